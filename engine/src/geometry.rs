@@ -1,0 +1,211 @@
+//! The primitive list and its BVH (obvhs CWBVH): closest-hit and occlusion queries.
+
+use crate::math::Ray;
+use crate::shape::{Quad, Sphere, SurfacePoint, TransformedSphere};
+use glam::Vec3A;
+use obvhs::{
+    BvhBuildParams,
+    aabb::Aabb,
+    cwbvh::{CwBvh, builder::build_cwbvh},
+    ray::RayHit,
+};
+use std::time::Duration;
+
+/// One primitive of the scene, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Primitive {
+    /// A sphere (translated and uniformly scaled spheres are baked into this form).
+    Sphere(Sphere),
+    /// A parallelogram (quads take any affine transform exactly).
+    Quad(Quad),
+    /// A sphere under a general affine transform.
+    TransformedSphere(TransformedSphere),
+}
+
+impl Primitive {
+    /// World-space bounds.
+    pub fn aabb(&self) -> Aabb {
+        match self {
+            Primitive::Sphere(s) => s.aabb(),
+            Primitive::Quad(q) => q.aabb(),
+            Primitive::TransformedSphere(s) => s.aabb(),
+        }
+    }
+
+    /// Smallest `t` in `(0, tmax)` or `f32::INFINITY`.
+    #[inline]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        match self {
+            Primitive::Sphere(s) => s.intersect(o, d, tmax),
+            Primitive::Quad(q) => q.intersect(o, d, tmax),
+            Primitive::TransformedSphere(s) => s.intersect(o, d, tmax),
+        }
+    }
+
+    /// Surface data at a point found by [`Self::intersect`].
+    #[inline]
+    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+        match self {
+            Primitive::Sphere(s) => s.surface(p),
+            Primitive::Quad(q) => q.surface(p),
+            Primitive::TransformedSphere(s) => s.surface(p),
+        }
+    }
+}
+
+/// A closest hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Index into [`Geometry::prims`].
+    pub prim: u32,
+    /// Surface data.
+    pub surface: SurfacePoint,
+}
+
+/// Primitives (in BVH order) with per-primitive material ids and the BVH over them.
+#[derive(Default)]
+pub struct Geometry {
+    /// Primitives, reordered to match the BVH leaves.
+    pub prims: Vec<Primitive>,
+    /// Material id of each primitive.
+    pub material: Vec<u32>,
+    bvh: Option<CwBvh>,
+}
+
+impl Geometry {
+    /// Builds the BVH and reorders the primitives (and their materials) to its leaf order.
+    pub fn build(prims: Vec<Primitive>, material: Vec<u32>) -> Self {
+        assert_eq!(prims.len(), material.len());
+        if prims.is_empty() {
+            return Self::default();
+        }
+        let aabbs: Vec<Aabb> = prims.iter().map(Primitive::aabb).collect();
+        let bvh = build_cwbvh(
+            &aabbs,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        let order = &bvh.primitive_indices;
+        let prims = order.iter().map(|&i| prims[i as usize]).collect();
+        let material = order.iter().map(|&i| material[i as usize]).collect();
+        Self {
+            prims,
+            material,
+            bvh: Some(bvh),
+        }
+    }
+
+    /// Closest hit with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
+        let bvh = self.bvh.as_ref()?;
+        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
+        let mut hit = RayHit::none();
+        let found = bvh.ray_traverse(oray, &mut hit, |r, slot| {
+            self.prims[slot].intersect(r.origin, r.direction, r.tmax)
+        });
+        if !found {
+            return None;
+        }
+        let prim = hit.primitive_id;
+        let surface = self.prims[prim as usize].surface(ray.at(hit.t));
+        Some(Hit {
+            t: hit.t,
+            prim,
+            surface,
+        })
+    }
+
+    /// True when something lies on the ray with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
+        let Some(bvh) = self.bvh.as_ref() else {
+            return false;
+        };
+        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
+        !bvh.ray_traverse_miss(oray, |r, slot| {
+            self.prims[slot].intersect(r.origin, r.direction, r.tmax)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic scatter of spheres and quads, including huge, tiny and overlapping ones.
+    fn scene() -> Vec<Primitive> {
+        let mut s = 12345u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32
+        };
+        let mut v = Vec::new();
+        for i in 0..300 {
+            let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
+            if i % 2 == 0 {
+                let r = [0.001, 0.3, 2.0, 50.0][i % 4 / 2 + (i % 7 == 0) as usize * 2];
+                v.push(Primitive::Sphere(Sphere {
+                    center: c,
+                    radius: r,
+                }));
+            } else {
+                let u = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
+                let w = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
+                if let Some(q) = Quad::new(c, u, w) {
+                    v.push(Primitive::Quad(q));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn bvh_closest_hit_equals_brute_force() {
+        let prims = scene();
+        let n = prims.len();
+        let geo = Geometry::build(prims.clone(), (0..n as u32).collect());
+        let mut s = 99u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let (mut hits, mut sum_t) = (0, 0.0f64);
+        for _ in 0..5000 {
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 30.0;
+            let d = Vec3A::new(rnd(), rnd(), rnd());
+            let ray = Ray::new(o, d);
+            let brute = prims
+                .iter()
+                .map(|p| p.intersect(o, d, f32::INFINITY))
+                .fold(f32::INFINITY, f32::min);
+            let got = geo
+                .intersect(&ray, f32::INFINITY)
+                .map_or(f32::INFINITY, |h| h.t);
+            assert_eq!(brute, got, "ray {o} {d}");
+            assert_eq!(geo.occluded(&ray, f32::INFINITY), brute.is_finite());
+            if got.is_finite() {
+                hits += 1;
+                sum_t += got as f64;
+            }
+        }
+        assert!(
+            hits > 500,
+            "the test must exercise hits: {hits}, sum {sum_t}"
+        );
+    }
+
+    #[test]
+    fn empty_geometry_has_no_hits() {
+        let geo = Geometry::build(vec![], vec![]);
+        let ray = Ray::new(Vec3A::ZERO, Vec3A::X);
+        assert!(geo.intersect(&ray, f32::INFINITY).is_none());
+        assert!(!geo.occluded(&ray, f32::INFINITY));
+    }
+}

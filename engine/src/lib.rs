@@ -1,0 +1,17 @@
+//! pathwave's scene model.
+//!
+//! Data flows one way: a RON file is parsed into a validated [`scene::SceneDesc`], spawned into a
+//! bevy_ecs [`world::SceneWorld`] (entities with `Transform`, `Shape` and `MaterialId`), and a
+//! change-detected schedule rebuilds the BVH and the emitter table and extracts a flat, read-only
+//! [`render_scene::RenderScene`] that integrators read without touching the ECS.
+#![warn(missing_docs)]
+
+pub mod camera;
+pub mod geometry;
+pub mod lights;
+pub mod material;
+pub mod math;
+pub mod render_scene;
+pub mod scene;
+pub mod shape;
+pub mod world;

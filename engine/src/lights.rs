@@ -1,0 +1,108 @@
+//! The emitter table used for next-event estimation: which primitives can be sampled and with
+//! what probability (proportional to emitted power).
+
+use crate::geometry::{Geometry, Primitive};
+use crate::material::Material;
+use crate::shape::LightSample;
+use glam::{Vec2, Vec3, Vec3A};
+
+/// Marks a primitive that is not in the light table.
+pub const NO_LIGHT: u32 = u32::MAX;
+
+/// Emissive primitives that next-event estimation samples.
+#[derive(Default, Debug)]
+pub struct LightTable {
+    /// Primitive index of each light.
+    pub prims: Vec<u32>,
+    /// Probability of picking each light.
+    pub pmf: Vec<f32>,
+    cdf: Vec<f32>,
+    /// For each primitive, its light index or [`NO_LIGHT`].
+    pub light_of_prim: Vec<u32>,
+}
+
+impl LightTable {
+    /// Collects the emitters of `geometry`. Spheres under a non-uniform transform are not
+    /// sampled (their emission still counts when a BSDF-sampled ray hits them).
+    pub fn build(geometry: &Geometry, materials: &[Material]) -> Self {
+        let mut t = LightTable {
+            light_of_prim: vec![NO_LIGHT; geometry.prims.len()],
+            ..Default::default()
+        };
+        let mut power = Vec::new();
+        for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
+            let Material::DiffuseLight { emit, two_sided } = materials[m as usize] else {
+                continue;
+            };
+            let area = match prim {
+                Primitive::Sphere(s) => s.area(),
+                Primitive::Quad(q) => q.area,
+                Primitive::TransformedSphere(_) => continue,
+            };
+            let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
+            if p > 0.0 {
+                t.light_of_prim[i] = t.prims.len() as u32;
+                t.prims.push(i as u32);
+                power.push(p);
+            }
+        }
+        let total: f32 = power.iter().sum();
+        let mut acc = 0.0;
+        for p in power {
+            t.pmf.push(p / total);
+            acc += p / total;
+            t.cdf.push(acc);
+        }
+        if let Some(last) = t.cdf.last_mut() {
+            *last = 1.0;
+        }
+        t
+    }
+
+    /// True when there is nothing to sample.
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+
+    /// Picks a light with `u` in [0, 1): (light index, probability).
+    #[inline]
+    pub fn pick(&self, u: f32) -> (usize, f32) {
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1);
+        (i, self.pmf[i])
+    }
+
+    /// Samples a point on light `light` as seen from `from`.
+    #[inline]
+    pub fn sample(&self, geometry: &Geometry, light: usize, from: Vec3A, u: Vec2) -> LightSample {
+        match &geometry.prims[self.prims[light] as usize] {
+            Primitive::Sphere(s) => s.sample_solid_angle(from, u),
+            Primitive::Quad(q) => q.sample_solid_angle(from, u),
+            Primitive::TransformedSphere(_) => unreachable!("not in the light table"),
+        }
+    }
+
+    /// Solid-angle density (including the pick probability) with which NEE from `from` would
+    /// have produced the point `p` (normal `n`) on primitive `prim`; 0 for unsampled emitters.
+    #[inline]
+    pub fn pdf(&self, geometry: &Geometry, prim: u32, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+        let light = self.light_of_prim[prim as usize];
+        if light == NO_LIGHT {
+            return 0.0;
+        }
+        let pdf = match &geometry.prims[prim as usize] {
+            Primitive::Sphere(s) => s.pdf_solid_angle(from, p, n),
+            Primitive::Quad(q) => q.pdf_solid_angle(from, p),
+            Primitive::TransformedSphere(_) => 0.0,
+        };
+        pdf * self.pmf[light as usize]
+    }
+}
+
+/// Rec. 709 luminance of a linear RGB colour.
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}

@@ -1,0 +1,70 @@
+//! The flat, read-only scene that integrators render: extracted from the ECS world after the
+//! systems have run, never queried in a hot loop.
+
+use crate::camera::Camera;
+use crate::geometry::Geometry;
+use crate::lights::LightTable;
+use crate::material::Material;
+use glam::{Vec3, Vec3A};
+use std::sync::Arc;
+
+/// Image size and sampling settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum number of bounces.
+    pub max_depth: u32,
+    /// Bounces before Russian roulette may end a path.
+    pub rr_depth: u32,
+    /// Seed of all random numbers.
+    pub seed: u64,
+}
+
+/// Radiance arriving from outside the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Background {
+    /// The same radiance in every direction (black is `Constant(0)`).
+    Constant(Vec3),
+    /// `(1 - a) * bottom + a * top`, `a = 0.5 * (dir.y + 1)`.
+    Sky {
+        /// Radiance straight down.
+        bottom: Vec3,
+        /// Radiance straight up.
+        top: Vec3,
+    },
+}
+
+impl Background {
+    /// Radiance arriving along `-dir` (seen by a ray travelling along `dir`).
+    #[inline]
+    pub fn radiance(&self, dir: Vec3A) -> Vec3 {
+        match *self {
+            Background::Constant(c) => c,
+            Background::Sky { bottom, top } => {
+                let a = 0.5 * (dir.y / dir.length() + 1.0);
+                bottom.lerp(top, a)
+            }
+        }
+    }
+}
+
+/// Everything an integrator needs, in flat arrays.
+pub struct RenderScene {
+    /// Camera for the configured image size.
+    pub camera: Camera,
+    /// Image and sampling settings.
+    pub settings: RenderSettings,
+    /// Light from outside.
+    pub background: Background,
+    /// Materials indexed by the primitives' material ids.
+    pub materials: Vec<Material>,
+    /// Primitives and BVH.
+    pub geometry: Arc<Geometry>,
+    /// Emitters for next-event estimation.
+    pub lights: Arc<LightTable>,
+}

@@ -1,0 +1,411 @@
+//! The scene description as written in RON. Every struct denies unknown fields; defaults are
+//! the ones documented on each field.
+
+use super::values::*;
+use crate::material::Fresnel;
+use glam::{Affine3A, Mat4, Vec3, Vec4};
+use serde::{Deserialize, Deserializer, de::Error};
+use std::cell::RefCell;
+use std::num::NonZeroU32;
+
+/// A whole scene file: `Scene(camera: .., render: .., background: .., materials: {..}, objects: [..])`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields, rename = "Scene")]
+pub struct SceneDesc {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Image size and sampling (all fields have defaults).
+    #[serde(default)]
+    pub render: RenderDesc,
+    /// What rays that leave the scene see (default black).
+    #[serde(default)]
+    pub background: BackgroundDesc,
+    /// Materials by name.
+    pub materials: NamedMaterials,
+    /// The objects.
+    pub objects: Vec<ObjectDesc>,
+}
+
+/// Thin-lens camera.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(try_from = "RawCamera")]
+pub struct CameraDesc {
+    /// Eye position.
+    pub look_from: Vec3,
+    /// Point looked at.
+    pub look_at: Vec3,
+    /// Up vector (default (0, 1, 0)); must not be parallel to the view direction.
+    pub vup: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub vfov: f32,
+    /// Lens radius (default 0: pinhole).
+    pub aperture_radius: f32,
+    /// Distance to the plane in focus (default: |look_at - look_from|).
+    pub focus_dist: f32,
+    /// Shutter open and close times (default (0, 0): no motion blur).
+    pub shutter: (f32, f32),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    look_from: V3,
+    look_at: V3,
+    #[serde(default = "default_vup")]
+    vup: Direction,
+    vfov: Fov,
+    #[serde(default)]
+    aperture_radius: NonNegative,
+    #[serde(default)]
+    focus_dist: Option<Positive>,
+    #[serde(default)]
+    shutter: (Finite, Finite),
+}
+
+fn default_vup() -> Direction {
+    Direction(Vec3::Y)
+}
+
+impl TryFrom<RawCamera> for CameraDesc {
+    type Error = String;
+    fn try_from(r: RawCamera) -> Result<Self, String> {
+        let view = r.look_at.0 - r.look_from.0;
+        if view.length_squared() == 0.0 {
+            return Err("camera: look_from and look_at are the same point".into());
+        }
+        if view.normalize().cross(r.vup.0.normalize()).length_squared() < 1e-12 {
+            return Err("camera: vup is parallel to the view direction".into());
+        }
+        if r.shutter.1.0 < r.shutter.0.0 {
+            return Err(format!(
+                "camera: shutter closes ({}) before it opens ({})",
+                r.shutter.1.0, r.shutter.0.0
+            ));
+        }
+        Ok(Self {
+            look_from: r.look_from.0,
+            look_at: r.look_at.0,
+            vup: r.vup.0,
+            vfov: r.vfov.0,
+            aperture_radius: r.aperture_radius.0,
+            focus_dist: r.focus_dist.map_or(view.length(), |f| f.0),
+            shutter: (r.shutter.0.0, r.shutter.1.0),
+        })
+    }
+}
+
+/// Image size and sampling.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderDesc {
+    /// Width in pixels (default 512).
+    pub width: NonZeroU32,
+    /// Height in pixels (default 512).
+    pub height: NonZeroU32,
+    /// Samples per pixel (default 64).
+    pub spp: NonZeroU32,
+    /// Maximum number of bounces (default 64).
+    pub max_depth: u32,
+    /// Bounces before Russian roulette may end a path (default 5).
+    pub rr_depth: u32,
+    /// Seed of every random number of the image (default 0).
+    pub seed: u64,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        let n = |x| NonZeroU32::new(x).unwrap();
+        Self {
+            width: n(512),
+            height: n(512),
+            spp: n(64),
+            max_depth: 64,
+            rr_depth: 5,
+            seed: 0,
+        }
+    }
+}
+
+/// Radiance seen by rays that leave the scene.
+#[derive(Deserialize, Debug, Clone, Copy, Default)]
+#[serde(deny_unknown_fields)]
+pub enum BackgroundDesc {
+    /// No light from outside (default).
+    #[default]
+    Black,
+    /// The same radiance in every direction.
+    Constant(Rgb),
+    /// `(1 - a) * bottom + a * top` with `a = 0.5 * (dir.y + 1)`.
+    Sky {
+        /// Radiance straight down (default (1, 1, 1)).
+        #[serde(default = "white")]
+        bottom: Rgb,
+        /// Radiance straight up (default (0.5, 0.7, 1.0)).
+        #[serde(default = "sky_blue")]
+        top: Rgb,
+    },
+}
+
+fn white() -> Rgb {
+    Rgb(Vec3::ONE)
+}
+
+fn sky_blue() -> Rgb {
+    Rgb(Vec3::new(0.5, 0.7, 1.0))
+}
+
+/// A material as written in the scene.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub enum MaterialDesc {
+    /// `Lambertian(albedo: (r, g, b))`.
+    Lambertian {
+        /// Reflectance, components in [0, 1].
+        albedo: Albedo,
+    },
+    /// `Metal(albedo: (r, g, b), fuzz: 0.1)`.
+    Metal {
+        /// Reflectance, components in [0, 1].
+        albedo: Albedo,
+        /// Blur in [0, 1] (default 0; larger values are clamped to 1).
+        #[serde(default)]
+        fuzz: NonNegative,
+    },
+    /// `Dielectric(ior: 1.5, fresnel: Exact)`.
+    Dielectric {
+        /// Index of refraction (> 0).
+        ior: Positive,
+        /// `Exact` (default) or `Schlick`.
+        #[serde(default)]
+        fresnel: Fresnel,
+    },
+    /// `DiffuseLight(emit: (r, g, b), two_sided: false)`.
+    DiffuseLight {
+        /// Emitted radiance.
+        emit: Rgb,
+        /// Emit on both sides (default false: only on the side of the normal).
+        #[serde(default)]
+        two_sided: bool,
+    },
+}
+
+/// The `materials: { "name": Material(..), .. }` map, in file order; names are unique.
+#[derive(Debug, Clone, Default)]
+pub struct NamedMaterials(pub Vec<(String, MaterialDesc)>);
+
+impl NamedMaterials {
+    /// (name, material) pairs in file order.
+    pub fn iter(&self) -> impl Iterator<Item = &(String, MaterialDesc)> {
+        self.0.iter()
+    }
+}
+
+impl<'de> Deserialize<'de> for NamedMaterials {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = NamedMaterials;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map from material names to materials")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, MaterialDesc)> = Vec::new();
+                while let Some(name) = map.next_key::<String>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(A::Error::custom(format!(
+                            "material \"{name}\" is defined twice"
+                        )));
+                    }
+                    let m = map.next_value()?;
+                    out.push((name, m));
+                }
+                Ok(NamedMaterials(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+thread_local! {
+    static MATERIAL_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
+}
+
+/// While alive, [`MaterialRef`]s parsed on this thread must name one of the given materials.
+pub(crate) struct MaterialNameScope;
+
+impl MaterialNameScope {
+    pub(crate) fn enter(names: Vec<String>) -> Self {
+        MATERIAL_NAMES.with(|m| *m.borrow_mut() = Some(names));
+        MaterialNameScope
+    }
+}
+
+impl Drop for MaterialNameScope {
+    fn drop(&mut self) {
+        MATERIAL_NAMES.with(|m| *m.borrow_mut() = None);
+    }
+}
+
+/// The name of a material defined in `materials`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MaterialRef(pub String);
+
+impl<'de> Deserialize<'de> for MaterialRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        MATERIAL_NAMES.with(|m| match &*m.borrow() {
+            Some(names) if !names.contains(&name) => {
+                let list: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+                Err(D::Error::custom(format!(
+                    "unknown material \"{name}\"; defined: {}",
+                    list.join(", ")
+                )))
+            }
+            _ => Ok(MaterialRef(name.clone())),
+        })
+    }
+}
+
+/// One object: a shape with a material and an optional list of transforms.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    /// The shape, in object space.
+    pub shape: ShapeDesc,
+    /// A name from `materials`.
+    pub material: MaterialRef,
+    /// Transforms applied in order, first to last (default none).
+    #[serde(default)]
+    pub transform: Vec<TransformOp>,
+}
+
+/// Shapes.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(try_from = "RawShape")]
+pub enum ShapeDesc {
+    /// `Sphere(center: (x, y, z), radius: r)`.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f32,
+    },
+    /// `Quad(q: .., u: .., v: ..)`: the points q + a u + b v, a, b in [0, 1]; normal u x v.
+    Quad {
+        /// Corner.
+        q: Vec3,
+        /// First edge.
+        u: Vec3,
+        /// Second edge (not parallel to u).
+        v: Vec3,
+    },
+    /// `Box(a: .., b: ..)`: the axis-aligned box between two opposite corners, six quads facing out.
+    Box {
+        /// Minimum corner.
+        min: Vec3,
+        /// Maximum corner.
+        max: Vec3,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+enum RawShape {
+    Sphere { center: V3, radius: Positive },
+    Quad { q: V3, u: V3, v: V3 },
+    Box { a: V3, b: V3 },
+}
+
+impl TryFrom<RawShape> for ShapeDesc {
+    type Error = String;
+    fn try_from(r: RawShape) -> Result<Self, String> {
+        Ok(match r {
+            RawShape::Sphere { center, radius } => ShapeDesc::Sphere {
+                center: center.0,
+                radius: radius.0,
+            },
+            RawShape::Quad { q, u, v } => {
+                let c = u.0.cross(v.0);
+                if !(c.length_squared() > 0.0) {
+                    return Err(format!(
+                        "Quad has no area: u {} and v {} are parallel or zero",
+                        u.0, v.0
+                    ));
+                }
+                ShapeDesc::Quad {
+                    q: q.0,
+                    u: u.0,
+                    v: v.0,
+                }
+            }
+            RawShape::Box { a, b } => {
+                let (min, max) = (a.0.min(b.0), a.0.max(b.0));
+                if (max - min).min_element() <= 0.0 {
+                    return Err(format!(
+                        "Box is flat: corners {} and {} share a coordinate",
+                        a.0, b.0
+                    ));
+                }
+                ShapeDesc::Box { min, max }
+            }
+        })
+    }
+}
+
+/// One step of an object's transform.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(try_from = "RawTransform")]
+pub struct TransformOp(pub Affine3A);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+enum RawTransform {
+    Translate(V3),
+    RotateX(Finite),
+    RotateY(Finite),
+    RotateZ(Finite),
+    Rotate { axis: Direction, degrees: Finite },
+    Scale(V3),
+    UniformScale(Finite),
+    Matrix([[Finite; 4]; 4]),
+}
+
+impl TryFrom<RawTransform> for TransformOp {
+    type Error = String;
+    fn try_from(r: RawTransform) -> Result<Self, String> {
+        let a = match r {
+            RawTransform::Translate(t) => Affine3A::from_translation(t.0),
+            RawTransform::RotateX(d) => Affine3A::from_rotation_x(d.0.to_radians()),
+            RawTransform::RotateY(d) => Affine3A::from_rotation_y(d.0.to_radians()),
+            RawTransform::RotateZ(d) => Affine3A::from_rotation_z(d.0.to_radians()),
+            RawTransform::Rotate { axis, degrees } => {
+                Affine3A::from_axis_angle(axis.0.normalize(), degrees.0.to_radians())
+            }
+            RawTransform::Scale(s) => Affine3A::from_scale(s.0),
+            RawTransform::UniformScale(s) => Affine3A::from_scale(Vec3::splat(s.0)),
+            RawTransform::Matrix(rows) => {
+                let r = rows.map(|row| Vec4::new(row[0].0, row[1].0, row[2].0, row[3].0));
+                if r[3] != Vec4::W {
+                    return Err(format!(
+                        "Matrix: the last row must be (0, 0, 0, 1), found {}",
+                        r[3]
+                    ));
+                }
+                Affine3A::from_mat4(Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose())
+            }
+        };
+        let det = a.matrix3.determinant();
+        if !(det.abs() > 1e-12) {
+            return Err("transform is singular (it flattens the object)".into());
+        }
+        Ok(TransformOp(a))
+    }
+}
+
+/// The product of a transform list: the first element is applied first.
+pub fn compose(ops: &[TransformOp]) -> Affine3A {
+    ops.iter().fold(Affine3A::IDENTITY, |acc, op| op.0 * acc)
+}

@@ -1,0 +1,12 @@
+//! The RON scene format: serde types with validation, and the loader that reports
+//! `file:line:col: message` for every error.
+
+mod desc;
+mod error;
+mod load;
+mod values;
+
+pub use desc::*;
+pub use error::SceneError;
+pub use load::{load, parse};
+pub use values::*;

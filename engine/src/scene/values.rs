@@ -1,0 +1,139 @@
+//! Validated scalar and vector values. Each rejects bad input while it is being parsed, so the
+//! error carries the line and column of the offending value.
+
+use glam::Vec3;
+use serde::{Deserialize, Deserializer, de::Error};
+
+fn check<'de, D: Deserializer<'de>, T>(ok: bool, value: T, what: &str) -> Result<T, D::Error> {
+    if ok {
+        Ok(value)
+    } else {
+        Err(D::Error::custom(what))
+    }
+}
+
+fn vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
+    let (x, y, z) = <(f32, f32, f32)>::deserialize(d)?;
+    let v = Vec3::new(x, y, z);
+    check::<D, _>(
+        v.is_finite(),
+        v,
+        &format!("expected three finite numbers, found ({x}, {y}, {z})"),
+    )
+}
+
+/// Three finite numbers `(x, y, z)`: a point or an offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3(pub Vec3);
+
+impl<'de> Deserialize<'de> for V3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        vec3(d).map(V3)
+    }
+}
+
+/// A non-zero vector `(x, y, z)`: a direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Direction(pub Vec3);
+
+impl<'de> Deserialize<'de> for Direction {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = vec3(d)?;
+        check::<D, _>(
+            v.length_squared() > 0.0,
+            Direction(v),
+            "expected a non-zero direction, found (0, 0, 0)",
+        )
+    }
+}
+
+/// A linear RGB colour `(r, g, b)` with every component >= 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rgb(pub Vec3);
+
+impl<'de> Deserialize<'de> for Rgb {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = vec3(d)?;
+        check::<D, _>(
+            v.min_element() >= 0.0,
+            Rgb(v),
+            &format!("expected a colour with components >= 0, found {v}"),
+        )
+    }
+}
+
+/// A reflectance `(r, g, b)` with every component in [0, 1] (more would create energy).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Albedo(pub Vec3);
+
+impl<'de> Deserialize<'de> for Albedo {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = vec3(d)?;
+        let ok = v.min_element() >= 0.0 && v.max_element() <= 1.0;
+        check::<D, _>(
+            ok,
+            Albedo(v),
+            &format!("expected an albedo with components in [0, 1], found {v}"),
+        )
+    }
+}
+
+/// A finite number.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Finite(pub f32);
+
+impl<'de> Deserialize<'de> for Finite {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let x = f32::deserialize(d)?;
+        check::<D, _>(
+            x.is_finite(),
+            Finite(x),
+            &format!("expected a finite number, found {x}"),
+        )
+    }
+}
+
+/// A finite number > 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Positive(pub f32);
+
+impl<'de> Deserialize<'de> for Positive {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let x = f32::deserialize(d)?;
+        check::<D, _>(
+            x.is_finite() && x > 0.0,
+            Positive(x),
+            &format!("expected a finite number > 0, found {x}"),
+        )
+    }
+}
+
+/// A finite number >= 0.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct NonNegative(pub f32);
+
+impl<'de> Deserialize<'de> for NonNegative {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let x = f32::deserialize(d)?;
+        check::<D, _>(
+            x.is_finite() && x >= 0.0,
+            NonNegative(x),
+            &format!("expected a finite number >= 0, found {x}"),
+        )
+    }
+}
+
+/// A vertical field of view in degrees, in (0, 180).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fov(pub f32);
+
+impl<'de> Deserialize<'de> for Fov {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let x = f32::deserialize(d)?;
+        check::<D, _>(
+            x > 0.0 && x < 180.0,
+            Fov(x),
+            &format!("expected a field of view in (0, 180) degrees, found {x}"),
+        )
+    }
+}

@@ -1,0 +1,180 @@
+//! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
+
+use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use glam::{Vec2, Vec3A};
+use obvhs::aabb::Aabb;
+
+/// A parallelogram. Its normal is `normalize(u x v)`; `uv` = (a, b).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quad {
+    /// Corner.
+    pub q: Vec3A,
+    /// First edge.
+    pub u: Vec3A,
+    /// Second edge.
+    pub v: Vec3A,
+    /// Unit normal `normalize(u x v)`.
+    pub n: Vec3A,
+    /// `(u x v) / |u x v|^2`, which turns cross products into the coordinates (a, b).
+    w: Vec3A,
+    /// Area `|u x v|`.
+    pub area: f32,
+}
+
+impl Quad {
+    /// Builds a quad; `None` when `u` and `v` are parallel or zero (no area).
+    pub fn new(q: Vec3A, u: Vec3A, v: Vec3A) -> Option<Self> {
+        let c = u.cross(v);
+        let len2 = c.length_squared();
+        if !(len2 > 0.0) || !len2.is_finite() {
+            return None;
+        }
+        let area = len2.sqrt();
+        Some(Self {
+            q,
+            u,
+            v,
+            n: c / area,
+            w: c / len2,
+            area,
+        })
+    }
+
+    /// Bounding box.
+    pub fn aabb(&self) -> Aabb {
+        let mut b = Aabb::empty();
+        for p in [
+            self.q,
+            self.q + self.u,
+            self.q + self.v,
+            self.q + self.u + self.v,
+        ] {
+            b.extend(p);
+        }
+        b
+    }
+
+    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the quad, or `f32::INFINITY`.
+    #[inline]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        let denom = self.n.dot(d);
+        if denom == 0.0 {
+            return f32::INFINITY;
+        }
+        let t = self.n.dot(self.q - o) / denom;
+        if !(t > 0.0 && t < tmax) {
+            return f32::INFINITY;
+        }
+        let ph = o + t * d - self.q;
+        let a = self.w.dot(ph.cross(self.v));
+        let b = self.w.dot(self.u.cross(ph));
+        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
+            t
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Surface data at the point `p`, re-projected onto the plane as `Q + a u + b v`.
+    #[inline]
+    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+        let ph = p - self.q;
+        let a = self.w.dot(ph.cross(self.v)).clamp(0.0, 1.0);
+        let b = self.w.dot(self.u.cross(ph)).clamp(0.0, 1.0);
+        SurfacePoint {
+            p: self.q + a * self.u + b * self.v,
+            n: self.n,
+            uv: Vec2::new(a, b),
+        }
+    }
+
+    /// Samples a point uniformly by area; the density is returned in solid angle at `from`.
+    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        let p = self.q + u.x * self.u + u.y * self.v;
+        LightSample {
+            p,
+            n: self.n,
+            pdf: area_to_solid_angle(1.0 / self.area, from, p, self.n),
+        }
+    }
+
+    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
+    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
+        area_to_solid_angle(1.0 / self.area, from, p, self.n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit() -> Quad {
+        Quad::new(Vec3A::ZERO, Vec3A::X, Vec3A::Y).unwrap()
+    }
+
+    #[test]
+    fn hit_inside_and_uv() {
+        let q = unit();
+        let o = Vec3A::new(0.25, 0.75, -2.0);
+        let t = q.intersect(o, Vec3A::Z, f32::INFINITY);
+        assert!((t - 2.0).abs() < 1e-6);
+        let sp = q.surface(o + t * Vec3A::Z);
+        assert!((sp.uv - Vec2::new(0.25, 0.75)).length() < 1e-6);
+        assert_eq!(sp.n, Vec3A::Z);
+        // From the back side as well: geometry is two-sided.
+        assert!(
+            q.intersect(Vec3A::new(0.5, 0.5, 1.0), -Vec3A::Z, f32::INFINITY)
+                .is_finite()
+        );
+    }
+
+    #[test]
+    fn miss_outside_parallel_behind() {
+        let q = unit();
+        assert_eq!(
+            q.intersect(Vec3A::new(1.5, 0.5, -1.0), Vec3A::Z, f32::INFINITY),
+            f32::INFINITY
+        );
+        assert_eq!(
+            q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::X, f32::INFINITY),
+            f32::INFINITY
+        );
+        assert_eq!(
+            q.intersect(Vec3A::new(0.5, 0.5, 1.0), Vec3A::Z, f32::INFINITY),
+            f32::INFINITY
+        );
+        assert_eq!(
+            q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::Z, 0.5),
+            f32::INFINITY
+        );
+    }
+
+    #[test]
+    fn grazing_rays_hit_edges_consistently() {
+        let q = unit();
+        // A ray almost parallel to the plane still finds the right point.
+        let d = Vec3A::new(1.0, 0.0, 1e-4).normalize();
+        let o = Vec3A::new(-1000.0, 0.5, -0.1);
+        let t = q.intersect(o, d, f32::INFINITY);
+        assert!(t.is_finite());
+        let p = o + t * d;
+        assert!(p.z.abs() < 1e-3 && (0.0..=1.0).contains(&p.x), "{p}");
+    }
+
+    #[test]
+    fn degenerate_quads_are_rejected() {
+        assert!(Quad::new(Vec3A::ZERO, Vec3A::X, Vec3A::X * 2.0).is_none());
+        assert!(Quad::new(Vec3A::ZERO, Vec3A::ZERO, Vec3A::Y).is_none());
+    }
+
+    #[test]
+    fn area_pdf_matches_geometry() {
+        let q = Quad::new(Vec3A::new(-1.0, -1.0, 2.0), Vec3A::X * 2.0, Vec3A::Y * 2.0).unwrap();
+        let ls = q.sample_solid_angle(Vec3A::ZERO, Vec2::splat(0.5));
+        assert!((ls.p - Vec3A::new(0.0, 0.0, 2.0)).length() < 1e-6);
+        assert!(
+            (ls.pdf - 4.0 / 4.0).abs() < 1e-6,
+            "dist^2 / (A cos) = 4 / 4"
+        );
+    }
+}

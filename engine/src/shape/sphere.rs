@@ -1,0 +1,245 @@
+//! Sphere: the numerically robust quadratic of Ray Tracing Gems ch. 7 and cone sampling
+//! (SEED.md section 12.4) for emitters.
+
+use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use crate::math::Frame;
+use glam::{Vec2, Vec3A};
+use obvhs::aabb::Aabb;
+use std::f32::consts::PI;
+
+/// A sphere. `uv`: u = (atan2(-z, x) + pi) / 2pi around +y, v = acos(-y) / pi from the bottom pole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3A,
+    /// Radius (> 0).
+    pub radius: f32,
+}
+
+impl Sphere {
+    /// Bounding box.
+    pub fn aabb(&self) -> Aabb {
+        Aabb::new(
+            self.center - Vec3A::splat(self.radius),
+            self.center + Vec3A::splat(self.radius),
+        )
+    }
+
+    /// Surface area.
+    pub fn area(&self) -> f32 {
+        4.0 * PI * self.radius * self.radius
+    }
+
+    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the sphere, or `f32::INFINITY`.
+    ///
+    /// The discriminant is computed as `r^2 - |f - (f.d / d.d) d|^2` and the roots as `c / q`,
+    /// `q / a`, which avoids the cancellation of the textbook formula for huge, tiny or distant
+    /// spheres (the radius-1000 ground of spheres-sky).
+    #[inline]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        let f = o - self.center;
+        let a = d.length_squared();
+        let b = f.dot(d);
+        let l = f - (b / a) * d;
+        let r2 = self.radius * self.radius;
+        let disc = a * (r2 - l.length_squared());
+        if disc < 0.0 {
+            return f32::INFINITY;
+        }
+        let c = f.length_squared() - r2;
+        let q = -(b + disc.sqrt().copysign(b));
+        let (mut t0, mut t1) = (c / q, q / a);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        if t0 > 0.0 && t0 < tmax {
+            t0
+        } else if t1 > 0.0 && t1 < tmax {
+            t1
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Surface data at the point `p` (re-projected onto the sphere).
+    #[inline]
+    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+        let d = p - self.center;
+        let n = d / d.length();
+        let p = self.center + self.radius * n;
+        let u = ((-n.z).atan2(n.x) + PI) / (2.0 * PI);
+        let v = (-n.y).clamp(-1.0, 1.0).acos() / PI;
+        SurfacePoint {
+            p,
+            n,
+            uv: Vec2::new(u, v),
+        }
+    }
+
+    /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
+    /// `from` is outside, uniformly by area when inside.
+    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        let dc2 = (self.center - from).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 {
+            let n = uniform_sphere(u);
+            let p = self.center + self.radius * n;
+            return LightSample {
+                p,
+                n,
+                pdf: area_to_solid_angle(1.0 / self.area(), from, p, n),
+            };
+        }
+        let sin2_max = r2 / dc2;
+        let sin_max = sin2_max.sqrt();
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        let mut one_minus_cos_max = 1.0 - cos_max;
+        let mut cos_t = (cos_max - 1.0) * u.x + 1.0;
+        let mut sin2_t = (1.0 - cos_t * cos_t).max(0.0);
+        if sin2_max < 0.000_685_23 {
+            // Small cones: Taylor expansion keeps 1 - cos precise.
+            sin2_t = sin2_max * u.x;
+            cos_t = (1.0 - sin2_t).sqrt();
+            one_minus_cos_max = sin2_max / 2.0;
+        }
+        let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+        let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+        let phi = u.y * 2.0 * PI;
+        let w = Vec3A::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha);
+        let frame = Frame::from_normal((self.center - from) / dc2.sqrt());
+        let n = frame.to_world(-w);
+        LightSample {
+            p: self.center + self.radius * n,
+            n,
+            pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+        }
+    }
+
+    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen from `from`.
+    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+        let dc2 = (self.center - from).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 {
+            return area_to_solid_angle(1.0 / self.area(), from, p, n);
+        }
+        let sin2_max = r2 / dc2;
+        let one_minus_cos_max = if sin2_max < 0.000_685_23 {
+            sin2_max / 2.0
+        } else {
+            1.0 - (1.0 - sin2_max).sqrt()
+        };
+        1.0 / (2.0 * PI * one_minus_cos_max)
+    }
+}
+
+/// Uniform direction on the unit sphere.
+#[inline]
+pub(crate) fn uniform_sphere(u: Vec2) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit() -> Sphere {
+        Sphere {
+            center: Vec3A::ZERO,
+            radius: 1.0,
+        }
+    }
+
+    #[test]
+    fn hit_from_outside_takes_near_root() {
+        let t = unit().intersect(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z, f32::INFINITY);
+        assert!((t - 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn miss_and_behind_origin() {
+        let s = unit();
+        assert_eq!(
+            s.intersect(Vec3A::new(0.0, 2.0, -5.0), Vec3A::Z, f32::INFINITY),
+            f32::INFINITY
+        );
+        assert_eq!(
+            s.intersect(Vec3A::new(0.0, 0.0, 5.0), Vec3A::Z, f32::INFINITY),
+            f32::INFINITY
+        );
+        assert_eq!(
+            s.intersect(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z, 3.9),
+            f32::INFINITY,
+            "tmax"
+        );
+    }
+
+    #[test]
+    fn inside_takes_far_root() {
+        let t = unit().intersect(Vec3A::ZERO, Vec3A::new(0.0, 2.0, 0.0), f32::INFINITY);
+        assert!(
+            (t - 0.5).abs() < 1e-6,
+            "unnormalised direction keeps t parametric: {t}"
+        );
+    }
+
+    #[test]
+    fn grazing_ray_touches_tangent() {
+        let s = unit();
+        let t = s.intersect(Vec3A::new(-5.0, 1.0 - 1e-4, 0.0), Vec3A::X, f32::INFINITY);
+        assert!(t.is_finite() && (t - 5.0).abs() < 0.02, "{t}");
+        let miss = s.intersect(Vec3A::new(-5.0, 1.0 + 1e-4, 0.0), Vec3A::X, f32::INFINITY);
+        assert_eq!(miss, f32::INFINITY);
+    }
+
+    #[test]
+    fn huge_sphere_is_precise() {
+        // The spheres-sky ground: a ray from the camera height hitting y = 0 far away.
+        let s = Sphere {
+            center: Vec3A::new(0.0, -1000.0, 0.0),
+            radius: 1000.0,
+        };
+        let o = Vec3A::new(13.0, 2.0, 3.0);
+        let d = Vec3A::new(-13.0, -2.0, -3.0).normalize();
+        let t = s.intersect(o, d, f32::INFINITY);
+        let p = o + t * d;
+        let err = ((p - s.center).length() - 1000.0).abs();
+        assert!(err < 1e-3, "hit point {err} off the surface");
+        assert!(p.y.abs() < 1e-3, "p = {p}");
+    }
+
+    #[test]
+    fn surface_uv_conventions() {
+        let s = unit();
+        let sp = s.surface(Vec3A::new(0.0, -1.0, 0.0));
+        assert!(sp.uv.y.abs() < 1e-6, "v = 0 at the bottom pole");
+        let sp = s.surface(Vec3A::new(1.0, 0.0, 0.0));
+        assert!((sp.uv - Vec2::new(0.5, 0.5)).length() < 1e-6, "{:?}", sp.uv);
+    }
+
+    #[test]
+    fn cone_samples_lie_on_visible_cap_with_constant_pdf() {
+        let s = Sphere {
+            center: Vec3A::new(0.0, 0.0, 10.0),
+            radius: 2.0,
+        };
+        let from = Vec3A::ZERO;
+        for i in 0..64 {
+            let u = Vec2::new((i as f32 + 0.5) / 64.0, ((i * 37) % 64) as f32 / 64.0);
+            let ls = s.sample_solid_angle(from, u);
+            assert!(((ls.p - s.center).length() - 2.0).abs() < 1e-4);
+            assert!(
+                ls.n.dot(from - ls.p) >= -1e-4,
+                "sampled point faces the reference"
+            );
+            let expected = s.pdf_solid_angle(from, ls.p, ls.n);
+            assert!((ls.pdf - expected).abs() < 1e-3 * expected);
+        }
+        // The pdf integrates to one over the cone: pdf * solid angle = 1.
+        let cos_max = (1.0f32 - 0.04).sqrt();
+        let omega = 2.0 * PI * (1.0 - cos_max);
+        assert!((s.pdf_solid_angle(from, s.center, Vec3A::Z) * omega - 1.0).abs() < 1e-3);
+    }
+}

@@ -1,0 +1,272 @@
+//! The ECS scene: entities with `Transform`, `Shape` and `MaterialId`; systems that rebuild the
+//! geometry (BVH and emitter table) only when what it depends on changed, and extract the
+//! [`RenderScene`].
+
+use crate::camera::Camera;
+use crate::geometry::{Geometry, Primitive};
+use crate::lights::LightTable;
+use crate::material::Material;
+use crate::render_scene::{Background, RenderScene, RenderSettings};
+use crate::scene::{BackgroundDesc, CameraDesc, MaterialDesc, SceneDesc, ShapeDesc, compose};
+use crate::shape::{Quad, Sphere, TransformedSphere};
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
+use glam::{Affine3A, Vec3, Vec3A};
+use std::sync::Arc;
+
+/// Object to world.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Transform(pub Affine3A);
+
+/// The object-space shape of an entity.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Shape(pub ShapeDesc);
+
+/// Index into the [`Materials`] resource.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaterialId(pub u32);
+
+/// All materials.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct Materials(pub Vec<Material>);
+
+/// The camera as described (turned into a [`Camera`] for the image size at extraction).
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct CameraParams(pub CameraDesc);
+
+/// Image and sampling settings.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct Settings(pub RenderSettings);
+
+/// Light from outside.
+#[derive(Resource, Clone, Copy, Debug)]
+pub struct BackgroundLight(pub Background);
+
+/// World-space primitives, BVH and emitter table, rebuilt by [`rebuild_geometry`].
+#[derive(Resource, Default)]
+pub struct SceneGeometry {
+    /// Primitives and BVH.
+    pub geometry: Arc<Geometry>,
+    /// Emitters.
+    pub lights: Arc<LightTable>,
+    /// How many times the geometry was rebuilt (for tests and statistics).
+    pub rebuilds: u64,
+}
+
+/// The latest extracted scene.
+#[derive(Resource, Default)]
+pub struct Extracted(pub Option<Arc<RenderScene>>);
+
+/// The per-frame update schedule.
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Update;
+
+/// Rebuilds primitives, BVH and light table when a shape, transform or material id changed,
+/// an object was removed, or the materials changed (the light table depends on them).
+#[allow(clippy::type_complexity)]
+pub fn rebuild_geometry(
+    mut out: ResMut<SceneGeometry>,
+    objects: Query<(Entity, &Transform, &Shape, &MaterialId)>,
+    changed: Query<(), Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>)>>,
+    mut removed: RemovedComponents<Shape>,
+    materials: Res<Materials>,
+) {
+    let removed = removed.read().count() > 0;
+    if !(removed || !changed.is_empty() || materials.is_changed() || out.rebuilds == 0) {
+        return;
+    }
+    let _span = tracing::info_span!("rebuild_geometry").entered();
+    let mut objs: Vec<_> = objects.iter().collect();
+    objs.sort_by_key(|(e, ..)| *e);
+    let (mut prims, mut mats) = (Vec::new(), Vec::new());
+    for (_, transform, shape, material) in objs {
+        let before = prims.len();
+        world_primitives(&shape.0, &transform.0, &mut prims);
+        mats.resize(prims.len().max(before), material.0);
+    }
+    let geometry = Geometry::build(prims, mats);
+    out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
+    out.geometry = Arc::new(geometry);
+    out.rebuilds += 1;
+}
+
+/// Builds a new [`RenderScene`] when anything it holds changed.
+pub fn extract_render_scene(
+    geometry: Res<SceneGeometry>,
+    materials: Res<Materials>,
+    camera: Res<CameraParams>,
+    settings: Res<Settings>,
+    background: Res<BackgroundLight>,
+    mut out: ResMut<Extracted>,
+) {
+    let any = geometry.is_changed()
+        || materials.is_changed()
+        || camera.is_changed()
+        || settings.is_changed()
+        || background.is_changed();
+    if !any && out.0.is_some() {
+        return;
+    }
+    let c = camera.0;
+    let s = settings.0;
+    out.0 = Some(Arc::new(RenderScene {
+        camera: Camera::new(
+            c.look_from,
+            c.look_at,
+            c.vup,
+            c.vfov,
+            c.aperture_radius,
+            c.focus_dist,
+            c.shutter,
+            s.width,
+            s.height,
+        ),
+        settings: s,
+        background: background.0,
+        materials: materials.0.clone(),
+        geometry: geometry.geometry.clone(),
+        lights: geometry.lights.clone(),
+    }));
+}
+
+/// Appends the world-space primitives of `shape` placed by `m`.
+pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) {
+    match *shape {
+        ShapeDesc::Sphere { center, radius } => {
+            let sphere = Sphere {
+                center: center.into(),
+                radius,
+            };
+            // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything
+            // else is intersected in object space.
+            let lin = m.matrix3;
+            let s = lin.x_axis.x;
+            let diagonal_uniform = s > 0.0 && lin == glam::Mat3A::from_diagonal(Vec3::splat(s));
+            if diagonal_uniform {
+                let center = m.transform_point3a(sphere.center);
+                out.push(Primitive::Sphere(Sphere {
+                    center,
+                    radius: radius * s,
+                }));
+            } else if let Some(ts) = TransformedSphere::new(sphere, *m) {
+                out.push(Primitive::TransformedSphere(ts));
+            }
+        }
+        ShapeDesc::Quad { q, u, v } => push_quad(m, q.into(), u.into(), v.into(), out),
+        ShapeDesc::Box { min, max } => {
+            let (a, b) = (Vec3A::from(min), Vec3A::from(max));
+            let d = b - a;
+            let (dx, dy, dz) = (Vec3A::X * d.x, Vec3A::Y * d.y, Vec3A::Z * d.z);
+            push_quad(m, Vec3A::new(a.x, a.y, b.z), dx, dy, out); // front (+z)
+            push_quad(m, Vec3A::new(b.x, a.y, b.z), -dz, dy, out); // right (+x)
+            push_quad(m, Vec3A::new(b.x, a.y, a.z), -dx, dy, out); // back (-z)
+            push_quad(m, a, dz, dy, out); // left (-x)
+            push_quad(m, Vec3A::new(a.x, b.y, b.z), dx, -dz, out); // top (+y)
+            push_quad(m, a, dx, dz, out); // bottom (-y)
+        }
+    }
+}
+
+fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) {
+    let (q, mut u, mut v) = (
+        m.transform_point3a(q),
+        m.transform_vector3a(u),
+        m.transform_vector3a(v),
+    );
+    // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
+    if m.matrix3.determinant() < 0.0 {
+        std::mem::swap(&mut u, &mut v);
+    }
+    if let Some(quad) = Quad::new(q, u, v) {
+        out.push(Primitive::Quad(quad));
+    }
+}
+
+fn material(desc: &MaterialDesc) -> Material {
+    match *desc {
+        MaterialDesc::Lambertian { albedo } => Material::Lambertian { albedo: albedo.0 },
+        MaterialDesc::Metal { albedo, fuzz } => Material::Metal {
+            albedo: albedo.0,
+            fuzz: fuzz.0.min(1.0),
+        },
+        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric {
+            ior: ior.0,
+            fresnel,
+        },
+        MaterialDesc::DiffuseLight { emit, two_sided } => Material::DiffuseLight {
+            emit: emit.0,
+            two_sided,
+        },
+    }
+}
+
+/// A bevy_ecs world holding a scene, with its update schedule.
+pub struct SceneWorld {
+    /// The ECS world (entities and resources); edit it between calls to [`Self::update`].
+    pub world: World,
+    schedule: Schedule,
+}
+
+impl SceneWorld {
+    /// Spawns the entities and resources of a scene description.
+    pub fn new(desc: &SceneDesc) -> Self {
+        let mut world = World::new();
+        let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
+        world.insert_resource(Materials(
+            desc.materials.iter().map(|(_, m)| material(m)).collect(),
+        ));
+        for obj in &desc.objects {
+            let id = names
+                .iter()
+                .position(|n| *n == obj.material.0)
+                .expect("material names are validated at load");
+            world.spawn((
+                Transform(compose(&obj.transform)),
+                Shape(obj.shape),
+                MaterialId(id as u32),
+            ));
+        }
+        let r = desc.render;
+        world.insert_resource(Settings(RenderSettings {
+            width: r.width.get(),
+            height: r.height.get(),
+            spp: r.spp.get(),
+            max_depth: r.max_depth,
+            rr_depth: r.rr_depth,
+            seed: r.seed,
+        }));
+        world.insert_resource(CameraParams(desc.camera));
+        world.insert_resource(BackgroundLight(match desc.background {
+            BackgroundDesc::Black => Background::Constant(Vec3::ZERO),
+            BackgroundDesc::Constant(c) => Background::Constant(c.0),
+            BackgroundDesc::Sky { bottom, top } => Background::Sky {
+                bottom: bottom.0,
+                top: top.0,
+            },
+        }));
+        world.init_resource::<SceneGeometry>();
+        world.init_resource::<Extracted>();
+        let mut schedule = Schedule::new(Update);
+        schedule.add_systems((
+            rebuild_geometry,
+            extract_render_scene.after(rebuild_geometry),
+        ));
+        Self { world, schedule }
+    }
+
+    /// Runs the systems and returns the current render scene.
+    pub fn update(&mut self) -> Arc<RenderScene> {
+        self.schedule.run(&mut self.world);
+        self.world.clear_trackers();
+        self.world
+            .resource::<Extracted>()
+            .0
+            .clone()
+            .expect("extract_render_scene always runs")
+    }
+
+    /// Convenience: spawn and extract in one step.
+    pub fn render_scene(desc: &SceneDesc) -> Arc<RenderScene> {
+        Self::new(desc).update()
+    }
+}

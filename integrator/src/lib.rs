@@ -1,0 +1,8 @@
+//! pathwave's integrators: how materials scatter light, samplers, the film, and the reference
+//! (megakernel) path tracer that the wavefront integrator is tested against.
+#![warn(missing_docs)]
+
+pub mod film;
+pub mod material;
+pub mod oracle;
+pub mod sampler;

@@ -1,0 +1,145 @@
+//! Metal: mirror reflection scaled by the albedo, optionally fuzzed by adding a point uniform in
+//! a ball of radius `fuzz` to the mirror direction (SEED.md 2.4.1). Directions that end below the
+//! surface are absorbed. The lobe is only sampled, never evaluated.
+
+use super::BsdfSample;
+use glam::{Vec2, Vec3, Vec3A};
+use pathwave_engine::math::reflect;
+
+/// Uniform point in the unit ball from three uniform numbers.
+#[inline]
+pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z) * uc.cbrt()
+}
+
+/// Samples the reflected direction.
+#[inline]
+pub fn sample(
+    albedo: Vec3,
+    fuzz: f32,
+    wo: Vec3A,
+    n: Vec3A,
+    u: Vec2,
+    uc: f32,
+) -> Option<BsdfSample> {
+    let nf = if wo.dot(n) < 0.0 { -n } else { n };
+    let mut wi = reflect(wo, nf);
+    if fuzz > 0.0 {
+        wi = (wi + fuzz * uniform_ball(u, uc)).normalize_or_zero();
+        if wi.dot(nf) <= 0.0 {
+            return None;
+        }
+    }
+    Some(BsdfSample {
+        wi,
+        weight: albedo,
+        pdf: 1.0,
+        delta: true,
+        eta: 1.0,
+    })
+}
+
+/// Density in solid angle of the direction `normalize(r + fuzz * ball)` about the unit mirror
+/// direction `r`, before absorption: the ball's volume along the ray `t w`, `(t1^3 - t0^3) / 3`,
+/// over its total volume.
+pub fn fuzz_pdf(r: Vec3A, fuzz: f32, w: Vec3A) -> f32 {
+    let c = w.dot(r);
+    let disc = c * c - 1.0 + fuzz * fuzz;
+    if disc < 0.0 {
+        return 0.0;
+    }
+    let s = disc.sqrt();
+    let (t0, t1) = ((c - s).max(0.0), (c + s).max(0.0));
+    (t1.powi(3) - t0.powi(3)) / (4.0 * std::f32::consts::PI * fuzz.powi(3))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::testing::{chi2, chi2_critical};
+
+    #[test]
+    fn perfect_mirror_reflects() {
+        let s = sample(
+            Vec3::ONE,
+            0.0,
+            Vec3A::new(1.0, 1.0, 0.0).normalize(),
+            Vec3A::Y,
+            Vec2::ZERO,
+            0.0,
+        )
+        .unwrap();
+        assert!((s.wi - Vec3A::new(-1.0, 1.0, 0.0).normalize()).length() < 1e-6);
+        assert!(s.delta);
+    }
+
+    #[test]
+    fn fuzzed_directions_follow_the_ball_projection_chi2() {
+        for fuzz in [0.3f32, 1.0] {
+            // Normal incidence: no direction falls below the surface for fuzz < 1.
+            let n = Vec3A::Z;
+            let wo = Vec3A::new(0.0, 0.2, 1.0).normalize();
+            let r = reflect(wo, n);
+            let (stat, dof) = chi2(
+                |u, uc| {
+                    let wi = (r + fuzz * uniform_ball(u, uc)).normalize();
+                    Some(wi)
+                },
+                |w| fuzz_pdf(r, fuzz, w),
+                r,
+                1_000_000,
+            );
+            assert!(
+                stat < chi2_critical(dof),
+                "fuzz {fuzz}: chi2 {stat} dof {dof}"
+            );
+        }
+    }
+
+    #[test]
+    fn fuzz_pdf_integrates_to_one() {
+        let r = Vec3A::Z;
+        for fuzz in [0.1f32, 0.5, 1.0] {
+            let (nt, np) = (4000, 16);
+            let mut sum = 0.0f64;
+            for i in 0..nt {
+                let z = -1.0 + 2.0 * (i as f32 + 0.5) / nt as f32;
+                for _ in 0..np {
+                    sum += fuzz_pdf(r, fuzz, Vec3A::new((1.0 - z * z).sqrt(), 0.0, z)) as f64;
+                }
+            }
+            let integral = sum * 4.0 * std::f64::consts::PI / (nt * np) as f64;
+            assert!((integral - 1.0).abs() < 0.01, "fuzz {fuzz}: {integral}");
+        }
+    }
+
+    #[test]
+    fn below_surface_is_absorbed_and_reflectance_is_albedo_otherwise() {
+        // Grazing incidence with full fuzz: some samples end below the surface.
+        let n = Vec3A::Z;
+        let wo = Vec3A::new(1.0, 0.0, 0.05).normalize();
+        let albedo = Vec3::new(0.8, 0.6, 0.4);
+        let mut s = crate::sampler::Sampler::new(3, 0, 0);
+        let (mut absorbed, mut sum) = (0, Vec3::ZERO);
+        let total = 100_000;
+        for _ in 0..total {
+            match sample(albedo, 1.0, wo, n, s.next_2d(), s.next_1d()) {
+                Some(b) => {
+                    assert!(b.wi.dot(n) > 0.0);
+                    sum += b.weight;
+                }
+                None => absorbed += 1,
+            }
+        }
+        assert!(
+            absorbed > total / 10,
+            "grazing full fuzz absorbs: {absorbed}"
+        );
+        let reflectance = sum / total as f32;
+        let expected = albedo * (1.0 - absorbed as f32 / total as f32);
+        assert!((reflectance - expected).abs().max_element() < 1e-5);
+    }
+}

@@ -1,0 +1,9 @@
+//! pathwave: a physically based path tracer. This crate is the command-line tool and a facade
+//! over the `engine` (scene model) and `integrator` crates, plus image I/O and error metrics.
+#![warn(missing_docs)]
+
+pub mod io;
+pub mod metrics;
+
+pub use pathwave_engine as engine;
+pub use pathwave_integrator as integrator;
