@@ -65,24 +65,8 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let result = match Cli::parse().command {
-        Command::Render {
-            scene,
-            output,
-            spp,
-            width,
-            height,
-            seed,
-            max_depth,
-            threads,
-            quiet,
-        } => {
-            let overrides = Overrides {
-                spp,
-                width,
-                height,
-                seed,
-                max_depth,
-            };
+        Command::Render { scene, output, spp, width, height, seed, max_depth, threads, quiet } => {
+            let overrides = Overrides { spp, width, height, seed, max_depth };
             render(&scene, &output, overrides, threads, quiet)
         }
         Command::Compare { a, b } => compare(&a, &b),
@@ -129,11 +113,7 @@ fn render(
     let film = pool.install(|| oracle::render(&scene, &|done, total| bar.update(done, total)));
     let secs = start.elapsed().as_secs_f64();
     bar.finish();
-    let img = LinearImage {
-        width: film.width,
-        height: film.height,
-        pixels: film.mean(),
-    };
+    let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
     let clamped = io::write(output, &img)?;
     let samples = s.width as f64 * s.height as f64 * s.spp as f64;
     eprintln!(
@@ -145,11 +125,7 @@ fn render(
         samples / secs / 1e6,
         pool.current_num_threads(),
         film.non_finite,
-        if clamped > 0 {
-            format!(", {clamped} pixels clamped to 1 in the PNG")
-        } else {
-            String::new()
-        },
+        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
     );
     Ok(())
 }
@@ -157,10 +133,7 @@ fn render(
 fn compare(a: &PathBuf, b: &PathBuf) -> Result<(), String> {
     let (x, r) = (io::read_linear(a)?, io::read_linear(b)?);
     if (x.width, x.height) != (r.width, r.height) {
-        return Err(format!(
-            "sizes differ: {}x{} vs {}x{}",
-            x.width, x.height, r.width, r.height
-        ));
+        return Err(format!("sizes differ: {}x{} vs {}x{}", x.width, x.height, r.width, r.height));
     }
     println!(
         "relMSE {:.6}  RMSE {:.6}  mean {:.6} vs {:.6} ({:+.3}%)",
@@ -182,11 +155,7 @@ struct Progress {
 
 impl Progress {
     fn new(quiet: bool) -> Self {
-        Self {
-            quiet,
-            start: Instant::now(),
-            last: Mutex::new(None),
-        }
+        Self { quiet, start: Instant::now(), last: Mutex::new(None) }
     }
 
     fn update(&self, done: usize, total: usize) {
@@ -201,11 +170,7 @@ impl Progress {
         *last = Some(now);
         let f = done as f64 / total as f64;
         let elapsed = self.start.elapsed().as_secs_f64();
-        let eta = if f > 0.0 {
-            elapsed * (1.0 - f) / f
-        } else {
-            0.0
-        };
+        let eta = if f > 0.0 { elapsed * (1.0 - f) / f } else { 0.0 };
         let width = 40;
         let filled = (f * width as f64) as usize;
         eprint!(

@@ -9,9 +9,7 @@ pub fn rel_mse(x: &[Vec3], reference: &[Vec3]) -> f64 {
         .iter()
         .zip(reference)
         .map(|(a, r)| {
-            (0..3)
-                .map(|c| ((a[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01))
-                .sum::<f64>()
+            (0..3).map(|c| ((a[c] - r[c]) as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01)).sum::<f64>()
         })
         .sum();
     sum / (3 * x.len()) as f64

@@ -44,17 +44,7 @@ impl Camera {
         let du = u * (wd / width as f32);
         let dv = -v * (h / height as f32);
         let corner = origin - focus_dist * w - 0.5 * wd * u + 0.5 * h * v;
-        Self {
-            origin,
-            u,
-            v,
-            w,
-            corner,
-            du,
-            dv,
-            lens_radius: aperture_radius,
-            shutter,
-        }
+        Self { origin, u, v, w, corner, du, dv, lens_radius: aperture_radius, shutter }
     }
 
     /// The ray through image position `pixel` (in pixels, continuous), lens sample `lens` in
@@ -69,11 +59,7 @@ impl Camera {
             self.origin
         };
         let (t0, t1) = self.shutter;
-        Ray {
-            origin,
-            dir: (target - origin).normalize(),
-            time: t0 + (t1 - t0) * time_u,
-        }
+        Ray { origin, dir: (target - origin).normalize(), time: t0 + (t1 - t0) * time_u }
     }
 
     /// The direction the camera looks along.
@@ -103,26 +89,13 @@ mod tests {
         let top = c.generate_ray(Vec2::new(128.0, 0.0), Vec2::ZERO, 0.0);
         assert!(top.dir.y > 0.0, "row 0 is the top row");
         let half = (20f32).to_radians();
-        assert!(
-            (top.dir.y.atan2(top.dir.z) - half).abs() < 1e-5,
-            "vertical fov"
-        );
+        assert!((top.dir.y.atan2(top.dir.z) - half).abs() < 1e-5, "vertical fov");
     }
 
     #[test]
     fn thin_lens_rays_converge_on_the_focus_plane() {
         let from = Vec3::new(13.0, 2.0, 3.0);
-        let c = Camera::new(
-            from,
-            Vec3::ZERO,
-            Vec3::Y,
-            20.0,
-            0.5,
-            10.0,
-            (0.0, 0.0),
-            384,
-            216,
-        );
+        let c = Camera::new(from, Vec3::ZERO, Vec3::Y, 20.0, 0.5, 10.0, (0.0, 0.0), 384, 216);
         let a = c.generate_ray(Vec2::new(100.0, 50.0), Vec2::new(0.1, 0.9), 0.0);
         let b = c.generate_ray(Vec2::new(100.0, 50.0), Vec2::new(0.8, 0.2), 0.0);
         assert!(a.origin != b.origin);

@@ -82,19 +82,11 @@ impl Geometry {
             return Self::default();
         }
         let aabbs: Vec<Aabb> = prims.iter().map(Primitive::aabb).collect();
-        let bvh = build_cwbvh(
-            &aabbs,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
         let order = &bvh.primitive_indices;
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
         let material = order.iter().map(|&i| material[i as usize]).collect();
-        Self {
-            prims,
-            material,
-            bvh: Some(bvh),
-        }
+        Self { prims, material, bvh: Some(bvh) }
     }
 
     /// Closest hit with `t` in `(0, tmax)`.
@@ -111,11 +103,7 @@ impl Geometry {
         }
         let prim = hit.primitive_id;
         let surface = self.prims[prim as usize].surface(ray.at(hit.t));
-        Some(Hit {
-            t: hit.t,
-            prim,
-            surface,
-        })
+        Some(Hit { t: hit.t, prim, surface })
     }
 
     /// True when something lies on the ray with `t` in `(0, tmax)`.
@@ -125,9 +113,7 @@ impl Geometry {
             return false;
         };
         let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
-        !bvh.ray_traverse_miss(oray, |r, slot| {
-            self.prims[slot].intersect(r.origin, r.direction, r.tmax)
-        })
+        !bvh.ray_traverse_miss(oray, |r, slot| self.prims[slot].intersect(r.origin, r.direction, r.tmax))
     }
 }
 
@@ -149,10 +135,7 @@ mod tests {
             let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
             if i % 2 == 0 {
                 let r = [0.001, 0.3, 2.0, 50.0][i % 4 / 2 + (i % 7 == 0) as usize * 2];
-                v.push(Primitive::Sphere(Sphere {
-                    center: c,
-                    radius: r,
-                }));
+                v.push(Primitive::Sphere(Sphere { center: c, radius: r }));
             } else {
                 let u = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
                 let w = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
@@ -181,13 +164,8 @@ mod tests {
             let o = Vec3A::new(rnd(), rnd(), rnd()) * 30.0;
             let d = Vec3A::new(rnd(), rnd(), rnd());
             let ray = Ray::new(o, d);
-            let brute = prims
-                .iter()
-                .map(|p| p.intersect(o, d, f32::INFINITY))
-                .fold(f32::INFINITY, f32::min);
-            let got = geo
-                .intersect(&ray, f32::INFINITY)
-                .map_or(f32::INFINITY, |h| h.t);
+            let brute = prims.iter().map(|p| p.intersect(o, d, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+            let got = geo.intersect(&ray, f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
             assert_eq!(brute, got, "ray {o} {d}");
             assert_eq!(geo.occluded(&ray, f32::INFINITY), brute.is_finite());
             if got.is_finite() {
@@ -195,10 +173,7 @@ mod tests {
                 sum_t += got as f64;
             }
         }
-        assert!(
-            hits > 500,
-            "the test must exercise hits: {hits}, sum {sum_t}"
-        );
+        assert!(hits > 500, "the test must exercise hits: {hits}, sum {sum_t}");
     }
 
     #[test]

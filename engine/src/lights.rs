@@ -25,10 +25,7 @@ impl LightTable {
     /// Collects the emitters of `geometry`. Spheres under a non-uniform transform are not
     /// sampled (their emission still counts when a BSDF-sampled ray hits them).
     pub fn build(geometry: &Geometry, materials: &[Material]) -> Self {
-        let mut t = LightTable {
-            light_of_prim: vec![NO_LIGHT; geometry.prims.len()],
-            ..Default::default()
-        };
+        let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
         let mut power = Vec::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
             let Material::DiffuseLight { emit, two_sided } = materials[m as usize] else {
@@ -67,10 +64,7 @@ impl LightTable {
     /// Picks a light with `u` in [0, 1): (light index, probability).
     #[inline]
     pub fn pick(&self, u: f32) -> (usize, f32) {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .min(self.cdf.len() - 1);
+        let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
         (i, self.pmf[i])
     }
 

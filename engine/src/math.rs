@@ -17,11 +17,7 @@ pub struct Ray {
 impl Ray {
     /// A ray at time 0.
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
-        Self {
-            origin,
-            dir,
-            time: 0.0,
-        }
+        Self { origin, dir, time: 0.0 }
     }
 
     /// The point at parameter `t`.
@@ -61,12 +57,26 @@ impl Frame {
     }
 }
 
-/// Moves a surface point off its surface along `n` (which must point to the side the new ray
-/// leaves from), by a distance proportional to the magnitude of the coordinates: Wächter and
-/// Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6.
-/// Scale invariant, and with no epsilon to tune per scene.
+/// The bound `n u / (1 - n u)` on the relative error of `n` chained f32 operations (pbrt-v4
+/// section 6.8.1), with u = 2^-24.
+pub const fn gamma(n: u32) -> f32 {
+    let u = f32::EPSILON * 0.5;
+    n as f32 * u / (1.0 - n as f32 * u)
+}
+
+/// Moves a surface point whose coordinates are off by at most `err` (absolute, per component)
+/// to the side of `n` (the side the new ray leaves from): first by the error bound along the
+/// normal (pbrt-v4 section 6.8.6), then by a few hundred ulps to absorb the rounding of that
+/// step (Wächter and Binder, Ray Tracing Gems ch. 6). No epsilon to tune per scene.
 #[inline]
-pub fn offset_ray_origin(p: Vec3A, n: Vec3A) -> Vec3A {
+pub fn offset_ray_origin(p: Vec3A, err: f32, n: Vec3A) -> Vec3A {
+    let d = err * n.abs().element_sum();
+    nudge(p + d * n, n)
+}
+
+/// Wächter and Binder's offset: 256 ulps along `n` (a fixed tiny step near the origin).
+#[inline]
+fn nudge(p: Vec3A, n: Vec3A) -> Vec3A {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
     const INT_SCALE: f32 = 256.0;
@@ -98,10 +108,7 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     let (r, theta) = if o.x.abs() > o.y.abs() {
         (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
     } else {
-        (
-            o.y,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
-        )
+        (o.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y))
     };
     r * Vec2::new(theta.cos(), theta.sin())
 }
@@ -112,20 +119,23 @@ mod tests {
 
     #[test]
     fn frame_is_orthonormal() {
-        for n in [
-            Vec3A::Z,
-            -Vec3A::Z,
-            Vec3A::X,
-            Vec3A::new(0.3, -0.4, 0.866).normalize(),
-        ] {
+        for n in [Vec3A::Z, -Vec3A::Z, Vec3A::X, Vec3A::new(0.3, -0.4, 0.866).normalize()] {
             let f = Frame::from_normal(n);
             assert!((f.t.length() - 1.0).abs() < 1e-6);
             assert!((f.b.length() - 1.0).abs() < 1e-6);
-            assert!(
-                f.t.dot(f.b).abs() < 1e-6 && f.t.dot(n).abs() < 1e-6 && f.b.dot(n).abs() < 1e-6
-            );
+            assert!(f.t.dot(f.b).abs() < 1e-6 && f.t.dot(n).abs() < 1e-6 && f.b.dot(n).abs() < 1e-6);
             assert!((f.t.cross(f.b) - n).length() < 1e-5, "right handed");
         }
+    }
+
+    #[test]
+    fn offset_clears_the_error_bound() {
+        let p = Vec3A::new(3.0, 1000.0, -2.0);
+        let n = Vec3A::new(0.0, 1.0, 0.0);
+        let o = offset_ray_origin(p, 1e-3, n);
+        assert!(o.y - p.y >= 1e-3);
+        // Plus the nudge of 256 ulps (ulp(1000) = 2^-14).
+        assert!(o.y - p.y <= 1e-3 + 257.0 / 16384.0);
     }
 
     #[test]
@@ -133,13 +143,10 @@ mod tests {
         for scale in [1e-4f32, 1e-2, 1.0, 555.0, 1e5] {
             let p = Vec3A::new(0.3, -0.7, 0.2) * scale;
             let n = Vec3A::new(0.0, 1.0, 0.0);
-            let o = offset_ray_origin(p, n);
+            let o = offset_ray_origin(p, 0.0, n);
             assert!(o.y > p.y, "scale {scale}");
             assert_eq!((o.x, o.z), (p.x, p.z));
-            assert!(
-                (o.y - p.y) < 1e-3 * scale.max(1.0 / 32.0),
-                "offset too large at {scale}"
-            );
+            assert!((o.y - p.y) < 1e-3 * scale.max(1.0 / 32.0), "offset too large at {scale}");
         }
     }
 }

@@ -133,10 +133,7 @@ pub fn extract_render_scene(
 pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) {
     match *shape {
         ShapeDesc::Sphere { center, radius } => {
-            let sphere = Sphere {
-                center: center.into(),
-                radius,
-            };
+            let sphere = Sphere { center: center.into(), radius };
             // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything
             // else is intersected in object space.
             let lin = m.matrix3;
@@ -144,10 +141,7 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
             let diagonal_uniform = s > 0.0 && lin == glam::Mat3A::from_diagonal(Vec3::splat(s));
             if diagonal_uniform {
                 let center = m.transform_point3a(sphere.center);
-                out.push(Primitive::Sphere(Sphere {
-                    center,
-                    radius: radius * s,
-                }));
+                out.push(Primitive::Sphere(Sphere { center, radius: radius * s }));
             } else if let Some(ts) = TransformedSphere::new(sphere, *m) {
                 out.push(Primitive::TransformedSphere(ts));
             }
@@ -168,11 +162,7 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
 }
 
 fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) {
-    let (q, mut u, mut v) = (
-        m.transform_point3a(q),
-        m.transform_vector3a(u),
-        m.transform_vector3a(v),
-    );
+    let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
     // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
     if m.matrix3.determinant() < 0.0 {
         std::mem::swap(&mut u, &mut v);
@@ -185,18 +175,9 @@ fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive
 fn material(desc: &MaterialDesc) -> Material {
     match *desc {
         MaterialDesc::Lambertian { albedo } => Material::Lambertian { albedo: albedo.0 },
-        MaterialDesc::Metal { albedo, fuzz } => Material::Metal {
-            albedo: albedo.0,
-            fuzz: fuzz.0.min(1.0),
-        },
-        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric {
-            ior: ior.0,
-            fresnel,
-        },
-        MaterialDesc::DiffuseLight { emit, two_sided } => Material::DiffuseLight {
-            emit: emit.0,
-            two_sided,
-        },
+        MaterialDesc::Metal { albedo, fuzz } => Material::Metal { albedo: albedo.0, fuzz: fuzz.0.min(1.0) },
+        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric { ior: ior.0, fresnel },
+        MaterialDesc::DiffuseLight { emit, two_sided } => Material::DiffuseLight { emit: emit.0, two_sided },
     }
 }
 
@@ -212,19 +193,13 @@ impl SceneWorld {
     pub fn new(desc: &SceneDesc) -> Self {
         let mut world = World::new();
         let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
-        world.insert_resource(Materials(
-            desc.materials.iter().map(|(_, m)| material(m)).collect(),
-        ));
+        world.insert_resource(Materials(desc.materials.iter().map(|(_, m)| material(m)).collect()));
         for obj in &desc.objects {
             let id = names
                 .iter()
                 .position(|n| *n == obj.material.0)
                 .expect("material names are validated at load");
-            world.spawn((
-                Transform(compose(&obj.transform)),
-                Shape(obj.shape),
-                MaterialId(id as u32),
-            ));
+            world.spawn((Transform(compose(&obj.transform)), Shape(obj.shape), MaterialId(id as u32)));
         }
         let r = desc.render;
         world.insert_resource(Settings(RenderSettings {
@@ -239,18 +214,12 @@ impl SceneWorld {
         world.insert_resource(BackgroundLight(match desc.background {
             BackgroundDesc::Black => Background::Constant(Vec3::ZERO),
             BackgroundDesc::Constant(c) => Background::Constant(c.0),
-            BackgroundDesc::Sky { bottom, top } => Background::Sky {
-                bottom: bottom.0,
-                top: top.0,
-            },
+            BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
         }));
         world.init_resource::<SceneGeometry>();
         world.init_resource::<Extracted>();
         let mut schedule = Schedule::new(Update);
-        schedule.add_systems((
-            rebuild_geometry,
-            extract_render_scene.after(rebuild_geometry),
-        ));
+        schedule.add_systems((rebuild_geometry, extract_render_scene.after(rebuild_geometry)));
         Self { world, schedule }
     }
 
@@ -258,11 +227,7 @@ impl SceneWorld {
     pub fn update(&mut self) -> Arc<RenderScene> {
         self.schedule.run(&mut self.world);
         self.world.clear_trackers();
-        self.world
-            .resource::<Extracted>()
-            .0
-            .clone()
-            .expect("extract_render_scene always runs")
+        self.world.resource::<Extracted>().0.clone().expect("extract_render_scene always runs")
     }
 
     /// Convenience: spawn and extract in one step.

@@ -24,23 +24,13 @@ impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
         let n = (width * height) as usize;
-        Self {
-            width,
-            height,
-            spp: 0,
-            sum: vec![[0.0; 3]; n],
-            sum_sq: vec![[0.0; 3]; n],
-            non_finite: 0,
-        }
+        Self { width, height, spp: 0, sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], non_finite: 0 }
     }
 
     /// Per-pixel mean.
     pub fn mean(&self) -> Vec<Vec3> {
         let k = 1.0 / self.spp.max(1) as f64;
-        self.sum
-            .iter()
-            .map(|s| Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32))
-            .collect()
+        self.sum.iter().map(|s| Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)).collect()
     }
 
     /// Per-pixel variance of the mean (sample variance / spp).

@@ -9,6 +9,7 @@ use crate::sampler::{Sampler, pixel_sample};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::shape::SurfacePoint;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -18,13 +19,8 @@ const TILE: u32 = 16;
 /// Renders the whole image. `progress(done, total)` is called after each tile, from any thread.
 pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> Film {
     let s = scene.settings;
-    let _span = tracing::info_span!(
-        "oracle_render",
-        width = s.width,
-        height = s.height,
-        spp = s.spp
-    )
-    .entered();
+    let _span =
+        tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
     let (tx, ty) = (s.width.div_ceil(TILE), s.height.div_ceil(TILE));
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
@@ -70,9 +66,7 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32) -> PixelAccumulator {
         let mut sampler = Sampler::new(s.seed, pixel, i);
         let lens = sampler.next_2d();
         let time = if has_shutter { sampler.next_1d() } else { 0.0 };
-        let ray = scene
-            .camera
-            .generate_ray(Vec2::new(x as f32, y as f32) + offset, lens, time);
+        let ray = scene.camera.generate_ray(Vec2::new(x as f32, y as f32) + offset, lens, time);
         acc.add(radiance(scene, ray, &mut sampler));
     }
     acc
@@ -115,7 +109,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
             break;
         }
         if material::has_smooth_part(mat) && !lights.is_empty() {
-            l += beta * direct_light(scene, sp.p, sp.n, wo, mat, ray.time, sampler);
+            l += beta * direct_light(scene, &sp, wo, mat, ray.time, sampler);
         }
         let Some(bs) = material::sample(mat, wo, sp.n, sampler.next_2d(), sampler.next_1d()) else {
             break;
@@ -126,11 +120,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
         prev_pdf = bs.pdf;
         prev_p = sp.p;
         let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
-        ray = Ray {
-            origin: offset_ray_origin(sp.p, side),
-            dir: bs.wi,
-            time: ray.time,
-        };
+        ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time: ray.time };
         depth += 1;
         if depth >= s.rr_depth {
             let rr = (beta * eta_scale).max_element();
@@ -149,13 +139,13 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
 /// One light sample at a surface point, MIS-weighted against BSDF sampling.
 fn direct_light(
     scene: &RenderScene,
-    p: Vec3A,
-    n: Vec3A,
+    sp: &SurfacePoint,
     wo: Vec3A,
     mat: &pathwave_engine::material::Material,
     time: f32,
     sampler: &mut Sampler,
 ) -> Vec3 {
+    let (p, n) = (sp.p, sp.n);
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
     let (light, pmf) = lights.pick(sampler.next_1d());
@@ -176,13 +166,9 @@ fn direct_light(
     if f == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let origin = offset_ray_origin(p, if wi.dot(n) > 0.0 { n } else { -n });
-    let target = offset_ray_origin(ls.p, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
-    let shadow = Ray {
-        origin,
-        dir: target - origin,
-        time,
-    };
+    let origin = offset_ray_origin(p, sp.err, if wi.dot(n) > 0.0 { n } else { -n });
+    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
+    let shadow = Ray { origin, dir: target - origin, time };
     if geo.occluded(&shadow, 1.0) {
         return Vec3::ZERO;
     }

@@ -61,8 +61,7 @@ pub fn pixel_sample(seed: u64, pixel: u32, s: u32, n: u32) -> Vec2 {
     let jy = randfloat(s, p.wrapping_mul(0x368c_c8b7));
     let x = ((s % m) as f32 + (sy as f32 + jx) / rows as f32) / m as f32;
     let y = ((s / m) as f32 + (sx as f32 + jy) / m as f32) / rows as f32;
-    let shift =
-        Vec2::new((h >> 40) as f32, ((h >> 16) & 0xff_ffff) as f32) * (1.0 / (1u32 << 24) as f32);
+    let shift = Vec2::new((h >> 40) as f32, ((h >> 16) & 0xff_ffff) as f32) * (1.0 / (1u32 << 24) as f32);
     let v = Vec2::new(x, y) + shift;
     v - v.floor()
 }
@@ -159,10 +158,7 @@ mod tests {
     fn pixel_samples_are_stratified_for_any_count() {
         for n in [1u32, 4, 7, 16, 33, 64] {
             let pts: Vec<Vec2> = (0..n).map(|s| pixel_sample(0, 42, s, n)).collect();
-            assert!(
-                pts.iter()
-                    .all(|p| (0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y))
-            );
+            assert!(pts.iter().all(|p| (0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y)));
             // 1D projections: one sample per stratum of width 1/n (up to the toroidal shift, which
             // moves every point by the same amount: strata counts stay at most 2).
             for axis in 0..2 {
@@ -181,14 +177,8 @@ mod tests {
         // box filter): the mean position is the pixel centre for each index.
         for n in [3u32, 10] {
             for s in 0..n {
-                let mean = (0..20_000)
-                    .map(|px| pixel_sample(5, px, s, n))
-                    .sum::<Vec2>()
-                    / 20_000.0;
-                assert!(
-                    (mean - Vec2::splat(0.5)).length() < 0.01,
-                    "n {n} s {s}: {mean}"
-                );
+                let mean = (0..20_000).map(|px| pixel_sample(5, px, s, n)).sum::<Vec2>() / 20_000.0;
+                assert!((mean - Vec2::splat(0.5)).length() < 0.01, "n {n} s {s}: {mean}");
             }
         }
     }

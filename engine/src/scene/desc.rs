@@ -115,14 +115,7 @@ pub struct RenderDesc {
 impl Default for RenderDesc {
     fn default() -> Self {
         let n = |x| NonZeroU32::new(x).unwrap();
-        Self {
-            width: n(512),
-            height: n(512),
-            spp: n(64),
-            max_depth: 64,
-            rr_depth: 5,
-            seed: 0,
-        }
+        Self { width: n(512), height: n(512), spp: n(64), max_depth: 64, rr_depth: 5, seed: 0 }
     }
 }
 
@@ -208,16 +201,11 @@ impl<'de> Deserialize<'de> for NamedMaterials {
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("a map from material names to materials")
             }
-            fn visit_map<A: serde::de::MapAccess<'de>>(
-                self,
-                mut map: A,
-            ) -> Result<Self::Value, A::Error> {
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
                 let mut out: Vec<(String, MaterialDesc)> = Vec::new();
                 while let Some(name) = map.next_key::<String>()? {
                     if out.iter().any(|(n, _)| *n == name) {
-                        return Err(A::Error::custom(format!(
-                            "material \"{name}\" is defined twice"
-                        )));
+                        return Err(A::Error::custom(format!("material \"{name}\" is defined twice")));
                     }
                     let m = map.next_value()?;
                     out.push((name, m));
@@ -259,10 +247,7 @@ impl<'de> Deserialize<'de> for MaterialRef {
         MATERIAL_NAMES.with(|m| match &*m.borrow() {
             Some(names) if !names.contains(&name) => {
                 let list: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
-                Err(D::Error::custom(format!(
-                    "unknown material \"{name}\"; defined: {}",
-                    list.join(", ")
-                )))
+                Err(D::Error::custom(format!("unknown material \"{name}\"; defined: {}", list.join(", "))))
             }
             _ => Ok(MaterialRef(name.clone())),
         })
@@ -323,31 +308,18 @@ impl TryFrom<RawShape> for ShapeDesc {
     type Error = String;
     fn try_from(r: RawShape) -> Result<Self, String> {
         Ok(match r {
-            RawShape::Sphere { center, radius } => ShapeDesc::Sphere {
-                center: center.0,
-                radius: radius.0,
-            },
+            RawShape::Sphere { center, radius } => ShapeDesc::Sphere { center: center.0, radius: radius.0 },
             RawShape::Quad { q, u, v } => {
                 let c = u.0.cross(v.0);
                 if !(c.length_squared() > 0.0) {
-                    return Err(format!(
-                        "Quad has no area: u {} and v {} are parallel or zero",
-                        u.0, v.0
-                    ));
+                    return Err(format!("Quad has no area: u {} and v {} are parallel or zero", u.0, v.0));
                 }
-                ShapeDesc::Quad {
-                    q: q.0,
-                    u: u.0,
-                    v: v.0,
-                }
+                ShapeDesc::Quad { q: q.0, u: u.0, v: v.0 }
             }
             RawShape::Box { a, b } => {
                 let (min, max) = (a.0.min(b.0), a.0.max(b.0));
                 if (max - min).min_element() <= 0.0 {
-                    return Err(format!(
-                        "Box is flat: corners {} and {} share a coordinate",
-                        a.0, b.0
-                    ));
+                    return Err(format!("Box is flat: corners {} and {} share a coordinate", a.0, b.0));
                 }
                 ShapeDesc::Box { min, max }
             }
@@ -389,10 +361,7 @@ impl TryFrom<RawTransform> for TransformOp {
             RawTransform::Matrix(rows) => {
                 let r = rows.map(|row| Vec4::new(row[0].0, row[1].0, row[2].0, row[3].0));
                 if r[3] != Vec4::W {
-                    return Err(format!(
-                        "Matrix: the last row must be (0, 0, 0, 1), found {}",
-                        r[3]
-                    ));
+                    return Err(format!("Matrix: the last row must be (0, 0, 0, 1), found {}", r[3]));
                 }
                 Affine3A::from_mat4(Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose())
             }

@@ -5,21 +5,13 @@ use glam::Vec3;
 use serde::{Deserialize, Deserializer, de::Error};
 
 fn check<'de, D: Deserializer<'de>, T>(ok: bool, value: T, what: &str) -> Result<T, D::Error> {
-    if ok {
-        Ok(value)
-    } else {
-        Err(D::Error::custom(what))
-    }
+    if ok { Ok(value) } else { Err(D::Error::custom(what)) }
 }
 
 fn vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
     let (x, y, z) = <(f32, f32, f32)>::deserialize(d)?;
     let v = Vec3::new(x, y, z);
-    check::<D, _>(
-        v.is_finite(),
-        v,
-        &format!("expected three finite numbers, found ({x}, {y}, {z})"),
-    )
+    check::<D, _>(v.is_finite(), v, &format!("expected three finite numbers, found ({x}, {y}, {z})"))
 }
 
 /// Three finite numbers `(x, y, z)`: a point or an offset.
@@ -70,11 +62,7 @@ impl<'de> Deserialize<'de> for Albedo {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = vec3(d)?;
         let ok = v.min_element() >= 0.0 && v.max_element() <= 1.0;
-        check::<D, _>(
-            ok,
-            Albedo(v),
-            &format!("expected an albedo with components in [0, 1], found {v}"),
-        )
+        check::<D, _>(ok, Albedo(v), &format!("expected an albedo with components in [0, 1], found {v}"))
     }
 }
 
@@ -85,11 +73,7 @@ pub struct Finite(pub f32);
 impl<'de> Deserialize<'de> for Finite {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let x = f32::deserialize(d)?;
-        check::<D, _>(
-            x.is_finite(),
-            Finite(x),
-            &format!("expected a finite number, found {x}"),
-        )
+        check::<D, _>(x.is_finite(), Finite(x), &format!("expected a finite number, found {x}"))
     }
 }
 

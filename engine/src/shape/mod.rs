@@ -20,6 +20,8 @@ pub struct SurfacePoint {
     pub n: Vec3A,
     /// Surface parameterisation (see each shape).
     pub uv: Vec2,
+    /// Bound on the absolute error of each coordinate of `p` (for spawning rays off it).
+    pub err: f32,
 }
 
 /// A point sampled on an emitter, with its density in solid angle as seen from the reference point.
@@ -31,6 +33,8 @@ pub struct LightSample {
     pub n: Vec3A,
     /// Density with respect to solid angle at the reference point.
     pub pdf: f32,
+    /// Bound on the absolute error of each coordinate of `p`.
+    pub err: f32,
 }
 
 /// Converts an area density at `p` (normal `n`) to a solid-angle density seen from `from`.
@@ -39,9 +43,5 @@ pub(crate) fn area_to_solid_angle(pdf_area: f32, from: Vec3A, p: Vec3A, n: Vec3A
     let d = p - from;
     let dist2 = d.length_squared();
     let cos = (n.dot(d) / dist2.sqrt()).abs();
-    if cos <= 0.0 {
-        0.0
-    } else {
-        pdf_area * dist2 / cos
-    }
+    if cos <= 0.0 { 0.0 } else { pdf_area * dist2 / cos }
 }

@@ -1,6 +1,7 @@
 //! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
 
 use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use crate::math::gamma;
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
@@ -30,25 +31,19 @@ impl Quad {
             return None;
         }
         let area = len2.sqrt();
-        Some(Self {
-            q,
-            u,
-            v,
-            n: c / area,
-            w: c / len2,
-            area,
-        })
+        Some(Self { q, u, v, n: c / area, w: c / len2, area })
+    }
+
+    /// Error bound of points computed as `q + a u + b v`.
+    #[inline]
+    pub fn point_error(&self) -> f32 {
+        gamma(4) * (self.q.abs() + self.u.abs() + self.v.abs()).max_element()
     }
 
     /// Bounding box.
     pub fn aabb(&self) -> Aabb {
         let mut b = Aabb::empty();
-        for p in [
-            self.q,
-            self.q + self.u,
-            self.q + self.v,
-            self.q + self.u + self.v,
-        ] {
+        for p in [self.q, self.q + self.u, self.q + self.v, self.q + self.u + self.v] {
             b.extend(p);
         }
         b
@@ -68,11 +63,7 @@ impl Quad {
         let ph = o + t * d - self.q;
         let a = self.w.dot(ph.cross(self.v));
         let b = self.w.dot(self.u.cross(ph));
-        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
-            t
-        } else {
-            f32::INFINITY
-        }
+        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) { t } else { f32::INFINITY }
     }
 
     /// Surface data at the point `p`, re-projected onto the plane as `Q + a u + b v`.
@@ -85,6 +76,7 @@ impl Quad {
             p: self.q + a * self.u + b * self.v,
             n: self.n,
             uv: Vec2::new(a, b),
+            err: self.point_error(),
         }
     }
 
@@ -95,6 +87,7 @@ impl Quad {
             p,
             n: self.n,
             pdf: area_to_solid_angle(1.0 / self.area, from, p, self.n),
+            err: self.point_error(),
         }
     }
 
@@ -122,31 +115,16 @@ mod tests {
         assert!((sp.uv - Vec2::new(0.25, 0.75)).length() < 1e-6);
         assert_eq!(sp.n, Vec3A::Z);
         // From the back side as well: geometry is two-sided.
-        assert!(
-            q.intersect(Vec3A::new(0.5, 0.5, 1.0), -Vec3A::Z, f32::INFINITY)
-                .is_finite()
-        );
+        assert!(q.intersect(Vec3A::new(0.5, 0.5, 1.0), -Vec3A::Z, f32::INFINITY).is_finite());
     }
 
     #[test]
     fn miss_outside_parallel_behind() {
         let q = unit();
-        assert_eq!(
-            q.intersect(Vec3A::new(1.5, 0.5, -1.0), Vec3A::Z, f32::INFINITY),
-            f32::INFINITY
-        );
-        assert_eq!(
-            q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::X, f32::INFINITY),
-            f32::INFINITY
-        );
-        assert_eq!(
-            q.intersect(Vec3A::new(0.5, 0.5, 1.0), Vec3A::Z, f32::INFINITY),
-            f32::INFINITY
-        );
-        assert_eq!(
-            q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::Z, 0.5),
-            f32::INFINITY
-        );
+        assert_eq!(q.intersect(Vec3A::new(1.5, 0.5, -1.0), Vec3A::Z, f32::INFINITY), f32::INFINITY);
+        assert_eq!(q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::X, f32::INFINITY), f32::INFINITY);
+        assert_eq!(q.intersect(Vec3A::new(0.5, 0.5, 1.0), Vec3A::Z, f32::INFINITY), f32::INFINITY);
+        assert_eq!(q.intersect(Vec3A::new(0.5, 0.5, -1.0), Vec3A::Z, 0.5), f32::INFINITY);
     }
 
     #[test]
@@ -172,9 +150,6 @@ mod tests {
         let q = Quad::new(Vec3A::new(-1.0, -1.0, 2.0), Vec3A::X * 2.0, Vec3A::Y * 2.0).unwrap();
         let ls = q.sample_solid_angle(Vec3A::ZERO, Vec2::splat(0.5));
         assert!((ls.p - Vec3A::new(0.0, 0.0, 2.0)).length() < 1e-6);
-        assert!(
-            (ls.pdf - 4.0 / 4.0).abs() < 1e-6,
-            "dist^2 / (A cos) = 4 / 4"
-        );
+        assert!((ls.pdf - 4.0 / 4.0).abs() < 1e-6, "dist^2 / (A cos) = 4 / 4");
     }
 }

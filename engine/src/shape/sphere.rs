@@ -2,7 +2,7 @@
 //! (SEED.md section 12.4) for emitters.
 
 use super::{LightSample, SurfacePoint, area_to_solid_angle};
-use crate::math::Frame;
+use crate::math::{Frame, gamma};
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 use std::f32::consts::PI;
@@ -19,10 +19,14 @@ pub struct Sphere {
 impl Sphere {
     /// Bounding box.
     pub fn aabb(&self) -> Aabb {
-        Aabb::new(
-            self.center - Vec3A::splat(self.radius),
-            self.center + Vec3A::splat(self.radius),
-        )
+        Aabb::new(self.center - Vec3A::splat(self.radius), self.center + Vec3A::splat(self.radius))
+    }
+
+    /// Error bound of points computed as `center + r n`: it scales with |center| + r (the huge
+    /// ground sphere of spheres-sky has an error of ~ulp(1000) at points near y = 0).
+    #[inline]
+    pub fn point_error(&self) -> f32 {
+        gamma(6) * (self.center.abs().max_element() + self.radius)
     }
 
     /// Surface area.
@@ -69,11 +73,7 @@ impl Sphere {
         let p = self.center + self.radius * n;
         let u = ((-n.z).atan2(n.x) + PI) / (2.0 * PI);
         let v = (-n.y).clamp(-1.0, 1.0).acos() / PI;
-        SurfacePoint {
-            p,
-            n,
-            uv: Vec2::new(u, v),
-        }
+        SurfacePoint { p, n, uv: Vec2::new(u, v), err: self.point_error() }
     }
 
     /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
@@ -88,6 +88,7 @@ impl Sphere {
                 p,
                 n,
                 pdf: area_to_solid_angle(1.0 / self.area(), from, p, n),
+                err: self.point_error(),
             };
         }
         let sin2_max = r2 / dc2;
@@ -112,6 +113,7 @@ impl Sphere {
             p: self.center + self.radius * n,
             n,
             pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+            err: self.point_error(),
         }
     }
 
@@ -123,11 +125,8 @@ impl Sphere {
             return area_to_solid_angle(1.0 / self.area(), from, p, n);
         }
         let sin2_max = r2 / dc2;
-        let one_minus_cos_max = if sin2_max < 0.000_685_23 {
-            sin2_max / 2.0
-        } else {
-            1.0 - (1.0 - sin2_max).sqrt()
-        };
+        let one_minus_cos_max =
+            if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - (1.0 - sin2_max).sqrt() };
         1.0 / (2.0 * PI * one_minus_cos_max)
     }
 }
@@ -146,10 +145,7 @@ mod tests {
     use super::*;
 
     fn unit() -> Sphere {
-        Sphere {
-            center: Vec3A::ZERO,
-            radius: 1.0,
-        }
+        Sphere { center: Vec3A::ZERO, radius: 1.0 }
     }
 
     #[test]
@@ -161,28 +157,15 @@ mod tests {
     #[test]
     fn miss_and_behind_origin() {
         let s = unit();
-        assert_eq!(
-            s.intersect(Vec3A::new(0.0, 2.0, -5.0), Vec3A::Z, f32::INFINITY),
-            f32::INFINITY
-        );
-        assert_eq!(
-            s.intersect(Vec3A::new(0.0, 0.0, 5.0), Vec3A::Z, f32::INFINITY),
-            f32::INFINITY
-        );
-        assert_eq!(
-            s.intersect(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z, 3.9),
-            f32::INFINITY,
-            "tmax"
-        );
+        assert_eq!(s.intersect(Vec3A::new(0.0, 2.0, -5.0), Vec3A::Z, f32::INFINITY), f32::INFINITY);
+        assert_eq!(s.intersect(Vec3A::new(0.0, 0.0, 5.0), Vec3A::Z, f32::INFINITY), f32::INFINITY);
+        assert_eq!(s.intersect(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z, 3.9), f32::INFINITY, "tmax");
     }
 
     #[test]
     fn inside_takes_far_root() {
         let t = unit().intersect(Vec3A::ZERO, Vec3A::new(0.0, 2.0, 0.0), f32::INFINITY);
-        assert!(
-            (t - 0.5).abs() < 1e-6,
-            "unnormalised direction keeps t parametric: {t}"
-        );
+        assert!((t - 0.5).abs() < 1e-6, "unnormalised direction keeps t parametric: {t}");
     }
 
     #[test]
@@ -197,10 +180,7 @@ mod tests {
     #[test]
     fn huge_sphere_is_precise() {
         // The spheres-sky ground: a ray from the camera height hitting y = 0 far away.
-        let s = Sphere {
-            center: Vec3A::new(0.0, -1000.0, 0.0),
-            radius: 1000.0,
-        };
+        let s = Sphere { center: Vec3A::new(0.0, -1000.0, 0.0), radius: 1000.0 };
         let o = Vec3A::new(13.0, 2.0, 3.0);
         let d = Vec3A::new(-13.0, -2.0, -3.0).normalize();
         let t = s.intersect(o, d, f32::INFINITY);
@@ -221,19 +201,13 @@ mod tests {
 
     #[test]
     fn cone_samples_lie_on_visible_cap_with_constant_pdf() {
-        let s = Sphere {
-            center: Vec3A::new(0.0, 0.0, 10.0),
-            radius: 2.0,
-        };
+        let s = Sphere { center: Vec3A::new(0.0, 0.0, 10.0), radius: 2.0 };
         let from = Vec3A::ZERO;
         for i in 0..64 {
             let u = Vec2::new((i as f32 + 0.5) / 64.0, ((i * 37) % 64) as f32 / 64.0);
             let ls = s.sample_solid_angle(from, u);
             assert!(((ls.p - s.center).length() - 2.0).abs() < 1e-4);
-            assert!(
-                ls.n.dot(from - ls.p) >= -1e-4,
-                "sampled point faces the reference"
-            );
+            assert!(ls.n.dot(from - ls.p) >= -1e-4, "sampled point faces the reference");
             let expected = s.pdf_solid_angle(from, ls.p, ls.n);
             assert!((ls.pdf - expected).abs() < 1e-3 * expected);
         }

@@ -2,6 +2,7 @@
 //! to object space, the hit point back, the normal by the inverse transpose (SEED.md section 9).
 
 use super::{Sphere, SurfacePoint};
+use crate::math::gamma;
 use glam::{Affine3A, Mat3A, Vec3A};
 use obvhs::aabb::Aabb;
 
@@ -61,13 +62,17 @@ impl TransformedSphere {
     /// Surface data at the world point `p`.
     #[inline]
     pub fn surface(&self, p: Vec3A) -> SurfacePoint {
-        let local = self
-            .sphere
-            .surface(self.object_from_world.transform_point3a(p));
+        let local = self.sphere.surface(self.object_from_world.transform_point3a(p));
+        let m = self.world_from_object;
+        // |M| times the object-space error, plus the rounding of M p + t.
+        let norm = m.matrix3.x_axis.abs() + m.matrix3.y_axis.abs() + m.matrix3.z_axis.abs();
+        let scale = norm.max_element();
+        let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
         SurfacePoint {
-            p: self.world_from_object.transform_point3a(local.p),
+            p: m.transform_point3a(local.p),
             n: (self.normal_to_world * local.n).normalize(),
             uv: local.uv,
+            err: scale * local.err + gamma(4) * magnitude,
         }
     }
 }
@@ -80,10 +85,7 @@ mod tests {
     #[test]
     fn ellipsoid_matches_analytic_hit_and_normal() {
         // x^2/4 + y^2 + z^2/9 = 1
-        let s = Sphere {
-            center: Vec3A::ZERO,
-            radius: 1.0,
-        };
+        let s = Sphere { center: Vec3A::ZERO, radius: 1.0 };
         let ts = TransformedSphere::new(s, Affine3A::from_scale(Vec3::new(2.0, 1.0, 3.0))).unwrap();
         let t = ts.intersect(Vec3A::new(-10.0, 0.0, 0.0), Vec3A::X, f32::INFINITY);
         assert!((t - 8.0).abs() < 1e-5);
@@ -99,12 +101,7 @@ mod tests {
 
     #[test]
     fn singular_transform_is_rejected() {
-        let s = Sphere {
-            center: Vec3A::ZERO,
-            radius: 1.0,
-        };
-        assert!(
-            TransformedSphere::new(s, Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0))).is_none()
-        );
+        let s = Sphere { center: Vec3A::ZERO, radius: 1.0 };
+        assert!(TransformedSphere::new(s, Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0))).is_none());
     }
 }

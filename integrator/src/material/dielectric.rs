@@ -30,11 +30,7 @@ pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
         return 1.0;
     }
     let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
-    let c = if eta < 1.0 {
-        (1.0 - sin2_t).sqrt()
-    } else {
-        cos_i
-    };
+    let c = if eta < 1.0 { (1.0 - sin2_t).sqrt() } else { cos_i };
     r0 + (1.0 - r0) * (1.0 - c).powi(5)
 }
 
@@ -55,33 +51,17 @@ pub fn refract(wo: Vec3A, n: Vec3A, eta: f32) -> Option<Vec3A> {
 #[inline]
 pub fn sample(ior: f32, fresnel: Fresnel, wo: Vec3A, n: Vec3A, uc: f32) -> Option<BsdfSample> {
     let cos_o = wo.dot(n);
-    let (eta, nf) = if cos_o >= 0.0 {
-        (ior, n)
-    } else {
-        (1.0 / ior, -n)
-    };
+    let (eta, nf) = if cos_o >= 0.0 { (ior, n) } else { (1.0 / ior, -n) };
     let cos_i = cos_o.abs();
     let f = match fresnel {
         Fresnel::Exact => fresnel_exact(cos_i, eta),
         Fresnel::Schlick => fresnel_schlick(cos_i, eta),
     };
     if uc < f {
-        return Some(BsdfSample {
-            wi: reflect(wo, nf),
-            weight: Vec3::ONE,
-            pdf: f,
-            delta: true,
-            eta: 1.0,
-        });
+        return Some(BsdfSample { wi: reflect(wo, nf), weight: Vec3::ONE, pdf: f, delta: true, eta: 1.0 });
     }
     let wi = refract(wo, nf, eta)?.normalize();
-    Some(BsdfSample {
-        wi,
-        weight: Vec3::splat(1.0 / (eta * eta)),
-        pdf: 1.0 - f,
-        delta: true,
-        eta,
-    })
+    Some(BsdfSample { wi, weight: Vec3::splat(1.0 / (eta * eta)), pdf: 1.0 - f, delta: true, eta })
 }
 
 #[cfg(test)]
@@ -102,10 +82,11 @@ mod tests {
         assert!(fresnel_exact(1e-4, 1.5) > 0.99);
         assert_eq!(fresnel_exact(0.5, 1.0 / 1.5), 1.0);
         assert_eq!(fresnel_schlick(0.5, 1.0 / 1.5), 1.0);
-        // Schlick is close to exact for glass away from grazing angles.
-        for c in [0.3f32, 0.6, 0.9] {
-            assert!((fresnel_schlick(c, 1.5) - fresnel_exact(c, 1.5)).abs() < 0.01);
+        // Schlick stays within 0.025 of exact for glass (worst near cos 0.5: 0.070 vs 0.089).
+        for c in [0.3f32, 0.5, 0.6, 0.9] {
+            assert!((fresnel_schlick(c, 1.5) - fresnel_exact(c, 1.5)).abs() < 0.025, "{c}");
         }
+        assert!((fresnel_schlick(0.5, 1.5) - 0.07).abs() < 1e-4);
     }
 
     #[test]
@@ -117,9 +98,9 @@ mod tests {
         let sin_t = wi.cross(-n).length();
         assert!((sin_i - 1.5 * sin_t).abs() < 1e-5);
         assert!(wi.dot(n) < 0.0 && (wi.length() - 1.0).abs() < 1e-5);
-        // Reversibility: refracting back out returns -wo.
-        let back = refract(-wi, -n, 1.0 / 1.5).unwrap();
-        assert!((back + wo).length() < 1e-5);
+        // Reversibility: light travelling back along -wi leaves along wo.
+        let back = refract(wi, -n, 1.0 / 1.5).unwrap();
+        assert!((back - wo).length() < 1e-5, "{back} {wo}");
     }
 
     #[test]
@@ -142,9 +123,6 @@ mod tests {
             }
         }
         let p = reflected as f32 / total as f32;
-        assert!(
-            (p - f).abs() < 4.0 * (f * (1.0 - f) / total as f32).sqrt(),
-            "{p} vs {f}"
-        );
+        assert!((p - f).abs() < 4.0 * (f * (1.0 - f) / total as f32).sqrt(), "{p} vs {f}");
     }
 }

@@ -23,13 +23,7 @@ pub fn sample(albedo: Vec3, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> 
         return None;
     }
     let wi = Frame::from_normal(nf).to_world(local);
-    Some(BsdfSample {
-        wi,
-        weight: albedo,
-        pdf,
-        delta: false,
-        eta: 1.0,
-    })
+    Some(BsdfSample { wi, weight: albedo, pdf, delta: false, eta: 1.0 })
 }
 
 /// `f |cos|` and pdf.
@@ -56,6 +50,7 @@ mod tests {
             |u, _| sample(Vec3::ONE, wo, n, u).map(|s| s.wi),
             |wi| eval(Vec3::ONE, wo, wi, n).1,
             n,
+            -1.0,
             1_000_000,
         );
         assert!(stat < chi2_critical(dof), "chi2 {stat} dof {dof}");
@@ -67,7 +62,7 @@ mod tests {
         let wo = Vec3A::new(0.0, 1.0, 1.0).normalize();
         let albedo = Vec3::new(0.2, 0.5, 0.9);
         for i in 0..100 {
-            let u = Vec2::new((i as f32 + 0.5) / 100.0, (i * 7 % 100) as f32 / 100.0);
+            let u = Vec2::new((i as f32 + 0.5) / 100.0, ((i * 7 % 100) as f32 + 0.5) / 100.0);
             let s = sample(albedo, wo, n, u).unwrap();
             let (f, pdf) = eval(albedo, wo, s.wi, n);
             assert!((pdf - s.pdf).abs() < 1e-4 * pdf.max(1.0));

@@ -75,12 +75,14 @@ pub(crate) mod testing {
         move || s.next_1d()
     }
 
-    /// Returns the chi-square statistic and its degrees of freedom. `pdf` is the density in
-    /// solid angle, integrated over each cell numerically; cells with expected count < 5 are pooled.
+    /// Returns the chi-square statistic and its degrees of freedom. Cells cover cos(theta) in
+    /// [z_min, 1] about `axis` (every sample must fall there); `pdf` is the density in solid
+    /// angle, integrated over each cell numerically; cells with expected count < 5 are pooled.
     pub fn chi2(
         mut sample: impl FnMut(Vec2, f32) -> Option<Vec3A>,
         pdf: impl Fn(Vec3A) -> f32,
         axis: Vec3A,
+        z_min: f64,
         n: usize,
     ) -> (f64, usize) {
         const CT: usize = 20;
@@ -88,7 +90,7 @@ pub(crate) mod testing {
         let frame = Frame::from_normal(axis);
         let cell = |w: Vec3A| {
             let l = Vec3A::new(w.dot(frame.t), w.dot(frame.b), w.dot(frame.n));
-            let ct = (((l.z + 1.0) * 0.5 * CT as f32) as usize).min(CT - 1);
+            let ct = (((l.z as f64 - z_min) / (1.0 - z_min) * CT as f64).max(0.0) as usize).min(CT - 1);
             let ph = ((l.y.atan2(l.x) / std::f32::consts::TAU + 0.5) * PH as f32) as usize % PH;
             ct * PH + ph
         };
@@ -99,16 +101,17 @@ pub(crate) mod testing {
                 observed[cell(w)] += 1.0;
             }
         }
-        // Expected counts: integrate the pdf over each cell with a 8x8 midpoint rule.
+        // Expected counts: integrate the pdf over each cell with a Q x Q midpoint rule.
+        const Q: usize = 24;
         let mut expected = vec![0f64; CT * PH];
-        let d_omega = 4.0 * std::f64::consts::PI / (CT * PH) as f64 / 64.0;
+        let d_omega = std::f64::consts::TAU * (1.0 - z_min) / (CT * PH * Q * Q) as f64;
         for (c, e) in expected.iter_mut().enumerate() {
             let (ct, ph) = (c / PH, c % PH);
-            for i in 0..8 {
-                for j in 0..8 {
-                    let z = ((ct as f64 + (i as f64 + 0.5) / 8.0) / CT as f64) * 2.0 - 1.0;
-                    let phi = ((ph as f64 + (j as f64 + 0.5) / 8.0) / PH as f64 - 0.5)
-                        * std::f64::consts::TAU;
+            for i in 0..Q {
+                for j in 0..Q {
+                    let z = z_min + (ct as f64 + (i as f64 + 0.5) / Q as f64) / CT as f64 * (1.0 - z_min);
+                    let phi =
+                        ((ph as f64 + (j as f64 + 0.5) / Q as f64) / PH as f64 - 0.5) * std::f64::consts::TAU;
                     let s = (1.0 - z * z).max(0.0).sqrt();
                     let l = Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, z as f32);
                     *e += pdf(frame.to_world(l)) as f64 * d_omega * n as f64;
@@ -131,7 +134,7 @@ pub(crate) mod testing {
         } else {
             assert!(
                 pool_o <= 5.0 + 3.0 * pool_e.sqrt() + 5.0,
-                "samples where the pdf is ~0: {pool_o}"
+                "{pool_o} samples where {pool_e} are expected"
             );
         }
         (stat, dof.saturating_sub(1))
