@@ -1,0 +1,126 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use pathwave::engine::scene::{SceneDesc, load, parse};
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::{film::Film, oracle};
+use pathwave::io::{LinearImage, read_linear};
+use std::path::{Path, PathBuf};
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A scene from `scenes/`.
+pub fn scene(name: &str) -> SceneDesc {
+    load(&root().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A scene written inline.
+pub fn inline(text: &str) -> SceneDesc {
+    parse(text, Path::new("<test>")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A reference image from `../shared/refs`.
+pub fn reference(name: &str) -> LinearImage {
+    read_linear(&root().join("../shared/refs").join(name)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Renders with the reference path tracer on the current rayon pool.
+pub fn render(desc: &SceneDesc) -> Film {
+    let scene = SceneWorld::render_scene(desc);
+    oracle::render(&scene, &|_, _| {})
+}
+
+/// Renders on a pool of `threads` threads.
+pub fn render_threads(desc: &SceneDesc, threads: usize) -> Film {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| render(desc))
+}
+
+/// Sets one named material's albedo (Lambertian or Metal) to `f(albedo)`.
+pub fn scale_albedo(desc: &mut SceneDesc, name: &str, factor: f32) {
+    use pathwave::engine::scene::{Albedo, MaterialDesc};
+    let (_, m) = desc.materials.0.iter_mut().find(|(n, _)| n == name).expect("material exists");
+    match m {
+        MaterialDesc::Lambertian { albedo } | MaterialDesc::Metal { albedo, .. } => {
+            *albedo = Albedo((albedo.0 * factor).min(Vec3::ONE))
+        }
+        _ => panic!("{name} has no albedo"),
+    }
+}
+
+/// Block-mean comparison of a render with a reference: the image is cut into `block` x `block`
+/// pixel blocks; for each block and channel, z = (mean - reference mean) / sigma, where sigma^2
+/// is the variance of our block mean (from the per-pixel sample variance) plus the reference's
+/// own (the same estimator's variance scaled by spp / ref_spp).
+pub fn block_z(film: &Film, reference: &LinearImage, block: u32, ref_spp: u32) -> BlockStats {
+    assert_eq!((film.width, film.height), (reference.width, reference.height));
+    let mean = film.mean();
+    let var = film.variance_of_mean();
+    let scale_ref = film.spp as f64 / ref_spp as f64;
+    let (bw, bh) = (film.width / block, film.height / block);
+    let (mut chi2, mut max_z, mut n, mut worst) = (0.0, 0.0f64, 0, String::new());
+    for by in 0..bh {
+        for bx in 0..bw {
+            for c in 0..3 {
+                let (mut m, mut r, mut v) = (0.0f64, 0.0f64, 0.0f64);
+                for y in by * block..(by + 1) * block {
+                    for x in bx * block..(bx + 1) * block {
+                        let i = (y * film.width + x) as usize;
+                        m += mean[i][c] as f64;
+                        r += reference.pixels[i][c] as f64;
+                        v += var[i][c] as f64;
+                    }
+                }
+                let k = (block * block) as f64;
+                let (m, r, v) = (m / k, r / k, v / (k * k));
+                let sigma2 = v * (1.0 + scale_ref);
+                if sigma2 == 0.0 {
+                    // A block with no variance (e.g. pure background) must match exactly-ish.
+                    assert!(
+                        (m - r).abs() <= 1e-4 * r.abs().max(1e-3),
+                        "noise-free block differs: {m} vs {r}"
+                    );
+                    continue;
+                }
+                // Two f32 renderers agree on noise-free features (a mirror reflecting the sky) to
+                // about 1e-4 relative: differences below 0.1% of the value are not errors.
+                let sigma2 = sigma2 + (1e-3 * r).powi(2);
+                let z = (m - r) / sigma2.sqrt();
+                chi2 += z * z;
+                if z.abs() > max_z {
+                    max_z = z.abs();
+                    worst = format!(
+                        "block ({bx}, {by}) channel {c}: {m:.6} vs {r:.6}, sigma {:.2e}",
+                        sigma2.sqrt()
+                    );
+                }
+                n += 1;
+            }
+        }
+    }
+    BlockStats { chi2_dof: chi2 / n as f64, max_z, blocks: n, worst }
+}
+
+/// Result of [`block_z`].
+#[derive(Debug)]
+pub struct BlockStats {
+    /// Chi-square per degree of freedom: 1 in expectation for an unbiased renderer.
+    pub chi2_dof: f64,
+    /// Largest |z|.
+    pub max_z: f64,
+    /// Number of (block, channel) pairs.
+    pub blocks: usize,
+    /// Description of the block with the largest |z|.
+    pub worst: String,
+}
+
+impl BlockStats {
+    /// Chi-square per dof within 5 sigma of 1 and no block beyond 6 sigma.
+    pub fn agrees(&self) -> bool {
+        self.chi2_dof < 1.0 + 5.0 * (2.0 / self.blocks as f64).sqrt() && self.max_z < 6.0
+    }
+}

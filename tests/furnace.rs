@@ -1,0 +1,115 @@
+//! Scenes with a known answer: energy conservation (white furnace) and direct lighting with
+//! light sampling, BSDF sampling and MIS agreeing on analytic values.
+
+mod common;
+use common::*;
+
+/// Mean of the pixels of a film with per-pixel values within `tolerance` sigma of `expected`.
+fn assert_all_pixels_near(film: &pathwave::integrator::film::Film, expected: impl Fn(usize) -> Option<f32>) {
+    let (mean, var) = (film.mean(), film.variance_of_mean());
+    let (mut chi2, mut n) = (0.0f64, 0);
+    for (i, (m, v)) in mean.iter().zip(&var).enumerate() {
+        let Some(e) = expected(i) else { continue };
+        for c in 0..3 {
+            let sigma2 = v[c] as f64 + 1e-10;
+            chi2 += (m[c] as f64 - e as f64).powi(2) / sigma2;
+            n += 1;
+        }
+    }
+    let dof = chi2 / n as f64;
+    assert!(n > 100, "too few pixels checked: {n}");
+    assert!(dof < 1.0 + 5.0 * (2.0 / n as f64).sqrt(), "chi2/dof {dof} over {n} pixel channels");
+}
+
+/// Albedo-1 surfaces of every kind (diffuse, mirror, glass) under a uniform sky of radiance 1:
+/// nothing is absorbed, so every pixel is 1 whatever the paths do (Russian roulette, glass
+/// radiance scaling by 1/eta^2 and back, concave crevices that need many bounces).
+#[test]
+fn white_furnace_is_one_everywhere() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
+            render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
+            background: Constant((1, 1, 1)),
+            materials: {
+                "white": Lambertian(albedo: (1, 1, 1)),
+                "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
+                "glass": Dielectric(ior: 1.5),
+            },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
+                (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
+                (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
+                (shape: Box(a: (-0.5, 0, 1.2), b: (0.5, 0.6, 2)), material: "white",
+                 transform: [RotateY(30)]),
+            ],
+        )"#,
+    );
+    let film = render(&desc);
+    let mean = film.mean();
+    let avg: f32 = mean.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / (3 * mean.len()) as f32;
+    assert!((avg - 1.0).abs() < 0.01, "image mean {avg}");
+    assert_all_pixels_near(&film, |_| Some(1.0));
+}
+
+/// The same scene with albedo 0.95 must fail the test above: it can see energy loss.
+#[test]
+fn white_furnace_detects_absorption() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
+            render: (width: 40, height: 32, spp: 64),
+            background: Constant((1, 1, 1)),
+            materials: { "white": Lambertian(albedo: (0.95, 0.95, 0.95)) },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
+            ],
+        )"#,
+    );
+    let film = render(&desc);
+    let result = std::panic::catch_unwind(|| assert_all_pixels_near(&film, |_| Some(1.0)));
+    assert!(result.is_err());
+}
+
+/// The camera inside a two-sided spherical emitter of radiance 1 looking at a convex diffuse
+/// sphere of albedo 0.5: the sphere receives radiance 1 from every direction, so it shows
+/// exactly 0.5 and the emitter 1. Exercises light sampling of a sphere from inside it (area
+/// sampling), emitter hits by BSDF sampling, and their MIS weights, which must sum to one.
+#[test]
+fn diffuse_sphere_inside_an_emitter_shows_its_albedo() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 0, 4), look_at: (0, 0, 0), vfov: 50),
+            render: (width: 32, height: 32, spp: 64),
+            materials: {
+                "sky": DiffuseLight(emit: (1, 1, 1), two_sided: true),
+                "grey": Lambertian(albedo: (0.5, 0.5, 0.5)),
+            },
+            objects: [
+                (shape: Sphere(center: (0, 0, 0), radius: 10), material: "sky"),
+                (shape: Sphere(center: (0, 0, 0), radius: 1), material: "grey"),
+            ],
+        )"#,
+    );
+    let film = render(&desc);
+    let mean = film.mean();
+    // Pixels fully on the small sphere (well inside its silhouette) are 0.5; the background 1.
+    let on_sphere = |i: usize| {
+        let (x, y) = ((i % 32) as f32 + 0.5 - 16.0, (i / 32) as f32 + 0.5 - 16.0);
+        let r = (x * x + y * y).sqrt();
+        // Silhouette radius in pixels: tan(asin(1/4)) = 1/sqrt(15) against tan(25 degrees) for 16 px.
+        let edge = 16.0 * (1.0 / 15f32.sqrt()) / 25f32.to_radians().tan();
+        if r < edge - 1.5 {
+            Some(0.5)
+        } else if r > edge + 1.5 {
+            Some(1.0)
+        } else {
+            None
+        }
+    };
+    let inside = (0..mean.len()).filter(|&i| on_sphere(i) == Some(0.5)).count();
+    assert!(inside > 50, "{inside} pixels on the sphere");
+    assert_all_pixels_near(&film, on_sphere);
+}
