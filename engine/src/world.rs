@@ -235,3 +235,79 @@ impl SceneWorld {
         Self::new(desc).update()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::parse;
+    use std::path::Path;
+
+    fn world() -> SceneWorld {
+        let desc = parse(
+            r#"Scene(
+                camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+                materials: { "a": Lambertian(albedo: (0.5, 0.5, 0.5)), "l": DiffuseLight(emit: (1, 1, 1)) },
+                objects: [
+                    (shape: Sphere(center: (0, 0, 0), radius: 1), material: "a"),
+                    (shape: Quad(q: (0, 2, 0), u: (1, 0, 0), v: (0, 0, 1)), material: "l"),
+                ],
+            )"#,
+            Path::new("<test>"),
+        )
+        .unwrap();
+        SceneWorld::new(&desc)
+    }
+
+    fn rebuilds(w: &SceneWorld) -> u64 {
+        w.world.resource::<SceneGeometry>().rebuilds
+    }
+
+    #[test]
+    fn geometry_is_rebuilt_only_when_its_inputs_change() {
+        let mut w = world();
+        let first = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert_eq!(first.geometry.prims.len(), 2);
+        assert_eq!(first.lights.prims.len(), 1);
+
+        // Nothing changed: no rebuild, and the same extracted scene.
+        let again = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(Arc::ptr_eq(&first, &again));
+
+        // A camera edit re-extracts without touching the geometry.
+        w.world.resource_mut::<CameraParams>().0.vfov = 30.0;
+        let cam = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(!Arc::ptr_eq(&first, &cam) && Arc::ptr_eq(&first.geometry, &cam.geometry));
+
+        // Moving an object rebuilds.
+        let e = w.world.query_filtered::<Entity, With<Shape>>().iter(&w.world).next().unwrap();
+        w.world.entity_mut(e).insert(Transform(Affine3A::from_translation(Vec3::X)));
+        w.update();
+        assert_eq!(rebuilds(&w), 2);
+
+        // A material edit rebuilds (the light table depends on it): the light goes dark.
+        w.world.resource_mut::<Materials>().0[1] = Material::Lambertian { albedo: Vec3::ONE };
+        let dark = w.update();
+        assert_eq!(rebuilds(&w), 3);
+        assert!(dark.lights.is_empty());
+
+        // Spawning and despawning rebuild; the removal is seen after clear_trackers.
+        let s = w
+            .world
+            .spawn((
+                Transform(Affine3A::IDENTITY),
+                Shape(ShapeDesc::Sphere { center: Vec3::Y, radius: 0.5 }),
+                MaterialId(0),
+            ))
+            .id();
+        assert_eq!(w.update().geometry.prims.len(), 3);
+        assert_eq!(rebuilds(&w), 4);
+        w.world.despawn(s);
+        assert_eq!(w.update().geometry.prims.len(), 2);
+        assert_eq!(rebuilds(&w), 5);
+        w.update();
+        assert_eq!(rebuilds(&w), 5);
+    }
+}
