@@ -113,3 +113,42 @@ fn diffuse_sphere_inside_an_emitter_shows_its_albedo() {
     assert!(inside > 50, "{inside} pixels on the sphere");
     assert_all_pixels_near(&film, on_sphere);
 }
+
+/// A diffuse plane lit by a spherical emitter seen from outside: where the whole sphere is above
+/// the horizon, the plane's radiance is exactly rho L (r^2 / D^2) (h / D), with D the distance to
+/// the centre and h its height. Exercises cone sampling of spheres and its MIS with BSDF sampling.
+#[test]
+fn plane_under_a_sphere_light_matches_the_closed_form() {
+    use glam::{Vec2, Vec3A};
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 6, 9), look_at: (0, 0, 0), vfov: 45),
+            render: (width: 48, height: 36, spp: 64),
+            materials: {
+                "lamp": DiffuseLight(emit: (4, 4, 4)),
+                "floor": Lambertian(albedo: (0.6, 0.6, 0.6)),
+            },
+            objects: [
+                (shape: Sphere(center: (0, 3, 0), radius: 1), material: "lamp"),
+                (shape: Quad(q: (-50, 0, -50), u: (0, 0, 100), v: (100, 0, 0)), material: "floor"),
+            ],
+        )"#,
+    );
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    let film = render(&desc);
+    let (c, r, l, rho) = (Vec3A::new(0.0, 3.0, 0.0), 1.0f32, 4.0f32, 0.6f32);
+    let expected = |i: usize| {
+        let (x, y) = ((i % 48) as f32 + 0.5, (i / 48) as f32 + 0.5);
+        let ray = scene.camera.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0);
+        // Skip pixels that see (or nearly see) the lamp.
+        let oc = c - ray.origin;
+        let miss = (oc - oc.dot(ray.dir) * ray.dir).length();
+        if miss < r + 0.3 || ray.dir.y >= 0.0 {
+            return None;
+        }
+        let p = ray.at(-ray.origin.y / ray.dir.y);
+        let d = (c - p).length();
+        (c.y / d > r / d + 0.01).then(|| rho * l * (r * r) / (d * d) * (c.y / d))
+    };
+    assert_all_pixels_near(&film, expected);
+}
