@@ -47,7 +47,7 @@ pub struct CameraDesc {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Camera")]
 struct RawCamera {
     look_from: V3,
     look_at: V3,
@@ -96,7 +96,7 @@ impl TryFrom<RawCamera> for CameraDesc {
 
 /// Image size and sampling.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields, default, rename = "Render")]
 pub struct RenderDesc {
     /// Width in pixels (default 512).
     pub width: NonZeroU32,
@@ -121,7 +121,7 @@ impl Default for RenderDesc {
 
 /// Radiance seen by rays that leave the scene.
 #[derive(Deserialize, Debug, Clone, Copy, Default)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Background")]
 pub enum BackgroundDesc {
     /// No light from outside (default).
     #[default]
@@ -149,7 +149,7 @@ fn sky_blue() -> Rgb {
 
 /// A material as written in the scene.
 #[derive(Deserialize, Debug, Clone, Copy)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Material")]
 pub enum MaterialDesc {
     /// `Lambertian(albedo: (r, g, b))`.
     Lambertian {
@@ -245,6 +245,9 @@ impl<'de> Deserialize<'de> for MaterialRef {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let name = String::deserialize(d)?;
         MATERIAL_NAMES.with(|m| match &*m.borrow() {
+            Some(names) if names.is_empty() => {
+                Err(D::Error::custom(format!("unknown material \"{name}\"; no materials are defined")))
+            }
             Some(names) if !names.contains(&name) => {
                 let list: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
                 Err(D::Error::custom(format!("unknown material \"{name}\"; defined: {}", list.join(", "))))
@@ -256,7 +259,7 @@ impl<'de> Deserialize<'de> for MaterialRef {
 
 /// One object: a shape with a material and an optional list of transforms.
 #[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Object")]
 pub struct ObjectDesc {
     /// The shape, in object space.
     pub shape: ShapeDesc,
@@ -297,7 +300,7 @@ pub enum ShapeDesc {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Shape")]
 enum RawShape {
     Sphere { center: V3, radius: Positive },
     Quad { q: V3, u: V3, v: V3 },
@@ -333,7 +336,7 @@ impl TryFrom<RawShape> for ShapeDesc {
 pub struct TransformOp(pub Affine3A);
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, rename = "Transform")]
 enum RawTransform {
     Translate(V3),
     RotateX(Finite),
@@ -342,7 +345,7 @@ enum RawTransform {
     Rotate { axis: Direction, degrees: Finite },
     Scale(V3),
     UniformScale(Finite),
-    Matrix([[Finite; 4]; 4]),
+    Matrix(Vec<Vec<Finite>>),
 }
 
 impl TryFrom<RawTransform> for TransformOp {
@@ -359,15 +362,20 @@ impl TryFrom<RawTransform> for TransformOp {
             RawTransform::Scale(s) => Affine3A::from_scale(s.0),
             RawTransform::UniformScale(s) => Affine3A::from_scale(Vec3::splat(s.0)),
             RawTransform::Matrix(rows) => {
-                let r = rows.map(|row| Vec4::new(row[0].0, row[1].0, row[2].0, row[3].0));
+                if rows.len() != 4 || rows.iter().any(|r| r.len() != 4) {
+                    return Err("Matrix: expected 4 rows of 4 numbers".into());
+                }
+                let r: Vec<Vec4> = rows.iter().map(|r| Vec4::new(r[0].0, r[1].0, r[2].0, r[3].0)).collect();
                 if r[3] != Vec4::W {
                     return Err(format!("Matrix: the last row must be (0, 0, 0, 1), found {}", r[3]));
                 }
                 Affine3A::from_mat4(Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose())
             }
         };
+        // Singular relative to the matrix's own scale: a tiny uniform scale is fine.
         let det = a.matrix3.determinant();
-        if !(det.abs() > 1e-12) {
+        let size = (a.matrix3.x_axis.abs() + a.matrix3.y_axis.abs() + a.matrix3.z_axis.abs()).max_element();
+        if !(det.abs() > f32::EPSILON * size.powi(3)) {
             return Err("transform is singular (it flattens the object)".into());
         }
         Ok(TransformOp(a))

@@ -20,6 +20,7 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// Parsing runs twice: the first pass collects the material names, the second checks every
 /// object's `material` against them while the parser still knows where that name stands.
 pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
     let error = |e: ron::error::SpannedError| SceneError {
         path: path.to_owned(),

@@ -1,0 +1,303 @@
+//! Scene loader errors: every bad scene is rejected with the line and column of the offending
+//! token and a message that says what was expected; the CLI reports them as `file:line:col:`.
+
+use pathwave::engine::scene::{SceneError, load, parse};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The camera, the second material and the object of the template, each alone on its line.
+const CAMERA: &str = "look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 40";
+const MATERIAL: &str = r#""light": DiffuseLight(emit: (4, 4, 4)),"#;
+const OBJECT: &str = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white"),"#;
+/// `OBJECT` with `radius` misspelled.
+const MISSPELLED: &str = r#"(shape: Sphere(center: (0, 0, 0), radious: 1), material: "white"),"#;
+
+/// A minimal valid scene. The camera fields start at line 2, column 14; the second material
+/// and the object start at column 9 of lines 5 and 8.
+fn scene(camera: &str, material: &str, object: &str) -> String {
+    format!(
+        r#"Scene(
+    camera: ({camera}),
+    materials: {{
+        "white": Lambertian(albedo: (0.7, 0.7, 0.7)),
+        {material}
+    }},
+    objects: [
+        {object}
+    ],
+)
+"#
+    )
+}
+
+fn with_camera(camera: &str) -> String {
+    scene(camera, MATERIAL, OBJECT)
+}
+
+fn with_material(material: &str) -> String {
+    scene(CAMERA, material, OBJECT)
+}
+
+fn with_object(object: &str) -> String {
+    scene(CAMERA, MATERIAL, object)
+}
+
+/// The error `text` must give.
+fn err(text: &str) -> SceneError {
+    parse(text, Path::new("test.ron")).expect_err("the scene should be rejected")
+}
+
+/// Asserts that `text` fails at `line:col` with a message containing every one of `words`.
+#[track_caller]
+fn assert_err(text: &str, line: usize, col: usize, words: &[&str]) {
+    let e = err(text);
+    let src = text.lines().nth(e.line.wrapping_sub(1)).unwrap_or("");
+    let caret = format!("{}^", " ".repeat(e.col.saturating_sub(1)));
+    assert!(
+        (e.line, e.col) == (line, col) && words.iter().all(|w| e.message.contains(w)),
+        "expected {line}:{col} and a message with {words:?}, got\n{e}\n{src}\n{caret}"
+    );
+}
+
+#[test]
+fn template_is_valid() {
+    parse(&scene(CAMERA, MATERIAL, OBJECT), Path::new("test.ron")).unwrap();
+}
+
+// 1. Misspelled field.
+
+#[test]
+fn misspelled_field_lists_valid_fields() {
+    // 8:43 is the `r` of `radious`.
+    assert_err(&with_object(MISSPELLED), 8, 43, &["`radious`", "`Sphere`", "`center`", "`radius`"]);
+}
+
+// 2. Wrong type.
+
+#[test]
+fn string_where_number_expected() {
+    let text = with_object(r#"(shape: Sphere(center: (0, 0, 0), radius: "big"), material: "white"),"#);
+    // ron points at the blank before `"big"` (8:51), one column early.
+    assert_err(&text, 8, 50, &["Expected float"]);
+}
+
+// 3. Unknown material.
+
+#[test]
+fn unknown_material_names_it_and_lists_defined_ones() {
+    let text = with_object(r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "whyte"),"#);
+    // 8:66 is the `w` of `"whyte"`, just inside the opening quote.
+    assert_err(&text, 8, 66, &[r#"unknown material "whyte""#, r#""white""#, r#""light""#]);
+}
+
+// 4. Material defined twice.
+
+#[test]
+fn material_defined_twice() {
+    let text = with_material(r#""white": Metal(albedo: (1, 1, 1)),"#);
+    // 5:10 is the `w` of the second `"white"` key.
+    assert_err(&text, 5, 10, &[r#"material "white" is defined twice"#]);
+}
+
+// 5. Bad values.
+
+#[test]
+fn negative_radius() {
+    let text = with_object(r#"(shape: Sphere(center: (0, 0, 0), radius: -1), material: "white"),"#);
+    assert_err(&text, 8, 51, &["> 0", "found -1"]);
+}
+
+#[test]
+fn zero_radius() {
+    let text = with_object(r#"(shape: Sphere(center: (0, 0, 0), radius: 0), material: "white"),"#);
+    assert_err(&text, 8, 51, &["> 0", "found 0"]);
+}
+
+#[test]
+fn nan_in_vector() {
+    let text = with_object(r#"(shape: Sphere(center: (0, NaN, 0), radius: 1), material: "white"),"#);
+    // Vectors are checked whole: 8:42 is the `)` that closes `(0, NaN, 0)`.
+    assert_err(&text, 8, 42, &["three finite numbers", "(0, NaN, 0)"]);
+}
+
+#[test]
+fn inf_in_vector() {
+    let text = with_camera("look_from: (0, 0, inf), look_at: (0, 0, 0), vfov: 40");
+    // 2:35 is the `)` that closes `(0, 0, inf)`.
+    assert_err(&text, 2, 35, &["three finite numbers", "(0, 0, inf)"]);
+}
+
+#[test]
+fn vfov_zero() {
+    let text = with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 0");
+    assert_err(&text, 2, 63, &["field of view in (0, 180)", "found 0"]);
+}
+
+#[test]
+fn vfov_180() {
+    let text = with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 180");
+    assert_err(&text, 2, 63, &["field of view in (0, 180)", "found 180"]);
+}
+
+#[test]
+fn albedo_above_one() {
+    let text = with_material(r#""dull": Lambertian(albedo: (0.5, 1.5, 0.5)),"#);
+    // 5:50 is the `)` that closes `(0.5, 1.5, 0.5)`.
+    assert_err(&text, 5, 50, &["albedo with components in [0, 1]", "[0.5, 1.5, 0.5]"]);
+}
+
+#[test]
+fn zero_area_quad() {
+    let text = with_object(r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (2, 0, 0)), material: "white"),"#);
+    // Shapes are checked whole: 8:62 is the `)` that closes `Quad(..)`.
+    assert_err(&text, 8, 62, &["Quad has no area", "parallel"]);
+}
+
+#[test]
+fn flat_box() {
+    let text = with_object(r#"(shape: Box(a: (0, 0, 0), b: (1, 0, 1)), material: "white"),"#);
+    // 8:47 is the `)` that closes `Box(..)`.
+    assert_err(&text, 8, 47, &["Box is flat", "share a coordinate"]);
+}
+
+#[test]
+fn singular_transform() {
+    let text = with_object(
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", transform: [Scale((1, 0, 1))]),"#,
+    );
+    // 8:101 is the `)` that closes `Scale(..)`.
+    assert_err(&text, 8, 101, &["transform is singular"]);
+}
+
+#[test]
+fn zero_vup() {
+    let text = with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vup: (0, 0, 0), vfov: 40");
+    // 2:70 is the `)` that closes the `vup` vector.
+    assert_err(&text, 2, 70, &["expected a non-zero direction"]);
+}
+
+#[test]
+fn look_from_equals_look_at() {
+    let text = with_camera("look_from: (1, 2, 3), look_at: (1, 2, 3), vfov: 40");
+    // The camera is checked whole: 2:64 is the `)` that closes `camera: (..)`, not either point.
+    assert_err(&text, 2, 64, &["look_from and look_at are the same point"]);
+}
+
+// 6. Unknown enum variant.
+
+#[test]
+fn unknown_material_variant() {
+    let text = with_material(r#""plastic": Plastic(albedo: (0.5, 0.5, 0.5)),"#);
+    assert_err(&text, 5, 20, &["`Plastic`", "`Lambertian`", "`Metal`", "`Dielectric`", "`DiffuseLight`"]);
+}
+
+#[test]
+fn unknown_shape_variant() {
+    let text = with_object(r#"(shape: Cylinder(center: (0, 0, 0), radius: 1), material: "white"),"#);
+    assert_err(&text, 8, 17, &["`Cylinder`", "`Sphere`", "`Quad`", "`Box`"]);
+}
+
+// 7. Missing field and syntax errors.
+
+#[test]
+fn missing_camera() {
+    let text = r#"Scene(
+    materials: {"white": Lambertian(albedo: (0.7, 0.7, 0.7))},
+    objects: [],
+)
+"#;
+    // Missing fields are only noticed at the `)` that closes the struct (4:1).
+    assert_err(text, 4, 1, &["missing field named `camera`", "`Scene`"]);
+}
+
+#[test]
+fn missing_closing_paren() {
+    // `(0, 0, 0` is not closed; 8:42 is the `radius` where `)` was expected.
+    let text = with_object(r#"(shape: Sphere(center: (0, 0, 0, radius: 1), material: "white"),"#);
+    assert_err(&text, 8, 42, &["Expected closing `)`"]);
+}
+
+#[test]
+fn trailing_garbage() {
+    // `oops` is at 11:1, but ron reports the end of the scene (10:2, just after its `)`).
+    let text = format!("{}oops\n", with_object(OBJECT));
+    assert_err(&text, 10, 2, &["trailing characters"]);
+}
+
+// 8. Unreadable file.
+
+#[test]
+fn load_nonexistent_file() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/no-such-scene.ron");
+    let e = load(&path).expect_err("a missing file should be an error");
+    assert_eq!((e.line, e.col), (0, 0));
+    assert_eq!(e.path, path);
+    assert!(e.message.contains("cannot read the scene"), "{e}");
+    assert!(e.to_string().starts_with(&format!("{}: cannot read", path.display())), "{e}");
+}
+
+// 9. The command line.
+
+#[test]
+fn cli_reports_position_without_panicking() {
+    let dir = std::env::temp_dir().join(format!("pathwave-scene-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("bad.ron");
+    std::fs::write(&scene_path, with_object(MISSPELLED)).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&scene_path)
+        .arg("-o")
+        .arg(dir.join("bad.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(!out.status.success(), "exit status {}; stderr:\n{stderr}", out.status);
+    assert!(stderr.contains(&format!("{}:8:43:", scene_path.display())), "stderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "stderr:\n{stderr}");
+}
+
+// 10. Positive control.
+
+#[test]
+fn shipped_scenes_parse() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "ron") {
+            load(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        }
+    }
+    assert!(n > 0, "no scenes in {}", dir.display());
+}
+
+// 11. Messages name the user's words, and valid unusual input is accepted.
+
+#[test]
+fn messages_name_user_facing_types() {
+    let e = err(&with_object(r#"(shape: Cylinder(radius: 1), material: "white"),"#));
+    assert!(e.message.contains("`Shape`") && !e.message.contains("Raw"), "{e}");
+    let e = err(&with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfvo: 40"));
+    assert!(e.message.contains("`Camera`") && !e.message.contains("Raw"), "{e}");
+}
+
+#[test]
+fn no_materials_defined() {
+    let text = with_object(OBJECT)
+        .replace(r#""white": Lambertian(albedo: (0.7, 0.7, 0.7)),"#, "")
+        .replace(MATERIAL, "");
+    let e = err(&text);
+    assert!(e.message.contains("no materials are defined"), "{e}");
+}
+
+#[test]
+fn matrix_rows_tiny_scales_and_a_byte_order_mark_are_accepted() {
+    let object = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", transform: [UniformScale(1e-5), Matrix([[1, 0, 0, 2], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])]),"#;
+    let text = format!("\u{feff}{}", with_object(object));
+    parse(&text, Path::new("test.ron")).unwrap_or_else(|e| panic!("{e}"));
+    let bad_row = object.replace("[0, 0, 0, 1]]", "[0, 0, 0]]");
+    assert!(err(&with_object(&bad_row)).message.contains("4 rows of 4 numbers"));
+}
