@@ -33,6 +33,13 @@ impl Film {
         self.sum.iter().map(|s| Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)).collect()
     }
 
+    /// Stores the samples of pixel `index`.
+    pub fn set_pixel(&mut self, index: usize, acc: &PixelAccumulator) {
+        self.sum[index] = acc.sum();
+        self.sum_sq[index] = acc.sum_sq();
+        self.non_finite += acc.non_finite;
+    }
+
     /// Per-pixel variance of the mean (sample variance / spp).
     pub fn variance_of_mean(&self) -> Vec<Vec3> {
         let n = self.spp as f64;
@@ -50,13 +57,19 @@ impl Film {
     }
 }
 
+/// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish, sums stay far from
+/// overflow for any realistic radiance and sample count).
+const FIXED: f64 = (1u64 << 50) as f64;
+
 /// Sums of one pixel's samples, with non-finite samples replaced by zero and counted.
-#[derive(Clone, Copy, Debug, Default)]
+///
+/// The sums are exact fixed-point integers: adding samples in any order gives the same bits, so
+/// an integrator may finish a pixel's samples in whatever order its scheduling produces and
+/// still write the image that the sequential reference writes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PixelAccumulator {
-    /// Sum of values.
-    pub sum: [f64; 3],
-    /// Sum of squares.
-    pub sum_sq: [f64; 3],
+    sum: [i128; 3],
+    sum_sq: [i128; 3],
     /// Non-finite samples seen.
     pub non_finite: u64,
 }
@@ -71,8 +84,57 @@ impl PixelAccumulator {
         }
         for c in 0..3 {
             let x = v[c] as f64;
-            self.sum[c] += x;
-            self.sum_sq[c] += x * x;
+            self.sum[c] += (x * FIXED) as i128;
+            self.sum_sq[c] += (x * x * FIXED) as i128;
         }
+    }
+
+    /// Adds another accumulator's samples.
+    #[inline]
+    pub fn merge(&mut self, o: &PixelAccumulator) {
+        for c in 0..3 {
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
+        }
+        self.non_finite += o.non_finite;
+    }
+
+    /// Sum of the values.
+    pub fn sum(&self) -> [f64; 3] {
+        self.sum.map(|s| s as f64 / FIXED)
+    }
+
+    /// Sum of the squared values.
+    pub fn sum_sq(&self) -> [f64; 3] {
+        self.sum_sq.map(|s| s as f64 / FIXED)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sums_do_not_depend_on_order() {
+        let values: Vec<Vec3> = (0..1000)
+            .map(|i| Vec3::splat((i as f32 * 0.7368).sin().abs() * 10f32.powi(i % 13 - 6)))
+            .collect();
+        let mut a = PixelAccumulator::default();
+        let mut b = PixelAccumulator::default();
+        values.iter().for_each(|v| a.add(*v));
+        values.iter().rev().for_each(|v| b.add(*v));
+        assert_eq!(a, b);
+        let exact: f64 = values.iter().map(|v| v.x as f64).sum();
+        assert!((a.sum()[0] - exact).abs() < 1e-9 * exact);
+    }
+
+    #[test]
+    fn non_finite_samples_are_counted_not_summed() {
+        let mut a = PixelAccumulator::default();
+        a.add(Vec3::new(f32::NAN, 1.0, 1.0));
+        a.add(Vec3::splat(f32::INFINITY));
+        a.add(Vec3::ONE);
+        assert_eq!(a.non_finite, 2);
+        assert_eq!(a.sum(), [1.0; 3]);
     }
 }

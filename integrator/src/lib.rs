@@ -5,4 +5,5 @@
 pub mod film;
 pub mod material;
 pub mod oracle;
+pub mod path;
 pub mod sampler;

@@ -1,0 +1,166 @@
+//! The per-vertex steps of a path, shared by the reference path tracer and the wavefront
+//! stages so that both compute every sample identically: what a ray that leaves the scene adds,
+//! what an emitter hit adds (MIS-weighted), the light sample that becomes a shadow ray, and
+//! BSDF sampling with Russian roulette.
+
+use crate::material::{self, power_heuristic};
+use crate::sampler::Sampler;
+use glam::{Vec3, Vec3A};
+use pathwave_engine::geometry::Hit;
+use pathwave_engine::material::Material;
+use pathwave_engine::math::{Ray, offset_ray_origin};
+use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::shape::SurfacePoint;
+
+/// The state a path carries from vertex to vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct PathState {
+    /// Radiance gathered so far.
+    pub l: Vec3,
+    /// Throughput.
+    pub beta: Vec3,
+    /// Product of squared relative IORs crossed (divided out of Russian roulette).
+    pub eta_scale: f32,
+    /// The last scattering was a delta lobe (or the path is a camera ray): no MIS on emitters.
+    pub delta: bool,
+    /// Last scattering point, for the light pdf of emitters hit by BSDF sampling.
+    pub prev_p: Vec3A,
+    /// BSDF pdf of the last scattering.
+    pub prev_pdf: f32,
+    /// Bounces so far.
+    pub depth: u32,
+}
+
+impl PathState {
+    /// A camera path starting at `origin`.
+    #[inline]
+    pub fn new(origin: Vec3A) -> Self {
+        Self {
+            l: Vec3::ZERO,
+            beta: Vec3::ONE,
+            eta_scale: 1.0,
+            delta: true,
+            prev_p: origin,
+            prev_pdf: 0.0,
+            depth: 0,
+        }
+    }
+}
+
+/// A shadow ray: if nothing lies on it with t in (0, 1), `contribution` is added to the path.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowRay {
+    /// From the shading point to the light point (both offset), unnormalised.
+    pub ray: Ray,
+    /// Throughput times the MIS-weighted light estimate.
+    pub contribution: Vec3,
+}
+
+/// A ray left the scene: add the background.
+#[inline]
+pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
+    st.l += st.beta * scene.background.radiance(dir);
+}
+
+/// A ray hit an emitter (whose BSDF is black: the path ends).
+#[inline]
+pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, wo: Vec3A) {
+    let sp = &hit.surface;
+    let le = mat.emitted(sp.n.dot(wo));
+    if le == Vec3::ZERO {
+        return;
+    }
+    let w = if st.delta {
+        1.0
+    } else {
+        power_heuristic(st.prev_pdf, scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, sp.p, sp.n))
+    };
+    st.l += st.beta * le * w;
+}
+
+/// Next-event estimation at a surface point: samples a light and returns the shadow ray that
+/// decides whether its MIS-weighted contribution counts. Call only for materials with a smooth
+/// part and scenes with lights.
+#[inline]
+pub fn sample_light(
+    scene: &RenderScene,
+    st: &PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    mat: &Material,
+    time: f32,
+    sampler: &mut Sampler,
+) -> Option<ShadowRay> {
+    let (p, n) = (sp.p, sp.n);
+    let geo = &*scene.geometry;
+    let lights = &*scene.lights;
+    let (light, pmf) = lights.pick(sampler.next_1d());
+    let ls = lights.sample(geo, light, p, sampler.next_2d());
+    let to = ls.p - p;
+    let dist = to.length();
+    if !(dist > 0.0) {
+        return None;
+    }
+    let wi = to / dist;
+    let light_mat = &scene.materials[geo.material[lights.prims[light] as usize] as usize];
+    let le = light_mat.emitted(ls.n.dot(-wi));
+    let pdf_light = ls.pdf * pmf;
+    if le == Vec3::ZERO || !(pdf_light > 0.0) {
+        return None;
+    }
+    let (f, pdf_bsdf) = material::eval(mat, wo, wi, n);
+    if f == Vec3::ZERO {
+        return None;
+    }
+    let origin = offset_ray_origin(p, sp.err, if wi.dot(n) > 0.0 { n } else { -n });
+    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
+    let contribution = st.beta * (f * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light));
+    Some(ShadowRay { ray: Ray { origin, dir: target - origin, time }, contribution })
+}
+
+/// Samples the BSDF, updates the throughput, applies Russian roulette; returns the next ray, or
+/// `None` when the path ends.
+#[inline]
+pub fn scatter(
+    scene: &RenderScene,
+    st: &mut PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    mat: &Material,
+    time: f32,
+    sampler: &mut Sampler,
+) -> Option<Ray> {
+    let bs = material::sample(mat, wo, sp.n, sampler.next_2d(), sampler.next_1d())?;
+    st.beta *= bs.weight;
+    st.eta_scale *= bs.eta * bs.eta;
+    st.delta = bs.delta;
+    st.prev_pdf = bs.pdf;
+    st.prev_p = sp.p;
+    let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
+    let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
+    st.depth += 1;
+    if st.depth >= scene.settings.rr_depth {
+        let rr = (st.beta * st.eta_scale).max_element();
+        if rr < 1.0 {
+            let q = (1.0 - rr).max(0.0);
+            if sampler.next_1d() < q {
+                return None;
+            }
+            st.beta /= 1.0 - q;
+        }
+    }
+    Some(ray)
+}
+
+/// The first ray of sample `index` of pixel (x, y), and its random stream.
+#[inline]
+pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
+    let s = scene.settings;
+    let pixel = y * s.width + x;
+    let offset = crate::sampler::pixel_sample(s.seed, pixel, index, s.spp);
+    let mut sampler = Sampler::new(s.seed, pixel, index);
+    let lens = sampler.next_2d();
+    let time = if scene.camera.shutter.0 != scene.camera.shutter.1 { sampler.next_1d() } else { 0.0 };
+    let ray = scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + offset, lens, time);
+    (ray, sampler)
+}
