@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::engine::{scene, world::SceneWorld};
-use pathwave::integrator::oracle;
+use pathwave::integrator::{oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::metrics;
 use std::io::Write;
@@ -49,6 +49,18 @@ enum Command {
         /// No progress bar.
         #[arg(short, long)]
         quiet: bool,
+        /// Which integrator renders.
+        #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
+        integrator: Integrator,
+        /// Paths in flight per worker (wavefront).
+        #[arg(long, default_value_t = 1024)]
+        batch: usize,
+        /// Print per-stage statistics (wavefront).
+        #[arg(long)]
+        stats: bool,
+        /// Write a Chrome/Perfetto trace of the render (one span per stage and batch).
+        #[arg(long, value_name = "FILE.json")]
+        trace: Option<PathBuf>,
     },
     /// Print RMSE and relMSE of image A against reference B (and both means).
     Compare {
@@ -59,18 +71,72 @@ enum Command {
     },
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Integrator {
+    /// Stages over structure-of-arrays queues (default).
+    Wavefront,
+    /// The reference path tracer, one path at a time.
+    Oracle,
+}
+
+/// Logs to stderr by `RUST_LOG`; with a trace file, also records every span for Perfetto. The
+/// returned guard flushes the trace when dropped.
+fn init_tracing(trace: Option<&PathBuf>) -> Option<tracing_chrome::FlushGuard> {
+    use tracing_subscriber::prelude::*;
+    fn fmt<S>() -> impl tracing_subscriber::Layer<S>
+    where
+        S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
+    {
+        tracing_subscriber::fmt::layer()
+            .with_writer(std::io::stderr)
+            .with_filter(tracing_subscriber::EnvFilter::from_default_env())
+    }
+    match trace {
+        Some(path) => {
+            let (chrome, guard) = tracing_chrome::ChromeLayerBuilder::new().file(path).build();
+            tracing_subscriber::registry().with(chrome).with(fmt()).init();
+            Some(guard)
+        }
+        None => {
+            tracing_subscriber::registry().with(fmt()).init();
+            None
+        }
+    }
+}
+
 fn main() -> ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-        .with_writer(std::io::stderr)
-        .init();
-    let result = match Cli::parse().command {
-        Command::Render { scene, output, spp, width, height, seed, max_depth, threads, quiet } => {
+    let cli = Cli::parse();
+    let trace = match &cli.command {
+        Command::Render { trace, .. } => trace.clone(),
+        _ => None,
+    };
+    let guard = init_tracing(trace.as_ref());
+    let result = match cli.command {
+        Command::Render {
+            scene,
+            output,
+            spp,
+            width,
+            height,
+            seed,
+            max_depth,
+            threads,
+            quiet,
+            integrator,
+            batch,
+            stats,
+            trace: _,
+        } => {
             let overrides = Overrides { spp, width, height, seed, max_depth };
-            render(&scene, &output, overrides, threads, quiet)
+            let how = How { integrator, batch, stats, threads, quiet };
+            render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
     };
+    drop(guard);
+    if let Some(t) = trace.filter(|_| result.is_ok()) {
+        eprintln!("trace written to {} (open it in ui.perfetto.dev)", t.display());
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -88,13 +154,16 @@ struct Overrides {
     max_depth: Option<u32>,
 }
 
-fn render(
-    path: &PathBuf,
-    output: &PathBuf,
-    o: Overrides,
+struct How {
+    integrator: Integrator,
+    batch: usize,
+    stats: bool,
     threads: Option<usize>,
     quiet: bool,
-) -> Result<(), String> {
+}
+
+fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(), String> {
+    let threads = how.threads;
     let mut desc = scene::load(path).map_err(|e| e.to_string())?;
     let r = &mut desc.render;
     r.spp = o.spp.unwrap_or(r.spp);
@@ -109,10 +178,23 @@ fn render(
     let start = Instant::now();
     let scene = SceneWorld::render_scene(&desc);
     let s = scene.settings;
-    let bar = Progress::new(quiet);
-    let film = pool.install(|| oracle::render(&scene, &|done, total| bar.update(done, total)));
+    let bar = Progress::new(how.quiet);
+    let progress = |done, total| bar.update(done, total);
+    let (film, stats) = pool.install(|| match how.integrator {
+        Integrator::Oracle => (oracle::render(&scene, &progress), None),
+        Integrator::Wavefront => {
+            let (film, stats) = wavefront::render(&scene, wavefront::Options { batch: how.batch }, &progress);
+            (film, Some(stats))
+        }
+    });
     let secs = start.elapsed().as_secs_f64();
     bar.finish();
+    if how.stats {
+        match &stats {
+            Some(st) => print_stats(st, secs, film.non_finite),
+            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        }
+    }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
     let clamped = io::write(output, &img)?;
     let samples = s.width as f64 * s.height as f64 * s.spp as f64;
@@ -128,6 +210,40 @@ fn render(
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
     );
     Ok(())
+}
+
+/// The `--stats` table on stderr.
+fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
+    let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
+    eprintln!("{:<22} {:>7} {:>12} {:>10} {:>9}", "stage", "time %", "items", "M items/s", "calls");
+    for (k, stage) in wavefront::Stage::ALL.iter().enumerate() {
+        if st.calls[k] == 0 {
+            continue;
+        }
+        let t = st.time[k].as_secs_f64();
+        eprintln!(
+            "{:<22} {:>6.1}% {:>12} {:>10.2} {:>9}",
+            stage.name(),
+            100.0 * t / total,
+            st.items[k],
+            st.items[k] as f64 / t / 1e6,
+            st.calls[k]
+        );
+    }
+    let ix = wavefront::Stage::IntersectClosest as usize;
+    let sh = wavefront::Stage::TraceShadowRays as usize;
+    let rays = st.items[ix] + st.items[sh];
+    eprintln!(
+        "{} iterations, mean queue occupancy {:.1}%; {} rays ({} closest, {} shadow): {:.2} Mrays/s; {:.3} M samples/s; {} NaN/Inf discarded",
+        st.iterations,
+        100.0 * st.occupancy_sum / st.iterations.max(1) as f64,
+        rays,
+        st.items[ix],
+        st.items[sh],
+        rays as f64 / wall / 1e6,
+        st.paths as f64 / wall / 1e6,
+        non_finite
+    );
 }
 
 fn compare(a: &PathBuf, b: &PathBuf) -> Result<(), String> {

@@ -7,3 +7,4 @@ pub mod material;
 pub mod oracle;
 pub mod path;
 pub mod sampler;
+pub mod wavefront;

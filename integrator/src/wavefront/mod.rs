@@ -1,0 +1,292 @@
+//! The wavefront integrator: paths advance stage by stage over structure-of-arrays queues.
+//!
+//! Each rayon task owns one image tile and a batch of path slots (sized to stay in cache). An
+//! iteration runs `generate_camera_rays` (fill free slots with new pixel samples),
+//! `intersect_closest`, `handle_escaped`, `handle_emissive`, one shading loop per material kind
+//! present (`shade_lambertian`, `shade_metal`, `shade_dielectric`; they write continuation rays
+//! and shadow rays), `trace_shadow_rays` and `accumulate_film` (finished paths free their slot).
+//! Paths that end are replaced by new camera samples until the tile's samples are done.
+//!
+//! Every sample is computed by the same per-vertex code as the reference path tracer and pixel
+//! sums are exact, so the image is bit-identical to the reference for any batch size and
+//! thread count.
+
+mod queues;
+mod stages;
+
+use crate::film::{Film, PixelAccumulator};
+use crate::path;
+use pathwave_engine::material::Material;
+use pathwave_engine::render_scene::RenderScene;
+use queues::{Paths, Queues};
+use rayon::prelude::*;
+pub use stages::MaterialKind;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+/// Tile edge in pixels: the unit of work of one rayon task.
+const TILE: u32 = 16;
+
+/// Settings of the wavefront integrator.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Paths in flight per worker.
+    pub batch: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self { batch: 1024 }
+    }
+}
+
+/// The stages, for statistics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// New camera rays.
+    GenerateCameraRays,
+    /// Closest-hit traversal.
+    IntersectClosest,
+    /// Background for rays that left.
+    HandleEscaped,
+    /// Emitter hits.
+    HandleEmissive,
+    /// Lambertian shading.
+    ShadeLambertian,
+    /// Metal shading.
+    ShadeMetal,
+    /// Dielectric shading.
+    ShadeDielectric,
+    /// Occlusion tests.
+    TraceShadowRays,
+    /// Finished paths into the film.
+    AccumulateFilm,
+}
+
+impl Stage {
+    /// All stages in pipeline order.
+    pub const ALL: [Stage; 9] = [
+        Stage::GenerateCameraRays,
+        Stage::IntersectClosest,
+        Stage::HandleEscaped,
+        Stage::HandleEmissive,
+        Stage::ShadeLambertian,
+        Stage::ShadeMetal,
+        Stage::ShadeDielectric,
+        Stage::TraceShadowRays,
+        Stage::AccumulateFilm,
+    ];
+
+    /// The stage's name (also its tracing span name).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::GenerateCameraRays => "generate_camera_rays",
+            Stage::IntersectClosest => "intersect_closest",
+            Stage::HandleEscaped => "handle_escaped",
+            Stage::HandleEmissive => "handle_emissive",
+            Stage::ShadeLambertian => "shade_lambertian",
+            Stage::ShadeMetal => "shade_metal",
+            Stage::ShadeDielectric => "shade_dielectric",
+            Stage::TraceShadowRays => "trace_shadow_rays",
+            Stage::AccumulateFilm => "accumulate_film",
+        }
+    }
+}
+
+/// Per-stage time and item counts, summed over workers.
+#[derive(Clone, Debug, Default)]
+pub struct Stats {
+    /// Time spent in each stage (summed over threads), indexed like [`Stage::ALL`].
+    pub time: [Duration; 9],
+    /// Items (rays or paths) each stage consumed.
+    pub items: [u64; 9],
+    /// Stage invocations with a non-empty queue.
+    pub calls: [u64; 9],
+    /// Wavefront iterations.
+    pub iterations: u64,
+    /// Sum over iterations of the fraction of slots that held a live path.
+    pub occupancy_sum: f64,
+    /// Samples (paths) completed.
+    pub paths: u64,
+}
+
+impl Stats {
+    fn merge(mut self, o: Stats) -> Stats {
+        for k in 0..9 {
+            self.time[k] += o.time[k];
+            self.items[k] += o.items[k];
+            self.calls[k] += o.calls[k];
+        }
+        self.iterations += o.iterations;
+        self.occupancy_sum += o.occupancy_sum;
+        self.paths += o.paths;
+        self
+    }
+}
+
+/// Renders the image; `progress(done, total)` is called after each tile.
+pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usize) + Sync)) -> (Film, Stats) {
+    let s = scene.settings;
+    let _span =
+        tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
+    let (tx, ty) = (s.width.div_ceil(TILE), s.height.div_ceil(TILE));
+    let total = (tx * ty) as usize;
+    let done = AtomicUsize::new(0);
+    let batch = opts.batch.max(1);
+    let results: Vec<(Vec<PixelAccumulator>, Stats)> = (0..tx * ty)
+        .into_par_iter()
+        .map_init(
+            || (Paths::with_slots(batch), Queues::default()),
+            |(paths, queues), t| {
+                let tile = Tile::new(t, tx, s.width, s.height);
+                let out = render_tile(scene, &tile, batch, paths, queues);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                out
+            },
+        )
+        .collect();
+    let mut film = Film::new(s.width, s.height);
+    film.spp = s.spp;
+    let mut stats = Stats::default();
+    for (t, (accs, st)) in results.into_iter().enumerate() {
+        let tile = Tile::new(t as u32, tx, s.width, s.height);
+        for (i, acc) in accs.iter().enumerate() {
+            let (x, y) = tile.pixel(i as u32);
+            film.set_pixel((y * s.width + x) as usize, acc);
+        }
+        stats = stats.merge(st);
+    }
+    (film, stats)
+}
+
+/// A rectangle of the image.
+struct Tile {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+}
+
+impl Tile {
+    fn new(t: u32, tiles_x: u32, width: u32, height: u32) -> Self {
+        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+        Self { x0, y0, w: (x0 + TILE).min(width) - x0, h: (y0 + TILE).min(height) - y0 }
+    }
+
+    fn pixel(&self, i: u32) -> (u32, u32) {
+        (self.x0 + i % self.w, self.y0 + i / self.w)
+    }
+}
+
+/// Runs the wavefront over all samples of one tile.
+fn render_tile(
+    scene: &RenderScene,
+    tile: &Tile,
+    batch: usize,
+    p: &mut Paths,
+    q: &mut Queues,
+) -> (Vec<PixelAccumulator>, Stats) {
+    let spp = scene.settings.spp as u64;
+    let work = (tile.w * tile.h) as u64 * spp;
+    let mut next_sample = 0u64;
+    let mut film = vec![PixelAccumulator::default(); (tile.w * tile.h) as usize];
+    let mut stats = Stats::default();
+    q.free.clear();
+    q.free.extend((0..batch as u32).rev());
+    q.active.clear();
+    let kinds = material_kinds(scene);
+    loop {
+        let fresh = q.free.len().min((work - next_sample) as usize);
+        timed(&mut stats, Stage::GenerateCameraRays, fresh, || {
+            while next_sample < work {
+                let Some(slot) = q.free.pop() else { break };
+                let (px, index) = ((next_sample / spp) as u32, (next_sample % spp) as u32);
+                let (x, y) = tile.pixel(px);
+                let (ray, sampler) = path::camera_ray(scene, x, y, index);
+                let s = slot as usize;
+                p.set_ray(s, ray);
+                p.set_state(s, &path::PathState::new(ray.origin));
+                p.sampler[s] = sampler;
+                p.pixel[s] = px;
+                q.active.push(slot);
+                next_sample += 1;
+            }
+        });
+        if q.active.is_empty() {
+            break;
+        }
+        stats.iterations += 1;
+        stats.occupancy_sum += q.active.len() as f64 / batch as f64;
+        timed(&mut stats, Stage::IntersectClosest, q.active.len(), || stages::intersect_closest(scene, p, q));
+        timed(&mut stats, Stage::HandleEscaped, q.escaped.len(), || stages::handle_escaped(scene, p, q));
+        timed(&mut stats, Stage::HandleEmissive, q.emissive.len(), || stages::handle_emissive(scene, p, q));
+        for (kind, stage, len) in [
+            (MaterialKind::Lambertian, Stage::ShadeLambertian, q.lambertian.len()),
+            (MaterialKind::Metal, Stage::ShadeMetal, q.metal.len()),
+            (MaterialKind::Dielectric, Stage::ShadeDielectric, q.dielectric.len()),
+        ] {
+            if kinds.contains(&kind) {
+                timed(&mut stats, stage, len, || stages::shade(scene, p, q, kind));
+            }
+        }
+        timed(&mut stats, Stage::TraceShadowRays, q.shadow.len(), || stages::trace_shadow_rays(scene, p, q));
+        timed(&mut stats, Stage::AccumulateFilm, q.finished.len(), || {
+            for &i in &q.finished {
+                film[p.pixel[i as usize] as usize].add(p.l[i as usize]);
+            }
+            q.free.extend_from_slice(&q.finished);
+        });
+        stats.paths += q.finished.len() as u64;
+        q.escaped.clear();
+        q.emissive.clear();
+        q.finished.clear();
+        q.shadow.clear();
+        std::mem::swap(&mut q.active, &mut q.next);
+        q.next.clear();
+    }
+    (film, stats)
+}
+
+/// Runs a stage under its tracing span, recording its time and item count.
+#[inline]
+fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
+    if items == 0 {
+        return;
+    }
+    let k = stage as usize;
+    let _span = match stage {
+        Stage::GenerateCameraRays => tracing::trace_span!("generate_camera_rays"),
+        Stage::IntersectClosest => tracing::trace_span!("intersect_closest"),
+        Stage::HandleEscaped => tracing::trace_span!("handle_escaped"),
+        Stage::HandleEmissive => tracing::trace_span!("handle_emissive"),
+        Stage::ShadeLambertian => tracing::trace_span!("shade_lambertian"),
+        Stage::ShadeMetal => tracing::trace_span!("shade_metal"),
+        Stage::ShadeDielectric => tracing::trace_span!("shade_dielectric"),
+        Stage::TraceShadowRays => tracing::trace_span!("trace_shadow_rays"),
+        Stage::AccumulateFilm => tracing::trace_span!("accumulate_film"),
+    }
+    .entered();
+    let start = Instant::now();
+    f();
+    stats.time[k] += start.elapsed();
+    stats.items[k] += items as u64;
+    stats.calls[k] += 1;
+}
+
+/// The material kinds that have a shading loop and occur in the scene: queues of absent kinds
+/// are never visited.
+pub fn material_kinds(scene: &RenderScene) -> Vec<MaterialKind> {
+    let mut kinds = Vec::new();
+    for m in &scene.materials {
+        let k = match m {
+            Material::Lambertian { .. } => MaterialKind::Lambertian,
+            Material::Metal { .. } => MaterialKind::Metal,
+            Material::Dielectric { .. } => MaterialKind::Dielectric,
+            Material::DiffuseLight { .. } => continue,
+        };
+        if !kinds.contains(&k) {
+            kinds.push(k);
+        }
+    }
+    kinds
+}

@@ -1,0 +1,172 @@
+//! Structure-of-arrays storage for the paths in flight and the queues between stages. Paths
+//! live in slots; queues hold slot indices (or, for shadow rays, the rays themselves).
+
+use crate::path::PathState;
+use crate::sampler::Sampler;
+use glam::{Vec3, Vec3A};
+use pathwave_engine::geometry::Hit;
+use pathwave_engine::math::Ray;
+
+/// Paths in flight, one slot each, every field its own array.
+#[derive(Default)]
+pub struct Paths {
+    /// Next ray to trace.
+    pub origin: Vec<Vec3A>,
+    /// Its direction (unit).
+    pub dir: Vec<Vec3A>,
+    /// Its time.
+    pub time: Vec<f32>,
+    /// Radiance gathered.
+    pub l: Vec<Vec3>,
+    /// Throughput.
+    pub beta: Vec<Vec3>,
+    /// Squared IOR ratios crossed.
+    pub eta_scale: Vec<f32>,
+    /// Last scattering was a delta lobe.
+    pub delta: Vec<bool>,
+    /// Last scattering point.
+    pub prev_p: Vec<Vec3A>,
+    /// Last BSDF pdf.
+    pub prev_pdf: Vec<f32>,
+    /// Bounces so far.
+    pub depth: Vec<u32>,
+    /// Random stream.
+    pub sampler: Vec<Sampler>,
+    /// Pixel (index within the worker's tile).
+    pub pixel: Vec<u32>,
+    /// Closest hit of the last intersection.
+    pub hit: Vec<Hit>,
+}
+
+impl Paths {
+    /// Storage for `n` slots.
+    pub fn with_slots(n: usize) -> Self {
+        let hit0 = Hit {
+            t: 0.0,
+            prim: 0,
+            surface: pathwave_engine::shape::SurfacePoint {
+                p: Vec3A::ZERO,
+                n: Vec3A::Z,
+                uv: glam::Vec2::ZERO,
+                err: 0.0,
+            },
+        };
+        Self {
+            origin: vec![Vec3A::ZERO; n],
+            dir: vec![Vec3A::Z; n],
+            time: vec![0.0; n],
+            l: vec![Vec3::ZERO; n],
+            beta: vec![Vec3::ONE; n],
+            eta_scale: vec![1.0; n],
+            delta: vec![true; n],
+            prev_p: vec![Vec3A::ZERO; n],
+            prev_pdf: vec![0.0; n],
+            depth: vec![0; n],
+            sampler: vec![Sampler::new(0, 0, 0); n],
+            pixel: vec![0; n],
+            hit: vec![hit0; n],
+        }
+    }
+
+    /// The ray of slot `i`.
+    #[inline]
+    pub fn ray(&self, i: usize) -> Ray {
+        Ray { origin: self.origin[i], dir: self.dir[i], time: self.time[i] }
+    }
+
+    /// Sets the ray of slot `i`.
+    #[inline]
+    pub fn set_ray(&mut self, i: usize, r: Ray) {
+        self.origin[i] = r.origin;
+        self.dir[i] = r.dir;
+        self.time[i] = r.time;
+    }
+
+    /// Gathers the path state of slot `i`.
+    #[inline]
+    pub fn state(&self, i: usize) -> PathState {
+        PathState {
+            l: self.l[i],
+            beta: self.beta[i],
+            eta_scale: self.eta_scale[i],
+            delta: self.delta[i],
+            prev_p: self.prev_p[i],
+            prev_pdf: self.prev_pdf[i],
+            depth: self.depth[i],
+        }
+    }
+
+    /// Scatters the path state of slot `i` back.
+    #[inline]
+    pub fn set_state(&mut self, i: usize, s: &PathState) {
+        self.l[i] = s.l;
+        self.beta[i] = s.beta;
+        self.eta_scale[i] = s.eta_scale;
+        self.delta[i] = s.delta;
+        self.prev_p[i] = s.prev_p;
+        self.prev_pdf[i] = s.prev_pdf;
+        self.depth[i] = s.depth;
+    }
+}
+
+/// Shadow rays waiting for an occlusion test, as parallel arrays.
+#[derive(Default)]
+pub struct ShadowQueue {
+    /// Ray origins.
+    pub origin: Vec<Vec3A>,
+    /// Unnormalised directions to the light point (t = 1 at the light).
+    pub dir: Vec<Vec3A>,
+    /// Contribution if unoccluded.
+    pub contribution: Vec<Vec3>,
+    /// Slot of the path it belongs to.
+    pub slot: Vec<u32>,
+}
+
+impl ShadowQueue {
+    /// Appends a shadow ray of path `slot`.
+    #[inline]
+    pub fn push(&mut self, slot: u32, ray: &Ray, contribution: Vec3) {
+        self.origin.push(ray.origin);
+        self.dir.push(ray.dir);
+        self.contribution.push(contribution);
+        self.slot.push(slot);
+    }
+
+    /// Empties the queue, keeping its storage.
+    pub fn clear(&mut self) {
+        self.origin.clear();
+        self.dir.clear();
+        self.contribution.clear();
+        self.slot.clear();
+    }
+
+    /// Number of rays queued.
+    pub fn len(&self) -> usize {
+        self.slot.len()
+    }
+}
+
+/// The slot-index queues between stages.
+#[derive(Default)]
+pub struct Queues {
+    /// Paths with a ray to trace this iteration.
+    pub active: Vec<u32>,
+    /// Paths with a ray for the next iteration.
+    pub next: Vec<u32>,
+    /// Rays that left the scene.
+    pub escaped: Vec<u32>,
+    /// Hits on emitters.
+    pub emissive: Vec<u32>,
+    /// Hits by material kind.
+    pub lambertian: Vec<u32>,
+    /// Hits on metal.
+    pub metal: Vec<u32>,
+    /// Hits on glass.
+    pub dielectric: Vec<u32>,
+    /// Paths that ended; their radiance goes to the film.
+    pub finished: Vec<u32>,
+    /// Free slots.
+    pub free: Vec<u32>,
+    /// Shadow rays.
+    pub shadow: ShadowQueue,
+}

@@ -1,0 +1,124 @@
+//! The stages of one wavefront iteration. Each is a tight loop over one queue; per-vertex math
+//! comes from [`crate::path`], so every sample equals the reference path tracer's.
+
+use super::queues::{Paths, Queues};
+use crate::material;
+use crate::path;
+use pathwave_engine::material::Material;
+use pathwave_engine::render_scene::RenderScene;
+
+/// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
+/// their material kind.
+pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
+    let geo = &*scene.geometry;
+    for &i in &q.active {
+        let s = i as usize;
+        match geo.intersect(&p.ray(s), f32::INFINITY) {
+            None => q.escaped.push(i),
+            Some(hit) => {
+                p.hit[s] = hit;
+                match scene.materials[geo.material[hit.prim as usize] as usize] {
+                    Material::Lambertian { .. } => q.lambertian.push(i),
+                    Material::Metal { .. } => q.metal.push(i),
+                    Material::Dielectric { .. } => q.dielectric.push(i),
+                    Material::DiffuseLight { .. } => q.emissive.push(i),
+                }
+            }
+        }
+    }
+}
+
+/// `handle_escaped`: adds the background; the paths end.
+pub fn handle_escaped(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
+    for &i in &q.escaped {
+        let s = i as usize;
+        let mut st = p.state(s);
+        path::escape(scene, &mut st, p.dir[s]);
+        p.l[s] = st.l;
+        q.finished.push(i);
+    }
+}
+
+/// `handle_emissive`: adds MIS-weighted emission; the paths end (emitters do not scatter).
+pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
+    let geo = &*scene.geometry;
+    for &i in &q.emissive {
+        let s = i as usize;
+        let hit = p.hit[s];
+        let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
+        let mut st = p.state(s);
+        path::emit(scene, &mut st, &hit, mat, -p.dir[s]);
+        p.l[s] = st.l;
+        q.finished.push(i);
+    }
+}
+
+/// One shading loop for the hits of one material kind: light sampling into the shadow queue
+/// (when the material has a smooth part and the scene has lights), then BSDF sampling into the
+/// next iteration's queue. Which queue is the `kind` argument.
+pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
+    let geo = &*scene.geometry;
+    let nee = kind == MaterialKind::Lambertian && !scene.lights.is_empty();
+    let queue = std::mem::take(match kind {
+        MaterialKind::Lambertian => &mut q.lambertian,
+        MaterialKind::Metal => &mut q.metal,
+        MaterialKind::Dielectric => &mut q.dielectric,
+    });
+    for &i in &queue {
+        let s = i as usize;
+        let mut st = p.state(s);
+        if st.depth == scene.settings.max_depth {
+            q.finished.push(i);
+            continue;
+        }
+        let hit = p.hit[s];
+        let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
+        debug_assert_eq!(material::has_smooth_part(mat), kind == MaterialKind::Lambertian);
+        let (wo, time) = (-p.dir[s], p.time[s]);
+        let mut sampler = p.sampler[s];
+        if nee {
+            if let Some(shadow) = path::sample_light(scene, &st, &hit.surface, wo, mat, time, &mut sampler) {
+                q.shadow.push(i, &shadow.ray, shadow.contribution);
+            }
+        }
+        match path::scatter(scene, &mut st, &hit.surface, wo, mat, time, &mut sampler) {
+            Some(ray) => {
+                p.set_ray(s, ray);
+                q.next.push(i);
+            }
+            None => q.finished.push(i),
+        }
+        p.sampler[s] = sampler;
+        p.set_state(s, &st);
+    }
+    let mut queue = queue;
+    queue.clear();
+    match kind {
+        MaterialKind::Lambertian => q.lambertian = queue,
+        MaterialKind::Metal => q.metal = queue,
+        MaterialKind::Dielectric => q.dielectric = queue,
+    }
+}
+
+/// `trace_shadow_rays`: occlusion tests; unoccluded contributions are added to their paths.
+pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
+    let geo = &*scene.geometry;
+    let sq = &q.shadow;
+    for k in 0..sq.len() {
+        let ray = pathwave_engine::math::Ray { origin: sq.origin[k], dir: sq.dir[k], time: 0.0 };
+        if !geo.occluded(&ray, 1.0) {
+            p.l[sq.slot[k] as usize] += sq.contribution[k];
+        }
+    }
+}
+
+/// The material kinds that have a shading loop.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaterialKind {
+    /// Lambertian (with light sampling).
+    Lambertian,
+    /// Metal.
+    Metal,
+    /// Dielectric.
+    Dielectric,
+}
