@@ -1,5 +1,6 @@
 //! The primitive list and its BVH (obvhs CWBVH): closest-hit and occlusion queries.
 
+use crate::flat::FlatPrims;
 use crate::math::Ray;
 use crate::shape::{Quad, Sphere, SurfacePoint, TransformedSphere};
 use glam::Vec3A;
@@ -64,19 +65,35 @@ pub struct Hit {
     pub surface: SurfacePoint,
 }
 
-/// Primitives (in BVH order) with per-primitive material ids and the BVH over them.
+/// Scenes with at most this many primitives (quads and spheres only) also keep flat primitive
+/// lists: a stream of rays tests them primitive by primitive, SIMD across rays, which beats
+/// traversing the BVH once per ray. Single rays still traverse the BVH (a scalar scan of even
+/// 13 quads is slower than obvhs: cornell renders in 2.53 s against 1.72 s).
+pub const FLAT_MAX: usize = 32;
+
+/// Primitives with per-primitive material ids and the structures that find ray hits among them.
 #[derive(Default)]
 pub struct Geometry {
-    /// Primitives, reordered to match the BVH leaves.
+    /// Primitives, in BVH leaf order.
     pub prims: Vec<Primitive>,
     /// Material id of each primitive.
     pub material: Vec<u32>,
     bvh: Option<CwBvh>,
+    flat: Option<FlatPrims>,
 }
 
 impl Geometry {
     /// Builds the BVH and reorders the primitives (and their materials) to its leaf order.
     pub fn build(prims: Vec<Primitive>, material: Vec<u32>) -> Self {
+        let mut g = Self::build_bvh(prims, material);
+        if g.prims.len() <= FLAT_MAX {
+            g.flat = FlatPrims::new(&g.prims);
+        }
+        g
+    }
+
+    /// Builds the BVH only, whatever the primitive count.
+    pub fn build_bvh(prims: Vec<Primitive>, material: Vec<u32>) -> Self {
         assert_eq!(prims.len(), material.len());
         if prims.is_empty() {
             return Self::default();
@@ -86,7 +103,7 @@ impl Geometry {
         let order = &bvh.primitive_indices;
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
         let material = order.iter().map(|&i| material[i as usize]).collect();
-        Self { prims, material, bvh: Some(bvh) }
+        Self { prims, material, bvh: Some(bvh), flat: None }
     }
 
     /// Closest hit with `t` in `(0, tmax)`.
@@ -101,17 +118,24 @@ impl Geometry {
         if !found {
             return None;
         }
-        let prim = hit.primitive_id;
-        let surface = self.prims[prim as usize].surface(ray.at(hit.t));
-        Some(Hit { t: hit.t, prim, surface })
+        Some(self.hit(ray, hit.t, hit.primitive_id))
+    }
+
+    /// The hit record of primitive `prim` at distance `t`.
+    #[inline]
+    pub fn hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
+        Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) }
+    }
+
+    /// The flat primitive lists, for scenes small enough to trace as streams.
+    pub fn flat(&self) -> Option<&FlatPrims> {
+        self.flat.as_ref()
     }
 
     /// True when something lies on the ray with `t` in `(0, tmax)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
-        let Some(bvh) = self.bvh.as_ref() else {
-            return false;
-        };
+        let Some(bvh) = self.bvh.as_ref() else { return false };
         let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
         !bvh.ray_traverse_miss(oray, |r, slot| self.prims[slot].intersect(r.origin, r.direction, r.tmax))
     }
@@ -151,7 +175,7 @@ mod tests {
     fn bvh_closest_hit_equals_brute_force() {
         let prims = scene();
         let n = prims.len();
-        let geo = Geometry::build(prims.clone(), (0..n as u32).collect());
+        let geo = Geometry::build_bvh(prims.clone(), (0..n as u32).collect());
         let mut s = 99u32;
         let mut rnd = move || {
             s ^= s << 13;
@@ -174,6 +198,46 @@ mod tests {
             }
         }
         assert!(hits > 500, "the test must exercise hits: {hits}, sum {sum_t}");
+    }
+
+    #[test]
+    fn flat_scan_and_stream_equal_the_bvh() {
+        use crate::flat::RayStream;
+        let prims: Vec<Primitive> = scene().into_iter().take(FLAT_MAX).collect();
+        let n = prims.len() as u32;
+        let geo = Geometry::build(prims.clone(), (0..n).collect());
+        let f = geo.flat().expect("small scenes have flat lists");
+        assert!(Geometry::build_bvh(prims.clone(), (0..n).collect()).flat().is_none());
+        let mut s = 7u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let mut stream = RayStream::default();
+        let mut rays = Vec::new();
+        for _ in 0..3000 {
+            let ray = Ray::new(Vec3A::new(rnd(), rnd(), rnd()) * 15.0, Vec3A::new(rnd(), rnd(), rnd()));
+            stream.push(ray.origin.to_array(), ray.dir.to_array());
+            rays.push(ray);
+        }
+        let (mut t, mut id) = (vec![f32::INFINITY; rays.len()], vec![0; rays.len()]);
+        f.intersect_stream(&stream, &mut t, &mut id);
+        let mut occ = vec![false; rays.len()];
+        f.occluded_stream(&stream, &mut occ);
+        let mut hits = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
+            let a = f.intersect(o, d, f32::INFINITY);
+            let b = geo.intersect(ray, f32::INFINITY).map(|h| (h.t, h.prim));
+            assert_eq!(a, b, "flat scan vs BVH");
+            assert_eq!(a, (id[i] != u32::MAX).then_some((t[i], id[i])), "stream vs scan");
+            assert_eq!(occ[i], f.occluded(o, d, 1.0));
+            assert_eq!(occ[i], geo.occluded(ray, 1.0));
+            hits += a.is_some() as u32;
+        }
+        assert!(hits > 300, "{hits}");
     }
 
     #[test]

@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod flat;
 pub mod geometry;
 pub mod lights;
 pub mod material;

@@ -1,8 +1,8 @@
 //! Geometric primitives in world space: each file holds one shape with its intersection,
 //! surface data, sampling and tests.
 
-mod quad;
-mod sphere;
+pub(crate) mod quad;
+pub(crate) mod sphere;
 mod transformed_sphere;
 
 pub use quad::Quad;

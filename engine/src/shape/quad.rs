@@ -52,18 +52,13 @@ impl Quad {
     /// Smallest `t` in `(0, tmax)` where `o + t d` meets the quad, or `f32::INFINITY`.
     #[inline]
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        let denom = self.n.dot(d);
-        if denom == 0.0 {
-            return f32::INFINITY;
-        }
-        let t = self.n.dot(self.q - o) / denom;
-        if !(t > 0.0 && t < tmax) {
-            return f32::INFINITY;
-        }
-        let ph = o + t * d - self.q;
-        let a = self.w.dot(ph.cross(self.v));
-        let b = self.w.dot(self.u.cross(ph));
-        if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) { t } else { f32::INFINITY }
+        quad_t(self.kernel(), o.to_array(), d.to_array(), tmax)
+    }
+
+    /// The data of the intersection kernel: q, u, v, n, w.
+    #[inline]
+    pub fn kernel(&self) -> [[f32; 3]; 5] {
+        [self.q, self.u, self.v, self.n, self.w].map(|x| x.to_array())
     }
 
     /// Surface data at the point `p`, re-projected onto the plane as `Q + a u + b v`.
@@ -95,6 +90,30 @@ impl Quad {
     pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
         area_to_solid_angle(1.0 / self.area, from, p, self.n)
     }
+}
+
+#[inline(always)]
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline(always)]
+fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// The quad test on plain numbers (`k` = q, u, v, n, w), branch-free so that a loop over many
+/// rays vectorises; the single-ray and the stream tests both use it, so they agree to the bit.
+#[inline(always)]
+pub fn quad_t(k: [[f32; 3]; 5], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
+    let [q, u, v, n, w] = k;
+    let denom = dot(n, d);
+    let t = dot(n, [q[0] - o[0], q[1] - o[1], q[2] - o[2]]) / denom;
+    let ph = [o[0] + t * d[0] - q[0], o[1] + t * d[1] - q[1], o[2] + t * d[2] - q[2]];
+    let a = dot(w, cross(ph, v));
+    let b = dot(w, cross(u, ph));
+    let hit = denom != 0.0 && t > 0.0 && t < tmax && a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0;
+    if hit { t } else { f32::INFINITY }
 }
 
 #[cfg(test)]

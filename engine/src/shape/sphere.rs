@@ -41,28 +41,7 @@ impl Sphere {
     /// spheres (the radius-1000 ground of spheres-sky).
     #[inline]
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        let f = o - self.center;
-        let a = d.length_squared();
-        let b = f.dot(d);
-        let l = f - (b / a) * d;
-        let r2 = self.radius * self.radius;
-        let disc = a * (r2 - l.length_squared());
-        if disc < 0.0 {
-            return f32::INFINITY;
-        }
-        let c = f.length_squared() - r2;
-        let q = -(b + disc.sqrt().copysign(b));
-        let (mut t0, mut t1) = (c / q, q / a);
-        if t0 > t1 {
-            std::mem::swap(&mut t0, &mut t1);
-        }
-        if t0 > 0.0 && t0 < tmax {
-            t0
-        } else if t1 > 0.0 && t1 < tmax {
-            t1
-        } else {
-            f32::INFINITY
-        }
+        sphere_t(self.center.to_array(), self.radius, o.to_array(), d.to_array(), tmax)
     }
 
     /// Surface data at the point `p` (re-projected onto the sphere).
@@ -129,6 +108,31 @@ impl Sphere {
             if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - (1.0 - sin2_max).sqrt() };
         1.0 / (2.0 * PI * one_minus_cos_max)
     }
+}
+
+/// The sphere test on plain numbers, branch-free so that a loop over many rays vectorises; the
+/// single-ray and the stream tests both use it, so they agree to the bit.
+#[inline(always)]
+pub fn sphere_t(c: [f32; 3], r: f32, o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
+    let f = [o[0] - c[0], o[1] - c[1], o[2] - c[2]];
+    let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let b = f[0] * d[0] + f[1] * d[1] + f[2] * d[2];
+    let k = b / a;
+    let l = [f[0] - k * d[0], f[1] - k * d[1], f[2] - k * d[2]];
+    let r2 = r * r;
+    let disc = a * (r2 - (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]));
+    let cc = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) - r2;
+    let q = -(b + disc.max(0.0).sqrt().copysign(b));
+    let (t0, t1) = (cc / q, q / a);
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let t = if lo > 0.0 && lo < tmax {
+        lo
+    } else if hi > 0.0 && hi < tmax {
+        hi
+    } else {
+        f32::INFINITY
+    };
+    if disc >= 0.0 { t } else { f32::INFINITY }
 }
 
 /// Uniform direction on the unit sphere.

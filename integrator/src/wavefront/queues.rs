@@ -4,6 +4,7 @@
 use crate::path::PathState;
 use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
+use pathwave_engine::flat::RayStream;
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::math::Ray;
 
@@ -112,30 +113,28 @@ impl Paths {
 /// Shadow rays waiting for an occlusion test, as parallel arrays.
 #[derive(Default)]
 pub struct ShadowQueue {
-    /// Ray origins.
-    pub origin: Vec<Vec3A>,
-    /// Unnormalised directions to the light point (t = 1 at the light).
-    pub dir: Vec<Vec3A>,
+    /// The rays (t = 1 at the light point).
+    pub rays: RayStream,
     /// Contribution if unoccluded.
     pub contribution: Vec<Vec3>,
     /// Slot of the path it belongs to.
     pub slot: Vec<u32>,
+    /// Occlusion results.
+    pub occluded: Vec<bool>,
 }
 
 impl ShadowQueue {
     /// Appends a shadow ray of path `slot`.
     #[inline]
     pub fn push(&mut self, slot: u32, ray: &Ray, contribution: Vec3) {
-        self.origin.push(ray.origin);
-        self.dir.push(ray.dir);
+        self.rays.push(ray.origin.to_array(), ray.dir.to_array());
         self.contribution.push(contribution);
         self.slot.push(slot);
     }
 
     /// Empties the queue, keeping its storage.
     pub fn clear(&mut self) {
-        self.origin.clear();
-        self.dir.clear();
+        self.rays.clear();
         self.contribution.clear();
         self.slot.clear();
     }
@@ -144,6 +143,17 @@ impl ShadowQueue {
     pub fn len(&self) -> usize {
         self.slot.len()
     }
+}
+
+/// The active rays gathered into a stream, with the closest-hit results.
+#[derive(Default)]
+pub struct HitStream {
+    /// Rays in the order of the active queue.
+    pub rays: RayStream,
+    /// Closest distance (tmax on entry).
+    pub t: Vec<f32>,
+    /// Primitive hit, or `u32::MAX`.
+    pub prim: Vec<u32>,
 }
 
 /// The slot-index queues between stages.
@@ -169,4 +179,6 @@ pub struct Queues {
     pub free: Vec<u32>,
     /// Shadow rays.
     pub shadow: ShadowQueue,
+    /// Stream storage for closest-hit queries on flat geometry.
+    pub stream: HitStream,
 }

@@ -4,27 +4,55 @@
 use super::queues::{Paths, Queues};
 use crate::material;
 use crate::path;
+use glam::Vec3A;
+use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
+use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
 /// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
-/// their material kind.
+/// their material kind. Scenes without a BVH are traced as one stream, primitive by primitive.
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
-    for &i in &q.active {
-        let s = i as usize;
-        match geo.intersect(&p.ray(s), f32::INFINITY) {
-            None => q.escaped.push(i),
-            Some(hit) => {
-                p.hit[s] = hit;
-                match scene.materials[geo.material[hit.prim as usize] as usize] {
-                    Material::Lambertian { .. } => q.lambertian.push(i),
-                    Material::Metal { .. } => q.metal.push(i),
-                    Material::Dielectric { .. } => q.dielectric.push(i),
-                    Material::DiffuseLight { .. } => q.emissive.push(i),
-                }
-            }
+    let Some(flat) = geo.flat() else {
+        for k in 0..q.active.len() {
+            let i = q.active[k];
+            let hit = geo.intersect(&p.ray(i as usize), f32::INFINITY);
+            bin(scene, p, q, i, hit);
         }
+        return;
+    };
+    let st = &mut q.stream;
+    st.rays.clear();
+    for &i in &q.active {
+        st.rays.push(p.origin[i as usize].to_array(), p.dir[i as usize].to_array());
+    }
+    let n = q.active.len();
+    st.t.clear();
+    st.t.resize(n, f32::INFINITY);
+    st.prim.resize(n, 0);
+    flat.intersect_stream(&st.rays, &mut st.t, &mut st.prim);
+    for k in 0..n {
+        let i = q.active[k];
+        let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
+        let hit = (prim != u32::MAX).then(|| geo.hit(&p.ray(i as usize), t, prim));
+        bin(scene, p, q, i, hit);
+    }
+}
+
+/// Sends path `i` to the escaped queue or to its material's queue.
+#[inline]
+fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<Hit>) {
+    let Some(hit) = hit else {
+        q.escaped.push(i);
+        return;
+    };
+    p.hit[i as usize] = hit;
+    match scene.materials[scene.geometry.material[hit.prim as usize] as usize] {
+        Material::Lambertian { .. } => q.lambertian.push(i),
+        Material::Metal { .. } => q.metal.push(i),
+        Material::Dielectric { .. } => q.dielectric.push(i),
+        Material::DiffuseLight { .. } => q.emissive.push(i),
     }
 }
 
@@ -103,10 +131,23 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
 /// `trace_shadow_rays`: occlusion tests; unoccluded contributions are added to their paths.
 pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
-    let sq = &q.shadow;
-    for k in 0..sq.len() {
-        let ray = pathwave_engine::math::Ray { origin: sq.origin[k], dir: sq.dir[k], time: 0.0 };
-        if !geo.occluded(&ray, 1.0) {
+    let sq = &mut q.shadow;
+    let n = sq.len();
+    sq.occluded.resize(n, false);
+    match geo.flat() {
+        Some(flat) => flat.occluded_stream(&sq.rays, &mut sq.occluded),
+        None => {
+            let [ox, oy, oz] = &sq.rays.o;
+            let [dx, dy, dz] = &sq.rays.d;
+            for k in 0..n {
+                let origin = Vec3A::new(ox[k], oy[k], oz[k]);
+                let dir = Vec3A::new(dx[k], dy[k], dz[k]);
+                sq.occluded[k] = geo.occluded(&Ray { origin, dir, time: 0.0 }, 1.0);
+            }
+        }
+    }
+    for k in 0..n {
+        if !sq.occluded[k] {
             p.l[sq.slot[k] as usize] += sq.contribution[k];
         }
     }

@@ -1,0 +1,151 @@
+//! Small scenes without a BVH: quads and spheres in structure-of-arrays form, tested by brute
+//! force. A single ray scans every primitive; a stream of rays is tested primitive by primitive,
+//! each test running over all rays so that it vectorises across rays (8 lanes with AVX2).
+//! Both scan quads, then spheres, in order, keeping the first of equal distances: the stream
+//! finds exactly the hits of the single-ray scan.
+
+use crate::geometry::Primitive;
+use crate::shape::{quad::quad_t, sphere::sphere_t};
+
+/// Rays as parallel arrays of coordinates.
+#[derive(Default, Debug, Clone)]
+pub struct RayStream {
+    /// Origins.
+    pub o: [Vec<f32>; 3],
+    /// Directions.
+    pub d: [Vec<f32>; 3],
+}
+
+impl RayStream {
+    /// Empties the stream, keeping its storage.
+    pub fn clear(&mut self) {
+        self.o.iter_mut().chain(self.d.iter_mut()).for_each(Vec::clear);
+    }
+
+    /// Appends a ray.
+    #[inline]
+    pub fn push(&mut self, o: [f32; 3], d: [f32; 3]) {
+        for k in 0..3 {
+            self.o[k].push(o[k]);
+            self.d[k].push(d[k]);
+        }
+    }
+
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.o[0].len()
+    }
+
+    /// True when empty.
+    pub fn is_empty(&self) -> bool {
+        self.o[0].is_empty()
+    }
+}
+
+/// Quads and spheres as parallel arrays, with their primitive indices.
+#[derive(Default, Debug)]
+pub struct FlatPrims {
+    quads: Vec<[[f32; 3]; 5]>,
+    quad_id: Vec<u32>,
+    spheres: Vec<([f32; 3], f32)>,
+    sphere_id: Vec<u32>,
+}
+
+impl FlatPrims {
+    /// `None` when a primitive has no flat form (transformed spheres).
+    pub fn new(prims: &[Primitive]) -> Option<Self> {
+        let mut f = FlatPrims::default();
+        for (i, p) in prims.iter().enumerate() {
+            match p {
+                Primitive::Quad(q) => {
+                    f.quads.push(q.kernel());
+                    f.quad_id.push(i as u32);
+                }
+                Primitive::Sphere(s) => {
+                    f.spheres.push((s.center.to_array(), s.radius));
+                    f.sphere_id.push(i as u32);
+                }
+                Primitive::TransformedSphere(_) => return None,
+            }
+        }
+        Some(f)
+    }
+
+    /// Closest hit `(t, primitive)` with t in (0, tmax), or `None`.
+    #[inline]
+    pub fn intersect(&self, o: [f32; 3], d: [f32; 3], tmax: f32) -> Option<(f32, u32)> {
+        let (mut best, mut id) = (tmax, u32::MAX);
+        for (k, q) in self.quads.iter().enumerate() {
+            let t = quad_t(*q, o, d, best);
+            if t < best {
+                best = t;
+                id = self.quad_id[k];
+            }
+        }
+        for (k, (c, r)) in self.spheres.iter().enumerate() {
+            let t = sphere_t(*c, *r, o, d, best);
+            if t < best {
+                best = t;
+                id = self.sphere_id[k];
+            }
+        }
+        (id != u32::MAX).then_some((best, id))
+    }
+
+    /// True when something lies on the ray with t in (0, tmax).
+    #[inline]
+    pub fn occluded(&self, o: [f32; 3], d: [f32; 3], tmax: f32) -> bool {
+        self.quads.iter().any(|q| quad_t(*q, o, d, tmax) < tmax)
+            || self.spheres.iter().any(|(c, r)| sphere_t(*c, *r, o, d, tmax) < tmax)
+    }
+
+    /// Closest hits of a stream: on return `t[i]` and `id[i]` hold ray i's hit (`u32::MAX`
+    /// and the initial `t[i]` on a miss). `t` must hold each ray's tmax on entry.
+    pub fn intersect_stream(&self, rays: &RayStream, t: &mut [f32], id: &mut [u32]) {
+        let n = rays.len();
+        let (t, id) = (&mut t[..n], &mut id[..n]);
+        id.fill(u32::MAX);
+        let [ox, oy, oz] = &rays.o;
+        let [dx, dy, dz] = &rays.d;
+        let (ox, oy, oz, dx, dy, dz) = (&ox[..n], &oy[..n], &oz[..n], &dx[..n], &dy[..n], &dz[..n]);
+        for (k, q) in self.quads.iter().enumerate() {
+            let pid = self.quad_id[k];
+            for i in 0..n {
+                let h = quad_t(*q, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], t[i]);
+                let better = h < t[i];
+                t[i] = if better { h } else { t[i] };
+                id[i] = if better { pid } else { id[i] };
+            }
+        }
+        for (k, (c, r)) in self.spheres.iter().enumerate() {
+            let pid = self.sphere_id[k];
+            for i in 0..n {
+                let h = sphere_t(*c, *r, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], t[i]);
+                let better = h < t[i];
+                t[i] = if better { h } else { t[i] };
+                id[i] = if better { pid } else { id[i] };
+            }
+        }
+    }
+
+    /// Occlusion of a stream with tmax = 1 for every ray (shadow rays aimed at a light point):
+    /// `hit[i]` becomes true when something lies on ray i with t in (0, 1).
+    pub fn occluded_stream(&self, rays: &RayStream, hit: &mut [bool]) {
+        let n = rays.len();
+        let hit = &mut hit[..n];
+        hit.fill(false);
+        let [ox, oy, oz] = &rays.o;
+        let [dx, dy, dz] = &rays.d;
+        let (ox, oy, oz, dx, dy, dz) = (&ox[..n], &oy[..n], &oz[..n], &dx[..n], &dy[..n], &dz[..n]);
+        for q in &self.quads {
+            for i in 0..n {
+                hit[i] |= quad_t(*q, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], 1.0) < 1.0;
+            }
+        }
+        for (c, r) in &self.spheres {
+            for i in 0..n {
+                hit[i] |= sphere_t(*c, *r, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], 1.0) < 1.0;
+            }
+        }
+    }
+}
