@@ -4,7 +4,7 @@ use clap::{Parser, Subcommand};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::metrics;
+use pathwave::{bench, metrics};
 use std::io::Write;
 use std::num::NonZeroU32;
 use std::path::PathBuf;
@@ -61,6 +61,28 @@ enum Command {
         /// Write a Chrome/Perfetto trace of the render (one span per stage and batch).
         #[arg(long, value_name = "FILE.json")]
         trace: Option<PathBuf>,
+    },
+    /// Run time against error: render the scenes that have references at several sample
+    /// counts with both integrators; print a markdown table, optionally write an SVG plot.
+    Bench {
+        /// Sample counts.
+        #[arg(long, value_delimiter = ',', default_value = "4,16,64,256,1024")]
+        spp: Vec<u32>,
+        /// Folder of the reference EXRs.
+        #[arg(long, default_value = "../shared/refs")]
+        refs: PathBuf,
+        /// Only these scenes (file stems, e.g. cornell).
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
+        /// Paths in flight per worker (wavefront).
+        #[arg(long, default_value_t = 1024)]
+        batch: usize,
+        /// Write a log-log plot of relMSE against seconds.
+        #[arg(long, value_name = "FILE.svg")]
+        svg: Option<PathBuf>,
+        /// Worker threads (default: all cores).
+        #[arg(short, long)]
+        threads: Option<usize>,
     },
     /// Print RMSE and relMSE of image A against reference B (and both means).
     Compare {
@@ -132,6 +154,9 @@ fn main() -> ExitCode {
             render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
+        Command::Bench { spp, refs, only, batch, svg, threads } => {
+            bench(&spp, &refs, &only, batch, svg, threads)
+        }
     };
     drop(guard);
     if let Some(t) = trace.filter(|_| result.is_ok()) {
@@ -209,6 +234,42 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(
         film.non_finite,
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
     );
+    Ok(())
+}
+
+fn bench(
+    spps: &[u32],
+    refs: &std::path::Path,
+    only: &[String],
+    batch: usize,
+    svg: Option<PathBuf>,
+    threads: Option<usize>,
+) -> Result<(), String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| e.to_string())?;
+    let mut rows = Vec::new();
+    for (scene, reference) in bench::default_scenes(refs) {
+        let stem = scene.file_stem().and_then(|s| s.to_str()).unwrap_or_default().to_string();
+        if !only.is_empty() && !only.contains(&stem) {
+            continue;
+        }
+        rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch))?);
+    }
+    println!(
+        "{}, {} threads, {}, batch {batch}\n",
+        bench::today(),
+        pool.current_num_threads(),
+        bench::machine()
+    );
+    println!("{}", bench::table_header());
+    for r in &rows {
+        println!("{}", bench::table_row(r));
+    }
+    if let Some(path) = svg {
+        std::fs::write(&path, bench::svg(&rows)).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     Ok(())
 }
 
