@@ -65,31 +65,25 @@ pub const fn gamma(n: u32) -> f32 {
 }
 
 /// Moves a surface point whose coordinates are off by at most `err` (absolute, per component)
-/// to the side of `n` (the side the new ray leaves from): first by the error bound along the
-/// normal (pbrt-v4 section 6.8.6), then by a few hundred ulps to absorb the rounding of that
-/// step (Wächter and Binder, Ray Tracing Gems ch. 6). No epsilon to tune per scene.
+/// to the side of `n` (the side the new ray leaves from): by the error bound along the normal,
+/// then one ulp further in each component the offset moved, so that rounding of the addition
+/// cannot put the point back inside the bound (pbrt-v4 section 6.8.6). Scale invariant: no
+/// epsilon to tune per scene.
 #[inline]
 pub fn offset_ray_origin(p: Vec3A, err: f32, n: Vec3A) -> Vec3A {
     let d = err * n.abs().element_sum();
-    nudge(p + d * n, n)
-}
-
-/// Wächter and Binder's offset: 256 ulps along `n` (a fixed tiny step near the origin).
-#[inline]
-fn nudge(p: Vec3A, n: Vec3A) -> Vec3A {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    #[inline]
-    fn one(p: f32, n: f32) -> f32 {
-        if p.abs() < ORIGIN {
-            return p + FLOAT_SCALE * n;
+    let offset = d * n;
+    let po = p + offset;
+    let away = |x: f32, o: f32| {
+        if o > 0.0 {
+            x.next_up()
+        } else if o < 0.0 {
+            x.next_down()
+        } else {
+            x
         }
-        let of = (INT_SCALE * n) as i32;
-        let bits = p.to_bits() as i32;
-        f32::from_bits(bits.wrapping_add(if p < 0.0 { -of } else { of }) as u32)
-    }
-    Vec3A::new(one(p.x, n.x), one(p.y, n.y), one(p.z, n.z))
+    };
+    Vec3A::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
 }
 
 /// Mirror reflection of `wo` (pointing away from the surface) about `n`.
@@ -129,24 +123,18 @@ mod tests {
     }
 
     #[test]
-    fn offset_clears_the_error_bound() {
-        let p = Vec3A::new(3.0, 1000.0, -2.0);
-        let n = Vec3A::new(0.0, 1.0, 0.0);
-        let o = offset_ray_origin(p, 1e-3, n);
-        assert!(o.y - p.y >= 1e-3);
-        // Plus the nudge of 256 ulps (ulp(1000) = 2^-14).
-        assert!(o.y - p.y <= 1e-3 + 257.0 / 16384.0);
-    }
-
-    #[test]
-    fn offset_moves_to_the_normal_side_at_every_scale() {
-        for scale in [1e-4f32, 1e-2, 1.0, 555.0, 1e5] {
+    fn offset_clears_the_error_bound_at_every_scale() {
+        for scale in [1e-6f32, 1e-3, 1.0, 555.0, 1e5] {
             let p = Vec3A::new(0.3, -0.7, 0.2) * scale;
             let n = Vec3A::new(0.0, 1.0, 0.0);
-            let o = offset_ray_origin(p, 0.0, n);
-            assert!(o.y > p.y, "scale {scale}");
+            let err = gamma(4) * scale;
+            let o = offset_ray_origin(p, err, n);
             assert_eq!((o.x, o.z), (p.x, p.z));
-            assert!((o.y - p.y) < 1e-3 * scale.max(1.0 / 32.0), "offset too large at {scale}");
+            assert!(o.y - p.y >= err, "scale {scale}");
+            assert!(
+                o.y - p.y <= 2.0 * err + 2.0 * (p.y.next_up() - p.y).abs(),
+                "scale {scale}: offset too large"
+            );
         }
     }
 }
