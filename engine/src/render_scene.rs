@@ -53,8 +53,28 @@ impl Background {
     }
 }
 
+/// What the scene contains, so that integrators pick code specialised for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Features {
+    /// Every emitter that light sampling picks is a quad (or there is none).
+    pub lights_are_quads: bool,
+}
+
+impl Features {
+    /// Detects the features of extracted geometry.
+    pub fn detect(geometry: &Geometry, lights: &LightTable) -> Self {
+        let lights_are_quads = lights
+            .prims
+            .iter()
+            .all(|&p| matches!(geometry.prims[p as usize], crate::geometry::Primitive::Quad(_)));
+        Self { lights_are_quads }
+    }
+}
+
 /// Everything an integrator needs, in flat arrays.
 pub struct RenderScene {
+    /// What the scene contains.
+    pub features: Features,
     /// Camera for the configured image size.
     pub camera: Camera,
     /// Image and sampling settings.

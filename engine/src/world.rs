@@ -6,7 +6,7 @@ use crate::camera::Camera;
 use crate::geometry::{Geometry, Primitive};
 use crate::lights::LightTable;
 use crate::material::Material;
-use crate::render_scene::{Background, RenderScene, RenderSettings};
+use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
 use crate::scene::{BackgroundDesc, CameraDesc, MaterialDesc, SceneDesc, ShapeDesc, compose};
 use crate::shape::{Quad, Sphere, TransformedSphere};
 use bevy_ecs::prelude::*;
@@ -110,6 +110,7 @@ pub fn extract_render_scene(
     let c = camera.0;
     let s = settings.0;
     out.0 = Some(Arc::new(RenderScene {
+        features: Features::detect(&geometry.geometry, &geometry.lights),
         camera: Camera::new(
             c.look_from,
             c.look_at,

@@ -3,6 +3,7 @@
 #![warn(missing_docs)]
 
 pub mod film;
+pub mod lambert_vertex;
 pub mod material;
 pub mod oracle;
 pub mod path;

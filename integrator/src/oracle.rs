@@ -4,10 +4,12 @@
 //! roulette, box-filtered stratified pixel samples, rayon over tiles.
 
 use crate::film::{Film, PixelAccumulator};
+use crate::lambert_vertex;
 use crate::material;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
 use glam::Vec3;
+use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
@@ -79,6 +81,21 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
         }
         if st.depth == scene.settings.max_depth {
             break;
+        }
+        if let (Material::Lambertian { albedo }, true) = (*mat, scene.features.lights_are_quads) {
+            let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, sampler);
+            let out = lambert_vertex::lambert(&input);
+            let (shadow, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time, sampler);
+            if let Some(s) = shadow {
+                if !geo.occluded(&s.ray, 1.0) {
+                    st.l += s.contribution;
+                }
+            }
+            match next {
+                Some(r) => ray = r,
+                None => break,
+            }
+            continue;
         }
         if material::has_smooth_part(mat) && !scene.lights.is_empty() {
             if let Some(shadow) = path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler) {

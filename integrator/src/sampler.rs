@@ -36,6 +36,13 @@ impl Sampler {
         (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 
+    /// The value [`Self::next_1d`] would return, without consuming it.
+    #[inline]
+    pub fn peek_1d(&self) -> f32 {
+        let mut s = *self;
+        s.next_1d()
+    }
+
     /// Next two values.
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {

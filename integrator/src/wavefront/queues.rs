@@ -179,6 +179,8 @@ pub struct Queues {
     pub free: Vec<u32>,
     /// Shadow rays.
     pub shadow: ShadowQueue,
+    /// Scratch list of slots.
+    pub scratch: Vec<u32>,
     /// Stream storage for closest-hit queries on flat geometry.
     pub stream: HitStream,
 }

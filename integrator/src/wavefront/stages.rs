@@ -2,6 +2,7 @@
 //! comes from [`crate::path`], so every sample equals the reference path tracer's.
 
 use super::queues::{Paths, Queues};
+use crate::lambert_vertex;
 use crate::material;
 use crate::path;
 use glam::Vec3A;
@@ -92,6 +93,13 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
         MaterialKind::Metal => &mut q.metal,
         MaterialKind::Dielectric => &mut q.dielectric,
     });
+    if kind == MaterialKind::Lambertian && scene.features.lights_are_quads {
+        shade_lambertian_lanes(scene, p, q, &queue);
+        let mut queue = queue;
+        queue.clear();
+        q.lambertian = queue;
+        return;
+    }
     for &i in &queue {
         let s = i as usize;
         let mut st = p.state(s);
@@ -126,6 +134,64 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
         MaterialKind::Metal => q.metal = queue,
         MaterialKind::Dielectric => q.dielectric = queue,
     }
+}
+
+/// Lambertian hits under quad lights: inputs are gathered 8 paths at a time into lane arrays,
+/// the branch-free kernel runs on all lanes at once (vectorised), and outputs are applied.
+fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
+    let geo = &*scene.geometry;
+    let max_depth = scene.settings.max_depth;
+    let mut slots = [0u32; LANES];
+    let mut states = [path::PathState::new(glam::Vec3A::ZERO); LANES];
+    let mut samplers = [crate::sampler::Sampler::new(0, 0, 0); LANES];
+    let mut ins = LambertInLanes::default();
+    let mut outs = LambertOutLanes::default();
+    let mut live = std::mem::take(&mut q.scratch);
+    live.clear();
+    for &i in queue {
+        if p.depth[i as usize] == max_depth {
+            q.finished.push(i);
+        } else {
+            live.push(i);
+        }
+    }
+    for chunk in live.chunks(LANES) {
+        let mut n = 0;
+        for &i in chunk {
+            let s = i as usize;
+            let hit = p.hit[s];
+            let Material::Lambertian { albedo } = scene.materials[geo.material[hit.prim as usize] as usize]
+            else {
+                unreachable!("the Lambertian queue holds Lambertian hits")
+            };
+            (slots[n], states[n], samplers[n]) = (i, p.state(s), p.sampler[s]);
+            let input =
+                lambert_vertex::gather(scene, &states[n], &hit.surface, -p.dir[s], albedo, &mut samplers[n]);
+            ins.set(n, &input);
+            n += 1;
+        }
+        lambert_vertex::lambert_lanes(&ins, &mut outs);
+        for l in 0..n {
+            let (i, s) = (slots[l], slots[l] as usize);
+            let (input, out) = (ins.get(l), outs.get(l));
+            let (shadow, next) =
+                lambert_vertex::apply(&input, &out, &mut states[l], p.time[s], &mut samplers[l]);
+            if let Some(sh) = shadow {
+                q.shadow.push(i, &sh.ray, sh.contribution);
+            }
+            match next {
+                Some(ray) => {
+                    p.set_ray(s, ray);
+                    q.next.push(i);
+                }
+                None => q.finished.push(i),
+            }
+            p.sampler[s] = samplers[l];
+            p.set_state(s, &states[l]);
+        }
+    }
+    q.scratch = live;
 }
 
 /// `trace_shadow_rays`: occlusion tests; unoccluded contributions are added to their paths.
