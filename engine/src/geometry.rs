@@ -145,15 +145,20 @@ impl Geometry {
 mod tests {
     use super::*;
 
-    /// A deterministic scatter of spheres and quads, including huge, tiny and overlapping ones.
-    fn scene() -> Vec<Primitive> {
-        let mut s = 12345u32;
-        let mut rnd = move || {
+    /// Deterministic numbers in [-1, 1).
+    fn xorshift(mut s: u32) -> impl FnMut() -> f32 {
+        move || {
             s ^= s << 13;
             s ^= s >> 17;
             s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        }
+    }
+
+    /// A deterministic scatter of spheres and quads, including huge, tiny and overlapping ones.
+    fn scene() -> Vec<Primitive> {
+        let mut r = xorshift(12345);
+        let mut rnd = move || 0.5 * (r() + 1.0);
         let mut v = Vec::new();
         for i in 0..300 {
             let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
@@ -176,13 +181,7 @@ mod tests {
         let prims = scene();
         let n = prims.len();
         let geo = Geometry::build_bvh(prims.clone(), (0..n as u32).collect());
-        let mut s = 99u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = xorshift(99);
         let (mut hits, mut sum_t) = (0, 0.0f64);
         for _ in 0..5000 {
             let o = Vec3A::new(rnd(), rnd(), rnd()) * 30.0;
@@ -208,13 +207,7 @@ mod tests {
         let geo = Geometry::build(prims.clone(), (0..n).collect());
         let f = geo.flat().expect("small scenes have flat lists");
         assert!(Geometry::build_bvh(prims.clone(), (0..n).collect()).flat().is_none());
-        let mut s = 7u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = xorshift(7);
         let mut stream = RayStream::default();
         let mut rays = Vec::new();
         for _ in 0..3000 {
