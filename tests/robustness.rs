@@ -45,25 +45,32 @@ const CASES: [(f32, Vec3); 5] = [
     (1.0, Vec3::new(1e5, 0.0, 0.0)),
 ];
 
+/// Renders `name` at every scale and placement of [`CASES`] with both integrators and compares
+/// each with the unscaled render; `seed` is the seed of the scaled renders.
+fn check_every_placement(name: &str, spp: u32, seed: u64) {
+    let base = render(&small(name, spp));
+    let reference = LinearImage { width: 64, height: 64, pixels: base.mean() };
+    let mut failures = Vec::new();
+    for (s, t) in CASES {
+        let mut desc = placed(small(name, spp), s, t);
+        desc.render.seed = seed;
+        for (integrator, film) in both(&desc) {
+            let stats = block_z(&film, &reference, 8, spp);
+            eprintln!("{name} scale {s:e}, offset {t}: {integrator} {stats:?}");
+            if !stats.agrees() || film.non_finite > 0 {
+                failures
+                    .push(format!("scale {s:e} offset {t} {integrator}: {stats:?}, {} NaN", film.non_finite));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{name}: {failures:#?}");
+}
+
 /// cornell-diffuse has no caustics, so renders with independent seeds can be compared by the
 /// block test: every scale and placement must match the unscaled image within noise.
 #[test]
 fn diffuse_cornell_is_the_same_at_every_scale_and_far_from_the_origin() {
-    let base = render(&small("cornell-diffuse.ron", 256));
-    let reference = LinearImage { width: 64, height: 64, pixels: base.mean() };
-    let mut failures = Vec::new();
-    for (s, t) in CASES {
-        let mut desc = placed(small("cornell-diffuse.ron", 256), s, t);
-        desc.render.seed = 77;
-        for (name, film) in both(&desc) {
-            let stats = block_z(&film, &reference, 8, 256);
-            eprintln!("scale {s:e}, offset {t}: {name} {stats:?}");
-            if !stats.agrees() || film.non_finite > 0 {
-                failures.push(format!("scale {s:e} offset {t} {name}: {stats:?}, {} NaN", film.non_finite));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{failures:#?}");
+    check_every_placement("cornell-diffuse.ron", 256, 77);
 }
 
 /// With glass and a mirror, compare under the same seed: paths start alike and drift apart only
@@ -71,18 +78,5 @@ fn diffuse_cornell_is_the_same_at_every_scale_and_far_from_the_origin() {
 /// (Independent seeds would need far more samples: one caustic firefly decides a 64x64 block.)
 #[test]
 fn glass_cornell_is_the_same_at_every_scale_and_far_from_the_origin() {
-    let base = render(&small("cornell.ron", 128));
-    let reference = LinearImage { width: 64, height: 64, pixels: base.mean() };
-    let mut failures = Vec::new();
-    for (s, t) in CASES {
-        let desc = placed(small("cornell.ron", 128), s, t);
-        for (name, film) in both(&desc) {
-            let stats = block_z(&film, &reference, 8, 128);
-            eprintln!("scale {s:e}, offset {t}: {name} {stats:?}");
-            if !stats.agrees() || film.non_finite > 0 {
-                failures.push(format!("scale {s:e} offset {t} {name}: {stats:?}, {} NaN", film.non_finite));
-            }
-        }
-    }
-    assert!(failures.is_empty(), "{failures:#?}");
+    check_every_placement("cornell.ron", 128, 0);
 }
