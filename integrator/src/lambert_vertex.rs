@@ -361,7 +361,8 @@ mod tests {
     fn offset_equals_the_engine_offset() {
         let mut s = Sampler::new(4, 0, 0);
         for _ in 0..10_000 {
-            let p = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5) * 10f32.powi((s.next_1d() * 12.0) as i32 - 6);
+            let p = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5)
+                * 10f32.powi((s.next_1d() * 12.0) as i32 - 6);
             let n = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5).normalize();
             let err = s.next_1d() * 1e-4;
             let a = offset(p, err, n);
@@ -376,7 +377,14 @@ mod tests {
         let wo = Vec3::new(0.5, -0.5, 0.7).normalize();
         let (stat, dof) = chi2(
             |u, _| {
-                let i = LambertIn { n, wo, u_dir: [u.x, u.y], albedo: Vec3::ONE, beta: Vec3::ONE, ..Default::default() };
+                let i = LambertIn {
+                    n,
+                    wo,
+                    u_dir: [u.x, u.y],
+                    albedo: Vec3::ONE,
+                    beta: Vec3::ONE,
+                    ..Default::default()
+                };
                 let o = lambert(&i);
                 (o.pdf > 0.0).then(|| Vec3A::from(o.d.normalize()))
             },

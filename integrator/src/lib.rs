@@ -8,4 +8,5 @@ pub mod material;
 pub mod oracle;
 pub mod path;
 pub mod sampler;
+pub mod tile;
 pub mod wavefront;

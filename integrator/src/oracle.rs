@@ -8,6 +8,7 @@ use crate::lambert_vertex;
 use crate::material;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
+use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
@@ -15,40 +16,31 @@ use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// Edge of the square tiles handed to rayon.
-const TILE: u32 = 16;
-
 /// Renders the whole image. `progress(done, total)` is called after each tile, from any thread.
 pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> Film {
     let s = scene.settings;
     let _span =
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = (s.width.div_ceil(TILE), s.height.div_ceil(TILE));
+    let (tx, ty) = Tile::grid(s.width, s.height);
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let tiles: Vec<Vec<PixelAccumulator>> = (0..tx * ty)
         .into_par_iter()
         .map(|t| {
-            let (x0, y0) = ((t % tx) * TILE, (t / tx) * TILE);
-            let mut out = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..(y0 + TILE).min(s.height) {
-                for x in x0..(x0 + TILE).min(s.width) {
-                    out.push(render_pixel(scene, x, y));
-                }
-            }
+            let tile = Tile::new(t, s.width, s.height);
+            let out =
+                (0..tile.len()).map(|i| tile.pixel(i)).map(|(x, y)| render_pixel(scene, x, y)).collect();
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             out
         })
         .collect();
     let mut film = Film::new(s.width, s.height);
     film.spp = s.spp;
-    for (t, tile) in tiles.into_iter().enumerate() {
-        let t = t as u32;
-        let (x0, y0) = ((t % tx) * TILE, (t / tx) * TILE);
-        let w = (x0 + TILE).min(s.width) - x0;
-        for (i, acc) in tile.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % w, y0 + i as u32 / w);
-            film.set_pixel((y * s.width + x) as usize, &acc);
+    for (t, accs) in tiles.into_iter().enumerate() {
+        let tile = Tile::new(t as u32, s.width, s.height);
+        for (i, acc) in accs.iter().enumerate() {
+            let (x, y) = tile.pixel(i as u32);
+            film.set_pixel((y * s.width + x) as usize, acc);
         }
     }
     film

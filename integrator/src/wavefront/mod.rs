@@ -16,6 +16,7 @@ mod stages;
 
 use crate::film::{Film, PixelAccumulator};
 use crate::path;
+use crate::tile::Tile;
 use pathwave_engine::material::Material;
 use pathwave_engine::render_scene::RenderScene;
 use queues::{Paths, Queues};
@@ -23,9 +24,6 @@ use rayon::prelude::*;
 pub use stages::MaterialKind;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
-
-/// Tile edge in pixels: the unit of work of one rayon task.
-const TILE: u32 = 16;
 
 /// Settings of the wavefront integrator.
 #[derive(Clone, Copy, Debug)]
@@ -129,7 +127,7 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
     let s = scene.settings;
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = (s.width.div_ceil(TILE), s.height.div_ceil(TILE));
+    let (tx, ty) = Tile::grid(s.width, s.height);
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let batch = opts.batch.max(1);
@@ -138,7 +136,7 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
         .map_init(
             || (Paths::with_slots(batch), Queues::default()),
             |(paths, queues), t| {
-                let tile = Tile::new(t, tx, s.width, s.height);
+                let tile = Tile::new(t, s.width, s.height);
                 let out = render_tile(scene, &tile, batch, paths, queues);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 out
@@ -149,7 +147,7 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
     film.spp = s.spp;
     let mut stats = Stats::default();
     for (t, (accs, st)) in results.into_iter().enumerate() {
-        let tile = Tile::new(t as u32, tx, s.width, s.height);
+        let tile = Tile::new(t as u32, s.width, s.height);
         for (i, acc) in accs.iter().enumerate() {
             let (x, y) = tile.pixel(i as u32);
             film.set_pixel((y * s.width + x) as usize, acc);
@@ -157,25 +155,6 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
         stats = stats.merge(st);
     }
     (film, stats)
-}
-
-/// A rectangle of the image.
-struct Tile {
-    x0: u32,
-    y0: u32,
-    w: u32,
-    h: u32,
-}
-
-impl Tile {
-    fn new(t: u32, tiles_x: u32, width: u32, height: u32) -> Self {
-        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-        Self { x0, y0, w: (x0 + TILE).min(width) - x0, h: (y0 + TILE).min(height) - y0 }
-    }
-
-    fn pixel(&self, i: u32) -> (u32, u32) {
-        (self.x0 + i % self.w, self.y0 + i / self.w)
-    }
 }
 
 /// Runs the wavefront over all samples of one tile.
