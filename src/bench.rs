@@ -44,7 +44,11 @@ pub fn run(scene_path: &Path, reference: &Path, spps: &[u32], batch: usize) -> R
             let (film, stats) = match integrator {
                 "oracle" => (oracle::render(&scene, &|_, _| {}), None),
                 _ => {
-                    let (f, s) = wavefront::render(&scene, wavefront::Options { batch }, &|_, _| {});
+                    let (f, s) = wavefront::render(
+                        &scene,
+                        wavefront::Options { batch, ..Default::default() },
+                        &|_, _| {},
+                    );
                     (f, Some(s))
                 }
             };
