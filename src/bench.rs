@@ -44,11 +44,7 @@ pub fn run(scene_path: &Path, reference: &Path, spps: &[u32], batch: usize) -> R
             let (film, stats) = match integrator {
                 "oracle" => (oracle::render(&scene, &|_, _| {}), None),
                 _ => {
-                    let (f, s) = wavefront::render(
-                        &scene,
-                        wavefront::Options { batch, ..Default::default() },
-                        &|_, _| {},
-                    );
+                    let (f, s) = wavefront::render(&scene, wavefront::Options { batch }, &|_, _| {});
                     (f, Some(s))
                 }
             };

@@ -58,9 +58,6 @@ enum Command {
         /// Print per-stage statistics (wavefront).
         #[arg(long)]
         stats: bool,
-        /// Experiment: global stage loops over the whole image (wavefront).
-        #[arg(long)]
-        global_queues: bool,
         /// Write a Chrome/Perfetto trace of the render (one span per stage and batch).
         #[arg(long, value_name = "FILE.json")]
         trace: Option<PathBuf>,
@@ -150,11 +147,10 @@ fn main() -> ExitCode {
             integrator,
             batch,
             stats,
-            global_queues,
             trace: _,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth };
-            let how = How { integrator, batch, stats, threads, quiet, global_queues };
+            let how = How { integrator, batch, stats, threads, quiet };
             render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
@@ -184,7 +180,6 @@ struct Overrides {
 }
 
 struct How {
-    global_queues: bool,
     integrator: Integrator,
     batch: usize,
     stats: bool,
@@ -213,11 +208,7 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(
     let (film, stats) = pool.install(|| match how.integrator {
         Integrator::Oracle => (oracle::render(&scene, &progress), None),
         Integrator::Wavefront => {
-            let (film, stats) = wavefront::render(
-                &scene,
-                wavefront::Options { batch: how.batch, global: how.global_queues },
-                &progress,
-            );
+            let (film, stats) = wavefront::render(&scene, wavefront::Options { batch: how.batch }, &progress);
             (film, Some(stats))
         }
     });

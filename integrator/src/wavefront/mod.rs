@@ -30,13 +30,11 @@ use std::time::{Duration, Instant};
 pub struct Options {
     /// Paths in flight per worker.
     pub batch: usize,
-    /// Experiment: pbrt-style global stages over the whole image instead of per-worker tiles.
-    pub global: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 1024, global: false }
+        Self { batch: 1024 }
     }
 }
 
@@ -133,9 +131,6 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let batch = opts.batch.max(1);
-    if opts.global {
-        return render_global(scene, batch);
-    }
     let results: Vec<(Vec<PixelAccumulator>, Stats)> = (0..tx * ty)
         .into_par_iter()
         .map_init(
@@ -227,130 +222,6 @@ fn render_tile(
         q.shadow.clear();
         std::mem::swap(&mut q.active, &mut q.next);
         q.next.clear();
-    }
-    (film, stats)
-}
-
-/// One chunk of the global wavefront: its slots, queues and a whole-image film.
-struct Chunk {
-    p: Paths,
-    q: Queues,
-    film: Vec<PixelAccumulator>,
-    stats: Stats,
-}
-
-/// pbrt-style: the whole image's samples form one pool; every stage runs as one rayon loop
-/// over all chunks of slots, with a barrier between stages.
-fn render_global(scene: &RenderScene, batch: usize) -> (Film, Stats) {
-    let s = scene.settings;
-    let spp = s.spp as u64;
-    let work = (s.width * s.height) as u64 * spp;
-    let next = std::sync::atomic::AtomicU64::new(0);
-    let n_chunks = rayon::current_num_threads() * 4;
-    let kinds = material_kinds(scene);
-    let mut chunks: Vec<Chunk> = (0..n_chunks)
-        .map(|_| {
-            let mut q = Queues::default();
-            q.free.extend((0..batch as u32).rev());
-            Chunk {
-                p: Paths::with_slots(batch),
-                q,
-                film: vec![PixelAccumulator::default(); (s.width * s.height) as usize],
-                stats: Stats::default(),
-            }
-        })
-        .collect();
-    loop {
-        chunks.par_iter_mut().for_each(|c| {
-            let (p, q) = (&mut c.p, &mut c.q);
-            let want = q.free.len() as u64;
-            let start = next.fetch_add(want, Ordering::Relaxed).min(work);
-            let end = (start + want).min(work);
-            timed(&mut c.stats, Stage::GenerateCameraRays, (end - start) as usize, || {
-                for k in start..end {
-                    let slot = q.free.pop().expect("claimed at most the free slots");
-                    let (px, index) = ((k / spp) as u32, (k % spp) as u32);
-                    let (ray, sampler) = path::camera_ray(scene, px % s.width, px / s.width, index);
-                    let i = slot as usize;
-                    p.set_ray(i, ray);
-                    p.set_state(i, &path::PathState::new(ray.origin));
-                    p.sampler[i] = sampler;
-                    p.pixel[i] = px;
-                    q.active.push(slot);
-                }
-            });
-        });
-        if chunks.iter().all(|c| c.q.active.is_empty()) {
-            break;
-        }
-        chunks.par_iter_mut().for_each(|c| {
-            c.stats.iterations += 1;
-            c.stats.occupancy_sum += c.q.active.len() as f64 / batch as f64;
-            let n = c.q.active.len();
-            timed(&mut c.stats, Stage::IntersectClosest, n, || {
-                stages::intersect_closest(scene, &mut c.p, &mut c.q)
-            });
-        });
-        chunks.par_iter_mut().for_each(|c| {
-            let (n, m) = (c.q.escaped.len(), c.q.emissive.len());
-            timed(&mut c.stats, Stage::HandleEscaped, n, || {
-                stages::handle_escaped(scene, &mut c.p, &mut c.q)
-            });
-            timed(&mut c.stats, Stage::HandleEmissive, m, || {
-                stages::handle_emissive(scene, &mut c.p, &mut c.q)
-            });
-        });
-        for (kind, stage) in [
-            (MaterialKind::Lambertian, Stage::ShadeLambertian),
-            (MaterialKind::Metal, Stage::ShadeMetal),
-            (MaterialKind::Dielectric, Stage::ShadeDielectric),
-        ] {
-            if kinds.contains(&kind) {
-                chunks.par_iter_mut().for_each(|c| {
-                    let n = match kind {
-                        MaterialKind::Lambertian => c.q.lambertian.len(),
-                        MaterialKind::Metal => c.q.metal.len(),
-                        MaterialKind::Dielectric => c.q.dielectric.len(),
-                    };
-                    timed(&mut c.stats, stage, n, || stages::shade(scene, &mut c.p, &mut c.q, kind));
-                });
-            }
-        }
-        chunks.par_iter_mut().for_each(|c| {
-            let n = c.q.shadow.len();
-            timed(&mut c.stats, Stage::TraceShadowRays, n, || {
-                stages::trace_shadow_rays(scene, &mut c.p, &mut c.q)
-            });
-        });
-        chunks.par_iter_mut().for_each(|c| {
-            let (p, q, film) = (&c.p, &mut c.q, &mut c.film);
-            timed(&mut c.stats, Stage::AccumulateFilm, q.finished.len(), || {
-                for &i in &q.finished {
-                    film[p.pixel[i as usize] as usize].add(p.l[i as usize]);
-                }
-                q.free.extend_from_slice(&q.finished);
-            });
-            c.stats.paths += q.finished.len() as u64;
-            q.escaped.clear();
-            q.emissive.clear();
-            q.finished.clear();
-            q.shadow.clear();
-            std::mem::swap(&mut q.active, &mut q.next);
-            q.next.clear();
-        });
-    }
-    let mut film = Film::new(s.width, s.height);
-    film.spp = s.spp;
-    let mut stats = Stats::default();
-    let mut acc = vec![PixelAccumulator::default(); (s.width * s.height) as usize];
-    for c in chunks {
-        for (a, b) in acc.iter_mut().zip(&c.film) {
-            a.merge(b);
-        }
-        stats = stats.merge(c.stats);
-    }
-    for (i, a) in acc.iter().enumerate() {
-        film.set_pixel(i, a);
     }
     (film, stats)
 }
