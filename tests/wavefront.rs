@@ -105,3 +105,25 @@ fn trace_file_names_the_stages_and_stats_print_a_table() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Shading loops exist only for material kinds that some object uses.
+#[test]
+fn unused_materials_add_no_shading_loop() {
+    use pathwave::integrator::wavefront::{MaterialKind, material_kinds};
+    let diffuse = SceneWorld::render_scene(&scene("cornell-diffuse.ron"));
+    assert_eq!(material_kinds(&diffuse), vec![MaterialKind::Lambertian]);
+    let with_unused = inline(
+        r#"Scene(
+            camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+            materials: {
+                "glass": Dielectric(ior: 1.5),
+                "steel": Metal(albedo: (0.8, 0.8, 0.8)),
+                "white": Lambertian(albedo: (0.7, 0.7, 0.7)),
+            },
+            objects: [(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white")],
+        )"#,
+    );
+    assert_eq!(material_kinds(&SceneWorld::render_scene(&with_unused)), vec![MaterialKind::Lambertian]);
+    let cornell = SceneWorld::render_scene(&scene("cornell.ron"));
+    assert_eq!(material_kinds(&cornell).len(), 3);
+}

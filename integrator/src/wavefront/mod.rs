@@ -252,11 +252,15 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
     stats.calls[k] += 1;
 }
 
-/// The material kinds that have a shading loop and occur in the scene: queues of absent kinds
-/// are never visited.
+/// The material kinds that have a shading loop and that some primitive uses: queues of kinds
+/// the scene does not use (even if it defines such materials) are never visited.
 pub fn material_kinds(scene: &RenderScene) -> Vec<MaterialKind> {
+    let mut used = vec![false; scene.materials.len()];
+    for &m in &scene.geometry.material {
+        used[m as usize] = true;
+    }
     let mut kinds = Vec::new();
-    for m in &scene.materials {
+    for (m, _) in scene.materials.iter().zip(&used).filter(|(_, u)| **u) {
         let k = match m {
             Material::Lambertian { .. } => MaterialKind::Lambertian,
             Material::Metal { .. } => MaterialKind::Metal,
