@@ -80,3 +80,39 @@ fn diffuse_cornell_is_the_same_at_every_scale_and_far_from_the_origin() {
 fn glass_cornell_is_the_same_at_every_scale_and_far_from_the_origin() {
     check_every_placement("cornell.ron", 128, 0);
 }
+
+/// A glass shell of radius 1 + 4e-5 around a diffuse sphere of radius 1 (the mitsuba3 PR #1871
+/// case): rays refracted into the 4e-5 gap must find the inner sphere. A fixed spawn epsilon
+/// larger than the gap skips it and the diffuse sphere turns to glass; at scale 1000 (gap 0.04)
+/// any method finds it. The two scales must render the same image.
+#[test]
+fn nested_spheres_with_a_4e_5_gap_render_like_their_scaled_up_copy() {
+    let text = |s: f32| {
+        format!(
+            r#"Scene(
+                camera: (look_from: (0, 0, {cam}), look_at: (0, 0, 0), vfov: 40),
+                render: (width: 48, height: 48, spp: 256),
+                background: Sky(bottom: (1, 1, 1), top: (0.3, 0.5, 1.0)),
+                materials: {{
+                    "glass": Dielectric(ior: 1.5),
+                    "red": Lambertian(albedo: (0.8, 0.2, 0.1)),
+                }},
+                objects: [
+                    (shape: Sphere(center: (0, 0, 0), radius: {outer}), material: "glass"),
+                    (shape: Sphere(center: (0, 0, 0), radius: {inner}), material: "red"),
+                ],
+            )"#,
+            cam = 4.0 * s,
+            outer = (1.0 + 4e-5) * s,
+            inner = s,
+        )
+    };
+    let big = render(&inline(&text(1000.0)));
+    let reference = LinearImage { width: 48, height: 48, pixels: big.mean() };
+    let mut desc = inline(&text(1.0));
+    desc.render.seed = 5;
+    for (name, film) in both(&desc) {
+        let stats = block_z(&film, &reference, 8, 256);
+        assert!(stats.agrees() && film.non_finite == 0, "{name}: {stats:?}");
+    }
+}
