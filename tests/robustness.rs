@@ -116,3 +116,27 @@ fn nested_spheres_with_a_4e_5_gap_render_like_their_scaled_up_copy() {
         assert!(stats.agrees() && film.non_finite == 0, "{name}: {stats:?}");
     }
 }
+
+/// The camera at the centre of a glass sphere (ior 1.5) under a uniform sky of radiance 1: every
+/// camera ray meets the surface head-on, and whether it refracts out (radiance scaled by
+/// n^2 = 2.25 on leaving the glass) or reflects back to the far side first, it carries exactly
+/// 2.25: radiance inside a dielectric is n^2 times the radiance outside. Every pixel must be
+/// 2.25, with no noise at all, and never NaN.
+#[test]
+fn camera_inside_a_glass_sphere_sees_n_squared() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 0, 0), look_at: (0, 0.3, -1), vfov: 60),
+            render: (width: 24, height: 16, spp: 16),
+            background: Constant((1, 1, 1)),
+            materials: { "glass": Dielectric(ior: 1.5) },
+            objects: [(shape: Sphere(center: (0, 0, 0), radius: 2), material: "glass")],
+        )"#,
+    );
+    for (name, film) in both(&desc) {
+        assert_eq!(film.non_finite, 0, "{name}");
+        for p in film.mean() {
+            assert!((p - glam::Vec3::splat(2.25)).abs().max_element() < 1e-5, "{name}: {p}");
+        }
+    }
+}
