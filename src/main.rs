@@ -43,6 +43,12 @@ enum Command {
         /// Maximum bounces (overrides the scene).
         #[arg(long)]
         max_depth: Option<u32>,
+        /// Scale samples down so that no component exceeds MAX (biased; off by default).
+        #[arg(long, value_name = "MAX")]
+        clamp: Option<f32>,
+        /// List the pixels that discarded NaN/Inf samples.
+        #[arg(short, long)]
+        verbose: bool,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
@@ -142,6 +148,8 @@ fn main() -> ExitCode {
             height,
             seed,
             max_depth,
+            clamp,
+            verbose,
             threads,
             quiet,
             integrator,
@@ -149,8 +157,8 @@ fn main() -> ExitCode {
             stats,
             trace: _,
         } => {
-            let overrides = Overrides { spp, width, height, seed, max_depth };
-            let how = How { integrator, batch, stats, threads, quiet };
+            let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
+            let how = How { integrator, batch, stats, threads, quiet, verbose };
             render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
@@ -177,9 +185,11 @@ struct Overrides {
     height: Option<NonZeroU32>,
     seed: Option<u64>,
     max_depth: Option<u32>,
+    clamp: Option<f32>,
 }
 
 struct How {
+    verbose: bool,
     integrator: Integrator,
     batch: usize,
     stats: bool,
@@ -196,6 +206,12 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(
     r.height = o.height.unwrap_or(r.height);
     r.seed = o.seed.unwrap_or(r.seed);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
+    if let Some(c) = o.clamp {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(format!("--clamp takes a finite number > 0, not {c}"));
+        }
+        r.clamp = Some(scene::Positive(c));
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -218,6 +234,11 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(
         match &stats {
             Some(st) => print_stats(st, secs, film.non_finite),
             None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        }
+    }
+    if how.verbose {
+        for &(i, n) in &film.non_finite_pixels {
+            eprintln!("NaN/Inf: {n} samples discarded at pixel {},{}", i % film.width, i / film.width);
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };

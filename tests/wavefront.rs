@@ -127,3 +127,17 @@ fn unused_materials_add_no_shading_loop() {
     let cornell = SceneWorld::render_scene(&scene("cornell.ron"));
     assert_eq!(material_kinds(&cornell).len(), 3);
 }
+
+/// `clamp` bounds every sample, so every pixel mean; without it the light (radiance 15) shows.
+#[test]
+fn clamping_bounds_samples_and_is_off_by_default() {
+    let mut desc = scene("cornell.ron");
+    desc.render.width = 32.try_into().unwrap();
+    desc.render.height = 32.try_into().unwrap();
+    desc.render.spp = 8.try_into().unwrap();
+    let brightest =
+        |d: &SceneDesc| wavefront(d, 1024, 2).0.mean().iter().map(|p| p.max_element()).fold(0.0, f32::max);
+    assert!(brightest(&desc) > 10.0, "unclamped, the light is seen at radiance 15");
+    desc.render.clamp = Some(pathwave::engine::scene::Positive(1.0));
+    assert!(brightest(&desc) <= 1.0);
+}

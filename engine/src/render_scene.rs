@@ -9,7 +9,7 @@ use glam::{Vec3, Vec3A};
 use std::sync::Arc;
 
 /// Image size and sampling settings.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     /// Width in pixels.
     pub width: u32,
@@ -23,6 +23,8 @@ pub struct RenderSettings {
     pub rr_depth: u32,
     /// Seed of all random numbers.
     pub seed: u64,
+    /// Largest sample component before scaling down (None: no clamping, unbiased).
+    pub clamp: Option<f32>,
 }
 
 /// Radiance arriving from outside the scene.

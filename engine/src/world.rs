@@ -210,6 +210,7 @@ impl SceneWorld {
             max_depth: r.max_depth,
             rr_depth: r.rr_depth,
             seed: r.seed,
+            clamp: r.clamp.map(|c| c.0),
         }));
         world.insert_resource(CameraParams(desc.camera));
         world.insert_resource(BackgroundLight(match desc.background {

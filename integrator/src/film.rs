@@ -18,13 +18,23 @@ pub struct Film {
     pub sum_sq: Vec<[f64; 3]>,
     /// Samples whose value was NaN or infinite; they were counted as zero.
     pub non_finite: u64,
+    /// Pixels (row-major index) that discarded non-finite samples, with how many.
+    pub non_finite_pixels: Vec<(u32, u64)>,
 }
 
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
         let n = (width * height) as usize;
-        Self { width, height, spp: 0, sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], non_finite: 0 }
+        Self {
+            width,
+            height,
+            spp: 0,
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+            non_finite: 0,
+            non_finite_pixels: Vec::new(),
+        }
     }
 
     /// Per-pixel mean.
@@ -38,6 +48,9 @@ impl Film {
         self.sum[index] = acc.sum();
         self.sum_sq[index] = acc.sum_sq();
         self.non_finite += acc.non_finite;
+        if acc.non_finite > 0 {
+            self.non_finite_pixels.push((index as u32, acc.non_finite));
+        }
     }
 
     /// Per-pixel variance of the mean (sample variance / spp).
@@ -54,6 +67,17 @@ impl Film {
                 Vec3::new(v(0), v(1), v(2))
             })
             .collect()
+    }
+}
+
+/// With `Some(max)`, scales a sample down so that its largest component is at most `max`
+/// (trades bias for fewer fireflies; off by default). Non-finite samples pass unchanged, to be
+/// counted by the accumulator.
+#[inline]
+pub fn clamp_sample(v: Vec3, max: Option<f32>) -> Vec3 {
+    match max {
+        Some(m) if v.max_element() > m => v * (m / v.max_element()),
+        _ => v,
     }
 }
 
@@ -126,6 +150,14 @@ mod tests {
         assert_eq!(a, b);
         let exact: f64 = values.iter().map(|v| v.x as f64).sum();
         assert!((a.sum()[0] - exact).abs() < 1e-9 * exact);
+    }
+
+    #[test]
+    fn clamping_scales_bright_samples_only() {
+        assert_eq!(clamp_sample(Vec3::new(8.0, 4.0, 2.0), Some(2.0)), Vec3::new(2.0, 1.0, 0.5));
+        assert_eq!(clamp_sample(Vec3::new(1.0, 0.5, 0.0), Some(2.0)), Vec3::new(1.0, 0.5, 0.0));
+        assert_eq!(clamp_sample(Vec3::splat(100.0), None), Vec3::splat(100.0));
+        assert!(clamp_sample(Vec3::splat(f32::NAN), Some(1.0)).is_nan());
     }
 
     #[test]

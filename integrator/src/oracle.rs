@@ -3,7 +3,7 @@
 //! quad and sphere emitters combined with BSDF sampling by MIS (power heuristic), Russian
 //! roulette, box-filtered stratified pixel samples, rayon over tiles.
 
-use crate::film::{Film, PixelAccumulator};
+use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex;
 use crate::material;
 use crate::path::{self, PathState};
@@ -51,7 +51,7 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32) -> PixelAccumulator {
     let mut acc = PixelAccumulator::default();
     for i in 0..scene.settings.spp {
         let (ray, mut sampler) = path::camera_ray(scene, x, y, i);
-        acc.add(radiance(scene, ray, &mut sampler));
+        acc.add(clamp_sample(radiance(scene, ray, &mut sampler), scene.settings.clamp));
     }
     acc
 }

@@ -110,12 +110,14 @@ pub struct RenderDesc {
     pub rr_depth: u32,
     /// Seed of every random number of the image (default 0).
     pub seed: u64,
+    /// Scale samples down so that no component exceeds this (default: none, which is unbiased).
+    pub clamp: Option<Positive>,
 }
 
 impl Default for RenderDesc {
     fn default() -> Self {
         let n = |x| NonZeroU32::new(x).unwrap();
-        Self { width: n(512), height: n(512), spp: n(64), max_depth: 64, rr_depth: 5, seed: 0 }
+        Self { width: n(512), height: n(512), spp: n(64), max_depth: 64, rr_depth: 5, seed: 0, clamp: None }
     }
 }
 

@@ -14,7 +14,7 @@
 mod queues;
 mod stages;
 
-use crate::film::{Film, PixelAccumulator};
+use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::path;
 use crate::tile::Tile;
 use pathwave_engine::material::Material;
@@ -211,7 +211,7 @@ fn render_tile(
         timed(&mut stats, Stage::TraceShadowRays, q.shadow.len(), || stages::trace_shadow_rays(scene, p, q));
         timed(&mut stats, Stage::AccumulateFilm, q.finished.len(), || {
             for &i in &q.finished {
-                film[p.pixel[i as usize] as usize].add(p.l[i as usize]);
+                film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], scene.settings.clamp));
             }
             q.free.extend_from_slice(&q.finished);
         });
