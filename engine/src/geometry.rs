@@ -107,18 +107,28 @@ impl Geometry {
     }
 
     /// Closest hit with `t` in `(0, tmax)`.
+    ///
+    /// obvhs's CWBVH clamps each node's entry distance to an absolute 1e-4, so a node whose box
+    /// ends closer than that to the origin would be skipped (a hit at t = 1.2e-5 was missed in
+    /// the property tests). The traversal therefore starts [`NODE_EPSILON`] twice over behind
+    /// the origin; primitives are tested with the true ray and the closest `t` is tracked here,
+    /// so hits are exact.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
-        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
+        let (oray, shift) = shifted(ray, tmax);
+        let (mut best, mut prim) = (tmax, u32::MAX);
         let mut hit = RayHit::none();
-        let found = bvh.ray_traverse(oray, &mut hit, |r, slot| {
-            self.prims[slot].intersect(r.origin, r.direction, r.tmax)
+        bvh.ray_traverse(oray, &mut hit, |_, slot| {
+            let t = self.prims[slot].intersect(ray.origin, ray.dir, best);
+            if t < best {
+                (best, prim) = (t, slot as u32);
+                t + shift
+            } else {
+                f32::INFINITY
+            }
         });
-        if !found {
-            return None;
-        }
-        Some(self.hit(ray, hit.t, hit.primitive_id))
+        (prim != u32::MAX).then(|| self.hit(ray, best, prim))
     }
 
     /// The hit record of primitive `prim` at distance `t`.
@@ -132,13 +142,27 @@ impl Geometry {
         self.flat.as_ref()
     }
 
-    /// True when something lies on the ray with `t` in `(0, tmax)`.
+    /// True when something lies on the ray with `t` in `(0, tmax)` (see [`Self::intersect`] on
+    /// the shifted traversal).
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
         let Some(bvh) = self.bvh.as_ref() else { return false };
-        let oray = obvhs::ray::Ray::new(ray.origin, ray.dir, 0.0, tmax);
-        !bvh.ray_traverse_miss(oray, |r, slot| self.prims[slot].intersect(r.origin, r.direction, r.tmax))
+        let (oray, shift) = shifted(ray, tmax);
+        !bvh.ray_traverse_miss(oray, |_, slot| {
+            if self.prims[slot].intersect(ray.origin, ray.dir, tmax) < tmax { shift } else { f32::INFINITY }
+        })
     }
+}
+
+/// The absolute distance below which obvhs's CWBVH clamps node entry (`cwbvh::node::EPSILON`).
+pub const NODE_EPSILON: f32 = 1e-4;
+
+/// The traversal ray: `ray` started `2 NODE_EPSILON` (world units) earlier, and that shift in
+/// ray parameter units.
+#[inline]
+fn shifted(ray: &Ray, tmax: f32) -> (obvhs::ray::Ray, f32) {
+    let shift = 2.0 * NODE_EPSILON / ray.dir.length();
+    (obvhs::ray::Ray::new(ray.origin - shift * ray.dir, ray.dir, 0.0, tmax + shift), shift)
 }
 
 #[cfg(test)]
