@@ -1,0 +1,103 @@
+//! Property tests of the geometry: rays leaving a surface never hit it again, hit points lie on
+//! their surface within their error bound, and the BVH finds exactly the brute-force closest hit,
+//! over random shapes at scales from 1e-3 to 1e4 and far from the origin.
+
+use glam::Vec3A;
+use pathwave_engine::geometry::{Geometry, Primitive};
+use pathwave_engine::math::{Ray, offset_ray_origin};
+use pathwave_engine::shape::{Quad, Sphere};
+use proptest::prelude::*;
+
+fn vec3(range: f32) -> impl Strategy<Value = Vec3A> {
+    (-range..range, -range..range, -range..range).prop_map(|(x, y, z)| Vec3A::new(x, y, z))
+}
+
+fn unit() -> impl Strategy<Value = Vec3A> {
+    vec3(1.0).prop_filter("non-zero", |v| v.length() > 1e-3).prop_map(|v| v.normalize())
+}
+
+/// A magnitude between 1e-3 and 1e4, log-uniform.
+fn scale() -> impl Strategy<Value = f32> {
+    (-3.0f32..4.0).prop_map(|e| 10f32.powf(e))
+}
+
+fn sphere() -> impl Strategy<Value = Sphere> {
+    (vec3(1.0), scale(), scale()).prop_map(|(c, offset, r)| Sphere { center: c * offset, radius: r })
+}
+
+fn quad() -> impl Strategy<Value = Quad> {
+    (vec3(1.0), scale(), vec3(1.0), vec3(1.0), scale())
+        .prop_filter_map("non-degenerate", |(q, offset, u, v, size)| {
+            let (u, v) = (u * size, v * size);
+            (u.cross(v).length() > 1e-3 * size * size).then(|| Quad::new(q * offset, u, v)).flatten()
+        })
+}
+
+/// A direction in the hemisphere about `n` (not grazing: cos > 0.01).
+fn leaving(n: Vec3A, d: Vec3A) -> Option<Vec3A> {
+    let d = if d.dot(n) < 0.0 { -d } else { d };
+    (d.dot(n) > 0.01).then_some(d)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn a_ray_leaving_a_sphere_never_hits_it(s in sphere(), from in unit(), dir in unit()) {
+        // A point on the sphere found by a ray, as the renderer finds them.
+        let o = s.center + from * s.radius * 3.0;
+        let t = s.intersect(o, -from, f32::INFINITY);
+        prop_assume!(t.is_finite());
+        let sp = s.surface(o - t * from);
+        let Some(d) = leaving(sp.n, dir) else { return Ok(()) };
+        let start = offset_ray_origin(sp.p, sp.err, sp.n);
+        prop_assert_eq!(s.intersect(start, d, f32::INFINITY), f32::INFINITY);
+    }
+
+    #[test]
+    fn a_ray_leaving_a_quad_on_either_side_never_hits_it(q in quad(), a in 0.0f32..1.0, b in 0.0f32..1.0, dir in unit()) {
+        let sp = q.surface(q.q + a * q.u + b * q.v);
+        for side in [sp.n, -sp.n] {
+            let Some(d) = leaving(side, dir) else { continue };
+            let start = offset_ray_origin(sp.p, sp.err, side);
+            prop_assert_eq!(q.intersect(start, d, f32::INFINITY), f32::INFINITY);
+        }
+    }
+
+    #[test]
+    fn hit_points_lie_on_the_surface_within_their_bound(s in sphere(), q in quad(), o in vec3(1.0), d in unit(), aim in vec3(0.5)) {
+        let o = o * s.radius.max(q.u.length()) * 4.0 + s.center;
+        // Aim at the sphere.
+        let dir = (s.center + aim * s.radius - o).normalize_or(d);
+        let t = s.intersect(o, dir, f32::INFINITY);
+        if t.is_finite() {
+            let sp = s.surface(o + t * dir);
+            let off = ((sp.p - s.center).length() - s.radius).abs();
+            prop_assert!(off <= 2.0 * sp.err, "sphere: {} off, bound {}", off, sp.err);
+        }
+        let t = q.intersect(o, d, f32::INFINITY);
+        if t.is_finite() {
+            let sp = q.surface(o + t * d);
+            let off = sp.n.dot(sp.p - q.q).abs();
+            prop_assert!(off <= sp.err * sp.n.abs().element_sum(), "quad: {} off, bound {}", off, sp.err);
+        }
+    }
+
+    #[test]
+    fn bvh_closest_hit_equals_brute_force(
+        spheres in prop::collection::vec(sphere(), 1..40),
+        quads in prop::collection::vec(quad(), 1..40),
+        rays in prop::collection::vec((vec3(1.0), scale(), unit()), 1..40),
+    ) {
+        let prims: Vec<Primitive> =
+            spheres.into_iter().map(Primitive::Sphere).chain(quads.into_iter().map(Primitive::Quad)).collect();
+        let n = prims.len() as u32;
+        let geo = Geometry::build_bvh(prims.clone(), (0..n).collect());
+        for (o, s, d) in rays {
+            let o = o * s;
+            let brute = prims.iter().map(|p| p.intersect(o, d, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+            let got = geo.intersect(&Ray::new(o, d), f32::INFINITY).map_or(f32::INFINITY, |h| h.t);
+            prop_assert_eq!(got, brute, "ray from {} along {}", o, d);
+        }
+    }
+}
