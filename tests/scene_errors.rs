@@ -154,6 +154,17 @@ fn zero_area_quad() {
 }
 
 #[test]
+fn errors_in_objects_name_the_object() {
+    let degenerate = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 0, 0)), material: "white"),"#;
+    let text = with_object(&format!("{OBJECT}\n        {OBJECT}\n        {degenerate}"));
+    // The third object, on line 10; 10:62 is the `)` that closes `Quad(..)`.
+    assert_err(&text, 10, 62, &["in objects[2]: Quad has no area"]);
+    // The index does not leak into the next scene's errors.
+    let e = err(&with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 180"));
+    assert!(!e.message.contains("objects["), "{e}");
+}
+
+#[test]
 fn flat_box() {
     let text = with_object(r#"(shape: Box(a: (0, 0, 0), b: (1, 0, 1)), material: "white"),"#);
     // 8:47 is the `)` that closes `Box(..)`.

@@ -26,11 +26,13 @@ fn sphere() -> impl Strategy<Value = Sphere> {
 }
 
 fn quad() -> impl Strategy<Value = Quad> {
-    (vec3(1.0), scale(), vec3(1.0), vec3(1.0), scale())
-        .prop_filter_map("non-degenerate", |(q, offset, u, v, size)| {
+    (vec3(1.0), scale(), vec3(1.0), vec3(1.0), scale()).prop_filter_map(
+        "non-degenerate",
+        |(q, offset, u, v, size)| {
             let (u, v) = (u * size, v * size);
             (u.cross(v).length() > 1e-3 * size * size).then(|| Quad::new(q * offset, u, v)).flatten()
-        })
+        },
+    )
 }
 
 /// A direction in the hemisphere about `n` (not grazing: cos > 0.01).

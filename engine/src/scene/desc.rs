@@ -5,7 +5,7 @@ use super::values::*;
 use crate::material::Fresnel;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::{Deserialize, Deserializer, de::Error};
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::num::NonZeroU32;
 
 /// A whole scene file: `Scene(camera: .., render: .., background: .., materials: {..}, objects: [..])`.
@@ -23,6 +23,7 @@ pub struct SceneDesc {
     /// Materials by name.
     pub materials: NamedMaterials,
     /// The objects.
+    #[serde(deserialize_with = "objects")]
     pub objects: Vec<ObjectDesc>,
 }
 
@@ -220,7 +221,39 @@ impl<'de> Deserialize<'de> for NamedMaterials {
 }
 
 thread_local! {
+    /// The index of the object being parsed, while inside `objects`.
+    static OBJECT_INDEX: Cell<Option<usize>> = const { Cell::new(None) };
     static MATERIAL_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
+}
+
+/// The index in `objects` of the object the parser stopped in, if it stopped in one: errors
+/// name it. Taking it resets it for the next parse.
+pub(crate) fn take_current_object() -> Option<usize> {
+    OBJECT_INDEX.take()
+}
+
+/// `objects: [..]`, noting the index of each element while it is parsed.
+fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<ObjectDesc>, D::Error> {
+    struct V;
+    impl<'de> serde::de::Visitor<'de> for V {
+        type Value = Vec<ObjectDesc>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a list of objects")
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+            let mut out = Vec::new();
+            loop {
+                OBJECT_INDEX.set(Some(out.len()));
+                match seq.next_element()? {
+                    Some(o) => out.push(o),
+                    None => break,
+                }
+            }
+            OBJECT_INDEX.set(None);
+            Ok(out)
+        }
+    }
+    d.deserialize_seq(V)
 }
 
 /// While alive, [`MaterialRef`]s parsed on this thread must name one of the given materials.

@@ -1,6 +1,9 @@
 //! Reading and parsing scene files.
 
-use super::{SceneDesc, SceneError, desc::MaterialNameScope};
+use super::{
+    SceneDesc, SceneError,
+    desc::{MaterialNameScope, take_current_object},
+};
 use ron::extensions::Extensions;
 use std::path::Path;
 
@@ -26,7 +29,10 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         path: path.to_owned(),
         line: e.span.start.line,
         col: e.span.start.col,
-        message: e.code.to_string(),
+        message: match take_current_object() {
+            Some(i) => format!("in objects[{i}]: {}", e.code),
+            None => e.code.to_string(),
+        },
     };
     let names: SceneDesc = options.from_str(text).map_err(error)?;
     let _scope = MaterialNameScope::enter(names.materials.iter().map(|(n, _)| n.clone()).collect());
