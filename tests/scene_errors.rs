@@ -165,6 +165,23 @@ fn errors_in_objects_name_the_object() {
 }
 
 #[test]
+fn object_beyond_max_coordinate() {
+    // Found by the fuzzer: the BVH builder's area arithmetic overflowed.
+    let text =
+        with_object(r#"(shape: Quad(q: (0, 0, 0), u: (0, 1, 0), v: (0, 1e38, 1)), material: "white"),"#);
+    // Objects are checked whole, with their transform: 8:85 is the `)` that closes the object.
+    assert_err(&text, 8, 85, &["in objects[0]", "reaches beyond 1e15 units"]);
+    let scaled = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", transform: [UniformScale(1e16)]),"#;
+    assert_err(&with_object(scaled), 8, 105, &["reaches beyond 1e15 units"]);
+}
+
+#[test]
+fn camera_beyond_max_coordinate() {
+    let text = with_camera("look_from: (0, 0, -2e15), look_at: (0, 0, 0), vfov: 40");
+    assert_err(&text, 2, 68, &["camera", "within 1e15 units"]);
+}
+
+#[test]
 fn flat_box() {
     let text = with_object(r#"(shape: Box(a: (0, 0, 0), b: (1, 0, 1)), material: "white"),"#);
     // 8:47 is the `)` that closes `Box(..)`.

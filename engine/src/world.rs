@@ -80,9 +80,11 @@ pub fn rebuild_geometry(
     objs.sort_by_key(|(e, ..)| *e);
     let (mut prims, mut mats) = (Vec::new(), Vec::new());
     for (_, transform, shape, material) in objs {
-        let before = prims.len();
-        world_primitives(&shape.0, &transform.0, &mut prims);
-        mats.resize(prims.len().max(before), material.0);
+        // Scene files are validated at load; objects spawned by code may still be bad.
+        if let Err(e) = world_primitives(&shape.0, &transform.0, &mut prims) {
+            tracing::error!("object skipped: {e}");
+        }
+        mats.resize(prims.len(), material.0);
     }
     let geometry = Geometry::build(prims, mats);
     out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
@@ -130,8 +132,15 @@ pub fn extract_render_scene(
     }));
 }
 
-/// Appends the world-space primitives of `shape` placed by `m`.
-pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) {
+/// How far from the origin anything may lie, in world units. Beyond it the BVH's surface-area
+/// arithmetic (extent squared times primitive count) overflows `f32`.
+pub const MAX_COORDINATE: f32 = 1e15;
+
+/// Appends the world-space primitives of `shape` placed by `m`; an error says why the placed
+/// shape cannot be rendered (a quad or ellipsoid flattened to nothing, or coordinates beyond
+/// [`MAX_COORDINATE`]). Scene files are checked with it at load.
+pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), String> {
+    let start = out.len();
     match *shape {
         ShapeDesc::Sphere { center, radius } => {
             let sphere = Sphere { center: center.into(), radius };
@@ -143,34 +152,45 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
             if diagonal_uniform {
                 let center = m.transform_point3a(sphere.center);
                 out.push(Primitive::Sphere(Sphere { center, radius: radius * s }));
-            } else if let Some(ts) = TransformedSphere::new(sphere, *m) {
+            } else {
+                let ts = TransformedSphere::new(sphere, *m).ok_or("the transform flattens the sphere")?;
                 out.push(Primitive::TransformedSphere(ts));
             }
         }
-        ShapeDesc::Quad { q, u, v } => push_quad(m, q.into(), u.into(), v.into(), out),
+        ShapeDesc::Quad { q, u, v } => push_quad(m, q.into(), u.into(), v.into(), out)?,
         ShapeDesc::Box { min, max } => {
             let (a, b) = (Vec3A::from(min), Vec3A::from(max));
             let d = b - a;
             let (dx, dy, dz) = (Vec3A::X * d.x, Vec3A::Y * d.y, Vec3A::Z * d.z);
-            push_quad(m, Vec3A::new(a.x, a.y, b.z), dx, dy, out); // front (+z)
-            push_quad(m, Vec3A::new(b.x, a.y, b.z), -dz, dy, out); // right (+x)
-            push_quad(m, Vec3A::new(b.x, a.y, a.z), -dx, dy, out); // back (-z)
-            push_quad(m, a, dz, dy, out); // left (-x)
-            push_quad(m, Vec3A::new(a.x, b.y, b.z), dx, -dz, out); // top (+y)
-            push_quad(m, a, dx, dz, out); // bottom (-y)
+            push_quad(m, Vec3A::new(a.x, a.y, b.z), dx, dy, out)?; // front (+z)
+            push_quad(m, Vec3A::new(b.x, a.y, b.z), -dz, dy, out)?; // right (+x)
+            push_quad(m, Vec3A::new(b.x, a.y, a.z), -dx, dy, out)?; // back (-z)
+            push_quad(m, a, dz, dy, out)?; // left (-x)
+            push_quad(m, Vec3A::new(a.x, b.y, b.z), dx, -dz, out)?; // top (+y)
+            push_quad(m, a, dx, dz, out)?; // bottom (-y)
         }
     }
+    let far = out[start..].iter().map(Primitive::aabb).any(|b| {
+        let m = b.min.abs().max(b.max.abs()).max_element();
+        !(m <= MAX_COORDINATE)
+    });
+    if far {
+        out.truncate(start);
+        return Err(format!("the object reaches beyond {MAX_COORDINATE:e} units from the origin"));
+    }
+    Ok(())
 }
 
-fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) {
+fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) -> Result<(), String> {
     let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
     // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
     if m.matrix3.determinant() < 0.0 {
         std::mem::swap(&mut u, &mut v);
     }
-    if let Some(quad) = Quad::new(q, u, v) {
-        out.push(Primitive::Quad(quad));
-    }
+    let quad = Quad::new(q, u, v)
+        .ok_or_else(|| format!("a quad with edges {u} and {v} has no area (or less than 1e-38)"))?;
+    out.push(Primitive::Quad(quad));
+    Ok(())
 }
 
 fn material(desc: &MaterialDesc) -> Material {

@@ -3,6 +3,7 @@
 
 use super::values::*;
 use crate::material::Fresnel;
+use crate::world::{MAX_COORDINATE, world_primitives};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::cell::{Cell, RefCell};
@@ -76,6 +77,13 @@ impl TryFrom<RawCamera> for CameraDesc {
         }
         if view.normalize().cross(r.vup.0.normalize()).length_squared() < 1e-12 {
             return Err("camera: vup is parallel to the view direction".into());
+        }
+        let far = [r.look_from.0.abs().max_element(), r.look_at.0.abs().max_element(), r.aperture_radius.0]
+            .into_iter()
+            .chain(r.focus_dist.map(|f| f.0))
+            .any(|x| x > MAX_COORDINATE);
+        if far || view.length() > MAX_COORDINATE {
+            return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
         }
         if r.shutter.1.0 < r.shutter.0.0 {
             return Err(format!(
@@ -294,7 +302,7 @@ impl<'de> Deserialize<'de> for MaterialRef {
 
 /// One object: a shape with a material and an optional list of transforms.
 #[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields, rename = "Object")]
+#[serde(try_from = "RawObject")]
 pub struct ObjectDesc {
     /// The shape, in object space.
     pub shape: ShapeDesc,
@@ -303,6 +311,25 @@ pub struct ObjectDesc {
     /// Transforms applied in order, first to last (default none).
     #[serde(default)]
     pub transform: Vec<TransformOp>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Object")]
+struct RawObject {
+    shape: ShapeDesc,
+    material: MaterialRef,
+    #[serde(default)]
+    transform: Vec<TransformOp>,
+}
+
+impl TryFrom<RawObject> for ObjectDesc {
+    type Error = String;
+    /// The object must survive its transform: no quad flattened to no area, every coordinate
+    /// within [`MAX_COORDINATE`].
+    fn try_from(r: RawObject) -> Result<Self, String> {
+        world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new())?;
+        Ok(Self { shape: r.shape, material: r.material, transform: r.transform })
+    }
 }
 
 /// Shapes.
@@ -408,9 +435,8 @@ impl TryFrom<RawTransform> for TransformOp {
             }
         };
         // Singular relative to the matrix's own scale: a tiny uniform scale is fine.
-        let det = a.matrix3.determinant();
         let size = (a.matrix3.x_axis.abs() + a.matrix3.y_axis.abs() + a.matrix3.z_axis.abs()).max_element();
-        if !(det.abs() > f32::EPSILON * size.powi(3)) {
+        if !((a.matrix3 * size.recip()).determinant().abs() > f32::EPSILON) {
             return Err("transform is singular (it flattens the object)".into());
         }
         Ok(TransformOp(a))

@@ -24,18 +24,16 @@ impl<'de> Deserialize<'de> for V3 {
     }
 }
 
-/// A non-zero vector `(x, y, z)`: a direction.
+/// A non-zero vector `(x, y, z)`: a direction (stored with its largest component +-1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Direction(pub Vec3);
 
 impl<'de> Deserialize<'de> for Direction {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = vec3(d)?;
-        check::<D, _>(
-            v.length_squared() > 0.0,
-            Direction(v),
-            "expected a non-zero direction, found (0, 0, 0)",
-        )
+        // Scaled so that the largest component is 1: `normalize` neither overflows nor underflows.
+        let m = v.abs().max_element();
+        check::<D, _>(m > 0.0, Direction(v / m), "expected a non-zero direction, found (0, 0, 0)")
     }
 }
 

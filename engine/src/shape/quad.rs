@@ -23,15 +23,16 @@ pub struct Quad {
 }
 
 impl Quad {
-    /// Builds a quad; `None` when `u` and `v` are parallel or zero (no area).
+    /// Builds a quad; `None` when `u` and `v` are parallel or zero (no area), or the area is
+    /// too small for `f32` (below about 1e-38).
     pub fn new(q: Vec3A, u: Vec3A, v: Vec3A) -> Option<Self> {
         let c = u.cross(v);
-        let len2 = c.length_squared();
-        if !(len2 > 0.0) || !len2.is_finite() {
-            return None;
-        }
-        let area = len2.sqrt();
-        Some(Self { q, u, v, n: c / area, w: c / len2, area })
+        // |c|^2 overflows for edges near 1e10: work with c scaled to a largest component of 1.
+        let k = c.abs().max_element();
+        let cs = c / k;
+        let len = cs.length();
+        let (n, w, area) = (cs / len, cs / (k * len * len), k * len);
+        (k > 0.0 && w.is_finite() && area.is_finite()).then_some(Self { q, u, v, n, w, area })
     }
 
     /// Error bound of points computed as `q + a u + b v`.
