@@ -182,6 +182,24 @@ fn camera_beyond_max_coordinate() {
 }
 
 #[test]
+fn object_with_neither_or_both_material_and_medium() {
+    let neither = r#"(shape: Sphere(center: (0, 0, 0), radius: 1)),"#;
+    assert_err(&with_object(neither), 8, 53, &["needs a `material`", "or a `medium`"]);
+    let both = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", medium: (density: 1, albedo: (1, 1, 1))),"#;
+    assert_err(&with_object(both), 8, 113, &["not both"]);
+}
+
+#[test]
+fn medium_needs_a_closed_shape_and_valid_numbers() {
+    let quad = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 1, 0)), medium: (density: 1, albedo: (1, 1, 1))),"#;
+    assert_err(&with_object(quad), 8, 104, &["closed shape", "not a Quad"]);
+    let zero = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 0, albedo: (1, 1, 1))),"#;
+    assert_err(&with_object(zero), 8, 73, &["finite number > 0", "found 0"]);
+    let bright = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 2, 1))),"#;
+    assert_err(&with_object(bright), 8, 92, &["albedo with components in [0, 1]"]);
+}
+
+#[test]
 fn flat_box() {
     let text = with_object(r#"(shape: Box(a: (0, 0, 0), b: (1, 0, 1)), material: "white"),"#);
     // 8:47 is the `)` that closes `Box(..)`.

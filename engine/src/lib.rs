@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod lights;
 pub mod material;
 pub mod math;
+pub mod media;
 pub mod render_scene;
 pub mod scene;
 pub mod shape;

@@ -5,6 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::Geometry;
 use crate::lights::LightTable;
 use crate::material::Material;
+use crate::media::Media;
 use glam::{Vec3, Vec3A};
 use std::sync::Arc;
 
@@ -60,16 +61,19 @@ impl Background {
 pub struct Features {
     /// Every emitter that light sampling picks is a quad (or there is none).
     pub lights_are_quads: bool,
+    /// Some volume holds a medium: rays sample free-flight distances and shadow rays
+    /// transmittance. Off, no medium code runs.
+    pub media: bool,
 }
 
 impl Features {
     /// Detects the features of extracted geometry.
-    pub fn detect(geometry: &Geometry, lights: &LightTable) -> Self {
+    pub fn detect(geometry: &Geometry, lights: &LightTable, media: &Media) -> Self {
         let lights_are_quads = lights
             .prims
             .iter()
             .all(|&p| matches!(geometry.prims[p as usize], crate::geometry::Primitive::Quad(_)));
-        Self { lights_are_quads }
+        Self { lights_are_quads, media: !media.is_empty() }
     }
 }
 
@@ -89,4 +93,6 @@ pub struct RenderScene {
     pub geometry: Arc<Geometry>,
     /// Emitters for next-event estimation.
     pub lights: Arc<LightTable>,
+    /// Participating media.
+    pub media: Arc<Media>,
 }

@@ -6,8 +6,9 @@ use crate::camera::Camera;
 use crate::geometry::{Geometry, Primitive};
 use crate::lights::LightTable;
 use crate::material::Material;
+use crate::media::{Boundary, Media, Medium, Volume};
 use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
-use crate::scene::{BackgroundDesc, CameraDesc, MaterialDesc, SceneDesc, ShapeDesc, compose};
+use crate::scene::{BackgroundDesc, Body, CameraDesc, MaterialDesc, SceneDesc, ShapeDesc, compose};
 use crate::shape::{Quad, Sphere, TransformedSphere};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
@@ -21,6 +22,11 @@ pub struct Transform(pub Affine3A);
 /// The object-space shape of an entity.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct Shape(pub ShapeDesc);
+
+/// A homogeneous medium filling the entity's (closed) shape; such entities have no
+/// [`MaterialId`] and are not surfaces.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Filling(pub Medium);
 
 /// Index into the [`Materials`] resource.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,6 +56,15 @@ pub struct SceneGeometry {
     /// Emitters.
     pub lights: Arc<LightTable>,
     /// How many times the geometry was rebuilt (for tests and statistics).
+    pub rebuilds: u64,
+}
+
+/// The world-space media volumes, rebuilt by [`rebuild_media`].
+#[derive(Resource, Default)]
+pub struct SceneMedia {
+    /// The volumes.
+    pub media: Arc<Media>,
+    /// How many times they were rebuilt.
     pub rebuilds: u64,
 }
 
@@ -92,9 +107,44 @@ pub fn rebuild_geometry(
     out.rebuilds += 1;
 }
 
+/// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,
+/// changed or was removed.
+#[allow(clippy::type_complexity)]
+pub fn rebuild_media(
+    mut out: ResMut<SceneMedia>,
+    volumes: Query<(Entity, &Transform, &Shape, &Filling)>,
+    changed: Query<(), (With<Filling>, Or<(Changed<Transform>, Changed<Shape>, Changed<Filling>)>)>,
+    mut removed: RemovedComponents<Filling>,
+) {
+    let removed = removed.read().count() > 0;
+    if !(removed || !changed.is_empty() || out.rebuilds == 0) {
+        return;
+    }
+    let _span = tracing::info_span!("rebuild_media").entered();
+    let mut vols: Vec<_> = volumes.iter().collect();
+    vols.sort_by_key(|(e, ..)| *e);
+    let volumes = vols
+        .into_iter()
+        .filter_map(|(_, transform, shape, filling)| {
+            let boundary = match shape.0 {
+                ShapeDesc::Sphere { center, radius } => Boundary::Sphere { center: center.into(), radius },
+                ShapeDesc::Box { min, max } => Boundary::Box { min: min.into(), max: max.into() },
+                ShapeDesc::Quad { .. } => {
+                    tracing::error!("medium skipped: a quad bounds no volume");
+                    return None;
+                }
+            };
+            Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0 })
+        })
+        .collect();
+    out.media = Arc::new(Media { volumes });
+    out.rebuilds += 1;
+}
+
 /// Builds a new [`RenderScene`] when anything it holds changed.
 pub fn extract_render_scene(
     geometry: Res<SceneGeometry>,
+    media: Res<SceneMedia>,
     materials: Res<Materials>,
     camera: Res<CameraParams>,
     settings: Res<Settings>,
@@ -102,6 +152,7 @@ pub fn extract_render_scene(
     mut out: ResMut<Extracted>,
 ) {
     let any = geometry.is_changed()
+        || media.is_changed()
         || materials.is_changed()
         || camera.is_changed()
         || settings.is_changed()
@@ -112,7 +163,7 @@ pub fn extract_render_scene(
     let c = camera.0;
     let s = settings.0;
     out.0 = Some(Arc::new(RenderScene {
-        features: Features::detect(&geometry.geometry, &geometry.lights),
+        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media),
         camera: Camera::new(
             c.look_from,
             c.look_at,
@@ -129,6 +180,7 @@ pub fn extract_render_scene(
         materials: materials.0.clone(),
         geometry: geometry.geometry.clone(),
         lights: geometry.lights.clone(),
+        media: media.media.clone(),
     }));
 }
 
@@ -216,11 +268,19 @@ impl SceneWorld {
         let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
         world.insert_resource(Materials(desc.materials.iter().map(|(_, m)| material(m)).collect()));
         for obj in &desc.objects {
-            let id = names
-                .iter()
-                .position(|n| *n == obj.material.0)
-                .expect("material names are validated at load");
-            world.spawn((Transform(compose(&obj.transform)), Shape(obj.shape), MaterialId(id as u32)));
+            let placed = (Transform(compose(&obj.transform)), Shape(obj.shape));
+            match &obj.body {
+                Body::Surface(name) => {
+                    let id = names
+                        .iter()
+                        .position(|n| *n == name.0)
+                        .expect("material names are validated at load");
+                    world.spawn((placed, MaterialId(id as u32)));
+                }
+                Body::Volume(m) => {
+                    world.spawn((placed, Filling(Medium { sigma_t: m.density.0, albedo: m.albedo.0 })));
+                }
+            }
         }
         let r = desc.render;
         world.insert_resource(Settings(RenderSettings {
@@ -239,9 +299,14 @@ impl SceneWorld {
             BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
         }));
         world.init_resource::<SceneGeometry>();
+        world.init_resource::<SceneMedia>();
         world.init_resource::<Extracted>();
         let mut schedule = Schedule::new(Update);
-        schedule.add_systems((rebuild_geometry, extract_render_scene.after(rebuild_geometry)));
+        schedule.add_systems((
+            rebuild_geometry,
+            rebuild_media,
+            extract_render_scene.after(rebuild_geometry).after(rebuild_media),
+        ));
         Self { world, schedule }
     }
 

@@ -61,7 +61,25 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
     let geo = &*scene.geometry;
     let mut st = PathState::new(ray.origin);
     loop {
-        let Some(hit) = geo.intersect(&ray, f32::INFINITY) else {
+        let hit = geo.intersect(&ray, f32::INFINITY);
+        if scene.features.media {
+            let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, sampler) {
+                if st.depth == scene.settings.max_depth {
+                    break;
+                }
+                let (shadow, next) = path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
+                if let Some(s) = shadow {
+                    path::trace_shadow(scene, &mut st, &s);
+                }
+                match next {
+                    Some(r) => ray = r,
+                    None => break,
+                }
+                continue;
+            }
+        }
+        let Some(hit) = hit else {
             path::escape(scene, &mut st, ray.dir);
             break;
         };
@@ -79,9 +97,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
             let out = lambert_vertex::lambert(&input);
             let (shadow, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time, sampler);
             if let Some(s) = shadow {
-                if !geo.occluded(&s.ray, 1.0) {
-                    st.l += s.contribution;
-                }
+                path::trace_shadow(scene, &mut st, &s);
             }
             match next {
                 Some(r) => ray = r,
@@ -90,10 +106,8 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
             continue;
         }
         if material::has_smooth_part(mat) && !scene.lights.is_empty() {
-            if let Some(shadow) = path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler) {
-                if !geo.occluded(&shadow.ray, 1.0) {
-                    st.l += shadow.contribution;
-                }
+            if let Some(s) = path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler) {
+                path::trace_shadow(scene, &mut st, &s);
             }
         }
         match path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler) {

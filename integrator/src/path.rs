@@ -78,6 +78,38 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, 
     st.l += st.beta * le * w;
 }
 
+/// A light sample seen from a point: the direction to it, the emitted radiance arriving, the
+/// density (solid angle, light choice included) and the offset point on the light to aim at.
+struct LightPick {
+    wi: Vec3A,
+    le: Vec3,
+    pdf: f32,
+    target: Vec3A,
+}
+
+/// Picks a light and a point on it as seen from `p`; `None` when it sends nothing towards `p`.
+#[inline]
+fn pick_light(scene: &RenderScene, p: Vec3A, sampler: &mut Sampler) -> Option<LightPick> {
+    let geo = &*scene.geometry;
+    let lights = &*scene.lights;
+    let (light, pmf) = lights.pick(sampler.next_1d());
+    let ls = lights.sample(geo, light, p, sampler.next_2d());
+    let to = ls.p - p;
+    let dist = to.length();
+    if !(dist > 0.0) {
+        return None;
+    }
+    let wi = to / dist;
+    let light_mat = &scene.materials[geo.material[lights.prims[light] as usize] as usize];
+    let le = light_mat.emitted(ls.n.dot(-wi));
+    let pdf = ls.pdf * pmf;
+    if le == Vec3::ZERO || !(pdf > 0.0) {
+        return None;
+    }
+    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
+    Some(LightPick { wi, le, pdf, target })
+}
+
 /// Next-event estimation at a surface point: samples a light and returns the shadow ray that
 /// decides whether its MIS-weighted contribution counts. Call only for materials with a smooth
 /// part and scenes with lights.
@@ -92,30 +124,110 @@ pub fn sample_light(
     sampler: &mut Sampler,
 ) -> Option<ShadowRay> {
     let (p, n) = (sp.p, sp.n);
-    let geo = &*scene.geometry;
-    let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(sampler.next_1d());
-    let ls = lights.sample(geo, light, p, sampler.next_2d());
-    let to = ls.p - p;
-    let dist = to.length();
-    if !(dist > 0.0) {
-        return None;
-    }
-    let wi = to / dist;
-    let light_mat = &scene.materials[geo.material[lights.prims[light] as usize] as usize];
-    let le = light_mat.emitted(ls.n.dot(-wi));
-    let pdf_light = ls.pdf * pmf;
-    if le == Vec3::ZERO || !(pdf_light > 0.0) {
-        return None;
-    }
-    let (f, pdf_bsdf) = material::eval(mat, wo, wi, n);
+    let lp = pick_light(scene, p, sampler)?;
+    let (f, pdf_bsdf) = material::eval(mat, wo, lp.wi, n);
     if f == Vec3::ZERO {
         return None;
     }
-    let origin = offset_ray_origin(p, sp.err, if wi.dot(n) > 0.0 { n } else { -n });
-    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
-    let contribution = st.beta * (f * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light));
-    Some(ShadowRay { ray: Ray { origin, dir: target - origin, time }, contribution })
+    let origin = offset_ray_origin(p, sp.err, if lp.wi.dot(n) > 0.0 { n } else { -n });
+    let contribution = st.beta * (f * lp.le * (power_heuristic(lp.pdf, pdf_bsdf) / lp.pdf));
+    Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
+}
+
+/// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
+/// else the media's transmittance along it (1 without media).
+#[inline]
+pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
+    if scene.geometry.occluded(ray, 1.0) {
+        0.0
+    } else if scene.features.media {
+        scene.media.transmittance(ray.origin, ray.dir, 1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Traces a shadow ray at once (one path at a time) and adds what gets through.
+#[inline]
+pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
+    let tr = shadow_transmittance(scene, &s.ray);
+    if tr > 0.0 {
+        st.l += s.contribution * tr;
+    }
+}
+
+/// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
+/// miss). When the ray scatters first, the throughput takes the medium's albedo and the
+/// scattering point is returned; otherwise nothing changes. Call only for scenes with media.
+#[inline]
+pub fn sample_medium(
+    scene: &RenderScene,
+    beta: &mut Vec3,
+    ray: &Ray,
+    tmax: f32,
+    sampler: &mut Sampler,
+) -> Option<Vec3A> {
+    let e = scene.media.sample(ray.origin, ray.dir, tmax, sampler.next_1d())?;
+    *beta *= e.albedo;
+    Some(ray.at(e.t))
+}
+
+/// Density (and value) of the isotropic phase function.
+const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
+
+/// A scattering event at `p` inside a medium (after [`sample_medium`]): next-event estimation
+/// with the isotropic phase function, then phase sampling and Russian roulette. Returns the
+/// shadow ray (if any) and the next ray (`None` when the path ends).
+#[inline]
+pub fn scatter_in_medium(
+    scene: &RenderScene,
+    st: &mut PathState,
+    p: Vec3A,
+    time: f32,
+    sampler: &mut Sampler,
+) -> (Option<ShadowRay>, Option<Ray>) {
+    if st.beta == Vec3::ZERO {
+        return (None, None);
+    }
+    let shadow = if scene.lights.is_empty() {
+        None
+    } else {
+        pick_light(scene, p, sampler).map(|lp| {
+            let contribution = st.beta * lp.le * (ISOTROPIC * power_heuristic(lp.pdf, ISOTROPIC) / lp.pdf);
+            ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
+        })
+    };
+    let wi = uniform_sphere(sampler.next_2d());
+    (st.delta, st.prev_pdf, st.prev_p) = (false, ISOTROPIC, p);
+    st.depth += 1;
+    let next = roulette(scene, st, sampler).then_some(Ray { origin: p, dir: wi, time });
+    (shadow, next)
+}
+
+/// A uniformly distributed unit vector.
+#[inline]
+fn uniform_sphere(u: glam::Vec2) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Russian roulette after `rr_depth` bounces: false when the path ends; survivors are
+/// reweighted.
+#[inline]
+fn roulette(scene: &RenderScene, st: &mut PathState, sampler: &mut Sampler) -> bool {
+    if st.depth >= scene.settings.rr_depth {
+        let rr = (st.beta * st.eta_scale).max_element();
+        if rr < 1.0 {
+            let q = (1.0 - rr).max(0.0);
+            if sampler.next_1d() < q {
+                return false;
+            }
+            st.beta /= 1.0 - q;
+        }
+    }
+    true
 }
 
 /// Samples the BSDF, updates the throughput, applies Russian roulette; returns the next ray, or
@@ -139,17 +251,7 @@ pub fn scatter(
     let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
-    if st.depth >= scene.settings.rr_depth {
-        let rr = (st.beta * st.eta_scale).max_element();
-        if rr < 1.0 {
-            let q = (1.0 - rr).max(0.0);
-            if sampler.next_1d() < q {
-                return None;
-            }
-            st.beta /= 1.0 - q;
-        }
-    }
-    Some(ray)
+    roulette(scene, st, sampler).then_some(ray)
 }
 
 /// The first ray of sample `index` of pixel (x, y), and its random stream.

@@ -300,24 +300,47 @@ impl<'de> Deserialize<'de> for MaterialRef {
     }
 }
 
-/// One object: a shape with a material and an optional list of transforms.
+/// One object: a shape with either a material (a surface) or a medium (a volume), and an
+/// optional list of transforms.
 #[derive(Deserialize, Debug, Clone)]
 #[serde(try_from = "RawObject")]
 pub struct ObjectDesc {
     /// The shape, in object space.
     pub shape: ShapeDesc,
-    /// A name from `materials`.
-    pub material: MaterialRef,
+    /// What the shape is.
+    pub body: Body,
     /// Transforms applied in order, first to last (default none).
-    #[serde(default)]
     pub transform: Vec<TransformOp>,
+}
+
+/// What an object's shape bounds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Body {
+    /// `material: "name"`: a surface with a material from `materials`.
+    Surface(MaterialRef),
+    /// `medium: (density: .., albedo: ..)`: an invisible, index-matched boundary (a closed
+    /// shape: sphere or box) filled with a homogeneous medium.
+    Volume(MediumDesc),
+}
+
+/// A homogeneous medium with an isotropic phase function.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Medium")]
+pub struct MediumDesc {
+    /// Extinction coefficient sigma_t per unit length, the same in every channel (> 0).
+    pub density: Positive,
+    /// Single-scattering albedo sigma_s / sigma_t, components in [0, 1].
+    pub albedo: Albedo,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Object")]
 struct RawObject {
     shape: ShapeDesc,
-    material: MaterialRef,
+    #[serde(default)]
+    material: Option<MaterialRef>,
+    #[serde(default)]
+    medium: Option<MediumDesc>,
     #[serde(default)]
     transform: Vec<TransformOp>,
 }
@@ -325,10 +348,21 @@ struct RawObject {
 impl TryFrom<RawObject> for ObjectDesc {
     type Error = String;
     /// The object must survive its transform: no quad flattened to no area, every coordinate
-    /// within [`MAX_COORDINATE`].
+    /// within [`MAX_COORDINATE`]; a medium needs a closed shape.
     fn try_from(r: RawObject) -> Result<Self, String> {
+        let body = match (r.material, r.medium) {
+            (Some(m), None) => Body::Surface(m),
+            (None, Some(_)) if matches!(r.shape, ShapeDesc::Quad { .. }) => {
+                return Err("a medium needs a closed shape (Sphere or Box), not a Quad".into());
+            }
+            (None, Some(m)) => Body::Volume(m),
+            (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),
+            (None, None) => {
+                return Err("an object needs a `material` (a surface) or a `medium` (a volume)".into());
+            }
+        };
         world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new())?;
-        Ok(Self { shape: r.shape, material: r.material, transform: r.transform })
+        Ok(Self { shape: r.shape, body, transform: r.transform })
     }
 }
 

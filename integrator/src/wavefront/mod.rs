@@ -2,7 +2,8 @@
 //!
 //! Each rayon task owns one image tile and a batch of path slots (sized to stay in cache). An
 //! iteration runs `generate_camera_rays` (fill free slots with new pixel samples),
-//! `intersect_closest`, `handle_escaped`, `handle_emissive`, one shading loop per material kind
+//! `intersect_closest` (which also samples free-flight distances in scenes with media),
+//! `handle_escaped`, `handle_emissive`, `shade_medium`, one shading loop per material kind
 //! present (`shade_lambertian`, `shade_metal`, `shade_dielectric`; they write continuation rays
 //! and shadow rays), `trace_shadow_rays` and `accumulate_film` (finished paths free their slot).
 //! Paths that end are replaced by new camera samples until the tile's samples are done.
@@ -49,6 +50,8 @@ pub enum Stage {
     HandleEscaped,
     /// Emitter hits.
     HandleEmissive,
+    /// Scattering in media.
+    ShadeMedium,
     /// Lambertian shading.
     ShadeLambertian,
     /// Metal shading.
@@ -63,11 +66,12 @@ pub enum Stage {
 
 impl Stage {
     /// All stages in pipeline order.
-    pub const ALL: [Stage; 9] = [
+    pub const ALL: [Stage; 10] = [
         Stage::GenerateCameraRays,
         Stage::IntersectClosest,
         Stage::HandleEscaped,
         Stage::HandleEmissive,
+        Stage::ShadeMedium,
         Stage::ShadeLambertian,
         Stage::ShadeMetal,
         Stage::ShadeDielectric,
@@ -82,6 +86,7 @@ impl Stage {
             Stage::IntersectClosest => "intersect_closest",
             Stage::HandleEscaped => "handle_escaped",
             Stage::HandleEmissive => "handle_emissive",
+            Stage::ShadeMedium => "shade_medium",
             Stage::ShadeLambertian => "shade_lambertian",
             Stage::ShadeMetal => "shade_metal",
             Stage::ShadeDielectric => "shade_dielectric",
@@ -95,11 +100,11 @@ impl Stage {
 #[derive(Clone, Debug, Default)]
 pub struct Stats {
     /// Time spent in each stage (summed over threads), indexed like [`Stage::ALL`].
-    pub time: [Duration; 9],
+    pub time: [Duration; Stage::ALL.len()],
     /// Items (rays or paths) each stage consumed.
-    pub items: [u64; 9],
+    pub items: [u64; Stage::ALL.len()],
     /// Stage invocations with a non-empty queue.
-    pub calls: [u64; 9],
+    pub calls: [u64; Stage::ALL.len()],
     /// Wavefront iterations.
     pub iterations: u64,
     /// Sum over iterations of the fraction of slots that held a live path.
@@ -110,7 +115,7 @@ pub struct Stats {
 
 impl Stats {
     fn merge(mut self, o: Stats) -> Stats {
-        for k in 0..9 {
+        for k in 0..Stage::ALL.len() {
             self.time[k] += o.time[k];
             self.items[k] += o.items[k];
             self.calls[k] += o.calls[k];
@@ -199,6 +204,7 @@ fn render_tile(
         timed(&mut stats, Stage::IntersectClosest, q.active.len(), || stages::intersect_closest(scene, p, q));
         timed(&mut stats, Stage::HandleEscaped, q.escaped.len(), || stages::handle_escaped(scene, p, q));
         timed(&mut stats, Stage::HandleEmissive, q.emissive.len(), || stages::handle_emissive(scene, p, q));
+        timed(&mut stats, Stage::ShadeMedium, q.medium.len(), || stages::shade_medium(scene, p, q));
         for (kind, stage, len) in [
             (MaterialKind::Lambertian, Stage::ShadeLambertian, q.lambertian.len()),
             (MaterialKind::Metal, Stage::ShadeMetal, q.metal.len()),
@@ -238,6 +244,7 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
         Stage::IntersectClosest => tracing::trace_span!("intersect_closest"),
         Stage::HandleEscaped => tracing::trace_span!("handle_escaped"),
         Stage::HandleEmissive => tracing::trace_span!("handle_emissive"),
+        Stage::ShadeMedium => tracing::trace_span!("shade_medium"),
         Stage::ShadeLambertian => tracing::trace_span!("shade_lambertian"),
         Stage::ShadeMetal => tracing::trace_span!("shade_metal"),
         Stage::ShadeDielectric => tracing::trace_span!("shade_dielectric"),

@@ -37,6 +37,8 @@ pub struct Paths {
     pub pixel: Vec<u32>,
     /// Closest hit of the last intersection.
     pub hit: Vec<Hit>,
+    /// Where the last ray scattered in a medium (valid for paths in the medium queue).
+    pub medium_p: Vec<Vec3A>,
 }
 
 impl Paths {
@@ -66,6 +68,7 @@ impl Paths {
             sampler: vec![Sampler::new(0, 0, 0); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
+            medium_p: vec![Vec3A::ZERO; n],
         }
     }
 
@@ -173,6 +176,8 @@ pub struct Queues {
     pub metal: Vec<u32>,
     /// Hits on glass.
     pub dielectric: Vec<u32>,
+    /// Rays that scattered in a medium before reaching a surface.
+    pub medium: Vec<u32>,
     /// Paths that ended; their radiance goes to the film.
     pub finished: Vec<u32>,
     /// Free slots.

@@ -41,9 +41,20 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     }
 }
 
-/// Sends path `i` to the escaped queue or to its material's queue.
+/// Sends path `i` to the medium queue if it scatters before the surface (scenes with media),
+/// else to the escaped queue or to its material's queue.
 #[inline]
 fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<Hit>) {
+    if scene.features.media {
+        let s = i as usize;
+        let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        let ray = p.ray(s);
+        if let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, &mut p.sampler[s]) {
+            p.medium_p[s] = at;
+            q.medium.push(i);
+            return;
+        }
+    }
     let Some(hit) = hit else {
         q.escaped.push(i);
         return;
@@ -80,6 +91,33 @@ pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         p.l[s] = st.l;
         q.finished.push(i);
     }
+}
+
+/// `shade_medium`: scattering in media: light sampling into the shadow queue, then phase
+/// sampling into the next iteration's queue.
+pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
+    for k in 0..q.medium.len() {
+        let (i, s) = (q.medium[k], q.medium[k] as usize);
+        let mut st = p.state(s);
+        if st.depth == scene.settings.max_depth {
+            q.finished.push(i);
+            continue;
+        }
+        let (shadow, next) =
+            path::scatter_in_medium(scene, &mut st, p.medium_p[s], p.time[s], &mut p.sampler[s]);
+        if let Some(sh) = shadow {
+            q.shadow.push(i, &sh.ray, sh.contribution);
+        }
+        match next {
+            Some(ray) => {
+                p.set_ray(s, ray);
+                q.next.push(i);
+            }
+            None => q.finished.push(i),
+        }
+        p.set_state(s, &st);
+    }
+    q.medium.clear();
 }
 
 /// One shading loop for the hits of one material kind: light sampling into the shadow queue
@@ -194,7 +232,8 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     q.scratch = live;
 }
 
-/// `trace_shadow_rays`: occlusion tests; unoccluded contributions are added to their paths.
+/// `trace_shadow_rays`: occlusion tests (and transmittance through media); what gets through
+/// is added to the paths.
 pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
     let sq = &mut q.shadow;
@@ -209,6 +248,16 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
                 let origin = Vec3A::new(ox[k], oy[k], oz[k]);
                 let dir = Vec3A::new(dx[k], dy[k], dz[k]);
                 sq.occluded[k] = geo.occluded(&Ray { origin, dir, time: 0.0 }, 1.0);
+            }
+        }
+    }
+    if scene.features.media {
+        let [ox, oy, oz] = &sq.rays.o;
+        let [dx, dy, dz] = &sq.rays.d;
+        for k in 0..n {
+            if !sq.occluded[k] {
+                let (o, d) = (Vec3A::new(ox[k], oy[k], oz[k]), Vec3A::new(dx[k], dy[k], dz[k]));
+                sq.contribution[k] *= scene.media.transmittance(o, d, 1.0);
             }
         }
     }
