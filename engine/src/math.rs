@@ -107,6 +107,15 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     r * Vec2::new(theta.cos(), theta.sin())
 }
 
+/// Uniform direction on the unit sphere.
+#[inline]
+pub fn uniform_sphere(u: Vec2) -> Vec3A {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * u.y;
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@ use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
-use pathwave_engine::math::{Ray, offset_ray_origin};
+use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
 
@@ -202,15 +202,6 @@ pub fn scatter_in_medium(
     st.depth += 1;
     let next = roulette(scene, st, sampler).then_some(Ray { origin: p, dir: wi, time });
     (shadow, next)
-}
-
-/// A uniformly distributed unit vector.
-#[inline]
-fn uniform_sphere(u: glam::Vec2) -> Vec3A {
-    let z = 1.0 - 2.0 * u.x;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u.y;
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 /// Russian roulette after `rr_depth` bounces: false when the path ends; survivors are

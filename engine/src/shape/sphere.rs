@@ -2,7 +2,7 @@
 //! (SEED.md section 12.4) for emitters.
 
 use super::{LightSample, SurfacePoint, area_to_solid_angle};
-use crate::math::{Frame, gamma};
+use crate::math::{Frame, gamma, uniform_sphere};
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 use std::f32::consts::PI;
@@ -133,15 +133,6 @@ pub fn sphere_t(c: [f32; 3], r: f32, o: [f32; 3], d: [f32; 3], tmax: f32) -> f32
         f32::INFINITY
     };
     if disc >= 0.0 { t } else { f32::INFINITY }
-}
-
-/// Uniform direction on the unit sphere.
-#[inline]
-pub(crate) fn uniform_sphere(u: Vec2) -> Vec3A {
-    let z = 1.0 - 2.0 * u.x;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 #[cfg(test)]
