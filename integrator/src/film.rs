@@ -1,5 +1,5 @@
 //! The film: per-pixel sums and sums of squares of sample radiance (for the mean and its
-//! variance), and the count of discarded non-finite samples.
+//! variance), and the count of discarded non-finite samples (and absurdly large ones).
 
 use glam::Vec3;
 
@@ -16,7 +16,7 @@ pub struct Film {
     pub sum: Vec<[f64; 3]>,
     /// Per pixel: sum of squared sample values.
     pub sum_sq: Vec<[f64; 3]>,
-    /// Samples whose value was NaN or infinite; they were counted as zero.
+    /// Samples whose value was NaN, infinite or above [`MAX_SAMPLE`]; they were counted as zero.
     pub non_finite: u64,
     /// Pixels (row-major index) that discarded non-finite samples, with how many.
     pub non_finite_pixels: Vec<(u32, u64)>,
@@ -81,9 +81,13 @@ pub fn clamp_sample(v: Vec3, max: Option<f32>) -> Vec3 {
     }
 }
 
-/// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish, sums stay far from
-/// overflow for any realistic radiance and sample count).
+/// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish).
 const FIXED: f64 = (1u64 << 50) as f64;
+
+/// Samples with a component above this are treated like infinite ones (discarded and counted):
+/// it keeps every pixel sum exact for up to 1.5e11 samples. Squares of samples above about
+/// 4e11 saturate the sum of squares, and the pixel's variance reads as infinite.
+pub const MAX_SAMPLE: f32 = 1e12;
 
 /// Sums of one pixel's samples, with non-finite samples replaced by zero and counted.
 ///
@@ -94,7 +98,7 @@ const FIXED: f64 = (1u64 << 50) as f64;
 pub struct PixelAccumulator {
     sum: [i128; 3],
     sum_sq: [i128; 3],
-    /// Non-finite samples seen.
+    /// Non-finite (or above [`MAX_SAMPLE`]) samples seen.
     pub non_finite: u64,
 }
 
@@ -102,14 +106,16 @@ impl PixelAccumulator {
     /// Adds one sample value.
     #[inline]
     pub fn add(&mut self, v: Vec3) {
-        if !v.is_finite() {
+        if !(v.is_finite() && v.abs().max_element() <= MAX_SAMPLE) {
             self.non_finite += 1;
             return;
         }
         for c in 0..3 {
             let x = v[c] as f64;
-            self.sum[c] += (x * FIXED) as i128;
-            self.sum_sq[c] += (x * x * FIXED) as i128;
+            // Saturating (`as` saturates too): for the non-negative values of radiance the
+            // result is the same in any order.
+            self.sum[c] = self.sum[c].saturating_add((x * FIXED) as i128);
+            self.sum_sq[c] = self.sum_sq[c].saturating_add((x * x * FIXED) as i128);
         }
     }
 
@@ -117,8 +123,8 @@ impl PixelAccumulator {
     #[inline]
     pub fn merge(&mut self, o: &PixelAccumulator) {
         for c in 0..3 {
-            self.sum[c] += o.sum[c];
-            self.sum_sq[c] += o.sum_sq[c];
+            self.sum[c] = self.sum[c].saturating_add(o.sum[c]);
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(o.sum_sq[c]);
         }
         self.non_finite += o.non_finite;
     }
@@ -128,9 +134,9 @@ impl PixelAccumulator {
         self.sum.map(|s| s as f64 / FIXED)
     }
 
-    /// Sum of the squared values.
+    /// Sum of the squared values (infinite where it saturated).
     pub fn sum_sq(&self) -> [f64; 3] {
-        self.sum_sq.map(|s| s as f64 / FIXED)
+        self.sum_sq.map(|s| if s == i128::MAX { f64::INFINITY } else { s as f64 / FIXED })
     }
 }
 
@@ -168,5 +174,20 @@ mod tests {
         a.add(Vec3::ONE);
         assert_eq!(a.non_finite, 2);
         assert_eq!(a.sum(), [1.0; 3]);
+    }
+
+    #[test]
+    fn huge_samples_neither_overflow_nor_depend_on_order() {
+        // Found by the fuzzer: an emitter of 6.7e28 overflowed the fixed-point sums.
+        let mut a = PixelAccumulator::default();
+        a.add(Vec3::splat(2e12));
+        assert_eq!((a.non_finite, a.sum()), (1, [0.0; 3]));
+        let values = [Vec3::splat(9e11), Vec3::splat(1.0), Vec3::splat(9e11), Vec3::splat(0.25)];
+        let (mut a, mut b) = (PixelAccumulator::default(), PixelAccumulator::default());
+        values.iter().for_each(|v| a.add(*v));
+        values.iter().rev().for_each(|v| b.add(*v));
+        assert_eq!(a, b);
+        assert_eq!(a.sum()[0], 2.0 * 9e11f32 as f64 + 1.25);
+        assert_eq!(a.sum_sq()[0], f64::INFINITY, "the squares saturate: the variance is unknown");
     }
 }
