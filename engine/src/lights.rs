@@ -22,8 +22,7 @@ pub struct LightTable {
 }
 
 impl LightTable {
-    /// Collects the emitters of `geometry`. Spheres under a non-uniform transform are not
-    /// sampled (their emission still counts when a BSDF-sampled ray hits them).
+    /// Collects the emitters of `geometry`.
     pub fn build(geometry: &Geometry, materials: &[Material]) -> Self {
         let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
         let mut power = Vec::new();
@@ -34,7 +33,7 @@ impl LightTable {
             let area = match prim {
                 Primitive::Sphere(s) => s.area(),
                 Primitive::Quad(q) => q.area,
-                Primitive::TransformedSphere(_) => continue,
+                Primitive::TransformedSphere(s) => s.area(),
             };
             let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
             if p > 0.0 {
@@ -74,7 +73,7 @@ impl LightTable {
         match &geometry.prims[self.prims[light] as usize] {
             Primitive::Sphere(s) => s.sample_solid_angle(from, u),
             Primitive::Quad(q) => q.sample_solid_angle(from, u),
-            Primitive::TransformedSphere(_) => unreachable!("not in the light table"),
+            Primitive::TransformedSphere(s) => s.sample_solid_angle(from, u),
         }
     }
 
@@ -89,7 +88,7 @@ impl LightTable {
         let pdf = match &geometry.prims[prim as usize] {
             Primitive::Sphere(s) => s.pdf_solid_angle(from, p, n),
             Primitive::Quad(q) => q.pdf_solid_angle(from, p),
-            Primitive::TransformedSphere(_) => 0.0,
+            Primitive::TransformedSphere(s) => s.pdf_solid_angle(from, p, n),
         };
         pdf * self.pmf[light as usize]
     }
