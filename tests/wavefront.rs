@@ -32,9 +32,13 @@ fn wavefront(desc: &SceneDesc, batch: usize, threads: usize) -> (Film, wavefront
 /// pixels may differ there.
 #[test]
 fn reproduces_the_oracle_for_any_batch_and_thread_count() {
-    for (name, max_differing) in
-        [("cornell.ron", 2), ("cornell-diffuse.ron", 2), ("cornell-smoke.ron", 2), ("spheres-sky.ron", 0)]
-    {
+    for (name, max_differing) in [
+        ("cornell.ron", 2),
+        ("cornell-diffuse.ron", 2),
+        ("cornell-smoke.ron", 2),
+        ("transforms.ron", 2),
+        ("spheres-sky.ron", 0),
+    ] {
         let desc = small(name, 6);
         let oracle = render_threads(&desc, 2);
         let mut first: Option<Film> = None;

@@ -103,3 +103,40 @@ proptest! {
         }
     }
 }
+
+/// A general affine map: any 3x3 with entries in [-2, 2] (shears included) that is not close to
+/// singular, and a translation.
+fn affine() -> impl Strategy<Value = glam::Affine3A> {
+    (vec3(2.0), vec3(2.0), vec3(2.0), vec3(5.0)).prop_filter_map("not singular", |(x, y, z, t)| {
+        let m = glam::Mat3A::from_cols(x, y, z);
+        (m.determinant().abs() > 0.05).then(|| glam::Affine3A { matrix3: m, translation: t })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn normals_stay_perpendicular_under_any_affine_map(m in affine(), from in unit(), t1 in unit()) {
+        // A hit on the transformed unit sphere: its world normal must be perpendicular to
+        // every world tangent, the images M t of object tangents t (perpendicular to the object
+        // normal).
+        use pathwave_engine::shape::TransformedSphere;
+        let ts = TransformedSphere::new(Sphere { center: Vec3A::ZERO, radius: 1.0 }, m).unwrap();
+        let o = m.transform_point3a(from * 4.0);
+        let d = m.transform_point3a(Vec3A::ZERO) - o;
+        let t = ts.intersect(o, d, f32::INFINITY);
+        prop_assert!(t.is_finite());
+        let sp = ts.surface(o + t * d);
+        let n_obj = m.inverse().transform_point3a(sp.p).normalize();
+        let tangent = t1.cross(n_obj);
+        prop_assume!(tangent.length() > 1e-2);
+        let world_tangent = m.transform_vector3a(tangent).normalize();
+        prop_assert!(sp.n.dot(world_tangent).abs() < 1e-4, "n {} . tangent {}", sp.n, world_tangent);
+        prop_assert!(sp.n.dot(d) < 0.0, "the normal faces the ray that came from outside");
+        // A quad under the same map: the normal is perpendicular to both mapped edges.
+        let Some(q) = Quad::new(m.transform_point3a(Vec3A::ZERO), m.transform_vector3a(Vec3A::X), m.transform_vector3a(t1)) else { return Ok(()) };
+        let qn = q.surface(q.q).n;
+        prop_assert!(qn.dot(q.u.normalize()).abs() < 1e-4 && qn.dot(q.v.normalize()).abs() < 1e-4);
+    }
+}

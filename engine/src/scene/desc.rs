@@ -438,9 +438,26 @@ enum RawTransform {
     RotateX(Finite),
     RotateY(Finite),
     RotateZ(Finite),
-    Rotate { axis: Direction, degrees: Finite },
+    Rotate {
+        axis: Direction,
+        degrees: Finite,
+    },
     Scale(V3),
     UniformScale(Finite),
+    Shear {
+        #[serde(default)]
+        xy: Finite,
+        #[serde(default)]
+        xz: Finite,
+        #[serde(default)]
+        yx: Finite,
+        #[serde(default)]
+        yz: Finite,
+        #[serde(default)]
+        zx: Finite,
+        #[serde(default)]
+        zy: Finite,
+    },
     Matrix(Vec<Vec<Finite>>),
 }
 
@@ -457,6 +474,12 @@ impl TryFrom<RawTransform> for TransformOp {
             }
             RawTransform::Scale(s) => Affine3A::from_scale(s.0),
             RawTransform::UniformScale(s) => Affine3A::from_scale(Vec3::splat(s.0)),
+            // x' = x + xy y + xz z, and likewise for y' and z'.
+            RawTransform::Shear { xy, xz, yx, yz, zx, zy } => Affine3A::from_mat3(glam::Mat3::from_cols(
+                Vec3::new(1.0, yx.0, zx.0),
+                Vec3::new(xy.0, 1.0, zy.0),
+                Vec3::new(xz.0, yz.0, 1.0),
+            )),
             RawTransform::Matrix(rows) => {
                 if rows.len() != 4 || rows.iter().any(|r| r.len() != 4) {
                     return Err("Matrix: expected 4 rows of 4 numbers".into());
