@@ -78,6 +78,9 @@ pub struct Geometry {
     pub prims: Vec<Primitive>,
     /// Material id of each primitive.
     pub material: Vec<u32>,
+    /// Velocity of each primitive (world units per unit time) when some primitive moves: at
+    /// time `t` a primitive lies translated by `velocity * t`.
+    pub velocity: Option<Vec<Vec3A>>,
     bvh: Option<CwBvh>,
     flat: Option<FlatPrims>,
 }
@@ -92,18 +95,62 @@ impl Geometry {
         g
     }
 
+    /// Builds the geometry of primitives moving with `velocity` (one per primitive) during the
+    /// shutter interval: BVH bounds cover each primitive's whole sweep. Without motion this is
+    /// [`Self::build`].
+    pub fn build_moving(
+        prims: Vec<Primitive>,
+        material: Vec<u32>,
+        velocity: Vec<Vec3A>,
+        shutter: (f32, f32),
+    ) -> Self {
+        assert_eq!(prims.len(), velocity.len());
+        if velocity.iter().all(|v| *v == Vec3A::ZERO) {
+            return Self::build(prims, material);
+        }
+        let aabbs = prims
+            .iter()
+            .zip(&velocity)
+            .map(|(p, &v)| {
+                let b = p.aabb();
+                let (a, c) = (v * shutter.0, v * shutter.1);
+                Aabb { min: b.min + a.min(c), max: b.max + a.max(c) }
+            })
+            .collect();
+        Self::from_aabbs(prims, material, Some(velocity), aabbs)
+    }
+
     /// Builds the BVH only, whatever the primitive count.
     pub fn build_bvh(prims: Vec<Primitive>, material: Vec<u32>) -> Self {
+        let aabbs = prims.iter().map(Primitive::aabb).collect();
+        Self::from_aabbs(prims, material, None, aabbs)
+    }
+
+    fn from_aabbs(
+        prims: Vec<Primitive>,
+        material: Vec<u32>,
+        velocity: Option<Vec<Vec3A>>,
+        aabbs: Vec<Aabb>,
+    ) -> Self {
         assert_eq!(prims.len(), material.len());
         if prims.is_empty() {
             return Self::default();
         }
-        let aabbs: Vec<Aabb> = prims.iter().map(Primitive::aabb).collect();
         let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
         let order = &bvh.primitive_indices;
         let prims = order.iter().map(|&i| prims[i as usize]).collect();
         let material = order.iter().map(|&i| material[i as usize]).collect();
-        Self { prims, material, bvh: Some(bvh), flat: None }
+        let velocity = velocity.map(|v| order.iter().map(|&i| v[i as usize]).collect());
+        Self { prims, material, velocity, bvh: Some(bvh), flat: None }
+    }
+
+    /// How far primitive `prim` has moved at `time` (zero for static scenes).
+    #[inline]
+    pub fn offset(&self, prim: u32, time: f32) -> Vec3A {
+        match &self.velocity {
+            Some(v) => v[prim as usize] * time,
+            None => Vec3A::ZERO,
+        }
     }
 
     /// Closest hit with `t` in `(0, tmax)`.
@@ -120,7 +167,8 @@ impl Geometry {
         let (mut best, mut prim) = (tmax, u32::MAX);
         let mut hit = RayHit::none();
         bvh.ray_traverse(oray, &mut hit, |_, slot| {
-            let t = self.prims[slot].intersect(ray.origin, ray.dir, best);
+            let o = ray.origin - self.offset(slot as u32, ray.time);
+            let t = self.prims[slot].intersect(o, ray.dir, best);
             if t < best {
                 (best, prim) = (t, slot as u32);
                 t + shift
@@ -134,7 +182,15 @@ impl Geometry {
     /// The hit record of primitive `prim` at distance `t`.
     #[inline]
     pub fn hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
-        Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) }
+        if self.velocity.is_none() {
+            return Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) };
+        }
+        // The primitive where it is at the ray's time: found at rest, moved back.
+        let off = self.offset(prim, ray.time);
+        let mut surface = self.prims[prim as usize].surface(ray.at(t) - off);
+        surface.err += crate::math::gamma(2) * (surface.p.abs() + off.abs()).max_element();
+        surface.p += off;
+        Hit { t, prim, surface }
     }
 
     /// The flat primitive lists, for scenes small enough to trace as streams.
@@ -149,7 +205,8 @@ impl Geometry {
         let Some(bvh) = self.bvh.as_ref() else { return false };
         let (oray, shift) = shifted(ray, tmax);
         !bvh.ray_traverse_miss(oray, |_, slot| {
-            if self.prims[slot].intersect(ray.origin, ray.dir, tmax) < tmax { shift } else { f32::INFINITY }
+            let o = ray.origin - self.offset(slot as u32, ray.time);
+            if self.prims[slot].intersect(o, ray.dir, tmax) < tmax { shift } else { f32::INFINITY }
         })
     }
 }

@@ -67,24 +67,33 @@ impl LightTable {
         (i, self.pmf[i])
     }
 
-    /// Samples a point on light `light` as seen from `from`.
+    /// Samples a point on light `light`, where it is at `time`, as seen from `from`.
     #[inline]
-    pub fn sample(&self, geometry: &Geometry, light: usize, from: Vec3A, u: Vec2) -> LightSample {
-        match &geometry.prims[self.prims[light] as usize] {
+    pub fn sample(&self, geometry: &Geometry, light: usize, from: Vec3A, u: Vec2, time: f32) -> LightSample {
+        let prim = self.prims[light];
+        // A moving light is sampled at rest, from where `from` is relative to it.
+        let off = geometry.offset(prim, time);
+        let from = from - off;
+        let mut ls = match &geometry.prims[prim as usize] {
             Primitive::Sphere(s) => s.sample_solid_angle(from, u),
             Primitive::Quad(q) => q.sample_solid_angle(from, u),
             Primitive::TransformedSphere(s) => s.sample_solid_angle(from, u),
-        }
+        };
+        ls.p += off;
+        ls
     }
 
-    /// Solid-angle density (including the pick probability) with which NEE from `from` would
-    /// have produced the point `p` (normal `n`) on primitive `prim`; 0 for unsampled emitters.
+    /// Solid-angle density (including the pick probability) with which NEE from `from` at `time`
+    /// would have produced the point `p` (normal `n`) on primitive `prim`; 0 for unsampled
+    /// emitters.
     #[inline]
-    pub fn pdf(&self, geometry: &Geometry, prim: u32, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+    pub fn pdf(&self, geometry: &Geometry, prim: u32, from: Vec3A, p: Vec3A, n: Vec3A, time: f32) -> f32 {
         let light = self.light_of_prim[prim as usize];
         if light == NO_LIGHT {
             return 0.0;
         }
+        let off = geometry.offset(prim, time);
+        let (from, p) = (from - off, p - off);
         let pdf = match &geometry.prims[prim as usize] {
             Primitive::Sphere(s) => s.pdf_solid_angle(from, p, n),
             Primitive::Quad(q) => q.pdf_solid_angle(from, p),

@@ -64,16 +64,26 @@ pub struct Features {
     /// Some volume holds a medium: rays sample free-flight distances and shadow rays
     /// transmittance. Off, no medium code runs.
     pub media: bool,
+    /// Something moves while the shutter is open: camera rays sample a time. Off, every ray
+    /// is at the shutter's opening and no time is drawn.
+    pub motion: bool,
 }
 
 impl Features {
     /// Detects the features of extracted geometry.
-    pub fn detect(geometry: &Geometry, lights: &LightTable, media: &Media) -> Self {
+    pub fn detect(geometry: &Geometry, lights: &LightTable, media: &Media, shutter: (f32, f32)) -> Self {
         let lights_are_quads = lights
             .prims
             .iter()
             .all(|&p| matches!(geometry.prims[p as usize], crate::geometry::Primitive::Quad(_)));
-        Self { lights_are_quads, media: !media.is_empty() }
+        // The Lambertian kernel samples quads where they rest.
+        let lights_are_quads =
+            lights_are_quads && lights.prims.iter().all(|&p| geometry.offset(p, 1.0) == Vec3A::ZERO);
+        Self {
+            lights_are_quads,
+            media: !media.is_empty(),
+            motion: geometry.velocity.is_some() && shutter.0 != shutter.1,
+        }
     }
 }
 

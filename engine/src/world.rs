@@ -28,6 +28,13 @@ pub struct Shape(pub ShapeDesc);
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct Filling(pub Medium);
 
+/// Linear motion: at time `t` the entity lies translated by `velocity * t`.
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    /// World units per unit time.
+    pub velocity: Vec3,
+}
+
 /// Index into the [`Materials`] resource.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MaterialId(pub u32);
@@ -76,32 +83,43 @@ pub struct Extracted(pub Option<Arc<RenderScene>>);
 #[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Update;
 
-/// Rebuilds primitives, BVH and light table when a shape, transform or material id changed,
-/// an object was removed, or the materials changed (the light table depends on them).
+/// Rebuilds primitives, BVH and light table when a shape, transform, material id or motion
+/// changed, an object or its motion was removed, the materials changed (the light table depends
+/// on them), or, in scenes with motion, the camera (its shutter bounds the sweeps).
 #[allow(clippy::type_complexity)]
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
-    objects: Query<(Entity, &Transform, &Shape, &MaterialId)>,
-    changed: Query<(), Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>)>>,
+    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>)>,
+    changed: Query<(), Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>>,
     mut removed: RemovedComponents<Shape>,
+    mut stopped: RemovedComponents<Motion>,
     materials: Res<Materials>,
+    camera: Res<CameraParams>,
 ) {
-    let removed = removed.read().count() > 0;
-    if !(removed || !changed.is_empty() || materials.is_changed() || out.rebuilds == 0) {
+    let removed = removed.read().count() > 0 || stopped.read().count() > 0;
+    // The shutter bounds the sweep of moving objects.
+    let moving = out.geometry.velocity.is_some();
+    if !(removed
+        || !changed.is_empty()
+        || materials.is_changed()
+        || (moving && camera.is_changed())
+        || out.rebuilds == 0)
+    {
         return;
     }
     let _span = tracing::info_span!("rebuild_geometry").entered();
     let mut objs: Vec<_> = objects.iter().collect();
     objs.sort_by_key(|(e, ..)| *e);
-    let (mut prims, mut mats) = (Vec::new(), Vec::new());
-    for (_, transform, shape, material) in objs {
+    let (mut prims, mut mats, mut velocity) = (Vec::new(), Vec::new(), Vec::new());
+    for (_, transform, shape, material, motion) in objs {
         // Scene files are validated at load; objects spawned by code may still be bad.
         if let Err(e) = world_primitives(&shape.0, &transform.0, &mut prims) {
             tracing::error!("object skipped: {e}");
         }
         mats.resize(prims.len(), material.0);
+        velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
     }
-    let geometry = Geometry::build(prims, mats);
+    let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
     out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
     out.geometry = Arc::new(geometry);
     out.rebuilds += 1;
@@ -163,7 +181,7 @@ pub fn extract_render_scene(
     let c = camera.0;
     let s = settings.0;
     out.0 = Some(Arc::new(RenderScene {
-        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media),
+        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media, c.shutter),
         camera: Camera::new(
             c.look_from,
             c.look_at,
@@ -275,7 +293,10 @@ impl SceneWorld {
                         .iter()
                         .position(|n| *n == name.0)
                         .expect("material names are validated at load");
-                    world.spawn((placed, MaterialId(id as u32)));
+                    let mut e = world.spawn((placed, MaterialId(id as u32)));
+                    if let Some(m) = obj.motion {
+                        e.insert(Motion { velocity: m.velocity.0 });
+                    }
                 }
                 Body::Volume(m) => {
                     world.spawn((placed, Filling(Medium { sigma_t: m.density.0, albedo: m.albedo.0 })));

@@ -86,7 +86,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
         let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
         let wo = -ray.dir;
         if mat.is_emissive() {
-            path::emit(scene, &mut st, &hit, mat, wo);
+            path::emit(scene, &mut st, &hit, mat, wo, ray.time);
             break;
         }
         if st.depth == scene.settings.max_depth {

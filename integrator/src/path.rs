@@ -64,7 +64,7 @@ pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
 
 /// A ray hit an emitter (whose BSDF is black: the path ends).
 #[inline]
-pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, wo: Vec3A) {
+pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, wo: Vec3A, time: f32) {
     let sp = &hit.surface;
     let le = mat.emitted(sp.n.dot(wo));
     if le == Vec3::ZERO {
@@ -73,7 +73,7 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, 
     let w = if st.delta {
         1.0
     } else {
-        power_heuristic(st.prev_pdf, scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, sp.p, sp.n))
+        power_heuristic(st.prev_pdf, scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, sp.p, sp.n, time))
     };
     st.l += st.beta * le * w;
 }
@@ -89,11 +89,11 @@ struct LightPick {
 
 /// Picks a light and a point on it as seen from `p`; `None` when it sends nothing towards `p`.
 #[inline]
-fn pick_light(scene: &RenderScene, p: Vec3A, sampler: &mut Sampler) -> Option<LightPick> {
+fn pick_light(scene: &RenderScene, p: Vec3A, time: f32, sampler: &mut Sampler) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
     let (light, pmf) = lights.pick(sampler.next_1d());
-    let ls = lights.sample(geo, light, p, sampler.next_2d());
+    let ls = lights.sample(geo, light, p, sampler.next_2d(), time);
     let to = ls.p - p;
     let dist = to.length();
     if !(dist > 0.0) {
@@ -124,7 +124,7 @@ pub fn sample_light(
     sampler: &mut Sampler,
 ) -> Option<ShadowRay> {
     let (p, n) = (sp.p, sp.n);
-    let lp = pick_light(scene, p, sampler)?;
+    let lp = pick_light(scene, p, time, sampler)?;
     let (f, pdf_bsdf) = material::eval(mat, wo, lp.wi, n);
     if f == Vec3::ZERO {
         return None;
@@ -192,7 +192,7 @@ pub fn scatter_in_medium(
     let shadow = if scene.lights.is_empty() {
         None
     } else {
-        pick_light(scene, p, sampler).map(|lp| {
+        pick_light(scene, p, time, sampler).map(|lp| {
             let contribution = st.beta * lp.le * (ISOTROPIC * power_heuristic(lp.pdf, ISOTROPIC) / lp.pdf);
             ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
         })
@@ -253,7 +253,8 @@ pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Samp
     let offset = crate::sampler::pixel_sample(s.seed, pixel, index, s.spp);
     let mut sampler = Sampler::new(s.seed, pixel, index);
     let lens = sampler.next_2d();
-    let time = if scene.camera.shutter.0 != scene.camera.shutter.1 { sampler.next_1d() } else { 0.0 };
+    // Time is sampled only when something moves while the shutter is open.
+    let time = if scene.features.motion { sampler.next_1d() } else { 0.0 };
     let ray = scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + offset, lens, time);
     (ray, sampler)
 }

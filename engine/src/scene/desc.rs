@@ -311,6 +311,17 @@ pub struct ObjectDesc {
     pub body: Body,
     /// Transforms applied in order, first to last (default none).
     pub transform: Vec<TransformOp>,
+    /// How it moves (default: it does not).
+    pub motion: Option<MotionDesc>,
+}
+
+/// Linear motion: at time `t` the object lies translated by `velocity * t` from where its
+/// transform puts it.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Motion")]
+pub struct MotionDesc {
+    /// World units per unit of time.
+    pub velocity: V3,
 }
 
 /// What an object's shape bounds.
@@ -343,6 +354,8 @@ struct RawObject {
     medium: Option<MediumDesc>,
     #[serde(default)]
     transform: Vec<TransformOp>,
+    #[serde(default)]
+    motion: Option<MotionDesc>,
 }
 
 impl TryFrom<RawObject> for ObjectDesc {
@@ -361,8 +374,11 @@ impl TryFrom<RawObject> for ObjectDesc {
                 return Err("an object needs a `material` (a surface) or a `medium` (a volume)".into());
             }
         };
+        if r.motion.is_some() && matches!(body, Body::Volume(_)) {
+            return Err("media do not move: `motion` is for surfaces".into());
+        }
         world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new())?;
-        Ok(Self { shape: r.shape, body, transform: r.transform })
+        Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion })
     }
 }
 

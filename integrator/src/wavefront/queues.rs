@@ -118,6 +118,8 @@ impl Paths {
 pub struct ShadowQueue {
     /// The rays (t = 1 at the light point).
     pub rays: RayStream,
+    /// Their times.
+    pub time: Vec<f32>,
     /// Contribution if unoccluded.
     pub contribution: Vec<Vec3>,
     /// Slot of the path it belongs to.
@@ -131,6 +133,7 @@ impl ShadowQueue {
     #[inline]
     pub fn push(&mut self, slot: u32, ray: &Ray, contribution: Vec3) {
         self.rays.push(ray.origin.to_array(), ray.dir.to_array());
+        self.time.push(ray.time);
         self.contribution.push(contribution);
         self.slot.push(slot);
     }
@@ -138,6 +141,7 @@ impl ShadowQueue {
     /// Empties the queue, keeping its storage.
     pub fn clear(&mut self) {
         self.rays.clear();
+        self.time.clear();
         self.contribution.clear();
         self.slot.clear();
     }

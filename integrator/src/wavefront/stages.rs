@@ -87,7 +87,7 @@ pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let hit = p.hit[s];
         let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
         let mut st = p.state(s);
-        path::emit(scene, &mut st, &hit, mat, -p.dir[s]);
+        path::emit(scene, &mut st, &hit, mat, -p.dir[s], p.time[s]);
         p.l[s] = st.l;
         q.finished.push(i);
     }
@@ -247,7 +247,7 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             for k in 0..n {
                 let origin = Vec3A::new(ox[k], oy[k], oz[k]);
                 let dir = Vec3A::new(dx[k], dy[k], dz[k]);
-                sq.occluded[k] = geo.occluded(&Ray { origin, dir, time: 0.0 }, 1.0);
+                sq.occluded[k] = geo.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
             }
         }
     }
