@@ -199,6 +199,39 @@ fn medium_needs_a_closed_shape_and_valid_numbers() {
     assert_err(&with_object(bright), 8, 92, &["albedo with components in [0, 1]"]);
 }
 
+/// A scene with a `textures` map before the materials.
+fn with_textures(textures: &str, material: &str) -> String {
+    scene(CAMERA, material, OBJECT).replacen(
+        "    materials: {",
+        &format!("    textures: {{ {textures} }},\n    materials: {{"),
+        1,
+    )
+}
+
+#[test]
+fn unknown_texture_names_list_the_defined_ones() {
+    let text = with_textures(r#""a": Noise(scale: 2)"#, r#""t": Lambertian(albedo: "b"),"#);
+    // Line 6 (the textures map is line 3): 6:34 is the end of the name.
+    assert_err(&text, 6, 34, &["unknown texture \"b\"", "defined: \"a\""]);
+}
+
+#[test]
+fn a_texture_may_only_name_textures_before_it() {
+    let text = with_textures(
+        r#""a": Checker(scale: 1, even: "b", odd: (1, 1, 1)), "b": Noise(scale: 2)"#,
+        r#""t": Lambertian(albedo: "a"),"#,
+    );
+    // 3:47 is the end of `"b"`.
+    assert_err(&text, 3, 47, &["texture \"b\" must be defined before the texture that uses it"]);
+}
+
+#[test]
+fn missing_image_file_is_named() {
+    let text = with_textures(r#""a": Image(file: "no-such.png")"#, r#""t": Lambertian(albedo: "a"),"#);
+    // 3:35 is the end of the file name (files are relative to the scene's directory).
+    assert_err(&text, 3, 35, &["cannot read the image", "no-such.png"]);
+}
+
 #[test]
 fn flat_box() {
     let text = with_object(r#"(shape: Box(a: (0, 0, 0), b: (1, 0, 1)), material: "white"),"#);

@@ -182,15 +182,21 @@ impl Geometry {
     /// The hit record of primitive `prim` at distance `t`.
     #[inline]
     pub fn hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
+        Hit { t, prim, surface: self.surface(prim, ray.at(t), ray.time) }
+    }
+
+    /// Surface data of primitive `prim` at the point `p` at `time`.
+    #[inline]
+    pub fn surface(&self, prim: u32, p: Vec3A, time: f32) -> SurfacePoint {
         if self.velocity.is_none() {
-            return Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) };
+            return self.prims[prim as usize].surface(p);
         }
-        // The primitive where it is at the ray's time: found at rest, moved back.
-        let off = self.offset(prim, ray.time);
-        let mut surface = self.prims[prim as usize].surface(ray.at(t) - off);
+        // The primitive where it is at `time`: found at rest, moved back.
+        let off = self.offset(prim, time);
+        let mut surface = self.prims[prim as usize].surface(p - off);
         surface.err += crate::math::gamma(2) * (surface.p.abs() + off.abs()).max_element();
         surface.p += off;
-        Hit { t, prim, surface }
+        surface
     }
 
     /// The flat primitive lists, for scenes small enough to trace as streams.

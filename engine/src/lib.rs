@@ -16,4 +16,5 @@ pub mod media;
 pub mod render_scene;
 pub mod scene;
 pub mod shape;
+pub mod texture;
 pub mod world;

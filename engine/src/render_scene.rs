@@ -6,6 +6,8 @@ use crate::geometry::Geometry;
 use crate::lights::LightTable;
 use crate::material::Material;
 use crate::media::Media;
+use crate::shape::SurfacePoint;
+use crate::texture::{MaterialTextures, Textures};
 use glam::{Vec3, Vec3A};
 use std::sync::Arc;
 
@@ -67,6 +69,9 @@ pub struct Features {
     /// Something moves while the shutter is open: camera rays sample a time. Off, every ray
     /// is at the shutter's opening and no time is drawn.
     pub motion: bool,
+    /// Some material that a primitive uses takes a colour from a texture. Off, materials are
+    /// used as they are.
+    pub textures: bool,
 }
 
 impl Features {
@@ -83,7 +88,23 @@ impl Features {
             lights_are_quads,
             media: !media.is_empty(),
             motion: geometry.velocity.is_some() && shutter.0 != shutter.1,
+            textures: false,
         }
+    }
+
+    /// Sets `textures` from what the primitives' materials use. A textured emitter also turns
+    /// `lights_are_quads` off: the Lambertian kernel takes one radiance per light.
+    pub fn with_textures(mut self, geometry: &Geometry, per_material: &[MaterialTextures]) -> Self {
+        let mut used = vec![false; per_material.len()];
+        for &m in &geometry.material {
+            used[m as usize] = true;
+        }
+        let textured = |t: &MaterialTextures| t.albedo.is_some() || t.emit.is_some();
+        self.textures = per_material.iter().zip(&used).any(|(t, u)| *u && textured(t));
+        if per_material.iter().zip(&used).any(|(t, u)| *u && t.emit.is_some()) {
+            self.lights_are_quads = false;
+        }
+        self
     }
 }
 
@@ -105,4 +126,35 @@ pub struct RenderScene {
     pub lights: Arc<LightTable>,
     /// Participating media.
     pub media: Arc<Media>,
+    /// Textures.
+    pub textures: Arc<Textures>,
+    /// Per material: which colours come from textures.
+    pub material_textures: Vec<MaterialTextures>,
+}
+
+impl RenderScene {
+    /// The material of primitive `prim` with its textured colours evaluated at `sp`.
+    #[inline]
+    pub fn material_at(&self, prim: u32, sp: &SurfacePoint) -> Material {
+        let id = self.geometry.material[prim as usize] as usize;
+        let m = self.materials[id];
+        if !self.features.textures {
+            return m;
+        }
+        let t = self.material_textures[id];
+        match m {
+            Material::Lambertian { .. } if t.albedo.is_some() => Material::Lambertian {
+                albedo: self.textures.at(t.albedo.unwrap(), sp).clamp(Vec3::ZERO, Vec3::ONE),
+            },
+            Material::Metal { fuzz, .. } if t.albedo.is_some() => Material::Metal {
+                albedo: self.textures.at(t.albedo.unwrap(), sp).clamp(Vec3::ZERO, Vec3::ONE),
+                fuzz,
+            },
+            Material::DiffuseLight { two_sided, .. } if t.emit.is_some() => Material::DiffuseLight {
+                emit: self.textures.at(t.emit.unwrap(), sp).max(Vec3::ZERO),
+                two_sided,
+            },
+            m => m,
+        }
+    }
 }

@@ -8,8 +8,12 @@ use crate::lights::LightTable;
 use crate::material::Material;
 use crate::media::{Boundary, Media, Medium, Volume};
 use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
-use crate::scene::{BackgroundDesc, Body, CameraDesc, MaterialDesc, SceneDesc, ShapeDesc, compose};
+use crate::scene::{
+    Albedo, BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc,
+    TextureDesc, compose,
+};
 use crate::shape::{Quad, Sphere, TransformedSphere};
+use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
 use glam::{Affine3A, Vec3, Vec3A};
@@ -163,6 +167,7 @@ pub fn rebuild_media(
 pub fn extract_render_scene(
     geometry: Res<SceneGeometry>,
     media: Res<SceneMedia>,
+    textures: Res<SceneTextures>,
     materials: Res<Materials>,
     camera: Res<CameraParams>,
     settings: Res<Settings>,
@@ -171,6 +176,7 @@ pub fn extract_render_scene(
 ) {
     let any = geometry.is_changed()
         || media.is_changed()
+        || textures.is_changed()
         || materials.is_changed()
         || camera.is_changed()
         || settings.is_changed()
@@ -181,7 +187,8 @@ pub fn extract_render_scene(
     let c = camera.0;
     let s = settings.0;
     out.0 = Some(Arc::new(RenderScene {
-        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media, c.shutter),
+        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media, c.shutter)
+            .with_textures(&geometry.geometry, &textures.per_material),
         camera: Camera::new(
             c.look_from,
             c.look_at,
@@ -199,6 +206,8 @@ pub fn extract_render_scene(
         geometry: geometry.geometry.clone(),
         lights: geometry.lights.clone(),
         media: media.media.clone(),
+        textures: textures.textures.clone(),
+        material_textures: textures.per_material.clone(),
     }));
 }
 
@@ -263,12 +272,112 @@ fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive
     Ok(())
 }
 
-fn material(desc: &MaterialDesc) -> Material {
-    match *desc {
-        MaterialDesc::Lambertian { albedo } => Material::Lambertian { albedo: albedo.0 },
-        MaterialDesc::Metal { albedo, fuzz } => Material::Metal { albedo: albedo.0, fuzz: fuzz.0.min(1.0) },
-        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric { ior: ior.0, fresnel },
-        MaterialDesc::DiffuseLight { emit, two_sided } => Material::DiffuseLight { emit: emit.0, two_sided },
+/// The scene's textures, and which material colours use them.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct SceneTextures {
+    /// All textures.
+    pub textures: Arc<Textures>,
+    /// Per material (indexed like [`Materials`]): its textured colours.
+    pub per_material: Vec<MaterialTextures>,
+}
+
+/// Builds the runtime textures: the named ones keep their indices in file order; colours
+/// written inline inside them (checker squares) become solid textures after them.
+fn build_textures(desc: &SceneDesc) -> Textures {
+    let n = desc.textures.0.len() as TextureId;
+    let mut inline = Vec::new();
+    let mut sub = |c: &Color<Rgb>| match c {
+        Color::Texture(name) => texture_id(desc, name),
+        Color::Value(v) => {
+            inline.push(Texture::Solid(v.0));
+            n + inline.len() as TextureId - 1
+        }
+    };
+    let noise = |kind, scale: &Positive, depth, color: &Rgb| Texture::Noise {
+        kind,
+        scale: scale.0,
+        depth,
+        color: color.0,
+    };
+    let mut list: Vec<Texture> = desc
+        .textures
+        .0
+        .iter()
+        .map(|(_, t)| match t {
+            TextureDesc::Solid(c) => Texture::Solid(c.0),
+            TextureDesc::Checker { scale, even, odd } => {
+                Texture::Checker { scale: scale.0, even: sub(even), odd: sub(odd) }
+            }
+            TextureDesc::UvChecker { u, v, even, odd } => {
+                Texture::UvChecker { u: u.0, v: v.0, even: sub(even), odd: sub(odd) }
+            }
+            TextureDesc::Image { file, wrap } => Texture::Image { image: file.image.clone(), wrap: *wrap },
+            TextureDesc::Noise { scale, color } => noise(NoiseKind::Smooth, scale, 0, color),
+            TextureDesc::BlockyNoise { scale, color } => noise(NoiseKind::Blocky, scale, 0, color),
+            TextureDesc::Turbulence { scale, depth, color } => {
+                noise(NoiseKind::Turbulence, scale, *depth, color)
+            }
+            TextureDesc::Marble { scale, depth, color } => noise(NoiseKind::Marble, scale, *depth, color),
+        })
+        .collect();
+    list.extend(inline);
+    Textures { list }
+}
+
+/// The index of a named texture.
+fn texture_id(desc: &SceneDesc, name: &str) -> TextureId {
+    desc.textures.0.iter().position(|(n, _)| n == name).expect("texture names are validated at load")
+        as TextureId
+}
+
+/// A material's parameters (textured colours hold the texture's mean) and its textures.
+fn material(desc: &SceneDesc, m: &MaterialDesc, textures: &Textures) -> (Material, MaterialTextures) {
+    let mut tex = MaterialTextures::default();
+    let color = |c: Vec3Or, slot: &mut Option<TextureId>| match c {
+        Vec3Or::Value(v) => v,
+        Vec3Or::Texture(name) => {
+            let id = texture_id(desc, name);
+            *slot = Some(id);
+            textures.mean(id)
+        }
+    };
+    let m = match m {
+        MaterialDesc::Lambertian { albedo } => {
+            Material::Lambertian { albedo: color(albedo.into(), &mut tex.albedo).min(Vec3::ONE) }
+        }
+        MaterialDesc::Metal { albedo, fuzz } => Material::Metal {
+            albedo: color(albedo.into(), &mut tex.albedo).min(Vec3::ONE),
+            fuzz: fuzz.0.min(1.0),
+        },
+        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric { ior: ior.0, fresnel: *fresnel },
+        MaterialDesc::DiffuseLight { emit, two_sided } => {
+            Material::DiffuseLight { emit: color(emit.into(), &mut tex.emit), two_sided: *two_sided }
+        }
+    };
+    (m, tex)
+}
+
+/// A colour of either kind, as a plain value or a texture name.
+enum Vec3Or<'a> {
+    Value(Vec3),
+    Texture(&'a str),
+}
+
+impl<'a> From<&'a Color<Albedo>> for Vec3Or<'a> {
+    fn from(c: &'a Color<Albedo>) -> Self {
+        match c {
+            Color::Value(v) => Vec3Or::Value(v.0),
+            Color::Texture(n) => Vec3Or::Texture(n),
+        }
+    }
+}
+
+impl<'a> From<&'a Color<Rgb>> for Vec3Or<'a> {
+    fn from(c: &'a Color<Rgb>) -> Self {
+        match c {
+            Color::Value(v) => Vec3Or::Value(v.0),
+            Color::Texture(n) => Vec3Or::Texture(n),
+        }
     }
 }
 
@@ -284,7 +393,10 @@ impl SceneWorld {
     pub fn new(desc: &SceneDesc) -> Self {
         let mut world = World::new();
         let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
-        world.insert_resource(Materials(desc.materials.iter().map(|(_, m)| material(m)).collect()));
+        let textures = build_textures(desc);
+        let (mats, per_material) = desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
+        world.insert_resource(Materials(mats));
+        world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
         for obj in &desc.objects {
             let placed = (Transform(compose(&obj.transform)), Shape(obj.shape));
             match &obj.body {

@@ -83,7 +83,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
             path::escape(scene, &mut st, ray.dir);
             break;
         };
-        let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
+        let mat = &scene.material_at(hit.prim, &hit.surface);
         let wo = -ray.dir;
         if mat.is_emissive() {
             path::emit(scene, &mut st, &hit, mat, wo, ray.time);

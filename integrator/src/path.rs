@@ -100,7 +100,12 @@ fn pick_light(scene: &RenderScene, p: Vec3A, time: f32, sampler: &mut Sampler) -
         return None;
     }
     let wi = to / dist;
-    let light_mat = &scene.materials[geo.material[lights.prims[light] as usize] as usize];
+    let prim = lights.prims[light];
+    let light_mat = if scene.features.textures {
+        scene.material_at(prim, &geo.surface(prim, ls.p, time))
+    } else {
+        scene.materials[geo.material[prim as usize] as usize]
+    };
     let le = light_mat.emitted(ls.n.dot(-wi));
     let pdf = ls.pdf * pmf;
     if le == Vec3::ZERO || !(pdf > 0.0) {

@@ -42,13 +42,14 @@ pub fn render_threads(desc: &SceneDesc, threads: usize) -> Film {
 
 /// Sets one named material's albedo (Lambertian or Metal) to `f(albedo)`.
 pub fn scale_albedo(desc: &mut SceneDesc, name: &str, factor: f32) {
-    use pathwave::engine::scene::{Albedo, MaterialDesc};
+    use pathwave::engine::scene::{Albedo, Color, MaterialDesc};
     let (_, m) = desc.materials.0.iter_mut().find(|(n, _)| n == name).expect("material exists");
     match m {
-        MaterialDesc::Lambertian { albedo } | MaterialDesc::Metal { albedo, .. } => {
+        MaterialDesc::Lambertian { albedo: Color::Value(albedo) }
+        | MaterialDesc::Metal { albedo: Color::Value(albedo), .. } => {
             *albedo = Albedo((albedo.0 * factor).min(Vec3::ONE))
         }
-        _ => panic!("{name} has no albedo"),
+        _ => panic!("{name} has no albedo colour"),
     }
 }
 

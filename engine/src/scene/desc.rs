@@ -3,6 +3,7 @@
 
 use super::values::*;
 use crate::material::Fresnel;
+use crate::texture::{TextureImage, Wrap};
 use crate::world::{MAX_COORDINATE, world_primitives};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::{Deserialize, Deserializer, de::Error};
@@ -21,6 +22,9 @@ pub struct SceneDesc {
     /// What rays that leave the scene see (default black).
     #[serde(default)]
     pub background: BackgroundDesc,
+    /// Textures by name (default none); a colour of a material may name one.
+    #[serde(default)]
+    pub textures: NamedTextures,
     /// Materials by name.
     pub materials: NamedMaterials,
     /// The objects.
@@ -159,18 +163,18 @@ fn sky_blue() -> Rgb {
 }
 
 /// A material as written in the scene.
-#[derive(Deserialize, Debug, Clone, Copy)]
+#[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields, rename = "Material")]
 pub enum MaterialDesc {
     /// `Lambertian(albedo: (r, g, b))`.
     Lambertian {
-        /// Reflectance, components in [0, 1].
-        albedo: Albedo,
+        /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
+        albedo: Color<Albedo>,
     },
     /// `Metal(albedo: (r, g, b), fuzz: 0.1)`.
     Metal {
-        /// Reflectance, components in [0, 1].
-        albedo: Albedo,
+        /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
+        albedo: Color<Albedo>,
         /// Blur in [0, 1] (default 0; larger values are clamped to 1).
         #[serde(default)]
         fuzz: NonNegative,
@@ -185,12 +189,192 @@ pub enum MaterialDesc {
     },
     /// `DiffuseLight(emit: (r, g, b), two_sided: false)`.
     DiffuseLight {
-        /// Emitted radiance.
-        emit: Rgb,
+        /// Emitted radiance, or a texture.
+        emit: Color<Rgb>,
         /// Emit on both sides (default false: only on the side of the normal).
         #[serde(default)]
         two_sided: bool,
     },
+}
+
+/// A colour written out, or the name of a texture from `textures`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Color<T> {
+    /// `(r, g, b)`.
+    Value(T),
+    /// `"name"`.
+    Texture(String),
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Color<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for V<T> {
+            type Value = Color<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a colour (r, g, b) or the name of a texture")
+            }
+            fn visit_str<E: Error>(self, name: &str) -> Result<Self::Value, E> {
+                check_texture_name(name).map_err(E::custom)?;
+                Ok(Color::Texture(name.to_owned()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+                T::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(Color::Value)
+            }
+        }
+        d.deserialize_any(V(std::marker::PhantomData))
+    }
+}
+
+/// A texture as written in the scene; colours inside may name textures defined before it.
+#[derive(Deserialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Texture")]
+pub enum TextureDesc {
+    /// `Solid((r, g, b))`.
+    Solid(Rgb),
+    /// `Checker(scale: s, even: .., odd: ..)`: 3-D cells of side s in world space.
+    Checker {
+        /// Cell size.
+        scale: Positive,
+        /// Even cells.
+        even: Color<Rgb>,
+        /// Odd cells.
+        odd: Color<Rgb>,
+    },
+    /// `UvChecker(u: 8, v: 4, even: .., odd: ..)`: u by v cells over the uv square.
+    UvChecker {
+        /// Cells along u.
+        u: Positive,
+        /// Cells along v.
+        v: Positive,
+        /// Even cells.
+        even: Color<Rgb>,
+        /// Odd cells.
+        odd: Color<Rgb>,
+    },
+    /// `Image(file: "earth.png", wrap: Repeat)`: PNG, JPEG, HDR or EXR, relative to the scene
+    /// file; 8-bit images are sRGB, float ones linear.
+    Image {
+        /// The file.
+        file: ImageFile,
+        /// `Repeat` (default), `Clamp` or `Mirror`.
+        #[serde(default)]
+        wrap: Wrap,
+    },
+    /// `Noise(scale: 4)`: smooth Perlin gradient noise of `scale * p`, in [0, 1].
+    Noise {
+        /// Frequency.
+        scale: Positive,
+        /// Colour the noise multiplies (default white).
+        #[serde(default = "white")]
+        color: Rgb,
+    },
+    /// `BlockyNoise(scale: 4)`: one random value per lattice cell, in [0, 1).
+    BlockyNoise {
+        /// Frequency.
+        scale: Positive,
+        /// Colour the noise multiplies (default white).
+        #[serde(default = "white")]
+        color: Rgb,
+    },
+    /// `Turbulence(scale: 4, depth: 7)`: sum of octaves of |noise|, in [0, 2).
+    Turbulence {
+        /// Frequency.
+        scale: Positive,
+        /// Octaves (default 7).
+        #[serde(default = "seven")]
+        depth: u32,
+        /// Colour the turbulence multiplies (default white).
+        #[serde(default = "white")]
+        color: Rgb,
+    },
+    /// `Marble(scale: 4, depth: 7)`: 0.5 (1 + sin(scale z + 10 turbulence)), in [0, 1].
+    Marble {
+        /// Frequency.
+        scale: Positive,
+        /// Octaves of the turbulence (default 7).
+        #[serde(default = "seven")]
+        depth: u32,
+        /// Colour of the veins' bright parts (default white).
+        #[serde(default = "white")]
+        color: Rgb,
+    },
+}
+
+fn seven() -> u32 {
+    7
+}
+
+/// An image file, read when the scene is loaded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageFile {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// The decoded image.
+    pub image: std::sync::Arc<TextureImage>,
+}
+
+impl<'de> Deserialize<'de> for ImageFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let path = std::path::PathBuf::from(String::deserialize(d)?);
+        let image = match SCENE_DIR.with(|s| s.borrow().clone()) {
+            Some(dir) => TextureImage::load(&dir.join(&path)).map_err(D::Error::custom)?,
+            None => TextureImage::default(),
+        };
+        Ok(ImageFile { path, image: std::sync::Arc::new(image) })
+    }
+}
+
+/// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct NamedTextures(pub Vec<(String, TextureDesc)>);
+
+impl<'de> Deserialize<'de> for NamedTextures {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = NamedTextures;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map from texture names to textures")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, TextureDesc)> = Vec::new();
+                while let Some(name) = map.next_key::<String>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(A::Error::custom(format!("texture \"{name}\" is defined twice")));
+                    }
+                    // Inside a texture, only the textures before it may be named (no cycles).
+                    TEXTURES_BEFORE.set(Some(out.len()));
+                    let t = map.next_value();
+                    TEXTURES_BEFORE.set(None);
+                    out.push((name, t?));
+                }
+                Ok(NamedTextures(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// Checks a texture name against the scene's textures (in the second parsing pass).
+fn check_texture_name(name: &str) -> Result<(), String> {
+    TEXTURE_NAMES.with(|t| match &*t.borrow() {
+        None => Ok(()),
+        Some(names) => {
+            let before = TEXTURES_BEFORE.get();
+            let visible = &names[..before.unwrap_or(names.len()).min(names.len())];
+            if visible.iter().any(|n| n == name) {
+                Ok(())
+            } else if before.is_some() && names.iter().any(|n| n == name) {
+                Err(format!("texture \"{name}\" must be defined before the texture that uses it"))
+            } else if visible.is_empty() {
+                Err(format!("unknown texture \"{name}\"; no textures are defined before this point"))
+            } else {
+                let list: Vec<String> = visible.iter().map(|n| format!("\"{n}\"")).collect();
+                Err(format!("unknown texture \"{name}\"; defined: {}", list.join(", ")))
+            }
+        }
+    })
 }
 
 /// The `materials: { "name": Material(..), .. }` map, in file order; names are unique.
@@ -229,6 +413,12 @@ impl<'de> Deserialize<'de> for NamedMaterials {
 }
 
 thread_local! {
+    /// The scene's texture names, in the second pass.
+    static TEXTURE_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
+    /// While a texture is parsed: how many textures precede it.
+    static TEXTURES_BEFORE: Cell<Option<usize>> = const { Cell::new(None) };
+    /// The directory image paths are relative to, in the second pass (images load then).
+    static SCENE_DIR: RefCell<Option<std::path::PathBuf>> = const { RefCell::new(None) };
     /// The index of the object being parsed, while inside `objects`.
     static OBJECT_INDEX: Cell<Option<usize>> = const { Cell::new(None) };
     static MATERIAL_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
@@ -265,11 +455,15 @@ fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<ObjectDesc>, D::Error>
 }
 
 /// While alive, [`MaterialRef`]s parsed on this thread must name one of the given materials.
+///
+/// Likewise texture names, and images load relative to `dir`.
 pub(crate) struct MaterialNameScope;
 
 impl MaterialNameScope {
-    pub(crate) fn enter(names: Vec<String>) -> Self {
-        MATERIAL_NAMES.with(|m| *m.borrow_mut() = Some(names));
+    pub(crate) fn enter(materials: Vec<String>, textures: Vec<String>, dir: std::path::PathBuf) -> Self {
+        MATERIAL_NAMES.with(|m| *m.borrow_mut() = Some(materials));
+        TEXTURE_NAMES.with(|m| *m.borrow_mut() = Some(textures));
+        SCENE_DIR.with(|m| *m.borrow_mut() = Some(dir));
         MaterialNameScope
     }
 }
@@ -277,6 +471,9 @@ impl MaterialNameScope {
 impl Drop for MaterialNameScope {
     fn drop(&mut self) {
         MATERIAL_NAMES.with(|m| *m.borrow_mut() = None);
+        TEXTURE_NAMES.with(|m| *m.borrow_mut() = None);
+        SCENE_DIR.with(|m| *m.borrow_mut() = None);
+        TEXTURES_BEFORE.set(None);
     }
 }
 

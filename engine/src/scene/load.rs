@@ -21,7 +21,8 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// Parses scene text; `path` only names the source in errors.
 ///
 /// Parsing runs twice: the first pass collects the material names, the second checks every
-/// object's `material` against them while the parser still knows where that name stands.
+/// object's `material` (and every texture name) against them while the parser still knows
+/// where that name stands, and reads image files.
 pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
@@ -35,6 +36,11 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         },
     };
     let names: SceneDesc = options.from_str(text).map_err(error)?;
-    let _scope = MaterialNameScope::enter(names.materials.iter().map(|(n, _)| n.clone()).collect());
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let _scope = MaterialNameScope::enter(
+        names.materials.iter().map(|(n, _)| n.clone()).collect(),
+        names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
+        dir,
+    );
     options.from_str(text).map_err(error)
 }

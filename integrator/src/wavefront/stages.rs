@@ -81,11 +81,10 @@ pub fn handle_escaped(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 
 /// `handle_emissive`: adds MIS-weighted emission; the paths end (emitters do not scatter).
 pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
-    let geo = &*scene.geometry;
     for &i in &q.emissive {
         let s = i as usize;
         let hit = p.hit[s];
-        let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
+        let mat = &scene.material_at(hit.prim, &hit.surface);
         let mut st = p.state(s);
         path::emit(scene, &mut st, &hit, mat, -p.dir[s], p.time[s]);
         p.l[s] = st.l;
@@ -124,7 +123,6 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 /// (when the material has a smooth part and the scene has lights), then BSDF sampling into the
 /// next iteration's queue. Which queue is the `kind` argument.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
-    let geo = &*scene.geometry;
     let nee = kind == MaterialKind::Lambertian && !scene.lights.is_empty();
     let queue = std::mem::take(match kind {
         MaterialKind::Lambertian => &mut q.lambertian,
@@ -146,7 +144,7 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
             continue;
         }
         let hit = p.hit[s];
-        let mat = &scene.materials[geo.material[hit.prim as usize] as usize];
+        let mat = &scene.material_at(hit.prim, &hit.surface);
         debug_assert_eq!(material::has_smooth_part(mat), kind == MaterialKind::Lambertian);
         let (wo, time) = (-p.dir[s], p.time[s]);
         let mut sampler = p.sampler[s];
@@ -178,7 +176,6 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
 /// the branch-free kernel runs on all lanes at once (vectorised), and outputs are applied.
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
-    let geo = &*scene.geometry;
     let max_depth = scene.settings.max_depth;
     let mut slots = [0u32; LANES];
     let mut states = [path::PathState::new(glam::Vec3A::ZERO); LANES];
@@ -199,8 +196,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         for &i in chunk {
             let s = i as usize;
             let hit = p.hit[s];
-            let Material::Lambertian { albedo } = scene.materials[geo.material[hit.prim as usize] as usize]
-            else {
+            let Material::Lambertian { albedo } = scene.material_at(hit.prim, &hit.surface) else {
                 unreachable!("the Lambertian queue holds Lambertian hits")
             };
             (slots[n], states[n], samplers[n]) = (i, p.state(s), p.sampler[s]);

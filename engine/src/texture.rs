@@ -1,0 +1,417 @@
+//! Textures: colours that vary over a surface (by its uv) or through space (by the world-space
+//! hit point). Plain data in one flat list; a texture refers to others (checker squares) by
+//! index, and only to textures defined before it, so evaluation always terminates.
+//!
+//! Conventions: u runs along a quad's `u` edge and around a sphere eastwards (see the README);
+//! v runs up. An image's row 0 is its top: v = 1. Solid textures (checker, noise) use world
+//! coordinates.
+
+use crate::shape::SurfacePoint;
+use glam::{Vec2, Vec3, Vec3A};
+use std::path::Path;
+use std::sync::{Arc, OnceLock};
+
+/// Index into [`Textures::list`].
+pub type TextureId = u32;
+
+/// How image lookups outside [0, 1] wrap.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+pub enum Wrap {
+    /// Tile the image (default).
+    #[default]
+    Repeat,
+    /// Repeat the edge texels.
+    Clamp,
+    /// Tile with every other copy mirrored.
+    Mirror,
+}
+
+/// A decoded image in linear RGB, row 0 on top.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct TextureImage {
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Row-major linear RGB texels.
+    pub texels: Vec<Vec3>,
+}
+
+impl TextureImage {
+    /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
+    /// once, here, through a 256-entry table; float images are already linear.
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let img = image::open(path).map_err(|e| format!("cannot read the image {}: {e}", path.display()))?;
+        let (width, height) = (img.width(), img.height());
+        let texels = match img {
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
+                img.into_rgb32f().pixels().map(|p| Vec3::from_array(p.0)).collect()
+            }
+            _ => {
+                let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+                img.into_rgb8()
+                    .pixels()
+                    .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+                    .collect()
+            }
+        };
+        if width == 0 || height == 0 {
+            return Err(format!("the image {} is empty", path.display()));
+        }
+        Ok(Self { width, height, texels })
+    }
+
+    /// Bilinear lookup at `uv` (texel centres at (i + 0.5) / size).
+    #[inline]
+    pub fn bilinear(&self, uv: Vec2, wrap: Wrap) -> Vec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv.x * w as f32 - 0.5;
+        let y = (1.0 - uv.y) * h as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let texel = |i: i64, j: i64| {
+            let (i, j) = (wrap_index(i, w, wrap), wrap_index(j, h, wrap));
+            self.texels[(j * w + i) as usize]
+        };
+        let top = texel(x0, y0).lerp(texel(x0 + 1, y0), fx);
+        let bottom = texel(x0, y0 + 1).lerp(texel(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Mean texel.
+    pub fn mean(&self) -> Vec3 {
+        self.texels.iter().copied().sum::<Vec3>() / self.texels.len() as f32
+    }
+}
+
+#[inline]
+fn wrap_index(i: i64, n: i64, wrap: Wrap) -> i64 {
+    match wrap {
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::Clamp => i.clamp(0, n - 1),
+        Wrap::Mirror => {
+            let k = i.rem_euclid(2 * n);
+            if k < n { k } else { 2 * n - 1 - k }
+        }
+    }
+}
+
+/// The sRGB transfer function, inverted.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// The noise functions of SEED.md section 8 (Ray Tracing: The Next Week, ch. 5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+pub enum NoiseKind {
+    /// Random values at lattice points, no interpolation: blocky, in [0, 1].
+    Blocky,
+    /// Perlin gradient noise: random unit vectors at lattice points, Hermite-smoothed trilinear
+    /// interpolation; mapped from [-1, 1] to [0, 1] (default).
+    Smooth,
+    /// Sum of `depth` octaves of |noise|, weights halving, frequencies doubling: in [0, 2).
+    Turbulence,
+    /// Marble veins: 0.5 (1 + sin(scale z + 10 turbulence(p))), in [0, 1].
+    Marble,
+}
+
+/// One texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    /// One colour everywhere.
+    Solid(Vec3),
+    /// 3-D checker: cells of side `scale`, `even` where floor(x/s) + floor(y/s) + floor(z/s) is
+    /// even.
+    Checker {
+        /// Cell size in world units.
+        scale: f32,
+        /// Texture of even cells.
+        even: TextureId,
+        /// Texture of odd cells.
+        odd: TextureId,
+    },
+    /// Checker in uv: `u` by `v` cells over the [0, 1]^2 square.
+    UvChecker {
+        /// Cells along u.
+        u: f32,
+        /// Cells along v.
+        v: f32,
+        /// Texture of even cells.
+        even: TextureId,
+        /// Texture of odd cells.
+        odd: TextureId,
+    },
+    /// An image, bilinearly filtered.
+    Image {
+        /// The texels.
+        image: Arc<TextureImage>,
+        /// Wrap mode.
+        wrap: Wrap,
+    },
+    /// Noise of world position times `scale`, times `color`.
+    Noise {
+        /// Which function.
+        kind: NoiseKind,
+        /// Frequency: the noise of `scale * p`.
+        scale: f32,
+        /// Octaves for turbulence and marble.
+        depth: u32,
+        /// Colour the grey value multiplies.
+        color: Vec3,
+    },
+}
+
+/// All textures of a scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Textures {
+    /// Textures; one refers only to textures before it.
+    pub list: Vec<Texture>,
+}
+
+impl Textures {
+    /// The colour of texture `id` at a surface point.
+    pub fn eval(&self, id: TextureId, uv: Vec2, p: Vec3A) -> Vec3 {
+        match &self.list[id as usize] {
+            Texture::Solid(c) => *c,
+            Texture::Checker { scale, even, odd } => {
+                let c = (p / *scale).floor();
+                let parity = (c.x + c.y + c.z).rem_euclid(2.0);
+                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+            }
+            Texture::UvChecker { u, v, even, odd } => {
+                let parity = ((uv.x * u).floor() + (uv.y * v).floor()).rem_euclid(2.0);
+                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+            }
+            Texture::Image { image, wrap } => image.bilinear(uv, *wrap),
+            Texture::Noise { kind, scale, depth, color } => {
+                let q = Vec3::from(p) * *scale;
+                let perlin = Perlin::shared();
+                let grey = match kind {
+                    NoiseKind::Blocky => perlin.blocky(q),
+                    NoiseKind::Smooth => 0.5 * (1.0 + perlin.noise(q)),
+                    NoiseKind::Turbulence => perlin.turbulence(q, *depth),
+                    // RTNW's marble: the turbulence of the unscaled point distorts the phase.
+                    NoiseKind::Marble => {
+                        0.5 * (1.0 + (q.z + 10.0 * perlin.turbulence(p.into(), *depth)).sin())
+                    }
+                };
+                *color * grey
+            }
+        }
+    }
+
+    /// The colour at a surface point.
+    #[inline]
+    pub fn at(&self, id: TextureId, sp: &SurfacePoint) -> Vec3 {
+        self.eval(id, sp.uv, sp.p)
+    }
+
+    /// A representative mean colour (light power estimates, statistics).
+    pub fn mean(&self, id: TextureId) -> Vec3 {
+        match &self.list[id as usize] {
+            Texture::Solid(c) => *c,
+            Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
+                0.5 * (self.mean(*even) + self.mean(*odd))
+            }
+            Texture::Image { image, .. } => image.mean(),
+            Texture::Noise { kind, color, .. } => {
+                *color * if *kind == NoiseKind::Turbulence { 0.3 } else { 0.5 }
+            }
+        }
+    }
+}
+
+/// Which of a material's colours come from textures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MaterialTextures {
+    /// Albedo (Lambertian, Metal).
+    pub albedo: Option<TextureId>,
+    /// Emitted radiance (DiffuseLight).
+    pub emit: Option<TextureId>,
+}
+
+/// Ken Perlin's lattice noise with random unit gradients (RTNW ch. 5), from a fixed seed.
+#[derive(Debug)]
+pub struct Perlin {
+    values: [f32; 256],
+    gradients: [Vec3; 256],
+    perm: [[u8; 256]; 3],
+}
+
+impl Perlin {
+    /// The table every texture uses (built once).
+    pub fn shared() -> &'static Perlin {
+        static P: OnceLock<Perlin> = OnceLock::new();
+        P.get_or_init(|| Perlin::new(0x5eed))
+    }
+
+    /// Tables from a seed (splitmix64).
+    pub fn new(seed: u64) -> Self {
+        let mut state = seed;
+        let mut next = move || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let values = std::array::from_fn(|_| next());
+        let gradients = std::array::from_fn(|_| {
+            loop {
+                let v = Vec3::new(2.0 * next() - 1.0, 2.0 * next() - 1.0, 2.0 * next() - 1.0);
+                let l = v.length();
+                if l > 0.1 && l <= 1.0 {
+                    break v / l;
+                }
+            }
+        });
+        let perm = std::array::from_fn(|_| {
+            let mut p: [u8; 256] = std::array::from_fn(|i| i as u8);
+            for i in (1..256).rev() {
+                let j = ((next() * (i + 1) as f32) as usize).min(i);
+                p.swap(i, j);
+            }
+            p
+        });
+        Self { values, gradients, perm }
+    }
+
+    #[inline]
+    fn hash(&self, i: i32, j: i32, k: i32) -> usize {
+        (self.perm[0][(i & 255) as usize]
+            ^ self.perm[1][(j & 255) as usize]
+            ^ self.perm[2][(k & 255) as usize]) as usize
+    }
+
+    /// The value of the lattice cell containing `p`, in [0, 1).
+    pub fn blocky(&self, p: Vec3) -> f32 {
+        let c = p.floor();
+        self.values[self.hash(c.x as i32, c.y as i32, c.z as i32)]
+    }
+
+    /// Gradient noise, in [-1, 1] (in fact within sqrt(3)/2).
+    pub fn noise(&self, p: Vec3) -> f32 {
+        let c = p.floor();
+        let f = p - c;
+        let (i, j, k) = (c.x as i32, c.y as i32, c.z as i32);
+        // Hermite smoothing of the interpolation weights.
+        let s = f * f * (3.0 - 2.0 * f);
+        let mut acc = 0.0;
+        for di in 0..2 {
+            for dj in 0..2 {
+                for dk in 0..2 {
+                    let g = self.gradients[self.hash(i + di, j + dj, k + dk)];
+                    let w = Vec3::new(f.x - di as f32, f.y - dj as f32, f.z - dk as f32);
+                    let wx = if di == 1 { s.x } else { 1.0 - s.x };
+                    let wy = if dj == 1 { s.y } else { 1.0 - s.y };
+                    let wz = if dk == 1 { s.z } else { 1.0 - s.z };
+                    acc += wx * wy * wz * g.dot(w);
+                }
+            }
+        }
+        acc
+    }
+
+    /// Sum over `depth` octaves of |noise|, weights 1, 1/2, 1/4, ..: in [0, 2).
+    pub fn turbulence(&self, p: Vec3, depth: u32) -> f32 {
+        let (mut acc, mut weight, mut q) = (0.0, 1.0, p);
+        for _ in 0..depth {
+            acc += weight * self.noise(q).abs();
+            weight *= 0.5;
+            q *= 2.0;
+        }
+        acc
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn points() -> impl Iterator<Item = Vec3> {
+        (0..20_000).map(|i| {
+            let f = |a: f32| ((0.5 + i as f32 * a).fract() - 0.5) * 40.0;
+            Vec3::new(f(0.754_877_7), f(0.569_840_3), f(0.362_229_6))
+        })
+    }
+
+    #[test]
+    fn noise_values_stay_in_their_documented_ranges() {
+        let p = Perlin::shared();
+        let (mut lo, mut hi) = (f32::MAX, f32::MIN);
+        for q in points() {
+            let n = p.noise(q);
+            (lo, hi) = (lo.min(n), hi.max(n));
+            assert!(n.abs() <= 3f32.sqrt() / 2.0, "noise {n}");
+            assert!((0.0..1.0).contains(&p.blocky(q)));
+            let t = p.turbulence(q, 7);
+            assert!((0.0..2.0).contains(&t), "turbulence {t}");
+        }
+        // Not degenerate: it uses a good part of its range.
+        assert!(lo < -0.4 && hi > 0.4, "noise spans only [{lo}, {hi}]");
+        let textures = Textures {
+            list: vec![Texture::Noise { kind: NoiseKind::Marble, scale: 4.0, depth: 7, color: Vec3::ONE }],
+        };
+        for q in points() {
+            let c = textures.eval(0, Vec2::ZERO, q.into());
+            assert!((0.0..=1.0).contains(&c.x), "marble {c}");
+        }
+    }
+
+    #[test]
+    fn noise_is_continuous_and_zero_on_the_lattice() {
+        let p = Perlin::shared();
+        assert_eq!(p.noise(Vec3::new(3.0, -2.0, 7.0)), 0.0);
+        let q = Vec3::new(1.3, 2.7, -0.4);
+        assert!((p.noise(q) - p.noise(q + Vec3::splat(1e-4))).abs() < 1e-3);
+    }
+
+    #[test]
+    fn checkers_alternate() {
+        let t = Textures {
+            list: vec![
+                Texture::Solid(Vec3::ZERO),
+                Texture::Solid(Vec3::ONE),
+                Texture::Checker { scale: 2.0, even: 0, odd: 1 },
+                Texture::UvChecker { u: 4.0, v: 2.0, even: 0, odd: 1 },
+            ],
+        };
+        assert_eq!(t.eval(2, Vec2::ZERO, Vec3A::new(0.5, 0.5, 0.5)), Vec3::ZERO);
+        assert_eq!(t.eval(2, Vec2::ZERO, Vec3A::new(2.5, 0.5, 0.5)), Vec3::ONE);
+        assert_eq!(t.eval(2, Vec2::ZERO, Vec3A::new(-0.5, 0.5, 0.5)), Vec3::ONE);
+        assert_eq!(t.eval(3, Vec2::new(0.1, 0.1), Vec3A::ZERO), Vec3::ZERO);
+        assert_eq!(t.eval(3, Vec2::new(0.3, 0.1), Vec3A::ZERO), Vec3::ONE);
+        assert_eq!(t.eval(3, Vec2::new(0.3, 0.6), Vec3A::ZERO), Vec3::ZERO);
+    }
+
+    #[test]
+    fn bilinear_wraps_and_runs_v_upwards() {
+        // 2 x 2: top row red, green; bottom row blue, white.
+        let img = TextureImage { width: 2, height: 2, texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE] };
+        // Texel centres: (0.25, 0.75) is the top-left texel.
+        assert_eq!(img.bilinear(Vec2::new(0.25, 0.75), Wrap::Repeat), Vec3::X);
+        assert_eq!(img.bilinear(Vec2::new(0.75, 0.25), Wrap::Repeat), Vec3::ONE);
+        // Halfway between the top texels.
+        assert_eq!(img.bilinear(Vec2::new(0.5, 0.75), Wrap::Clamp), Vec3::new(0.5, 0.5, 0.0));
+        // At u = 0 Repeat blends with the right column, Clamp does not.
+        assert_eq!(img.bilinear(Vec2::new(0.0, 0.75), Wrap::Repeat), Vec3::new(0.5, 0.5, 0.0));
+        assert_eq!(img.bilinear(Vec2::new(0.0, 0.75), Wrap::Clamp), Vec3::X);
+        assert_eq!(img.bilinear(Vec2::new(-0.25, 0.75), Wrap::Mirror), Vec3::X);
+        assert_eq!(img.bilinear(Vec2::new(1.25, 0.75), Wrap::Repeat), Vec3::X);
+    }
+
+    #[test]
+    fn eight_bit_images_are_srgb_decoded_once() {
+        let dir = std::env::temp_dir().join(format!("pathwave-tex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("grey.png");
+        image::RgbImage::from_pixel(1, 1, image::Rgb([188, 128, 0])).save(&path).unwrap();
+        let img = TextureImage::load(&path).unwrap();
+        let t = img.texels[0];
+        // sRGB 188/255 is linear 0.5029 (decoded twice it would be 0.2; not at all, 0.737).
+        assert!((t.x - 0.502_886).abs() < 1e-4, "{t}");
+        assert!((t.y - srgb_to_linear(128.0 / 255.0)).abs() < 1e-6 && t.z == 0.0);
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+}
