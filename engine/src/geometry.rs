@@ -224,8 +224,12 @@ pub const NODE_EPSILON: f32 = 1e-4;
 /// ray parameter units.
 #[inline]
 fn shifted(ray: &Ray, tmax: f32) -> (obvhs::ray::Ray, f32) {
-    let shift = 2.0 * NODE_EPSILON / ray.dir.length();
-    (obvhs::ray::Ray::new(ray.origin - shift * ray.dir, ray.dir, 0.0, tmax + shift), shift)
+    // obvhs inverts direction components within f32::EPSILON of zero to +-1/EPSILON by their
+    // sign, but orders each slab by `direction < 0`: a -0.0 component inverts to -1/EPSILON yet
+    // is ordered as positive, and every node is missed. Adding +0.0 turns -0.0 into +0.0.
+    let dir = ray.dir + Vec3A::ZERO;
+    let shift = 2.0 * NODE_EPSILON / dir.length();
+    (obvhs::ray::Ray::new(ray.origin - shift * dir, dir, 0.0, tmax + shift), shift)
 }
 
 #[cfg(test)]
@@ -326,5 +330,18 @@ mod tests {
         let ray = Ray::new(Vec3A::ZERO, Vec3A::X);
         assert!(geo.intersect(&ray, f32::INFINITY).is_none());
         assert!(!geo.occluded(&ray, f32::INFINITY));
+    }
+
+    #[test]
+    fn axis_aligned_rays_with_negative_zero_components_hit() {
+        // -Z is (-0, -0, -1): obvhs used to miss every node with such a ray.
+        let s = Primitive::Sphere(Sphere { center: Vec3A::ZERO, radius: 1.0 });
+        let geo = Geometry::build_bvh(vec![s, s], vec![0, 0]);
+        for dir in [-Vec3A::X, -Vec3A::Y, -Vec3A::Z, Vec3A::X, Vec3A::Y, Vec3A::Z] {
+            let ray = Ray::new(-4.0 * dir, dir);
+            let hit = geo.intersect(&ray, f32::INFINITY).map(|h| h.t);
+            assert_eq!(hit, Some(3.0), "{dir}");
+            assert!(geo.occluded(&ray, 10.0), "{dir}");
+        }
     }
 }
