@@ -68,6 +68,8 @@ pub struct SceneGeometry {
     pub lights: Arc<LightTable>,
     /// How many times the geometry was rebuilt (for tests and statistics).
     pub rebuilds: u64,
+    /// The entities it was built from, sorted.
+    pub entities: Vec<Entity>,
 }
 
 /// The world-space media volumes, rebuilt by [`rebuild_media`].
@@ -77,6 +79,8 @@ pub struct SceneMedia {
     pub media: Arc<Media>,
     /// How many times they were rebuilt.
     pub rebuilds: u64,
+    /// The entities they were built from, sorted.
+    pub entities: Vec<Entity>,
 }
 
 /// The latest extracted scene.
@@ -94,13 +98,20 @@ pub struct Update;
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
     objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>)>,
-    changed: Query<(), Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>>,
-    mut removed: RemovedComponents<Shape>,
+    changed: Query<
+        (),
+        (With<MaterialId>, Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>),
+    >,
+    mut removed_shape: RemovedComponents<Shape>,
+    mut removed_material: RemovedComponents<MaterialId>,
     mut stopped: RemovedComponents<Motion>,
     materials: Res<Materials>,
     camera: Res<CameraParams>,
 ) {
-    let removed = removed.read().count() > 0 || stopped.read().count() > 0;
+    // Only removals from entities the geometry was built from matter (not from volumes).
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let removed =
+        removed_shape.read().chain(removed_material.read()).chain(stopped.read()).any(was_built_from);
     // The shutter bounds the sweep of moving objects.
     let moving = out.geometry.velocity.is_some();
     if !(removed
@@ -114,6 +125,7 @@ pub fn rebuild_geometry(
     let _span = tracing::info_span!("rebuild_geometry").entered();
     let mut objs: Vec<_> = objects.iter().collect();
     objs.sort_by_key(|(e, ..)| *e);
+    out.entities = objs.iter().map(|(e, ..)| *e).collect();
     let (mut prims, mut mats, mut velocity) = (Vec::new(), Vec::new(), Vec::new());
     for (_, transform, shape, material, motion) in objs {
         // Scene files are validated at load; objects spawned by code may still be bad.
@@ -136,15 +148,18 @@ pub fn rebuild_media(
     mut out: ResMut<SceneMedia>,
     volumes: Query<(Entity, &Transform, &Shape, &Filling)>,
     changed: Query<(), (With<Filling>, Or<(Changed<Transform>, Changed<Shape>, Changed<Filling>)>)>,
+    mut removed_shape: RemovedComponents<Shape>,
     mut removed: RemovedComponents<Filling>,
 ) {
-    let removed = removed.read().count() > 0;
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let removed = removed_shape.read().chain(removed.read()).any(was_built_from);
     if !(removed || !changed.is_empty() || out.rebuilds == 0) {
         return;
     }
     let _span = tracing::info_span!("rebuild_media").entered();
     let mut vols: Vec<_> = volumes.iter().collect();
     vols.sort_by_key(|(e, ..)| *e);
+    out.entities = vols.iter().map(|(e, ..)| *e).collect();
     let volumes = vols
         .into_iter()
         .filter_map(|(_, transform, shape, filling)| {
@@ -459,6 +474,7 @@ impl SceneWorld {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Ray;
     use crate::scene::parse;
     use std::path::Path;
 
@@ -529,5 +545,64 @@ mod tests {
         assert_eq!(rebuilds(&w), 5);
         w.update();
         assert_eq!(rebuilds(&w), 5);
+    }
+
+    #[test]
+    fn motion_rebuilds_with_swept_bounds_and_follows_the_shutter() {
+        let mut w = world();
+        w.update();
+        // A still scene ignores the shutter.
+        w.world.resource_mut::<CameraParams>().0.shutter = (0.0, 1.0);
+        let still = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(!still.features.motion);
+
+        // Setting the sphere moving rebuilds; the BVH covers its sweep, time is sampled.
+        let e = w
+            .world
+            .query::<(Entity, &Shape)>()
+            .iter(&w.world)
+            .find_map(|(e, s)| matches!(s.0, ShapeDesc::Sphere { .. }).then_some(e))
+            .unwrap();
+        w.world.entity_mut(e).insert(Motion { velocity: Vec3::new(3.0, 0.0, 0.0) });
+        let moving = w.update();
+        assert_eq!(rebuilds(&w), 2);
+        assert!(moving.features.motion);
+        let at = |s: &RenderScene, t: f32| {
+            s.geometry
+                .intersect(&Ray { origin: Vec3A::new(3.0, 0.0, 5.0), dir: -Vec3A::Z, time: t }, f32::INFINITY)
+        };
+        assert!(at(&moving, 0.0).is_none() && at(&moving, 1.0).is_some());
+
+        // Now the shutter bounds the sweep: changing it rebuilds.
+        w.world.resource_mut::<CameraParams>().0.shutter = (0.0, 2.0);
+        w.update();
+        assert_eq!(rebuilds(&w), 3);
+
+        // Stopping (removing the motion) rebuilds, seen after clear_trackers.
+        w.world.entity_mut(e).remove::<Motion>();
+        let stopped = w.update();
+        assert_eq!(rebuilds(&w), 4);
+        assert!(!stopped.features.motion && at(&stopped, 1.0).is_none());
+    }
+
+    #[test]
+    fn media_rebuild_only_when_a_volume_changes() {
+        let mut w = world();
+        w.update();
+        assert!(w.update().media.is_empty());
+        let v = w
+            .world
+            .spawn((
+                Transform(Affine3A::IDENTITY),
+                Shape(ShapeDesc::Box { min: Vec3::ZERO, max: Vec3::ONE }),
+                Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
+            ))
+            .id();
+        let with = w.update();
+        assert_eq!((with.media.volumes.len(), rebuilds(&w)), (1, 1), "a volume is not geometry");
+        assert!(with.features.media);
+        w.world.despawn(v);
+        assert!(!w.update().features.media);
     }
 }
