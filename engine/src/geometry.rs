@@ -44,7 +44,7 @@ impl Primitive {
     }
 
     /// Surface data at a point found by [`Self::intersect`].
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, p: Vec3A) -> SurfacePoint {
         match self {
             Primitive::Sphere(s) => s.surface(p),
@@ -162,13 +162,24 @@ impl Geometry {
     /// so hits are exact.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
+        // One traversal loop each for still and moving geometry: the still one does no motion
+        // arithmetic per primitive.
+        match &self.velocity {
+            None => self.intersect_with(ray, tmax, |_| ray.origin),
+            Some(v) => self.intersect_with(ray, tmax, |slot| ray.origin - v[slot] * ray.time),
+        }
+    }
+
+    /// [`Self::intersect`], with `origin(slot)` the ray origin relative to primitive `slot`
+    /// at rest.
+    #[inline(always)]
+    fn intersect_with(&self, ray: &Ray, tmax: f32, origin: impl Fn(usize) -> Vec3A) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let (oray, shift) = shifted(ray, tmax);
         let (mut best, mut prim) = (tmax, u32::MAX);
         let mut hit = RayHit::none();
         bvh.ray_traverse(oray, &mut hit, |_, slot| {
-            let o = ray.origin - self.offset(slot as u32, ray.time);
-            let t = self.prims[slot].intersect(o, ray.dir, best);
+            let t = self.prims[slot].intersect(origin(slot), ray.dir, best);
             if t < best {
                 (best, prim) = (t, slot as u32);
                 t + shift
@@ -182,7 +193,17 @@ impl Geometry {
     /// The hit record of primitive `prim` at distance `t`.
     #[inline]
     pub fn hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
-        Hit { t, prim, surface: self.surface(prim, ray.at(t), ray.time) }
+        if self.velocity.is_none() {
+            return self.static_hit(ray, t, prim);
+        }
+        Hit { t, prim, surface: self.moving_surface(prim, ray.at(t), ray.time) }
+    }
+
+    /// [`Self::hit`] for geometry without motion (flat lists exist only then).
+    #[inline(always)]
+    pub fn static_hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
+        debug_assert!(self.velocity.is_none());
+        Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) }
     }
 
     /// Surface data of primitive `prim` at the point `p` at `time`.
@@ -191,6 +212,12 @@ impl Geometry {
         if self.velocity.is_none() {
             return self.prims[prim as usize].surface(p);
         }
+        self.moving_surface(prim, p, time)
+    }
+
+    /// [`Self::surface`] in scenes with motion (kept out of line).
+    #[inline(never)]
+    fn moving_surface(&self, prim: u32, p: Vec3A, time: f32) -> SurfacePoint {
         // The primitive where it is at `time`: found at rest, moved back.
         let off = self.offset(prim, time);
         let mut surface = self.prims[prim as usize].surface(p - off);
@@ -208,11 +235,18 @@ impl Geometry {
     /// the shifted traversal).
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
+        match &self.velocity {
+            None => self.occluded_with(ray, tmax, |_| ray.origin),
+            Some(v) => self.occluded_with(ray, tmax, |slot| ray.origin - v[slot] * ray.time),
+        }
+    }
+
+    #[inline(always)]
+    fn occluded_with(&self, ray: &Ray, tmax: f32, origin: impl Fn(usize) -> Vec3A) -> bool {
         let Some(bvh) = self.bvh.as_ref() else { return false };
         let (oray, shift) = shifted(ray, tmax);
         !bvh.ray_traverse_miss(oray, |_, slot| {
-            let o = ray.origin - self.offset(slot as u32, ray.time);
-            if self.prims[slot].intersect(o, ray.dir, tmax) < tmax { shift } else { f32::INFINITY }
+            if self.prims[slot].intersect(origin(slot), ray.dir, tmax) < tmax { shift } else { f32::INFINITY }
         })
     }
 }

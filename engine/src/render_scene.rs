@@ -134,13 +134,19 @@ pub struct RenderScene {
 
 impl RenderScene {
     /// The material of primitive `prim` with its textured colours evaluated at `sp`.
-    #[inline]
+    #[inline(always)]
     pub fn material_at(&self, prim: u32, sp: &SurfacePoint) -> Material {
         let id = self.geometry.material[prim as usize] as usize;
-        let m = self.materials[id];
         if !self.features.textures {
-            return m;
+            return self.materials[id];
         }
+        self.textured_material(id, sp)
+    }
+
+    /// [`Self::material_at`] for scenes with textures (kept out of line).
+    #[inline(never)]
+    fn textured_material(&self, id: usize, sp: &SurfacePoint) -> Material {
+        let m = self.materials[id];
         let t = self.material_textures[id];
         match m {
             Material::Lambertian { .. } if t.albedo.is_some() => Material::Lambertian {

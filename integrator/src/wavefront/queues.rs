@@ -11,7 +11,7 @@ use pathwave_engine::math::Ray;
 /// Paths in flight, one slot each, every field its own array.
 #[derive(Default)]
 pub struct Paths {
-    /// Next ray to trace.
+    /// Next ray to trace (for paths in the medium queue, `origin` is the scattering point).
     pub origin: Vec<Vec3A>,
     /// Its direction (unit).
     pub dir: Vec<Vec3A>,
@@ -37,8 +37,6 @@ pub struct Paths {
     pub pixel: Vec<u32>,
     /// Closest hit of the last intersection.
     pub hit: Vec<Hit>,
-    /// Where the last ray scattered in a medium (valid for paths in the medium queue).
-    pub medium_p: Vec<Vec3A>,
 }
 
 impl Paths {
@@ -68,7 +66,6 @@ impl Paths {
             sampler: vec![Sampler::new(0, 0, 0); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
-            medium_p: vec![Vec3A::ZERO; n],
         }
     }
 

@@ -36,7 +36,8 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for k in 0..n {
         let i = q.active[k];
         let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
-        let hit = (prim != u32::MAX).then(|| geo.hit(&p.ray(i as usize), t, prim));
+        // Flat lists exist only for geometry without motion.
+        let hit = (prim != u32::MAX).then(|| geo.static_hit(&p.ray(i as usize), t, prim));
         bin(scene, p, q, i, hit);
     }
 }
@@ -45,15 +46,9 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 /// else to the escaped queue or to its material's queue.
 #[inline]
 fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<Hit>) {
-    if scene.features.media {
-        let s = i as usize;
-        let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-        let ray = p.ray(s);
-        if let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, &mut p.sampler[s]) {
-            p.medium_p[s] = at;
-            q.medium.push(i);
-            return;
-        }
+    if scene.features.media && scatters_in_medium(scene, p, q, i, hit.as_ref().map_or(f32::INFINITY, |h| h.t))
+    {
+        return;
     }
     let Some(hit) = hit else {
         q.escaped.push(i);
@@ -66,6 +61,21 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
         Material::Dielectric { .. } => q.dielectric.push(i),
         Material::DiffuseLight { .. } => q.emissive.push(i),
     }
+}
+
+/// Free-flight sampling for path `i` up to the surface at `tmax`: true (and the path queued for
+/// `shade_medium`) when it scatters first. Kept out of line: scenes without media never call it.
+#[inline(never)]
+fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32) -> bool {
+    let s = i as usize;
+    let ray = p.ray(s);
+    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, &mut p.sampler[s]) else {
+        return false;
+    };
+    // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
+    p.origin[s] = at;
+    q.medium.push(i);
+    true
 }
 
 /// `handle_escaped`: adds the background; the paths end.
@@ -103,7 +113,7 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             continue;
         }
         let (shadow, next) =
-            path::scatter_in_medium(scene, &mut st, p.medium_p[s], p.time[s], &mut p.sampler[s]);
+            path::scatter_in_medium(scene, &mut st, p.origin[s], p.time[s], &mut p.sampler[s]);
         if let Some(sh) = shadow {
             q.shadow.push(i, &sh.ray, sh.contribution);
         }
