@@ -59,7 +59,7 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
         integrator: Integrator,
         /// Paths in flight per worker (wavefront).
-        #[arg(long, default_value_t = 1024)]
+        #[arg(long, default_value_t = 256)]
         batch: usize,
         /// Print per-stage statistics (wavefront).
         #[arg(long)]
@@ -81,7 +81,7 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
         /// Paths in flight per worker (wavefront).
-        #[arg(long, default_value_t = 1024)]
+        #[arg(long, default_value_t = 256)]
         batch: usize,
         /// Write a log-log plot of relMSE against seconds.
         #[arg(long, value_name = "FILE.svg")]

@@ -35,7 +35,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 1024 }
+        Self { batch: 256 }
     }
 }
 
