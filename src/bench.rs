@@ -180,12 +180,20 @@ fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
     if lo.is_finite() && hi > lo { (lo - 0.1, hi + 0.1) } else { (0.0, 1.0) }
 }
 
-/// The default scenes: those in `scenes/` with a reference in `refs`.
+/// The default scenes: those in `scenes/` with a reference `<name>.exr` in `refs`, by name.
 pub fn default_scenes(refs: &Path) -> Vec<(PathBuf, PathBuf)> {
-    ["cornell", "cornell-diffuse", "spheres-sky"]
-        .iter()
-        .map(|s| (PathBuf::from(format!("scenes/{s}.ron")), refs.join(format!("{s}.exr"))))
-        .collect()
+    let mut out: Vec<(PathBuf, PathBuf)> = std::fs::read_dir("scenes")
+        .into_iter()
+        .flatten()
+        .filter_map(|e| {
+            let path = e.ok()?.path();
+            let stem = path.file_stem()?.to_str()?.to_owned();
+            let reference = refs.join(format!("{stem}.exr"));
+            (path.extension()? == "ron" && reference.exists()).then_some((path, reference))
+        })
+        .collect();
+    out.sort();
+    out
 }
 
 /// "2026-11-22" for the current UTC date.

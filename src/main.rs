@@ -270,13 +270,21 @@ fn bench(
         .num_threads(threads.unwrap_or(0))
         .build()
         .map_err(|e| e.to_string())?;
+    let stem = |p: &PathBuf| p.file_stem().and_then(|s| s.to_str()).unwrap_or_default().to_string();
+    let scenes = bench::default_scenes(refs);
+    if let Some(missing) = only.iter().find(|o| !scenes.iter().any(|(s, _)| stem(s) == **o)) {
+        let names: Vec<String> = scenes.iter().map(|(s, _)| stem(s)).collect();
+        return Err(format!(
+            "--only {missing}: no such scene with a reference in {}; there are: {}",
+            refs.display(),
+            names.join(", ")
+        ));
+    }
     let mut rows = Vec::new();
-    for (scene, reference) in bench::default_scenes(refs) {
-        let stem = scene.file_stem().and_then(|s| s.to_str()).unwrap_or_default().to_string();
-        if !only.is_empty() && !only.contains(&stem) {
-            continue;
+    for (scene, reference) in scenes {
+        if only.is_empty() || only.contains(&stem(&scene)) {
+            rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch))?);
         }
-        rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch))?);
     }
     println!(
         "{}, {} threads, {}, batch {batch}\n",
