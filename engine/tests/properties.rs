@@ -146,7 +146,10 @@ proptest! {
         let tangent = t1.cross(n_obj);
         prop_assume!(tangent.length() > 1e-2);
         let world_tangent = m.transform_vector3a(tangent).normalize();
-        prop_assert!(sp.n.dot(world_tangent).abs() < 1e-4, "n {} . tangent {}", sp.n, world_tangent);
+        // Rounding grows with the map's condition number |M| |M^-1| (Frobenius norms).
+        let frobenius = |a: glam::Mat3A| (a.x_axis.length_squared() + a.y_axis.length_squared() + a.z_axis.length_squared()).sqrt();
+        let cond = frobenius(m.matrix3) * frobenius(m.matrix3.inverse());
+        prop_assert!(sp.n.dot(world_tangent).abs() < 1e-5 * cond, "n {} . tangent {} (condition {cond})", sp.n, world_tangent);
         prop_assert!(sp.n.dot(d) < 0.0, "the normal faces the ray that came from outside");
         // A quad under the same map: the normal is perpendicular to both mapped edges.
         let Some(q) = Quad::new(m.transform_point3a(Vec3A::ZERO), m.transform_vector3a(Vec3A::X), m.transform_vector3a(t1)) else { return Ok(()) };
