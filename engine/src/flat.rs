@@ -65,7 +65,7 @@ impl FlatPrims {
                     f.spheres.push((s.center.to_array(), s.radius));
                     f.sphere_id.push(i as u32);
                 }
-                Primitive::TransformedSphere(_) => return None,
+                Primitive::TransformedSphere(_) | Primitive::Triangle(_) => return None,
             }
         }
         Some(f)

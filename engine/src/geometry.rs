@@ -2,7 +2,7 @@
 
 use crate::flat::FlatPrims;
 use crate::math::Ray;
-use crate::shape::{Quad, Sphere, SurfacePoint, TransformedSphere};
+use crate::shape::{Quad, Sphere, SurfacePoint, TransformedSphere, Triangle};
 use glam::Vec3A;
 use obvhs::{
     BvhBuildParams,
@@ -21,6 +21,8 @@ pub enum Primitive {
     Quad(Quad),
     /// A sphere under a general affine transform.
     TransformedSphere(TransformedSphere),
+    /// A triangle (watertight intersection).
+    Triangle(Triangle),
 }
 
 impl Primitive {
@@ -30,6 +32,7 @@ impl Primitive {
             Primitive::Sphere(s) => s.aabb(),
             Primitive::Quad(q) => q.aabb(),
             Primitive::TransformedSphere(s) => s.aabb(),
+            Primitive::Triangle(t) => t.aabb(),
         }
     }
 
@@ -40,6 +43,7 @@ impl Primitive {
             Primitive::Sphere(s) => s.intersect(o, d, tmax),
             Primitive::Quad(q) => q.intersect(o, d, tmax),
             Primitive::TransformedSphere(s) => s.intersect(o, d, tmax),
+            Primitive::Triangle(t) => t.intersect(o, d, tmax),
         }
     }
 
@@ -50,6 +54,7 @@ impl Primitive {
             Primitive::Sphere(s) => s.surface(p),
             Primitive::Quad(q) => q.surface(p),
             Primitive::TransformedSphere(s) => s.surface(p),
+            Primitive::Triangle(t) => t.surface(p),
         }
     }
 }

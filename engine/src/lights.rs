@@ -34,6 +34,7 @@ impl LightTable {
                 Primitive::Sphere(s) => s.area(),
                 Primitive::Quad(q) => q.area,
                 Primitive::TransformedSphere(s) => s.area(),
+                Primitive::Triangle(t) => t.area(),
             };
             let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
             if p > 0.0 {
@@ -78,6 +79,7 @@ impl LightTable {
             Primitive::Sphere(s) => s.sample_solid_angle(from, u),
             Primitive::Quad(q) => q.sample_solid_angle(from, u),
             Primitive::TransformedSphere(s) => s.sample_solid_angle(from, u),
+            Primitive::Triangle(t) => t.sample_solid_angle(from, u),
         };
         ls.p += off;
         ls
@@ -98,6 +100,7 @@ impl LightTable {
             Primitive::Sphere(s) => s.pdf_solid_angle(from, p, n),
             Primitive::Quad(q) => q.pdf_solid_angle(from, p),
             Primitive::TransformedSphere(s) => s.pdf_solid_angle(from, p, n),
+            Primitive::Triangle(t) => t.pdf_solid_angle(from, p),
         };
         pdf * self.pmf[light as usize]
     }

@@ -12,7 +12,7 @@ use crate::scene::{
     Albedo, BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc,
     TextureDesc, compose,
 };
-use crate::shape::{Quad, Sphere, TransformedSphere};
+use crate::shape::{Quad, Sphere, TransformedSphere, Triangle};
 use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
@@ -166,8 +166,8 @@ pub fn rebuild_media(
             let boundary = match shape.0 {
                 ShapeDesc::Sphere { center, radius } => Boundary::Sphere { center: center.into(), radius },
                 ShapeDesc::Box { min, max } => Boundary::Box { min: min.into(), max: max.into() },
-                ShapeDesc::Quad { .. } => {
-                    tracing::error!("medium skipped: a quad bounds no volume");
+                ShapeDesc::Quad { .. } | ShapeDesc::Triangle { .. } => {
+                    tracing::error!("medium skipped: a quad or triangle bounds no volume");
                     return None;
                 }
             };
@@ -252,6 +252,13 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
             }
         }
         ShapeDesc::Quad { q, u, v } => push_quad(m, q.into(), u.into(), v.into(), out)?,
+        ShapeDesc::Triangle { a, b, c } => {
+            let [a, b, c] = [a, b, c].map(|p| m.transform_point3a(p.into()));
+            // A mirroring transform flips the winding; keep the normal facing the same side.
+            let (b, c) = if m.matrix3.determinant() < 0.0 { (c, b) } else { (b, c) };
+            let t = Triangle::new(a, b, c).ok_or_else(|| format!("a triangle {a}, {b}, {c} has no area"))?;
+            out.push(Primitive::Triangle(t));
+        }
         ShapeDesc::Box { min, max } => {
             let (a, b) = (Vec3A::from(min), Vec3A::from(max));
             let d = b - a;

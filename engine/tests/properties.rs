@@ -6,7 +6,7 @@
 use glam::Vec3A;
 use pathwave_engine::geometry::{Geometry, Primitive};
 use pathwave_engine::math::{Ray, offset_ray_origin};
-use pathwave_engine::shape::{Quad, Sphere};
+use pathwave_engine::shape::{Quad, Sphere, Triangle};
 use proptest::prelude::*;
 
 fn vec3(range: f32) -> impl Strategy<Value = Vec3A> {
@@ -32,6 +32,16 @@ fn quad() -> impl Strategy<Value = Quad> {
         |(q, offset, u, v, size)| {
             let (u, v) = (u * size, v * size);
             (u.cross(v).length() > 1e-3 * size * size).then(|| Quad::new(q * offset, u, v)).flatten()
+        },
+    )
+}
+
+fn triangle() -> impl Strategy<Value = Triangle> {
+    (vec3(1.0), scale(), vec3(1.0), vec3(1.0), vec3(1.0), scale()).prop_filter_map(
+        "non-degenerate",
+        |(c, offset, a, b, d, size)| {
+            let (a, b, d) = (c * offset + a * size, c * offset + b * size, c * offset + d * size);
+            ((b - a).cross(d - a).length() > 1e-3 * size * size).then(|| Triangle::new(a, b, d)).flatten()
         },
     )
 }
@@ -100,13 +110,35 @@ proptest! {
     }
 
     #[test]
+    fn a_ray_leaving_a_triangle_on_either_side_never_hits_it(t in triangle(), a in 0.0f32..1.0, b in 0.0f32..1.0, dir in unit()) {
+        let (b1, b2) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+        let target = t.p[0] + b1 * (t.p[1] - t.p[0]) + b2 * (t.p[2] - t.p[0]);
+        let n = (t.p[1] - t.p[0]).cross(t.p[2] - t.p[0]).normalize();
+        for side in [n, -n] {
+            let o = target + side * (t.p[1] - t.p[0]).length();
+            let hit = t.intersect(o, target - o, f32::INFINITY);
+            prop_assume!(hit.is_finite());
+            let sp = t.surface(o + hit * (target - o));
+            prop_assert!((sp.p - target).abs().max_element() <= sp.err + 1e-6 * (t.p[1] - t.p[0]).length());
+            let Some(d) = leaving(side, dir) else { continue };
+            let start = offset_ray_origin(sp.p, sp.err, side);
+            prop_assert_eq!(t.intersect(start, d, f32::INFINITY), f32::INFINITY);
+        }
+    }
+
+    #[test]
     fn bvh_closest_hit_equals_brute_force(
         spheres in prop::collection::vec(sphere(), 1..40),
         quads in prop::collection::vec(quad(), 1..40),
+        triangles in prop::collection::vec(triangle(), 0..40),
         rays in prop::collection::vec((vec3(1.0), scale(), direction()), 1..40),
     ) {
-        let prims: Vec<Primitive> =
-            spheres.into_iter().map(Primitive::Sphere).chain(quads.into_iter().map(Primitive::Quad)).collect();
+        let prims: Vec<Primitive> = spheres
+            .into_iter()
+            .map(Primitive::Sphere)
+            .chain(quads.into_iter().map(Primitive::Quad))
+            .chain(triangles.into_iter().map(Primitive::Triangle))
+            .collect();
         let n = prims.len() as u32;
         let geo = Geometry::build_bvh(prims.clone(), (0..n).collect());
         for (o, s, d) in rays {

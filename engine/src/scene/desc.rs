@@ -562,8 +562,8 @@ impl TryFrom<RawObject> for ObjectDesc {
     fn try_from(r: RawObject) -> Result<Self, String> {
         let body = match (r.material, r.medium) {
             (Some(m), None) => Body::Surface(m),
-            (None, Some(_)) if matches!(r.shape, ShapeDesc::Quad { .. }) => {
-                return Err("a medium needs a closed shape (Sphere or Box), not a Quad".into());
+            (None, Some(_)) if matches!(r.shape, ShapeDesc::Quad { .. } | ShapeDesc::Triangle { .. }) => {
+                return Err("a medium needs a closed shape (Sphere or Box), not a Quad or Triangle".into());
             }
             (None, Some(m)) => Body::Volume(m),
             (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),
@@ -599,6 +599,16 @@ pub enum ShapeDesc {
         /// Second edge (not parallel to u).
         v: Vec3,
     },
+    /// `Triangle(a: .., b: .., c: ..)`: normal (b - a) x (c - a); uv = barycentric weights of
+    /// b and c.
+    Triangle {
+        /// First vertex.
+        a: Vec3,
+        /// Second vertex.
+        b: Vec3,
+        /// Third vertex.
+        c: Vec3,
+    },
     /// `Box(a: .., b: ..)`: the axis-aligned box between two opposite corners, six quads facing out.
     Box {
         /// Minimum corner.
@@ -613,6 +623,7 @@ pub enum ShapeDesc {
 enum RawShape {
     Sphere { center: V3, radius: Positive },
     Quad { q: V3, u: V3, v: V3 },
+    Triangle { a: V3, b: V3, c: V3 },
     Box { a: V3, b: V3 },
 }
 
@@ -627,6 +638,12 @@ impl TryFrom<RawShape> for ShapeDesc {
                     return Err(format!("Quad has no area: u {} and v {} are parallel or zero", u.0, v.0));
                 }
                 ShapeDesc::Quad { q: q.0, u: u.0, v: v.0 }
+            }
+            RawShape::Triangle { a, b, c } => {
+                if !((b.0 - a.0).cross(c.0 - a.0).length_squared() > 0.0) {
+                    return Err(format!("Triangle has no area: {}, {} and {} are collinear", a.0, b.0, c.0));
+                }
+                ShapeDesc::Triangle { a: a.0, b: b.0, c: c.0 }
             }
             RawShape::Box { a, b } => {
                 let (min, max) = (a.0.min(b.0), a.0.max(b.0));

@@ -4,10 +4,12 @@
 pub(crate) mod quad;
 pub(crate) mod sphere;
 mod transformed_sphere;
+mod triangle;
 
 pub use quad::Quad;
 pub use sphere::Sphere;
 pub use transformed_sphere::TransformedSphere;
+pub use triangle::Triangle;
 
 use glam::{Vec2, Vec3A};
 
