@@ -234,7 +234,8 @@ fn missing_image_file_is_named() {
 
 #[test]
 fn collinear_triangle() {
-    let text = with_object(r#"(shape: Triangle(a: (0, 0, 0), b: (1, 1, 1), c: (2, 2, 2)), material: "white"),"#);
+    let text =
+        with_object(r#"(shape: Triangle(a: (0, 0, 0), b: (1, 1, 1), c: (2, 2, 2)), material: "white"),"#);
     // 8:66 is the `)` that closes `Triangle(..)`.
     assert_err(&text, 8, 66, &["Triangle has no area", "collinear"]);
 }

@@ -78,6 +78,21 @@ fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32
     true
 }
 
+/// Queues path `i`'s shadow ray (if any) and its next ray, or ends the path.
+#[inline]
+fn route(p: &mut Paths, q: &mut Queues, i: u32, shadow: Option<path::ShadowRay>, next: Option<Ray>) {
+    if let Some(sh) = shadow {
+        q.shadow.push(i, &sh.ray, sh.contribution);
+    }
+    match next {
+        Some(ray) => {
+            p.set_ray(i as usize, ray);
+            q.next.push(i);
+        }
+        None => q.finished.push(i),
+    }
+}
+
 /// `handle_escaped`: adds the background; the paths end.
 pub fn handle_escaped(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for &i in &q.escaped {
@@ -114,16 +129,7 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         }
         let (shadow, next) =
             path::scatter_in_medium(scene, &mut st, p.origin[s], p.time[s], &mut p.sampler[s]);
-        if let Some(sh) = shadow {
-            q.shadow.push(i, &sh.ray, sh.contribution);
-        }
-        match next {
-            Some(ray) => {
-                p.set_ray(s, ray);
-                q.next.push(i);
-            }
-            None => q.finished.push(i),
-        }
+        route(p, q, i, shadow, next);
         p.set_state(s, &st);
     }
     q.medium.clear();
@@ -158,18 +164,13 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
         debug_assert_eq!(material::has_smooth_part(mat), kind == MaterialKind::Lambertian);
         let (wo, time) = (-p.dir[s], p.time[s]);
         let mut sampler = p.sampler[s];
-        if nee {
-            if let Some(shadow) = path::sample_light(scene, &st, &hit.surface, wo, mat, time, &mut sampler) {
-                q.shadow.push(i, &shadow.ray, shadow.contribution);
-            }
-        }
-        match path::scatter(scene, &mut st, &hit.surface, wo, mat, time, &mut sampler) {
-            Some(ray) => {
-                p.set_ray(s, ray);
-                q.next.push(i);
-            }
-            None => q.finished.push(i),
-        }
+        let shadow = if nee {
+            path::sample_light(scene, &st, &hit.surface, wo, mat, time, &mut sampler)
+        } else {
+            None
+        };
+        let next = path::scatter(scene, &mut st, &hit.surface, wo, mat, time, &mut sampler);
+        route(p, q, i, shadow, next);
         p.sampler[s] = sampler;
         p.set_state(s, &st);
     }
@@ -221,16 +222,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             let (input, out) = (ins.get(l), outs.get(l));
             let (shadow, next) =
                 lambert_vertex::apply(&input, &out, &mut states[l], p.time[s], &mut samplers[l]);
-            if let Some(sh) = shadow {
-                q.shadow.push(i, &sh.ray, sh.contribution);
-            }
-            match next {
-                Some(ray) => {
-                    p.set_ray(s, ray);
-                    q.next.push(i);
-                }
-                None => q.finished.push(i),
-            }
+            route(p, q, i, shadow, next);
             p.sampler[s] = samplers[l];
             p.set_state(s, &states[l]);
         }
