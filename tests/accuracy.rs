@@ -65,3 +65,9 @@ fn spheres_sky_matches_reference() {
         &[("ground albedo +5%", |d| scale_albedo(d, "ground", 1.05))],
     );
 }
+
+#[test]
+fn mesh_matches_reference() {
+    let knot: Error = ("knot albedo +5%", |d| scale_albedo(d, "knot", 1.05));
+    check("mesh.ron", "mesh.exr", 4096, 64, &[WHITE_ALBEDO, knot]);
+}

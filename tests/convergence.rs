@@ -73,3 +73,9 @@ fn cornell_smoke_converges() {
     // The reference used 2048 spp (ANCHORS.md).
     check("cornell-smoke", |e64| e64 * 64.0 / 2048.0);
 }
+
+#[test]
+fn mesh_converges() {
+    // The reference used 4096 spp (ANCHORS.md).
+    check("mesh", |e64| e64 * 64.0 / 4096.0);
+}

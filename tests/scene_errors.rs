@@ -192,7 +192,7 @@ fn object_with_neither_or_both_material_and_medium() {
 #[test]
 fn medium_needs_a_closed_shape_and_valid_numbers() {
     let quad = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 1, 0)), medium: (density: 1, albedo: (1, 1, 1))),"#;
-    assert_err(&with_object(quad), 8, 104, &["closed shape", "not a Quad"]);
+    assert_err(&with_object(quad), 8, 104, &["closed shape", "Sphere or Box"]);
     let zero = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 0, albedo: (1, 1, 1))),"#;
     assert_err(&with_object(zero), 8, 73, &["finite number > 0", "found 0"]);
     let bright = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 2, 1))),"#;
@@ -238,6 +238,13 @@ fn collinear_triangle() {
         with_object(r#"(shape: Triangle(a: (0, 0, 0), b: (1, 1, 1), c: (2, 2, 2)), material: "white"),"#);
     // 8:66 is the `)` that closes `Triangle(..)`.
     assert_err(&text, 8, 66, &["Triangle has no area", "collinear"]);
+}
+
+#[test]
+fn missing_mesh_file_is_named() {
+    let text = with_object(r#"(shape: Mesh(file: "assets/none.obj"), material: "white"),"#);
+    // 8:29 is the file name (relative to the scene's directory).
+    assert_err(&text, 8, 29, &["in objects[0]", "cannot read the mesh", "none.obj"]);
 }
 
 #[test]

@@ -24,7 +24,7 @@ use std::sync::Arc;
 pub struct Transform(pub Affine3A);
 
 /// The object-space shape of an entity.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Clone, Debug, PartialEq)]
 pub struct Shape(pub ShapeDesc);
 
 /// A homogeneous medium filling the entity's (closed) shape; such entities have no
@@ -164,6 +164,10 @@ pub fn rebuild_media(
         .into_iter()
         .filter_map(|(_, transform, shape, filling)| {
             let boundary = match shape.0 {
+                ShapeDesc::Mesh(_) => {
+                    tracing::error!("medium skipped: mesh boundaries are not supported yet");
+                    return None;
+                }
                 ShapeDesc::Sphere { center, radius } => Boundary::Sphere { center: center.into(), radius },
                 ShapeDesc::Box { min, max } => Boundary::Box { min: min.into(), max: max.into() },
                 ShapeDesc::Quad { .. } | ShapeDesc::Triangle { .. } => {
@@ -236,6 +240,18 @@ pub const MAX_COORDINATE: f32 = 1e15;
 pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), String> {
     let start = out.len();
     match *shape {
+        ShapeDesc::Mesh(ref mesh) => {
+            let world: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p.into())).collect();
+            let mirrored = m.matrix3.determinant() < 0.0;
+            for &[a, b, c] in mesh.triangles.iter() {
+                let [a, b, c] = [a, b, c].map(|i| world[i as usize]);
+                let (b, c) = if mirrored { (c, b) } else { (b, c) };
+                // Triangles without area cannot be hit: meshes often hold a few; drop them.
+                if let Some(t) = Triangle::new(a, b, c) {
+                    out.push(Primitive::Triangle(t));
+                }
+            }
+        }
         ShapeDesc::Sphere { center, radius } => {
             let sphere = Sphere { center: center.into(), radius };
             // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything
@@ -420,7 +436,7 @@ impl SceneWorld {
         world.insert_resource(Materials(mats));
         world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
         for obj in &desc.objects {
-            let placed = (Transform(compose(&obj.transform)), Shape(obj.shape));
+            let placed = (Transform(compose(&obj.transform)), Shape(obj.shape.clone()));
             match &obj.body {
                 Body::Surface(name) => {
                     let id = names

@@ -325,6 +325,51 @@ impl<'de> Deserialize<'de> for ImageFile {
     }
 }
 
+/// The triangles of an OBJ file, read when the scene is loaded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshFile {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// Vertex positions.
+    pub positions: std::sync::Arc<Vec<Vec3>>,
+    /// Triangles, as indices into `positions`.
+    pub triangles: std::sync::Arc<Vec<[u32; 3]>>,
+}
+
+impl<'de> Deserialize<'de> for MeshFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let path = std::path::PathBuf::from(String::deserialize(d)?);
+        let (positions, triangles) = match SCENE_DIR.with(|s| s.borrow().clone()) {
+            Some(dir) => read_obj(&dir.join(&path)).map_err(D::Error::custom)?,
+            None => (Vec::new(), Vec::new()),
+        };
+        Ok(MeshFile { path, positions: positions.into(), triangles: triangles.into() })
+    }
+}
+
+/// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
+fn read_obj(path: &std::path::Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), String> {
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    let (models, _) = tobj::load_obj(path, &options)
+        .map_err(|e| format!("cannot read the mesh {}: {e}", path.display()))?;
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    for m in models {
+        let base = positions.len() as u32;
+        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        triangles.extend(m.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+    }
+    if !positions.iter().all(|p| p.is_finite()) {
+        return Err(format!("the mesh {} has a vertex that is not a finite number", path.display()));
+    }
+    if triangles.is_empty() {
+        return Err(format!("the mesh {} has no faces", path.display()));
+    }
+    if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
+        return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
+    }
+    Ok((positions, triangles))
+}
+
 /// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct NamedTextures(pub Vec<(String, TextureDesc)>);
@@ -562,8 +607,8 @@ impl TryFrom<RawObject> for ObjectDesc {
     fn try_from(r: RawObject) -> Result<Self, String> {
         let body = match (r.material, r.medium) {
             (Some(m), None) => Body::Surface(m),
-            (None, Some(_)) if matches!(r.shape, ShapeDesc::Quad { .. } | ShapeDesc::Triangle { .. }) => {
-                return Err("a medium needs a closed shape (Sphere or Box), not a Quad or Triangle".into());
+            (None, Some(_)) if !matches!(r.shape, ShapeDesc::Sphere { .. } | ShapeDesc::Box { .. }) => {
+                return Err("a medium needs a closed shape: Sphere or Box".into());
             }
             (None, Some(m)) => Body::Volume(m),
             (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),
@@ -580,7 +625,7 @@ impl TryFrom<RawObject> for ObjectDesc {
 }
 
 /// Shapes.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Deserialize, Debug, Clone, PartialEq)]
 #[serde(try_from = "RawShape")]
 pub enum ShapeDesc {
     /// `Sphere(center: (x, y, z), radius: r)`.
@@ -609,6 +654,9 @@ pub enum ShapeDesc {
         /// Third vertex.
         c: Vec3,
     },
+    /// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene
+    /// file), flat shaded; triangles without area are dropped.
+    Mesh(MeshFile),
     /// `Box(a: .., b: ..)`: the axis-aligned box between two opposite corners, six quads facing out.
     Box {
         /// Minimum corner.
@@ -624,6 +672,7 @@ enum RawShape {
     Sphere { center: V3, radius: Positive },
     Quad { q: V3, u: V3, v: V3 },
     Triangle { a: V3, b: V3, c: V3 },
+    Mesh { file: MeshFile },
     Box { a: V3, b: V3 },
 }
 
@@ -645,6 +694,7 @@ impl TryFrom<RawShape> for ShapeDesc {
                 }
                 ShapeDesc::Triangle { a: a.0, b: b.0, c: c.0 }
             }
+            RawShape::Mesh { file } => ShapeDesc::Mesh(file),
             RawShape::Box { a, b } => {
                 let (min, max) = (a.0.min(b.0), a.0.max(b.0));
                 if (max - min).min_element() <= 0.0 {
