@@ -60,58 +60,49 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32) -> PixelAccumulator {
 pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec3 {
     let geo = &*scene.geometry;
     let mut st = PathState::new(ray.origin);
-    loop {
+    'path: loop {
         let hit = geo.intersect(&ray, f32::INFINITY);
-        if scene.features.media {
-            let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, sampler) {
-                if st.depth == scene.settings.max_depth {
-                    break;
+        // Each vertex yields an optional shadow ray and the next ray (None: the path ends).
+        let (shadow, next) = 'vertex: {
+            if scene.features.media {
+                let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+                if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, sampler) {
+                    if st.depth == scene.settings.max_depth {
+                        break 'path;
+                    }
+                    break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
                 }
-                let (shadow, next) = path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
-                if let Some(s) = shadow {
-                    path::trace_shadow(scene, &mut st, &s);
-                }
-                match next {
-                    Some(r) => ray = r,
-                    None => break,
-                }
-                continue;
             }
-        }
-        let Some(hit) = hit else {
-            path::escape(scene, &mut st, ray.dir);
-            break;
+            let Some(hit) = hit else {
+                path::escape(scene, &mut st, ray.dir);
+                break 'path;
+            };
+            let mat = &scene.material_at(hit.prim, &hit.surface);
+            let wo = -ray.dir;
+            if mat.is_emissive() {
+                path::emit(scene, &mut st, &hit, mat, wo, ray.time);
+                break 'path;
+            }
+            if st.depth == scene.settings.max_depth {
+                break 'path;
+            }
+            if let (Material::Lambertian { albedo }, true) = (*mat, scene.features.lights_are_quads) {
+                let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, sampler);
+                let out = lambert_vertex::lambert(&input);
+                break 'vertex lambert_vertex::apply(&input, &out, &mut st, ray.time, sampler);
+            }
+            let shadow = if material::has_smooth_part(mat) && !scene.lights.is_empty() {
+                path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler)
+            } else {
+                None
+            };
+            (shadow, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
         };
-        let mat = &scene.material_at(hit.prim, &hit.surface);
-        let wo = -ray.dir;
-        if mat.is_emissive() {
-            path::emit(scene, &mut st, &hit, mat, wo, ray.time);
-            break;
+        if let Some(s) = shadow {
+            path::trace_shadow(scene, &mut st, &s);
         }
-        if st.depth == scene.settings.max_depth {
-            break;
-        }
-        if let (Material::Lambertian { albedo }, true) = (*mat, scene.features.lights_are_quads) {
-            let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, sampler);
-            let out = lambert_vertex::lambert(&input);
-            let (shadow, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time, sampler);
-            if let Some(s) = shadow {
-                path::trace_shadow(scene, &mut st, &s);
-            }
-            match next {
-                Some(r) => ray = r,
-                None => break,
-            }
-            continue;
-        }
-        if material::has_smooth_part(mat) && !scene.lights.is_empty() {
-            if let Some(s) = path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler) {
-                path::trace_shadow(scene, &mut st, &s);
-            }
-        }
-        match path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler) {
-            Some(next) => ray = next,
+        match next {
+            Some(r) => ray = r,
             None => break,
         }
     }
