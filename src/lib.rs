@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod io;
 pub mod metrics;
+pub mod raybench;
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

@@ -90,6 +90,19 @@ enum Command {
         #[arg(short, long)]
         threads: Option<usize>,
     },
+    /// BVH build time and traversal rates (Mrays/s) on the knot of ANCHORS.md and on a scene's
+    /// geometry: primary, diffuse-bounce and shadow rays on 1 and 2 threads.
+    BenchRays {
+        /// Knot rings (2 x rings x segments triangles).
+        #[arg(long, default_value_t = 2000)]
+        rings: u32,
+        /// Knot ring vertices.
+        #[arg(long, default_value_t = 250)]
+        segments: u32,
+        /// A scene whose geometry and first light also get primary, bounce and shadow rays.
+        #[arg(long, default_value = "scenes/cornell-diffuse.ron")]
+        scene: PathBuf,
+    },
     /// Print RMSE and relMSE of image A against reference B (and both means).
     Compare {
         /// The image to judge.
@@ -162,6 +175,9 @@ fn main() -> ExitCode {
             render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
+        Command::BenchRays { rings, segments, scene } => {
+            pathwave::raybench::run((rings, segments), Some(&scene)).map(|table| println!("{table}"))
+        }
         Command::Bench { spp, refs, only, batch, svg, threads } => {
             bench(&spp, &refs, &only, batch, svg, threads)
         }

@@ -6,6 +6,7 @@
 //! [`render_scene::RenderScene`] that integrators read without touching the ECS.
 #![warn(missing_docs)]
 
+pub mod bvh8;
 pub mod camera;
 pub mod flat;
 pub mod geometry;
@@ -13,6 +14,7 @@ pub mod lights;
 pub mod material;
 pub mod math;
 pub mod media;
+pub mod mesh;
 pub mod render_scene;
 pub mod scene;
 pub mod shape;

@@ -1,0 +1,422 @@
+//! An 8-wide BVH with uncompressed child boxes, collapsed from an obvhs binary BVH (PLOC build,
+//! reinsertion, SAH leaf collapse), and its single-ray traversal.
+//!
+//! obvhs's CWBVH quantises child boxes and decodes them per node; here a node holds its eight
+//! child boxes as plain `f32` lanes, so one node test is six subtractions, six multiplications
+//! and a few min/max over 8 lanes (AVX2 with `target-cpu=x86-64-v3`). The traversal tests
+//! nodes from `t = 0` (no absolute node epsilon), widens each box exit by `1 + 2 gamma(3)`
+//! (Ize 2013: rounding cannot make a ray miss a box it touches), and visits hit children
+//! nearest first. What a leaf holds is the caller's business: a leaf is a range
+//! `(first, count)` that the caller assigned when building, and the caller tests it.
+
+use crate::math::gamma;
+use glam::Vec3A;
+use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
+use std::time::Duration;
+
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// An unused child slot.
+const EMPTY: u32 = u32::MAX;
+/// Set in a child reference that names a leaf.
+const LEAF: u32 = 1 << 31;
+/// Largest leaf range start.
+const MAX_FIRST: u32 = (1 << 28) - 1;
+
+/// One node: the boxes of up to eight children (empty slots have inverted boxes that no ray
+/// enters) and what each child is.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Node {
+    /// Lower corners, per axis and child.
+    pub lo: [[f32; WIDTH]; 3],
+    /// Upper corners, per axis and child.
+    pub hi: [[f32; WIDTH]; 3],
+    /// Per child: an inner node index, a leaf (`LEAF | first << 3 | count - 1`) or `EMPTY`.
+    child: [u32; WIDTH],
+}
+
+impl Node {
+    const EMPTY: Node =
+        Node { lo: [[f32::INFINITY; WIDTH]; 3], hi: [[f32::NEG_INFINITY; WIDTH]; 3], child: [EMPTY; WIDTH] };
+
+    fn set_box(&mut self, i: usize, b: &Aabb) {
+        for a in 0..3 {
+            self.lo[a][i] = b.min[a];
+            self.hi[a][i] = b.max[a];
+        }
+    }
+
+    fn child_box(&self, i: usize) -> Aabb {
+        Aabb {
+            min: Vec3A::new(self.lo[0][i], self.lo[1][i], self.lo[2][i]),
+            max: Vec3A::new(self.hi[0][i], self.hi[1][i], self.hi[2][i]),
+        }
+    }
+}
+
+/// A leaf as the caller sees it: `count` (1..=8) items from `first`.
+#[inline(always)]
+fn leaf_range(c: u32) -> (u32, u32) {
+    ((c & !LEAF) >> 3, (c & 7) + 1)
+}
+
+/// The 8-wide BVH. Node 0 is the root; children come after their parents.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh8 {
+    nodes: Vec<Node>,
+    /// Bounds of everything.
+    pub bounds: Aabb,
+}
+
+/// A ray prepared for box tests.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay {
+    o: [f32; 3],
+    inv: [f32; 3],
+    neg: [bool; 3],
+}
+
+impl BoxRay {
+    /// Prepares origin `o` and direction `d`. Direction components near zero are replaced by
+    /// `+-1e-20` of their sign, so that `1/d` stays finite and `(lo - o) / d` cannot be NaN
+    /// (coordinates are at most 1e15, products at most 1e35).
+    #[inline(always)]
+    pub fn new(o: Vec3A, d: Vec3A) -> Self {
+        let d = d + Vec3A::ZERO; // -0.0 -> +0.0: the sign test and 1/d then agree
+        let safe = |x: f32| if x.abs() < 1e-20 { 1e-20f32.copysign(x) } else { x };
+        let inv = [1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z)];
+        Self { o: o.to_array(), inv, neg: inv.map(|i| i < 0.0) }
+    }
+}
+
+/// Widening of the box exit distance that covers the rounding of `(lo - o) * inv`.
+const EXIT_SCALE: f32 = 1.0 + 2.0 * gamma(3);
+
+/// Entry distances of the children the ray enters before `tmax`, and which ones they are.
+#[inline(always)]
+fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
+    let mut tnear = [0.0f32; WIDTH];
+    let mut tfar = [tmax; WIDTH];
+    for a in 0..3 {
+        let (near, far) = if r.neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+        for l in 0..WIDTH {
+            tnear[l] = tnear[l].max((near[l] - r.o[a]) * r.inv[a]);
+            tfar[l] = tfar[l].min((far[l] - r.o[a]) * r.inv[a] * EXIT_SCALE);
+        }
+    }
+    let mut mask = 0u32;
+    for l in 0..WIDTH {
+        mask |= ((tnear[l] <= tfar[l]) as u32) << l;
+    }
+    (mask, tnear)
+}
+
+/// Traversal stack depth: at most seven entries per level.
+const STACK: usize = 8 * 64;
+
+impl Bvh8 {
+    /// Builds a binary BVH over `aabbs` with obvhs and collapses it. `leaf` receives the
+    /// indices (into `aabbs`) of each leaf's primitives, at most `max_leaf` of them, stores
+    /// them as it likes and returns the `(first, count)` range (count 1..=8) that
+    /// [`Self::closest`] and [`Self::any`] will hand back for that leaf.
+    pub fn build(aabbs: &[Aabb], max_leaf: u32, leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
+        assert!((1..=8).contains(&max_leaf));
+        if aabbs.is_empty() {
+            return Self::default();
+        }
+        let params = BvhBuildParams { max_prims_per_leaf: max_leaf, ..BvhBuildParams::medium_build() };
+        let bvh2 = obvhs::bvh2::builder::build_bvh2(aabbs, params, &mut Duration::default());
+        Self::collapse(&bvh2, leaf)
+    }
+
+    /// Collapses a binary BVH: each node takes the two children of its binary counterpart and
+    /// repeatedly opens the largest (by surface area) inner child until it has eight.
+    pub fn collapse(bvh2: &Bvh2, mut leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
+        let n2 = &bvh2.nodes;
+        let mut out = Self { nodes: vec![Node::EMPTY], bounds: *n2[0].aabb() };
+        // (binary node, wide node to fill)
+        let mut todo = vec![(0usize, 0usize)];
+        let mut leaf_ref = |i: usize| {
+            let b = &n2[i];
+            let prims =
+                &bvh2.primitive_indices[b.first_index as usize..(b.first_index + b.prim_count) as usize];
+            let (first, count) = leaf(prims);
+            assert!(first <= MAX_FIRST && (1..=8).contains(&count), "leaf range {first}, {count}");
+            LEAF | first << 3 | (count - 1)
+        };
+        while let Some((bi, wi)) = todo.pop() {
+            let root = &n2[bi];
+            if root.is_leaf() {
+                // A tree that is one leaf: a root with one child.
+                let c = leaf_ref(bi);
+                out.nodes[wi].set_box(0, root.aabb());
+                out.nodes[wi].child[0] = c;
+                continue;
+            }
+            let mut kids = vec![root.first_index as usize, root.first_index as usize + 1];
+            while kids.len() < WIDTH {
+                let open = kids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, k)| !n2[**k].is_leaf())
+                    .max_by(|a, b| n2[*a.1].aabb().half_area().total_cmp(&n2[*b.1].aabb().half_area()));
+                let Some((pos, &k)) = open else { break };
+                kids.swap_remove(pos);
+                kids.extend([n2[k].first_index as usize, n2[k].first_index as usize + 1]);
+            }
+            for (slot, &k) in kids.iter().enumerate() {
+                out.nodes[wi].set_box(slot, n2[k].aabb());
+                out.nodes[wi].child[slot] = if n2[k].is_leaf() {
+                    leaf_ref(k)
+                } else {
+                    out.nodes.push(Node::EMPTY);
+                    let w = out.nodes.len() - 1;
+                    todo.push((k, w));
+                    w as u32
+                };
+            }
+        }
+        out
+    }
+
+    /// Recomputes every box from the leaves' bounds (`bounds(first, count)`), keeping the
+    /// tree: for primitives that moved a little. Bounds of a tree that holds nothing stay empty.
+    pub fn refit(&mut self, mut bounds: impl FnMut(u32, u32) -> Aabb) {
+        // Children come after their parents: a reverse sweep sees every child first.
+        for i in (0..self.nodes.len()).rev() {
+            for slot in 0..WIDTH {
+                let c = self.nodes[i].child[slot];
+                let b = match c {
+                    EMPTY => continue,
+                    c if c & LEAF != 0 => {
+                        let (first, count) = leaf_range(c);
+                        bounds(first, count)
+                    }
+                    c => self.node_bounds(c as usize),
+                };
+                self.nodes[i].set_box(slot, &b);
+            }
+        }
+        if !self.nodes.is_empty() {
+            self.bounds = self.node_bounds(0);
+        }
+    }
+
+    fn node_bounds(&self, i: usize) -> Aabb {
+        let n = &self.nodes[i];
+        (0..WIDTH).filter(|&s| n.child[s] != EMPTY).fold(Aabb::empty(), |b, s| b.union(&n.child_box(s)))
+    }
+
+    /// Sum of the surface areas of all child boxes relative to the root's: the expected number
+    /// of node tests of a random ray that meets the root, up to a constant. Refitting after
+    /// large motion makes it grow; then a rebuild pays.
+    pub fn sah_cost(&self) -> f32 {
+        let root = self.bounds.half_area();
+        if self.nodes.is_empty() || !(root > 0.0) {
+            return 0.0;
+        }
+        let mut sum = 0.0;
+        for n in &self.nodes {
+            for s in (0..WIDTH).filter(|&s| n.child[s] != EMPTY) {
+                sum += n.child_box(s).half_area();
+            }
+        }
+        sum / root
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Bytes held by the nodes.
+    pub fn node_bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node>()
+    }
+
+    /// Closest-hit traversal of the ray `o + t d`, `t` in `(0, tmax)`. `leaf(first, count,
+    /// best)` tests a leaf against the closest distance so far and returns the new closest
+    /// (or `best` unchanged); the traversal returns the final closest.
+    #[inline(always)]
+    pub fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+        if self.nodes.is_empty() {
+            return tmax;
+        }
+        let r = BoxRay::new(o, d);
+        let mut best = tmax;
+        let mut stack = [(0u32, 0.0f32); STACK];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let (first, count) = leaf_range(cur);
+                best = leaf(first, count, best);
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (mut mask, tnear) = test_node(node, &r, best);
+                match mask.count_ones() {
+                    0 => {}
+                    1 => {
+                        cur = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    _ => {
+                        // Sort the hit children far to near, push all but the nearest.
+                        let mut keys = [0u64; WIDTH];
+                        let mut n = 0;
+                        while mask != 0 {
+                            let s = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            let key = (tnear[s].to_bits() as u64) << 32 | s as u64;
+                            let mut j = n;
+                            while j > 0 && keys[j - 1] < key {
+                                keys[j] = keys[j - 1];
+                                j -= 1;
+                            }
+                            keys[j] = key;
+                            n += 1;
+                        }
+                        for &k in &keys[..n - 1] {
+                            let s = (k & 7) as usize;
+                            stack[sp] = (node.child[s], tnear[s]);
+                            sp += 1;
+                        }
+                        cur = node.child[(keys[n - 1] & 7) as usize];
+                        continue;
+                    }
+                }
+            }
+            // Pop the nearest entry still closer than the best hit.
+            loop {
+                if sp == 0 {
+                    return best;
+                }
+                sp -= 1;
+                let (c, t) = stack[sp];
+                if t <= best {
+                    cur = c;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Any-hit traversal: true when `leaf(first, count)` reports a hit for some leaf the ray
+    /// `o + t d`, `t` in `(0, tmax)`, enters.
+    #[inline(always)]
+    pub fn any(&self, o: Vec3A, d: Vec3A, tmax: f32, mut leaf: impl FnMut(u32, u32) -> bool) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let r = BoxRay::new(o, d);
+        let mut stack = [0u32; STACK];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            if cur & LEAF != 0 {
+                let (first, count) = leaf_range(cur);
+                if leaf(first, count) {
+                    return true;
+                }
+            } else {
+                let node = &self.nodes[cur as usize];
+                let (mut mask, _) = test_node(node, &r, tmax);
+                while mask != 0 {
+                    let s = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack[sp] = node.child[s];
+                    sp += 1;
+                }
+            }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            cur = stack[sp];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn boxes() -> Vec<Aabb> {
+        let mut s = 1u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32
+        };
+        (0..2000)
+            .map(|_| {
+                let c = Vec3A::new(rnd(), rnd(), rnd()) * 100.0;
+                let e = Vec3A::new(rnd(), rnd(), rnd()) * [0.1, 2.0, 10.0][(rnd() * 3.0) as usize % 3];
+                Aabb { min: c - e, max: c + e }
+            })
+            .collect()
+    }
+
+    /// Slab test of one box, for comparison.
+    fn enters(b: &Aabb, o: Vec3A, d: Vec3A, tmax: f32) -> Option<f32> {
+        let (t0, t1) = ((b.min - o) / d, (b.max - o) / d);
+        let (near, far) = (t0.min(t1).max_element().max(0.0), t0.max(t1).min_element().min(tmax));
+        (near <= far).then_some(near)
+    }
+
+    #[test]
+    fn traversal_finds_what_a_scan_finds_and_refit_keeps_it() {
+        let mut aabbs = boxes();
+        let mut order = Vec::new();
+        let mut bvh = Bvh8::build(&aabbs, 4, |p| {
+            order.extend_from_slice(p);
+            ((order.len() - p.len()) as u32, p.len() as u32)
+        });
+        assert!(bvh.node_count() > 1);
+        for round in 0..2 {
+            let mut s = 77u32;
+            let mut rnd = move || {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                s as f32 / u32::MAX as f32 * 2.0 - 1.0
+            };
+            let mut hits = 0;
+            for _ in 0..500 {
+                let o = Vec3A::new(rnd(), rnd(), rnd()) * 150.0;
+                // Aimed at the cloud of boxes, so that most rays hit something.
+                let d = (Vec3A::new(rnd(), rnd(), rnd()) + 1.0) * 50.0 - o;
+                let want = aabbs.iter().filter_map(|b| enters(b, o, d, 1e9)).fold(f32::INFINITY, f32::min);
+                // "Primitives" are the boxes themselves.
+                let got = bvh.closest(o, d, f32::INFINITY, |first, count, best| {
+                    let items = &order[first as usize..(first + count) as usize];
+                    items.iter().filter_map(|&i| enters(&aabbs[i as usize], o, d, best)).fold(best, f32::min)
+                });
+                assert_eq!(want, got, "round {round}, ray {o} {d}");
+                let any = bvh.any(o, d, f32::INFINITY, |first, count| {
+                    order[first as usize..(first + count) as usize]
+                        .iter()
+                        .any(|&i| enters(&aabbs[i as usize], o, d, f32::INFINITY).is_some())
+                });
+                assert_eq!(any, want.is_finite());
+                hits += want.is_finite() as u32;
+            }
+            assert!(hits > 250, "{hits}");
+            // Move every box and refit.
+            for b in &mut aabbs {
+                let shift = Vec3A::new(3.0, -1.0, 0.5) * (b.min.x % 1.0);
+                (b.min, b.max) = (b.min + shift, b.max + shift);
+            }
+            let before = bvh.sah_cost();
+            bvh.refit(|first, count| {
+                order[first as usize..(first + count) as usize]
+                    .iter()
+                    .fold(Aabb::empty(), |a, &i| a.union(&aabbs[i as usize]))
+            });
+            assert!(bvh.sah_cost() >= before * 0.9);
+        }
+    }
+}

@@ -1,0 +1,293 @@
+//! Triangle meshes in object space and their bottom-level BVH: an [`Bvh8`] whose leaves are
+//! blocks of up to eight triangles stored lane by lane, tested eight at a time with the
+//! watertight test of [`Triangle::intersect`] (same operations, same bits).
+
+use crate::bvh8::Bvh8;
+use crate::math::gamma;
+use crate::shape::{SurfacePoint, Triangle};
+use glam::Vec3A;
+use obvhs::aabb::Aabb;
+use std::sync::Arc;
+
+/// A triangle mesh: positions and index triples. Degenerate triangles are kept here and
+/// skipped by the BVH.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<Vec3A>,
+    /// Triangles as indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl MeshData {
+    /// Triangle `i`.
+    #[inline]
+    pub fn triangle(&self, i: u32) -> [Vec3A; 3] {
+        self.triangles[i as usize].map(|v| self.positions[v as usize])
+    }
+
+    /// The (2,3) torus-knot tube of `../shared/refs/ANCHORS.md` with `rings` rings of `segments`
+    /// vertices: `2 rings segments` triangles (1,000,000 for 2000 x 250).
+    pub fn knot(rings: u32, segments: u32) -> Self {
+        use std::f64::consts::TAU;
+        let mut positions = Vec::with_capacity((rings * segments) as usize);
+        for i in 0..rings {
+            let t = TAU * i as f64 / rings as f64;
+            let (s2, c2, s3, c3) = ((2.0 * t).sin(), (2.0 * t).cos(), (3.0 * t).sin(), (3.0 * t).cos());
+            let r = c3 + 2.0;
+            let (r1, r2) = (-3.0 * s3, -9.0 * c3);
+            let c = glam::DVec3::new(r * c2, r * s2, -s3);
+            let d1 = glam::DVec3::new(r1 * c2 - 2.0 * r * s2, r1 * s2 + 2.0 * r * c2, -3.0 * c3);
+            let d2 = glam::DVec3::new(
+                r2 * c2 - 4.0 * r1 * s2 - 4.0 * r * c2,
+                r2 * s2 + 4.0 * r1 * c2 - 4.0 * r * s2,
+                9.0 * s3,
+            );
+            // Frenet frame: T along c', N the part of c'' across T, B = T x N.
+            let tangent = d1.normalize();
+            let normal = (d2 - d2.dot(tangent) * tangent).normalize();
+            let binormal = tangent.cross(normal);
+            for j in 0..segments {
+                let theta = TAU * j as f64 / segments as f64;
+                let rad = 0.4 * (1.0 + 0.08 * (60.0 * t).sin() * (6.0 * theta).sin());
+                let p = c + rad * (theta.cos() * normal + theta.sin() * binormal);
+                positions.push(p.as_vec3().into());
+            }
+        }
+        let mut triangles = Vec::with_capacity(2 * (rings * segments) as usize);
+        let at = |i: u32, j: u32| (i % rings) * segments + j % segments;
+        for i in 0..rings {
+            for j in 0..segments {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+        Self { positions, triangles }
+    }
+}
+
+/// Up to eight triangles, lane by lane: `v[vertex][axis][lane]`. Unused lanes hold NaN, which
+/// fails every comparison of the test.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct TriBlock {
+    v: [[[f32; 8]; 3]; 3],
+    /// Triangle index (into the mesh) per lane.
+    id: [u32; 8],
+}
+
+/// A ray prepared for the watertight test: the permutation that makes z the direction's
+/// largest axis and the shear that maps the direction to +z.
+#[derive(Clone, Copy, Debug)]
+pub struct TriRay {
+    k: [usize; 3],
+    o: [f32; 3],
+    s: [f32; 3],
+}
+
+impl TriRay {
+    /// Prepares the ray `o + t d`.
+    #[inline(always)]
+    pub fn new(o: Vec3A, d: Vec3A) -> Self {
+        let kz = d.abs().max_position();
+        let k = [(kz + 1) % 3, (kz + 2) % 3, kz];
+        let dp = [d[k[0]], d[k[1]], d[k[2]]];
+        Self { k, o: [o[k[0]], o[k[1]], o[k[2]]], s: [-dp[0] / dp[2], -dp[1] / dp[2], 1.0 / dp[2]] }
+    }
+}
+
+impl TriBlock {
+    /// Distances (infinite where missed) of the eight lanes, each in `(0, tmax)`; lanes whose
+    /// edge functions are exactly zero in `f32` are decided by the scalar test (in `f64`).
+    #[inline(always)]
+    fn intersect(&self, r: &TriRay, o: Vec3A, d: Vec3A, tmax: f32) -> [f32; 8] {
+        let [kx, ky, kz] = r.k;
+        let mut x = [[0.0f32; 8]; 3];
+        let mut y = [[0.0f32; 8]; 3];
+        let mut z = [[0.0f32; 8]; 3];
+        for j in 0..3 {
+            for l in 0..8 {
+                let pz = self.v[j][kz][l] - r.o[2];
+                x[j][l] = (self.v[j][kx][l] - r.o[0]) + r.s[0] * pz;
+                y[j][l] = (self.v[j][ky][l] - r.o[1]) + r.s[1] * pz;
+                z[j][l] = pz * r.s[2];
+            }
+        }
+        let mut out = [f32::INFINITY; 8];
+        let mut zero_edge = 0u32;
+        for l in 0..8 {
+            let e0 = x[1][l] * y[2][l] - y[1][l] * x[2][l];
+            let e1 = x[2][l] * y[0][l] - y[2][l] * x[0][l];
+            let e2 = x[0][l] * y[1][l] - y[0][l] * x[1][l];
+            zero_edge |= ((e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0)) as u32 * (1 << l);
+            let det = e0 + e1 + e2;
+            let t_scaled = e0 * z[0][l] + e1 * z[1][l] + e2 * z[2][l];
+            let inv_det = 1.0 / det;
+            let t = t_scaled * inv_det;
+            let max_z = z[0][l].abs().max(z[1][l].abs()).max(z[2][l].abs());
+            let max_x = x[0][l].abs().max(x[1][l].abs()).max(x[2][l].abs());
+            let max_y = y[0][l].abs().max(y[1][l].abs()).max(y[2][l].abs());
+            let delta_z = gamma(3) * max_z;
+            let delta_x = gamma(5) * (max_x + max_z);
+            let delta_y = gamma(5) * (max_y + max_z);
+            let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+            let max_e = e0.abs().max(e1.abs()).max(e2.abs());
+            let delta_t =
+                3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
+            let same_sign = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+            let in_range = if det < 0.0 {
+                t_scaled < 0.0 && t_scaled >= tmax * det
+            } else {
+                t_scaled > 0.0 && t_scaled <= tmax * det
+            };
+            if same_sign && det != 0.0 && in_range && t > delta_t && t < tmax {
+                out[l] = t;
+            }
+        }
+        // NaN lanes compare unequal to zero, so unused lanes never come here.
+        while zero_edge != 0 {
+            let l = zero_edge.trailing_zeros() as usize;
+            zero_edge &= zero_edge - 1;
+            let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
+            out[l] = Triangle { p }.intersect(o, d, tmax);
+        }
+        out
+    }
+}
+
+/// A mesh's bottom-level BVH.
+#[derive(Debug, Default)]
+pub struct MeshBlas {
+    /// The mesh.
+    pub mesh: Arc<MeshData>,
+    bvh: Bvh8,
+    blocks: Vec<TriBlock>,
+}
+
+impl MeshBlas {
+    /// Builds the BVH of `mesh` (triangles without area are left out).
+    pub fn build(mesh: Arc<MeshData>) -> Self {
+        let _span = tracing::info_span!("build_blas", triangles = mesh.triangles.len()).entered();
+        let ids: Vec<u32> = (0..mesh.triangles.len() as u32)
+            .filter(|&i| {
+                let [a, b, c] = mesh.triangle(i);
+                Triangle::new(a, b, c).is_some()
+            })
+            .collect();
+        let aabbs: Vec<Aabb> = ids
+            .iter()
+            .map(|&i| {
+                let [a, b, c] = mesh.triangle(i);
+                Aabb { min: a.min(b).min(c), max: a.max(b).max(c) }
+            })
+            .collect();
+        let mut blocks = Vec::with_capacity(ids.len() / 4);
+        let bvh = Bvh8::build(&aabbs, 8, |prims| {
+            let mut b = TriBlock { v: [[[f32::NAN; 8]; 3]; 3], id: [u32::MAX; 8] };
+            for (l, &p) in prims.iter().enumerate() {
+                let id = ids[p as usize];
+                for (j, v) in mesh.triangle(id).iter().enumerate() {
+                    for a in 0..3 {
+                        b.v[j][a][l] = v[a];
+                    }
+                }
+                b.id[l] = id;
+            }
+            blocks.push(b);
+            (blocks.len() as u32 - 1, 1)
+        });
+        Self { mesh, bvh, blocks }
+    }
+
+    /// Bounds in object space.
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.bounds
+    }
+
+    /// Bytes held by the BVH and the triangle blocks (not the mesh itself).
+    pub fn bytes(&self) -> usize {
+        self.bvh.node_bytes() + self.blocks.len() * size_of::<TriBlock>()
+    }
+
+    /// Closest hit `(t, triangle)` with `t` in `(0, tmax)`, in object space.
+    #[inline]
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
+        let r = TriRay::new(o, d);
+        let mut id = u32::MAX;
+        let t = self.bvh.closest(o, d, tmax, |first, _, best| {
+            let block = &self.blocks[first as usize];
+            let ts = block.intersect(&r, o, d, best);
+            let mut best = best;
+            for l in 0..8 {
+                if ts[l] < best {
+                    (best, id) = (ts[l], block.id[l]);
+                }
+            }
+            best
+        });
+        (id != u32::MAX).then_some((t, id))
+    }
+
+    /// True when some triangle lies on the ray with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        let r = TriRay::new(o, d);
+        self.bvh.any(o, d, tmax, |first, _| {
+            self.blocks[first as usize].intersect(&r, o, d, tmax).iter().any(|t| *t < tmax)
+        })
+    }
+
+    /// Surface data on triangle `id` at the object-space point `p`.
+    #[inline]
+    pub fn surface(&self, id: u32, p: Vec3A) -> SurfacePoint {
+        let [a, b, c] = self.mesh.triangle(id);
+        Triangle { p: [a, b, c] }.surface(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blas_hits_equal_a_scan_of_the_scalar_test() {
+        let mesh = Arc::new(MeshData::knot(60, 24));
+        let blas = MeshBlas::build(mesh.clone());
+        let mut s = 3u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let mut hits = 0;
+        for i in 0..4000 {
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 5.0;
+            // Some rays start on the surface: at a vertex, aimed across the mesh.
+            let o = if i % 4 == 0 { mesh.positions[i % mesh.positions.len()] } else { o };
+            let d = Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - o * 0.5 * (i % 2) as f32;
+            let scan = (0..mesh.triangles.len() as u32)
+                .map(|k| {
+                    let [a, b, c] = mesh.triangle(k);
+                    (Triangle { p: [a, b, c] }.intersect(o, d, f32::INFINITY), k)
+                })
+                .fold((f32::INFINITY, u32::MAX), |a, b| if b.0 < a.0 { b } else { a });
+            let got = blas.intersect(o, d, f32::INFINITY);
+            assert_eq!(got.map(|h| h.0), scan.1.ne(&u32::MAX).then_some(scan.0), "ray {o} {d}");
+            assert_eq!(blas.occluded(o, d, f32::INFINITY), got.is_some());
+            if let Some((t, _)) = got {
+                hits += 1;
+                assert!(!blas.occluded(o, d, t * 0.999) || t < 1e-3, "nothing lies before the closest hit");
+            }
+        }
+        assert!(hits > 1000, "{hits}");
+    }
+
+    #[test]
+    fn the_knot_has_the_anchor_triangle_count() {
+        let m = MeshData::knot(2000, 250);
+        assert_eq!(m.triangles.len(), 1_000_000);
+        assert!(m.positions.iter().all(|p| p.is_finite() && p.length() < 3.5));
+    }
+}

@@ -1,0 +1,246 @@
+//! `pathwave bench-rays`: BVH build time and traversal rates on the rays of
+//! `../shared/refs/ANCHORS.md` (primary, diffuse-bounce and shadow rays on the 1M-triangle knot
+//! and on cornell-diffuse), so that our figures sit beside Embree's measured the same way.
+
+use crate::engine::geometry::{Geometry, Primitive};
+use crate::engine::mesh::{MeshBlas, MeshData};
+use crate::engine::shape::Triangle;
+use glam::{Vec2, Vec3A};
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Rays with their extent.
+#[derive(Default)]
+pub struct Rays {
+    /// Origins.
+    pub o: Vec<Vec3A>,
+    /// Directions.
+    pub d: Vec<Vec3A>,
+    /// Largest distances.
+    pub tmax: Vec<f32>,
+}
+
+impl Rays {
+    fn push(&mut self, o: Vec3A, d: Vec3A, tmax: f32) {
+        self.o.push(o);
+        self.d.push(d);
+        self.tmax.push(tmax);
+    }
+}
+
+/// Something rays can be traced against: closest hit `(t, geometric normal)` and occlusion.
+pub trait Target: Sync {
+    /// Closest hit.
+    fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Vec3A)>;
+    /// Any hit.
+    fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool;
+}
+
+impl Target for MeshBlas {
+    fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Vec3A)> {
+        self.intersect(o, d, tmax).map(|(t, id)| (t, self.surface(id, o + t * d).n))
+    }
+    fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        MeshBlas::occluded(self, o, d, tmax)
+    }
+}
+
+impl Target for Geometry {
+    fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Vec3A)> {
+        let ray = crate::engine::math::Ray::new(o, d);
+        self.intersect(&ray, tmax).map(|h| (h.t, h.surface.n))
+    }
+    fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
+        Geometry::occluded(self, &crate::engine::math::Ray::new(o, d), tmax)
+    }
+}
+
+/// Rays through the pixel centres of a `size` x `size` pinhole camera, in 8x8 tiles.
+pub fn primary(from: Vec3A, at: Vec3A, up: Vec3A, vfov_deg: f32, size: u32) -> Rays {
+    let w = (from - at).normalize();
+    let u = up.cross(w).normalize();
+    let v = w.cross(u);
+    let half = (vfov_deg.to_radians() / 2.0).tan();
+    let mut rays = Rays::default();
+    for ty in (0..size).step_by(8) {
+        for tx in (0..size).step_by(8) {
+            for y in ty..(ty + 8).min(size) {
+                for x in tx..(tx + 8).min(size) {
+                    let sx = (2.0 * (x as f32 + 0.5) / size as f32 - 1.0) * half;
+                    let sy = (1.0 - 2.0 * (y as f32 + 0.5) / size as f32) * half;
+                    rays.push(from, (sx * u + sy * v - w).normalize(), f32::INFINITY);
+                }
+            }
+        }
+    }
+    rays
+}
+
+/// A hash of `i` to two numbers in [0, 1).
+fn rnd2(i: u32, salt: u32) -> Vec2 {
+    let h = |mut x: u32| {
+        x ^= x >> 16;
+        x = x.wrapping_mul(0x7feb352d);
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x846ca68b);
+        x ^ (x >> 16)
+    };
+    let a = h(i.wrapping_mul(2).wrapping_add(salt.wrapping_mul(0x9e3779b9)));
+    let b = h(a ^ 0x5bd1e995);
+    Vec2::new((a >> 8) as f32 / (1 << 24) as f32, (b >> 8) as f32 / (1 << 24) as f32)
+}
+
+/// One cosine-distributed ray per primary hit about the geometric normal turned to face the
+/// camera, its origin moved `offset` along that normal.
+pub fn bounce(primary: &Rays, hits: &[Option<(f32, Vec3A)>], offset: f32) -> Rays {
+    let mut rays = Rays::default();
+    for (i, h) in hits.iter().enumerate() {
+        let Some((t, n)) = *h else { continue };
+        let d = primary.d[i];
+        let n = if n.dot(d) > 0.0 { -n } else { n };
+        let p = primary.o[i] + t * d + offset * n;
+        let u = rnd2(i as u32, 1);
+        let (r, phi) = (u.x.sqrt(), std::f32::consts::TAU * u.y);
+        let (t1, t2) = n.any_orthonormal_pair();
+        let dir = r * phi.cos() * t1 + r * phi.sin() * t2 + (1.0 - u.x).max(0.0).sqrt() * n;
+        rays.push(p, dir, f32::INFINITY);
+    }
+    rays
+}
+
+/// Shadow rays from each primary hit to a uniform point of the one-sided light quad
+/// `(q, eu, ev)` (normal along `eu x ev`), only where surface and light face each other.
+pub fn shadow(primary: &Rays, hits: &[Option<(f32, Vec3A)>], light: [Vec3A; 3], offset: f32) -> Rays {
+    let [q, eu, ev] = light;
+    let ln = eu.cross(ev).normalize();
+    let mut rays = Rays::default();
+    for (i, h) in hits.iter().enumerate() {
+        let Some((t, n)) = *h else { continue };
+        let d = primary.d[i];
+        let n = if n.dot(d) > 0.0 { -n } else { n };
+        let p = primary.o[i] + t * d + offset * n;
+        let u = rnd2(i as u32, 2);
+        let target = q + u.x * eu + u.y * ev;
+        let to = target - p;
+        // On the light itself (same plane) or facing away: no ray.
+        if to.dot(n) <= 0.0 || to.dot(ln) >= 0.0 || (p - q).dot(ln).abs() < 1e-3 {
+            continue;
+        }
+        rays.push(p, to, 0.999);
+    }
+    rays
+}
+
+/// Traces `rays` on `threads` threads (closest or any hit); returns the hits and Mrays/s
+/// (median of 3 runs).
+fn trace(
+    target: &dyn Target,
+    rays: &Rays,
+    threads: usize,
+    occlusion: bool,
+) -> (Vec<Option<(f32, Vec3A)>>, f64) {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    let mut rates = Vec::new();
+    let mut hits = Vec::new();
+    for _ in 0..3 {
+        let start = Instant::now();
+        hits = pool.install(|| {
+            (0..rays.o.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|i| {
+                    let (o, d, tmax) = (rays.o[i], rays.d[i], rays.tmax[i]);
+                    if occlusion {
+                        target.occluded(o, d, tmax).then_some((0.0, Vec3A::ZERO))
+                    } else {
+                        target.closest(o, d, tmax)
+                    }
+                })
+                .collect()
+        });
+        rates.push(rays.o.len() as f64 / start.elapsed().as_secs_f64() / 1e6);
+    }
+    rates.sort_by(f64::total_cmp);
+    (hits, rates[1])
+}
+
+/// One table row per ray kind and thread count.
+fn rows(
+    out: &mut String,
+    name: &str,
+    target: &dyn Target,
+    primary_rays: &Rays,
+    offset: f32,
+    light: Option<[Vec3A; 3]>,
+) {
+    let (hits, _) = trace(target, primary_rays, 2, false);
+    let frac =
+        |h: &[Option<(f32, Vec3A)>]| h.iter().filter(|h| h.is_some()).count() as f64 / h.len().max(1) as f64;
+    let bounce_rays = bounce(primary_rays, &hits, offset);
+    let mut kinds = vec![("primary", primary_rays, false), ("diffuse bounce", &bounce_rays, false)];
+    let shadow_rays = light.map(|l| shadow(primary_rays, &hits, l, offset));
+    if let Some(s) = &shadow_rays {
+        kinds.push(("shadow (occlusion)", s, true));
+    }
+    for (kind, rays, occlusion) in kinds {
+        let (h1, r1) = trace(target, rays, 1, occlusion);
+        let (_, r2) = trace(target, rays, 2, occlusion);
+        let _ =
+            writeln!(out, "| {name} | {kind} | {} | {:.3} | {r1:.2} | {r2:.2} |", rays.o.len(), frac(&h1));
+    }
+}
+
+/// Runs the benchmark; `knot` = (rings, segments) of the mesh (2000, 250 for 1M triangles).
+pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<String, String> {
+    let mut out = String::new();
+    let start = Instant::now();
+    let mesh = Arc::new(MeshData::knot(knot.0, knot.1));
+    let gen_s = start.elapsed().as_secs_f64();
+    let n = mesh.triangles.len();
+    let _ = writeln!(out, "knot: {n} triangles (generated in {gen_s:.2} s)\n");
+    let _ = writeln!(out, "| BVH | build s (2 threads) | bytes | bytes/triangle |");
+    let _ = writeln!(out, "|---|---|---|---|");
+    let start = Instant::now();
+    let blas = MeshBlas::build(mesh.clone());
+    let ours_s = start.elapsed().as_secs_f64();
+    let _ = writeln!(
+        out,
+        "| pathwave BVH8 + 8-triangle blocks | {ours_s:.3} | {} | {:.1} |",
+        blas.bytes(),
+        blas.bytes() as f64 / n as f64
+    );
+    let tris: Vec<Primitive> = (0..n as u32)
+        .filter_map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            Triangle::new(a, b, c).map(Primitive::Triangle)
+        })
+        .collect();
+    let m = tris.len();
+    let start = Instant::now();
+    let cw = Geometry::build_bvh(tris, vec![0; m]);
+    let cw_s = start.elapsed().as_secs_f64();
+    let _ = writeln!(
+        out,
+        "| obvhs CWBVH + Primitive list (before) | {cw_s:.3} | | {} (primitive list) |",
+        size_of::<Primitive>()
+    );
+    let _ = writeln!(out, "\n| scene | rays | count | hit fraction | Mrays/s 1t | Mrays/s 2t |");
+    let _ = writeln!(out, "|---|---|---|---|---|---|");
+    let cam = primary(Vec3A::new(0.0, -3.0, 7.5), Vec3A::ZERO, Vec3A::Y, 45.0, 1024);
+    rows(&mut out, "knot (pathwave BVH8)", &blas, &cam, 1e-4, None);
+    rows(&mut out, "knot (obvhs CWBVH)", &cw, &cam, 1e-4, None);
+    if let Some(path) = cornell {
+        let desc = crate::engine::scene::load(path).map_err(|e| e.to_string())?;
+        let scene = crate::engine::world::SceneWorld::render_scene(&desc);
+        let c = desc.camera;
+        let cam = primary(c.look_from.into(), c.look_at.into(), c.vup.into(), c.vfov, 1024);
+        let light = scene.lights.prims.first().and_then(|&p| match scene.geometry.prims[p as usize] {
+            Primitive::Quad(q) => Some([q.q, q.u, q.v]),
+            _ => None,
+        });
+        rows(&mut out, "cornell-diffuse (obvhs CWBVH)", &*scene.geometry, &cam, 1e-2, light);
+    }
+    Ok(out)
+}
