@@ -176,7 +176,7 @@ fn main() -> ExitCode {
         }
         Command::Compare { a, b } => compare(&a, &b),
         Command::BenchRays { rings, segments, scene } => {
-            pathwave::raybench::run((rings, segments), Some(&scene)).map(|table| println!("{table}"))
+            pathwave::raybench::run((rings, segments), Some(&scene))
         }
         Command::Bench { spp, refs, only, batch, svg, threads } => {
             bench(&spp, &refs, &only, batch, svg, threads)

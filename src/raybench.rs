@@ -7,7 +7,6 @@ use crate::engine::mesh::{MeshBlas, MeshData};
 use crate::engine::shape::Triangle;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
-use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -167,14 +166,7 @@ fn trace(
 }
 
 /// One table row per ray kind and thread count.
-fn rows(
-    out: &mut String,
-    name: &str,
-    target: &dyn Target,
-    primary_rays: &Rays,
-    offset: f32,
-    light: Option<[Vec3A; 3]>,
-) {
+fn rows(name: &str, target: &dyn Target, primary_rays: &Rays, offset: f32, light: Option<[Vec3A; 3]>) {
     let (hits, _) = trace(target, primary_rays, 2, false);
     let frac =
         |h: &[Option<(f32, Vec3A)>]| h.iter().filter(|h| h.is_some()).count() as f64 / h.len().max(1) as f64;
@@ -187,26 +179,23 @@ fn rows(
     for (kind, rays, occlusion) in kinds {
         let (h1, r1) = trace(target, rays, 1, occlusion);
         let (_, r2) = trace(target, rays, 2, occlusion);
-        let _ =
-            writeln!(out, "| {name} | {kind} | {} | {:.3} | {r1:.2} | {r2:.2} |", rays.o.len(), frac(&h1));
+        let _ = println!("| {name} | {kind} | {} | {:.3} | {r1:.2} | {r2:.2} |", rays.o.len(), frac(&h1));
     }
 }
 
-/// Runs the benchmark; `knot` = (rings, segments) of the mesh (2000, 250 for 1M triangles).
-pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<String, String> {
-    let mut out = String::new();
+/// Runs the benchmark, printing markdown tables as it goes; `knot` = (rings, segments) of the mesh (2000, 250 for 1M triangles).
+pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), String> {
     let start = Instant::now();
     let mesh = Arc::new(MeshData::knot(knot.0, knot.1));
     let gen_s = start.elapsed().as_secs_f64();
     let n = mesh.triangles.len();
-    let _ = writeln!(out, "knot: {n} triangles (generated in {gen_s:.2} s)\n");
-    let _ = writeln!(out, "| BVH | build s (2 threads) | bytes | bytes/triangle |");
-    let _ = writeln!(out, "|---|---|---|---|");
+    println!("knot: {n} triangles (generated in {gen_s:.2} s)\n");
+    println!("| BVH | build s (2 threads) | bytes | bytes/triangle |");
+    println!("|---|---|---|---|");
     let start = Instant::now();
     let blas = MeshBlas::build(mesh.clone());
     let ours_s = start.elapsed().as_secs_f64();
-    let _ = writeln!(
-        out,
+    println!(
         "| pathwave BVH8 + 8-triangle blocks | {ours_s:.3} | {} | {:.1} |",
         blas.bytes(),
         blas.bytes() as f64 / n as f64
@@ -221,16 +210,15 @@ pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<String
     let start = Instant::now();
     let cw = Geometry::build_bvh(tris, vec![0; m]);
     let cw_s = start.elapsed().as_secs_f64();
-    let _ = writeln!(
-        out,
+    println!(
         "| obvhs CWBVH + Primitive list (before) | {cw_s:.3} | | {} (primitive list) |",
         size_of::<Primitive>()
     );
-    let _ = writeln!(out, "\n| scene | rays | count | hit fraction | Mrays/s 1t | Mrays/s 2t |");
-    let _ = writeln!(out, "|---|---|---|---|---|---|");
+    println!("\n| scene | rays | count | hit fraction | Mrays/s 1t | Mrays/s 2t |");
+    println!("|---|---|---|---|---|---|");
     let cam = primary(Vec3A::new(0.0, -3.0, 7.5), Vec3A::ZERO, Vec3A::Y, 45.0, 1024);
-    rows(&mut out, "knot (pathwave BVH8)", &blas, &cam, 1e-4, None);
-    rows(&mut out, "knot (obvhs CWBVH)", &cw, &cam, 1e-4, None);
+    rows("knot (pathwave BVH8)", &blas, &cam, 1e-4, None);
+    rows("knot (obvhs CWBVH)", &cw, &cam, 1e-4, None);
     if let Some(path) = cornell {
         let desc = crate::engine::scene::load(path).map_err(|e| e.to_string())?;
         let scene = crate::engine::world::SceneWorld::render_scene(&desc);
@@ -240,7 +228,7 @@ pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<String
             Primitive::Quad(q) => Some([q.q, q.u, q.v]),
             _ => None,
         });
-        rows(&mut out, "cornell-diffuse (obvhs CWBVH)", &*scene.geometry, &cam, 1e-2, light);
+        rows("cornell-diffuse (obvhs CWBVH)", &*scene.geometry, &cam, 1e-2, light);
     }
-    Ok(out)
+    Ok(())
 }

@@ -102,6 +102,93 @@ impl TriBlock {
     /// edge functions are exactly zero in `f32` are decided by the scalar test (in `f64`).
     #[inline(always)]
     fn intersect(&self, r: &TriRay, o: Vec3A, d: Vec3A, tmax: f32) -> [f32; 8] {
+        let (mut out, mut zero_edge) = self.lanes(r, tmax);
+        // NaN lanes compare unequal to zero, so unused lanes never come here.
+        while zero_edge != 0 {
+            let l = zero_edge.trailing_zeros() as usize;
+            zero_edge &= zero_edge - 1;
+            let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
+            out[l] = Triangle { p }.intersect(o, d, tmax);
+        }
+        out
+    }
+
+    /// The eight tests and the lanes with an edge function exactly zero (left to the caller).
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    #[inline(always)]
+    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32) {
+        use std::arch::x86_64::*;
+        // SAFETY: aligned loads of whole 32-byte lane arrays of `self` (32-byte aligned); AVX2
+        // is enabled for the whole build.
+        unsafe {
+            let [kx, ky, kz] = r.k;
+            let splat = _mm256_set1_ps;
+            let (ox, oy, oz) = (splat(r.o[0]), splat(r.o[1]), splat(r.o[2]));
+            let (sx, sy, sz) = (splat(r.s[0]), splat(r.s[1]), splat(r.s[2]));
+            let ld = |j: usize, a: usize| _mm256_load_ps(self.v[j][a].as_ptr());
+            let (add, sub, mul) = (_mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps);
+            let mut x = [_mm256_setzero_ps(); 3];
+            let mut y = x;
+            let mut z = x;
+            for j in 0..3 {
+                let pz = sub(ld(j, kz), oz);
+                x[j] = add(sub(ld(j, kx), ox), mul(sx, pz));
+                y[j] = add(sub(ld(j, ky), oy), mul(sy, pz));
+                z[j] = mul(pz, sz);
+            }
+            let zero = _mm256_setzero_ps();
+            let e0 = sub(mul(x[1], y[2]), mul(y[1], x[2]));
+            let e1 = sub(mul(x[2], y[0]), mul(y[2], x[0]));
+            let e2 = sub(mul(x[0], y[1]), mul(y[0], x[1]));
+            let eq0 = |e| _mm256_cmp_ps::<_CMP_EQ_OQ>(e, zero);
+            let zero_edge = _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(eq0(e0), eq0(e1)), eq0(e2))) as u32;
+            let det = add(add(e0, e1), e2);
+            let t_scaled = add(add(mul(e0, z[0]), mul(e1, z[1])), mul(e2, z[2]));
+            let inv_det = _mm256_div_ps(splat(1.0), det);
+            let t = mul(t_scaled, inv_det);
+            let abs = |v| _mm256_andnot_ps(splat(-0.0), v);
+            let max3 = |v: [__m256; 3]| _mm256_max_ps(_mm256_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
+            let (max_x, max_y, max_z) = (max3(x), max3(y), max3(z));
+            let delta_z = mul(splat(gamma(3)), max_z);
+            let delta_x = mul(splat(gamma(5)), add(max_x, max_z));
+            let delta_y = mul(splat(gamma(5)), add(max_y, max_z));
+            let delta_e = mul(
+                splat(2.0),
+                add(add(mul(mul(splat(gamma(2)), max_x), max_y), mul(delta_y, max_x)), mul(delta_x, max_y)),
+            );
+            let max_e = max3([e0, e1, e2]);
+            let delta_t = mul(
+                mul(
+                    splat(3.0),
+                    add(
+                        add(mul(mul(splat(gamma(3)), max_e), max_z), mul(delta_e, max_z)),
+                        mul(delta_z, max_e),
+                    ),
+                ),
+                abs(inv_det),
+            );
+            let cmp_ge = |a, b| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
+            let cmp_gt = |a, b| _mm256_cmp_ps::<_CMP_GT_OQ>(a, b);
+            let (and, or) = (_mm256_and_ps, _mm256_or_ps);
+            let all_ge = and(and(cmp_ge(e0, zero), cmp_ge(e1, zero)), cmp_ge(e2, zero));
+            let all_le = and(and(cmp_ge(zero, e0), cmp_ge(zero, e1)), cmp_ge(zero, e2));
+            let tmax_det = mul(splat(tmax), det);
+            let neg = and(cmp_gt(zero, det), and(cmp_gt(zero, t_scaled), cmp_ge(t_scaled, tmax_det)));
+            let pos = and(cmp_gt(det, zero), and(cmp_gt(t_scaled, zero), cmp_ge(tmax_det, t_scaled)));
+            let hit = and(
+                and(or(all_ge, all_le), or(neg, pos)),
+                and(cmp_gt(t, delta_t), _mm256_cmp_ps::<_CMP_LT_OQ>(t, splat(tmax))),
+            );
+            let mut out = [0.0f32; 8];
+            _mm256_storeu_ps(out.as_mut_ptr(), _mm256_blendv_ps(splat(f32::INFINITY), t, hit));
+            (out, zero_edge)
+        }
+    }
+
+    /// [`Self::lanes`] without AVX2, lane by lane.
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    #[inline(always)]
+    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32) {
         let [kx, ky, kz] = r.k;
         let mut x = [[0.0f32; 8]; 3];
         let mut y = [[0.0f32; 8]; 3];
@@ -145,14 +232,7 @@ impl TriBlock {
                 out[l] = t;
             }
         }
-        // NaN lanes compare unequal to zero, so unused lanes never come here.
-        while zero_edge != 0 {
-            let l = zero_edge.trailing_zeros() as usize;
-            zero_edge &= zero_edge - 1;
-            let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
-            out[l] = Triangle { p }.intersect(o, d, tmax);
-        }
-        out
+        (out, zero_edge)
     }
 }
 
