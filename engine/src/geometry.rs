@@ -64,8 +64,10 @@ impl Primitive {
 pub struct Hit {
     /// Ray parameter.
     pub t: f32,
-    /// Index into [`Geometry::prims`].
+    /// Index into [`Geometry::prims`], or [`crate::instances::INSTANCE_PRIM`].
     pub prim: u32,
+    /// Material id.
+    pub material: u32,
     /// Surface data.
     pub surface: SurfacePoint,
 }
@@ -201,14 +203,24 @@ impl Geometry {
         if self.velocity.is_none() {
             return self.static_hit(ray, t, prim);
         }
-        Hit { t, prim, surface: self.moving_surface(prim, ray.at(t), ray.time) }
+        Hit {
+            t,
+            prim,
+            material: self.material[prim as usize],
+            surface: self.moving_surface(prim, ray.at(t), ray.time),
+        }
     }
 
     /// [`Self::hit`] for geometry without motion (flat lists exist only then).
     #[inline(always)]
     pub fn static_hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
         debug_assert!(self.velocity.is_none());
-        Hit { t, prim, surface: self.prims[prim as usize].surface(ray.at(t)) }
+        Hit {
+            t,
+            prim,
+            material: self.material[prim as usize],
+            surface: self.prims[prim as usize].surface(ray.at(t)),
+        }
     }
 
     /// Surface data of primitive `prim` at the point `p` at `time`.

@@ -10,6 +10,7 @@ pub mod bvh8;
 pub mod camera;
 pub mod flat;
 pub mod geometry;
+pub mod instances;
 pub mod lights;
 pub mod material;
 pub mod math;

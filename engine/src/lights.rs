@@ -90,7 +90,8 @@ impl LightTable {
     /// emitters.
     #[inline]
     pub fn pdf(&self, geometry: &Geometry, prim: u32, from: Vec3A, p: Vec3A, n: Vec3A, time: f32) -> f32 {
-        let light = self.light_of_prim[prim as usize];
+        // Instance hits (prim out of range) are never sampled.
+        let light = self.light_of_prim.get(prim as usize).copied().unwrap_or(NO_LIGHT);
         if light == NO_LIGHT {
             return 0.0;
         }

@@ -2,9 +2,11 @@
 //! systems have run, never queried in a hot loop.
 
 use crate::camera::Camera;
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, Hit};
+use crate::instances::Instances;
 use crate::lights::LightTable;
 use crate::material::Material;
+use crate::math::Ray;
 use crate::media::Media;
 use crate::shape::SurfacePoint;
 use crate::texture::{MaterialTextures, Textures};
@@ -72,11 +74,20 @@ pub struct Features {
     /// Some material that a primitive uses takes a colour from a texture. Off, materials are
     /// used as they are.
     pub textures: bool,
+    /// Some mesh is instanced: rays also traverse the TLAS. Off, only the primitive BVH (or
+    /// the flat lists of small scenes) is traced.
+    pub instances: bool,
 }
 
 impl Features {
     /// Detects the features of extracted geometry.
-    pub fn detect(geometry: &Geometry, lights: &LightTable, media: &Media, shutter: (f32, f32)) -> Self {
+    pub fn detect(
+        geometry: &Geometry,
+        instances: &Instances,
+        lights: &LightTable,
+        media: &Media,
+        shutter: (f32, f32),
+    ) -> Self {
         let lights_are_quads = lights
             .prims
             .iter()
@@ -87,16 +98,23 @@ impl Features {
         Self {
             lights_are_quads,
             media: !media.is_empty(),
-            motion: geometry.velocity.is_some() && shutter.0 != shutter.1,
+            motion: (geometry.velocity.is_some() || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO))
+                && shutter.0 != shutter.1,
             textures: false,
+            instances: !instances.is_empty(),
         }
     }
 
     /// Sets `textures` from what the primitives' materials use. A textured emitter also turns
     /// `lights_are_quads` off: the Lambertian kernel takes one radiance per light.
-    pub fn with_textures(mut self, geometry: &Geometry, per_material: &[MaterialTextures]) -> Self {
+    pub fn with_textures(
+        mut self,
+        geometry: &Geometry,
+        instances: &Instances,
+        per_material: &[MaterialTextures],
+    ) -> Self {
         let mut used = vec![false; per_material.len()];
-        for &m in &geometry.material {
+        for &m in geometry.material.iter().chain(instances.list.iter().map(|i| &i.material)) {
             used[m as usize] = true;
         }
         let textured = |t: &MaterialTextures| t.albedo.is_some() || t.emit.is_some();
@@ -122,6 +140,8 @@ pub struct RenderScene {
     pub materials: Vec<Material>,
     /// Primitives and BVH.
     pub geometry: Arc<Geometry>,
+    /// Mesh instances and their TLAS.
+    pub instances: Arc<Instances>,
     /// Emitters for next-event estimation.
     pub lights: Arc<LightTable>,
     /// Participating media.
@@ -133,10 +153,26 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
-    /// The material of primitive `prim` with its textured colours evaluated at `sp`.
+    /// Closest hit with `t` in `(0, tmax)` among primitives and instances.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
+        let hit = self.geometry.intersect(ray, tmax);
+        if !self.features.instances {
+            return hit;
+        }
+        self.instances.intersect(ray, hit.map_or(tmax, |h| h.t)).or(hit)
+    }
+
+    /// True when a primitive or an instance lies on the ray with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
+        self.geometry.occluded(ray, tmax) || (self.features.instances && self.instances.occluded(ray, tmax))
+    }
+
+    /// Material `id` with its textured colours evaluated at `sp`.
     #[inline(always)]
-    pub fn material_at(&self, prim: u32, sp: &SurfacePoint) -> Material {
-        let id = self.geometry.material[prim as usize] as usize;
+    pub fn material_at(&self, id: u32, sp: &SurfacePoint) -> Material {
+        let id = id as usize;
         if !self.features.textures {
             return self.materials[id];
         }

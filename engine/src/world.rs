@@ -4,9 +4,11 @@
 
 use crate::camera::Camera;
 use crate::geometry::{Geometry, Primitive};
+use crate::instances::{Instance, Instances};
 use crate::lights::LightTable;
 use crate::material::Material;
 use crate::media::{Boundary, Media, Medium, Volume};
+use crate::mesh::{MeshBlas, MeshData};
 use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
 use crate::scene::{
     Albedo, BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc,
@@ -38,6 +40,14 @@ pub struct Motion {
     /// World units per unit time.
     pub velocity: Vec3,
 }
+
+/// Marks a mesh entity drawn as an instance: its mesh's BLAS (one per mesh, shared by every
+/// entity naming the same mesh) placed through the TLAS, instead of its triangles baked into
+/// the primitive BVH. Scenes mark every mesh whose material does not emit; emitting meshes
+/// stay primitives, so that light sampling finds their triangles. An instanced entity whose
+/// shape is not a mesh is skipped (with an error).
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct Instanced;
 
 /// Index into the [`Materials`] resource.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,6 +93,52 @@ pub struct SceneMedia {
     pub entities: Vec<Entity>,
 }
 
+/// The BLAS of every mesh that some instance uses, keyed by the mesh's address (each BLAS
+/// holds its mesh, so the address stays taken while the entry lives).
+#[derive(Resource, Default)]
+pub struct MeshLibrary {
+    blas: std::collections::HashMap<usize, Arc<MeshBlas>>,
+    /// How many BLAS were built.
+    pub builds: u64,
+}
+
+impl MeshLibrary {
+    /// Number of meshes held.
+    pub fn len(&self) -> usize {
+        self.blas.len()
+    }
+
+    /// True when no mesh is held.
+    pub fn is_empty(&self) -> bool {
+        self.blas.is_empty()
+    }
+
+    /// The BLAS of `mesh`, built the first time it is asked for.
+    fn get(&mut self, mesh: &Arc<MeshData>) -> Arc<MeshBlas> {
+        let key = Arc::as_ptr(mesh) as usize;
+        if let Some(b) = self.blas.get(&key) {
+            return b.clone();
+        }
+        self.builds += 1;
+        let b = Arc::new(MeshBlas::build(mesh.clone()));
+        self.blas.insert(key, b.clone());
+        b
+    }
+}
+
+/// Instances and their TLAS, kept by [`update_instances`].
+#[derive(Resource, Default)]
+pub struct SceneInstances {
+    /// The instances (index `i` is `entities[i]`).
+    pub instances: Arc<Instances>,
+    /// The instanced entities, sorted.
+    pub entities: Vec<Entity>,
+    /// How many times the TLAS was built.
+    pub builds: u64,
+    /// How many times it was refitted instead.
+    pub refits: u64,
+}
+
 /// The latest extracted scene.
 #[derive(Resource, Default)]
 pub struct Extracted(pub Option<Arc<RenderScene>>);
@@ -97,21 +153,33 @@ pub struct Update;
 #[allow(clippy::type_complexity)]
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
-    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>)>,
+    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), Without<Instanced>>,
     changed: Query<
         (),
-        (With<MaterialId>, Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>),
+        (
+            With<MaterialId>,
+            Without<Instanced>,
+            Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>,
+        ),
     >,
+    now_instanced: Query<Entity, Added<Instanced>>,
     mut removed_shape: RemovedComponents<Shape>,
     mut removed_material: RemovedComponents<MaterialId>,
     mut stopped: RemovedComponents<Motion>,
+    mut not_instanced: RemovedComponents<Instanced>,
     materials: Res<Materials>,
     camera: Res<CameraParams>,
 ) {
-    // Only removals from entities the geometry was built from matter (not from volumes).
+    // Only removals from entities the geometry was built from matter (not from volumes or
+    // instances); an entity that stops being an instance joins.
     let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
-    let removed =
-        removed_shape.read().chain(removed_material.read()).chain(stopped.read()).any(was_built_from);
+    let removed = removed_shape
+        .read()
+        .chain(removed_material.read())
+        .chain(stopped.read())
+        .chain(now_instanced.iter())
+        .any(was_built_from)
+        | not_instanced.read().any(|e| objects.contains(e));
     // The shutter bounds the sweep of moving objects.
     let moving = out.geometry.velocity.is_some();
     if !(removed
@@ -139,6 +207,81 @@ pub fn rebuild_geometry(
     out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
     out.geometry = Arc::new(geometry);
     out.rebuilds += 1;
+}
+
+/// Keeps the instances: the TLAS is rebuilt when instances come or go or change mesh or
+/// material (building the BLAS of a mesh no instance used before), refitted when they only
+/// move (or rebuilt when refitting made it much worse), and left alone otherwise. A BLAS is
+/// built once per mesh, whatever happens to the instances.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+pub fn update_instances(
+    mut out: ResMut<SceneInstances>,
+    mut library: ResMut<MeshLibrary>,
+    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), With<Instanced>>,
+    reshaped: Query<(), (With<Instanced>, Or<(Added<Instanced>, Changed<Shape>, Changed<MaterialId>)>)>,
+    moved: Query<Entity, (With<Instanced>, Or<(Changed<Transform>, Changed<Motion>)>)>,
+    mut removed_shape: RemovedComponents<Shape>,
+    mut removed_material: RemovedComponents<MaterialId>,
+    mut removed: RemovedComponents<Instanced>,
+    mut stopped: RemovedComponents<Motion>,
+    camera: Res<CameraParams>,
+) {
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let gone = removed_shape.read().chain(removed_material.read()).chain(removed.read()).any(was_built_from);
+    let stopped: Vec<Entity> = stopped.read().filter(|e| was_built_from(*e)).collect();
+    let moving = out.instances.list.iter().any(|i| i.velocity != Vec3A::ZERO);
+    let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
+    if gone || !reshaped.is_empty() || (moving && camera.is_changed()) || out.builds == 0 {
+        let _span = tracing::info_span!("rebuild_instances").entered();
+        let mut objs: Vec<_> = objects.iter().collect();
+        objs.sort_by_key(|(e, ..)| *e);
+        let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
+        for (e, transform, shape, material, motion) in objs {
+            let ShapeDesc::Mesh(file) = &shape.0 else {
+                tracing::error!("instance skipped: only meshes are instanced");
+                continue;
+            };
+            let b = library.get(&file.mesh);
+            let index = match blas.iter().position(|x| Arc::ptr_eq(x, &b)) {
+                Some(i) => i,
+                None => {
+                    blas.push(b);
+                    blas.len() - 1
+                }
+            };
+            match Instance::new(index as u32, transform.0, material.0, velocity(motion)) {
+                Some(inst) => {
+                    list.push(inst);
+                    entities.push(e);
+                }
+                None => tracing::error!("instance skipped: its transform is singular"),
+            }
+        }
+        // Meshes no instance uses any more are dropped.
+        library.blas.retain(|_, b| blas.iter().any(|x| Arc::ptr_eq(x, b)));
+        out.instances = Arc::new(Instances::build(blas, list, camera.0.shutter));
+        out.entities = entities;
+        out.builds += 1;
+        return;
+    }
+    if moved.is_empty() && stopped.is_empty() {
+        return;
+    }
+    let out = &mut *out;
+    let instances = Arc::make_mut(&mut out.instances);
+    for e in moved.iter().chain(stopped) {
+        let Ok(i) = out.entities.binary_search(&e) else { continue };
+        let Ok((_, transform, _, _, motion)) = objects.get(e) else { continue };
+        if !instances.place(i, transform.0, velocity(motion)) {
+            tracing::error!("instance not moved: its new transform is singular");
+        }
+    }
+    if instances.refit() {
+        out.refits += 1;
+    } else {
+        *instances = Instances::build(instances.blas.clone(), instances.list.clone(), camera.0.shutter);
+        out.builds += 1;
+    }
 }
 
 /// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,
@@ -183,8 +326,10 @@ pub fn rebuild_media(
 }
 
 /// Builds a new [`RenderScene`] when anything it holds changed.
+#[allow(clippy::too_many_arguments)]
 pub fn extract_render_scene(
     geometry: Res<SceneGeometry>,
+    instances: Res<SceneInstances>,
     media: Res<SceneMedia>,
     textures: Res<SceneTextures>,
     materials: Res<Materials>,
@@ -194,6 +339,7 @@ pub fn extract_render_scene(
     mut out: ResMut<Extracted>,
 ) {
     let any = geometry.is_changed()
+        || instances.is_changed()
         || media.is_changed()
         || textures.is_changed()
         || materials.is_changed()
@@ -206,8 +352,14 @@ pub fn extract_render_scene(
     let c = camera.0;
     let s = settings.0;
     out.0 = Some(Arc::new(RenderScene {
-        features: Features::detect(&geometry.geometry, &geometry.lights, &media.media, c.shutter)
-            .with_textures(&geometry.geometry, &textures.per_material),
+        features: Features::detect(
+            &geometry.geometry,
+            &instances.instances,
+            &geometry.lights,
+            &media.media,
+            c.shutter,
+        )
+        .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
         camera: Camera::new(
             c.look_from,
             c.look_at,
@@ -223,6 +375,7 @@ pub fn extract_render_scene(
         background: background.0,
         materials: materials.0.clone(),
         geometry: geometry.geometry.clone(),
+        instances: instances.instances.clone(),
         lights: geometry.lights.clone(),
         media: media.media.clone(),
         textures: textures.textures.clone(),
@@ -241,9 +394,9 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
     let start = out.len();
     match *shape {
         ShapeDesc::Mesh(ref mesh) => {
-            let world: Vec<Vec3A> = mesh.positions.iter().map(|&p| m.transform_point3a(p.into())).collect();
+            let world: Vec<Vec3A> = mesh.mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
             let mirrored = m.matrix3.determinant() < 0.0;
-            for &[a, b, c] in mesh.triangles.iter() {
+            for &[a, b, c] in mesh.mesh.triangles.iter() {
                 let [a, b, c] = [a, b, c].map(|i| world[i as usize]);
                 let (b, c) = if mirrored { (c, b) } else { (b, c) };
                 // Triangles without area cannot be hit: meshes often hold a few; drop them.
@@ -432,10 +585,22 @@ impl SceneWorld {
         let mut world = World::new();
         let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
         let textures = build_textures(desc);
-        let (mats, per_material) = desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
+        let (mats, per_material): (Vec<Material>, _) =
+            desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
+        let emits = |id: usize| matches!(mats[id], Material::DiffuseLight { .. });
+        let instanced: Vec<bool> = desc
+            .objects
+            .iter()
+            .map(|o| match (&o.shape, &o.body) {
+                (ShapeDesc::Mesh(_), Body::Surface(name)) => {
+                    !emits(names.iter().position(|n| *n == name.0).expect("validated"))
+                }
+                _ => false,
+            })
+            .collect();
         world.insert_resource(Materials(mats));
         world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
-        for obj in &desc.objects {
+        for (obj, instanced) in desc.objects.iter().zip(instanced) {
             let placed = (Transform(compose(&obj.transform)), Shape(obj.shape.clone()));
             match &obj.body {
                 Body::Surface(name) => {
@@ -446,6 +611,9 @@ impl SceneWorld {
                     let mut e = world.spawn((placed, MaterialId(id as u32)));
                     if let Some(m) = obj.motion {
                         e.insert(Motion { velocity: m.velocity.0 });
+                    }
+                    if instanced {
+                        e.insert(Instanced);
                     }
                 }
                 Body::Volume(m) => {
@@ -470,13 +638,16 @@ impl SceneWorld {
             BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
         }));
         world.init_resource::<SceneGeometry>();
+        world.init_resource::<SceneInstances>();
+        world.init_resource::<MeshLibrary>();
         world.init_resource::<SceneMedia>();
         world.init_resource::<Extracted>();
         let mut schedule = Schedule::new(Update);
         schedule.add_systems((
             rebuild_geometry,
+            update_instances,
             rebuild_media,
-            extract_render_scene.after(rebuild_geometry).after(rebuild_media),
+            extract_render_scene.after(rebuild_geometry).after(update_instances).after(rebuild_media),
         ));
         Self { world, schedule }
     }

@@ -58,10 +58,9 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32) -> PixelAccumulator {
 
 /// Radiance arriving at the ray origin along the ray (unit direction).
 pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec3 {
-    let geo = &*scene.geometry;
     let mut st = PathState::new(ray.origin);
     'path: loop {
-        let hit = geo.intersect(&ray, f32::INFINITY);
+        let hit = scene.intersect(&ray, f32::INFINITY);
         // Each vertex yields an optional shadow ray and the next ray (None: the path ends).
         let (shadow, next) = 'vertex: {
             if scene.features.media {
@@ -77,7 +76,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
                 path::escape(scene, &mut st, ray.dir);
                 break 'path;
             };
-            let mat = &scene.material_at(hit.prim, &hit.surface);
+            let mat = &scene.material_at(hit.material, &hit.surface);
             let wo = -ray.dir;
             if mat.is_emissive() {
                 path::emit(scene, &mut st, &hit, mat, wo, ray.time);

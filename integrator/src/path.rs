@@ -102,7 +102,7 @@ fn pick_light(scene: &RenderScene, p: Vec3A, time: f32, sampler: &mut Sampler) -
     let wi = to / dist;
     let prim = lights.prims[light];
     let light_mat = if scene.features.textures {
-        scene.material_at(prim, &geo.surface(prim, ls.p, time))
+        scene.material_at(geo.material[prim as usize], &geo.surface(prim, ls.p, time))
     } else {
         scene.materials[geo.material[prim as usize] as usize]
     };
@@ -143,7 +143,7 @@ pub fn sample_light(
 /// else the media's transmittance along it (1 without media).
 #[inline]
 pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
-    if scene.geometry.occluded(ray, 1.0) {
+    if scene.occluded(ray, 1.0) {
         0.0
     } else if scene.features.media {
         scene.media.transmittance(ray.origin, ray.dir, 1.0)

@@ -325,37 +325,41 @@ impl<'de> Deserialize<'de> for ImageFile {
     }
 }
 
-/// The triangles of an OBJ file, read when the scene is loaded.
+/// The triangles of an OBJ file, read when the scene is loaded. Objects naming the same file
+/// share one mesh (and, as instances, one BLAS).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshFile {
     /// The path as written.
     pub path: std::path::PathBuf,
-    /// Vertex positions.
-    pub positions: std::sync::Arc<Vec<Vec3>>,
-    /// Triangles, as indices into `positions`.
-    pub triangles: std::sync::Arc<Vec<[u32; 3]>>,
+    /// Positions and triangles.
+    pub mesh: std::sync::Arc<crate::mesh::MeshData>,
 }
 
 impl<'de> Deserialize<'de> for MeshFile {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
-        let (positions, triangles) = match SCENE_DIR.with(|s| s.borrow().clone()) {
-            Some(dir) => read_obj(&dir.join(&path)).map_err(D::Error::custom)?,
-            None => (Vec::new(), Vec::new()),
+        let Some(dir) = SCENE_DIR.with(|s| s.borrow().clone()) else {
+            return Ok(MeshFile { path, mesh: Default::default() });
         };
-        Ok(MeshFile { path, positions: positions.into(), triangles: triangles.into() })
+        let full = dir.join(&path);
+        if let Some(mesh) = MESHES.with(|m| m.borrow().get(&full).cloned()) {
+            return Ok(MeshFile { path, mesh });
+        }
+        let mesh = std::sync::Arc::new(read_obj(&full).map_err(D::Error::custom)?);
+        MESHES.with(|m| m.borrow_mut().insert(full, mesh.clone()));
+        Ok(MeshFile { path, mesh })
     }
 }
 
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
-fn read_obj(path: &std::path::Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), String> {
+fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let (models, _) = tobj::load_obj(path, &options)
         .map_err(|e| format!("cannot read the mesh {}: {e}", path.display()))?;
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     for m in models {
         let base = positions.len() as u32;
-        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])));
         triangles.extend(m.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
     }
     if !positions.iter().all(|p| p.is_finite()) {
@@ -367,7 +371,7 @@ fn read_obj(path: &std::path::Path) -> Result<(Vec<Vec3>, Vec<[u32; 3]>), String
     if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
-    Ok((positions, triangles))
+    Ok(crate::mesh::MeshData { positions, triangles })
 }
 
 /// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.
@@ -467,6 +471,9 @@ thread_local! {
     /// The index of the object being parsed, while inside `objects`.
     static OBJECT_INDEX: Cell<Option<usize>> = const { Cell::new(None) };
     static MATERIAL_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
+    /// Meshes read so far in this load, by path: each file is read once and shared.
+    static MESHES: RefCell<std::collections::HashMap<std::path::PathBuf, std::sync::Arc<crate::mesh::MeshData>>> =
+        RefCell::new(Default::default());
 }
 
 /// The index in `objects` of the object the parser stopped in, if it stopped in one: errors
@@ -518,6 +525,7 @@ impl Drop for MaterialNameScope {
         MATERIAL_NAMES.with(|m| *m.borrow_mut() = None);
         TEXTURE_NAMES.with(|m| *m.borrow_mut() = None);
         SCENE_DIR.with(|m| *m.borrow_mut() = None);
+        MESHES.with(|m| m.borrow_mut().clear());
         TEXTURES_BEFORE.set(None);
     }
 }

@@ -263,7 +263,7 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
 /// the scene does not use (even if it defines such materials) are never visited.
 pub fn material_kinds(scene: &RenderScene) -> Vec<MaterialKind> {
     let mut used = vec![false; scene.materials.len()];
-    for &m in &scene.geometry.material {
+    for &m in scene.geometry.material.iter().chain(scene.instances.list.iter().map(|i| &i.material)) {
         used[m as usize] = true;
     }
     let mut kinds = Vec::new();

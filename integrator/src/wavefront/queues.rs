@@ -45,6 +45,7 @@ impl Paths {
         let hit0 = Hit {
             t: 0.0,
             prim: 0,
+            material: 0,
             surface: pathwave_engine::shape::SurfacePoint {
                 p: Vec3A::ZERO,
                 n: Vec3A::Z,

@@ -15,10 +15,11 @@ use pathwave_engine::render_scene::RenderScene;
 /// their material kind. Scenes without a BVH are traced as one stream, primitive by primitive.
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
-    let Some(flat) = geo.flat() else {
+    let flat = geo.flat().filter(|_| !scene.features.instances);
+    let Some(flat) = flat else {
         for k in 0..q.active.len() {
             let i = q.active[k];
-            let hit = geo.intersect(&p.ray(i as usize), f32::INFINITY);
+            let hit = scene.intersect(&p.ray(i as usize), f32::INFINITY);
             bin(scene, p, q, i, hit);
         }
         return;
@@ -55,7 +56,7 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
         return;
     };
     p.hit[i as usize] = hit;
-    match scene.materials[scene.geometry.material[hit.prim as usize] as usize] {
+    match scene.materials[hit.material as usize] {
         Material::Lambertian { .. } => q.lambertian.push(i),
         Material::Metal { .. } => q.metal.push(i),
         Material::Dielectric { .. } => q.dielectric.push(i),
@@ -109,7 +110,7 @@ pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for &i in &q.emissive {
         let s = i as usize;
         let hit = p.hit[s];
-        let mat = &scene.material_at(hit.prim, &hit.surface);
+        let mat = &scene.material_at(hit.material, &hit.surface);
         let mut st = p.state(s);
         path::emit(scene, &mut st, &hit, mat, -p.dir[s], p.time[s]);
         p.l[s] = st.l;
@@ -160,7 +161,7 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
             continue;
         }
         let hit = p.hit[s];
-        let mat = &scene.material_at(hit.prim, &hit.surface);
+        let mat = &scene.material_at(hit.material, &hit.surface);
         debug_assert_eq!(material::has_smooth_part(mat), kind == MaterialKind::Lambertian);
         let (wo, time) = (-p.dir[s], p.time[s]);
         let mut sampler = p.sampler[s];
@@ -207,7 +208,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         for &i in chunk {
             let s = i as usize;
             let hit = p.hit[s];
-            let Material::Lambertian { albedo } = scene.material_at(hit.prim, &hit.surface) else {
+            let Material::Lambertian { albedo } = scene.material_at(hit.material, &hit.surface) else {
                 unreachable!("the Lambertian queue holds Lambertian hits")
             };
             (slots[n], states[n], samplers[n]) = (i, p.state(s), p.sampler[s]);
@@ -233,11 +234,10 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
 /// `trace_shadow_rays`: occlusion tests (and transmittance through media); what gets through
 /// is added to the paths.
 pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
-    let geo = &*scene.geometry;
     let sq = &mut q.shadow;
     let n = sq.len();
     sq.occluded.resize(n, false);
-    match geo.flat() {
+    match scene.geometry.flat().filter(|_| !scene.features.instances) {
         Some(flat) => flat.occluded_stream(&sq.rays, &mut sq.occluded),
         None => {
             let [ox, oy, oz] = &sq.rays.o;
@@ -245,7 +245,7 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             for k in 0..n {
                 let origin = Vec3A::new(ox[k], oy[k], oz[k]);
                 let dir = Vec3A::new(dx[k], dy[k], dz[k]);
-                sq.occluded[k] = geo.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
+                sq.occluded[k] = scene.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
             }
         }
     }

@@ -1,0 +1,208 @@
+//! Mesh instances and the top-level BVH over them. An instance places a shared [`MeshBlas`]
+//! with an affine transform, a material and a velocity; rays move into the instance's object
+//! space, so a thousand instances of a mesh cost a thousand instance records and one BLAS.
+
+use crate::bvh8::Bvh8;
+use crate::geometry::Hit;
+use crate::math::{Ray, gamma};
+use crate::mesh::MeshBlas;
+use crate::shape::SurfacePoint;
+use glam::{Affine3A, Mat3A, Vec3A};
+use obvhs::aabb::Aabb;
+use std::sync::Arc;
+
+/// The `prim` of a [`Hit`] on an instance (there is no primitive index: the triangle is an
+/// instance's business, and emitters are never instanced).
+pub const INSTANCE_PRIM: u32 = u32::MAX;
+
+/// One placed mesh.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    /// Index into [`Instances::blas`].
+    pub blas: u32,
+    /// Object to world (at time 0).
+    pub world_from_object: Affine3A,
+    /// World to object.
+    pub object_from_world: Affine3A,
+    /// Inverse transpose of the linear part (object normals to world normals).
+    pub normal_to_world: Mat3A,
+    /// Material id.
+    pub material: u32,
+    /// World units per unit time.
+    pub velocity: Vec3A,
+}
+
+impl Instance {
+    /// An instance, or `None` when the transform is singular or not finite.
+    pub fn new(blas: u32, world_from_object: Affine3A, material: u32, velocity: Vec3A) -> Option<Self> {
+        let det = world_from_object.matrix3.determinant();
+        if !(det.abs() > 0.0 && det.is_finite()) || !world_from_object.translation.is_finite() {
+            return None;
+        }
+        let object_from_world = world_from_object.inverse();
+        Some(Self {
+            blas,
+            world_from_object,
+            object_from_world,
+            normal_to_world: object_from_world.matrix3.transpose(),
+            material,
+            velocity,
+        })
+    }
+}
+
+/// Instances, the BLAS they share and the TLAS over them.
+#[derive(Clone, Debug, Default)]
+pub struct Instances {
+    /// Bottom-level BVHs.
+    pub blas: Vec<Arc<MeshBlas>>,
+    /// The instances.
+    pub list: Vec<Instance>,
+    /// Shutter interval the TLAS bounds cover.
+    shutter: (f32, f32),
+    tlas: Bvh8,
+    /// Instance indices in TLAS leaf order.
+    order: Vec<u32>,
+    /// Sum of child-box areas when the TLAS was built (see [`Bvh8::sah_cost`]).
+    built_cost: f32,
+}
+
+/// World bounds of an object box under an affine map (the eight corners).
+fn transform_box(b: &Aabb, m: &Affine3A) -> Aabb {
+    let mut out = Aabb::empty();
+    for i in 0..8 {
+        let c = Vec3A::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        out.extend(m.transform_point3a(c));
+    }
+    out
+}
+
+impl Instances {
+    /// Builds the TLAS over `list` (BLAS indices into `blas`); bounds cover each instance's
+    /// motion over `shutter`.
+    pub fn build(blas: Vec<Arc<MeshBlas>>, list: Vec<Instance>, shutter: (f32, f32)) -> Self {
+        let _span = tracing::info_span!("build_tlas", instances = list.len()).entered();
+        let mut me = Self { blas, list, shutter, ..Default::default() };
+        let aabbs: Vec<Aabb> = (0..me.list.len()).map(|i| me.world_bounds(i)).collect();
+        let mut order = Vec::with_capacity(aabbs.len());
+        me.tlas = Bvh8::build(&aabbs, 4, |prims| {
+            order.extend_from_slice(prims);
+            ((order.len() - prims.len()) as u32, prims.len() as u32)
+        });
+        me.order = order;
+        me.built_cost = me.tlas.sah_cost();
+        me
+    }
+
+    /// True when there are no instances.
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+
+    /// World bounds of instance `i` over the shutter interval.
+    pub fn world_bounds(&self, i: usize) -> Aabb {
+        let inst = &self.list[i];
+        let b = transform_box(&self.blas[inst.blas as usize].bounds(), &inst.world_from_object);
+        let (a, c) = (inst.velocity * self.shutter.0, inst.velocity * self.shutter.1);
+        Aabb { min: b.min + a.min(c), max: b.max + a.max(c) }
+    }
+
+    /// Replaces the placement of instance `i` (call [`Self::refit`] after the last one).
+    pub fn place(&mut self, i: usize, world_from_object: Affine3A, velocity: Vec3A) -> bool {
+        let old = &self.list[i];
+        match Instance::new(old.blas, world_from_object, old.material, velocity) {
+            Some(new) => {
+                self.list[i] = new;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Refits the TLAS to the instances' current placements. Returns false, leaving the TLAS
+    /// as it was fitted, when the refitted tree has become much worse than a fresh build would
+    /// be (its node areas doubled): then the caller rebuilds.
+    pub fn refit(&mut self) -> bool {
+        let _span = tracing::info_span!("refit_tlas", instances = self.list.len()).entered();
+        let aabbs: Vec<Aabb> = (0..self.list.len()).map(|i| self.world_bounds(i)).collect();
+        let order = &self.order;
+        self.tlas.refit(|first, count| {
+            order[first as usize..(first + count) as usize]
+                .iter()
+                .fold(Aabb::empty(), |b, &i| b.union(&aabbs[i as usize]))
+        });
+        self.tlas.sah_cost() <= 2.0 * self.built_cost.max(1.0)
+    }
+
+    /// Bytes held by the instance records and the TLAS (not the BLAS).
+    pub fn bytes(&self) -> usize {
+        self.list.len() * size_of::<Instance>() + self.tlas.node_bytes() + self.order.len() * 4
+    }
+
+    /// The ray in instance `i`'s object space (the direction is not renormalised, so `t` is
+    /// the same in both spaces).
+    #[inline(always)]
+    fn object_ray(&self, inst: &Instance, ray: &Ray) -> (Vec3A, Vec3A) {
+        let o = ray.origin - inst.velocity * ray.time;
+        (inst.object_from_world.transform_point3a(o), inst.object_from_world.transform_vector3a(ray.dir))
+    }
+
+    /// Closest hit with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
+        let (mut inst_hit, mut tri) = (u32::MAX, 0);
+        let t = self.tlas.closest(ray.origin, ray.dir, tmax, |first, count, mut best| {
+            for &i in &self.order[first as usize..(first + count) as usize] {
+                let inst = &self.list[i as usize];
+                let (o, d) = self.object_ray(inst, ray);
+                if let Some((t, id)) = self.blas[inst.blas as usize].intersect(o, d, best) {
+                    (best, inst_hit, tri) = (t, i, id);
+                }
+            }
+            best
+        });
+        (inst_hit != u32::MAX).then(|| {
+            let inst = &self.list[inst_hit as usize];
+            Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, tri, ray, t) }
+        })
+    }
+
+    /// True when some instance lies on the ray with `t` in `(0, tmax)`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
+        self.tlas.any(ray.origin, ray.dir, tmax, |first, count| {
+            self.order[first as usize..(first + count) as usize].iter().any(|&i| {
+                let inst = &self.list[i as usize];
+                let (o, d) = self.object_ray(inst, ray);
+                self.blas[inst.blas as usize].occluded(o, d, tmax)
+            })
+        })
+    }
+
+    /// World-space surface data of triangle `tri` of `inst` hit by `ray` at `t`: found in
+    /// object space (re-projected onto the triangle, so the ray's rounding does not enter) and
+    /// moved back, with the error bound of [`crate::shape::TransformedSphere`] plus the motion
+    /// offset's rounding.
+    fn surface(&self, inst: &Instance, tri: u32, ray: &Ray, t: f32) -> SurfacePoint {
+        let (o, d) = self.object_ray(inst, ray);
+        let local = self.blas[inst.blas as usize].surface(tri, o + t * d);
+        let m = inst.world_from_object;
+        let norm = |a: &Mat3A| (a.x_axis.abs() + a.y_axis.abs() + a.z_axis.abs()).max_element();
+        let scale = norm(&m.matrix3);
+        let off = inst.velocity * ray.time;
+        let world_p = m.transform_point3a(local.p) + off;
+        let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
+        SurfacePoint {
+            p: world_p,
+            n: (inst.normal_to_world * local.n).normalize(),
+            uv: local.uv,
+            err: scale * local.err
+                + gamma(4) * magnitude
+                + gamma(2) * (world_p.abs().max_element() + off.abs().max_element()),
+        }
+    }
+}
