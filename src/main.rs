@@ -102,6 +102,12 @@ enum Command {
         /// A scene whose geometry and first light also get primary, bounce and shadow rays.
         #[arg(long, default_value = "scenes/cornell-diffuse.ron")]
         scene: PathBuf,
+        /// Also time per-frame updates of this scene of instances (one instance moving).
+        #[arg(long, value_name = "SCENE.ron")]
+        instances: Option<PathBuf>,
+        /// Also build and trace knots of 10^3 up to 10^N triangles.
+        #[arg(long, value_name = "N")]
+        scaling: Option<u32>,
     },
     /// Print RMSE and relMSE of image A against reference B (and both means).
     Compare {
@@ -175,8 +181,10 @@ fn main() -> ExitCode {
             render(&scene, &output, overrides, &how)
         }
         Command::Compare { a, b } => compare(&a, &b),
-        Command::BenchRays { rings, segments, scene } => {
+        Command::BenchRays { rings, segments, scene, instances, scaling } => {
             pathwave::raybench::run((rings, segments), Some(&scene))
+                .and_then(|_| instances.map_or(Ok(()), |p| pathwave::raybench::instance_update(&p, 100)))
+                .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
         }
         Command::Bench { spp, refs, only, batch, svg, threads } => {
             bench(&spp, &refs, &only, batch, svg, threads)

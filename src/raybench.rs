@@ -232,3 +232,86 @@ pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), St
     }
     Ok(())
 }
+
+/// Per-frame update of a scene of instances: one instance moves each frame (the ECS refits the
+/// TLAS) against rebuilding the TLAS from scratch; prints a markdown table.
+pub fn instance_update(path: &std::path::Path, frames: usize) -> Result<(), String> {
+    use crate::engine::world::{Instanced, MeshLibrary, SceneInstances, Transform};
+    let desc = crate::engine::scene::load(path).map_err(|e| e.to_string())?;
+    let mut w = crate::engine::world::SceneWorld::new(&desc);
+    let start = Instant::now();
+    let scene = w.update();
+    let first = start.elapsed().as_secs_f64();
+    let n = scene.instances.list.len();
+    let e = w
+        .world
+        .query_filtered::<bevy_ecs::entity::Entity, bevy_ecs::query::With<Instanced>>()
+        .iter(&w.world)
+        .next()
+        .ok_or("the scene has no instances")?;
+    let base = w.world.get::<Transform>(e).ok_or("no transform")?.0;
+    let mut refit = Vec::new();
+    for f in 0..frames {
+        let m = glam::Affine3A::from_translation(glam::Vec3::new(0.0, 0.01 * f as f32, 0.0)) * base;
+        w.world.entity_mut(e).insert(Transform(m));
+        let start = Instant::now();
+        w.update();
+        refit.push(start.elapsed().as_secs_f64());
+    }
+    let mut rebuild = Vec::new();
+    let inst = w.world.resource::<SceneInstances>().instances.clone();
+    for _ in 0..frames.min(20) {
+        let start = Instant::now();
+        let rebuilt = crate::engine::instances::Instances::build(
+            inst.blas.clone(),
+            inst.list.clone(),
+            desc.camera.shutter,
+        );
+        rebuild.push(start.elapsed().as_secs_f64());
+        drop(rebuilt);
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2] * 1e3
+    };
+    let s = w.world.resource::<SceneInstances>();
+    let blas = w.world.resource::<MeshLibrary>().builds;
+    println!(
+        "{}: {n} instances, {} BLAS ({} triangles each)",
+        path.display(),
+        inst.blas.len(),
+        inst.blas[0].mesh.triangles.len()
+    );
+    println!("first update (BLAS + TLAS build, extraction): {:.1} ms", first * 1e3);
+    println!(
+        "after {frames} frames moving one instance: {blas} BLAS builds, {} TLAS builds, {} refits",
+        s.builds, s.refits
+    );
+    println!("| per-frame update | median ms |\n|---|---|");
+    println!("| move one instance: ECS update (refit TLAS, extract) | {:.3} |", median(&mut refit));
+    println!("| rebuild the TLAS from scratch | {:.3} |", median(&mut rebuild));
+    println!("instance records + TLAS: {} bytes; BLAS: {} bytes", inst.bytes(), inst.blas[0].bytes());
+    Ok(())
+}
+
+/// BVH build time, size and traversal rates as the triangle count grows (knots of 10^3..10^max
+/// triangles).
+pub fn scaling(max_exp: u32) -> Result<(), String> {
+    println!("| triangles | build s (2t) | bytes/triangle | primary Mrays/s (2t) | bounce Mrays/s (2t) |");
+    println!("|---|---|---|---|---|");
+    for e in 3..=max_exp {
+        let n = 10f64.powi(e as i32);
+        // rings = 8 segments: 2 * 8 s^2 = n.
+        let segments = ((n / 16.0).sqrt().round() as u32).max(3);
+        let mesh = Arc::new(MeshData::knot(8 * segments, segments));
+        let start = Instant::now();
+        let blas = MeshBlas::build(mesh.clone());
+        let build = start.elapsed().as_secs_f64();
+        let cam = primary(Vec3A::new(0.0, -3.0, 7.5), Vec3A::ZERO, Vec3A::Y, 45.0, 512);
+        let (hits, p) = trace(&blas, &cam, 2, false);
+        let (_, b) = trace(&blas, &bounce(&cam, &hits, 1e-4), 2, false);
+        let t = mesh.triangles.len();
+        println!("| {t} | {build:.3} | {:.1} | {p:.2} | {b:.2} |", blas.bytes() as f64 / t as f64);
+    }
+    Ok(())
+}
