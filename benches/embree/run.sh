@@ -1,0 +1,6 @@
+#!/bin/sh
+# Builds and runs the Embree anchor on this machine (Debian: apt-get install libembree-dev).
+set -e
+out="${TMPDIR:-/tmp}/pathwave-embree-anchor"
+cc -O3 -march=native -o "$out" "$(dirname "$0")/anchor.c" -lembree3 -lpthread -lm
+"$out"
