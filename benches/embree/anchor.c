@@ -84,8 +84,9 @@ static uint32_t hash(uint32_t x) {
   x ^= x >> 16; x *= 0x7feb352dU; x ^= x >> 15; x *= 0x846ca68bU; return x ^ (x >> 16);
 }
 
-int main(void) {
-  const int rings = 2000, segs = 250, size = 1024;
+int main(int argc, char **argv) {
+  /* Optional: rings and segments of the knot (default 2000 x 250). */
+  const int rings = argc > 2 ? atoi(argv[1]) : 2000, segs = argc > 2 ? atoi(argv[2]) : 250, size = 1024;
   RTCDevice dev = rtcNewDevice("threads=2");
   RTCScene scene = rtcNewScene(dev);
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);

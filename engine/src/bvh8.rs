@@ -29,29 +29,37 @@ const MAX_FIRST: u32 = (1 << 28) - 1;
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node {
-    /// Lower corners, per axis and child.
-    pub lo: [[f32; WIDTH]; 3],
-    /// Upper corners, per axis and child.
-    pub hi: [[f32; WIDTH]; 3],
+    /// Per child: lower x, upper x, lower y, upper y, lower z, upper z (a ray picks its near
+    /// and far planes by index, computed once per ray).
+    pub planes: [[f32; WIDTH]; 6],
     /// Per child: an inner node index, a leaf (`LEAF | first << 3 | count - 1`) or `EMPTY`.
     child: [u32; WIDTH],
 }
 
 impl Node {
-    const EMPTY: Node =
-        Node { lo: [[f32::INFINITY; WIDTH]; 3], hi: [[f32::NEG_INFINITY; WIDTH]; 3], child: [EMPTY; WIDTH] };
+    const EMPTY: Node = Node {
+        planes: [
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        child: [EMPTY; WIDTH],
+    };
 
     fn set_box(&mut self, i: usize, b: &Aabb) {
         for a in 0..3 {
-            self.lo[a][i] = b.min[a];
-            self.hi[a][i] = b.max[a];
+            self.planes[2 * a][i] = b.min[a];
+            self.planes[2 * a + 1][i] = b.max[a];
         }
     }
 
     fn child_box(&self, i: usize) -> Aabb {
         Aabb {
-            min: Vec3A::new(self.lo[0][i], self.lo[1][i], self.lo[2][i]),
-            max: Vec3A::new(self.hi[0][i], self.hi[1][i], self.hi[2][i]),
+            min: Vec3A::new(self.planes[0][i], self.planes[2][i], self.planes[4][i]),
+            max: Vec3A::new(self.planes[1][i], self.planes[3][i], self.planes[5][i]),
         }
     }
 }
@@ -75,7 +83,8 @@ pub struct Bvh8 {
 pub struct BoxRay {
     o: [f32; 3],
     inv: [f32; 3],
-    neg: [bool; 3],
+    /// Per axis, the index in [`Node::planes`] of the near plane (the far one is `near ^ 1`).
+    near: [usize; 3],
 }
 
 impl BoxRay {
@@ -87,7 +96,7 @@ impl BoxRay {
         let d = d + Vec3A::ZERO; // -0.0 -> +0.0: the sign test and 1/d then agree
         let safe = |x: f32| if x.abs() < 1e-20 { 1e-20f32.copysign(x) } else { x };
         let inv = [1.0 / safe(d.x), 1.0 / safe(d.y), 1.0 / safe(d.z)];
-        Self { o: o.to_array(), inv, neg: inv.map(|i| i < 0.0) }
+        Self { o: o.to_array(), inv, near: [0, 1, 2].map(|a| 2 * a + (inv[a] < 0.0) as usize) }
     }
 }
 
@@ -103,17 +112,18 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
     // aligned, each array 32 bytes); AVX2 is enabled for the whole build.
     unsafe {
         let mut tnear = _mm256_setzero_ps();
-        let mut tfar = _mm256_set1_ps(tmax);
+        let mut exit = _mm256_set1_ps(f32::INFINITY);
         let scale = _mm256_set1_ps(EXIT_SCALE);
         for a in 0..3 {
-            let (near, far) = if r.neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+            let (near, far) = (&node.planes[r.near[a]], &node.planes[r.near[a] ^ 1]);
             let (o, inv) = (_mm256_set1_ps(r.o[a]), _mm256_set1_ps(r.inv[a]));
             let n = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
-            let f = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv), scale);
+            let f = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
             // Never NaN: `inv` is finite and non-zero, box corners finite or infinite.
             tnear = _mm256_max_ps(tnear, n);
-            tfar = _mm256_min_ps(tfar, f);
+            exit = _mm256_min_ps(exit, f);
         }
+        let tfar = _mm256_min_ps(_mm256_mul_ps(exit, scale), _mm256_set1_ps(tmax));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
         let mut out = [0.0f32; WIDTH];
         _mm256_storeu_ps(out.as_mut_ptr(), tnear);
@@ -128,7 +138,7 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
     let mut tnear = [0.0f32; WIDTH];
     let mut tfar = [tmax; WIDTH];
     for a in 0..3 {
-        let (near, far) = if r.neg[a] { (&node.hi[a], &node.lo[a]) } else { (&node.lo[a], &node.hi[a]) };
+        let (near, far) = (&node.planes[r.near[a]], &node.planes[r.near[a] ^ 1]);
         for l in 0..WIDTH {
             tnear[l] = tnear[l].max((near[l] - r.o[a]) * r.inv[a]);
             tfar[l] = tfar[l].min((far[l] - r.o[a]) * r.inv[a] * EXIT_SCALE);
@@ -296,7 +306,17 @@ impl Bvh8 {
                 match mask.count_ones() {
                     0 => {}
                     1 => {
-                        cur = node.child[mask.trailing_zeros() as usize];
+                        cur = node.child[mask.trailing_zeros() as usize & 7];
+                        continue;
+                    }
+                    2 => {
+                        // Push the farther, go to the nearer.
+                        let a = mask.trailing_zeros() as usize & 7;
+                        let b = (31 - mask.leading_zeros()) as usize & 7;
+                        let (near, far) = if tnear[a] <= tnear[b] { (a, b) } else { (b, a) };
+                        stack[sp] = (node.child[far], tnear[far]);
+                        sp += 1;
+                        cur = node.child[near];
                         continue;
                     }
                     _ => {
@@ -304,7 +324,7 @@ impl Bvh8 {
                         let mut keys = [0u64; WIDTH];
                         let mut n = 0;
                         while mask != 0 {
-                            let s = mask.trailing_zeros() as usize;
+                            let s = mask.trailing_zeros() as usize & 7;
                             mask &= mask - 1;
                             let key = (tnear[s].to_bits() as u64) << 32 | s as u64;
                             let mut j = n;

@@ -142,6 +142,15 @@ impl TriBlock {
             let e2 = sub(mul(x[0], y[1]), mul(y[0], x[1]));
             let eq0 = |e| _mm256_cmp_ps::<_CMP_EQ_OQ>(e, zero);
             let zero_edge = _mm256_movemask_ps(_mm256_or_ps(_mm256_or_ps(eq0(e0), eq0(e1)), eq0(e2))) as u32;
+            let cmp_ge = |a, b| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
+            let (and, or) = (_mm256_and_ps, _mm256_or_ps);
+            let all_ge = and(and(cmp_ge(e0, zero), cmp_ge(e1, zero)), cmp_ge(e2, zero));
+            let all_le = and(and(cmp_ge(zero, e0), cmp_ge(zero, e1)), cmp_ge(zero, e2));
+            let inside = or(all_ge, all_le);
+            // Most blocks a ray reaches it passes by: skip the division and the error bound.
+            if _mm256_movemask_ps(inside) == 0 {
+                return ([f32::INFINITY; 8], zero_edge);
+            }
             let det = add(add(e0, e1), e2);
             let t_scaled = add(add(mul(e0, z[0]), mul(e1, z[1])), mul(e2, z[2]));
             let inv_det = _mm256_div_ps(splat(1.0), det);
@@ -167,16 +176,12 @@ impl TriBlock {
                 ),
                 abs(inv_det),
             );
-            let cmp_ge = |a, b| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
             let cmp_gt = |a, b| _mm256_cmp_ps::<_CMP_GT_OQ>(a, b);
-            let (and, or) = (_mm256_and_ps, _mm256_or_ps);
-            let all_ge = and(and(cmp_ge(e0, zero), cmp_ge(e1, zero)), cmp_ge(e2, zero));
-            let all_le = and(and(cmp_ge(zero, e0), cmp_ge(zero, e1)), cmp_ge(zero, e2));
             let tmax_det = mul(splat(tmax), det);
             let neg = and(cmp_gt(zero, det), and(cmp_gt(zero, t_scaled), cmp_ge(t_scaled, tmax_det)));
             let pos = and(cmp_gt(det, zero), and(cmp_gt(t_scaled, zero), cmp_ge(tmax_det, t_scaled)));
             let hit = and(
-                and(or(all_ge, all_le), or(neg, pos)),
+                and(inside, or(neg, pos)),
                 and(cmp_gt(t, delta_t), _mm256_cmp_ps::<_CMP_LT_OQ>(t, splat(tmax))),
             );
             let mut out = [0.0f32; 8];
