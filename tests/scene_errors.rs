@@ -395,3 +395,33 @@ fn matrix_rows_tiny_scales_and_a_byte_order_mark_are_accepted() {
     let bad_row = object.replace("[0, 0, 0, 1]]", "[0, 0, 0]]");
     assert!(err(&with_object(&bad_row)).message.contains("4 rows of 4 numbers"));
 }
+
+/// A scene with an `animation` block on line 10 (after the template's closing `],`).
+fn with_animation(animation: &str) -> String {
+    scene(CAMERA, MATERIAL, OBJECT).replacen(
+        "    ],\n)",
+        &format!("    ],\n    animation: ({animation}),\n)"),
+        1,
+    )
+}
+
+#[test]
+fn animation_errors_name_the_key() {
+    let text = with_animation(r#"emit: [("light", Linear([(0, (1, 1, 1)), (0, (2, 2, 2))]))]"#);
+    let e = err(&text);
+    assert!(e.line == 10 && e.message.contains("key times must increase: 0 comes after 0"), "{e}");
+    let e = err(&with_animation(r#"emit: [("white", Linear([(0, (1, 1, 1))]))]"#));
+    assert!(e.line == 10 && e.message.contains("\"white\" is not a DiffuseLight"), "{e}");
+    let e = err(&with_animation("shutter: 1.5"));
+    assert!(e.line == 10 && e.message.contains("expected a number in [0, 1], found 1.5"), "{e}");
+    let e = err(&with_animation("camera: (vfov: Cubic([(0, 40)]))"));
+    assert!(e.line == 10 && e.message.contains("Linear") && e.message.contains("Smooth"), "{e}");
+    let e = err(&with_object(
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", animate: (rotate: Linear([(0, Euler(1, 2))]))),"#,
+    ));
+    assert!(e.line == 8 && e.message.contains("in objects[0]"), "{e}");
+    let e = err(&with_object(
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 1, 1)), animate: (translate: Linear([(0, (0, 0, 0))]))),"#,
+    ));
+    assert!(e.line == 8 && e.message.contains("media do not move"), "{e}");
+}

@@ -6,6 +6,7 @@
 //! [`render_scene::RenderScene`] that integrators read without touching the ECS.
 #![warn(missing_docs)]
 
+pub mod animation;
 pub mod bvh8;
 pub mod camera;
 pub mod flat;

@@ -49,6 +49,117 @@ pub struct Motion {
 #[derive(Component, Clone, Copy, Debug, Default)]
 pub struct Instanced;
 
+/// Keyframed placement: the system [`animate_objects`] sets the entity's [`Transform`] and
+/// [`Motion`] from it for the current [`FrameTime`].
+#[derive(Component, Clone, Debug)]
+pub struct Animated {
+    /// The static transform the keyframed one is applied after.
+    pub base: Affine3A,
+    /// The keys.
+    pub keys: crate::animation::ObjectAnimation,
+    /// The object's own linear motion, added to the keyframed one.
+    pub velocity: Vec3,
+}
+
+/// The shutter interval of the frame being rendered, in absolute seconds: rays sample times in
+/// it and keyframes are evaluated in it. A still has the camera's shutter (frame time 0).
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
+pub struct FrameTime {
+    /// Shutter opens.
+    pub open: f32,
+    /// Shutter closes.
+    pub close: f32,
+}
+
+/// The camera as the scene file places it, and its keyframes.
+#[derive(Resource, Clone, Debug)]
+pub struct CameraKeys {
+    /// The camera without keyframes.
+    pub base: CameraDesc,
+    /// Its keyframes.
+    pub keys: crate::animation::CameraAnimation,
+}
+
+/// Emitted radiance keyframes: (material id, keys).
+#[derive(Resource, Clone, Debug, Default)]
+pub struct EmitKeys(pub Vec<(u32, crate::animation::Track<Vec3>)>);
+
+/// Places keyframed objects for the frame's shutter: rotation and scale as at mid-shutter,
+/// translation moving linearly from its position at shutter open to the one at shutter close
+/// (as a [`Motion`], so rays see it at their own time). Components are written only when they
+/// change, so a frame that moves nothing rebuilds nothing.
+pub fn animate_objects(
+    time: Res<FrameTime>,
+    mut objects: Query<(Ref<Animated>, &mut Transform, &mut Motion)>,
+) {
+    for (anim, mut transform, mut motion) in &mut objects {
+        if !(time.is_changed() || anim.is_changed()) {
+            continue;
+        }
+        let at = |t: f32| anim.keys.at(t) * anim.base;
+        let (t0, t1) = (time.open, time.close);
+        let mid = at(0.5 * (t0 + t1));
+        let (p0, p1) = (at(t0).translation, at(t1).translation);
+        let v = if t1 > t0 { (p1 - p0) / (t1 - t0) } else { Vec3A::ZERO };
+        // At time t the object is at p0 + v (t - t0) (plus its own motion, v_own t).
+        let placed = Affine3A { matrix3: mid.matrix3, translation: p0 - v * t0 };
+        let velocity = Vec3::from(v) + anim.velocity;
+        transform.set_if_neq(Transform(placed));
+        motion.set_if_neq(Motion { velocity });
+    }
+}
+
+/// Sets the camera for the frame: keyframes at mid-shutter, shutter = the frame's.
+pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: ResMut<CameraParams>) {
+    if !(time.is_changed() || keys.is_changed()) {
+        return;
+    }
+    let t = 0.5 * (time.open + time.close);
+    let mut c = keys.base;
+    let k = &keys.keys;
+    if let Some(k) = &k.look_from {
+        c.look_from = k.at(t);
+    }
+    if let Some(k) = &k.look_at {
+        c.look_at = k.at(t);
+    }
+    if let Some(k) = &k.vfov {
+        c.vfov = k.at(t).clamp(1e-3, 179.0);
+    }
+    if let Some(k) = &k.focus_dist {
+        c.focus_dist = k.at(t).max(1e-6);
+    } else if k.look_from.is_some() || k.look_at.is_some() {
+        // The default focus distance follows the target.
+        c.focus_dist = (c.look_at - c.look_from).length();
+    }
+    c.shutter = (time.open, time.close);
+    if !same_camera(&camera.0, &c) {
+        camera.0 = c;
+    }
+}
+
+fn same_camera(a: &CameraDesc, b: &CameraDesc) -> bool {
+    (a.look_from, a.look_at, a.vup, a.vfov, a.aperture_radius, a.focus_dist, a.shutter)
+        == (b.look_from, b.look_at, b.vup, b.vfov, b.aperture_radius, b.focus_dist, b.shutter)
+}
+
+/// Sets keyframed emitted radiance for the frame (at mid-shutter).
+pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials: ResMut<Materials>) {
+    if !time.is_changed() || keys.0.is_empty() {
+        return;
+    }
+    let t = 0.5 * (time.open + time.close);
+    for (id, track) in &keys.0 {
+        let new = track.at(t).max(Vec3::ZERO);
+        if let Material::DiffuseLight { emit, .. } = materials.bypass_change_detection().0[*id as usize]
+            && emit != new
+            && let Material::DiffuseLight { emit, .. } = &mut materials.0[*id as usize]
+        {
+            *emit = new;
+        }
+    }
+}
+
 /// Index into the [`Materials`] resource.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MaterialId(pub u32);
@@ -151,6 +262,7 @@ pub struct Update;
 /// changed, an object or its motion was removed, the materials changed (the light table depends
 /// on them), or, in scenes with motion, the camera (its shutter bounds the sweeps).
 #[allow(clippy::type_complexity)]
+#[allow(clippy::too_many_arguments)]
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
     objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), Without<Instanced>>,
@@ -609,8 +721,12 @@ impl SceneWorld {
                         .position(|n| *n == name.0)
                         .expect("material names are validated at load");
                     let mut e = world.spawn((placed, MaterialId(id as u32)));
-                    if let Some(m) = obj.motion {
-                        e.insert(Motion { velocity: m.velocity.0 });
+                    let velocity = obj.motion.map_or(Vec3::ZERO, |m| m.velocity.0);
+                    if obj.motion.is_some() || obj.animate.is_some() {
+                        e.insert(Motion { velocity });
+                    }
+                    if let Some(keys) = &obj.animate {
+                        e.insert(Animated { base: compose(&obj.transform), keys: keys.clone(), velocity });
                     }
                     if instanced {
                         e.insert(Instanced);
@@ -632,6 +748,19 @@ impl SceneWorld {
             clamp: r.clamp.map(|c| c.0),
         }));
         world.insert_resource(CameraParams(desc.camera));
+        world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });
+        world.insert_resource(CameraKeys { base: desc.camera, keys: desc.animation.camera.clone() });
+        let emit_keys = desc
+            .animation
+            .emit
+            .iter()
+            .map(|(name, track)| {
+                let id =
+                    names.iter().position(|n| *n == name.0).expect("material names are validated at load");
+                (id as u32, track.0.clone())
+            })
+            .collect();
+        world.insert_resource(EmitKeys(emit_keys));
         world.insert_resource(BackgroundLight(match desc.background {
             BackgroundDesc::Black => Background::Constant(Vec3::ZERO),
             BackgroundDesc::Constant(c) => Background::Constant(c.0),
@@ -643,13 +772,23 @@ impl SceneWorld {
         world.init_resource::<SceneMedia>();
         world.init_resource::<Extracted>();
         let mut schedule = Schedule::new(Update);
-        schedule.add_systems((
-            rebuild_geometry,
-            update_instances,
-            rebuild_media,
-            extract_render_scene.after(rebuild_geometry).after(update_instances).after(rebuild_media),
-        ));
+        schedule.add_systems(
+            (
+                (animate_objects, animate_camera, animate_emission),
+                (rebuild_geometry, update_instances, rebuild_media),
+                extract_render_scene,
+            )
+                .chain(),
+        );
         Self { world, schedule }
+    }
+
+    /// Sets the frame's shutter interval (absolute seconds) for the next [`Self::update`].
+    pub fn set_time(&mut self, open: f32, close: f32) {
+        let t = FrameTime { open, close };
+        if *self.world.resource::<FrameTime>() != t {
+            *self.world.resource_mut::<FrameTime>() = t;
+        }
     }
 
     /// Runs the systems and returns the current render scene.

@@ -30,6 +30,38 @@ pub struct SceneDesc {
     /// The objects.
     #[serde(deserialize_with = "objects")]
     pub objects: Vec<ObjectDesc>,
+    /// Frames, frame rate and shutter of `pathwave animate`, and the camera's and emitters'
+    /// keyframes (default: a still).
+    #[serde(default)]
+    pub animation: AnimationDesc,
+}
+
+/// `animation: (frames: 48, fps: 24, shutter: 0.5, camera: (..), emit: [("light", ..)])`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields, default, rename = "Animation")]
+pub struct AnimationDesc {
+    /// Frames that `pathwave animate` renders by default (default 1).
+    pub frames: NonZeroU32,
+    /// Frames per second (default 24): frame `i` is at time `i / fps`.
+    pub fps: Positive,
+    /// Shutter as a fraction of the frame interval, in [0, 1] (default 0: no motion blur).
+    pub shutter: UnitInterval,
+    /// Camera keyframes.
+    pub camera: crate::animation::CameraAnimation,
+    /// Emitted radiance keyframes of `DiffuseLight` materials, by material name.
+    pub emit: Vec<(LightRef, crate::animation::RgbTrack)>,
+}
+
+impl Default for AnimationDesc {
+    fn default() -> Self {
+        Self {
+            frames: NonZeroU32::MIN,
+            fps: Positive(24.0),
+            shutter: UnitInterval(0.0),
+            camera: Default::default(),
+            emit: Vec::new(),
+        }
+    }
 }
 
 /// Thin-lens camera.
@@ -471,6 +503,8 @@ thread_local! {
     /// The index of the object being parsed, while inside `objects`.
     static OBJECT_INDEX: Cell<Option<usize>> = const { Cell::new(None) };
     static MATERIAL_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
+    /// The names of the `DiffuseLight` materials, in the second pass.
+    static LIGHT_NAMES: RefCell<Option<Vec<String>>> = const { RefCell::new(None) };
     /// Meshes read so far in this load, by path: each file is read once and shared.
     static MESHES: RefCell<std::collections::HashMap<std::path::PathBuf, std::sync::Arc<crate::mesh::MeshData>>> =
         RefCell::new(Default::default());
@@ -512,8 +546,14 @@ fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<ObjectDesc>, D::Error>
 pub(crate) struct MaterialNameScope;
 
 impl MaterialNameScope {
-    pub(crate) fn enter(materials: Vec<String>, textures: Vec<String>, dir: std::path::PathBuf) -> Self {
+    pub(crate) fn enter(
+        materials: Vec<String>,
+        lights: Vec<String>,
+        textures: Vec<String>,
+        dir: std::path::PathBuf,
+    ) -> Self {
         MATERIAL_NAMES.with(|m| *m.borrow_mut() = Some(materials));
+        LIGHT_NAMES.with(|m| *m.borrow_mut() = Some(lights));
         TEXTURE_NAMES.with(|m| *m.borrow_mut() = Some(textures));
         SCENE_DIR.with(|m| *m.borrow_mut() = Some(dir));
         MaterialNameScope
@@ -523,6 +563,7 @@ impl MaterialNameScope {
 impl Drop for MaterialNameScope {
     fn drop(&mut self) {
         MATERIAL_NAMES.with(|m| *m.borrow_mut() = None);
+        LIGHT_NAMES.with(|m| *m.borrow_mut() = None);
         TEXTURE_NAMES.with(|m| *m.borrow_mut() = None);
         SCENE_DIR.with(|m| *m.borrow_mut() = None);
         MESHES.with(|m| m.borrow_mut().clear());
@@ -550,6 +591,22 @@ impl<'de> Deserialize<'de> for MaterialRef {
     }
 }
 
+/// The name of a `DiffuseLight` material.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LightRef(pub String);
+
+impl<'de> Deserialize<'de> for LightRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let MaterialRef(name) = MaterialRef::deserialize(d)?;
+        LIGHT_NAMES.with(|l| match &*l.borrow() {
+            Some(lights) if !lights.contains(&name) => Err(D::Error::custom(format!(
+                "material \"{name}\" is not a DiffuseLight: only emitters have `emit` keys"
+            ))),
+            _ => Ok(LightRef(name.clone())),
+        })
+    }
+}
+
 /// One object: a shape with either a material (a surface) or a medium (a volume), and an
 /// optional list of transforms.
 #[derive(Deserialize, Debug, Clone)]
@@ -563,6 +620,8 @@ pub struct ObjectDesc {
     pub transform: Vec<TransformOp>,
     /// How it moves (default: it does not).
     pub motion: Option<MotionDesc>,
+    /// Keyframed placement, applied after `transform` (default none).
+    pub animate: Option<crate::animation::ObjectAnimation>,
 }
 
 /// Linear motion: at time `t` the object lies translated by `velocity * t` from where its
@@ -606,6 +665,8 @@ struct RawObject {
     transform: Vec<TransformOp>,
     #[serde(default)]
     motion: Option<MotionDesc>,
+    #[serde(default)]
+    animate: Option<crate::animation::ObjectAnimation>,
 }
 
 impl TryFrom<RawObject> for ObjectDesc {
@@ -627,8 +688,11 @@ impl TryFrom<RawObject> for ObjectDesc {
         if r.motion.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `motion` is for surfaces".into());
         }
+        if r.animate.is_some() && matches!(body, Body::Volume(_)) {
+            return Err("media do not move: `animate` is for surfaces".into());
+        }
         world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new())?;
-        Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion })
+        Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion, animate: r.animate })
     }
 }
 

@@ -39,6 +39,12 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let _scope = MaterialNameScope::enter(
         names.materials.iter().map(|(n, _)| n.clone()).collect(),
+        names
+            .materials
+            .iter()
+            .filter(|(_, m)| matches!(m, super::MaterialDesc::DiffuseLight { .. }))
+            .map(|(n, _)| n.clone())
+            .collect(),
         names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
         dir,
     );

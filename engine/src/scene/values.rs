@@ -119,3 +119,18 @@ impl<'de> Deserialize<'de> for Fov {
         )
     }
 }
+
+/// A number in [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitInterval(pub f32);
+
+impl<'de> Deserialize<'de> for UnitInterval {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f32::deserialize(d)?;
+        if (0.0..=1.0).contains(&v) {
+            Ok(UnitInterval(v))
+        } else {
+            Err(D::Error::custom(format!("expected a number in [0, 1], found {v}")))
+        }
+    }
+}
