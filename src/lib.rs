@@ -2,6 +2,7 @@
 //! over the `engine` (scene model) and `integrator` crates, plus image I/O and error metrics.
 #![warn(missing_docs)]
 
+pub mod animate;
 pub mod bench;
 pub mod io;
 pub mod metrics;

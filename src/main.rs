@@ -4,7 +4,7 @@ use clap::{Parser, Subcommand};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::{bench, metrics};
+use pathwave::{animate, bench, metrics};
 use std::io::Write;
 use std::num::NonZeroU32;
 use std::path::PathBuf;
@@ -67,6 +67,50 @@ enum Command {
         /// Write a Chrome/Perfetto trace of the render (one span per stage and batch).
         #[arg(long, value_name = "FILE.json")]
         trace: Option<PathBuf>,
+        /// Evaluate keyframes at this time (seconds); the camera's shutter opens and closes
+        /// relative to it.
+        #[arg(long, default_value_t = 0.0)]
+        time: f32,
+    },
+    /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
+    /// an animated GIF when the output ends in .gif. Existing frames are skipped.
+    Animate {
+        /// The scene file.
+        scene: PathBuf,
+        /// Output pattern, e.g. out/frame_{frame:04}.png (or .exr), or anim.gif.
+        #[arg(short, long)]
+        output: String,
+        /// Frames A..B (B excluded) or A..=B (default: 0..the scene's `animation.frames`).
+        #[arg(long)]
+        frames: Option<String>,
+        /// Frames per second (default: the scene's, 24 if it has none).
+        #[arg(long)]
+        fps: Option<f32>,
+        /// Shutter as a fraction of the frame interval, 0 = no motion blur (default: the
+        /// scene's `animation.shutter`).
+        #[arg(long)]
+        shutter: Option<f32>,
+        /// Render frames whose file already exists.
+        #[arg(long)]
+        overwrite: bool,
+        /// Samples per pixel (overrides the scene).
+        #[arg(long)]
+        spp: Option<NonZeroU32>,
+        /// Image width (overrides the scene).
+        #[arg(long)]
+        width: Option<NonZeroU32>,
+        /// Image height (overrides the scene).
+        #[arg(long)]
+        height: Option<NonZeroU32>,
+        /// Random seed (overrides the scene; every frame uses it).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores).
+        #[arg(short, long)]
+        threads: Option<usize>,
+        /// Only the summary.
+        #[arg(short, long)]
+        quiet: bool,
     },
     /// Run time against error: render the scenes that have references at several sample
     /// counts with both integrators; print a markdown table, optionally write an SVG plot.
@@ -175,10 +219,28 @@ fn main() -> ExitCode {
             batch,
             stats,
             trace: _,
+            time,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
             let how = How { integrator, batch, stats, threads, quiet, verbose };
-            render(&scene, &output, overrides, &how)
+            render(&scene, &output, overrides, &how, time)
+        }
+        Command::Animate {
+            scene,
+            output,
+            frames,
+            fps,
+            shutter,
+            overwrite,
+            spp,
+            width,
+            height,
+            seed,
+            threads,
+            quiet,
+        } => {
+            let overrides = Overrides { spp, width, height, seed, max_depth: None, clamp: None };
+            animate(&scene, &output, frames, fps, shutter, overwrite, overrides, threads, quiet)
         }
         Command::Compare { a, b } => compare(&a, &b),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
@@ -221,8 +283,8 @@ struct How {
     quiet: bool,
 }
 
-fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(), String> {
-    let threads = how.threads;
+/// Loads a scene and applies the command line's overrides.
+fn load(path: &PathBuf, o: &Overrides) -> Result<scene::SceneDesc, String> {
     let mut desc = scene::load(path).map_err(|e| e.to_string())?;
     let r = &mut desc.render;
     r.spp = o.spp.unwrap_or(r.spp);
@@ -236,12 +298,59 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How) -> Result<(
         }
         r.clamp = Some(scene::Positive(c));
     }
-    let pool = rayon::ThreadPoolBuilder::new()
+    Ok(desc)
+}
+
+fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
-        .map_err(|e| format!("cannot start {threads:?} threads: {e}"))?;
+        .map_err(|e| format!("cannot start {threads:?} threads: {e}"))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn animate(
+    path: &PathBuf,
+    output: &str,
+    frames: Option<String>,
+    fps: Option<f32>,
+    shutter: Option<f32>,
+    overwrite: bool,
+    o: Overrides,
+    threads: Option<usize>,
+    quiet: bool,
+) -> Result<(), String> {
+    let desc = load(path, &o)?;
+    let a = &desc.animation;
+    let frames = match frames {
+        Some(f) => animate::parse_range(&f)?,
+        None => (0, a.frames.get()),
+    };
+    let fps = fps.unwrap_or(a.fps.0);
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(format!("--fps takes a number > 0, not {fps}"));
+    }
+    let shutter = shutter.unwrap_or(a.shutter.0);
+    if !(0.0..=1.0).contains(&shutter) {
+        return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
+    }
+    let pool = pool(threads)?;
+    let mut world = SceneWorld::new(&desc);
+    let seq = animate::Sequence { output, frames, fps, shutter, overwrite, quiet };
+    animate::run(&mut world, &seq, |scene| {
+        let (film, _) = pool.install(|| wavefront::render(scene, wavefront::Options::default(), &|_, _| {}));
+        LinearImage { width: film.width, height: film.height, pixels: film.mean() }
+    })
+}
+
+fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How, time: f32) -> Result<(), String> {
+    let desc = load(path, &o)?;
+    let pool = pool(how.threads)?;
     let start = Instant::now();
-    let scene = SceneWorld::render_scene(&desc);
+    let mut world = SceneWorld::new(&desc);
+    let shutter = desc.camera.shutter;
+    world.set_time(time + shutter.0, time + shutter.1);
+    let scene = world.update();
     let s = scene.settings;
     let bar = Progress::new(how.quiet);
     let progress = |done, total| bar.update(done, total);

@@ -179,7 +179,7 @@ fn rows(name: &str, target: &dyn Target, primary_rays: &Rays, offset: f32, light
     for (kind, rays, occlusion) in kinds {
         let (h1, r1) = trace(target, rays, 1, occlusion);
         let (_, r2) = trace(target, rays, 2, occlusion);
-        let _ = println!("| {name} | {kind} | {} | {:.3} | {r1:.2} | {r2:.2} |", rays.o.len(), frac(&h1));
+        println!("| {name} | {kind} | {} | {:.3} | {r1:.2} | {r2:.2} |", rays.o.len(), frac(&h1));
     }
 }
 

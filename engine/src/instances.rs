@@ -36,7 +36,7 @@ impl Instance {
     /// An instance, or `None` when the transform is singular or not finite.
     pub fn new(blas: u32, world_from_object: Affine3A, material: u32, velocity: Vec3A) -> Option<Self> {
         let det = world_from_object.matrix3.determinant();
-        if !(det.abs() > 0.0 && det.is_finite()) || !world_from_object.translation.is_finite() {
+        if !(det.abs() > 0.0 && det.is_finite() && world_from_object.translation.is_finite()) {
             return None;
         }
         let object_from_world = world_from_object.inverse();

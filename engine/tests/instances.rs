@@ -10,7 +10,7 @@ use pathwave_engine::math::Ray;
 use pathwave_engine::mesh::MeshData;
 use pathwave_engine::scene::{MeshFile, ShapeDesc, parse};
 use pathwave_engine::world::{
-    Instanced, MaterialId, Materials, MeshLibrary, SceneInstances, SceneWorld, Shape, Transform,
+    Instanced, MaterialId, MeshLibrary, SceneInstances, SceneWorld, Shape, Transform,
 };
 use std::path::Path;
 use std::sync::Arc;

@@ -1,0 +1,202 @@
+//! Animation: a frame of `animate` equals `render` at that time, a keyframed instance blurs
+//! like the same motion without instancing, a static scene rebuilds no BVH after the first
+//! frame, and a killed sequence resumes without redoing finished frames.
+
+mod common;
+use common::*;
+use pathwave::animate;
+use pathwave::engine::world::{SceneGeometry, SceneInstances, SceneWorld};
+use pathwave::integrator::wavefront;
+use pathwave::io::read_linear;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn pathwave() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pathwave"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-anim-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{err}");
+    err
+}
+
+#[test]
+fn a_frame_of_animate_equals_render_at_its_time() {
+    let dir = temp("frame");
+    let scene = root().join("scenes/animation-bounce.ron");
+    let pattern = dir.join("f_{frame:03}.exr");
+    let small = ["--spp", "4", "--width", "64", "--height", "48"];
+    run(pathwave()
+        .arg("animate")
+        .arg(&scene)
+        .args(["-o", pattern.to_str().unwrap(), "--frames", "17..19", "--shutter", "0", "-q"])
+        .args(small));
+    // Frame 18 opens at 18/24 s; the scene's camera has no shutter of its own.
+    let still = dir.join("still.exr");
+    run(pathwave()
+        .arg("render")
+        .arg(&scene)
+        .args(["-o", still.to_str().unwrap(), "--time", "0.75", "-q"])
+        .args(small));
+    let frame = read_linear(&dir.join("f_018.exr")).unwrap();
+    assert_eq!(frame, read_linear(&still).unwrap(), "frame 18 differs from render --time 0.75");
+    // And the previous frame is a different picture (the ball moved).
+    assert_ne!(read_linear(&dir.join("f_017.exr")).unwrap(), frame);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+const INSTANCE_SCENE: &str = r#"Scene(
+    camera: (look_from: (0, 0, 6), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 64),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+    objects: [
+        (
+            shape: Mesh(file: "assets/knot-2k.obj"),
+            material: "m",
+            transform: [UniformScale(0.6)],
+            animate: (translate: Linear([(0, (-1.5, 0, 0)), (1, (1.5, 0, 0))])),
+        ),
+    ],
+    animation: (fps: 4, shutter: 1),
+)"#;
+
+#[test]
+fn a_keyframed_instance_blurs_like_the_same_motion_without_instancing() {
+    let desc = pathwave::engine::scene::parse(INSTANCE_SCENE, &root().join("scenes/inline.ron")).unwrap();
+    let render_frame = |instanced: bool, shutter: f32| {
+        let mut w = SceneWorld::new(&desc);
+        if !instanced {
+            use bevy_ecs::prelude::*;
+            use pathwave::engine::world::Instanced;
+            let es: Vec<Entity> =
+                w.world.query_filtered::<Entity, With<Instanced>>().iter(&w.world).collect();
+            for e in es {
+                w.world.entity_mut(e).remove::<Instanced>();
+            }
+        }
+        // Frame 1 of 4 per second with a full shutter: the knot sweeps 0.75 units.
+        let scene = animate::scene_at(&mut w, 1, 4.0, shutter);
+        assert_eq!(scene.features.instances, instanced);
+        assert_eq!(scene.features.motion, shutter > 0.0);
+        wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0.mean()
+    };
+    let (inst, baked, still) = (render_frame(true, 1.0), render_frame(false, 1.0), render_frame(true, 0.0));
+    let rel = |a: &[glam::Vec3], b: &[glam::Vec3]| pathwave::metrics::rel_mse(a, b);
+    let same = rel(&inst, &baked);
+    let blur = rel(&inst, &still);
+    // The same samples see the same (moving) triangles up to rounding in two spaces.
+    assert!(same < 1e-4, "instanced vs baked blur: relMSE {same}");
+    assert!(blur > 100.0 * same.max(1e-6), "the blur must show: relMSE against the still {blur}");
+}
+
+#[test]
+fn a_static_scene_rebuilds_no_bvh_after_the_first_frame() {
+    let desc = scene("mesh.ron");
+    let mut w = SceneWorld::new(&desc);
+    for frame in 0..8 {
+        animate::scene_at(&mut w, frame, 24.0, 0.5);
+    }
+    assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 1);
+    let i = w.world.resource::<SceneInstances>();
+    assert_eq!((i.builds, i.refits), (1, 0));
+    // Whereas a scene whose ball moves rebuilds its primitives each frame.
+    let mut w = SceneWorld::new(&scene("animation-bounce.ron"));
+    for frame in 0..8 {
+        animate::scene_at(&mut w, frame, 24.0, 0.5);
+    }
+    assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 8);
+}
+
+fn mtime(p: &Path) -> std::time::SystemTime {
+    std::fs::metadata(p).unwrap().modified().unwrap()
+}
+
+#[test]
+fn a_killed_sequence_resumes_without_redoing_frames() {
+    let dir = temp("resume");
+    let pattern = dir.join("f_{frame:04}.png");
+    let args = |c: &mut Command| {
+        c.arg("animate").arg(root().join("scenes/animation-orbit.ron")).args([
+            "-o",
+            pattern.to_str().unwrap(),
+            "--frames",
+            "0..12",
+            "-t",
+            "1",
+            "--spp",
+            "64",
+        ]);
+    };
+    let frame = |i: u32| animate::frame_path(pattern.to_str().unwrap(), i).unwrap();
+    let mut child = {
+        let mut c = pathwave();
+        args(&mut c);
+        c.stderr(std::process::Stdio::null()).spawn().unwrap()
+    };
+    // Kill it once two frames are on disk.
+    let start = std::time::Instant::now();
+    while !frame(1).exists() {
+        assert!(start.elapsed().as_secs() < 120, "no frame after 2 minutes");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let done: Vec<u32> = (0..12).filter(|&i| frame(i).exists()).collect();
+    assert!(done.len() < 12, "the run finished before it was killed");
+    // No temporary file is left looking like a frame.
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        assert!(name.starts_with("f_") || name.starts_with('.'), "{name}");
+    }
+    let before: Vec<_> = done.iter().map(|&i| mtime(&frame(i))).collect();
+    let mut c = pathwave();
+    args(&mut c);
+    let log = run(&mut c);
+    for (k, &i) in done.iter().enumerate() {
+        assert_eq!(mtime(&frame(i)), before[k], "frame {i} was rendered again");
+    }
+    assert!((0..12).all(|i| frame(i).exists()));
+    assert!(log.contains(&format!("{} skipped", done.len())), "{log}");
+    // --overwrite renders them all.
+    let mut c = pathwave();
+    args(&mut c);
+    let log = run(c.arg("--overwrite"));
+    assert!(log.contains("12 frames rendered, 0 skipped"), "{log}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn animate_writes_an_animated_gif() {
+    let dir = temp("gif");
+    let gif = dir.join("a.gif");
+    run(pathwave().arg("animate").arg(root().join("scenes/animation-bounce.ron")).args([
+        "-o",
+        gif.to_str().unwrap(),
+        "--frames",
+        "0..3",
+        "--spp",
+        "2",
+        "--width",
+        "32",
+        "--height",
+        "24",
+    ]));
+    use image::AnimationDecoder;
+    let dec =
+        image::codecs::gif::GifDecoder::new(std::io::BufReader::new(std::fs::File::open(&gif).unwrap()))
+            .unwrap();
+    let frames = dec.into_frames().collect_frames().unwrap();
+    assert_eq!(frames.len(), 3);
+    assert_eq!(frames[0].buffer().dimensions(), (32, 24));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
