@@ -200,3 +200,55 @@ fn animate_writes_an_animated_gif() {
     assert_eq!(frames[0].buffer().dimensions(), (32, 24));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+const SPIN_SCENE: &str = r#"Scene(
+    camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 1024, max_depth: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+    objects: [
+        (
+            shape: Mesh(file: "assets/knot-2k.obj"),
+            material: "m",
+            transform: [Translate((0.5, 0, 0))],
+            animate: (rotate: Linear([(0, Euler((0, 0, 0))), (1, Euler((0, 0, 90)))])),
+        ),
+    ],
+)"#;
+
+/// The mean of `steps` renders at evenly spaced times in [0, 1] with the shutter closed.
+fn still_average(desc: &pathwave::engine::scene::SceneDesc, steps: u32) -> pathwave::io::LinearImage {
+    let mut sum = vec![glam::Vec3::ZERO; 48 * 48];
+    for k in 0..steps {
+        let t = (k as f32 + 0.5) / steps as f32;
+        let mut d = desc.clone();
+        d.render.spp = (desc.render.spp.get() / steps).try_into().unwrap();
+        d.render.seed = 1000 + k as u64;
+        let mut w = SceneWorld::new(&d);
+        w.set_time(t, t);
+        let film = pathwave::integrator::oracle::render(&w.update(), &|_, _| {});
+        for (s, p) in sum.iter_mut().zip(film.mean()) {
+            *s += p / steps as f32;
+        }
+    }
+    pathwave::io::LinearImage { width: 48, height: 48, pixels: sum }
+}
+
+#[test]
+fn a_spinning_instance_averages_its_still_images() {
+    let desc = pathwave::engine::scene::parse(SPIN_SCENE, &root().join("scenes/inline.ron")).unwrap();
+    let reference = still_average(&desc, 32);
+    let blurred = |close: f32| {
+        let mut w = SceneWorld::new(&desc);
+        w.set_time(0.0, close);
+        let scene = w.update();
+        assert!(scene.instances.list[0].motion.is_some(), "the instance turns while the shutter is open");
+        pathwave::integrator::oracle::render(&scene, &|_, _| {})
+    };
+    let stats = block_z(&blurred(1.0), &reference, 8, 1024);
+    eprintln!("spinning: {stats:?}");
+    assert!(stats.agrees(), "{stats:?}");
+    let stats = block_z(&blurred(0.9), &reference, 8, 1024);
+    eprintln!("shutter 10% short: {stats:?}");
+    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+}

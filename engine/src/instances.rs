@@ -7,7 +7,7 @@ use crate::geometry::Hit;
 use crate::math::{Ray, gamma};
 use crate::mesh::MeshBlas;
 use crate::shape::SurfacePoint;
-use glam::{Affine3A, Mat3A, Vec3A};
+use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::sync::Arc;
 
@@ -30,6 +30,96 @@ pub struct Instance {
     pub material: u32,
     /// World units per unit time.
     pub velocity: Vec3A,
+    /// A placement that turns or scales while the shutter is open: then it, not the fields
+    /// above, places the instance (per ray time).
+    pub motion: Option<Box<ShutterMotion>>,
+}
+
+/// A keyframed placement over the shutter interval: `world_from_object(time) = A(time) base`,
+/// with the scale, rotation and translation of `A` interpolated (lerp, slerp, lerp) from shutter
+/// open to close, so every ray sees the instance where it is at the ray's time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShutterMotion {
+    /// The static part.
+    pub base: Affine3A,
+    base_inv: Affine3A,
+    /// Shutter open and close.
+    pub times: (f32, f32),
+    scale: (Vec3, Vec3),
+    rotation: (Quat, Quat),
+    translation: (Vec3, Vec3),
+}
+
+impl ShutterMotion {
+    /// `open` and `close` are `A` at the shutter's open and close `times`; `None` when a
+    /// transform is singular or the interval empty.
+    pub fn new(base: Affine3A, open: Affine3A, close: Affine3A, times: (f32, f32)) -> Option<Self> {
+        let ok = |m: &Affine3A| {
+            let det = m.matrix3.determinant();
+            det.abs() > 0.0 && det.is_finite() && m.translation.is_finite()
+        };
+        if !(ok(&base) && ok(&open) && ok(&close) && times.1 > times.0) {
+            return None;
+        }
+        let (s0, r0, t0) = open.to_scale_rotation_translation();
+        let (s1, mut r1, t1) = close.to_scale_rotation_translation();
+        if r1.dot(r0) < 0.0 {
+            r1 = -r1;
+        }
+        Some(Self {
+            base,
+            base_inv: base.inverse(),
+            times,
+            scale: (s0, s1),
+            rotation: (r0, r1),
+            translation: (t0, t1),
+        })
+    }
+
+    /// Scale, rotation and translation of `A` at `time`.
+    #[inline]
+    fn srt(&self, time: f32) -> (Vec3A, Quat, Vec3A) {
+        let u = ((time - self.times.0) / (self.times.1 - self.times.0)).clamp(0.0, 1.0);
+        (
+            self.scale.0.lerp(self.scale.1, u).into(),
+            self.rotation.0.slerp(self.rotation.1, u),
+            self.translation.0.lerp(self.translation.1, u).into(),
+        )
+    }
+
+    /// Object to world at `time`.
+    pub fn world_from_object(&self, time: f32) -> Affine3A {
+        let (s, r, t) = self.srt(time);
+        Affine3A::from_scale_rotation_translation(s.into(), r, t.into()) * self.base
+    }
+
+    /// The ray `o + t d` at `time` in object space (`t` unchanged).
+    #[inline]
+    fn object_ray(&self, time: f32, o: Vec3A, d: Vec3A) -> (Vec3A, Vec3A) {
+        let (s, r, t) = self.srt(time);
+        let inv = r.inverse();
+        let (o, d) = ((inv * (o - t)) / s, (inv * d) / s);
+        (self.base_inv.transform_point3a(o), self.base_inv.transform_vector3a(d))
+    }
+
+    /// World bounds of the object box `b` over the shutter: the union of its bounds at 33
+    /// times, grown by how far a point of the box can move between two of them.
+    fn bounds(&self, b: &Aabb) -> Aabb {
+        const N: usize = 32;
+        let local = transform_box(b, &self.base);
+        let reach = local.min.abs().max(local.max.abs()).length();
+        let (s, r) = (self.scale, self.rotation);
+        let angle = r.0.angle_between(r.1) / N as f32;
+        let smax = s.0.abs().max(s.1.abs()).max_element();
+        let pad = reach * (angle * smax + (s.1 - s.0).abs().max_element() / N as f32)
+            + (self.translation.1 - self.translation.0).length() / N as f32;
+        let mut out = Aabb::empty();
+        for k in 0..=N {
+            let time = self.times.0 + (self.times.1 - self.times.0) * k as f32 / N as f32;
+            out = out.union(&transform_box(b, &self.world_from_object(time)));
+        }
+        Aabb { min: out.min - pad, max: out.max + pad }
+    }
 }
 
 impl Instance {
@@ -47,7 +137,15 @@ impl Instance {
             normal_to_world: object_from_world.matrix3.transpose(),
             material,
             velocity,
+            motion: None,
         })
+    }
+
+    /// This instance turning or scaling over the shutter as `motion` says (its fixed fields
+    /// then hold the mid-shutter placement, for anything that wants one).
+    pub fn with_motion(mut self, motion: Option<ShutterMotion>) -> Self {
+        self.motion = motion.map(Box::new);
+        self
     }
 }
 
@@ -58,8 +156,8 @@ pub struct Instances {
     pub blas: Vec<Arc<MeshBlas>>,
     /// The instances.
     pub list: Vec<Instance>,
-    /// Shutter interval the TLAS bounds cover.
-    shutter: (f32, f32),
+    /// Shutter interval the TLAS bounds cover (moving instances are swept over it).
+    pub shutter: (f32, f32),
     tlas: Bvh8,
     /// Instance indices in TLAS leaf order.
     order: Vec<u32>,
@@ -106,17 +204,26 @@ impl Instances {
     /// World bounds of instance `i` over the shutter interval.
     pub fn world_bounds(&self, i: usize) -> Aabb {
         let inst = &self.list[i];
+        if let Some(m) = &inst.motion {
+            return m.bounds(&self.blas[inst.blas as usize].bounds());
+        }
         let b = transform_box(&self.blas[inst.blas as usize].bounds(), &inst.world_from_object);
         let (a, c) = (inst.velocity * self.shutter.0, inst.velocity * self.shutter.1);
         Aabb { min: b.min + a.min(c), max: b.max + a.max(c) }
     }
 
     /// Replaces the placement of instance `i` (call [`Self::refit`] after the last one).
-    pub fn place(&mut self, i: usize, world_from_object: Affine3A, velocity: Vec3A) -> bool {
+    pub fn place(
+        &mut self,
+        i: usize,
+        world_from_object: Affine3A,
+        velocity: Vec3A,
+        motion: Option<ShutterMotion>,
+    ) -> bool {
         let old = &self.list[i];
         match Instance::new(old.blas, world_from_object, old.material, velocity) {
             Some(new) => {
-                self.list[i] = new;
+                self.list[i] = new.with_motion(motion);
                 true
             }
             None => false,
@@ -147,6 +254,9 @@ impl Instances {
     /// the same in both spaces).
     #[inline(always)]
     fn object_ray(&self, inst: &Instance, ray: &Ray) -> (Vec3A, Vec3A) {
+        if let Some(m) = &inst.motion {
+            return m.object_ray(ray.time, ray.origin, ray.dir);
+        }
         let o = ray.origin - inst.velocity * ray.time;
         (inst.object_from_world.transform_point3a(o), inst.object_from_world.transform_vector3a(ray.dir))
     }
@@ -190,15 +300,20 @@ impl Instances {
     fn surface(&self, inst: &Instance, tri: u32, ray: &Ray, t: f32) -> SurfacePoint {
         let (o, d) = self.object_ray(inst, ray);
         let local = self.blas[inst.blas as usize].surface(tri, o + t * d);
-        let m = inst.world_from_object;
+        let (m, normal_to_world, off) = match &inst.motion {
+            Some(motion) => {
+                let m = motion.world_from_object(ray.time);
+                (m, m.matrix3.inverse().transpose(), Vec3A::ZERO)
+            }
+            None => (inst.world_from_object, inst.normal_to_world, inst.velocity * ray.time),
+        };
         let norm = |a: &Mat3A| (a.x_axis.abs() + a.y_axis.abs() + a.z_axis.abs()).max_element();
         let scale = norm(&m.matrix3);
-        let off = inst.velocity * ray.time;
         let world_p = m.transform_point3a(local.p) + off;
         let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
         SurfacePoint {
             p: world_p,
-            n: (inst.normal_to_world * local.n).normalize(),
+            n: (normal_to_world * local.n).normalize(),
             uv: local.uv,
             err: scale * local.err
                 + gamma(4) * magnitude

@@ -98,7 +98,8 @@ impl Features {
         Self {
             lights_are_quads,
             media: !media.is_empty(),
-            motion: (geometry.velocity.is_some() || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO))
+            motion: (geometry.velocity.is_some()
+                || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some()))
                 && shutter.0 != shutter.1,
             textures: false,
             instances: !instances.is_empty(),

@@ -4,7 +4,7 @@
 
 use crate::camera::Camera;
 use crate::geometry::{Geometry, Primitive};
-use crate::instances::{Instance, Instances};
+use crate::instances::{Instance, Instances, ShutterMotion};
 use crate::lights::LightTable;
 use crate::material::Material;
 use crate::media::{Boundary, Media, Medium, Volume};
@@ -329,7 +329,10 @@ pub fn rebuild_geometry(
 pub fn update_instances(
     mut out: ResMut<SceneInstances>,
     mut library: ResMut<MeshLibrary>,
-    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), With<Instanced>>,
+    objects: Query<
+        (Entity, &Transform, &Shape, &MaterialId, Option<&Motion>, Option<&Animated>),
+        With<Instanced>,
+    >,
     reshaped: Query<(), (With<Instanced>, Or<(Added<Instanced>, Changed<Shape>, Changed<MaterialId>)>)>,
     moved: Query<Entity, (With<Instanced>, Or<(Changed<Transform>, Changed<Motion>)>)>,
     mut removed_shape: RemovedComponents<Shape>,
@@ -337,18 +340,33 @@ pub fn update_instances(
     mut removed: RemovedComponents<Instanced>,
     mut stopped: RemovedComponents<Motion>,
     camera: Res<CameraParams>,
+    time: Res<FrameTime>,
 ) {
+    // Keyframed instances that turn or scale while the shutter is open are placed per ray
+    // time; translation alone is the exact linear motion of `Motion`.
+    let shutter_motion = |anim: Option<&Animated>| -> Option<ShutterMotion> {
+        let a = anim?;
+        let (t0, t1) = (time.open, time.close);
+        let (a0, a1) = (a.keys.at(t0), a.keys.at(t1));
+        if !(t1 > t0) || a0.matrix3 == a1.matrix3 {
+            return None;
+        }
+        let v = Vec3A::from(a.velocity);
+        let a0 = Affine3A { translation: a0.translation + v * t0, ..a0 };
+        let a1 = Affine3A { translation: a1.translation + v * t1, ..a1 };
+        ShutterMotion::new(a.base, a0, a1, (t0, t1))
+    };
     let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
     let gone = removed_shape.read().chain(removed_material.read()).chain(removed.read()).any(was_built_from);
     let stopped: Vec<Entity> = stopped.read().filter(|e| was_built_from(*e)).collect();
-    let moving = out.instances.list.iter().any(|i| i.velocity != Vec3A::ZERO);
+    let moving = out.instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some());
     let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
-    if gone || !reshaped.is_empty() || (moving && camera.is_changed()) || out.builds == 0 {
+    if gone || !reshaped.is_empty() || out.builds == 0 {
         let _span = tracing::info_span!("rebuild_instances").entered();
         let mut objs: Vec<_> = objects.iter().collect();
         objs.sort_by_key(|(e, ..)| *e);
         let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
-        for (e, transform, shape, material, motion) in objs {
+        for (e, transform, shape, material, motion, anim) in objs {
             let ShapeDesc::Mesh(file) = &shape.0 else {
                 tracing::error!("instance skipped: only meshes are instanced");
                 continue;
@@ -363,7 +381,7 @@ pub fn update_instances(
             };
             match Instance::new(index as u32, transform.0, material.0, velocity(motion)) {
                 Some(inst) => {
-                    list.push(inst);
+                    list.push(inst.with_motion(shutter_motion(anim)));
                     entities.push(e);
                 }
                 None => tracing::error!("instance skipped: its transform is singular"),
@@ -376,15 +394,18 @@ pub fn update_instances(
         out.builds += 1;
         return;
     }
-    if moved.is_empty() && stopped.is_empty() {
+    // A new shutter changes the sweep of whatever moves: a refit covers it.
+    let new_shutter = moving && camera.is_changed();
+    if moved.is_empty() && stopped.is_empty() && !new_shutter {
         return;
     }
     let out = &mut *out;
     let instances = Arc::make_mut(&mut out.instances);
+    instances.shutter = camera.0.shutter;
     for e in moved.iter().chain(stopped) {
         let Ok(i) = out.entities.binary_search(&e) else { continue };
-        let Ok((_, transform, _, _, motion)) = objects.get(e) else { continue };
-        if !instances.place(i, transform.0, velocity(motion)) {
+        let Ok((_, transform, _, _, motion, anim)) = objects.get(e) else { continue };
+        if !instances.place(i, transform.0, velocity(motion), shutter_motion(anim)) {
             tracing::error!("instance not moved: its new transform is singular");
         }
     }
