@@ -311,9 +311,13 @@ impl Instances {
         let scale = norm(&m.matrix3);
         let world_p = m.transform_point3a(local.p) + off;
         let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
+        let n = (normal_to_world * local.n).normalize();
+        // The shading normal's side decides (the file's normals say where outside is).
+        let ns = (normal_to_world * local.ns).normalize();
         SurfacePoint {
             p: world_p,
-            n: (normal_to_world * local.n).normalize(),
+            n: if n.dot(ns) < 0.0 { -n } else { n },
+            ns,
             uv: local.uv,
             err: scale * local.err
                 + gamma(4) * magnitude

@@ -17,6 +17,10 @@ pub struct MeshData {
     pub positions: Vec<Vec3A>,
     /// Triangles as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Vertex normals (indexed like `positions`), for smooth shading; `None`: flat shading.
+    pub normals: Option<Vec<Vec3A>>,
+    /// Vertex texture coordinates (indexed like `positions`); `None`: barycentric uv.
+    pub uvs: Option<Vec<glam::Vec2>>,
 }
 
 impl MeshData {
@@ -63,7 +67,7 @@ impl MeshData {
                 triangles.push([a, c, d]);
             }
         }
-        Self { positions, triangles }
+        Self { positions, triangles, normals: None, uvs: None }
     }
 }
 
@@ -323,11 +327,29 @@ impl MeshBlas {
         })
     }
 
-    /// Surface data on triangle `id` at the object-space point `p`.
+    /// Surface data on triangle `id` at the object-space point `p`: with vertex normals, the
+    /// shading normal interpolates them (and the geometric normal turns to its side); with
+    /// vertex uvs, so does uv.
     #[inline]
     pub fn surface(&self, id: u32, p: Vec3A) -> SurfacePoint {
         let [a, b, c] = self.mesh.triangle(id);
-        Triangle { p: [a, b, c] }.surface(p)
+        let mut sp = Triangle { p: [a, b, c] }.surface(p);
+        let (b1, b2) = (sp.uv.x, sp.uv.y);
+        let b0 = 1.0 - b1 - b2;
+        let [i, j, k] = self.mesh.triangles[id as usize].map(|v| v as usize);
+        if let Some(n) = &self.mesh.normals {
+            let ns = b0 * n[i] + b1 * n[j] + b2 * n[k];
+            if ns.length_squared() > 0.0 && ns.is_finite() {
+                sp.ns = ns.normalize();
+                if sp.n.dot(sp.ns) < 0.0 {
+                    sp.n = -sp.n;
+                }
+            }
+        }
+        if let Some(uv) = &self.mesh.uvs {
+            sp.uv = b0 * uv[i] + b1 * uv[j] + b2 * uv[k];
+        }
+        sp
     }
 }
 

@@ -17,10 +17,12 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 /// Everything the kernel reads for one path.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LambertIn {
-    /// Hit point, geometric normal, point error bound.
+    /// Hit point.
     pub p: Vec3,
-    /// Unit geometric normal.
+    /// Unit shading normal (the BSDF's).
     pub n: Vec3,
+    /// Unit geometric normal (rays leave along it).
+    pub ng: Vec3,
     /// Error bound of `p`.
     pub err: f32,
     /// Direction to the previous vertex.
@@ -153,7 +155,7 @@ fn disk(u: [f32; 2]) -> (f32, f32) {
 /// The kernel.
 #[inline(always)]
 pub fn lambert(i: &LambertIn) -> LambertOut {
-    let (p, n) = (i.p, i.n);
+    let (p, n, ng) = (i.p, i.n, i.ng);
     // Light sample.
     let pl = i.lq + i.lu * i.u_light[0] + i.lv * i.u_light[1];
     let to = pl - p;
@@ -169,8 +171,11 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let f = i.albedo * c;
     let w = power_heuristic(pdf_light, c);
     let contribution = i.beta * (f * i.emit * (w / pdf_light));
-    let shadow = dist > 0.0 && pdf_light > 0.0 && faces && i.emit != Vec3::ZERO && co * ci > 0.0;
-    let so = offset(p, i.err, sel3(ci > 0.0, n, -n));
+    // Directions must leave on the same side of the surface and of the shading normal.
+    let cig = dot(wi, ng);
+    let shadow =
+        dist > 0.0 && pdf_light > 0.0 && faces && i.emit != Vec3::ZERO && co * ci > 0.0 && cig * ci > 0.0;
+    let so = offset(p, i.err, sel3(cig > 0.0, ng, -ng));
     let st = offset(pl, i.lerr, sel3(dot(i.ln, wi) < 0.0, i.ln, -i.ln));
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
@@ -183,7 +188,8 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let t = Vec3::new(1.0 + sign * nf.x * nf.x * a, sign * b, -sign * nf.x);
     let bt = Vec3::new(b, sign + nf.y * nf.y * a, -nf.y);
     let d = t * dx + bt * dy + nf * z;
-    let o = offset(p, i.err, sel3(dot(d, n) > 0.0, n, -n));
+    let dg = dot(d, ng);
+    let o = offset(p, i.err, sel3(dg > 0.0, ng, -ng));
     // Russian roulette.
     let beta = i.beta * i.albedo;
     let rr = (beta * i.eta_scale).max_element();
@@ -196,7 +202,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
         so,
         sd: st - so,
         contribution,
-        alive: pdf > 0.0 && survive,
+        alive: pdf > 0.0 && survive && dg * dot(d, n) > 0.0,
         o,
         d,
         beta,
@@ -221,7 +227,8 @@ pub fn gather(
     let lights = &*scene.lights;
     let mut i = LambertIn {
         p: sp.p.into(),
-        n: sp.n.into(),
+        n: sp.ns.into(),
+        ng: sp.n.into(),
         err: sp.err,
         wo: wo.into(),
         albedo,
@@ -313,7 +320,7 @@ macro_rules! lanes {
 }
 
 lanes!(LambertInLanes for LambertIn {
-    p: v3, n: v3, err: f32, wo: v3, albedo: v3, beta: v3, eta_scale: f32, depth_after: u32,
+    p: v3, n: v3, ng: v3, err: f32, wo: v3, albedo: v3, beta: v3, eta_scale: f32, depth_after: u32,
     lq: v3, lu: v3, lv: v3, ln: v3, lerr: f32, inv_area: f32, emit: v3, two_sided: bool, pmf: f32,
     u_light: f2, u_dir: f2, u_rr: f32, rr_on: bool,
 });
@@ -379,6 +386,7 @@ mod tests {
             |u, _| {
                 let i = LambertIn {
                     n,
+                    ng: n,
                     wo,
                     u_dir: [u.x, u.y],
                     albedo: Vec3::ONE,

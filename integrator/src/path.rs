@@ -130,7 +130,11 @@ pub fn sample_light(
 ) -> Option<ShadowRay> {
     let (p, n) = (sp.p, sp.n);
     let lp = pick_light(scene, p, time, sampler)?;
-    let (f, pdf_bsdf) = material::eval(mat, wo, lp.wi, n);
+    // The light must lie on the same side of the surface and of the shading normal.
+    if lp.wi.dot(n) * lp.wi.dot(sp.ns) <= 0.0 {
+        return None;
+    }
+    let (f, pdf_bsdf) = material::eval(mat, wo, lp.wi, sp.ns);
     if f == Vec3::ZERO {
         return None;
     }
@@ -238,7 +242,12 @@ pub fn scatter(
     time: f32,
     sampler: &mut Sampler,
 ) -> Option<Ray> {
-    let bs = material::sample(mat, wo, sp.n, sampler.next_2d(), sampler.next_1d())?;
+    let bs = material::sample(mat, wo, sp.ns, sampler.next_2d(), sampler.next_1d())?;
+    // A direction on one side of the shading normal and the other of the surface ends the
+    // path (with vertex normals; without them the two sides agree).
+    if bs.wi.dot(sp.n) * bs.wi.dot(sp.ns) <= 0.0 {
+        return None;
+    }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
     st.delta = bs.delta;

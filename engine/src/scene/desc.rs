@@ -389,11 +389,27 @@ fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     let (models, _) = tobj::load_obj(path, &options)
         .map_err(|e| format!("cannot read the mesh {}: {e}", path.display()))?;
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    // Vertex normals and uvs count only if every model has them.
+    let (mut normals, mut uvs) = (Some(Vec::new()), Some(Vec::new()));
     for m in models {
+        let m = m.mesh;
         let base = positions.len() as u32;
-        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])));
-        triangles.extend(m.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        let n = m.positions.len() / 3;
+        positions.extend(m.positions.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])));
+        triangles.extend(m.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        match (&mut normals, m.normals.len() == 3 * n) {
+            (Some(v), true) => {
+                v.extend(m.normals.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])))
+            }
+            _ => normals = None,
+        }
+        match (&mut uvs, m.texcoords.len() == 2 * n) {
+            (Some(v), true) => v.extend(m.texcoords.chunks_exact(2).map(|t| glam::Vec2::new(t[0], t[1]))),
+            _ => uvs = None,
+        }
     }
+    let normals = normals.filter(|n| n.iter().all(|v| v.is_finite()));
+    let uvs = uvs.filter(|u| u.iter().all(|v| v.is_finite()));
     if !positions.iter().all(|p| p.is_finite()) {
         return Err(format!("the mesh {} has a vertex that is not a finite number", path.display()));
     }
@@ -403,7 +419,7 @@ fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
-    Ok(crate::mesh::MeshData { positions, triangles })
+    Ok(crate::mesh::MeshData { positions, triangles, normals, uvs })
 }
 
 /// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.

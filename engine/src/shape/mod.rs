@@ -18,8 +18,12 @@ use glam::{Vec2, Vec3A};
 pub struct SurfacePoint {
     /// The hit point, re-projected onto the surface where that is cheap.
     pub p: Vec3A,
-    /// Unit geometric normal on the shape's outside (for a quad: along `u x v`).
+    /// Unit geometric normal on the shape's outside (for a quad: along `u x v`): rays leave
+    /// the surface along it.
     pub n: Vec3A,
+    /// Unit shading normal, on the side of `n`: BSDFs are evaluated about it. It differs from
+    /// `n` only on meshes with vertex normals.
+    pub ns: Vec3A,
     /// Surface parameterisation (see each shape).
     pub uv: Vec2,
     /// Bound on the absolute error of each coordinate of `p` (for spawning rays off it).

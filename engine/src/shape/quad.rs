@@ -76,6 +76,7 @@ impl Quad {
         SurfacePoint {
             p: self.q + a * self.u + b * self.v,
             n: self.n,
+            ns: self.n,
             uv: Vec2::new(a, b),
             err: self.point_error(),
         }

@@ -52,7 +52,7 @@ impl Sphere {
         let p = self.center + self.radius * n;
         let u = ((-n.z).atan2(n.x) + PI) / (2.0 * PI);
         let v = (-n.y).clamp(-1.0, 1.0).acos() / PI;
-        SurfacePoint { p, n, uv: Vec2::new(u, v), err: self.point_error() }
+        SurfacePoint { p, n, ns: n, uv: Vec2::new(u, v), err: self.point_error() }
     }
 
     /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when

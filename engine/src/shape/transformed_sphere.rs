@@ -68,9 +68,11 @@ impl TransformedSphere {
         let norm = m.matrix3.x_axis.abs() + m.matrix3.y_axis.abs() + m.matrix3.z_axis.abs();
         let scale = norm.max_element();
         let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
+        let n = (self.normal_to_world * local.n).normalize();
         SurfacePoint {
             p: m.transform_point3a(local.p),
-            n: (self.normal_to_world * local.n).normalize(),
+            n,
+            ns: n,
             uv: local.uv,
             err: scale * local.err + gamma(4) * magnitude,
         }

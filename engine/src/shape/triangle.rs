@@ -125,7 +125,8 @@ impl Triangle {
         let [p0, p1, p2] = self.p;
         let p = b0 * p0 + b1 * p1 + b2 * p2;
         let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
-        SurfacePoint { p, n: self.cross().normalize(), uv: Vec2::new(b1, b2), err }
+        let n = self.cross().normalize();
+        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
     }
 
     /// Samples a point uniformly by area (the square-root parameterisation).

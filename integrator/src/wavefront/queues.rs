@@ -49,6 +49,7 @@ impl Paths {
             surface: pathwave_engine::shape::SurfacePoint {
                 p: Vec3A::ZERO,
                 n: Vec3A::Z,
+                ns: Vec3A::Z,
                 uv: glam::Vec2::ZERO,
                 err: 0.0,
             },
