@@ -192,7 +192,7 @@ fn object_with_neither_or_both_material_and_medium() {
 #[test]
 fn medium_needs_a_closed_shape_and_valid_numbers() {
     let quad = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 1, 0)), medium: (density: 1, albedo: (1, 1, 1))),"#;
-    assert_err(&with_object(quad), 8, 104, &["closed shape", "Sphere or Box"]);
+    assert_err(&with_object(quad), 8, 104, &["closed shape", "Sphere, Box or a closed Mesh"]);
     let zero = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 0, albedo: (1, 1, 1))),"#;
     assert_err(&with_object(zero), 8, 73, &["finite number > 0", "found 0"]);
     let bright = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 2, 1))),"#;

@@ -327,6 +327,16 @@ impl MeshBlas {
         })
     }
 
+    /// Appends the `t` of every hit of the ray `o + t d`, `t > 0` (unsorted).
+    pub fn all_hits(&self, o: Vec3A, d: Vec3A, out: &mut Vec<f32>) {
+        let r = TriRay::new(o, d);
+        self.bvh.any(o, d, f32::INFINITY, |first, _| {
+            let ts = self.blocks[first as usize].intersect(&r, o, d, f32::INFINITY);
+            out.extend(ts.iter().filter(|t| t.is_finite()));
+            false
+        });
+    }
+
     /// Surface data on triangle `id` at the object-space point `p`: with vertex normals, the
     /// shading normal interpolates them (and the geometric normal turns to its side); with
     /// vertex uvs, so does uv.

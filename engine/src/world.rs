@@ -439,13 +439,16 @@ pub fn rebuild_media(
     let volumes = vols
         .into_iter()
         .filter_map(|(_, transform, shape, filling)| {
-            let boundary = match shape.0 {
-                ShapeDesc::Mesh(_) => {
-                    tracing::error!("medium skipped: mesh boundaries are not supported yet");
-                    return None;
+            let boundary = match &shape.0 {
+                ShapeDesc::Mesh(file) => {
+                    if let Some((a, b, _)) = crate::scene::open_edge(&file.mesh) {
+                        tracing::error!("medium skipped: its mesh is open at the edge {a} - {b}");
+                        return None;
+                    }
+                    Boundary::Mesh(Arc::new(MeshBlas::build(file.mesh.clone())))
                 }
-                ShapeDesc::Sphere { center, radius } => Boundary::Sphere { center: center.into(), radius },
-                ShapeDesc::Box { min, max } => Boundary::Box { min: min.into(), max: max.into() },
+                &ShapeDesc::Sphere { center, radius } => Boundary::Sphere { center: center.into(), radius },
+                &ShapeDesc::Box { min, max } => Boundary::Box { min: min.into(), max: max.into() },
                 ShapeDesc::Quad { .. } | ShapeDesc::Triangle { .. } => {
                     tracing::error!("medium skipped: a quad or triangle bounds no volume");
                     return None;

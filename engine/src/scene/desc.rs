@@ -383,6 +383,24 @@ impl<'de> Deserialize<'de> for MeshFile {
     }
 }
 
+/// An edge (by vertex position) that borders an odd number of triangles, and that number: a
+/// mesh without one is closed, so a ray's hits alternate between entering and leaving it.
+pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec3A, u32)> {
+    use std::collections::HashMap;
+    let key = |p: glam::Vec3A| p.to_array().map(f32::to_bits);
+    let mut count: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (key(mesh.positions[t[k] as usize]), key(mesh.positions[t[(k + 1) % 3] as usize]));
+            *count.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+        }
+    }
+    let pos = |k: [u32; 3]| glam::Vec3A::from_array(k.map(f32::from_bits));
+    let mut odd: Vec<_> = count.into_iter().filter(|(_, n)| n % 2 == 1).collect();
+    odd.sort_unstable();
+    odd.first().map(|&((a, b), n)| (pos(a), pos(b), n))
+}
+
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
 fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
@@ -692,8 +710,21 @@ impl TryFrom<RawObject> for ObjectDesc {
     fn try_from(r: RawObject) -> Result<Self, String> {
         let body = match (r.material, r.medium) {
             (Some(m), None) => Body::Surface(m),
-            (None, Some(_)) if !matches!(r.shape, ShapeDesc::Sphere { .. } | ShapeDesc::Box { .. }) => {
-                return Err("a medium needs a closed shape: Sphere or Box".into());
+            (None, Some(_))
+                if !matches!(
+                    r.shape,
+                    ShapeDesc::Sphere { .. } | ShapeDesc::Box { .. } | ShapeDesc::Mesh(_)
+                ) =>
+            {
+                return Err("a medium needs a closed shape: Sphere, Box or a closed Mesh".into());
+            }
+            (None, Some(_)) if matches!(&r.shape, ShapeDesc::Mesh(m) if open_edge(&m.mesh).is_some()) => {
+                let ShapeDesc::Mesh(m) = &r.shape else { unreachable!() };
+                let (a, b, n) = open_edge(&m.mesh).unwrap();
+                return Err(format!(
+                    "a medium needs a closed mesh, but in {} the edge from {a} to {b} borders {n} triangle(s)",
+                    m.path.display()
+                ));
             }
             (None, Some(m)) => Body::Volume(m),
             (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),

@@ -70,6 +70,23 @@ impl Triangle {
         if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
             return MISS;
         }
+        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+            // The ray passes exactly through an edge or a vertex. Of the triangles sharing it,
+            // only the one for which the edge is a "top-left" edge (in the ray's frame, with
+            // the winding made positive) takes the hit: exactly one, which keeps the parity of
+            // hits through closed meshes (media boundaries) right.
+            let s = (e0 + e1 + e2).signum();
+            let top_left = |a: Vec3A, b: Vec3A| {
+                let (dx, dy) = (s * (b.x - a.x), s * (b.y - a.y));
+                dy > 0.0 || (dy == 0.0 && dx < 0.0)
+            };
+            if (e0 == 0.0 && !top_left(q[1], q[2]))
+                || (e1 == 0.0 && !top_left(q[2], q[0]))
+                || (e2 == 0.0 && !top_left(q[0], q[1]))
+            {
+                return MISS;
+            }
+        }
         let det = e0 + e1 + e2;
         if det == 0.0 {
             return MISS;
@@ -195,6 +212,20 @@ mod tests {
             let d = target - origin;
             let hits = fan.iter().filter(|t| t.intersect(origin, d, f32::INFINITY).is_finite()).count();
             assert!(hits >= 1, "a ray at {target} went through the fan");
+            assert!(hits <= 1, "a ray at {target} hit {hits} triangles of the fan");
+        }
+        // Exactly through the shared (diagonal) edge, axis-aligned. (The square's outer corners
+        // are not shared: the fill rule may leave them to a neighbour that is not there.)
+        let square = [
+            Triangle::new(Vec3A::ZERO, Vec3A::X, Vec3A::new(1.0, 1.0, 0.0)).unwrap(),
+            Triangle::new(Vec3A::ZERO, Vec3A::new(1.0, 1.0, 0.0), Vec3A::Y).unwrap(),
+        ];
+        for (x, y) in [(0.5, 0.5), (0.25, 0.25), (0.75, 0.75)] {
+            for dir in [-Vec3A::Z, Vec3A::Z] {
+                let o = Vec3A::new(x, y, 0.0) - 3.0 * dir;
+                let hits = square.iter().filter(|t| t.intersect(o, dir, f32::INFINITY).is_finite()).count();
+                assert_eq!(hits, 1, "({x}, {y}) along {dir}");
+            }
         }
     }
 
@@ -205,7 +236,10 @@ mod tests {
         for i in 0..100 {
             let u = Vec2::new((i as f32 + 0.5) / 100.0, ((i * 37) % 100) as f32 / 100.0);
             let ls = t.sample_solid_angle(from, u);
-            assert!(t.intersect(from, ls.p - from, 2.0).is_finite() || (ls.p - from).length() < 1e-3);
+            // Points on the boundary belong to the triangle only on its "top-left" edges.
+            let (b1, b2) = t.barycentric(ls.p);
+            let boundary = b1 == 0.0 || b2 == 0.0 || b1 + b2 >= 1.0;
+            assert!(t.intersect(from, ls.p - from, 2.0).is_finite() || boundary);
             assert!((ls.pdf / t.pdf_solid_angle(from, ls.p) - 1.0).abs() < 1e-5);
         }
     }
