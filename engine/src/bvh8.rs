@@ -111,18 +111,19 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
     // SAFETY: the loads read whole 32-byte-aligned lane arrays of `node` (the node is 64-byte
     // aligned, each array 32 bytes); AVX2 is enabled for the whole build.
     unsafe {
-        let mut tnear = _mm256_setzero_ps();
-        let mut exit = _mm256_set1_ps(f32::INFINITY);
         let scale = _mm256_set1_ps(EXIT_SCALE);
+        let mut n = [_mm256_setzero_ps(); 3];
+        let mut f = n;
         for a in 0..3 {
             let (near, far) = (&node.planes[r.near[a]], &node.planes[r.near[a] ^ 1]);
             let (o, inv) = (_mm256_set1_ps(r.o[a]), _mm256_set1_ps(r.inv[a]));
-            let n = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
-            let f = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
-            // Never NaN: `inv` is finite and non-zero, box corners finite or infinite.
-            tnear = _mm256_max_ps(tnear, n);
-            exit = _mm256_min_ps(exit, f);
+            n[a] = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr()), o), inv);
+            f[a] = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr()), o), inv);
         }
+        // Never NaN: `inv` is finite and non-zero, box corners finite or infinite. Reduced as
+        // trees (two levels, not three) to shorten the dependency chain.
+        let tnear = _mm256_max_ps(_mm256_max_ps(n[0], n[1]), _mm256_max_ps(n[2], _mm256_setzero_ps()));
+        let exit = _mm256_min_ps(_mm256_min_ps(f[0], f[1]), f[2]);
         let tfar = _mm256_min_ps(_mm256_mul_ps(exit, scale), _mm256_set1_ps(tmax));
         let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar)) as u32;
         let mut out = [0.0f32; WIDTH];
