@@ -119,7 +119,13 @@ proptest! {
             let hit = t.intersect(o, target - o, f32::INFINITY);
             prop_assume!(hit.is_finite());
             let sp = t.surface(o + hit * (target - o));
-            prop_assert!((sp.p - target).abs().max_element() <= sp.err + 1e-6 * (t.p[1] - t.p[0]).length());
+            // Off the plane by at most the bound; within the plane, the barycentric
+            // reconstruction may wander by rounding times the triangle's conditioning.
+            let (e1, e2) = (t.p[1] - t.p[0], t.p[2] - t.p[0]);
+            let cond = e1.length() * e2.length() / e1.cross(e2).length();
+            let dev = sp.p - target;
+            prop_assert!(dev.dot(n).abs() <= sp.err * n.abs().element_sum(), "off the plane by {}", dev.dot(n));
+            prop_assert!(dev.length() <= sp.err + 1e-6 * e1.length().max(e2.length()) * cond, "{dev}");
             let Some(d) = leaving(side, dir) else { continue };
             let start = offset_ray_origin(sp.p, sp.err, side);
             prop_assert_eq!(t.intersect(start, d, f32::INFINITY), f32::INFINITY);
