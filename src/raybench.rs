@@ -91,15 +91,21 @@ fn rnd2(i: u32, salt: u32) -> Vec2 {
     Vec2::new((a >> 8) as f32 / (1 << 24) as f32, (b >> 8) as f32 / (1 << 24) as f32)
 }
 
+/// The point of primary hit `i` (at `t`, normal `n`) moved `offset` along the normal turned
+/// to face the camera, and that normal.
+fn lifted(primary: &Rays, i: usize, t: f32, n: Vec3A, offset: f32) -> (Vec3A, Vec3A) {
+    let d = primary.d[i];
+    let n = if n.dot(d) > 0.0 { -n } else { n };
+    (primary.o[i] + t * d + offset * n, n)
+}
+
 /// One cosine-distributed ray per primary hit about the geometric normal turned to face the
 /// camera, its origin moved `offset` along that normal.
 pub fn bounce(primary: &Rays, hits: &[Option<(f32, Vec3A)>], offset: f32) -> Rays {
     let mut rays = Rays::default();
     for (i, h) in hits.iter().enumerate() {
         let Some((t, n)) = *h else { continue };
-        let d = primary.d[i];
-        let n = if n.dot(d) > 0.0 { -n } else { n };
-        let p = primary.o[i] + t * d + offset * n;
+        let (p, n) = lifted(primary, i, t, n, offset);
         let u = rnd2(i as u32, 1);
         let (r, phi) = (u.x.sqrt(), std::f32::consts::TAU * u.y);
         let (t1, t2) = n.any_orthonormal_pair();
@@ -117,9 +123,7 @@ pub fn shadow(primary: &Rays, hits: &[Option<(f32, Vec3A)>], light: [Vec3A; 3], 
     let mut rays = Rays::default();
     for (i, h) in hits.iter().enumerate() {
         let Some((t, n)) = *h else { continue };
-        let d = primary.d[i];
-        let n = if n.dot(d) > 0.0 { -n } else { n };
-        let p = primary.o[i] + t * d + offset * n;
+        let (p, n) = lifted(primary, i, t, n, offset);
         let u = rnd2(i as u32, 2);
         let target = q + u.x * eu + u.y * ev;
         let to = target - p;

@@ -4,7 +4,7 @@
 
 use crate::bvh8::Bvh8;
 use crate::geometry::Hit;
-use crate::math::{Ray, gamma};
+use crate::math::{Ray, gamma, transform_box};
 use crate::mesh::MeshBlas;
 use crate::shape::SurfacePoint;
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
@@ -163,20 +163,6 @@ pub struct Instances {
     order: Vec<u32>,
     /// Sum of child-box areas when the TLAS was built (see [`Bvh8::sah_cost`]).
     built_cost: f32,
-}
-
-/// World bounds of an object box under an affine map (the eight corners).
-fn transform_box(b: &Aabb, m: &Affine3A) -> Aabb {
-    let mut out = Aabb::empty();
-    for i in 0..8 {
-        let c = Vec3A::new(
-            if i & 1 == 0 { b.min.x } else { b.max.x },
-            if i & 2 == 0 { b.min.y } else { b.max.y },
-            if i & 4 == 0 { b.min.z } else { b.max.z },
-        );
-        out.extend(m.transform_point3a(c));
-    }
-    out
 }
 
 impl Instances {

@@ -116,6 +116,20 @@ pub fn uniform_sphere(u: Vec2) -> Vec3A {
     Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
+/// World bounds of an object box under an affine map (its eight corners mapped).
+pub fn transform_box(b: &obvhs::aabb::Aabb, m: &glam::Affine3A) -> obvhs::aabb::Aabb {
+    let mut out = obvhs::aabb::Aabb::empty();
+    for i in 0..8 {
+        let c = Vec3A::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        out.extend(m.transform_point3a(c));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -37,17 +37,7 @@ impl TransformedSphere {
 
     /// World bounding box (the transformed object box: conservative).
     pub fn aabb(&self) -> Aabb {
-        let b = self.sphere.aabb();
-        let mut out = Aabb::empty();
-        for i in 0..8 {
-            let c = Vec3A::new(
-                if i & 1 == 0 { b.min.x } else { b.max.x },
-                if i & 2 == 0 { b.min.y } else { b.max.y },
-                if i & 4 == 0 { b.min.z } else { b.max.z },
-            );
-            out.extend(self.world_from_object.transform_point3a(c));
-        }
-        out
+        crate::math::transform_box(&self.sphere.aabb(), &self.world_from_object)
     }
 
     /// Smallest `t` in `(0, tmax)`; the object-space direction is not renormalised, so `t` is the
