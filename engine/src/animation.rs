@@ -97,12 +97,6 @@ impl<T: Keyed> Track<T> {
             }
         }
     }
-
-    /// True when the value changes between `t0` and `t1` (some key lies strictly inside, or
-    /// the ends differ).
-    pub fn varies(&self, t0: f32, t1: f32) -> bool {
-        self.keys.len() > 1 && self.keys.last().unwrap().0 > t0 && self.keys[0].0 < t1
-    }
 }
 
 /// `Linear([(t, v), ..])` or `Smooth([(t, v), ..])` as written.
@@ -249,7 +243,6 @@ mod tests {
             keys: vec![(0.0, 0.0), (1.0, 1.0), (2.0, 2.0), (3.0, 3.0)],
         };
         assert!((line.at(1.5) - 1.5).abs() < 1e-6);
-        assert!(l.varies(0.5, 0.6) && !l.varies(4.0, 5.0) && !lin(&[(0.0, 1.0)]).varies(-1.0, 1.0));
     }
 
     #[test]
