@@ -252,3 +252,57 @@ fn a_spinning_instance_averages_its_still_images() {
     eprintln!("shutter 10% short: {stats:?}");
     assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
 }
+
+#[test]
+fn camera_and_emission_keys_reach_the_scene_and_only_changes_rebuild() {
+    use pathwave::engine::material::Material;
+    let desc = pathwave::engine::scene::parse(
+        r#"Scene(
+            camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+            materials: { "l": DiffuseLight(emit: (1, 1, 1)), "m": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+            objects: [
+                (shape: Quad(q: (-1, 2, -1), u: (2, 0, 0), v: (0, 0, 2)), material: "l"),
+                (shape: Sphere(center: (0, 0, 0), radius: 1), material: "m"),
+            ],
+            animation: (
+                camera: (look_from: Linear([(0, (0, 0, 5)), (2, (0, 0, 9))]), vfov: Smooth([(0, 40), (1, 30)])),
+                emit: [("l", Linear([(0, (1, 1, 1)), (1, (3, 3, 3)), (2, (3, 3, 3))]))],
+            ),
+        )"#,
+        std::path::Path::new("<test>"),
+    )
+    .unwrap();
+    let mut w = SceneWorld::new(&desc);
+    let emit = |s: &pathwave::engine::render_scene::RenderScene| match s.materials[0] {
+        Material::DiffuseLight { emit, .. } => emit.x,
+        _ => panic!("the light"),
+    };
+    let at = |w: &mut SceneWorld, t: f32| {
+        w.set_time(t, t);
+        w.update()
+    };
+    let s = at(&mut w, 0.5);
+    assert_eq!(emit(&s), 2.0);
+    assert_eq!(
+        s.camera,
+        pathwave::engine::camera::Camera::new(
+            glam::Vec3::new(0.0, 0.0, 6.0),
+            glam::Vec3::ZERO,
+            glam::Vec3::Y,
+            35.0,
+            0.0,
+            6.0,
+            (0.5, 0.5),
+            512,
+            512,
+        )
+    );
+    let rebuilds = |w: &SceneWorld| w.world.resource::<SceneGeometry>().rebuilds;
+    let before = rebuilds(&w);
+    // Between 1 and 2 s the radiance holds: the light table is not rebuilt.
+    at(&mut w, 1.2);
+    let b = rebuilds(&w);
+    at(&mut w, 1.6);
+    assert_eq!(rebuilds(&w), b, "a frame where nothing the geometry depends on changed rebuilt it");
+    assert!(b > before, "the radiance change from 2 to 3 reached the light table");
+}

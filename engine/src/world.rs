@@ -149,14 +149,18 @@ pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials
         return;
     }
     let t = 0.5 * (time.open + time.close);
+    let mut changed = false;
     for (id, track) in &keys.0 {
         let new = track.at(t).max(Vec3::ZERO);
-        if let Material::DiffuseLight { emit, .. } = materials.bypass_change_detection().0[*id as usize]
-            && emit != new
-            && let Material::DiffuseLight { emit, .. } = &mut materials.0[*id as usize]
+        if let Material::DiffuseLight { emit, .. } = &mut materials.bypass_change_detection().0[*id as usize]
+            && *emit != new
         {
             *emit = new;
+            changed = true;
         }
+    }
+    if changed {
+        materials.set_changed();
     }
 }
 
