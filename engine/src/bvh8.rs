@@ -152,6 +152,29 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
     (mask, tnear)
 }
 
+/// Asks for the four cache lines of the inner children in `mask` while the traversal sorts
+/// them and finishes the current branch: on the 1M-triangle knot, where nodes come from L3,
+/// bounce rays trace 7% faster (two of the four lines: no gain).
+#[inline(always)]
+fn prefetch_children(nodes: &[Node], node: &Node, mut mask: u32) {
+    while mask != 0 {
+        let c = node.child[mask.trailing_zeros() as usize & 7];
+        mask &= mask - 1;
+        if c & LEAF == 0 {
+            let p = nodes.as_ptr().wrapping_add(c as usize).cast::<i8>();
+            #[cfg(target_arch = "x86_64")]
+            for line in 0..4 {
+                // SAFETY: a prefetch is only a hint; it does not fault on any address.
+                unsafe {
+                    std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                        p.wrapping_add(64 * line),
+                    )
+                };
+            }
+        }
+    }
+}
+
 /// Traversal stack depth: at most seven entries per level.
 const STACK: usize = 8 * 64;
 
@@ -333,44 +356,47 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, tnear) = test_node(node, &r, best);
-                match mask.count_ones() {
-                    0 => {}
-                    1 => {
-                        cur = node.child[mask.trailing_zeros() as usize & 7];
+                prefetch_children(&self.nodes, node, mask);
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize & 7;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = node.child[a];
                         continue;
                     }
-                    2 => {
+                    let b = mask.trailing_zeros() as usize & 7;
+                    mask &= mask - 1;
+                    if mask == 0 {
                         // Push the farther, go to the nearer.
-                        let a = mask.trailing_zeros() as usize & 7;
-                        let b = (31 - mask.leading_zeros()) as usize & 7;
                         let (near, far) = if tnear[a] <= tnear[b] { (a, b) } else { (b, a) };
                         stack.push((node.child[far], tnear[far]));
                         cur = node.child[near];
                         continue;
                     }
-                    _ => {
-                        // Sort the hit children far to near, push all but the nearest.
-                        let mut keys = [0u64; WIDTH];
-                        let mut n = 0;
-                        while mask != 0 {
-                            let s = mask.trailing_zeros() as usize & 7;
-                            mask &= mask - 1;
-                            let key = (tnear[s].to_bits() as u64) << 32 | s as u64;
-                            let mut j = n;
-                            while j > 0 && keys[j - 1] < key {
-                                keys[j] = keys[j - 1];
-                                j -= 1;
-                            }
-                            keys[j] = key;
-                            n += 1;
+                    // Sort the hit children far to near, push all but the nearest.
+                    let mut keys = [0u64; WIDTH];
+                    let key = |s: usize| (tnear[s].to_bits() as u64) << 32 | s as u64;
+                    let (ka, kb) = (key(a), key(b));
+                    (keys[0], keys[1]) = if ka > kb { (ka, kb) } else { (kb, ka) };
+                    let mut n = 2;
+                    while mask != 0 {
+                        let s = mask.trailing_zeros() as usize & 7;
+                        mask &= mask - 1;
+                        let key = key(s);
+                        let mut j = n;
+                        while j > 0 && keys[j - 1] < key {
+                            keys[j] = keys[j - 1];
+                            j -= 1;
                         }
-                        for &k in &keys[..n - 1] {
-                            let s = (k & 7) as usize;
-                            stack.push((node.child[s], tnear[s]));
-                        }
-                        cur = node.child[(keys[n - 1] & 7) as usize];
-                        continue;
+                        keys[j] = key;
+                        n += 1;
                     }
+                    for &k in &keys[..n - 1] {
+                        let s = (k & 7) as usize;
+                        stack.push((node.child[s], tnear[s]));
+                    }
+                    cur = node.child[(keys[n - 1] & 7) as usize];
+                    continue;
                 }
             }
             // Pop the nearest entry still closer than the best hit.
