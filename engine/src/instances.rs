@@ -255,8 +255,8 @@ impl Instances {
             for &i in &self.order[first as usize..(first + count) as usize] {
                 let inst = &self.list[i as usize];
                 let (o, d) = self.object_ray(inst, ray);
-                if let Some((t, id)) = self.blas[inst.blas as usize].intersect(o, d, best) {
-                    (best, inst_hit, tri) = (t, i, id);
+                if let Some(h) = self.blas[inst.blas as usize].intersect(o, d, best) {
+                    (best, inst_hit, tri) = (h.t, i, h.id);
                 }
             }
             best

@@ -102,25 +102,28 @@ impl TriRay {
 }
 
 impl TriBlock {
-    /// Distances (infinite where missed) of the eight lanes, each in `(0, tmax)`; lanes whose
-    /// edge functions are exactly zero in `f32` are decided by the scalar test (in `f64`).
+    /// Distances of the eight lanes, each in `(0, tmax)` where the lane's bit in the returned
+    /// mask is set (the other lanes hold anything); lanes whose edge functions are exactly
+    /// zero in `f32` are decided by the scalar test (in `f64`).
     #[inline(always)]
-    fn intersect(&self, r: &TriRay, o: Vec3A, d: Vec3A, tmax: f32) -> [f32; 8] {
-        let (mut out, mut zero_edge) = self.lanes(r, tmax);
+    fn intersect(&self, r: &TriRay, o: Vec3A, d: Vec3A, tmax: f32) -> ([f32; 8], u32) {
+        let (mut out, mut hit, mut zero_edge) = self.lanes(r, tmax);
         // NaN lanes compare unequal to zero, so unused lanes never come here.
         while zero_edge != 0 {
             let l = zero_edge.trailing_zeros() as usize;
             zero_edge &= zero_edge - 1;
             let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
             out[l] = Triangle { p }.intersect(o, d, tmax);
+            hit |= ((out[l] < tmax) as u32) << l;
         }
-        out
+        (out, hit)
     }
 
-    /// The eight tests and the lanes with an edge function exactly zero (left to the caller).
+    /// The eight tests: distances, the lanes hit and the lanes with an edge function exactly
+    /// zero (left to the caller).
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     #[inline(always)]
-    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32) {
+    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
         use std::arch::x86_64::*;
         // SAFETY: aligned loads of whole 32-byte lane arrays of `self` (32-byte aligned); AVX2
         // is enabled for the whole build.
@@ -153,7 +156,7 @@ impl TriBlock {
             let inside = or(all_ge, all_le);
             // Most blocks a ray reaches it passes by: skip the division and the error bound.
             if _mm256_movemask_ps(inside) == 0 {
-                return ([f32::INFINITY; 8], zero_edge);
+                return ([f32::INFINITY; 8], 0, zero_edge);
             }
             let det = add(add(e0, e1), e2);
             let t_scaled = add(add(mul(e0, z[0]), mul(e1, z[1])), mul(e2, z[2]));
@@ -189,15 +192,15 @@ impl TriBlock {
                 and(cmp_gt(t, delta_t), _mm256_cmp_ps::<_CMP_LT_OQ>(t, splat(tmax))),
             );
             let mut out = [0.0f32; 8];
-            _mm256_storeu_ps(out.as_mut_ptr(), _mm256_blendv_ps(splat(f32::INFINITY), t, hit));
-            (out, zero_edge)
+            _mm256_storeu_ps(out.as_mut_ptr(), t);
+            (out, _mm256_movemask_ps(hit) as u32 & !zero_edge, zero_edge)
         }
     }
 
     /// [`Self::lanes`] without AVX2, lane by lane.
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
     #[inline(always)]
-    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32) {
+    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
         let [kx, ky, kz] = r.k;
         let mut x = [[0.0f32; 8]; 3];
         let mut y = [[0.0f32; 8]; 3];
@@ -211,6 +214,7 @@ impl TriBlock {
             }
         }
         let mut out = [f32::INFINITY; 8];
+        let mut hit = 0u32;
         let mut zero_edge = 0u32;
         for l in 0..8 {
             let e0 = x[1][l] * y[2][l] - y[1][l] * x[2][l];
@@ -239,10 +243,23 @@ impl TriBlock {
             };
             if same_sign && det != 0.0 && in_range && t > delta_t && t < tmax {
                 out[l] = t;
+                hit |= 1 << l;
             }
         }
-        (out, zero_edge)
+        (out, hit & !zero_edge, zero_edge)
     }
+}
+
+/// A ray's closest hit on a mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshHit {
+    /// Distance along the ray.
+    pub t: f32,
+    /// Triangle index.
+    pub id: u32,
+    /// Geometric normal (not normalised) `(p1 - p0) x (p2 - p0)`, from the triangle block the
+    /// traversal just read (no second look at the mesh).
+    pub ng: Vec3A,
 }
 
 /// A mesh's bottom-level BVH.
@@ -299,40 +316,44 @@ impl MeshBlas {
         self.bvh.node_bytes() + self.blocks.len() * size_of::<TriBlock>()
     }
 
-    /// Closest hit `(t, triangle)` with `t` in `(0, tmax)`, in object space.
+    /// Closest hit with `t` in `(0, tmax)`, in object space.
     #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, u32)> {
+    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<MeshHit> {
         let r = TriRay::new(o, d);
-        let mut id = u32::MAX;
+        let (mut block, mut lane) = (u32::MAX, 0);
         let t = self.bvh.closest(o, d, tmax, |first, _, best| {
-            let block = &self.blocks[first as usize];
-            let ts = block.intersect(&r, o, d, best);
+            let (ts, mut hit) = self.blocks[first as usize].intersect(&r, o, d, best);
             let mut best = best;
-            for l in 0..8 {
+            while hit != 0 {
+                let l = hit.trailing_zeros() as usize;
+                hit &= hit - 1;
                 if ts[l] < best {
-                    (best, id) = (ts[l], block.id[l]);
+                    (best, block, lane) = (ts[l], first, l);
                 }
             }
             best
         });
-        (id != u32::MAX).then_some((t, id))
+        (block != u32::MAX).then(|| {
+            let b = &self.blocks[block as usize];
+            let [p0, p1, p2] =
+                [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
+            MeshHit { t, id: b.id[lane], ng: (p1 - p0).cross(p2 - p0) }
+        })
     }
 
     /// True when some triangle lies on the ray with `t` in `(0, tmax)`.
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
         let r = TriRay::new(o, d);
-        self.bvh.any(o, d, tmax, |first, _| {
-            self.blocks[first as usize].intersect(&r, o, d, tmax).iter().any(|t| *t < tmax)
-        })
+        self.bvh.any(o, d, tmax, |first, _| self.blocks[first as usize].intersect(&r, o, d, tmax).1 != 0)
     }
 
     /// Appends the `t` of every hit of the ray `o + t d`, `t > 0` (unsorted).
     pub fn all_hits(&self, o: Vec3A, d: Vec3A, out: &mut Vec<f32>) {
         let r = TriRay::new(o, d);
         self.bvh.any(o, d, f32::INFINITY, |first, _| {
-            let ts = self.blocks[first as usize].intersect(&r, o, d, f32::INFINITY);
-            out.extend(ts.iter().filter(|t| t.is_finite()));
+            let (ts, hit) = self.blocks[first as usize].intersect(&r, o, d, f32::INFINITY);
+            out.extend((0..8).filter(|l| hit & 1 << l != 0).map(|l| ts[l]));
             false
         });
     }
@@ -391,10 +412,13 @@ mod tests {
                 })
                 .fold((f32::INFINITY, u32::MAX), |a, b| if b.0 < a.0 { b } else { a });
             let got = blas.intersect(o, d, f32::INFINITY);
-            assert_eq!(got.map(|h| h.0), scan.1.ne(&u32::MAX).then_some(scan.0), "ray {o} {d}");
+            assert_eq!(got.map(|h| h.t), scan.1.ne(&u32::MAX).then_some(scan.0), "ray {o} {d}");
             assert_eq!(blas.occluded(o, d, f32::INFINITY), got.is_some());
-            if let Some((t, _)) = got {
+            if let Some(MeshHit { t, id, ng }) = got {
                 hits += 1;
+                let [a, b, c] = mesh.triangle(id);
+                assert_eq!(ng, (b - a).cross(c - a));
+                assert_eq!(t, scan.0);
                 assert!(!blas.occluded(o, d, t * 0.999) || t < 1e-3, "nothing lies before the closest hit");
             }
         }
