@@ -210,22 +210,22 @@ impl<T: Copy> Stack<T> {
 
 impl Bvh8 {
     /// Builds a binary BVH over `aabbs` with obvhs and collapses it. `leaf` receives the
-    /// indices (into `aabbs`) of each leaf's primitives, at most `max_leaf` of them, stores
-    /// them as it likes and returns the `(first, count)` range (count 1..=8) that
-    /// [`Self::closest`] and [`Self::any`] will hand back for that leaf.
+    /// indices (into `aabbs`) of each leaf's primitives, every subtree of at most `max_leaf`
+    /// of them as one leaf, stores them as it likes and returns the `(first, count)` range
+    /// (count 1..=8) that [`Self::closest`] and [`Self::any`] will hand back for that leaf.
     pub fn build(aabbs: &[Aabb], max_leaf: u32, leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
-        assert!((1..=8).contains(&max_leaf));
+        assert!((1..=255).contains(&max_leaf));
         if aabbs.is_empty() {
             return Self::default();
         }
-        // obvhs's fast preset (PLOC, light reinsertion) with a leaf cost that fills the
-        // 8-lane triangle blocks: on the 1M-triangle knot, diffuse-bounce traversal as fast as
-        // the slow preset (2.97 Mrays/s on 2 threads) for half the build time (0.38 s against
-        // 0.81 s); the default leaf cost of 3 leaves blocks 44% full (90 bytes per triangle
-        // against 68) and traverses 12% slower (benches/RESULTS.md).
+        // obvhs's fast preset (PLOC, light reinsertion), its leaf collapse made to take every
+        // subtree that fits (a traversal cost far above the intersection cost): on the
+        // 1M-triangle knot, diffuse-bounce traversal as fast as the slow preset for half the
+        // build time (0.38 s against 0.81 s); SAH-chosen leaves (cost 3 or 6) leave more,
+        // emptier blocks and trace 4-12% slower (benches/RESULTS.md).
         let params = BvhBuildParams {
             max_prims_per_leaf: max_leaf,
-            collapse_traversal_cost: 6.0,
+            collapse_traversal_cost: 1e6,
             ..BvhBuildParams::fast_build()
         };
         let bvh2 = obvhs::bvh2::builder::build_bvh2(aabbs, params, &mut Duration::default());

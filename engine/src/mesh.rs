@@ -289,19 +289,25 @@ impl MeshBlas {
             })
             .collect();
         let mut blocks = Vec::with_capacity(ids.len() / 4);
-        let bvh = Bvh8::build(&aabbs, 8, |prims| {
-            let mut b = TriBlock { v: [[[f32::NAN; 8]; 3]; 3], id: [u32::MAX; 8] };
-            for (l, &p) in prims.iter().enumerate() {
-                let id = ids[p as usize];
-                for (j, v) in mesh.triangle(id).iter().enumerate() {
-                    for a in 0..3 {
-                        b.v[j][a][l] = v[a];
+        // Leaves of up to three blocks: the bottom level of small nodes becomes leaves, which
+        // on the 1M-triangle knot cuts nodes from 53k to 21k and bytes per triangle from 68 to
+        // 53, and traces bounce rays 7% faster than one-block leaves (benches/RESULTS.md).
+        let bvh = Bvh8::build(&aabbs, 24, |prims| {
+            let first = blocks.len() as u32;
+            for chunk in prims.chunks(8) {
+                let mut b = TriBlock { v: [[[f32::NAN; 8]; 3]; 3], id: [u32::MAX; 8] };
+                for (l, &p) in chunk.iter().enumerate() {
+                    let id = ids[p as usize];
+                    for (j, v) in mesh.triangle(id).iter().enumerate() {
+                        for a in 0..3 {
+                            b.v[j][a][l] = v[a];
+                        }
                     }
+                    b.id[l] = id;
                 }
-                b.id[l] = id;
+                blocks.push(b);
             }
-            blocks.push(b);
-            (blocks.len() as u32 - 1, 1)
+            (first, blocks.len() as u32 - first)
         });
         Self { mesh, bvh, blocks }
     }
@@ -321,14 +327,16 @@ impl MeshBlas {
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<MeshHit> {
         let r = TriRay::new(o, d);
         let (mut block, mut lane) = (u32::MAX, 0);
-        let t = self.bvh.closest(o, d, tmax, |first, _, best| {
-            let (ts, mut hit) = self.blocks[first as usize].intersect(&r, o, d, best);
+        let t = self.bvh.closest(o, d, tmax, |first, count, best| {
             let mut best = best;
-            while hit != 0 {
-                let l = hit.trailing_zeros() as usize;
-                hit &= hit - 1;
-                if ts[l] < best {
-                    (best, block, lane) = (ts[l], first, l);
+            for bi in first..first + count {
+                let (ts, mut hit) = self.blocks[bi as usize].intersect(&r, o, d, best);
+                while hit != 0 {
+                    let l = hit.trailing_zeros() as usize;
+                    hit &= hit - 1;
+                    if ts[l] < best {
+                        (best, block, lane) = (ts[l], bi, l);
+                    }
                 }
             }
             best
@@ -345,15 +353,21 @@ impl MeshBlas {
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
         let r = TriRay::new(o, d);
-        self.bvh.any(o, d, tmax, |first, _| self.blocks[first as usize].intersect(&r, o, d, tmax).1 != 0)
+        self.bvh.any(o, d, tmax, |first, count| {
+            self.blocks[first as usize..(first + count) as usize]
+                .iter()
+                .any(|b| b.intersect(&r, o, d, tmax).1 != 0)
+        })
     }
 
     /// Appends the `t` of every hit of the ray `o + t d`, `t > 0` (unsorted).
     pub fn all_hits(&self, o: Vec3A, d: Vec3A, out: &mut Vec<f32>) {
         let r = TriRay::new(o, d);
-        self.bvh.any(o, d, f32::INFINITY, |first, _| {
-            let (ts, hit) = self.blocks[first as usize].intersect(&r, o, d, f32::INFINITY);
-            out.extend((0..8).filter(|l| hit & 1 << l != 0).map(|l| ts[l]));
+        self.bvh.any(o, d, f32::INFINITY, |first, count| {
+            for b in &self.blocks[first as usize..(first + count) as usize] {
+                let (ts, hit) = b.intersect(&r, o, d, f32::INFINITY);
+                out.extend((0..8).filter(|l| hit & 1 << l != 0).map(|l| ts[l]));
+            }
             false
         });
     }
@@ -405,12 +419,20 @@ mod tests {
             // Some rays start on the surface: at a vertex, aimed across the mesh.
             let o = if i % 4 == 0 { mesh.positions[i % mesh.positions.len()] } else { o };
             let d = Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - o * 0.5 * (i % 2) as f32;
-            let scan = (0..mesh.triangles.len() as u32)
+            let all: Vec<(f32, u32)> = (0..mesh.triangles.len() as u32)
                 .map(|k| {
                     let [a, b, c] = mesh.triangle(k);
                     (Triangle { p: [a, b, c] }.intersect(o, d, f32::INFINITY), k)
                 })
-                .fold((f32::INFINITY, u32::MAX), |a, b| if b.0 < a.0 { b } else { a });
+                .filter(|h| h.0.is_finite())
+                .collect();
+            let scan = all.iter().fold((f32::INFINITY, u32::MAX), |a, b| if b.0 < a.0 { *b } else { a });
+            let mut want: Vec<f32> = all.iter().map(|h| h.0).collect();
+            let mut listed = Vec::new();
+            blas.all_hits(o, d, &mut listed);
+            want.sort_by(f32::total_cmp);
+            listed.sort_by(f32::total_cmp);
+            assert_eq!(listed, want, "every hit of ray {o} {d}");
             let got = blas.intersect(o, d, f32::INFINITY);
             assert_eq!(got.map(|h| h.t), scan.1.ne(&u32::MAX).then_some(scan.0), "ray {o} {d}");
             assert_eq!(blas.occluded(o, d, f32::INFINITY), got.is_some());
@@ -420,6 +442,7 @@ mod tests {
                 assert_eq!(ng, (b - a).cross(c - a));
                 assert_eq!(t, scan.0);
                 assert!(!blas.occluded(o, d, t * 0.999) || t < 1e-3, "nothing lies before the closest hit");
+                assert!(blas.occluded(o, d, t * 1.001), "the closest hit occludes");
             }
         }
         assert!(hits > 1000, "{hits}");
