@@ -2,6 +2,8 @@
 //! (megakernel) path tracer that the wavefront integrator is tested against.
 #![warn(missing_docs)]
 
+pub mod aov;
+pub mod denoise;
 pub mod film;
 pub mod lambert_vertex;
 pub mod material;

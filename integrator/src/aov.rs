@@ -1,0 +1,124 @@
+//! Auxiliary images for the denoiser: the albedo, the shading normal and the emitted radiance
+//! seen directly through each pixel, averaged over the same camera rays (lens, pixel area,
+//! shutter time) as the render's samples. Perfect mirrors and glass pass the albedo and normal
+//! guides on to the first other surface they show (media are not followed).
+//!
+//! With every sample of the render traced, `emission` is exactly the part of each pixel's mean
+//! that camera rays found on emitters and the background (times the media's transmittance,
+//! its expectation, in scenes with media): the denoiser filters the rest and adds it back, so
+//! lights and their antialiased edges stay as sharp as rendered.
+
+use crate::material::dielectric::refract;
+use crate::path;
+use glam::Vec3;
+use pathwave_engine::material::Material;
+use pathwave_engine::math::{Ray, offset_ray_origin, reflect};
+use pathwave_engine::render_scene::RenderScene;
+use rayon::prelude::*;
+
+/// Per-pixel albedo and normal, row-major, row 0 on top.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aovs {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Mean albedo in [0, 1]: the material's reflectance, 1 for glass, the clamped radiance of
+    /// an emitter or of the background where a ray leaves the scene.
+    pub albedo: Vec<Vec3>,
+    /// Mean world-space shading normal turned towards the camera (not renormalised: its length
+    /// falls where a pixel sees several orientations); zero where rays leave the scene.
+    pub normal: Vec<Vec3>,
+    /// Mean radiance of emitters and background met by the camera rays themselves.
+    pub emission: Vec<Vec3>,
+}
+
+/// Traces `samples` camera rays per pixel (the render's own sample indices 0..samples; give
+/// the render's spp for an exact `emission`).
+pub fn render(scene: &RenderScene, samples: u32) -> Aovs {
+    let _span = tracing::info_span!("render_aovs", samples).entered();
+    let (w, h) = (scene.settings.width, scene.settings.height);
+    let samples = samples.max(1);
+    let rows: Vec<Vec<[Vec3; 3]>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            (0..w)
+                .map(|x| {
+                    let mut sum = [Vec3::ZERO; 3];
+                    for index in 0..samples {
+                        let one = first_surface(scene, &path::camera_ray(scene, x, y, index).0);
+                        (0..3).for_each(|k| sum[k] += one[k]);
+                    }
+                    sum.map(|v| v / samples as f32)
+                })
+                .collect()
+        })
+        .collect();
+    let mut out = Aovs { width: w, height: h, ..Default::default() };
+    for [a, n, e] in rows.into_iter().flatten() {
+        out.albedo.push(a);
+        out.normal.push(n);
+        out.emission.push(e);
+    }
+    out
+}
+
+/// Perfect mirrors and glass hand the guides on to what they show, up to this many times.
+const MAX_SPECULAR: u32 = 4;
+
+/// Albedo, camera-facing shading normal and emitted radiance of what a camera ray sees. The
+/// emission is the first surface's or the background's, as [`path::emit`] and [`path::escape`]
+/// add it at the first vertex. Albedo and normal are those of the first surface that is not a
+/// perfect mirror or glass (tinted by the mirrors on the way; glass refracts unless the light
+/// cannot get out), so that what those show keeps its edges.
+fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
+    let first = scene.intersect(camera, f32::INFINITY);
+    let transmittance = if scene.features.media {
+        scene.media.transmittance(camera.origin, camera.dir, first.map_or(f32::INFINITY, |h| h.t))
+    } else {
+        1.0
+    };
+    let emission = match &first {
+        None => scene.background.radiance(camera.dir),
+        Some(h) => scene.material_at(h.material, &h.surface).emitted(h.surface.n.dot(-camera.dir)),
+    } * transmittance;
+    // The normal of the last mirror or glass surface: a reflection of the sky keeps it, so
+    // that it does not pass for the sky itself (whose pixels hold only emission).
+    let (mut ray, mut hit, mut tint, mut last_n) = (*camera, first, Vec3::ONE, Vec3::ZERO);
+    for bounce in 0..=MAX_SPECULAR {
+        let Some(h) = hit else {
+            return [
+                tint * scene.background.radiance(ray.dir).clamp(Vec3::ZERO, Vec3::ONE),
+                last_n,
+                emission,
+            ];
+        };
+        let sp = &h.surface;
+        let wo = -ray.dir.normalize();
+        let ns = if sp.ns.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
+        let last = bounce == MAX_SPECULAR;
+        let dir = match scene.material_at(h.material, sp) {
+            Material::Metal { albedo, fuzz } if fuzz == 0.0 && !last => {
+                tint *= albedo;
+                reflect(wo, ns)
+            }
+            Material::Dielectric { ior, .. } if !last => {
+                let eta = if sp.ns.dot(wo) >= 0.0 { ior } else { 1.0 / ior };
+                refract(wo, ns, eta).unwrap_or_else(|| reflect(wo, ns))
+            }
+            m => {
+                let albedo = match m {
+                    Material::Lambertian { albedo } | Material::Metal { albedo, .. } => albedo,
+                    Material::Dielectric { .. } => Vec3::ONE,
+                    Material::DiffuseLight { emit, .. } => emit.clamp(Vec3::ZERO, Vec3::ONE),
+                };
+                return [tint * albedo, ns.into(), emission];
+            }
+        };
+        last_n = ns.into();
+        let side = if dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
+        ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir, time: ray.time };
+        hit = scene.intersect(&ray, f32::INFINITY);
+    }
+    unreachable!("the last bounce returns")
+}
