@@ -2,12 +2,12 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::engine::{scene, world::SceneWorld};
-use pathwave::integrator::{oracle, wavefront};
+use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics};
 use std::io::Write;
 use std::num::NonZeroU32;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Mutex;
 use std::time::Instant;
@@ -71,6 +71,14 @@ enum Command {
         /// relative to it.
         #[arg(long, default_value_t = 0.0)]
         time: f32,
+        /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
+        /// output gets the denoised image, NAME.noisy.EXT the render as it came.
+        #[arg(long)]
+        denoise: bool,
+        /// Also write the denoiser's guides: NAME.albedo.EXT and NAME.normal.EXT (normals as
+        /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
+        #[arg(long)]
+        aov: bool,
     },
     /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
     /// an animated GIF when the output ends in .gif. Existing frames are skipped.
@@ -220,9 +228,11 @@ fn main() -> ExitCode {
             stats,
             trace: _,
             time,
+            denoise,
+            aov,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
-            let how = How { integrator, batch, stats, threads, quiet, verbose };
+            let how = How { integrator, batch, stats, threads, quiet, verbose, denoise, aov };
             render(&scene, &output, overrides, &how, time)
         }
         Command::Animate {
@@ -276,6 +286,8 @@ struct Overrides {
 
 struct How {
     verbose: bool,
+    denoise: bool,
+    aov: bool,
     integrator: Integrator,
     batch: usize,
     stats: bool,
@@ -375,6 +387,8 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How, time: f32) 
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
+    let img =
+        if how.denoise || how.aov { post_process(&scene, &film, img, output, how, &pool)? } else { img };
     let clamped = io::write(output, &img)?;
     let samples = s.width as f64 * s.height as f64 * s.spp as f64;
     eprintln!(
@@ -389,6 +403,46 @@ fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How, time: f32) 
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
     );
     Ok(())
+}
+
+/// Renders the guides, writes them (`--aov`) and returns the image denoised (`--denoise`,
+/// which first writes the image as rendered beside the output).
+fn post_process(
+    scene: &pathwave::engine::render_scene::RenderScene,
+    film: &Film,
+    img: LinearImage,
+    output: &Path,
+    how: &How,
+    pool: &rayon::ThreadPool,
+) -> Result<LinearImage, String> {
+    let start = Instant::now();
+    // The render's own camera rays, so that the emission they saw comes out exactly, up to 64
+    // per pixel (beyond, the guides cost more than they gain).
+    let rays = film.spp.min(64);
+    let aovs = pool.install(|| aov::render(scene, rays));
+    let aov_secs = start.elapsed().as_secs_f64();
+    let sibling = |tag: &str| {
+        let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+        output.with_file_name(format!("{stem}.{tag}.{ext}"))
+    };
+    let image = |pixels| LinearImage { width: img.width, height: img.height, pixels };
+    if how.aov {
+        let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let normal = aovs.normal.iter().map(|n| if exr { *n } else { 0.5 + 0.5 * *n }).collect();
+        io::write(&sibling("albedo"), &image(aovs.albedo.clone()))?;
+        io::write(&sibling("normal"), &image(normal))?;
+        eprintln!("guides ({rays} rays per pixel) in {aov_secs:.2} s");
+    }
+    if !how.denoise {
+        return Ok(img);
+    }
+    io::write(&sibling("noisy"), &img)?;
+    let start = Instant::now();
+    let variance = film.variance_of_mean();
+    let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
+    eprintln!("denoised in {:.2} s (guides {aov_secs:.2} s)", start.elapsed().as_secs_f64());
+    Ok(image(out))
 }
 
 fn bench(
