@@ -296,7 +296,7 @@ struct How {
 }
 
 /// Loads a scene and applies the command line's overrides.
-fn load(path: &PathBuf, o: &Overrides) -> Result<scene::SceneDesc, String> {
+fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
     let mut desc = scene::load(path).map_err(|e| e.to_string())?;
     let r = &mut desc.render;
     r.spp = o.spp.unwrap_or(r.spp);
@@ -322,7 +322,7 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
 
 #[allow(clippy::too_many_arguments)]
 fn animate(
-    path: &PathBuf,
+    path: &Path,
     output: &str,
     frames: Option<String>,
     fps: Option<f32>,
@@ -355,7 +355,7 @@ fn animate(
     })
 }
 
-fn render(path: &PathBuf, output: &PathBuf, o: Overrides, how: &How, time: f32) -> Result<(), String> {
+fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Result<(), String> {
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
     let start = Instant::now();
@@ -523,7 +523,7 @@ fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
     );
 }
 
-fn compare(a: &PathBuf, b: &PathBuf) -> Result<(), String> {
+fn compare(a: &Path, b: &Path) -> Result<(), String> {
     let (x, r) = (io::read_linear(a)?, io::read_linear(b)?);
     if (x.width, x.height) != (r.width, r.height) {
         return Err(format!("sizes differ: {}x{} vs {}x{}", x.width, x.height, r.width, r.height));
