@@ -377,12 +377,12 @@ fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Res
     bar.finish();
     if how.stats {
         match &stats {
-            Some(st) => print_stats(st, secs, film.non_finite),
+            Some(st) => print_stats(st, secs, film.non_finite()),
             None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
         }
     }
     if how.verbose {
-        for &(i, n) in &film.non_finite_pixels {
+        for &(i, n) in &film.non_finite_pixels() {
             eprintln!("NaN/Inf: {n} samples discarded at pixel {},{}", i % film.width, i / film.width);
         }
     }
@@ -399,7 +399,7 @@ fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Res
         s.spp,
         samples / secs / 1e6,
         pool.current_num_threads(),
-        film.non_finite,
+        film.non_finite(),
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
     );
     Ok(())

@@ -19,7 +19,7 @@ fn one_and_two_threads_give_identical_bits() {
     let a = render_threads(&desc, 1);
     let b = render_threads(&desc, 2);
     let c = render_threads(&desc, 2);
-    assert!(a.sum.iter().any(|p| p[0] > 0.0), "the image is not black");
+    assert!(a.pixels.iter().any(|p| p.sum()[0] > 0.0), "the image is not black");
     assert_eq!(a, b, "1 vs 2 threads");
     assert_eq!(b, c, "two runs on 2 threads");
 }
@@ -28,6 +28,6 @@ fn one_and_two_threads_give_identical_bits() {
 fn the_seed_changes_the_noise() {
     let a = render_threads(&small_cornell(1), 2);
     let b = render_threads(&small_cornell(2), 2);
-    let differing = a.sum.iter().zip(&b.sum).filter(|(x, y)| x != y).count();
-    assert!(differing > a.sum.len() / 2, "only {differing} pixels differ");
+    let differing = a.pixels.iter().zip(&b.pixels).filter(|(x, y)| x != y).count();
+    assert!(differing > a.pixels.len() / 2, "only {differing} pixels differ");
 }

@@ -57,9 +57,11 @@ fn check_every_placement(name: &str, spp: u32, seed: u64) {
         for (integrator, film) in both(&desc) {
             let stats = block_z(&film, &reference, 8, spp);
             eprintln!("{name} scale {s:e}, offset {t}: {integrator} {stats:?}");
-            if !stats.agrees() || film.non_finite > 0 {
-                failures
-                    .push(format!("scale {s:e} offset {t} {integrator}: {stats:?}, {} NaN", film.non_finite));
+            if !stats.agrees() || film.non_finite() > 0 {
+                failures.push(format!(
+                    "scale {s:e} offset {t} {integrator}: {stats:?}, {} NaN",
+                    film.non_finite()
+                ));
             }
         }
     }
@@ -113,7 +115,7 @@ fn nested_spheres_with_a_4e_5_gap_render_like_their_scaled_up_copy() {
     desc.render.seed = 5;
     for (name, film) in both(&desc) {
         let stats = block_z(&film, &reference, 8, 256);
-        assert!(stats.agrees() && film.non_finite == 0, "{name}: {stats:?}");
+        assert!(stats.agrees() && film.non_finite() == 0, "{name}: {stats:?}");
     }
 }
 
@@ -134,7 +136,7 @@ fn camera_inside_a_glass_sphere_sees_n_squared() {
         )"#,
     );
     for (name, film) in both(&desc) {
-        assert_eq!(film.non_finite, 0, "{name}");
+        assert_eq!(film.non_finite(), 0, "{name}");
         for p in film.mean() {
             assert!((p - glam::Vec3::splat(2.25)).abs().max_element() < 1e-5, "{name}: {p}");
         }

@@ -19,7 +19,7 @@ fn every_scene_renders() {
         desc.render.height = ((48.0 / aspect) as u32).max(1).try_into().unwrap();
         desc.render.spp = 4.try_into().unwrap();
         let film = render(&desc);
-        assert_eq!(film.non_finite, 0, "{name}: NaN or Inf samples");
+        assert_eq!(film.non_finite(), 0, "{name}: NaN or Inf samples");
         let mean = film.mean();
         let avg = mean.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / mean.len() as f32;
         assert!(avg > 0.01, "{name} renders black");

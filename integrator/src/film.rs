@@ -1,4 +1,4 @@
-//! The film: per-pixel sums and sums of squares of sample radiance (for the mean and its
+//! The film: per-pixel exact sums and sums of squares of sample radiance (for the mean and its
 //! variance), and the count of discarded non-finite samples (and absurdly large ones).
 
 use glam::Vec3;
@@ -12,57 +12,63 @@ pub struct Film {
     pub height: u32,
     /// Samples per pixel accumulated.
     pub spp: u32,
-    /// Per pixel (row-major, row 0 on top): sum of sample values.
-    pub sum: Vec<[f64; 3]>,
-    /// Per pixel: sum of squared sample values.
-    pub sum_sq: Vec<[f64; 3]>,
-    /// Samples whose value was NaN, infinite or above [`MAX_SAMPLE`]; they were counted as zero.
-    pub non_finite: u64,
-    /// Pixels (row-major index) that discarded non-finite samples, with how many.
-    pub non_finite_pixels: Vec<(u32, u64)>,
+    /// Per pixel (row-major, row 0 on top): the samples' exact sums.
+    pub pixels: Vec<PixelAccumulator>,
 }
 
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
-        let n = (width * height) as usize;
-        Self {
-            width,
-            height,
-            spp: 0,
-            sum: vec![[0.0; 3]; n],
-            sum_sq: vec![[0.0; 3]; n],
-            non_finite: 0,
-            non_finite_pixels: Vec::new(),
-        }
+        Self { width, height, spp: 0, pixels: vec![PixelAccumulator::default(); (width * height) as usize] }
     }
 
     /// Per-pixel mean.
     pub fn mean(&self) -> Vec<Vec3> {
         let k = 1.0 / self.spp.max(1) as f64;
-        self.sum.iter().map(|s| Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)).collect()
+        self.pixels
+            .iter()
+            .map(|p| {
+                let s = p.sum();
+                Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)
+            })
+            .collect()
     }
 
     /// Stores the samples of pixel `index`.
     pub fn set_pixel(&mut self, index: usize, acc: &PixelAccumulator) {
-        self.sum[index] = acc.sum();
-        self.sum_sq[index] = acc.sum_sq();
-        self.non_finite += acc.non_finite;
-        if acc.non_finite > 0 {
-            self.non_finite_pixels.push((index as u32, acc.non_finite));
-        }
+        self.pixels[index] = *acc;
+    }
+
+    /// Adds the samples of another film of the same size (other sample indices of the same
+    /// pixels): the sums are exact, so the result has the same bits as rendering them all at
+    /// once.
+    pub fn merge(&mut self, o: &Film) {
+        assert_eq!((self.width, self.height), (o.width, o.height), "films of different sizes");
+        self.spp += o.spp;
+        self.pixels.iter_mut().zip(&o.pixels).for_each(|(a, b)| a.merge(b));
+    }
+
+    /// Samples whose value was NaN, infinite or above [`MAX_SAMPLE`]; they were counted as zero.
+    pub fn non_finite(&self) -> u64 {
+        self.pixels.iter().map(|p| p.non_finite).sum()
+    }
+
+    /// Pixels (row-major index) that discarded non-finite samples, with how many.
+    pub fn non_finite_pixels(&self) -> Vec<(u32, u64)> {
+        let bad = self.pixels.iter().enumerate().filter(|(_, p)| p.non_finite > 0);
+        bad.map(|(i, p)| (i as u32, p.non_finite)).collect()
     }
 
     /// Per-pixel variance of the mean (sample variance / spp).
     pub fn variance_of_mean(&self) -> Vec<Vec3> {
         let n = self.spp as f64;
         if n < 2.0 {
-            return vec![Vec3::splat(f32::INFINITY); self.sum.len()];
+            return vec![Vec3::splat(f32::INFINITY); self.pixels.len()];
         }
-        self.sum
+        self.pixels
             .iter()
-            .zip(&self.sum_sq)
-            .map(|(s, q)| {
+            .map(|p| {
+                let (s, q) = (p.sum(), p.sum_sq());
                 let v = |c: usize| (((q[c] - s[c] * s[c] / n) / (n - 1.0)).max(0.0) / n) as f32;
                 Vec3::new(v(0), v(1), v(2))
             })
@@ -127,6 +133,17 @@ impl PixelAccumulator {
             self.sum_sq[c] = self.sum_sq[c].saturating_add(o.sum_sq[c]);
         }
         self.non_finite += o.non_finite;
+    }
+
+    /// The exact state: fixed-point sums and sums of squares (2^50 units) and the count of
+    /// discarded samples, for checkpoints.
+    pub fn raw(&self) -> ([i128; 3], [i128; 3], u64) {
+        (self.sum, self.sum_sq, self.non_finite)
+    }
+
+    /// An accumulator from [`Self::raw`]'s parts.
+    pub fn from_raw(sum: [i128; 3], sum_sq: [i128; 3], non_finite: u64) -> Self {
+        Self { sum, sum_sq, non_finite }
     }
 
     /// Sum of the values.

@@ -14,10 +14,21 @@ use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Renders the whole image. `progress(done, total)` is called after each tile, from any thread.
 pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> Film {
+    render_samples(scene, 0..scene.settings.spp, progress)
+}
+
+/// Renders the samples `samples` (indices into the scene's `spp` per pixel) of every pixel:
+/// films of disjoint ranges merge into the film of their union, bit for bit.
+pub fn render_samples(
+    scene: &RenderScene,
+    samples: Range<u32>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Film {
     let s = scene.settings;
     let _span =
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
@@ -28,14 +39,16 @@ pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> 
         .into_par_iter()
         .map(|t| {
             let tile = Tile::new(t, s.width, s.height);
-            let out =
-                (0..tile.len()).map(|i| tile.pixel(i)).map(|(x, y)| render_pixel(scene, x, y)).collect();
+            let out = (0..tile.len())
+                .map(|i| tile.pixel(i))
+                .map(|(x, y)| render_pixel(scene, x, y, samples.clone()))
+                .collect();
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             out
         })
         .collect();
     let mut film = Film::new(s.width, s.height);
-    film.spp = s.spp;
+    film.spp = samples.len() as u32;
     for (t, accs) in tiles.into_iter().enumerate() {
         let tile = Tile::new(t as u32, s.width, s.height);
         for (i, acc) in accs.iter().enumerate() {
@@ -46,10 +59,10 @@ pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> 
     film
 }
 
-/// All samples of one pixel.
-pub fn render_pixel(scene: &RenderScene, x: u32, y: u32) -> PixelAccumulator {
+/// Samples `samples` of one pixel.
+pub fn render_pixel(scene: &RenderScene, x: u32, y: u32, samples: Range<u32>) -> PixelAccumulator {
     let mut acc = PixelAccumulator::default();
-    for i in 0..scene.settings.spp {
+    for i in samples {
         let (ray, mut sampler) = path::camera_ray(scene, x, y, i);
         acc.add(clamp_sample(radiance(scene, ray, &mut sampler), scene.settings.clamp));
     }

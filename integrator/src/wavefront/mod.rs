@@ -23,6 +23,7 @@ use pathwave_engine::render_scene::RenderScene;
 use queues::{Paths, Queues};
 use rayon::prelude::*;
 pub use stages::MaterialKind;
+use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -129,6 +130,17 @@ impl Stats {
 
 /// Renders the image; `progress(done, total)` is called after each tile.
 pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usize) + Sync)) -> (Film, Stats) {
+    render_samples(scene, opts, 0..scene.settings.spp, progress)
+}
+
+/// Renders the samples `samples` (indices into the scene's `spp` per pixel) of every pixel:
+/// films of disjoint ranges merge into the film of their union, bit for bit.
+pub fn render_samples(
+    scene: &RenderScene,
+    opts: Options,
+    samples: Range<u32>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (Film, Stats) {
     let s = scene.settings;
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
@@ -142,14 +154,14 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
             || (Paths::with_slots(batch), Queues::default()),
             |(paths, queues), t| {
                 let tile = Tile::new(t, s.width, s.height);
-                let out = render_tile(scene, &tile, batch, paths, queues);
+                let out = render_tile(scene, &tile, samples.clone(), batch, paths, queues);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 out
             },
         )
         .collect();
     let mut film = Film::new(s.width, s.height);
-    film.spp = s.spp;
+    film.spp = samples.len() as u32;
     let mut stats = Stats::default();
     for (t, (accs, st)) in results.into_iter().enumerate() {
         let tile = Tile::new(t as u32, s.width, s.height);
@@ -162,15 +174,16 @@ pub fn render(scene: &RenderScene, opts: Options, progress: &(dyn Fn(usize, usiz
     (film, stats)
 }
 
-/// Runs the wavefront over all samples of one tile.
+/// Runs the wavefront over samples `samples` of every pixel of one tile.
 fn render_tile(
     scene: &RenderScene,
     tile: &Tile,
+    samples: Range<u32>,
     batch: usize,
     p: &mut Paths,
     q: &mut Queues,
 ) -> (Vec<PixelAccumulator>, Stats) {
-    let spp = scene.settings.spp as u64;
+    let spp = samples.len() as u64;
     let work = (tile.w * tile.h) as u64 * spp;
     let mut next_sample = 0u64;
     let mut film = vec![PixelAccumulator::default(); (tile.w * tile.h) as usize];
@@ -184,7 +197,7 @@ fn render_tile(
         timed(&mut stats, Stage::GenerateCameraRays, fresh, || {
             while next_sample < work {
                 let Some(slot) = q.free.pop() else { break };
-                let (px, index) = ((next_sample / spp) as u32, (next_sample % spp) as u32);
+                let (px, index) = ((next_sample / spp) as u32, samples.start + (next_sample % spp) as u32);
                 let (x, y) = tile.pixel(px);
                 let (ray, sampler) = path::camera_ray(scene, x, y, index);
                 let s = slot as usize;
