@@ -4,6 +4,7 @@
 
 pub mod animate;
 pub mod bench;
+pub mod checkpoint;
 pub mod io;
 pub mod metrics;
 pub mod raybench;

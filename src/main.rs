@@ -1,6 +1,7 @@
 //! The `pathwave` command line.
 
 use clap::{Parser, Subcommand};
+use pathwave::checkpoint::{self, Checkpoint};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
@@ -79,6 +80,14 @@ enum Command {
         /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
         #[arg(long)]
         aov: bool,
+        /// Render in passes and, every SECS seconds, save the samples so far to OUT.ckpt and
+        /// the image so far to OUT (the checkpoint is kept at the end, for --resume --spp).
+        #[arg(long, value_name = "SECS")]
+        checkpoint_every: Option<f64>,
+        /// Continue from OUT.ckpt if it exists (same scene and settings; the result has the
+        /// bits of an uninterrupted render); checkpoints every 60 s unless --checkpoint-every.
+        #[arg(long)]
+        resume: bool,
     },
     /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
     /// an animated GIF when the output ends in .gif. Existing frames are skipped.
@@ -170,7 +179,7 @@ enum Command {
     },
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum Integrator {
     /// Stages over structure-of-arrays queues (default).
     Wavefront,
@@ -230,10 +239,14 @@ fn main() -> ExitCode {
             time,
             denoise,
             aov,
+            checkpoint_every,
+            resume,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
             let how = How { integrator, batch, stats, threads, quiet, verbose, denoise, aov };
-            render(&scene, &output, overrides, &how, time)
+            let checkpoint = (checkpoint_every.is_some() || resume)
+                .then(|| Checkpointing { every: checkpoint_every.unwrap_or(60.0).max(0.0), resume });
+            render(&scene, &output, overrides, &how, time, checkpoint)
         }
         Command::Animate {
             scene,
@@ -282,6 +295,14 @@ struct Overrides {
     seed: Option<u64>,
     max_depth: Option<u32>,
     clamp: Option<f32>,
+}
+
+/// `--checkpoint-every` and `--resume`.
+struct Checkpointing {
+    /// Seconds between checkpoints.
+    every: f64,
+    /// Start from the checkpoint file if there is one.
+    resume: bool,
 }
 
 struct How {
@@ -355,7 +376,14 @@ fn animate(
     })
 }
 
-fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Result<(), String> {
+fn render(
+    path: &Path,
+    output: &Path,
+    o: Overrides,
+    how: &How,
+    time: f32,
+    checkpointing: Option<Checkpointing>,
+) -> Result<(), String> {
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
     let start = Instant::now();
@@ -364,15 +392,86 @@ fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Res
     world.set_time(time + shutter.0, time + shutter.1);
     let scene = world.update();
     let s = scene.settings;
-    let bar = Progress::new(how.quiet);
-    let progress = |done, total| bar.update(done, total);
-    let (film, stats) = pool.install(|| match how.integrator {
-        Integrator::Oracle => (oracle::render(&scene, &progress), None),
-        Integrator::Wavefront => {
-            let (film, stats) = wavefront::render(&scene, wavefront::Options { batch: how.batch }, &progress);
-            (film, Some(stats))
+    let ckpt_path = output.with_file_name(format!(
+        "{}.ckpt",
+        output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+    ));
+    let key = checkpoint::key(
+        &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
+        &format!(
+            "{}x{} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?}",
+            s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator
+        ),
+    );
+    let mut film = Film::new(s.width, s.height);
+    if checkpointing.as_ref().is_some_and(|c| c.resume) {
+        if ckpt_path.exists() {
+            let ckpt = Checkpoint::load(&ckpt_path)?;
+            if ckpt.key != key {
+                return Err(format!(
+                    "{}: the checkpoint is of another scene or other settings (size, seed, depth, \
+                     clamp, time or integrator); remove it or render without --resume",
+                    ckpt_path.display()
+                ));
+            }
+            if ckpt.target_spp != s.spp && ckpt.film.spp < s.spp {
+                eprintln!(
+                    "note: the checkpoint was started for {} spp: samples {}..{} are stratified for {} \
+                     (unbiased, but not the bits of a fresh {}-spp render)",
+                    ckpt.target_spp, ckpt.film.spp, s.spp, s.spp, s.spp
+                );
+            }
+            eprintln!("{}: resuming at {} of {} spp", ckpt_path.display(), ckpt.film.spp, s.spp);
+            film = ckpt.film;
+        } else if !how.quiet {
+            eprintln!("{}: no checkpoint yet, starting at sample 0", ckpt_path.display());
         }
-    });
+    }
+    let first_spp = film.spp;
+    let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid(s.width, s.height);
+    let tiles = (tiles_x * tiles_y) as usize;
+    let bar = Progress::new(how.quiet);
+    let mut stats: Option<wavefront::Stats> = None;
+    let mut last_save = Instant::now();
+    // Without checkpoints, one pass; with them, passes sized to take about half the interval
+    // (measured on the pass before), starting with one sample per pixel.
+    let mut pass = if checkpointing.is_some() { 1 } else { s.spp.saturating_sub(film.spp) };
+    while film.spp < s.spp {
+        let range = film.spp..(film.spp + pass).min(s.spp);
+        let k = range.len();
+        let before = (film.spp - first_spp) as usize * tiles;
+        let total = (s.spp - first_spp) as usize * tiles;
+        let progress = |done: usize, _| bar.update(before + done * k, total);
+        let pass_start = Instant::now();
+        let (part, st) = pool.install(|| match how.integrator {
+            Integrator::Oracle => (oracle::render_samples(&scene, range.clone(), &progress), None),
+            Integrator::Wavefront => {
+                let opts = wavefront::Options { batch: how.batch };
+                let (film, stats) = wavefront::render_samples(&scene, opts, range.clone(), &progress);
+                (film, Some(stats))
+            }
+        });
+        film.merge(&part);
+        stats = match (stats, st) {
+            (Some(a), Some(b)) => Some(a.merge(b)),
+            (a, b) => a.or(b),
+        };
+        if let Some(c) = &checkpointing {
+            if last_save.elapsed().as_secs_f64() >= c.every || film.spp == s.spp {
+                // The image so far first: once a checkpoint exists, so does an image.
+                if film.spp < s.spp {
+                    io::write(
+                        output,
+                        &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
+                    )?;
+                }
+                Checkpoint { key, target_spp: s.spp, film: film.clone() }.save(&ckpt_path)?;
+                last_save = Instant::now();
+            }
+            let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
+            pass = ((c.every / 2.0 / per_sample.max(1e-9)) as u32).clamp(1, s.spp);
+        }
+    }
     let secs = start.elapsed().as_secs_f64();
     bar.finish();
     if how.stats {
@@ -390,17 +489,18 @@ fn render(path: &Path, output: &Path, o: Overrides, how: &How, time: f32) -> Res
     let img =
         if how.denoise || how.aov { post_process(&scene, &film, img, output, how, &pool)? } else { img };
     let clamped = io::write(output, &img)?;
-    let samples = s.width as f64 * s.height as f64 * s.spp as f64;
+    let samples = s.width as f64 * s.height as f64 * (film.spp - first_spp) as f64;
     eprintln!(
-        "{}: {}x{} {} spp in {secs:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}",
+        "{}: {}x{} {} spp in {secs:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
         output.display(),
         s.width,
         s.height,
-        s.spp,
+        film.spp,
         samples / secs / 1e6,
         pool.current_num_threads(),
         film.non_finite(),
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
+        if checkpointing.is_some() { format!("; checkpoint {}", ckpt_path.display()) } else { String::new() },
     );
     Ok(())
 }

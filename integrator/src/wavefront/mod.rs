@@ -115,7 +115,8 @@ pub struct Stats {
 }
 
 impl Stats {
-    fn merge(mut self, o: Stats) -> Stats {
+    /// The sums of two sets of statistics.
+    pub fn merge(mut self, o: Stats) -> Stats {
         for k in 0..Stage::ALL.len() {
             self.time[k] += o.time[k];
             self.items[k] += o.items[k];

@@ -1,0 +1,122 @@
+//! Checkpoints of a render in progress: the film's exact per-pixel sums and its sample count,
+//! so that a render resumed from one finishes with the bits of an uninterrupted render.
+//!
+//! The file is binary, little-endian: the magic `PWCKPT01`, a 64-bit key (a hash of the scene
+//! file and of every setting that changes what a sample is), the image width and height, the
+//! samples per pixel the render was started for and those done, then per pixel the three sums
+//! and three sums of squares as fixed-point `i128` and the count of discarded samples (`u64`).
+
+use crate::integrator::film::{Film, PixelAccumulator};
+use std::path::Path;
+
+const MAGIC: &[u8; 8] = b"PWCKPT01";
+/// Bytes per pixel: six `i128` and one `u64`.
+const PIXEL_BYTES: usize = 6 * 16 + 8;
+/// Bytes before the pixels.
+const HEADER_BYTES: usize = 8 + 8 + 4 * 4;
+
+/// A render in progress.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checkpoint {
+    /// What the samples depend on (see [`key`]).
+    pub key: u64,
+    /// Samples per pixel the render was started for (the count its sample pattern is
+    /// stratified for).
+    pub target_spp: u32,
+    /// The samples so far (`film.spp` of them per pixel).
+    pub film: Film,
+}
+
+/// FNV-1a over the scene file and a description of the settings that change what a sample is
+/// (not the sample count).
+pub fn key(scene_file: &[u8], settings: &str) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for &b in scene_file.iter().chain([0xff].iter()).chain(settings.as_bytes()) {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+impl Checkpoint {
+    /// Writes the checkpoint to `path` (whole or not at all).
+    pub fn save(&self, path: &Path) -> Result<(), String> {
+        let f = &self.film;
+        let mut out = Vec::with_capacity(HEADER_BYTES + f.pixels.len() * PIXEL_BYTES);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&self.key.to_le_bytes());
+        for v in [f.width, f.height, self.target_spp, f.spp] {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        for p in &f.pixels {
+            let (sum, sum_sq, non_finite) = p.raw();
+            for v in sum.iter().chain(&sum_sq) {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            out.extend_from_slice(&non_finite.to_le_bytes());
+        }
+        crate::io::atomically(path, |tmp| {
+            std::fs::write(tmp, &out)
+                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))
+        })
+    }
+
+    /// Reads a checkpoint written by [`Self::save`].
+    pub fn load(path: &Path) -> Result<Self, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bad = |what: &str| format!("{}: not a pathwave checkpoint ({what})", path.display());
+        if bytes.len() < HEADER_BYTES || &bytes[..8] != MAGIC {
+            return Err(bad("no PWCKPT01 header"));
+        }
+        let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
+        let (width, height, target_spp, spp) = (u32_at(16), u32_at(20), u32_at(24), u32_at(28));
+        let pixels = width as usize * height as usize;
+        if bytes.len() != HEADER_BYTES + pixels * PIXEL_BYTES {
+            return Err(bad(&format!(
+                "{} bytes where a {width}x{height} image needs {}",
+                bytes.len(),
+                HEADER_BYTES + pixels * PIXEL_BYTES
+            )));
+        }
+        let mut film = Film::new(width, height);
+        film.spp = spp;
+        for (p, chunk) in film.pixels.iter_mut().zip(bytes[HEADER_BYTES..].chunks_exact(PIXEL_BYTES)) {
+            let i128_at = |k: usize| i128::from_le_bytes(chunk[16 * k..16 * k + 16].try_into().unwrap());
+            let non_finite = u64::from_le_bytes(chunk[96..104].try_into().unwrap());
+            *p = PixelAccumulator::from_raw(
+                [i128_at(0), i128_at(1), i128_at(2)],
+                [i128_at(3), i128_at(4), i128_at(5)],
+                non_finite,
+            );
+        }
+        Ok(Self { key, target_spp, film })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn a_checkpoint_reads_back_as_written_and_a_damaged_one_is_refused() {
+        let mut film = Film::new(3, 2);
+        film.spp = 5;
+        for (i, p) in film.pixels.iter_mut().enumerate() {
+            p.add(Vec3::new(i as f32, 0.5, 1e-9));
+            p.add(Vec3::splat(f32::NAN));
+        }
+        let c = Checkpoint { key: key(b"scene", "settings"), target_spp: 64, film };
+        let path = std::env::temp_dir().join(format!("pathwave-ckpt-{}.ckpt", std::process::id()));
+        c.save(&path).unwrap();
+        assert_eq!(Checkpoint::load(&path).unwrap(), c);
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
+        assert!(Checkpoint::load(&path).unwrap_err().contains("bytes where a 3x2 image needs"));
+        std::fs::write(&path, b"PNG....").unwrap();
+        assert!(Checkpoint::load(&path).unwrap_err().contains("not a pathwave checkpoint"));
+        std::fs::remove_file(&path).unwrap();
+        assert_ne!(key(b"scene", "settings"), key(b"scene", "settingz"));
+        assert_ne!(key(b"scene", "settings"), key(b"scen", "esettings"));
+    }
+}

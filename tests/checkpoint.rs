@@ -1,0 +1,83 @@
+//! Checkpoints: a render killed mid-way and resumed ends with the bits of an uninterrupted
+//! render; a checkpoint of other settings is refused.
+
+mod common;
+use common::root;
+use pathwave::checkpoint::Checkpoint;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-ckpt-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn pathwave(out: &Path, spp: u32, extra: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_pathwave"));
+    c.args(["render", "scenes/cornell.ron", "--width", "96", "--height", "96", "-q", "-o"])
+        .arg(out)
+        .arg("--spp")
+        .arg(spp.to_string())
+        .args(extra)
+        .current_dir(root());
+    c
+}
+
+#[test]
+fn a_killed_render_resumes_to_the_same_bits() {
+    let dir = temp("resume");
+    let (plain, out) = (dir.join("plain.exr"), dir.join("out.exr"));
+    assert!(pathwave(&plain, 384, &[]).status().unwrap().success());
+    let ckpt = dir.join("out.exr.ckpt");
+    // Checkpoints after every pass; killed as soon as the first one is on disk.
+    let mut child = pathwave(&out, 384, &["--checkpoint-every", "0"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !ckpt.exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no checkpoint appeared");
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let partial = Checkpoint::load(&ckpt).unwrap();
+    assert!(partial.film.spp < 384, "the render finished before it could be killed: {}", partial.film.spp);
+    // The image so far is there to look at.
+    assert!(out.exists());
+
+    let resumed = pathwave(&out, 384, &["--resume"]).output().unwrap();
+    let log = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{log}");
+    assert!(log.contains(&format!("resuming at {} of 384 spp", partial.film.spp)), "{log}");
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&plain).unwrap(), "the resumed image differs");
+    // The finished checkpoint is kept, complete.
+    assert_eq!(Checkpoint::load(&ckpt).unwrap().film.spp, 384);
+
+    // Another seed: refused, and nothing is overwritten.
+    let before = std::fs::read(&out).unwrap();
+    let other = pathwave(&out, 384, &["--resume", "--seed", "7"]).output().unwrap();
+    assert!(!other.status.success());
+    assert!(
+        String::from_utf8_lossy(&other.stderr)
+            .contains("the checkpoint is of another scene or other settings")
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn resume_without_a_checkpoint_starts_from_the_first_sample() {
+    let dir = temp("fresh");
+    let (plain, out) = (dir.join("plain.exr"), dir.join("out.exr"));
+    assert!(pathwave(&plain, 4, &[]).status().unwrap().success());
+    let run = pathwave(&out, 4, &["--resume"]).output().unwrap();
+    assert!(run.status.success());
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&plain).unwrap());
+    assert_eq!(Checkpoint::load(&dir.join("out.exr.ckpt")).unwrap().film.spp, 4);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
