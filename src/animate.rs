@@ -2,7 +2,8 @@
 //! systems move keyframed objects, camera and emitters, and the BVH systems refit or rebuild
 //! only what moved), renders with ray times spread over the frame's shutter, and writes the
 //! image atomically. Frames whose file exists are skipped unless overwriting, so a killed run
-//! resumes where it stopped.
+//! resumes where it stopped. `--shard I/N` renders every N-th frame from the I-th, so that N
+//! processes (on one machine or several sharing the output directory) split a sequence.
 
 use crate::engine::world::SceneWorld;
 use crate::io::{self, LinearImage};
@@ -51,6 +52,17 @@ pub fn parse_range(s: &str) -> Result<(u32, u32), String> {
     Ok((a, b))
 }
 
+/// Parses `I/N` (shard I of N, 0 <= I < N).
+pub fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("--shard takes I/N with 0 <= I < N, not {s}");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u32, u32) = (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+    if i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
 /// The shutter interval of `frame`: it opens at `frame / fps` and stays open for `shutter`
 /// frame intervals.
 pub fn frame_time(frame: u32, fps: f32, shutter: f32) -> (f32, f32) {
@@ -71,6 +83,8 @@ pub struct Sequence<'a> {
     pub output: &'a str,
     /// Frames `[first, end)`.
     pub frames: (u32, u32),
+    /// `(i, n)`: only frames `first + i + k n`.
+    pub shard: (u32, u32),
     /// Frames per second.
     pub fps: f32,
     /// Shutter as a fraction of the frame interval.
@@ -94,10 +108,18 @@ pub fn run(
         return Ok(());
     }
     let (first, end) = seq.frames;
-    let total = end - first;
+    let (shard, shards) = seq.shard;
+    if gif && shards > 1 {
+        return Err(format!(
+            "{}: a GIF needs every frame in one process; shard a sequence of image files instead",
+            seq.output
+        ));
+    }
+    let frames: Vec<u32> = (first..end).filter(|f| (f - first) % shards == shard).collect();
+    let total = frames.len() as u32;
     let start = Instant::now();
     let (mut times, mut skipped, mut images) = (Vec::new(), 0u32, Vec::new());
-    for (i, frame) in (first..end).enumerate() {
+    for (i, frame) in frames.into_iter().enumerate() {
         let path = if gif { None } else { Some(frame_path(seq.output, frame)?) };
         if let Some(p) = &path
             && p.exists()
@@ -161,5 +183,7 @@ mod tests {
         assert_eq!(parse_range("3..=7").unwrap(), (3, 8));
         assert!(parse_range("7..3").is_err() && parse_range("x").is_err());
         assert_eq!(frame_time(12, 24.0, 0.5), (0.5, 0.5 + 0.5 / 24.0));
+        assert_eq!(parse_shard("1/3").unwrap(), (1, 3));
+        assert!(parse_shard("3/3").is_err() && parse_shard("1").is_err() && parse_shard("a/2").is_err());
     }
 }

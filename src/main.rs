@@ -110,6 +110,10 @@ enum Command {
         /// Render frames whose file already exists.
         #[arg(long)]
         overwrite: bool,
+        /// Render only every N-th frame from the I-th (I/N, 0-based), so that N processes split
+        /// the sequence (frame files only, not a GIF).
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
         /// Samples per pixel (overrides the scene).
         #[arg(long)]
         spp: Option<NonZeroU32>,
@@ -255,6 +259,7 @@ fn main() -> ExitCode {
             fps,
             shutter,
             overwrite,
+            shard,
             spp,
             width,
             height,
@@ -263,7 +268,8 @@ fn main() -> ExitCode {
             quiet,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth: None, clamp: None };
-            animate(&scene, &output, frames, fps, shutter, overwrite, overrides, threads, quiet)
+            let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
+            animate(&scene, &output, seq, overrides, threads, quiet)
         }
         Command::Compare { a, b } => compare(&a, &b),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
@@ -341,35 +347,41 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
         .map_err(|e| format!("cannot start {threads:?} threads: {e}"))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn animate(
-    path: &Path,
-    output: &str,
+/// `animate`'s options about which frames to render.
+struct SequenceArgs {
     frames: Option<String>,
     fps: Option<f32>,
     shutter: Option<f32>,
     overwrite: bool,
+    shard: Option<String>,
+}
+
+fn animate(
+    path: &Path,
+    output: &str,
+    args: SequenceArgs,
     o: Overrides,
     threads: Option<usize>,
     quiet: bool,
 ) -> Result<(), String> {
     let desc = load(path, &o)?;
     let a = &desc.animation;
-    let frames = match frames {
-        Some(f) => animate::parse_range(&f)?,
+    let frames = match &args.frames {
+        Some(f) => animate::parse_range(f)?,
         None => (0, a.frames.get()),
     };
-    let fps = fps.unwrap_or(a.fps.0);
+    let fps = args.fps.unwrap_or(a.fps.0);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps takes a number > 0, not {fps}"));
     }
-    let shutter = shutter.unwrap_or(a.shutter.0);
+    let shutter = args.shutter.unwrap_or(a.shutter.0);
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
     }
+    let shard = args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
     let pool = pool(threads)?;
     let mut world = SceneWorld::new(&desc);
-    let seq = animate::Sequence { output, frames, fps, shutter, overwrite, quiet };
+    let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: args.overwrite, quiet };
     animate::run(&mut world, &seq, |scene| {
         let (film, _) = pool.install(|| wavefront::render(scene, wavefront::Options::default(), &|_, _| {}));
         LinearImage { width: film.width, height: film.height, pixels: film.mean() }

@@ -306,3 +306,44 @@ fn camera_and_emission_keys_reach_the_scene_and_only_changes_rebuild() {
     assert_eq!(rebuilds(&w), b, "a frame where nothing the geometry depends on changed rebuilt it");
     assert!(b > before, "the radiance change from 2 to 3 reached the light table");
 }
+
+#[test]
+fn shards_split_a_sequence_into_the_frames_of_one_run() {
+    let dir = temp("shard");
+    let small = ["--spp", "2", "--width", "32", "--height", "24", "--frames", "0..7", "-t", "1"];
+    let scene = root().join("scenes/animation-bounce.ron");
+    let (whole, split) = (dir.join("whole_{frame:02}.exr"), dir.join("split_{frame:02}.exr"));
+    run(pathwave().arg("animate").arg(&scene).arg("-o").arg(&whole).args(small));
+    // Two processes at once on one directory, as on two machines sharing it.
+    let shard = |i: u32| {
+        let mut c = pathwave();
+        c.arg("animate").arg(&scene).arg("-o").arg(&split).args(small).args(["--shard", &format!("{i}/2")]);
+        c.stderr(std::process::Stdio::piped()).spawn().unwrap()
+    };
+    let (a, b) = (shard(0), shard(1));
+    let logs: Vec<String> = [a, b]
+        .into_iter()
+        .map(|c| {
+            let out = c.wait_with_output().unwrap();
+            assert!(out.status.success());
+            String::from_utf8_lossy(&out.stderr).to_string()
+        })
+        .collect();
+    assert!(logs[0].contains("4 frames rendered") && logs[1].contains("3 frames rendered"), "{logs:?}");
+    for f in 0..7 {
+        let path = |p: &PathBuf| animate::frame_path(p.to_str().unwrap(), f).unwrap();
+        assert_eq!(std::fs::read(path(&split)).unwrap(), std::fs::read(path(&whole)).unwrap(), "frame {f}");
+    }
+    let gif = pathwave()
+        .arg("animate")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.join("a.gif"))
+        .args(small)
+        .args(["--shard", "0/2"])
+        .output()
+        .unwrap();
+    assert!(!gif.status.success());
+    assert!(String::from_utf8_lossy(&gif.stderr).contains("a GIF needs every frame in one process"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
