@@ -34,9 +34,9 @@ pub fn frame_path(pattern: &str, frame: u32) -> Result<PathBuf, String> {
     Ok(PathBuf::from(format!("{}{number}{}", &pattern[..start], &pattern[end + 1..])))
 }
 
-/// Parses `A..B` (B excluded) or `A..=B`.
-pub fn parse_range(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--frames takes A..B or A..=B, not {s}");
+/// Parses `A..B` (B excluded) or `A..=B` given to `flag`.
+pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{flag} takes A..B or A..=B, not {s}");
     let (a, b, inclusive) = match s.split_once("..=") {
         Some((a, b)) => (a, b, true),
         None => {
@@ -47,7 +47,7 @@ pub fn parse_range(s: &str) -> Result<(u32, u32), String> {
     let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
     let b = if inclusive { b + 1 } else { b };
     if b <= a {
-        return Err(format!("--frames {s} holds no frame"));
+        return Err(format!("{flag} {s} is empty"));
     }
     Ok((a, b))
 }
@@ -179,9 +179,9 @@ mod tests {
         assert_eq!(frame_path("{frame}.exr", 12).unwrap(), PathBuf::from("12.exr"));
         assert!(frame_path("out.png", 1).is_err());
         assert!(frame_path("f{frame:x}.png", 1).unwrap_err().contains("unknown frame format"));
-        assert_eq!(parse_range("3..7").unwrap(), (3, 7));
-        assert_eq!(parse_range("3..=7").unwrap(), (3, 8));
-        assert!(parse_range("7..3").is_err() && parse_range("x").is_err());
+        assert_eq!(parse_range("3..7", "--frames").unwrap(), (3, 7));
+        assert_eq!(parse_range("3..=7", "--frames").unwrap(), (3, 8));
+        assert!(parse_range("7..3", "--frames").is_err() && parse_range("x", "--frames").is_err());
         assert_eq!(frame_time(12, 24.0, 0.5), (0.5, 0.5 + 0.5 / 24.0));
         assert_eq!(parse_shard("1/3").unwrap(), (1, 3));
         assert!(parse_shard("3/3").is_err() && parse_shard("1").is_err() && parse_shard("a/2").is_err());

@@ -3,17 +3,18 @@
 //!
 //! The file is binary, little-endian: the magic `PWCKPT01`, a 64-bit key (a hash of the scene
 //! file and of every setting that changes what a sample is), the image width and height, the
-//! samples per pixel the render was started for and those done, then per pixel the three sums
-//! and three sums of squares as fixed-point `i128` and the count of discarded samples (`u64`).
+//! samples per pixel the render was started for, the index of its first sample and the count
+//! done (the samples `first..first + count` of every pixel), then per pixel the three sums and
+//! three sums of squares as fixed-point `i128` and the count of discarded samples (`u64`).
 
 use crate::integrator::film::{Film, PixelAccumulator};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"PWCKPT01";
 /// Bytes per pixel: six `i128` and one `u64`.
 const PIXEL_BYTES: usize = 6 * 16 + 8;
 /// Bytes before the pixels.
-const HEADER_BYTES: usize = 8 + 8 + 4 * 4;
+const HEADER_BYTES: usize = 8 + 8 + 5 * 4;
 
 /// A render in progress.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,8 +24,16 @@ pub struct Checkpoint {
     /// Samples per pixel the render was started for (the count its sample pattern is
     /// stratified for).
     pub target_spp: u32,
-    /// The samples so far (`film.spp` of them per pixel).
+    /// Index of the first sample held (0 unless the render was split by sample ranges).
+    pub first_sample: u32,
+    /// The samples so far (`film.spp` of them per pixel, from `first_sample` on).
     pub film: Film,
+}
+
+/// Where the checkpoint of the image `output` goes: beside it, `.ckpt` appended.
+pub fn path_for(output: &Path) -> PathBuf {
+    let name = output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{name}.ckpt"))
 }
 
 /// FNV-1a over the scene file and a description of the settings that change what a sample is
@@ -44,7 +53,7 @@ impl Checkpoint {
         let mut out = Vec::with_capacity(HEADER_BYTES + f.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&self.key.to_le_bytes());
-        for v in [f.width, f.height, self.target_spp, f.spp] {
+        for v in [f.width, f.height, self.target_spp, self.first_sample, f.spp] {
             out.extend_from_slice(&v.to_le_bytes());
         }
         for p in &f.pixels {
@@ -69,7 +78,8 @@ impl Checkpoint {
         }
         let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
         let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
-        let (width, height, target_spp, spp) = (u32_at(16), u32_at(20), u32_at(24), u32_at(28));
+        let (width, height, target_spp) = (u32_at(16), u32_at(20), u32_at(24));
+        let (first_sample, spp) = (u32_at(28), u32_at(32));
         let pixels = width as usize * height as usize;
         if bytes.len() != HEADER_BYTES + pixels * PIXEL_BYTES {
             return Err(bad(&format!(
@@ -89,8 +99,42 @@ impl Checkpoint {
                 non_finite,
             );
         }
-        Ok(Self { key, target_spp, film })
+        Ok(Self { key, target_spp, first_sample, film })
     }
+}
+
+/// Merges checkpoints of one render (same scene, settings and size) holding disjoint sample
+/// ranges; the result starts at the lowest first sample. Its samples may have gaps: the second
+/// value is the end of the last range (`first_sample + film.spp` when there are none).
+pub fn merge(parts: &[Checkpoint]) -> Result<(Checkpoint, u32), String> {
+    let mut order: Vec<&Checkpoint> = parts.iter().collect();
+    order.sort_by_key(|c| c.first_sample);
+    let first = *order.first().ok_or("nothing to merge")?;
+    let mut out = Checkpoint { film: Film::new(first.film.width, first.film.height), ..first.clone() };
+    let mut end = first.first_sample;
+    for c in order {
+        if (c.key, c.target_spp, c.film.width, c.film.height)
+            != (first.key, first.target_spp, first.film.width, first.film.height)
+        {
+            return Err(format!(
+                "samples {}..{} are of another render (scene, settings, size or sample count) than samples {}..{}",
+                c.first_sample,
+                c.first_sample + c.film.spp,
+                first.first_sample,
+                first.first_sample + first.film.spp
+            ));
+        }
+        if c.first_sample < end {
+            return Err(format!(
+                "samples {}..{} overlap samples before {end}: each sample must come from one part",
+                c.first_sample,
+                c.first_sample + c.film.spp
+            ));
+        }
+        end = c.first_sample + c.film.spp;
+        out.film.merge(&c.film);
+    }
+    Ok((out, end))
 }
 
 #[cfg(test)]
@@ -106,7 +150,7 @@ mod tests {
             p.add(Vec3::new(i as f32, 0.5, 1e-9));
             p.add(Vec3::splat(f32::NAN));
         }
-        let c = Checkpoint { key: key(b"scene", "settings"), target_spp: 64, film };
+        let c = Checkpoint { key: key(b"scene", "settings"), target_spp: 64, first_sample: 3, film };
         let path = std::env::temp_dir().join(format!("pathwave-ckpt-{}.ckpt", std::process::id()));
         c.save(&path).unwrap();
         assert_eq!(Checkpoint::load(&path).unwrap(), c);

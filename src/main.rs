@@ -88,6 +88,20 @@ enum Command {
         /// bits of an uninterrupted render); checkpoints every 60 s unless --checkpoint-every.
         #[arg(long)]
         resume: bool,
+        /// Render only sample indices A..B of each pixel (of --spp) and keep them in OUT.ckpt,
+        /// for `pathwave merge` to add to the other parts.
+        #[arg(long, value_name = "A..B")]
+        samples: Option<String>,
+    },
+    /// Merge checkpoints holding disjoint sample ranges of one render (from `render
+    /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
+    Merge {
+        /// Checkpoints (OUT.ckpt files) to merge.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The image; the extension picks the format.
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
     /// an animated GIF when the output ends in .gif. Existing frames are skipped.
@@ -245,13 +259,19 @@ fn main() -> ExitCode {
             aov,
             checkpoint_every,
             resume,
+            samples,
         } => {
             let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
             let how = How { integrator, batch, stats, threads, quiet, verbose, denoise, aov };
-            let checkpoint = (checkpoint_every.is_some() || resume)
-                .then(|| Checkpointing { every: checkpoint_every.unwrap_or(60.0).max(0.0), resume });
-            render(&scene, &output, overrides, &how, time, checkpoint)
+            let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose();
+            samples.and_then(|samples| {
+                // A part is kept in its checkpoint for `merge`.
+                let checkpoint = (checkpoint_every.is_some() || resume || samples.is_some())
+                    .then(|| Checkpointing { every: checkpoint_every.unwrap_or(60.0).max(0.0), resume });
+                render(&scene, &output, overrides, &how, time, checkpoint, samples)
+            })
         }
+        Command::Merge { parts, output } => merge(&parts, &output),
         Command::Animate {
             scene,
             output,
@@ -367,7 +387,7 @@ fn animate(
     let desc = load(path, &o)?;
     let a = &desc.animation;
     let frames = match &args.frames {
-        Some(f) => animate::parse_range(f)?,
+        Some(f) => animate::parse_range(f, "--frames")?,
         None => (0, a.frames.get()),
     };
     let fps = args.fps.unwrap_or(a.fps.0);
@@ -395,6 +415,7 @@ fn render(
     how: &How,
     time: f32,
     checkpointing: Option<Checkpointing>,
+    samples: Option<(u32, u32)>,
 ) -> Result<(), String> {
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
@@ -404,10 +425,7 @@ fn render(
     world.set_time(time + shutter.0, time + shutter.1);
     let scene = world.update();
     let s = scene.settings;
-    let ckpt_path = output.with_file_name(format!(
-        "{}.ckpt",
-        output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
-    ));
+    let ckpt_path = checkpoint::path_for(output);
     let key = checkpoint::key(
         &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
         &format!(
@@ -415,6 +433,13 @@ fn render(
             s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator
         ),
     );
+    // The sample indices this run owns: all of them, or a range with --samples (one machine's
+    // share of a frame, added to the others by `pathwave merge`).
+    let (lo, hi) = samples.unwrap_or((0, s.spp));
+    if hi > s.spp {
+        return Err(format!("--samples {lo}..{hi} goes beyond the {} samples per pixel", s.spp));
+    }
+    let part = (lo, hi) != (0, s.spp);
     let mut film = Film::new(s.width, s.height);
     if checkpointing.as_ref().is_some_and(|c| c.resume) {
         if ckpt_path.exists() {
@@ -426,17 +451,31 @@ fn render(
                     ckpt_path.display()
                 ));
             }
-            if ckpt.target_spp != s.spp && ckpt.film.spp < s.spp {
+            if ckpt.first_sample != lo {
+                return Err(format!(
+                    "{}: the checkpoint holds samples from {}, this run renders {lo}..{hi}",
+                    ckpt_path.display(),
+                    ckpt.first_sample
+                ));
+            }
+            if ckpt.target_spp != s.spp && lo + ckpt.film.spp < hi {
                 eprintln!(
-                    "note: the checkpoint was started for {} spp: samples {}..{} are stratified for {} \
+                    "note: the checkpoint was started for {} spp: samples {}..{hi} are stratified for {} \
                      (unbiased, but not the bits of a fresh {}-spp render)",
-                    ckpt.target_spp, ckpt.film.spp, s.spp, s.spp, s.spp
+                    ckpt.target_spp,
+                    lo + ckpt.film.spp,
+                    s.spp,
+                    s.spp
                 );
             }
-            eprintln!("{}: resuming at {} of {} spp", ckpt_path.display(), ckpt.film.spp, s.spp);
+            if part {
+                eprintln!("{}: resuming samples {lo}..{hi} at {}", ckpt_path.display(), lo + ckpt.film.spp);
+            } else {
+                eprintln!("{}: resuming at {} of {} spp", ckpt_path.display(), ckpt.film.spp, s.spp);
+            }
             film = ckpt.film;
         } else if !how.quiet {
-            eprintln!("{}: no checkpoint yet, starting at sample 0", ckpt_path.display());
+            eprintln!("{}: no checkpoint yet, starting at sample {lo}", ckpt_path.display());
         }
     }
     let first_spp = film.spp;
@@ -447,12 +486,13 @@ fn render(
     let mut last_save = Instant::now();
     // Without checkpoints, one pass; with them, passes sized to take about half the interval
     // (measured on the pass before), starting with one sample per pixel.
-    let mut pass = if checkpointing.is_some() { 1 } else { s.spp.saturating_sub(film.spp) };
-    while film.spp < s.spp {
-        let range = film.spp..(film.spp + pass).min(s.spp);
+    let mut pass = if checkpointing.is_some() { 1 } else { hi - lo };
+    while lo + film.spp < hi {
+        let next = lo + film.spp;
+        let range = next..(next + pass).min(hi);
         let k = range.len();
         let before = (film.spp - first_spp) as usize * tiles;
-        let total = (s.spp - first_spp) as usize * tiles;
+        let total = (hi - lo - first_spp) as usize * tiles;
         let progress = |done: usize, _| bar.update(before + done * k, total);
         let pass_start = Instant::now();
         let (part, st) = pool.install(|| match how.integrator {
@@ -469,15 +509,17 @@ fn render(
             (a, b) => a.or(b),
         };
         if let Some(c) = &checkpointing {
-            if last_save.elapsed().as_secs_f64() >= c.every || film.spp == s.spp {
+            let finished = lo + film.spp == hi;
+            if last_save.elapsed().as_secs_f64() >= c.every || finished {
                 // The image so far first: once a checkpoint exists, so does an image.
-                if film.spp < s.spp {
+                if !finished {
                     io::write(
                         output,
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
                     )?;
                 }
-                Checkpoint { key, target_spp: s.spp, film: film.clone() }.save(&ckpt_path)?;
+                Checkpoint { key, target_spp: s.spp, first_sample: lo, film: film.clone() }
+                    .save(&ckpt_path)?;
                 last_save = Instant::now();
             }
             let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
@@ -514,6 +556,35 @@ fn render(
         if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
         if checkpointing.is_some() { format!("; checkpoint {}", ckpt_path.display()) } else { String::new() },
     );
+    Ok(())
+}
+
+fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+    let loaded = parts.iter().map(|p| Checkpoint::load(p)).collect::<Result<Vec<_>, _>>()?;
+    let (merged, hi) = checkpoint::merge(&loaded)?;
+    let f = &merged.film;
+    io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() })?;
+    let lo = merged.first_sample;
+    if lo + f.spp == hi {
+        let ckpt = checkpoint::path_for(output);
+        merged.save(&ckpt)?;
+        eprintln!(
+            "{}: samples {lo}..{hi} of {} from {} parts{}; checkpoint {}",
+            output.display(),
+            merged.target_spp,
+            parts.len(),
+            if (lo, hi) == (0, merged.target_spp) { " (all of them)" } else { "" },
+            ckpt.display()
+        );
+    } else {
+        eprintln!(
+            "{}: {} samples between {lo} and {hi} of {}, with gaps (no checkpoint written: \
+             a checkpoint holds one run of samples)",
+            output.display(),
+            f.spp,
+            merged.target_spp
+        );
+    }
     Ok(())
 }
 

@@ -81,3 +81,38 @@ fn resume_without_a_checkpoint_starts_from_the_first_sample() {
     assert_eq!(Checkpoint::load(&dir.join("out.exr.ckpt")).unwrap().film.spp, 4);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn parts_rendered_apart_merge_into_the_whole_render() {
+    let dir = temp("merge");
+    let out = |name: &str| dir.join(name);
+    let render = |name: &str, extra: &[&str]| {
+        let r = pathwave(&out(name), 7, extra).output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    };
+    let merge = |parts: &[&str], to: &str| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_pathwave"));
+        c.arg("merge").args(parts.iter().map(|p| out(p))).arg("-o").arg(out(to));
+        c.output().unwrap()
+    };
+    render("plain.exr", &[]);
+    // Three machines' shares, merged in any order.
+    render("a.exr", &["--samples", "0..2"]);
+    render("b.exr", &["--samples", "2..3"]);
+    render("c.exr", &["--samples", "3..7"]);
+    assert!(merge(&["c.exr.ckpt", "a.exr.ckpt", "b.exr.ckpt"], "all.exr").status.success());
+    assert_eq!(std::fs::read(out("all.exr")).unwrap(), std::fs::read(out("plain.exr")).unwrap());
+    // Two of three: an image of their samples and a checkpoint that --resume completes.
+    assert!(merge(&["a.exr.ckpt", "b.exr.ckpt"], "ab.exr").status.success());
+    assert_eq!(Checkpoint::load(&out("ab.exr.ckpt")).unwrap().film.spp, 3);
+    render("ab.exr", &["--resume"]);
+    assert_eq!(std::fs::read(out("ab.exr")).unwrap(), std::fs::read(out("plain.exr")).unwrap());
+    // A sample twice, or parts of other settings, are refused.
+    let twice = merge(&["a.exr.ckpt", "a.exr.ckpt"], "x.exr");
+    assert!(!twice.status.success() && String::from_utf8_lossy(&twice.stderr).contains("overlap"));
+    render("s.exr", &["--samples", "3..7", "--seed", "9"]);
+    let other = merge(&["a.exr.ckpt", "b.exr.ckpt", "s.exr.ckpt"], "x.exr");
+    assert!(!other.status.success() && String::from_utf8_lossy(&other.stderr).contains("another render"));
+    assert!(!out("x.exr").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
