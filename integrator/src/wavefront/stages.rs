@@ -15,8 +15,7 @@ use pathwave_engine::render_scene::RenderScene;
 /// their material kind. Scenes without a BVH are traced as one stream, primitive by primitive.
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
-    let flat = geo.flat().filter(|_| !scene.features.instances);
-    let Some(flat) = flat else {
+    let Some(flat) = geo.flat() else {
         for k in 0..q.active.len() {
             let i = q.active[k];
             let hit = scene.intersect(&p.ray(i as usize), f32::INFINITY);
@@ -38,7 +37,13 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let i = q.active[k];
         let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
         // Flat lists exist only for geometry without motion.
-        let hit = (prim != u32::MAX).then(|| geo.static_hit(&p.ray(i as usize), t, prim));
+        let ray = p.ray(i as usize);
+        let hit = (prim != u32::MAX).then(|| geo.static_hit(&ray, t, prim));
+        // Instances behind the primitives' hit are not looked at.
+        let hit = match scene.features.instances {
+            true => scene.instances.intersect(&ray, t).or(hit),
+            false => hit,
+        };
         bin(scene, p, q, i, hit);
     }
 }
@@ -237,8 +242,22 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let sq = &mut q.shadow;
     let n = sq.len();
     sq.occluded.resize(n, false);
-    match scene.geometry.flat().filter(|_| !scene.features.instances) {
-        Some(flat) => flat.occluded_stream(&sq.rays, &mut sq.occluded),
+    match scene.geometry.flat() {
+        Some(flat) => {
+            flat.occluded_stream(&sq.rays, &mut sq.occluded);
+            if scene.features.instances {
+                let [ox, oy, oz] = &sq.rays.o;
+                let [dx, dy, dz] = &sq.rays.d;
+                for k in 0..n {
+                    if !sq.occluded[k] {
+                        let origin = Vec3A::new(ox[k], oy[k], oz[k]);
+                        let dir = Vec3A::new(dx[k], dy[k], dz[k]);
+                        sq.occluded[k] =
+                            scene.instances.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
+                    }
+                }
+            }
+        }
         None => {
             let [ox, oy, oz] = &sq.rays.o;
             let [dx, dy, dz] = &sq.rays.d;
