@@ -347,3 +347,46 @@ fn shards_split_a_sequence_into_the_frames_of_one_run() {
     assert!(String::from_utf8_lossy(&gif.stderr).contains("a GIF needs every frame in one process"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A camera sliding sideways past a sphere and turning a little: the blurred frame must agree
+/// with the mean of stills across the shutter.
+const PAN_SCENE: &str = r#"Scene(
+    camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 1024, max_depth: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)), "r": Lambertian(albedo: (0.7, 0.1, 0.1)) },
+    objects: [
+        (shape: Sphere(center: (0, 0, 0), radius: 1), material: "m"),
+        (shape: Sphere(center: (1.2, 0.8, -1), radius: 0.4), material: "r"),
+        // A wall behind them, so that no block is background alone (noise-free).
+        (shape: Quad(q: (-20, -20, -3), u: (40, 0, 0), v: (0, 40, 0)), material: "m"),
+    ],
+    animation: (camera: (
+        look_from: Linear([(0, (-1, 0, 7)), (1, (1, 0, 7))]),
+        look_at: Linear([(0, (-0.8, 0, 0)), (1, (0.8, 0, 0))]),
+    )),
+)"#;
+
+#[test]
+fn a_moving_camera_averages_its_still_images() {
+    let desc = pathwave::engine::scene::parse(PAN_SCENE, &root().join("scenes/inline.ron")).unwrap();
+    let reference = still_average(&desc, 32);
+    let blurred = |close: f32| {
+        let mut w = SceneWorld::new(&desc);
+        w.set_time(0.0, close);
+        let scene = w.update();
+        assert!(scene.camera.moves() && scene.features.motion, "the camera moves while the shutter is open");
+        pathwave::integrator::oracle::render(&scene, &|_, _| {})
+    };
+    let stats = block_z(&blurred(1.0), &reference, 8, 1024);
+    eprintln!("panning: {stats:?}");
+    assert!(stats.agrees(), "{stats:?}");
+    let stats = block_z(&blurred(0.9), &reference, 8, 1024);
+    eprintln!("shutter 10% short: {stats:?}");
+    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+    // With the shutter closed the camera is still: no time is drawn.
+    let mut w = SceneWorld::new(&desc);
+    w.set_time(0.5, 0.5);
+    let still = w.update();
+    assert!(!still.camera.moves() && !still.features.motion);
+}

@@ -3,18 +3,42 @@
 use crate::math::{Ray, concentric_disk};
 use glam::{Vec2, Vec3, Vec3A};
 
-/// A camera ready to generate rays for an image of a given size.
+/// Where the camera is and where its image lies: origin, image right / up / backward unit axes,
+/// and the top-left corner of the image on the focus plane with the pixel steps there.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
+struct Pose {
     origin: Vec3A,
-    /// Image right, up and backward (from the target to the eye) unit axes.
     u: Vec3A,
     v: Vec3A,
     w: Vec3A,
-    /// Top-left corner of the image on the focus plane and the pixel steps there.
     corner: Vec3A,
     du: Vec3A,
     dv: Vec3A,
+}
+
+impl Pose {
+    /// The pose a fraction `s` of the way to `b` (component-wise: for the small steps of one
+    /// shutter interval, a chord of a turning camera's path).
+    fn lerp(&self, b: &Pose, s: f32) -> Pose {
+        Pose {
+            origin: self.origin.lerp(b.origin, s),
+            u: self.u.lerp(b.u, s),
+            v: self.v.lerp(b.v, s),
+            w: self.w.lerp(b.w, s),
+            corner: self.corner.lerp(b.corner, s),
+            du: self.du.lerp(b.du, s),
+            dv: self.dv.lerp(b.dv, s),
+        }
+    }
+}
+
+/// A camera ready to generate rays for an image of a given size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// The pose at shutter open (the only one for a camera that does not move).
+    pose: Pose,
+    /// The pose at shutter close, for a camera that moves while the shutter is open.
+    close: Option<Pose>,
     lens_radius: f32,
     /// Shutter open and close times.
     pub shutter: (f32, f32),
@@ -44,27 +68,43 @@ impl Camera {
         let du = u * (wd / width as f32);
         let dv = -v * (h / height as f32);
         let corner = origin - focus_dist * w - 0.5 * wd * u + 0.5 * h * v;
-        Self { origin, u, v, w, corner, du, dv, lens_radius: aperture_radius, shutter }
+        let pose = Pose { origin, u, v, w, corner, du, dv };
+        Self { pose, close: None, lens_radius: aperture_radius, shutter }
+    }
+
+    /// This camera at shutter open, moving to `close`'s pose at shutter close (its aperture
+    /// and shutter are this one's).
+    pub fn moving_to(self, close: &Camera) -> Self {
+        Self { close: (close.pose != self.pose).then_some(close.pose), ..self }
+    }
+
+    /// True when the camera moves while the shutter is open.
+    pub fn moves(&self) -> bool {
+        self.close.is_some() && self.shutter.0 != self.shutter.1
     }
 
     /// The ray through image position `pixel` (in pixels, continuous), lens sample `lens` in
     /// [0,1)^2 and shutter fraction `time_u`. The direction is unit length.
     #[inline]
     pub fn generate_ray(&self, pixel: Vec2, lens: Vec2, time_u: f32) -> Ray {
-        let target = self.corner + pixel.x * self.du + pixel.y * self.dv;
+        let pose = match &self.close {
+            Some(close) => self.pose.lerp(close, time_u),
+            None => self.pose,
+        };
+        let target = pose.corner + pixel.x * pose.du + pixel.y * pose.dv;
         let origin = if self.lens_radius > 0.0 {
             let d = concentric_disk(lens) * self.lens_radius;
-            self.origin + d.x * self.u + d.y * self.v
+            pose.origin + d.x * pose.u + d.y * pose.v
         } else {
-            self.origin
+            pose.origin
         };
         let (t0, t1) = self.shutter;
         Ray { origin, dir: (target - origin).normalize(), time: t0 + (t1 - t0) * time_u }
     }
 
-    /// The direction the camera looks along.
+    /// The direction the camera looks along (at shutter open).
     pub fn forward(&self) -> Vec3A {
-        -self.w
+        -self.pose.w
     }
 }
 

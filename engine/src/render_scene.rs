@@ -68,8 +68,8 @@ pub struct Features {
     /// Some volume holds a medium: rays sample free-flight distances and shadow rays
     /// transmittance. Off, no medium code runs.
     pub media: bool,
-    /// Something moves while the shutter is open: camera rays sample a time. Off, every ray
-    /// is at the shutter's opening and no time is drawn.
+    /// Something (or the camera) moves while the shutter is open: camera rays sample a time.
+    /// Off, every ray is at the shutter's opening and no time is drawn.
     pub motion: bool,
     /// Some material that a primitive uses takes a colour from a texture. Off, materials are
     /// used as they are.
@@ -86,7 +86,7 @@ impl Features {
         instances: &Instances,
         lights: &LightTable,
         media: &Media,
-        shutter: (f32, f32),
+        camera: &Camera,
     ) -> Self {
         let lights_are_quads = lights
             .prims
@@ -99,8 +99,9 @@ impl Features {
             lights_are_quads,
             media: !media.is_empty(),
             motion: (geometry.velocity.is_some()
-                || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some()))
-                && shutter.0 != shutter.1,
+                || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some())
+                || camera.moves())
+                && camera.shutter.0 != camera.shutter.1,
             textures: false,
             instances: !instances.is_empty(),
         }

@@ -114,27 +114,42 @@ pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: R
     if !(time.is_changed() || keys.is_changed()) {
         return;
     }
-    let t = 0.5 * (time.open + time.close);
-    let mut c = keys.base;
-    let k = &keys.keys;
-    if let Some(k) = &k.look_from {
-        c.look_from = k.at(t);
-    }
-    if let Some(k) = &k.look_at {
-        c.look_at = k.at(t);
-    }
-    if let Some(k) = &k.vfov {
-        c.vfov = k.at(t).clamp(1e-3, 179.0);
-    }
-    if let Some(k) = &k.focus_dist {
-        c.focus_dist = k.at(t).max(1e-6);
-    } else if k.look_from.is_some() || k.look_at.is_some() {
-        // The default focus distance follows the target.
-        c.focus_dist = (c.look_at - c.look_from).length();
-    }
-    c.shutter = (time.open, time.close);
-    if !same_camera(&camera.0, &c) {
-        camera.0 = c;
+    let at = |t: f32| {
+        let mut c = keys.base;
+        let k = &keys.keys;
+        if let Some(k) = &k.look_from {
+            c.look_from = k.at(t);
+        }
+        if let Some(k) = &k.look_at {
+            c.look_at = k.at(t);
+        }
+        if let Some(k) = &k.vfov {
+            c.vfov = k.at(t).clamp(1e-3, 179.0);
+        }
+        if let Some(k) = &k.focus_dist {
+            c.focus_dist = k.at(t).max(1e-6);
+        } else if k.look_from.is_some() || k.look_at.is_some() {
+            // The default focus distance follows the target.
+            c.focus_dist = (c.look_at - c.look_from).length();
+        }
+        c.shutter = (time.open, time.close);
+        c
+    };
+    // A camera that moves while the shutter is open: its poses at open and close, between
+    // which camera rays interpolate.
+    let (open, close) = (at(time.open), at(time.close));
+    let next = if same_camera(&open, &close) {
+        (at(0.5 * (time.open + time.close)), None)
+    } else {
+        (open, Some(close))
+    };
+    let same = same_camera(&camera.0, &next.0)
+        && match (&camera.1, &next.1) {
+            (Some(a), Some(b)) => same_camera(a, b),
+            (a, b) => a.is_none() && b.is_none(),
+        };
+    if !same {
+        (camera.0, camera.1) = next;
     }
 }
 
@@ -172,9 +187,11 @@ pub struct MaterialId(pub u32);
 #[derive(Resource, Clone, Debug, Default)]
 pub struct Materials(pub Vec<Material>);
 
-/// The camera as described (turned into a [`Camera`] for the image size at extraction).
+/// The camera as described (turned into a [`Camera`] for the image size at extraction), and,
+/// when keyframes move it while the shutter is open, as it is at shutter close (the first is
+/// then the camera at shutter open).
 #[derive(Resource, Clone, Copy, Debug)]
-pub struct CameraParams(pub CameraDesc);
+pub struct CameraParams(pub CameraDesc, pub Option<CameraDesc>);
 
 /// Image and sampling settings.
 #[derive(Resource, Clone, Copy, Debug)]
@@ -489,28 +506,25 @@ pub fn extract_render_scene(
     if !any && out.0.is_some() {
         return;
     }
-    let c = camera.0;
     let s = settings.0;
+    let make = |c: &CameraDesc| {
+        let (from, at, up) = (c.look_from, c.look_at, c.vup);
+        Camera::new(from, at, up, c.vfov, c.aperture_radius, c.focus_dist, c.shutter, s.width, s.height)
+    };
+    let camera = match &camera.1 {
+        Some(close) => make(&camera.0).moving_to(&make(close)),
+        None => make(&camera.0),
+    };
     out.0 = Some(Arc::new(RenderScene {
         features: Features::detect(
             &geometry.geometry,
             &instances.instances,
             &geometry.lights,
             &media.media,
-            c.shutter,
+            &camera,
         )
         .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
-        camera: Camera::new(
-            c.look_from,
-            c.look_at,
-            c.vup,
-            c.vfov,
-            c.aperture_radius,
-            c.focus_dist,
-            c.shutter,
-            s.width,
-            s.height,
-        ),
+        camera,
         settings: s,
         background: background.0,
         materials: materials.0.clone(),
@@ -775,7 +789,7 @@ impl SceneWorld {
             seed: r.seed,
             clamp: r.clamp.map(|c| c.0),
         }));
-        world.insert_resource(CameraParams(desc.camera));
+        world.insert_resource(CameraParams(desc.camera, None));
         world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });
         world.insert_resource(CameraKeys { base: desc.camera, keys: desc.animation.camera.clone() });
         let emit_keys = desc
