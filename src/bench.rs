@@ -1,9 +1,10 @@
 //! `pathwave bench`: run time against error. Renders scenes that have a reference image at a
-//! series of sample counts with each integrator, and reports seconds, throughput and error
-//! (relMSE, RMSE) as a markdown table and a log-log plot (SVG) of relMSE against seconds.
+//! series of sample counts with each integrator (and, if asked, the wavefront's image denoised),
+//! and reports seconds, throughput and error (relMSE, RMSE) as a markdown table and a log-log
+//! plot (SVG) of relMSE against seconds.
 
 use crate::engine::{scene, world::SceneWorld};
-use crate::integrator::{oracle, wavefront};
+use crate::integrator::{aov, denoise as denoiser, oracle, wavefront};
 use crate::{io, metrics};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -14,7 +15,7 @@ use std::time::Instant;
 pub struct Row {
     /// Scene file stem.
     pub scene: String,
-    /// "wavefront" or "oracle".
+    /// "wavefront", "oracle" or "wavefront + denoiser".
     pub integrator: &'static str,
     /// Samples per pixel.
     pub spp: u32,
@@ -30,8 +31,16 @@ pub struct Row {
     pub rmse: f64,
 }
 
-/// Renders `scene_path` at each of `spp` with both integrators and compares with `reference`.
-pub fn run(scene_path: &Path, reference: &Path, spps: &[u32], batch: usize) -> Result<Vec<Row>, String> {
+/// Renders `scene_path` at each of `spp` with both integrators and compares with `reference`;
+/// with `denoise`, also the wavefront's image denoised (its seconds include the guides and the
+/// filter).
+pub fn run(
+    scene_path: &Path,
+    reference: &Path,
+    spps: &[u32],
+    batch: usize,
+    denoise: bool,
+) -> Result<Vec<Row>, String> {
     let reference = io::read_linear(reference)?;
     let name = scene_path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
     let mut rows = Vec::new();
@@ -70,7 +79,26 @@ pub fn run(scene_path: &Path, reference: &Path, spps: &[u32], batch: usize) -> R
                 rmse: metrics::rmse(&mean, &reference.pixels),
             };
             eprintln!("{}", table_row(&row));
-            rows.push(row);
+            if denoise && integrator == "wavefront" {
+                let start = Instant::now();
+                let aovs = aov::render(&scene, 0..spp);
+                let out = denoiser::denoise(&mean, &film.variance_of_mean(), &aovs, &Default::default());
+                let seconds = seconds + start.elapsed().as_secs_f64();
+                let denoised = Row {
+                    integrator: "wavefront + denoiser",
+                    seconds,
+                    msamples: samples / seconds / 1e6,
+                    mrays: None,
+                    rel_mse: metrics::rel_mse(&out, &reference.pixels),
+                    rmse: metrics::rmse(&out, &reference.pixels),
+                    ..row.clone()
+                };
+                eprintln!("{}", table_row(&denoised));
+                rows.push(row);
+                rows.push(denoised);
+            } else {
+                rows.push(row);
+            }
         }
     }
     Ok(rows)
@@ -153,7 +181,11 @@ pub fn svg(rows: &[Row]) -> String {
     }
     for (k, (scene, integrator)) in series.iter().enumerate() {
         let colour = colours[k % colours.len()];
-        let dash = if *integrator == "oracle" { " stroke-dasharray=\"6 4\"" } else { "" };
+        let dash = match *integrator {
+            "oracle" => " stroke-dasharray=\"6 4\"",
+            "wavefront + denoiser" => " stroke-dasharray=\"2 3\"",
+            _ => "",
+        };
         let pts: Vec<String> = rows
             .iter()
             .filter(|r| r.scene == *scene && r.integrator == *integrator)

@@ -165,6 +165,9 @@ enum Command {
         /// Write a log-log plot of relMSE against seconds.
         #[arg(long, value_name = "FILE.svg")]
         svg: Option<PathBuf>,
+        /// Also the wavefront's images denoised (seconds include the guides and the filter).
+        #[arg(long)]
+        denoise: bool,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
@@ -297,8 +300,8 @@ fn main() -> ExitCode {
                 .and_then(|_| instances.map_or(Ok(()), |p| pathwave::raybench::instance_update(&p, 100)))
                 .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
         }
-        Command::Bench { spp, refs, only, batch, svg, threads } => {
-            bench(&spp, &refs, &only, batch, svg, threads)
+        Command::Bench { spp, refs, only, batch, svg, denoise, threads } => {
+            bench(&spp, &refs, &only, batch, svg, denoise, threads)
         }
     };
     drop(guard);
@@ -540,8 +543,11 @@ fn render(
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
-    let img =
-        if how.denoise || how.aov { post_process(&scene, &film, img, output, how, &pool)? } else { img };
+    let img = if how.denoise || how.aov {
+        post_process(&scene, &film, lo..lo + film.spp, img, output, how, &pool)?
+    } else {
+        img
+    };
     let clamped = io::write(output, &img)?;
     let samples = s.width as f64 * s.height as f64 * (film.spp - first_spp) as f64;
     eprintln!(
@@ -593,16 +599,15 @@ fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
 fn post_process(
     scene: &pathwave::engine::render_scene::RenderScene,
     film: &Film,
+    samples: std::ops::Range<u32>,
     img: LinearImage,
     output: &Path,
     how: &How,
     pool: &rayon::ThreadPool,
 ) -> Result<LinearImage, String> {
     let start = Instant::now();
-    // The render's own camera rays, so that the emission they saw comes out exactly, up to 64
-    // per pixel (beyond, the guides cost more than they gain).
-    let rays = film.spp.min(64);
-    let aovs = pool.install(|| aov::render(scene, rays));
+    // The render's own camera rays, so that the emission they met comes out exactly.
+    let aovs = pool.install(|| aov::render(scene, samples.clone()));
     let aov_secs = start.elapsed().as_secs_f64();
     let sibling = |tag: &str| {
         let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -615,7 +620,7 @@ fn post_process(
         let normal = aovs.normal.iter().map(|n| if exr { *n } else { 0.5 + 0.5 * *n }).collect();
         io::write(&sibling("albedo"), &image(aovs.albedo.clone()))?;
         io::write(&sibling("normal"), &image(normal))?;
-        eprintln!("guides ({rays} rays per pixel) in {aov_secs:.2} s");
+        eprintln!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len());
     }
     if !how.denoise {
         return Ok(img);
@@ -634,6 +639,7 @@ fn bench(
     only: &[String],
     batch: usize,
     svg: Option<PathBuf>,
+    denoise: bool,
     threads: Option<usize>,
 ) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new()
@@ -653,7 +659,7 @@ fn bench(
     let mut rows = Vec::new();
     for (scene, reference) in scenes {
         if only.is_empty() || only.contains(&stem(&scene)) {
-            rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch))?);
+            rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch, denoise))?);
         }
     }
     println!(

@@ -15,7 +15,7 @@ use pathwave::metrics::rel_mse;
 fn render_and_denoise(desc: &SceneDesc, opts: &denoise::Options) -> (Vec<Vec3>, Vec<Vec3>) {
     let scene = SceneWorld::render_scene(desc);
     let film = oracle::render(&scene, &|_, _| {});
-    let aovs = aov::render(&scene, film.spp);
+    let aovs = aov::render(&scene, 0..film.spp);
     let noisy = film.mean();
     let out = denoise::denoise(&noisy, &film.variance_of_mean(), &aovs, opts);
     (noisy, out)

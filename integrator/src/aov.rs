@@ -15,6 +15,7 @@ use pathwave_engine::material::Material;
 use pathwave_engine::math::{Ray, offset_ray_origin, reflect};
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Per-pixel albedo and normal, row-major, row 0 on top.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -33,23 +34,23 @@ pub struct Aovs {
     pub emission: Vec<Vec3>,
 }
 
-/// Traces `samples` camera rays per pixel (the render's own sample indices 0..samples; give
-/// the render's spp for an exact `emission`).
-pub fn render(scene: &RenderScene, samples: u32) -> Aovs {
-    let _span = tracing::info_span!("render_aovs", samples).entered();
+/// Traces the camera rays of samples `samples` of every pixel (the render's own: give its
+/// sample range, and `emission` is exactly what its camera rays met).
+pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
+    let _span = tracing::info_span!("render_aovs", samples = samples.len()).entered();
     let (w, h) = (scene.settings.width, scene.settings.height);
-    let samples = samples.max(1);
+    let n = samples.len().max(1) as f32;
     let rows: Vec<Vec<[Vec3; 3]>> = (0..h)
         .into_par_iter()
         .map(|y| {
             (0..w)
                 .map(|x| {
                     let mut sum = [Vec3::ZERO; 3];
-                    for index in 0..samples {
+                    for index in samples.clone() {
                         let one = first_surface(scene, &path::camera_ray(scene, x, y, index).0);
                         (0..3).for_each(|k| sum[k] += one[k]);
                     }
-                    sum.map(|v| v / samples as f32)
+                    sum.map(|v| v / n)
                 })
                 .collect()
         })
