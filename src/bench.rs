@@ -4,7 +4,7 @@
 //! plot (SVG) of relMSE against seconds.
 
 use crate::engine::{scene, world::SceneWorld};
-use crate::integrator::{aov, denoise as denoiser, oracle, wavefront};
+use crate::integrator::{denoise as denoiser, oracle, wavefront};
 use crate::{io, metrics};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -32,8 +32,8 @@ pub struct Row {
 }
 
 /// Renders `scene_path` at each of `spp` with both integrators and compares with `reference`;
-/// with `denoise`, also the wavefront's image denoised (its seconds include the guides and the
-/// filter).
+/// with `denoise`, also the wavefront's image denoised (rendered again recording the guides;
+/// its seconds include that render and the filter).
 pub fn run(
     scene_path: &Path,
     reference: &Path,
@@ -53,7 +53,8 @@ pub fn run(
             let (film, stats) = match integrator {
                 "oracle" => (oracle::render(&scene, &|_, _| {}), None),
                 _ => {
-                    let (f, s) = wavefront::render(&scene, wavefront::Options { batch }, &|_, _| {});
+                    let opts = wavefront::Options { batch, ..Default::default() };
+                    let (f, s) = wavefront::render(&scene, opts, &|_, _| {});
                     (f, Some(s))
                 }
             };
@@ -80,10 +81,14 @@ pub fn run(
             };
             eprintln!("{}", table_row(&row));
             if denoise && integrator == "wavefront" {
+                // Rendered again, recording the guides on the way.
                 let start = Instant::now();
-                let aovs = aov::render(&scene, 0..spp);
-                let out = denoiser::denoise(&mean, &film.variance_of_mean(), &aovs, &Default::default());
-                let seconds = seconds + start.elapsed().as_secs_f64();
+                let opts = wavefront::Options { batch, guides: true };
+                let (film, _) = wavefront::render(&scene, opts, &|_, _| {});
+                let aovs = film.guides.as_ref().expect("the wavefront recorded the guides");
+                let out =
+                    denoiser::denoise(&film.mean(), &film.variance_of_mean(), aovs, &Default::default());
+                let seconds = start.elapsed().as_secs_f64();
                 let denoised = Row {
                     integrator: "wavefront + denoiser",
                     seconds,

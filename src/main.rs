@@ -501,7 +501,7 @@ fn render(
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(&scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
-                let opts = wavefront::Options { batch: how.batch };
+                let opts = wavefront::Options { batch: how.batch, guides: how.denoise || how.aov };
                 let (film, stats) = wavefront::render_samples(&scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }
@@ -606,8 +606,12 @@ fn post_process(
     pool: &rayon::ThreadPool,
 ) -> Result<LinearImage, String> {
     let start = Instant::now();
-    // The render's own camera rays, so that the emission they met comes out exactly.
-    let aovs = pool.install(|| aov::render(scene, samples.clone()));
+    // Recorded by the wavefront on the way, or traced now from the render's own camera rays
+    // (the oracle, a resumed render), so that the emission they met comes out exactly.
+    let aovs = match &film.guides {
+        Some(g) => g.clone(),
+        None => pool.install(|| aov::render(scene, samples.clone())),
+    };
     let aov_secs = start.elapsed().as_secs_f64();
     let sibling = |tag: &str| {
         let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -620,7 +624,10 @@ fn post_process(
         let normal = aovs.normal.iter().map(|n| if exr { *n } else { 0.5 + 0.5 * *n }).collect();
         io::write(&sibling("albedo"), &image(aovs.albedo.clone()))?;
         io::write(&sibling("normal"), &image(normal))?;
-        eprintln!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len());
+        match film.guides {
+            Some(_) => eprintln!("guides recorded during the render"),
+            None => eprintln!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
+        }
     }
     if !how.denoise {
         return Ok(img);
@@ -629,7 +636,8 @@ fn post_process(
     let start = Instant::now();
     let variance = film.variance_of_mean();
     let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
-    eprintln!("denoised in {:.2} s (guides {aov_secs:.2} s)", start.elapsed().as_secs_f64());
+    let guides = if film.guides.is_some() { String::new() } else { format!(" (guides {aov_secs:.2} s)") };
+    eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
     Ok(image(out))
 }
 

@@ -23,7 +23,7 @@ fn small(name: &str, spp: u32) -> SceneDesc {
 fn wavefront(desc: &SceneDesc, batch: usize, threads: usize) -> (Film, wavefront::Stats) {
     let scene = SceneWorld::render_scene(desc);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-    pool.install(|| wavefront::render(&scene, Options { batch }, &|_, _| {}))
+    pool.install(|| wavefront::render(&scene, Options { batch, ..Default::default() }, &|_, _| {}))
 }
 
 /// Same seed, same per-vertex code, exact pixel sums: the wavefront reproduces the oracle's

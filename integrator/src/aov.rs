@@ -64,6 +64,22 @@ pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
     out
 }
 
+/// The albedo guide of a material: its reflectance, 1 for glass, an emitter's clamped radiance.
+#[inline]
+pub fn albedo(m: &Material) -> Vec3 {
+    match *m {
+        Material::Lambertian { albedo } | Material::Metal { albedo, .. } => albedo,
+        Material::Dielectric { .. } => Vec3::ONE,
+        Material::DiffuseLight { emit, .. } => emit.clamp(Vec3::ZERO, Vec3::ONE),
+    }
+}
+
+/// The sky's albedo guide: its radiance, clamped.
+#[inline]
+pub fn sky_albedo(radiance: Vec3) -> Vec3 {
+    radiance.clamp(Vec3::ZERO, Vec3::ONE)
+}
+
 /// Perfect mirrors and glass hand the guides on to what they show, up to this many times.
 const MAX_SPECULAR: u32 = 4;
 
@@ -88,11 +104,7 @@ fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
     let (mut ray, mut hit, mut tint, mut last_n) = (*camera, first, Vec3::ONE, Vec3::ZERO);
     for bounce in 0..=MAX_SPECULAR {
         let Some(h) = hit else {
-            return [
-                tint * scene.background.radiance(ray.dir).clamp(Vec3::ZERO, Vec3::ONE),
-                last_n,
-                emission,
-            ];
+            return [tint * sky_albedo(scene.background.radiance(ray.dir)), last_n, emission];
         };
         let sp = &h.surface;
         let wo = -ray.dir.normalize();
@@ -107,14 +119,7 @@ fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
                 let eta = if sp.ns.dot(wo) >= 0.0 { ior } else { 1.0 / ior };
                 refract(wo, ns, eta).unwrap_or_else(|| reflect(wo, ns))
             }
-            m => {
-                let albedo = match m {
-                    Material::Lambertian { albedo } | Material::Metal { albedo, .. } => albedo,
-                    Material::Dielectric { .. } => Vec3::ONE,
-                    Material::DiffuseLight { emit, .. } => emit.clamp(Vec3::ZERO, Vec3::ONE),
-                };
-                return [tint * albedo, ns.into(), emission];
-            }
+            m => return [tint * albedo(&m), ns.into(), emission],
         };
         last_n = ns.into();
         let side = if dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };

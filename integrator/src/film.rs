@@ -1,6 +1,7 @@
 //! The film: per-pixel exact sums and sums of squares of sample radiance (for the mean and its
 //! variance), and the count of discarded non-finite samples (and absurdly large ones).
 
+use crate::aov::Aovs;
 use glam::Vec3;
 
 /// Accumulated samples of an image.
@@ -14,12 +15,15 @@ pub struct Film {
     pub spp: u32,
     /// Per pixel (row-major, row 0 on top): the samples' exact sums.
     pub pixels: Vec<PixelAccumulator>,
+    /// The denoiser's guides over the same samples, when the integrator recorded them.
+    pub guides: Option<Aovs>,
 }
 
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
-        Self { width, height, spp: 0, pixels: vec![PixelAccumulator::default(); (width * height) as usize] }
+        let pixels = vec![PixelAccumulator::default(); (width * height) as usize];
+        Self { width, height, spp: 0, pixels, guides: None }
     }
 
     /// Per-pixel mean.
@@ -44,6 +48,23 @@ impl Film {
     /// once.
     pub fn merge(&mut self, o: &Film) {
         assert_eq!((self.width, self.height), (o.width, o.height), "films of different sizes");
+        // Guides over all the samples: weighted means where both have them (or only one film
+        // has samples), none where some samples have none.
+        self.guides = match (self.guides.take(), &o.guides) {
+            (Some(mut a), Some(b)) => {
+                let (wa, wb) = (self.spp as f32, o.spp as f32);
+                let mix = |x: &mut Vec<Vec3>, y: &Vec<Vec3>| {
+                    x.iter_mut().zip(y).for_each(|(x, y)| *x = (*x * wa + *y * wb) / (wa + wb).max(1.0))
+                };
+                mix(&mut a.albedo, &b.albedo);
+                mix(&mut a.normal, &b.normal);
+                mix(&mut a.emission, &b.emission);
+                Some(a)
+            }
+            (a, b) if self.spp == 0 => b.clone().or(a),
+            (a, _) if o.spp == 0 => a,
+            _ => None,
+        };
         self.spp += o.spp;
         self.pixels.iter_mut().zip(&o.pixels).for_each(|(a, b)| a.merge(b));
     }

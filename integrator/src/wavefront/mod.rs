@@ -15,12 +15,14 @@
 mod queues;
 mod stages;
 
+use crate::aov::Aovs;
 use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::path;
 use crate::tile::Tile;
+use glam::Vec3;
 use pathwave_engine::material::Material;
 use pathwave_engine::render_scene::RenderScene;
-use queues::{Paths, Queues};
+use queues::{Guide, Paths, Queues};
 use rayon::prelude::*;
 pub use stages::MaterialKind;
 use std::ops::Range;
@@ -32,11 +34,13 @@ use std::time::{Duration, Instant};
 pub struct Options {
     /// Paths in flight per worker.
     pub batch: usize,
+    /// Also record the denoiser's guides ([`Film::guides`]) from the paths' own camera rays.
+    pub guides: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 256 }
+        Self { batch: 256, guides: false }
     }
 }
 
@@ -47,6 +51,8 @@ pub enum Stage {
     GenerateCameraRays,
     /// Closest-hit traversal.
     IntersectClosest,
+    /// The denoiser's guides.
+    RecordGuides,
     /// Background for rays that left.
     HandleEscaped,
     /// Emitter hits.
@@ -67,9 +73,10 @@ pub enum Stage {
 
 impl Stage {
     /// All stages in pipeline order.
-    pub const ALL: [Stage; 10] = [
+    pub const ALL: [Stage; 11] = [
         Stage::GenerateCameraRays,
         Stage::IntersectClosest,
+        Stage::RecordGuides,
         Stage::HandleEscaped,
         Stage::HandleEmissive,
         Stage::ShadeMedium,
@@ -85,6 +92,7 @@ impl Stage {
         match self {
             Stage::GenerateCameraRays => "generate_camera_rays",
             Stage::IntersectClosest => "intersect_closest",
+            Stage::RecordGuides => "record_guides",
             Stage::HandleEscaped => "handle_escaped",
             Stage::HandleEmissive => "handle_emissive",
             Stage::ShadeMedium => "shade_medium",
@@ -149,13 +157,13 @@ pub fn render_samples(
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let batch = opts.batch.max(1);
-    let results: Vec<(Vec<PixelAccumulator>, Stats)> = (0..tx * ty)
+    let results: Vec<TileResult> = (0..tx * ty)
         .into_par_iter()
         .map_init(
             || (Paths::with_slots(batch), Queues::default()),
             |(paths, queues), t| {
                 let tile = Tile::new(t, s.width, s.height);
-                let out = render_tile(scene, &tile, samples.clone(), batch, paths, queues);
+                let out = render_tile(scene, &tile, samples.clone(), batch, opts.guides, paths, queues);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 out
             },
@@ -163,16 +171,39 @@ pub fn render_samples(
         .collect();
     let mut film = Film::new(s.width, s.height);
     film.spp = samples.len() as u32;
+    let n = s.width as usize * s.height as usize;
+    let mut guides = opts.guides.then(|| Aovs {
+        width: s.width,
+        height: s.height,
+        albedo: vec![Vec3::ZERO; n],
+        normal: vec![Vec3::ZERO; n],
+        emission: vec![Vec3::ZERO; n],
+    });
+    let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
-    for (t, (accs, st)) in results.into_iter().enumerate() {
+    for (t, r) in results.into_iter().enumerate() {
         let tile = Tile::new(t as u32, s.width, s.height);
-        for (i, acc) in accs.iter().enumerate() {
+        for (i, acc) in r.film.iter().enumerate() {
             let (x, y) = tile.pixel(i as u32);
-            film.set_pixel((y * s.width + x) as usize, acc);
+            let k = (y * s.width + x) as usize;
+            film.set_pixel(k, acc);
+            if let (Some(g), Some(sums)) = (&mut guides, &r.guides) {
+                let [a, n, e] = sums[i];
+                (g.albedo[k], g.normal[k], g.emission[k]) = (a * per_sample, n * per_sample, e * per_sample);
+            }
         }
-        stats = stats.merge(st);
+        stats = stats.merge(r.stats);
     }
+    film.guides = guides;
     (film, stats)
+}
+
+/// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
+/// emission) when asked for, and statistics.
+struct TileResult {
+    film: Vec<PixelAccumulator>,
+    guides: Option<Vec<[Vec3; 3]>>,
+    stats: Stats,
 }
 
 /// Runs the wavefront over samples `samples` of every pixel of one tile.
@@ -181,13 +212,15 @@ fn render_tile(
     tile: &Tile,
     samples: Range<u32>,
     batch: usize,
+    guides: bool,
     p: &mut Paths,
     q: &mut Queues,
-) -> (Vec<PixelAccumulator>, Stats) {
+) -> TileResult {
     let spp = samples.len() as u64;
     let work = (tile.w * tile.h) as u64 * spp;
     let mut next_sample = 0u64;
     let mut film = vec![PixelAccumulator::default(); (tile.w * tile.h) as usize];
+    let mut guide_sums = guides.then(|| vec![[Vec3::ZERO; 3]; (tile.w * tile.h) as usize]);
     let mut stats = Stats::default();
     q.free.clear();
     q.free.extend((0..batch as u32).rev());
@@ -206,6 +239,7 @@ fn render_tile(
                 p.set_state(s, &path::PathState::new(ray.origin));
                 p.sampler[s] = sampler;
                 p.pixel[s] = px;
+                p.guide[s] = Guide::NEW;
                 q.active.push(slot);
                 next_sample += 1;
             }
@@ -216,6 +250,9 @@ fn render_tile(
         stats.iterations += 1;
         stats.occupancy_sum += q.active.len() as f64 / batch as f64;
         timed(&mut stats, Stage::IntersectClosest, q.active.len(), || stages::intersect_closest(scene, p, q));
+        if guides {
+            timed(&mut stats, Stage::RecordGuides, q.active.len(), || stages::record_guides(scene, p, q));
+        }
         timed(&mut stats, Stage::HandleEscaped, q.escaped.len(), || stages::handle_escaped(scene, p, q));
         timed(&mut stats, Stage::HandleEmissive, q.emissive.len(), || stages::handle_emissive(scene, p, q));
         timed(&mut stats, Stage::ShadeMedium, q.medium.len(), || stages::shade_medium(scene, p, q));
@@ -233,6 +270,15 @@ fn render_tile(
             for &i in &q.finished {
                 film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], scene.settings.clamp));
             }
+            if let Some(sums) = &mut guide_sums {
+                for &i in &q.finished {
+                    // A path that ended among mirrors and glass shows their tint.
+                    let g = &p.guide[i as usize];
+                    let albedo = if g.open { g.tint } else { g.albedo };
+                    let sum = &mut sums[p.pixel[i as usize] as usize];
+                    (sum[0], sum[1], sum[2]) = (sum[0] + albedo, sum[1] + g.normal, sum[2] + g.emission);
+                }
+            }
             q.free.extend_from_slice(&q.finished);
         });
         stats.paths += q.finished.len() as u64;
@@ -243,7 +289,7 @@ fn render_tile(
         std::mem::swap(&mut q.active, &mut q.next);
         q.next.clear();
     }
-    (film, stats)
+    TileResult { film, guides: guide_sums, stats }
 }
 
 /// Runs a stage under its tracing span, recording its time and item count.
@@ -256,6 +302,7 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
     let _span = match stage {
         Stage::GenerateCameraRays => tracing::trace_span!("generate_camera_rays"),
         Stage::IntersectClosest => tracing::trace_span!("intersect_closest"),
+        Stage::RecordGuides => tracing::trace_span!("record_guides"),
         Stage::HandleEscaped => tracing::trace_span!("handle_escaped"),
         Stage::HandleEmissive => tracing::trace_span!("handle_emissive"),
         Stage::ShadeMedium => tracing::trace_span!("shade_medium"),

@@ -37,6 +37,43 @@ pub struct Paths {
     pub pixel: Vec<u32>,
     /// Closest hit of the last intersection.
     pub hit: Vec<Hit>,
+    /// Denoiser guides of the path's sample (only with [`super::Options::guides`]).
+    pub guide: Vec<Guide>,
+}
+
+/// What a path's camera ray showed, for the denoiser: see [`crate::aov`].
+#[derive(Clone, Copy, Debug)]
+pub struct Guide {
+    /// Still following perfect mirrors and glass from the camera: albedo and normal to come.
+    pub open: bool,
+    /// The last surface followed was glass (its normal, facing the ray that came, is `normal`).
+    pub glass: bool,
+    /// Product of the mirrors' albedos so far.
+    pub tint: Vec3,
+    /// Albedo of the first surface that is not a perfect mirror or glass.
+    pub albedo: Vec3,
+    /// Its camera-facing shading normal (or the last mirror's or glass's).
+    pub normal: Vec3,
+    /// Radiance the camera ray itself met on an emitter or the background.
+    pub emission: Vec3,
+}
+
+impl Guide {
+    /// A fresh camera ray's.
+    pub const NEW: Guide = Guide {
+        open: true,
+        glass: false,
+        tint: Vec3::ONE,
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        emission: Vec3::ZERO,
+    };
+
+    /// Records the surface that ends the chain of mirrors and glass.
+    #[inline]
+    pub fn close(&mut self, albedo: Vec3, normal: Vec3) {
+        (self.open, self.albedo, self.normal) = (false, self.tint * albedo, normal);
+    }
 }
 
 impl Paths {
@@ -68,6 +105,7 @@ impl Paths {
             sampler: vec![Sampler::new(0, 0, 0); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
+            guide: vec![Guide::NEW; n],
         }
     }
 

@@ -2,10 +2,11 @@
 //! comes from [`crate::path`], so every sample equals the reference path tracer's.
 
 use super::queues::{Paths, Queues};
+use crate::aov;
 use crate::lambert_vertex;
 use crate::material;
 use crate::path;
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
@@ -54,6 +55,11 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<Hit>) {
     if scene.features.media && scatters_in_medium(scene, p, q, i, hit.as_ref().map_or(f32::INFINITY, |h| h.t))
     {
+        // The surface behind the medium (infinitely far when none), for `record_guides`.
+        match hit {
+            Some(h) => p.hit[i as usize] = h,
+            None => p.hit[i as usize].t = f32::INFINITY,
+        }
         return;
     }
     let Some(hit) = hit else {
@@ -97,6 +103,86 @@ fn route(p: &mut Paths, q: &mut Queues, i: u32, shadow: Option<path::ShadowRay>,
         }
         None => q.finished.push(i),
     }
+}
+
+/// `record_guides` (only when the denoiser's guides are asked for): for the paths whose camera
+/// ray has met only perfect mirrors and glass so far, the albedo and normal of what their ray
+/// reached now, and at the first vertex the emission that `handle_escaped` and
+/// `handle_emissive` are about to add (the same expression, so the same bits).
+pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
+    // Glass refracts in most paths and reflects in a few; the guides follow the refraction (as
+    // the separate pass does): a path that came back off glass shows the glass.
+    let queues = [&q.escaped, &q.emissive, &q.lambertian, &q.metal, &q.dielectric, &q.medium];
+    for &i in queues.into_iter().flatten() {
+        let g = &mut p.guide[i as usize];
+        if g.open && g.glass && p.dir[i as usize].dot(g.normal.into()) > 0.0 {
+            let normal = g.normal;
+            g.close(Vec3::ONE, normal);
+        }
+    }
+    for &i in &q.escaped {
+        let s = i as usize;
+        let g = &mut p.guide[s];
+        if g.open {
+            let sky = scene.background.radiance(p.dir[s]);
+            if p.depth[s] == 0 {
+                g.emission = p.beta[s] * sky;
+            }
+            let normal = g.normal;
+            g.close(aov::sky_albedo(sky), normal);
+        }
+    }
+    for &i in &q.emissive {
+        let s = i as usize;
+        if p.guide[s].open {
+            let hit = p.hit[s];
+            let mat = scene.material_at(hit.material, &hit.surface);
+            if p.depth[s] == 0 {
+                p.guide[s].emission = p.beta[s] * mat.emitted(hit.surface.n.dot(-p.dir[s]));
+            }
+            p.guide[s].close(aov::albedo(&mat), facing(hit.surface.ns, p.dir[s]));
+        }
+    }
+    for queue in [&q.lambertian, &q.metal, &q.dielectric] {
+        for &i in queue {
+            let s = i as usize;
+            if !p.guide[s].open {
+                continue;
+            }
+            let hit = p.hit[s];
+            let ns = facing(hit.surface.ns, p.dir[s]);
+            match scene.material_at(hit.material, &hit.surface) {
+                // The chain goes on: the next hit of the path records.
+                Material::Metal { albedo, fuzz } if fuzz == 0.0 => {
+                    let g = &mut p.guide[s];
+                    (g.tint, g.normal, g.glass) = (g.tint * albedo, ns, false);
+                }
+                Material::Dielectric { .. } => (p.guide[s].normal, p.guide[s].glass) = (ns, true),
+                m => p.guide[s].close(aov::albedo(&m), ns),
+            }
+        }
+    }
+    // Scattered in a medium: the guides show the surface behind it, as the separate pass
+    // does (or the sky: white, no normal).
+    for &i in &q.medium {
+        let s = i as usize;
+        if p.guide[s].open {
+            let hit = p.hit[s];
+            match hit.t.is_finite() {
+                true => {
+                    let m = scene.material_at(hit.material, &hit.surface);
+                    p.guide[s].close(aov::albedo(&m), facing(hit.surface.ns, p.dir[s]));
+                }
+                false => p.guide[s].close(Vec3::ONE, Vec3::ZERO),
+            }
+        }
+    }
+}
+
+/// The shading normal `ns` turned towards where the ray came from.
+#[inline]
+fn facing(ns: Vec3A, dir: Vec3A) -> Vec3 {
+    (if ns.dot(dir) > 0.0 { -ns } else { ns }).into()
 }
 
 /// `handle_escaped`: adds the background; the paths end.
