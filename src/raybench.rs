@@ -177,8 +177,10 @@ fn rows(name: &str, target: &dyn Target, primary_rays: &Rays, offset: f32, light
     let bounce_rays = bounce(primary_rays, &hits, offset);
     let mut kinds = vec![("primary", primary_rays, false), ("diffuse bounce", &bounce_rays, false)];
     let shadow_rays = light.map(|l| shadow(primary_rays, &hits, l, offset));
-    if let Some(s) = &shadow_rays {
-        kinds.push(("shadow (occlusion)", s, true));
+    match &shadow_rays {
+        Some(s) => kinds.push(("shadow (occlusion)", s, true)),
+        // Without a light, occlusion on the bounce rays.
+        None => kinds.push(("diffuse bounce (occlusion)", &bounce_rays, true)),
     }
     for (kind, rays, occlusion) in kinds {
         let (h1, r1) = trace(target, rays, 1, occlusion);
