@@ -116,6 +116,13 @@ const FIXED: f64 = (1u64 << 50) as f64;
 /// 4e11 saturate the sum of squares, and the pixel's variance reads as infinite.
 pub const MAX_SAMPLE: f32 = 1e12;
 
+/// `v as i128` (truncated, saturating), through one `i64` conversion instruction when `v`
+/// fits (samples below 8192): the `i128` conversion is a library call.
+#[inline(always)]
+fn fixed(v: f64) -> i128 {
+    if v.abs() < 9.2e18 { v as i64 as i128 } else { v as i128 }
+}
+
 /// Sums of one pixel's samples, with non-finite samples replaced by zero and counted.
 ///
 /// The sums are exact fixed-point integers: adding samples in any order gives the same bits, so
@@ -141,8 +148,8 @@ impl PixelAccumulator {
             let x = v[c] as f64;
             // Saturating (`as` saturates too): for the non-negative values of radiance the
             // result is the same in any order.
-            self.sum[c] = self.sum[c].saturating_add((x * FIXED) as i128);
-            self.sum_sq[c] = self.sum_sq[c].saturating_add((x * x * FIXED) as i128);
+            self.sum[c] = self.sum[c].saturating_add(fixed(x * FIXED));
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(x * x * FIXED));
         }
     }
 
