@@ -214,17 +214,17 @@ pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), St
         .collect();
     let m = tris.len();
     let start = Instant::now();
-    let cw = Geometry::build_bvh(tris, vec![0; m]);
-    let cw_s = start.elapsed().as_secs_f64();
+    let prims = Geometry::build_bvh(tris, vec![0; m]);
+    let prims_s = start.elapsed().as_secs_f64();
     println!(
-        "| obvhs CWBVH + Primitive list (before) | {cw_s:.3} | | {} (primitive list) |",
+        "| BVH8 over a Primitive list (scalar triangle tests) | {prims_s:.3} | | {} (primitive list) |",
         size_of::<Primitive>()
     );
     println!("\n| scene | rays | count | hit fraction | Mrays/s 1t | Mrays/s 2t |");
     println!("|---|---|---|---|---|---|");
     let cam = primary(Vec3A::new(0.0, -3.0, 7.5), Vec3A::ZERO, Vec3A::Y, 45.0, 1024);
     rows("knot (pathwave BVH8)", &blas, &cam, 1e-4, None);
-    rows("knot (obvhs CWBVH)", &cw, &cam, 1e-4, None);
+    rows("knot (BVH8 over Primitives)", &prims, &cam, 1e-4, None);
     if let Some(path) = cornell {
         let desc = crate::engine::scene::load(path).map_err(|e| e.to_string())?;
         let scene = crate::engine::world::SceneWorld::render_scene(&desc);
@@ -234,7 +234,7 @@ pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), St
             Primitive::Quad(q) => Some([q.q, q.u, q.v]),
             _ => None,
         });
-        rows("cornell-diffuse (obvhs CWBVH)", &*scene.geometry, &cam, 1e-2, light);
+        rows("cornell-diffuse (BVH8 over quads)", &*scene.geometry, &cam, 1e-2, light);
     }
     Ok(())
 }
