@@ -448,13 +448,7 @@ mod tests {
     use super::*;
 
     fn boxes() -> Vec<Aabb> {
-        let mut s = 1u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
+        let mut rnd = crate::testing::uniform(1);
         (0..2000)
             .map(|_| {
                 let c = Vec3A::new(rnd(), rnd(), rnd()) * 100.0;
@@ -481,13 +475,7 @@ mod tests {
         });
         assert!(bvh.node_count() > 1);
         for round in 0..2 {
-            let mut s = 77u32;
-            let mut rnd = move || {
-                s ^= s << 13;
-                s ^= s >> 17;
-                s ^= s << 5;
-                s as f32 / u32::MAX as f32 * 2.0 - 1.0
-            };
+            let mut rnd = crate::testing::signed(77);
             let mut hits = 0;
             for _ in 0..500 {
                 let o = Vec3A::new(rnd(), rnd(), rnd()) * 150.0;

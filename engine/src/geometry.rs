@@ -269,15 +269,7 @@ impl Geometry {
 mod tests {
     use super::*;
 
-    /// Deterministic numbers in [-1, 1).
-    fn xorshift(mut s: u32) -> impl FnMut() -> f32 {
-        move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        }
-    }
+    use crate::testing::signed as xorshift;
 
     /// A deterministic scatter of spheres and quads, including huge, tiny and overlapping ones.
     fn scene() -> Vec<Primitive> {

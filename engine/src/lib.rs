@@ -22,3 +22,23 @@ pub mod scene;
 pub mod shape;
 pub mod texture;
 pub mod world;
+
+/// Helpers shared by the unit tests.
+#[cfg(test)]
+mod testing {
+    /// Deterministic numbers in [0, 1) (xorshift32 from `s`, which must not be 0).
+    pub fn uniform(mut s: u32) -> impl FnMut() -> f32 {
+        move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32
+        }
+    }
+
+    /// Deterministic numbers in [-1, 1).
+    pub fn signed(s: u32) -> impl FnMut() -> f32 {
+        let mut u = uniform(s);
+        move || u() * 2.0 - 1.0
+    }
+}

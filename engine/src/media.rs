@@ -348,13 +348,7 @@ mod tests {
         let mut mesh = crate::mesh::MeshData::default();
         cube(Vec3A::ZERO, Vec3A::ONE, &mut mesh);
         let (mv, bv) = (mesh_volume(mesh, m), unit_box(1.0, m));
-        let mut s = 5u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
+        let mut rnd = crate::testing::uniform(5);
         let mut inside = 0;
         for _ in 0..2000 {
             let o = Vec3A::new(rnd(), rnd(), rnd()) * 4.0 - Vec3A::new(1.0, 1.5, 1.5);

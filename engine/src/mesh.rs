@@ -406,13 +406,7 @@ mod tests {
     fn blas_hits_equal_a_scan_of_the_scalar_test() {
         let mesh = Arc::new(MeshData::knot(60, 24));
         let blas = MeshBlas::build(mesh.clone());
-        let mut s = 3u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = crate::testing::signed(3);
         let mut hits = 0;
         for i in 0..4000 {
             let o = Vec3A::new(rnd(), rnd(), rnd()) * 5.0;
