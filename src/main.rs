@@ -29,18 +29,8 @@ enum Command {
         /// Output image; the extension picks the format (.png or .exr).
         #[arg(short, long)]
         output: PathBuf,
-        /// Samples per pixel (overrides the scene).
-        #[arg(long)]
-        spp: Option<NonZeroU32>,
-        /// Image width (overrides the scene).
-        #[arg(long)]
-        width: Option<NonZeroU32>,
-        /// Image height (overrides the scene).
-        #[arg(long)]
-        height: Option<NonZeroU32>,
-        /// Random seed (overrides the scene).
-        #[arg(long)]
-        seed: Option<u64>,
+        #[command(flatten)]
+        image: ImageArgs,
         /// Maximum bounces (overrides the scene).
         #[arg(long)]
         max_depth: Option<u32>,
@@ -128,18 +118,8 @@ enum Command {
         /// the sequence (frame files only, not a GIF).
         #[arg(long, value_name = "I/N")]
         shard: Option<String>,
-        /// Samples per pixel (overrides the scene).
-        #[arg(long)]
-        spp: Option<NonZeroU32>,
-        /// Image width (overrides the scene).
-        #[arg(long)]
-        width: Option<NonZeroU32>,
-        /// Image height (overrides the scene).
-        #[arg(long)]
-        height: Option<NonZeroU32>,
-        /// Random seed (overrides the scene; every frame uses it).
-        #[arg(long)]
-        seed: Option<u64>,
+        #[command(flatten)]
+        image: ImageArgs,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
@@ -244,10 +224,7 @@ fn main() -> ExitCode {
         Command::Render {
             scene,
             output,
-            spp,
-            width,
-            height,
-            seed,
+            image,
             max_depth,
             clamp,
             verbose,
@@ -264,7 +241,7 @@ fn main() -> ExitCode {
             resume,
             samples,
         } => {
-            let overrides = Overrides { spp, width, height, seed, max_depth, clamp };
+            let overrides = Overrides { image, max_depth, clamp };
             let how = How { integrator, batch, stats, threads, quiet, verbose, denoise, aov };
             let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose();
             samples.and_then(|samples| {
@@ -275,22 +252,8 @@ fn main() -> ExitCode {
             })
         }
         Command::Merge { parts, output } => merge(&parts, &output),
-        Command::Animate {
-            scene,
-            output,
-            frames,
-            fps,
-            shutter,
-            overwrite,
-            shard,
-            spp,
-            width,
-            height,
-            seed,
-            threads,
-            quiet,
-        } => {
-            let overrides = Overrides { spp, width, height, seed, max_depth: None, clamp: None };
+        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, image, threads, quiet } => {
+            let overrides = Overrides { image, max_depth: None, clamp: None };
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
             animate(&scene, &output, seq, overrides, threads, quiet)
         }
@@ -317,11 +280,25 @@ fn main() -> ExitCode {
     }
 }
 
-struct Overrides {
+/// What `render` and `animate` may both override of a scene's `render` settings.
+#[derive(clap::Args, Clone, Copy, Debug)]
+struct ImageArgs {
+    /// Samples per pixel (overrides the scene).
+    #[arg(long)]
     spp: Option<NonZeroU32>,
+    /// Image width (overrides the scene).
+    #[arg(long)]
     width: Option<NonZeroU32>,
+    /// Image height (overrides the scene).
+    #[arg(long)]
     height: Option<NonZeroU32>,
+    /// Random seed (overrides the scene; every frame of a sequence uses it).
+    #[arg(long)]
     seed: Option<u64>,
+}
+
+struct Overrides {
+    image: ImageArgs,
     max_depth: Option<u32>,
     clamp: Option<f32>,
 }
@@ -349,10 +326,10 @@ struct How {
 fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
     let mut desc = scene::load(path).map_err(|e| e.to_string())?;
     let r = &mut desc.render;
-    r.spp = o.spp.unwrap_or(r.spp);
-    r.width = o.width.unwrap_or(r.width);
-    r.height = o.height.unwrap_or(r.height);
-    r.seed = o.seed.unwrap_or(r.seed);
+    r.spp = o.image.spp.unwrap_or(r.spp);
+    r.width = o.image.width.unwrap_or(r.width);
+    r.height = o.image.height.unwrap_or(r.height);
+    r.seed = o.image.seed.unwrap_or(r.seed);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     if let Some(c) = o.clamp {
         if !(c.is_finite() && c > 0.0) {
