@@ -390,3 +390,39 @@ fn a_moving_camera_averages_its_still_images() {
     let still = w.update();
     assert!(!still.camera.moves() && !still.features.motion);
 }
+
+/// A box spun by keyframes: as an analytic box it would take its mid-shutter pose; it must
+/// blur like the mean of its stills.
+const SPIN_BOX_SCENE: &str = r#"Scene(
+    camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 1024, max_depth: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)), "w": Lambertian(albedo: (0.8, 0.8, 0.8)) },
+    objects: [
+        (
+            shape: Box(a: (-1, -1, -1), b: (1, 1, 1)),
+            material: "m",
+            animate: (rotate: Linear([(0, Euler((0, 0, 0))), (1, Euler((0, 0, 60)))])),
+        ),
+        (shape: Quad(q: (-20, -20, -3), u: (40, 0, 0), v: (0, 40, 0)), material: "w"),
+    ],
+)"#;
+
+#[test]
+fn a_spinning_box_averages_its_still_images() {
+    let desc = pathwave::engine::scene::parse(SPIN_BOX_SCENE, &root().join("scenes/inline.ron")).unwrap();
+    let reference = still_average(&desc, 32);
+    let blurred = |close: f32| {
+        let mut w = SceneWorld::new(&desc);
+        w.set_time(0.0, close);
+        let scene = w.update();
+        assert!(scene.instances.list[0].motion.is_some(), "the box turns while the shutter is open");
+        pathwave::integrator::oracle::render(&scene, &|_, _| {})
+    };
+    let stats = block_z(&blurred(1.0), &reference, 8, 1024);
+    eprintln!("spinning box: {stats:?}");
+    assert!(stats.agrees(), "{stats:?}");
+    let stats = block_z(&blurred(0.9), &reference, 8, 1024);
+    eprintln!("shutter 10% short: {stats:?}");
+    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+}

@@ -605,6 +605,25 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
     Ok(())
 }
 
+/// A box or a quad as a triangle mesh in its own space (two triangles per face, uvs as the
+/// quads'); `None` for other shapes.
+fn flat_mesh(shape: &ShapeDesc) -> Option<MeshData> {
+    if !matches!(shape, ShapeDesc::Box { .. } | ShapeDesc::Quad { .. }) {
+        return None;
+    }
+    let mut quads = Vec::new();
+    world_primitives(shape, &Affine3A::IDENTITY, &mut quads).ok()?;
+    let mut mesh = MeshData { uvs: Some(Vec::new()), ..Default::default() };
+    for p in quads {
+        let Primitive::Quad(q) = p else { return None };
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([q.q, q.q + q.u, q.q + q.u + q.v, q.q + q.v]);
+        mesh.uvs.as_mut()?.extend([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::ONE, glam::Vec2::Y]);
+        mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+    }
+    Some(mesh)
+}
+
 fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) -> Result<(), String> {
     let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
     // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
@@ -742,10 +761,29 @@ impl SceneWorld {
         let (mats, per_material): (Vec<Material>, _) =
             desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
         let emits = |id: usize| matches!(mats[id], Material::DiffuseLight { .. });
+        // Boxes and quads whose keyframes turn or scale them become meshes, so that they blur
+        // by their motion over the shutter as instances do (not at their mid-shutter pose).
+        let shapes: Vec<ShapeDesc> = desc
+            .objects
+            .iter()
+            .map(|o| {
+                let turns = o.animate.as_ref().is_some_and(|a| a.rotate.is_some() || a.scale.is_some());
+                let surface = matches!(&o.body, Body::Surface(name)
+                    if !emits(names.iter().position(|n| *n == name.0).expect("validated")));
+                match (turns && surface).then(|| flat_mesh(&o.shape)).flatten() {
+                    Some(mesh) => ShapeDesc::Mesh(crate::scene::MeshFile {
+                        path: "<keyframed shape>".into(),
+                        mesh: Arc::new(mesh),
+                    }),
+                    None => o.shape.clone(),
+                }
+            })
+            .collect();
         let instanced: Vec<bool> = desc
             .objects
             .iter()
-            .map(|o| match (&o.shape, &o.body) {
+            .zip(&shapes)
+            .map(|(o, shape)| match (shape, &o.body) {
                 (ShapeDesc::Mesh(_), Body::Surface(name)) => {
                     !emits(names.iter().position(|n| *n == name.0).expect("validated"))
                 }
@@ -754,8 +792,8 @@ impl SceneWorld {
             .collect();
         world.insert_resource(Materials(mats));
         world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
-        for (obj, instanced) in desc.objects.iter().zip(instanced) {
-            let placed = (Transform(compose(&obj.transform)), Shape(obj.shape.clone()));
+        for ((obj, instanced), shape) in desc.objects.iter().zip(instanced).zip(shapes) {
+            let placed = (Transform(compose(&obj.transform)), Shape(shape));
             match &obj.body {
                 Body::Surface(name) => {
                     let id = names
