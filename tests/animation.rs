@@ -234,23 +234,34 @@ fn still_average(desc: &pathwave::engine::scene::SceneDesc, steps: u32) -> pathw
     pathwave::io::LinearImage { width: 48, height: 48, pixels: sum }
 }
 
-#[test]
-fn a_spinning_instance_averages_its_still_images() {
-    let desc = pathwave::engine::scene::parse(SPIN_SCENE, &root().join("scenes/inline.ron")).unwrap();
+/// The scene `text` rendered with the shutter open over [0, 1] must agree (block means) with
+/// the mean of 32 stills across it, and with a shutter 10% short must not; `moves` checks that
+/// what should move while the shutter is open does.
+fn blurs_like_its_stills(
+    text: &str,
+    what: &str,
+    moves: impl Fn(&pathwave::engine::render_scene::RenderScene) -> bool,
+) {
+    let desc = pathwave::engine::scene::parse(text, &root().join("scenes/inline.ron")).unwrap();
     let reference = still_average(&desc, 32);
     let blurred = |close: f32| {
         let mut w = SceneWorld::new(&desc);
         w.set_time(0.0, close);
         let scene = w.update();
-        assert!(scene.instances.list[0].motion.is_some(), "the instance turns while the shutter is open");
+        assert!(moves(&scene), "{what}: nothing moves while the shutter is open");
         pathwave::integrator::oracle::render(&scene, &|_, _| {})
     };
     let stats = block_z(&blurred(1.0), &reference, 8, 1024);
-    eprintln!("spinning: {stats:?}");
-    assert!(stats.agrees(), "{stats:?}");
+    eprintln!("{what}: {stats:?}");
+    assert!(stats.agrees(), "{what}: {stats:?}");
     let stats = block_z(&blurred(0.9), &reference, 8, 1024);
-    eprintln!("shutter 10% short: {stats:?}");
-    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+    eprintln!("{what}, shutter 10% short: {stats:?}");
+    assert!(!stats.agrees(), "{what}: a shutter 10% short went unnoticed: {stats:?}");
+}
+
+#[test]
+fn a_spinning_instance_averages_its_still_images() {
+    blurs_like_its_stills(SPIN_SCENE, "spinning instance", |s| s.instances.list[0].motion.is_some());
 }
 
 #[test]
@@ -369,22 +380,9 @@ const PAN_SCENE: &str = r#"Scene(
 
 #[test]
 fn a_moving_camera_averages_its_still_images() {
-    let desc = pathwave::engine::scene::parse(PAN_SCENE, &root().join("scenes/inline.ron")).unwrap();
-    let reference = still_average(&desc, 32);
-    let blurred = |close: f32| {
-        let mut w = SceneWorld::new(&desc);
-        w.set_time(0.0, close);
-        let scene = w.update();
-        assert!(scene.camera.moves() && scene.features.motion, "the camera moves while the shutter is open");
-        pathwave::integrator::oracle::render(&scene, &|_, _| {})
-    };
-    let stats = block_z(&blurred(1.0), &reference, 8, 1024);
-    eprintln!("panning: {stats:?}");
-    assert!(stats.agrees(), "{stats:?}");
-    let stats = block_z(&blurred(0.9), &reference, 8, 1024);
-    eprintln!("shutter 10% short: {stats:?}");
-    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+    blurs_like_its_stills(PAN_SCENE, "panning camera", |s| s.camera.moves() && s.features.motion);
     // With the shutter closed the camera is still: no time is drawn.
+    let desc = pathwave::engine::scene::parse(PAN_SCENE, &root().join("scenes/inline.ron")).unwrap();
     let mut w = SceneWorld::new(&desc);
     w.set_time(0.5, 0.5);
     let still = w.update();
@@ -410,19 +408,5 @@ const SPIN_BOX_SCENE: &str = r#"Scene(
 
 #[test]
 fn a_spinning_box_averages_its_still_images() {
-    let desc = pathwave::engine::scene::parse(SPIN_BOX_SCENE, &root().join("scenes/inline.ron")).unwrap();
-    let reference = still_average(&desc, 32);
-    let blurred = |close: f32| {
-        let mut w = SceneWorld::new(&desc);
-        w.set_time(0.0, close);
-        let scene = w.update();
-        assert!(scene.instances.list[0].motion.is_some(), "the box turns while the shutter is open");
-        pathwave::integrator::oracle::render(&scene, &|_, _| {})
-    };
-    let stats = block_z(&blurred(1.0), &reference, 8, 1024);
-    eprintln!("spinning box: {stats:?}");
-    assert!(stats.agrees(), "{stats:?}");
-    let stats = block_z(&blurred(0.9), &reference, 8, 1024);
-    eprintln!("shutter 10% short: {stats:?}");
-    assert!(!stats.agrees(), "a shutter 10% short went unnoticed: {stats:?}");
+    blurs_like_its_stills(SPIN_BOX_SCENE, "spinning box", |s| s.instances.list[0].motion.is_some());
 }
