@@ -162,8 +162,8 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             }
         }
     }
-    // Scattered in a medium: the guides show the surface behind it, as the separate pass
-    // does (or the sky: white, no normal).
+    // Scattered in a medium: the guides show the surface behind it, or the sky, as the
+    // separate pass does.
     for &i in &q.medium {
         let s = i as usize;
         if p.guide[s].open {
@@ -173,7 +173,7 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
                     let m = scene.material_at(hit.material, &hit.surface);
                     p.guide[s].close(aov::albedo(&m), facing(hit.surface.ns, p.dir[s]));
                 }
-                false => p.guide[s].close(Vec3::ONE, Vec3::ZERO),
+                false => p.guide[s].close(aov::sky_albedo(scene.background.radiance(p.dir[s])), Vec3::ZERO),
             }
         }
     }
