@@ -17,7 +17,7 @@ use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Per-pixel albedo and normal, row-major, row 0 on top.
+/// Per-pixel albedo, normal and directly seen emission, row-major, row 0 on top.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Aovs {
     /// Width in pixels.
