@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::checkpoint::{self, Checkpoint};
-use pathwave::engine::{scene, world::SceneWorld};
+use pathwave::engine::{render_scene::SamplerKind, scene, world::SceneWorld};
 use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics};
@@ -295,6 +295,9 @@ struct ImageArgs {
     /// Random seed (overrides the scene; every frame of a sequence uses it).
     #[arg(long)]
     seed: Option<u64>,
+    /// How samples are made: sobol (default), stratified or independent (overrides the scene).
+    #[arg(long)]
+    sampler: Option<SamplerKind>,
 }
 
 struct Overrides {
@@ -330,6 +333,7 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
     r.width = o.image.width.unwrap_or(r.width);
     r.height = o.image.height.unwrap_or(r.height);
     r.seed = o.image.seed.unwrap_or(r.seed);
+    r.sampler = o.image.sampler.unwrap_or(r.sampler);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     if let Some(c) = o.clamp {
         if !(c.is_finite() && c > 0.0) {
@@ -409,8 +413,8 @@ fn render(
     let key = checkpoint::key(
         &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
         &format!(
-            "{}x{} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?}",
-            s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator
+            "{}x{} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?}",
+            s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator, s.sampler
         ),
     );
     // The sample indices this run owns: all of them, or a range with --samples (one machine's
@@ -427,7 +431,7 @@ fn render(
             if ckpt.key != key {
                 return Err(format!(
                     "{}: the checkpoint is of another scene or other settings (size, seed, depth, \
-                     clamp, time or integrator); remove it or render without --resume",
+                     clamp, time, integrator or sampler); remove it or render without --resume",
                     ckpt_path.display()
                 ));
             }
@@ -438,7 +442,9 @@ fn render(
                     ckpt.first_sample
                 ));
             }
-            if ckpt.target_spp != s.spp && lo + ckpt.film.spp < hi {
+            // Sobol and independent samples do not depend on the count: a render extended to
+            // more samples is the bits of a fresh one. Stratified patterns do.
+            if ckpt.target_spp != s.spp && lo + ckpt.film.spp < hi && s.sampler == SamplerKind::Stratified {
                 eprintln!(
                     "note: the checkpoint was started for {} spp: samples {}..{hi} are stratified for {} \
                      (unbiased, but not the bits of a fresh {}-spp render)",

@@ -1,6 +1,14 @@
 //! Accuracy against independent ground-truth renders (`../shared/refs`, linear EXR made with
 //! another renderer): block means must agree within the noise estimated from the render itself,
 //! and the same test must reject the scene with a deliberate 5% error (an albedo, a density).
+//!
+//! The noise estimate is the pixels' sample variance over the sample count. For the
+//! low-discrepancy default sampler the error of the mean is smaller than that (chi-square per
+//! block about 0.4 instead of 1), so the agreement check is conservative, and every scene's
+//! deliberate errors show that the test still sees 5%. Independent samples would make the
+//! estimate exact on average but not robust: caustics through cornell's glass are rare paths
+//! whose block means are heavy-tailed (+-8% over seeds at 128 spp), and the variance of the
+//! samples misses what they did not find.
 
 mod common;
 use common::*;
@@ -52,7 +60,7 @@ fn cornell_smoke_matches_reference() {
             }
         }
     });
-    check("cornell-smoke.ron", "cornell-smoke.exr", 2048, 128, &[WHITE_ALBEDO, white_smoke_density]);
+    check("cornell-smoke.ron", "cornell-smoke.exr", 2048, 256, &[WHITE_ALBEDO, white_smoke_density]);
 }
 
 #[test]

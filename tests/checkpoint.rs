@@ -83,6 +83,25 @@ fn resume_without_a_checkpoint_starts_from_the_first_sample() {
 }
 
 #[test]
+fn more_samples_on_a_finished_render_give_the_bits_of_a_fresh_one() {
+    // Sobol samples do not depend on the sample count: 4 spp resumed to 16 is the 16-spp render.
+    // Stratified patterns do, and the run says so.
+    let dir = temp("extend");
+    for (sampler, same) in [("sobol", true), ("stratified", false)] {
+        let (plain, out) = (dir.join(format!("plain-{sampler}.exr")), dir.join(format!("out-{sampler}.exr")));
+        assert!(pathwave(&plain, 16, &["--sampler", sampler]).status().unwrap().success());
+        assert!(pathwave(&out, 4, &["--resume", "--sampler", sampler]).status().unwrap().success());
+        let more = pathwave(&out, 16, &["--resume", "--sampler", sampler]).output().unwrap();
+        let log = String::from_utf8_lossy(&more.stderr);
+        assert!(more.status.success(), "{log}");
+        assert_eq!(log.contains("not the bits of a fresh 16-spp render"), !same, "{sampler}: {log}");
+        let equal = std::fs::read(&out).unwrap() == std::fs::read(&plain).unwrap();
+        assert_eq!(equal, same, "{sampler}: extended render equal to a fresh one: {equal}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn parts_rendered_apart_merge_into_the_whole_render() {
     let dir = temp("merge");
     let out = |name: &str| dir.join(name);

@@ -1,7 +1,9 @@
-//! Convergence against the independent references: relMSE at 64, 256 and 1024 spp must fall as
-//! 1/spp (fitted log-log slope in [-1.1, -0.9], after subtracting the reference's own relMSE,
-//! which no render can get below), and the image mean must be within 0.5% at 1024 spp. A biased
-//! renderer flattens at high spp and fails. Renders with the wavefront (the default integrator).
+//! Convergence against the independent references: relMSE at 16, 64, 256 and 1024 spp must fall
+//! at least as fast as 1/spp^0.9 (fitted log-log slope, after subtracting the reference's own
+//! relMSE, which no render can get below, over the errors at least twice that; low-discrepancy
+//! samples may fall faster than 1/spp),
+//! and the image mean must be within 0.5% at 1024 spp. A biased renderer flattens at high spp
+//! and fails. Renders with the wavefront (the default integrator) and the default sampler.
 
 mod common;
 use common::*;
@@ -19,33 +21,36 @@ fn log_log_slope(points: &[(f64, f64)]) -> f64 {
     cov / var
 }
 
-fn check(name: &str, reference_noise: impl Fn(f64) -> f64) {
+/// The relMSE a reference carries of its own, estimated as that of an `spp`-sample render
+/// with independent samples (as the reference's renderer used) times `spp / reference_spp`: the
+/// error of independent samples falls as 1/spp.
+fn reference_noise(independent_relmse: f64, spp: u32, reference_spp: u32) -> f64 {
+    independent_relmse * spp as f64 / reference_spp as f64
+}
+
+fn check(name: &str, own: f64) {
     let reference = reference(&format!("{name}.exr"));
     let mut points = Vec::new();
     let mut last_mean = 0.0;
-    let mut e64 = 0.0;
-    for spp in [64u32, 256, 1024] {
+    for spp in [16u32, 64, 256, 1024] {
         let mut desc = scene(&format!("{name}.ron"));
         desc.render.spp = spp.try_into().unwrap();
         let scene = SceneWorld::render_scene(&desc);
         let film = wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0;
         let img = film.mean();
         let e = rel_mse(&img, &reference.pixels);
-        if spp == 64 {
-            e64 = e;
-        }
-        let own = reference_noise(e64);
         eprintln!("{name} {spp} spp: relMSE {e:.6} (reference's own {own:.6})");
-        assert!(
-            e > own * 1.5,
-            "{name}: at {spp} spp the error is too close to the reference's own noise to fit"
-        );
-        points.push((spp as f64, e - own));
+        // Errors close to the reference's own noise say little about ours: fit those at least
+        // twice as large.
+        if e > 2.0 * own {
+            points.push((spp as f64, e - own));
+        }
         last_mean = mean(&img) / mean(&reference.pixels) - 1.0;
     }
+    assert!(points.len() >= 3, "{name}: fewer than three errors well above the reference's own noise");
     let slope = log_log_slope(&points);
     eprintln!("{name}: slope {slope:.3}, mean at 1024 spp {:+.3}%", 100.0 * last_mean);
-    assert!((-1.1..=-0.9).contains(&slope), "{name}: relMSE slope {slope:.3} (a biased renderer flattens)");
+    assert!(slope <= -0.9, "{name}: relMSE slope {slope:.3} (a biased renderer flattens)");
     assert!(last_mean.abs() < 0.005, "{name}: mean off by {:+.3}% at 1024 spp", 100.0 * last_mean);
 }
 
@@ -53,29 +58,29 @@ fn check(name: &str, reference_noise: impl Fn(f64) -> f64) {
 fn cornell_converges() {
     // cornell.exr and cornell-B.exr are independent renders: half their relMSE is each one's own.
     let (a, b) = (reference("cornell.exr"), reference("cornell-B.exr"));
-    let own = rel_mse(&a.pixels, &b.pixels) / 2.0;
-    check("cornell", |_| own);
+    check("cornell", rel_mse(&a.pixels, &b.pixels) / 2.0);
 }
+
+// The other references (Mitsuba 3, independent samples): the relMSE of 64-spp renders with
+// independent samples, Mitsuba's where recorded (cornell-smoke: 0.00895), else pathwave's
+// (`--sampler independent`), and the references' sample counts.
 
 #[test]
 fn cornell_diffuse_converges() {
-    // The reference used 4096 spp: its own relMSE is about relMSE(64) * 64 / 4096.
-    check("cornell-diffuse", |e64| e64 * 64.0 / 4096.0);
+    check("cornell-diffuse", reference_noise(0.00385, 64, 4096));
 }
 
 #[test]
 fn spheres_sky_converges() {
-    check("spheres-sky", |e64| e64 * 64.0 / 2048.0);
+    check("spheres-sky", reference_noise(0.00302, 64, 2048));
 }
 
 #[test]
 fn cornell_smoke_converges() {
-    // The reference used 2048 spp (ANCHORS.md).
-    check("cornell-smoke", |e64| e64 * 64.0 / 2048.0);
+    check("cornell-smoke", reference_noise(0.00895, 64, 2048));
 }
 
 #[test]
 fn mesh_converges() {
-    // The reference used 4096 spp (ANCHORS.md).
-    check("mesh", |e64| e64 * 64.0 / 4096.0);
+    check("mesh", reference_noise(0.00234, 64, 4096));
 }

@@ -83,6 +83,12 @@ impl Camera {
         self.close.is_some() && self.shutter.0 != self.shutter.1
     }
 
+    /// True when the lens has an aperture (rays then need a lens sample).
+    #[inline]
+    pub fn has_aperture(&self) -> bool {
+        self.lens_radius > 0.0
+    }
+
     /// The ray through image position `pixel` (in pixels, continuous), lens sample `lens` in
     /// [0,1)^2 and shutter fraction `time_u`. The direction is unit length.
     #[inline]

@@ -30,6 +30,42 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Largest sample component before scaling down (None: no clamping, unbiased).
     pub clamp: Option<f32>,
+    /// How the random numbers of the samples are made.
+    pub sampler: SamplerKind,
+}
+
+/// How the samples' random numbers are made (see the integrator's `sampler` module).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol in every 1D and 2D dimension (extensible: the first N samples of a
+    /// pixel are those of an N-spp render).
+    #[default]
+    Sobol,
+    /// Correlated multi-jittered in every 2D dimension, jittered strata in every 1D one (the
+    /// pattern depends on the sample count).
+    Stratified,
+    /// Independent uniform numbers.
+    Independent,
+}
+
+impl SamplerKind {
+    /// The names, as the command line and scene files spell them.
+    pub const NAMES: [(&'static str, SamplerKind); 3] = [
+        ("sobol", SamplerKind::Sobol),
+        ("stratified", SamplerKind::Stratified),
+        ("independent", SamplerKind::Independent),
+    ];
+}
+
+impl std::str::FromStr for SamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::NAMES
+            .iter()
+            .find(|(n, _)| *n == s)
+            .map(|&(_, k)| k)
+            .ok_or_else(|| format!("no sampler '{s}': there are sobol, stratified and independent"))
+    }
 }
 
 /// Radiance arriving from outside the scene.
@@ -63,8 +99,6 @@ impl Background {
 /// What the scene contains, so that integrators pick code specialised for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Features {
-    /// Every emitter that light sampling picks is a quad (or there is none).
-    pub lights_are_quads: bool,
     /// Some volume holds a medium: rays sample free-flight distances and shadow rays
     /// transmittance. Off, no medium code runs.
     pub media: bool,
@@ -81,22 +115,8 @@ pub struct Features {
 
 impl Features {
     /// Detects the features of extracted geometry.
-    pub fn detect(
-        geometry: &Geometry,
-        instances: &Instances,
-        lights: &LightTable,
-        media: &Media,
-        camera: &Camera,
-    ) -> Self {
-        let lights_are_quads = lights
-            .prims
-            .iter()
-            .all(|&p| matches!(geometry.prims[p as usize], crate::geometry::Primitive::Quad(_)));
-        // The Lambertian kernel samples quads where they rest.
-        let lights_are_quads =
-            lights_are_quads && lights.prims.iter().all(|&p| geometry.offset(p, 1.0) == Vec3A::ZERO);
+    pub fn detect(geometry: &Geometry, instances: &Instances, media: &Media, camera: &Camera) -> Self {
         Self {
-            lights_are_quads,
             media: !media.is_empty(),
             motion: (geometry.velocity.is_some()
                 || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some())
@@ -107,8 +127,7 @@ impl Features {
         }
     }
 
-    /// Sets `textures` from what the primitives' materials use. A textured emitter also turns
-    /// `lights_are_quads` off: the Lambertian kernel takes one radiance per light.
+    /// Sets `textures` from what the primitives' materials use.
     pub fn with_textures(
         mut self,
         geometry: &Geometry,
@@ -121,9 +140,6 @@ impl Features {
         }
         let textured = |t: &MaterialTextures| t.albedo.is_some() || t.emit.is_some();
         self.textures = per_material.iter().zip(&used).any(|(t, u)| *u && textured(t));
-        if per_material.iter().zip(&used).any(|(t, u)| *u && t.emit.is_some()) {
-            self.lights_are_quads = false;
-        }
         self
     }
 }

@@ -516,14 +516,8 @@ pub fn extract_render_scene(
         None => make(&camera.0),
     };
     out.0 = Some(Arc::new(RenderScene {
-        features: Features::detect(
-            &geometry.geometry,
-            &instances.instances,
-            &geometry.lights,
-            &media.media,
-            &camera,
-        )
-        .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
+        features: Features::detect(&geometry.geometry, &instances.instances, &media.media, &camera)
+            .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
         camera,
         settings: s,
         background: background.0,
@@ -826,6 +820,7 @@ impl SceneWorld {
             rr_depth: r.rr_depth,
             seed: r.seed,
             clamp: r.clamp.map(|c| c.0),
+            sampler: r.sampler,
         }));
         world.insert_resource(CameraParams(desc.camera, None));
         world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });

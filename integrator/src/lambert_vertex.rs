@@ -1,14 +1,14 @@
-//! The Lambertian vertex under quad lights as one branch-free kernel over plain numbers: light
-//! sample, BSDF evaluation and MIS weight, the shadow ray, cosine-weighted sampling of the next
-//! direction (with a polynomial sine/cosine) and Russian roulette. The reference path tracer
+//! The Lambertian vertex as one branch-free kernel over plain numbers: BSDF evaluation and MIS
+//! weight of the light sample (drawn when the inputs are gathered), the shadow ray,
+//! cosine-weighted sampling of the next direction (with a polynomial sine/cosine) and Russian
+//! roulette. The reference path tracer
 //! runs it one path at a time; the wavefront runs it over arrays, where it vectorises across
 //! paths. Inputs are gathered and outputs applied by shared code, so both compute the same bits.
 
 use crate::material::power_heuristic;
-use crate::path::{PathState, ShadowRay};
-use crate::sampler::Sampler;
+use crate::path::{self, PathState, ShadowRay};
+use crate::sampler::{Dims, Sampler};
 use glam::{Vec3, Vec3A};
-use pathwave_engine::geometry::{Geometry, Primitive};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -35,27 +35,15 @@ pub struct LambertIn {
     pub eta_scale: f32,
     /// Bounces after this vertex scatters.
     pub depth_after: u32,
-    /// The picked quad light: corner, edges, unit normal, point error bound.
-    pub lq: Vec3,
-    /// First edge.
-    pub lu: Vec3,
-    /// Second edge.
-    pub lv: Vec3,
-    /// Unit normal.
-    pub ln: Vec3,
-    /// Error bound of light points.
-    pub lerr: f32,
-    /// 1 / area.
-    pub inv_area: f32,
-    /// Emitted radiance (zero when the scene has no lights).
-    pub emit: Vec3,
-    /// Emits on both sides.
-    pub two_sided: bool,
-    /// Probability of having picked this light (0: no light sampling).
-    pub pmf: f32,
-    /// Random numbers: light point, direction, roulette.
-    pub u_light: [f32; 2],
-    /// Direction.
+    /// Unit direction to the light sample.
+    pub wi: Vec3,
+    /// Radiance it sends towards the point.
+    pub le: Vec3,
+    /// Its solid-angle density, light choice included (0: no light sample).
+    pub pdf_light: f32,
+    /// The light point offset off the light, for the shadow ray to aim at.
+    pub target: Vec3,
+    /// Random numbers: direction.
     pub u_dir: [f32; 2],
     /// Russian roulette.
     pub u_rr: f32,
@@ -84,8 +72,6 @@ pub struct LambertOut {
     pub beta: Vec3,
     /// Density of the sampled direction.
     pub pdf: f32,
-    /// The roulette number was used.
-    pub rr_drawn: bool,
 }
 
 #[inline(always)]
@@ -157,26 +143,16 @@ fn disk(u: [f32; 2]) -> (f32, f32) {
 pub fn lambert(i: &LambertIn) -> LambertOut {
     let (p, n, ng) = (i.p, i.n, i.ng);
     // Light sample.
-    let pl = i.lq + i.lu * i.u_light[0] + i.lv * i.u_light[1];
-    let to = pl - p;
-    let dist2 = dot(to, to);
-    let dist = dist2.sqrt();
-    let wi = to / dist;
-    let cos_l = (dot(i.ln, to) / dist).abs();
-    let pdf_area = if cos_l > 0.0 { i.inv_area * dist2 / cos_l } else { 0.0 };
-    let pdf_light = pdf_area * i.pmf;
-    let faces = i.two_sided || dot(i.ln, -wi) > 0.0;
+    let wi = i.wi;
     let (co, ci) = (dot(i.wo, n), dot(wi, n));
     let c = ci.abs() * FRAC_1_PI;
     let f = i.albedo * c;
-    let w = power_heuristic(pdf_light, c);
-    let contribution = i.beta * (f * i.emit * (w / pdf_light));
+    let w = power_heuristic(i.pdf_light, c);
+    let contribution = i.beta * (f * i.le * (w / i.pdf_light));
     // Directions must leave on the same side of the surface and of the shading normal.
     let cig = dot(wi, ng);
-    let shadow =
-        dist > 0.0 && pdf_light > 0.0 && faces && i.emit != Vec3::ZERO && co * ci > 0.0 && cig * ci > 0.0;
+    let shadow = i.pdf_light > 0.0 && co * ci > 0.0 && cig * ci > 0.0;
     let so = offset(p, i.err, sel3(cig > 0.0, ng, -ng));
-    let st = offset(pl, i.lerr, sel3(dot(i.ln, wi) < 0.0, i.ln, -i.ln));
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
     let (dx, dy) = disk(i.u_dir);
@@ -200,20 +176,18 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     LambertOut {
         shadow,
         so,
-        sd: st - so,
+        sd: i.target - so,
         contribution,
         alive: pdf > 0.0 && survive && dg * dot(d, n) > 0.0,
         o,
         d,
         beta,
         pdf,
-        rr_drawn: rr_drawn && pdf > 0.0,
     }
 }
 
-/// Gathers the kernel's inputs for a Lambertian hit, drawing the random numbers in a fixed order
-/// (light pick, light point, direction, one spare, then the roulette number, which is consumed
-/// by [`apply`] only if used).
+/// Gathers the kernel's inputs for a Lambertian hit, with the random numbers of the vertex's
+/// dimensions.
 #[inline]
 pub fn gather(
     scene: &RenderScene,
@@ -221,10 +195,9 @@ pub fn gather(
     sp: &SurfacePoint,
     wo: Vec3A,
     albedo: Vec3,
-    sampler: &mut Sampler,
+    time: f32,
+    sampler: &Sampler,
 ) -> LambertIn {
-    let geo: &Geometry = &scene.geometry;
-    let lights = &*scene.lights;
     let mut i = LambertIn {
         p: sp.p.into(),
         n: sp.ns.into(),
@@ -237,26 +210,17 @@ pub fn gather(
         depth_after: st.depth + 1,
         ..Default::default()
     };
-    if !lights.is_empty() {
-        let (light, pmf) = lights.pick(sampler.next_1d());
-        let prim = lights.prims[light] as usize;
-        let Primitive::Quad(q) = &geo.prims[prim] else { unreachable!("call only when lights_are_quads") };
-        let pathwave_engine::material::Material::DiffuseLight { emit, two_sided } =
-            scene.materials[geo.material[prim] as usize]
-        else {
-            unreachable!("lights are emissive")
-        };
-        (i.lq, i.lu, i.lv, i.ln) = (q.q.into(), q.u.into(), q.v.into(), q.n.into());
-        (i.lerr, i.inv_area, i.emit, i.two_sided, i.pmf) =
-            (q.point_error(), 1.0 / q.area, emit, two_sided, pmf);
-        let u = sampler.next_2d();
-        i.u_light = [u.x, u.y];
+    if !scene.lights.is_empty()
+        && let Some(lp) = path::pick_light(scene, sp.p, time, st.depth, sampler)
+    {
+        (i.wi, i.le, i.pdf_light, i.target) = (lp.wi.into(), lp.le, lp.pdf, lp.target.into());
     }
-    let u = sampler.next_2d();
+    let u = sampler.get_2d(Dims::vertex(st.depth, Dims::BSDF));
     i.u_dir = [u.x, u.y];
-    sampler.next_1d();
     i.rr_on = i.depth_after >= scene.settings.rr_depth;
-    i.u_rr = sampler.peek_1d();
+    if i.rr_on {
+        i.u_rr = sampler.get_1d(Dims::vertex(st.depth, Dims::ROULETTE));
+    }
     i
 }
 
@@ -268,7 +232,6 @@ pub fn apply(
     o: &LambertOut,
     st: &mut PathState,
     time: f32,
-    sampler: &mut Sampler,
 ) -> (Option<ShadowRay>, Option<Ray>) {
     let shadow = o.shadow.then(|| ShadowRay {
         ray: Ray { origin: o.so.into(), dir: o.sd.into(), time },
@@ -282,9 +245,6 @@ pub fn apply(
     st.prev_pdf = o.pdf;
     st.prev_p = i.p.into();
     st.depth = i.depth_after;
-    if o.rr_drawn {
-        sampler.next_1d();
-    }
     let next = o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time });
     (shadow, next)
 }
@@ -321,13 +281,11 @@ macro_rules! lanes {
 
 lanes!(LambertInLanes for LambertIn {
     p: v3, n: v3, ng: v3, err: f32, wo: v3, albedo: v3, beta: v3, eta_scale: f32, depth_after: u32,
-    lq: v3, lu: v3, lv: v3, ln: v3, lerr: f32, inv_area: f32, emit: v3, two_sided: bool, pmf: f32,
-    u_light: f2, u_dir: f2, u_rr: f32, rr_on: bool,
+    wi: v3, le: v3, pdf_light: f32, target: v3, u_dir: f2, u_rr: f32, rr_on: bool,
 });
 
 lanes!(LambertOutLanes for LambertOut {
     shadow: bool, so: v3, sd: v3, contribution: v3, alive: bool, o: v3, d: v3, beta: v3, pdf: f32,
-    rr_drawn: bool,
 });
 
 /// Runs the kernel on all lanes.
@@ -366,7 +324,7 @@ mod tests {
 
     #[test]
     fn offset_equals_the_engine_offset() {
-        let mut s = Sampler::new(4, 0, 0);
+        let mut s = crate::sampler::TestRng::new(4);
         for _ in 0..10_000 {
             let p = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5)
                 * 10f32.powi((s.next_1d() * 12.0) as i32 - 6);

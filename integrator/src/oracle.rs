@@ -63,14 +63,14 @@ pub fn render_samples(
 pub fn render_pixel(scene: &RenderScene, x: u32, y: u32, samples: Range<u32>) -> PixelAccumulator {
     let mut acc = PixelAccumulator::default();
     for i in samples {
-        let (ray, mut sampler) = path::camera_ray(scene, x, y, i);
-        acc.add(clamp_sample(radiance(scene, ray, &mut sampler), scene.settings.clamp));
+        let (ray, sampler) = path::camera_ray(scene, x, y, i);
+        acc.add(clamp_sample(radiance(scene, ray, &sampler), scene.settings.clamp));
     }
     acc
 }
 
 /// Radiance arriving at the ray origin along the ray (unit direction).
-pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec3 {
+pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
     let mut st = PathState::new(ray.origin);
     'path: loop {
         let hit = scene.intersect(&ray, f32::INFINITY);
@@ -78,7 +78,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
         let (shadow, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, sampler) {
+                if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, st.depth, sampler) {
                     if st.depth == scene.settings.max_depth {
                         break 'path;
                     }
@@ -98,17 +98,13 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &mut Sampler) -> Vec
             if st.depth == scene.settings.max_depth {
                 break 'path;
             }
-            if let (Material::Lambertian { albedo }, true) = (*mat, scene.features.lights_are_quads) {
-                let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, sampler);
+            if let Material::Lambertian { albedo } = *mat {
+                let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, ray.time, sampler);
                 let out = lambert_vertex::lambert(&input);
-                break 'vertex lambert_vertex::apply(&input, &out, &mut st, ray.time, sampler);
+                break 'vertex lambert_vertex::apply(&input, &out, &mut st, ray.time);
             }
-            let shadow = if material::has_smooth_part(mat) && !scene.lights.is_empty() {
-                path::sample_light(scene, &st, &hit.surface, wo, mat, ray.time, sampler)
-            } else {
-                None
-            };
-            (shadow, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
+            debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
+            (None, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
         };
         if let Some(s) = shadow {
             path::trace_shadow(scene, &mut st, &s);

@@ -4,7 +4,7 @@
 //! BSDF sampling with Russian roulette.
 
 use crate::material::{self, power_heuristic};
-use crate::sampler::Sampler;
+use crate::sampler::{Dims, Sampler};
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
@@ -80,20 +80,31 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, 
 
 /// A light sample seen from a point: the direction to it, the emitted radiance arriving, the
 /// density (solid angle, light choice included) and the offset point on the light to aim at.
-struct LightPick {
-    wi: Vec3A,
-    le: Vec3,
-    pdf: f32,
-    target: Vec3A,
+pub(crate) struct LightPick {
+    pub wi: Vec3A,
+    pub le: Vec3,
+    pub pdf: f32,
+    pub target: Vec3A,
 }
 
-/// Picks a light and a point on it as seen from `p`; `None` when it sends nothing towards `p`.
+/// Picks a light and a point on it as seen from `p` (the vertex after `depth` bounces); `None`
+/// when it sends nothing towards `p`.
 #[inline]
-fn pick_light(scene: &RenderScene, p: Vec3A, time: f32, sampler: &mut Sampler) -> Option<LightPick> {
+pub(crate) fn pick_light(
+    scene: &RenderScene,
+    p: Vec3A,
+    time: f32,
+    depth: u32,
+    sampler: &Sampler,
+) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(sampler.next_1d());
-    let ls = lights.sample(geo, light, p, sampler.next_2d(), time);
+    // One light needs no choice.
+    let (light, pmf) = match lights.prims.len() {
+        1 => (0, 1.0),
+        _ => lights.pick(sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK))),
+    };
+    let ls = lights.sample(geo, light, p, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)), time);
     let to = ls.p - p;
     let dist = to.length();
     if !(dist > 0.0) {
@@ -113,34 +124,6 @@ fn pick_light(scene: &RenderScene, p: Vec3A, time: f32, sampler: &mut Sampler) -
     }
     let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
     Some(LightPick { wi, le, pdf, target })
-}
-
-/// Next-event estimation at a surface point: samples a light and returns the shadow ray that
-/// decides whether its MIS-weighted contribution counts. Call only for materials with a smooth
-/// part and scenes with lights.
-#[inline]
-pub fn sample_light(
-    scene: &RenderScene,
-    st: &PathState,
-    sp: &SurfacePoint,
-    wo: Vec3A,
-    mat: &Material,
-    time: f32,
-    sampler: &mut Sampler,
-) -> Option<ShadowRay> {
-    let (p, n) = (sp.p, sp.n);
-    let lp = pick_light(scene, p, time, sampler)?;
-    // The light must lie on the same side of the surface and of the shading normal.
-    if lp.wi.dot(n) * lp.wi.dot(sp.ns) <= 0.0 {
-        return None;
-    }
-    let (f, pdf_bsdf) = material::eval(mat, wo, lp.wi, sp.ns);
-    if f == Vec3::ZERO {
-        return None;
-    }
-    let origin = offset_ray_origin(p, sp.err, if lp.wi.dot(n) > 0.0 { n } else { -n });
-    let contribution = st.beta * (f * lp.le * (power_heuristic(lp.pdf, pdf_bsdf) / lp.pdf));
-    Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
 }
 
 /// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
@@ -166,17 +149,20 @@ pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
 }
 
 /// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
-/// miss). When the ray scatters first, the throughput takes the medium's albedo and the
-/// scattering point is returned; otherwise nothing changes. Call only for scenes with media.
+/// miss), on the segment that leads to the vertex after `depth` bounces. When the ray scatters
+/// first, the throughput takes the medium's albedo and the scattering point is returned;
+/// otherwise nothing changes. Call only for scenes with media.
 #[inline]
 pub fn sample_medium(
     scene: &RenderScene,
     beta: &mut Vec3,
     ray: &Ray,
     tmax: f32,
-    sampler: &mut Sampler,
+    depth: u32,
+    sampler: &Sampler,
 ) -> Option<Vec3A> {
-    let e = scene.media.sample(ray.origin, ray.dir, tmax, sampler.next_1d())?;
+    let e =
+        scene.media.sample(ray.origin, ray.dir, tmax, sampler.get_1d(Dims::vertex(depth, Dims::MEDIUM)))?;
     *beta *= e.albedo;
     Some(ray.at(e.t))
 }
@@ -193,35 +179,37 @@ pub fn scatter_in_medium(
     st: &mut PathState,
     p: Vec3A,
     time: f32,
-    sampler: &mut Sampler,
+    sampler: &Sampler,
 ) -> (Option<ShadowRay>, Option<Ray>) {
     if st.beta == Vec3::ZERO {
         return (None, None);
     }
+    let depth = st.depth;
     let shadow = if scene.lights.is_empty() {
         None
     } else {
-        pick_light(scene, p, time, sampler).map(|lp| {
+        pick_light(scene, p, time, depth, sampler).map(|lp| {
             let contribution = st.beta * lp.le * (ISOTROPIC * power_heuristic(lp.pdf, ISOTROPIC) / lp.pdf);
             ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
         })
     };
-    let wi = uniform_sphere(sampler.next_2d());
+    let wi = uniform_sphere(sampler.get_2d(Dims::vertex(depth, Dims::BSDF)));
     (st.delta, st.prev_pdf, st.prev_p) = (false, ISOTROPIC, p);
     st.depth += 1;
-    let next = roulette(scene, st, sampler).then_some(Ray { origin: p, dir: wi, time });
+    let u_rr = || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE));
+    let next = roulette(scene, st, u_rr).then_some(Ray { origin: p, dir: wi, time });
     (shadow, next)
 }
 
-/// Russian roulette after `rr_depth` bounces: false when the path ends; survivors are
-/// reweighted.
+/// Russian roulette after `rr_depth` bounces with the number `u()` (drawn only if needed): false when the path ends;
+/// survivors are reweighted.
 #[inline]
-fn roulette(scene: &RenderScene, st: &mut PathState, sampler: &mut Sampler) -> bool {
+fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) -> bool {
     if st.depth >= scene.settings.rr_depth {
         let rr = (st.beta * st.eta_scale).max_element();
         if rr < 1.0 {
             let q = (1.0 - rr).max(0.0);
-            if sampler.next_1d() < q {
+            if u() < q {
                 return false;
             }
             st.beta /= 1.0 - q;
@@ -240,9 +228,16 @@ pub fn scatter(
     wo: Vec3A,
     mat: &Material,
     time: f32,
-    sampler: &mut Sampler,
+    sampler: &Sampler,
 ) -> Option<Ray> {
-    let bs = material::sample(mat, wo, sp.ns, sampler.next_2d(), sampler.next_1d())?;
+    let depth = st.depth;
+    let bs = material::sample(
+        mat,
+        wo,
+        sp.ns,
+        sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
+        sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
+    )?;
     // A direction on one side of the shading normal and the other of the surface ends the
     // path (with vertex normals; without them the two sides agree).
     if bs.wi.dot(sp.n) * bs.wi.dot(sp.ns) <= 0.0 {
@@ -256,7 +251,7 @@ pub fn scatter(
     let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
-    roulette(scene, st, sampler).then_some(ray)
+    roulette(scene, st, || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))).then_some(ray)
 }
 
 /// The first ray of sample `index` of pixel (x, y), and its random stream.
@@ -264,11 +259,12 @@ pub fn scatter(
 pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
     let s = scene.settings;
     let pixel = y * s.width + x;
-    let offset = crate::sampler::pixel_sample(s.seed, pixel, index, s.spp);
-    let mut sampler = Sampler::new(s.seed, pixel, index);
-    let lens = sampler.next_2d();
-    // Time is sampled only when something moves while the shutter is open.
-    let time = if scene.features.motion { sampler.next_1d() } else { 0.0 };
+    let sampler = Sampler::new(s.sampler, s.seed, pixel, index, s.spp);
+    let offset = sampler.get_2d(Dims::PIXEL);
+    // The lens and time are sampled only where the camera has an aperture and something moves
+    // while the shutter is open.
+    let lens = if scene.camera.has_aperture() { sampler.get_2d(Dims::LENS) } else { glam::Vec2::ZERO };
+    let time = if scene.features.motion { sampler.get_1d(Dims::TIME) } else { 0.0 };
     let ray = scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + offset, lens, time);
     (ray, sampler)
 }

@@ -1,7 +1,25 @@
-//! Counter-based random numbers: every value is a hash of (seed, pixel, sample index, dimension),
-//! so an image does not depend on thread count, scheduling or batch size.
+//! Counter-based samples: every value is a function of (seed, pixel, sample index, dimension),
+//! so an image does not depend on thread count, scheduling or batch size, and any range of
+//! sample indices renders the same bits alone or as part of a larger render.
+//!
+//! Every decision of a path reads a fixed dimension ([`Dims`]): the pixel position, the lens and
+//! the time, then per vertex the medium distance, the light choice, the light point, the BSDF's
+//! two numbers and its lobe, and Russian roulette. Three ways to fill them ([`SamplerKind`]):
+//!
+//! - **Sobol** (the default): each 1D or 2D dimension is an Owen-scrambled (0,2)-sequence, the
+//!   first two dimensions of Sobol's sequence, with its own scramble per pixel and dimension and
+//!   its own shuffle of the sample indices, so that dimensions are not correlated: the "padded"
+//!   construction of Burley, "Practical Hash-based Owen Scrambling" (JCGT 9(4), 2020), with the
+//!   hash of pbrt-v4's `FastOwenScrambler`. A pixel's first 2^k samples form a (0,k,2)-net in
+//!   every 2D dimension, every sample is uniform on its own (unbiased for any count), and the
+//!   sequence is extensible: the first N samples are those of an N-spp render.
+//! - **Stratified**: correlated multi-jittered samples (Kensler, "Correlated Multi-Jittered
+//!   Sampling", Pixar TM 13-01, 2013) in every 2D dimension and jittered permuted strata in every
+//!   1D one, as Mitsuba's `multijitter`; the pattern depends on the sample count.
+//! - **Independent**: uniform hashes, the baseline.
 
 use glam::Vec2;
+use pathwave_engine::render_scene::SamplerKind;
 
 /// MurmurHash3's 64-bit finaliser: a bijective mixer with full avalanche.
 #[inline]
@@ -13,66 +31,174 @@ pub fn mix64(mut x: u64) -> u64 {
     x ^ (x >> 33)
 }
 
-/// The random numbers of one pixel sample, drawn one dimension after the other.
+/// The dimensions a path reads, in a fixed layout: the camera's first, then [`Self::PER_VERTEX`]
+/// per vertex. 1D and 2D dimensions each take one index.
+pub struct Dims;
+
+impl Dims {
+    /// Position in the pixel (2D).
+    pub const PIXEL: u32 = 0;
+    /// Point on the lens (2D).
+    pub const LENS: u32 = 1;
+    /// Time in the shutter interval (1D).
+    pub const TIME: u32 = 2;
+    const CAMERA: u32 = 3;
+    /// Distance sampled through a medium on the segment that leads to the vertex (1D).
+    pub const MEDIUM: u32 = 0;
+    /// Which light next-event estimation samples (1D).
+    pub const LIGHT_PICK: u32 = 1;
+    /// The point on that light (2D).
+    pub const LIGHT: u32 = 2;
+    /// The BSDF's or phase function's direction (2D).
+    pub const BSDF: u32 = 3;
+    /// The BSDF's choice of lobe (1D).
+    pub const LOBE: u32 = 4;
+    /// Russian roulette after the vertex (1D).
+    pub const ROULETTE: u32 = 5;
+    /// Dimensions per vertex.
+    pub const PER_VERTEX: u32 = 6;
+
+    /// Dimension `slot` of the vertex after `depth` bounces (the camera ray's hit is depth 0).
+    #[inline]
+    pub const fn vertex(depth: u32, slot: u32) -> u32 {
+        Self::CAMERA + depth * Self::PER_VERTEX + slot
+    }
+}
+
+/// The samples of one pixel sample: a key and an index, immutable along the path.
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
     key: u64,
-    dim: u64,
+    index: u32,
+    spp: u32,
+    kind: SamplerKind,
 }
 
 impl Sampler {
-    /// The stream of sample `sample` of pixel `pixel` (row-major index) under `seed`.
+    /// Sample `index` of `spp` of pixel `pixel` (row-major index) under `seed`.
     #[inline]
-    pub fn new(seed: u64, pixel: u32, sample: u32) -> Self {
-        let key = mix64(mix64(seed) ^ (((pixel as u64) << 32) | sample as u64));
-        Self { key, dim: 0 }
+    pub fn new(kind: SamplerKind, seed: u64, pixel: u32, index: u32, spp: u32) -> Self {
+        Self { key: mix64(mix64(seed) ^ pixel as u64), index, spp: spp.max(1), kind }
     }
 
-    /// Next value, uniform in [0, 1).
+    /// Dimension `dim` as one number in [0, 1).
     #[inline]
-    pub fn next_1d(&mut self) -> f32 {
-        let h = mix64(self.key ^ self.dim.wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        self.dim += 1;
-        (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    pub fn get_1d(&self, dim: u32) -> f32 {
+        let h = self.hash(dim);
+        match self.kind {
+            SamplerKind::Sobol => {
+                let i = shuffle(self.index, h as u32);
+                to_unit(owen_sobol(i, false, (h >> 32) as u32))
+            }
+            SamplerKind::Stratified => stratified_1d(self.index, self.spp, h),
+            SamplerKind::Independent => to_unit((mix64(h ^ self.index as u64) >> 32) as u32),
+        }
     }
 
-    /// The value [`Self::next_1d`] would return, without consuming it.
+    /// Dimension `dim` as two numbers in [0, 1).
     #[inline]
-    pub fn peek_1d(&self) -> f32 {
-        let mut s = *self;
-        s.next_1d()
+    pub fn get_2d(&self, dim: u32) -> Vec2 {
+        let h = self.hash(dim);
+        match self.kind {
+            SamplerKind::Sobol => {
+                let i = shuffle(self.index, h as u32);
+                let s = mix64(h) as u32;
+                Vec2::new(to_unit(owen_sobol(i, false, (h >> 32) as u32)), to_unit(owen_sobol(i, true, s)))
+            }
+            SamplerKind::Stratified => cmj_2d(self.index, self.spp, h),
+            SamplerKind::Independent => {
+                let r = mix64(h ^ self.index as u64);
+                Vec2::new(to_unit((r >> 32) as u32), to_unit(r as u32))
+            }
+        }
     }
 
-    /// Next two values.
+    /// The hash of (pixel, dimension) that seeds a dimension's scramble.
     #[inline]
-    pub fn next_2d(&mut self) -> Vec2 {
-        let x = self.next_1d();
-        Vec2::new(x, self.next_1d())
+    fn hash(&self, dim: u32) -> u64 {
+        mix64(self.key ^ (dim as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15))
     }
 }
 
-/// Position of sample `s` of `n` inside pixel `pixel` (in [0,1)^2): correlated multi-jittered
-/// sampling (Kensler 2013), stratified in 2D and in both 1D projections for any `n`, then
-/// shifted by a per-pixel random toroidal offset so that every sample is uniform over the pixel
-/// (an unbiased box filter even when `n` is not a product of two strata counts).
+/// The top 24 bits of `x` as a float in [0, 1).
 #[inline]
-pub fn pixel_sample(seed: u64, pixel: u32, s: u32, n: u32) -> Vec2 {
-    let h = mix64(mix64(seed ^ 0x5bd1_e995) ^ pixel as u64);
+fn to_unit(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// Owen scrambling of the bit-reversed `v` (whose lowest bit is the most significant digit):
+/// each output bit is flipped by a hash of the bits below it. The hash is pbrt-v4's
+/// `FastOwenScrambler` (after Laine and Karras 2011 and Vegdahl's improvement).
+#[inline]
+fn owen_reversed(mut v: u32, seed: u32) -> u32 {
+    v ^= v.wrapping_mul(0x3d20_adea);
+    v = v.wrapping_add(seed);
+    v = v.wrapping_mul((seed >> 16) | 1);
+    v ^= v.wrapping_mul(0x0552_6c56);
+    v ^= v.wrapping_mul(0x53a2_2864);
+    v
+}
+
+/// A shuffle of the sample indices (Burley 2020's nested uniform scramble of the index): a
+/// bijection under which the first 2^k indices map onto one aligned block of 2^k indices, so
+/// that a pixel's first 2^k samples still form one net.
+#[inline]
+fn shuffle(index: u32, seed: u32) -> u32 {
+    owen_reversed(index.reverse_bits(), seed).reverse_bits()
+}
+
+/// Owen-scrambled Sobol dimension 0 (`second` false) or 1 of sample `i`, as 32 fixed-point bits.
+///
+/// Dimension 0 is the van der Corput sequence (the bits of `i` reversed). Dimension 1's
+/// generator is Pascal's triangle mod 2: output digit j is the parity of the bits k of `i` with
+/// C(k, j) odd, that is (Lucas) with j a bit-subset of k, which a superset-sum transform over
+/// the five bits of the digit position computes in five steps.
+#[inline]
+fn owen_sobol(i: u32, second: bool, seed: u32) -> u32 {
+    let mut a = i;
+    if second {
+        a ^= (a >> 1) & 0x5555_5555;
+        a ^= (a >> 2) & 0x3333_3333;
+        a ^= (a >> 4) & 0x0f0f_0f0f;
+        a ^= (a >> 8) & 0x00ff_00ff;
+        a ^= (a >> 16) & 0x0000_ffff;
+    }
+    // `a` holds the digits least significant first (bit j is digit j of the fraction), which is
+    // the order the scrambler takes.
+    owen_reversed(a, seed).reverse_bits()
+}
+
+/// Sample `s` of `n` of a correlated multi-jittered pattern seeded by `h`: stratified in 2D and
+/// in both 1D projections, then shifted by a random toroidal offset so that every sample is
+/// uniform on its own (an unbiased estimator even when `n` is not a product of strata counts).
+#[inline]
+fn cmj_2d(s: u32, n: u32, h: u64) -> Vec2 {
     let p = h as u32;
     let m = ((n as f32).sqrt() as u32).max(1);
     let rows = n.div_ceil(m);
-    let s = permute(s, n, p.wrapping_mul(0x5163_3e2d));
+    let s = permute(s % n, n, p.wrapping_mul(0x5163_3e2d));
     let sx = permute(s % m, m, p.wrapping_mul(0x68bc_21eb));
     let sy = permute(s / m, rows, p.wrapping_mul(0x02e5_be93));
     let jx = randfloat(s, p.wrapping_mul(0x967a_889b));
     let jy = randfloat(s, p.wrapping_mul(0x368c_c8b7));
     let x = ((s % m) as f32 + (sy as f32 + jx) / rows as f32) / m as f32;
     let y = ((s / m) as f32 + (sx as f32 + jy) / m as f32) / rows as f32;
-    let shift = Vec2::new((h >> 40) as f32, ((h >> 16) & 0xff_ffff) as f32) * (1.0 / (1u32 << 24) as f32);
+    let shift = Vec2::new(to_unit((h >> 32) as u32), to_unit((h >> 8) as u32));
     let v = Vec2::new(x, y) + shift;
     v - v.floor()
 }
 
+/// Sample `s` of `n` jittered strata in a random order seeded by `h`.
+#[inline]
+fn stratified_1d(s: u32, n: u32, h: u64) -> f32 {
+    let p = h as u32;
+    let k = permute(s % n, n, p.wrapping_mul(0x5163_3e2d));
+    let x = (k as f32 + randfloat(s, p.wrapping_mul(0x967a_889b))) / n as f32;
+    // Rounding can reach 1 for large n.
+    x.min(1.0 - f32::EPSILON / 2.0)
+}
+
+/// Kensler's hashed permutation of [0, l).
 fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     if l == 1 {
         return 0;
@@ -109,6 +235,7 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     (i.wrapping_add(p)) % l
 }
 
+/// Kensler's hashed jitter in [0, 1).
 fn randfloat(mut i: u32, p: u32) -> f32 {
     i ^= p;
     i ^= i >> 17;
@@ -123,51 +250,117 @@ fn randfloat(mut i: u32, p: u32) -> f32 {
     (i >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
+/// A stream of independent uniform numbers for tests that need many of them.
+#[cfg(test)]
+pub(crate) struct TestRng(u64);
+
+#[cfg(test)]
+impl TestRng {
+    pub(crate) fn new(seed: u64) -> Self {
+        Self(mix64(seed ^ 0x2545_f491_4f6c_dd1d))
+    }
+
+    pub(crate) fn next_1d(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        to_unit((mix64(self.0) >> 32) as u32)
+    }
+
+    pub(crate) fn next_2d(&mut self) -> Vec2 {
+        let x = self.next_1d();
+        Vec2::new(x, self.next_1d())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[test]
-    fn streams_are_deterministic_and_distinct() {
-        let a: Vec<f32> = (0..8)
-            .map({
-                let mut s = Sampler::new(7, 3, 1);
-                move |_| s.next_1d()
-            })
-            .collect();
-        let b: Vec<f32> = (0..8)
-            .map({
-                let mut s = Sampler::new(7, 3, 1);
-                move |_| s.next_1d()
-            })
-            .collect();
-        let c = Sampler::new(7, 3, 2).next_1d();
-        assert_eq!(a, b);
-        assert_ne!(a[0], c);
-        assert!(a.iter().all(|x| (0.0..1.0).contains(x)));
+    const KINDS: [SamplerKind; 3] = [SamplerKind::Sobol, SamplerKind::Stratified, SamplerKind::Independent];
+
+    /// The 2D points of dimension `dim` of samples `0..n` of a pixel.
+    fn points(kind: SamplerKind, pixel: u32, dim: u32, n: u32) -> Vec<Vec2> {
+        (0..n).map(|i| Sampler::new(kind, 3, pixel, i, n).get_2d(dim)).collect()
     }
 
     #[test]
-    fn uniform_mean_and_variance() {
-        let n = 200_000;
-        let (mut m, mut m2) = (0.0f64, 0.0f64);
-        for i in 0..n {
-            let x = Sampler::new(1, i, 0).next_1d() as f64;
-            m += x;
-            m2 += x * x;
+    fn sobol_generator_is_pascals_triangle_mod_2() {
+        // Columns of Sobol's second generator matrix: v_0 = 1 (as the top bit), v_k = v_{k-1}
+        // xor v_{k-1} / 2; without scrambling a point is the xor of the columns of its bits.
+        let mut v = [0u32; 32];
+        v[0] = 1 << 31;
+        for k in 1..32 {
+            v[k] = v[k - 1] ^ (v[k - 1] >> 1);
         }
-        let (mean, var) = (m / n as f64, m2 / n as f64 - (m / n as f64).powi(2));
-        assert!((mean - 0.5).abs() < 0.003, "{mean}");
-        assert!((var - 1.0 / 12.0).abs() < 0.002, "{var}");
+        let unscrambled = |i: u32, second: bool| {
+            let mut a = i;
+            if second {
+                a ^= (a >> 1) & 0x5555_5555;
+                a ^= (a >> 2) & 0x3333_3333;
+                a ^= (a >> 4) & 0x0f0f_0f0f;
+                a ^= (a >> 8) & 0x00ff_00ff;
+                a ^= (a >> 16) & 0x0000_ffff;
+            }
+            a.reverse_bits()
+        };
+        for i in [0u32, 1, 2, 3, 5, 12, 255, 1 << 20, 0xdead_beef, u32::MAX] {
+            let expect = (0..32).filter(|&k| i >> k & 1 == 1).fold(0, |x, k| x ^ v[k]);
+            assert_eq!(unscrambled(i, true), expect, "{i}");
+            assert_eq!(unscrambled(i, false), i.reverse_bits());
+        }
+        // Owen scrambling keeps the 1D projection a (0,1)-sequence: the first 2^12 points take
+        // each of the 2^12 strata once.
+        let mut seen: Vec<u32> = (0..4096).map(|i| owen_sobol(i, true, 77) >> 20).collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..4096).collect::<Vec<_>>());
     }
 
     #[test]
-    fn pixel_samples_are_stratified_for_any_count() {
+    fn sobol_2d_points_form_nets_in_every_elementary_interval() {
+        // 2^k points of any 2D dimension of any pixel: every elementary interval of area 2^-k
+        // (2^a by 2^(k-a) boxes) holds exactly one point.
+        for k in [4u32, 6, 8] {
+            let n = 1u32 << k;
+            for (pixel, dim) in
+                [(0, Dims::PIXEL), (17, Dims::vertex(0, Dims::LIGHT)), (999, Dims::vertex(7, Dims::BSDF))]
+            {
+                let pts = points(SamplerKind::Sobol, pixel, dim, n);
+                for a in 0..=k {
+                    let (nx, ny) = (1u32 << a, 1u32 << (k - a));
+                    let mut count = vec![0; n as usize];
+                    for p in &pts {
+                        count[((p.x * nx as f32) as u32 * ny + (p.y * ny as f32) as u32) as usize] += 1;
+                    }
+                    assert!(count.iter().all(|&c| c == 1), "k {k} pixel {pixel} dim {dim} boxes {nx}x{ny}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sobol_1d_points_are_stratified_and_the_sequence_extends() {
+        let n = 64;
+        let mut count = vec![0; n];
+        for i in 0..n as u32 {
+            count[(Sampler::new(SamplerKind::Sobol, 1, 5, i, 64).get_1d(Dims::TIME) * n as f32) as usize] +=
+                1;
+        }
+        assert!(count.iter().all(|&c| c == 1), "{count:?}");
+        // A sample's values do not depend on the sample count: the first 16 of 1024 are the 16.
+        for i in 0..16 {
+            let (a, b) = (
+                Sampler::new(SamplerKind::Sobol, 1, 5, i, 16),
+                Sampler::new(SamplerKind::Sobol, 1, 5, i, 1024),
+            );
+            assert_eq!(a.get_2d(Dims::LENS), b.get_2d(Dims::LENS));
+        }
+    }
+
+    #[test]
+    fn stratified_points_fill_every_stratum_for_any_count() {
         for n in [1u32, 4, 7, 16, 33, 64] {
-            let pts: Vec<Vec2> = (0..n).map(|s| pixel_sample(0, 42, s, n)).collect();
-            assert!(pts.iter().all(|p| (0.0..1.0).contains(&p.x) && (0.0..1.0).contains(&p.y)));
-            // 1D projections: one sample per stratum of width 1/n (up to the toroidal shift, which
-            // moves every point by the same amount: strata counts stay at most 2).
+            let pts = points(SamplerKind::Stratified, 42, Dims::vertex(2, Dims::LIGHT), n);
+            // 1D projections: one sample per stratum of width 1/n, up to the toroidal shift,
+            // which moves every point by the same amount: strata counts stay at most 2.
             for axis in 0..2 {
                 let mut count = vec![0; n as usize];
                 for p in &pts {
@@ -175,18 +368,56 @@ mod tests {
                 }
                 assert!(count.iter().all(|&c| c <= 2), "n {n} axis {axis} {count:?}");
             }
+            let mut count = vec![0; n as usize];
+            for i in 0..n {
+                count[(Sampler::new(SamplerKind::Stratified, 3, 42, i, n).get_1d(Dims::TIME) * n as f32)
+                    as usize] += 1;
+            }
+            assert!(count.iter().all(|&c| c == 1), "n {n} 1D {count:?}");
         }
     }
 
     #[test]
-    fn pixel_samples_are_uniform_over_pixels() {
-        // Averaged over many pixels, every sample index covers the pixel uniformly (unbiased
-        // box filter): the mean position is the pixel centre for each index.
-        for n in [3u32, 10] {
-            for s in 0..n {
-                let mean = (0..20_000).map(|px| pixel_sample(5, px, s, n)).sum::<Vec2>() / 20_000.0;
-                assert!((mean - Vec2::splat(0.5)).length() < 0.01, "n {n} s {s}: {mean}");
+    fn every_sample_is_uniform_over_pixels_and_values_stay_below_one() {
+        // Averaged over many pixels, every sample index of every kind is uniform: mean 1/2,
+        // variance 1/12 in each coordinate (an unbiased estimator whatever the count).
+        for kind in KINDS {
+            for (s, n) in [(0u32, 1u32), (2, 3), (5, 10), (100, 256)] {
+                let m = 20_000;
+                let (mut sum, mut sq) = (Vec2::ZERO, Vec2::ZERO);
+                for px in 0..m {
+                    let u = Sampler::new(kind, 5, px, s, n).get_2d(Dims::vertex(1, Dims::BSDF));
+                    assert!(u.x < 1.0 && u.y < 1.0 && u.x >= 0.0 && u.y >= 0.0);
+                    (sum, sq) = (sum + u, sq + u * u);
+                }
+                let (mean, var) = (sum / m as f32, sq / m as f32 - (sum / m as f32).powf(2.0));
+                assert!((mean - Vec2::splat(0.5)).abs().max_element() < 0.01, "{kind:?} {s}/{n}: {mean}");
+                assert!(
+                    (var - Vec2::splat(1.0 / 12.0)).abs().max_element() < 0.005,
+                    "{kind:?} {s}/{n}: {var}"
+                );
             }
+        }
+    }
+
+    #[test]
+    fn dimensions_are_not_correlated() {
+        // Two dimensions of one pixel sample, over many pixels and indices: the correlation of
+        // their values is about zero (padding decorrelates the dimensions).
+        for kind in KINDS {
+            let (mut sxy, mut sx, mut sy, mut n) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+            for px in 0..200 {
+                for i in 0..64 {
+                    let s = Sampler::new(kind, 9, px, i, 64);
+                    let (a, b) = (
+                        s.get_2d(Dims::vertex(0, Dims::LIGHT)).x as f64,
+                        s.get_2d(Dims::vertex(0, Dims::BSDF)).x as f64,
+                    );
+                    (sxy, sx, sy, n) = (sxy + a * b, sx + a, sy + b, n + 1.0);
+                }
+            }
+            let cov = sxy / n - sx / n * sy / n;
+            assert!((cov * 12.0).abs() < 0.02, "{kind:?}: correlation {}", cov * 12.0);
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use super::values::*;
 use crate::material::Fresnel;
+use crate::render_scene::SamplerKind;
 use crate::texture::{TextureImage, Wrap};
 use crate::world::{MAX_COORDINATE, world_primitives};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
@@ -157,12 +158,23 @@ pub struct RenderDesc {
     pub seed: u64,
     /// Scale samples down so that no component exceeds this (default: none, which is unbiased).
     pub clamp: Option<Positive>,
+    /// How the samples' random numbers are made: `Sobol` (default), `Stratified`, `Independent`.
+    pub sampler: SamplerKind,
 }
 
 impl Default for RenderDesc {
     fn default() -> Self {
         let n = |x| NonZeroU32::new(x).unwrap();
-        Self { width: n(512), height: n(512), spp: n(64), max_depth: 64, rr_depth: 5, seed: 0, clamp: None }
+        Self {
+            width: n(512),
+            height: n(512),
+            spp: n(64),
+            max_depth: 64,
+            rr_depth: 5,
+            seed: 0,
+            clamp: None,
+            sampler: SamplerKind::default(),
+        }
     }
 }
 

@@ -110,7 +110,7 @@ mod tests {
         let n = Vec3A::Z;
         let wo = Vec3A::new(0.7, 0.0, 0.3).normalize();
         let f = fresnel_exact(wo.z, 1.5);
-        let mut s = crate::sampler::Sampler::new(9, 0, 0);
+        let mut s = crate::sampler::TestRng::new(9);
         let total = 200_000;
         let mut reflected = 0;
         for _ in 0..total {

@@ -103,7 +103,7 @@ mod tests {
         let wo = Vec3A::new(1.0, 0.0, 0.3).normalize();
         let r = reflect(wo, n);
         let albedo = Vec3::new(0.8, 0.6, 0.4);
-        let mut s = crate::sampler::Sampler::new(3, 0, 0);
+        let mut s = crate::sampler::TestRng::new(3);
         let total = 200_000;
         let mut absorbed = 0;
         for _ in 0..total {

@@ -71,7 +71,7 @@ pub(crate) mod testing {
     use pathwave_engine::math::Frame;
 
     fn rng(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = crate::sampler::Sampler::new(seed, 0, 0);
+        let mut s = crate::sampler::TestRng::new(seed);
         move || s.next_1d()
     }
 

@@ -7,6 +7,7 @@ use glam::{Vec3, Vec3A};
 use pathwave_engine::flat::RayStream;
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::math::Ray;
+use pathwave_engine::render_scene::SamplerKind;
 
 /// Paths in flight, one slot each, every field its own array.
 #[derive(Default)]
@@ -102,7 +103,7 @@ impl Paths {
             prev_p: vec![Vec3A::ZERO; n],
             prev_pdf: vec![0.0; n],
             depth: vec![0; n],
-            sampler: vec![Sampler::new(0, 0, 0); n],
+            sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
             guide: vec![Guide::NEW; n],

@@ -81,7 +81,7 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
 fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32) -> bool {
     let s = i as usize;
     let ray = p.ray(s);
-    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, &mut p.sampler[s]) else {
+    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, p.depth[s], &p.sampler[s]) else {
         return false;
     };
     // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
@@ -219,54 +219,40 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             q.finished.push(i);
             continue;
         }
-        let (shadow, next) =
-            path::scatter_in_medium(scene, &mut st, p.origin[s], p.time[s], &mut p.sampler[s]);
+        let (shadow, next) = path::scatter_in_medium(scene, &mut st, p.origin[s], p.time[s], &p.sampler[s]);
         route(p, q, i, shadow, next);
         p.set_state(s, &st);
     }
     q.medium.clear();
 }
 
-/// One shading loop for the hits of one material kind: light sampling into the shadow queue
-/// (when the material has a smooth part and the scene has lights), then BSDF sampling into the
-/// next iteration's queue. Which queue is the `kind` argument.
+/// One shading loop for the hits of one material kind: Lambertian hits go through the lane
+/// kernel (light sampling into the shadow queue, BSDF sampling into the next iteration's
+/// queue); the delta materials only sample their BSDF. Which queue is the `kind` argument.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
-    let nee = kind == MaterialKind::Lambertian && !scene.lights.is_empty();
-    let queue = std::mem::take(match kind {
+    let mut queue = std::mem::take(match kind {
         MaterialKind::Lambertian => &mut q.lambertian,
         MaterialKind::Metal => &mut q.metal,
         MaterialKind::Dielectric => &mut q.dielectric,
     });
-    if kind == MaterialKind::Lambertian && scene.features.lights_are_quads {
+    if kind == MaterialKind::Lambertian {
         shade_lambertian_lanes(scene, p, q, &queue);
-        let mut queue = queue;
-        queue.clear();
-        q.lambertian = queue;
-        return;
-    }
-    for &i in &queue {
-        let s = i as usize;
-        let mut st = p.state(s);
-        if st.depth == scene.settings.max_depth {
-            q.finished.push(i);
-            continue;
+    } else {
+        for &i in &queue {
+            let s = i as usize;
+            let mut st = p.state(s);
+            if st.depth == scene.settings.max_depth {
+                q.finished.push(i);
+                continue;
+            }
+            let hit = p.hit[s];
+            let mat = &scene.material_at(hit.material, &hit.surface);
+            debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
+            let next = path::scatter(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &p.sampler[s]);
+            route(p, q, i, None, next);
+            p.set_state(s, &st);
         }
-        let hit = p.hit[s];
-        let mat = &scene.material_at(hit.material, &hit.surface);
-        debug_assert_eq!(material::has_smooth_part(mat), kind == MaterialKind::Lambertian);
-        let (wo, time) = (-p.dir[s], p.time[s]);
-        let mut sampler = p.sampler[s];
-        let shadow = if nee {
-            path::sample_light(scene, &st, &hit.surface, wo, mat, time, &mut sampler)
-        } else {
-            None
-        };
-        let next = path::scatter(scene, &mut st, &hit.surface, wo, mat, time, &mut sampler);
-        route(p, q, i, shadow, next);
-        p.sampler[s] = sampler;
-        p.set_state(s, &st);
     }
-    let mut queue = queue;
     queue.clear();
     match kind {
         MaterialKind::Lambertian => q.lambertian = queue,
@@ -275,14 +261,13 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     }
 }
 
-/// Lambertian hits under quad lights: inputs are gathered 8 paths at a time into lane arrays,
+/// Lambertian hits: inputs are gathered 8 paths at a time into lane arrays,
 /// the branch-free kernel runs on all lanes at once (vectorised), and outputs are applied.
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
     let max_depth = scene.settings.max_depth;
     let mut slots = [0u32; LANES];
     let mut states = [path::PathState::new(glam::Vec3A::ZERO); LANES];
-    let mut samplers = [crate::sampler::Sampler::new(0, 0, 0); LANES];
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut live = std::mem::take(&mut q.scratch);
@@ -302,9 +287,16 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             let Material::Lambertian { albedo } = scene.material_at(hit.material, &hit.surface) else {
                 unreachable!("the Lambertian queue holds Lambertian hits")
             };
-            (slots[n], states[n], samplers[n]) = (i, p.state(s), p.sampler[s]);
-            let input =
-                lambert_vertex::gather(scene, &states[n], &hit.surface, -p.dir[s], albedo, &mut samplers[n]);
+            (slots[n], states[n]) = (i, p.state(s));
+            let input = lambert_vertex::gather(
+                scene,
+                &states[n],
+                &hit.surface,
+                -p.dir[s],
+                albedo,
+                p.time[s],
+                &p.sampler[s],
+            );
             ins.set(n, &input);
             n += 1;
         }
@@ -312,10 +304,8 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         for l in 0..n {
             let (i, s) = (slots[l], slots[l] as usize);
             let (input, out) = (ins.get(l), outs.get(l));
-            let (shadow, next) =
-                lambert_vertex::apply(&input, &out, &mut states[l], p.time[s], &mut samplers[l]);
+            let (shadow, next) = lambert_vertex::apply(&input, &out, &mut states[l], p.time[s]);
             route(p, q, i, shadow, next);
-            p.sampler[s] = samplers[l];
             p.set_state(s, &states[l]);
         }
     }
