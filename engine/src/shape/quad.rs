@@ -20,6 +20,40 @@ pub struct Quad {
     w: Vec3A,
     /// Area `|u x v|`.
     pub area: f32,
+    /// The edges are perpendicular: lights are sampled by solid angle.
+    rect: bool,
+}
+
+/// Solid angles outside this range are sampled by area: below it the two densities agree
+/// closely and the spherical mapping loses precision, above it the point is almost on the
+/// plane inside the rectangle (the bounds of pbrt-v4's `DiffuseAreaLight`).
+const SPHERICAL_SOLID_ANGLE: std::ops::Range<f64> = 3e-4..6.22;
+
+/// Rectangles estimated to subtend less than this (steradians) are sampled by area: on
+/// cornell-diffuse at 64 spp, 0.1 keeps 70% of the spherical sampling's lower error (relMSE
+/// 0.001814 against 0.001781 for all and 0.001884 for none) at a fraction of its cost.
+const SPHERICAL_MIN_ESTIMATE: f32 = 0.1;
+
+/// A rectangle as seen from a point: the spherical rectangle of Urena, Fajardo and King, "An
+/// Area-Preserving Parametrization for Spherical Rectangles" (EGSR 2013), in the rectangle's
+/// frame (x along `u`, y along `v`, z so that the point lies at z0 < 0 below the corner), in
+/// f64. The interior angles g_i enter only through cos and sin, which are algebraic in the
+/// corner coordinates, so the solid angle needs one `atan2` (of a product of unit complex
+/// numbers: no cancellation in the sum of angles minus 2 pi) and a sample one `sincos`. The
+/// transcendental functions are the `libm` crate's, the same bits on every x86-64 CPU.
+struct SphericalRect {
+    x0: f64,
+    y0: f64,
+    z0: f64,
+    x1: f64,
+    y1: f64,
+    /// z components of the edge-plane normals n0 and n2.
+    b0: f64,
+    b1: f64,
+    /// cos and sin of k = 2 pi - g2 - g3.
+    k: (f64, f64),
+    /// Solid angle.
+    s: f64,
 }
 
 impl Quad {
@@ -32,7 +66,8 @@ impl Quad {
         let cs = c / k;
         let len = cs.length();
         let (n, w, area) = (cs / len, cs / (k * len * len), k * len);
-        (k > 0.0 && w.is_finite() && area.is_finite()).then_some(Self { q, u, v, n, w, area })
+        let rect = u.normalize().dot(v.normalize()).abs() < 1e-5;
+        (k > 0.0 && w.is_finite() && area.is_finite()).then_some(Self { q, u, v, n, w, area, rect })
     }
 
     /// Error bound of points computed as `q + a u + b v`, scaled by the conditioning
@@ -82,20 +117,114 @@ impl Quad {
         }
     }
 
-    /// Samples a point uniformly by area; the density is returned in solid angle at `from`.
+    /// Samples a point of the quad as seen from `from`: uniformly in the solid angle of a
+    /// rectangle (unless it subtends very little or almost everything), else uniformly by area;
+    /// the density is returned in solid angle.
     pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        let p = self.q + u.x * self.u + u.y * self.v;
-        LightSample {
-            p,
-            n: self.n,
-            pdf: area_to_solid_angle(1.0 / self.area, from, p, self.n),
-            err: self.point_error(),
-        }
+        let (a, b, pdf) = match self.spherical(from) {
+            Some(r) => {
+                let (a, b) = r.sample(u);
+                (a, b, (1.0 / r.s) as f32)
+            }
+            None => (u.x, u.y, 0.0),
+        };
+        let p = self.q + a * self.u + b * self.v;
+        let pdf = if pdf > 0.0 { pdf } else { area_to_solid_angle(1.0 / self.area, from, p, self.n) };
+        LightSample { p, n: self.n, pdf, err: self.point_error() }
     }
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
     pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
-        area_to_solid_angle(1.0 / self.area, from, p, self.n)
+        match self.spherical(from) {
+            Some(r) => (1.0 / r.s) as f32,
+            None => area_to_solid_angle(1.0 / self.area, from, p, self.n),
+        }
+    }
+
+    /// The spherical rectangle seen from `o`, when the quad is a rectangle whose solid angle is
+    /// in [`SPHERICAL_SOLID_ANGLE`].
+    fn spherical(&self, o: Vec3A) -> Option<SphericalRect> {
+        if !self.rect {
+            return None;
+        }
+        // Where the rectangle subtends little, area sampling is about as good and much cheaper:
+        // a first estimate of the solid angle, A cos / d^2 at the centre, decides.
+        let c = self.q + 0.5 * (self.u + self.v) - o;
+        let d2 = c.length_squared();
+        if self.area * self.n.dot(c).abs() < SPHERICAL_MIN_ESTIMATE * d2 * d2.sqrt() {
+            return None;
+        }
+        let v3 = |v: Vec3A| glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+        let (eu, ev) = (v3(self.u), v3(self.v));
+        let (exl, eyl) = (eu.length(), ev.length());
+        let (x, y) = (eu / exl, ev / eyl);
+        let d = v3(self.q) - v3(o);
+        let (x0, y0) = (d.dot(x), d.dot(y));
+        let z0 = -d.dot(x.cross(y)).abs();
+        let (x1, y1) = (x0 + exl, y0 + eyl);
+        // Lengths of the edge planes' normals (0, z0, -y0), (-z0, 0, x1), (0, -z0, y1),
+        // (z0, 0, -x0), and distances to the corners (x1, y0), (x1, y1), (x0, y1), (x0, y0).
+        let z2 = z0 * z0;
+        let r = [(z2 + y0 * y0).sqrt(), (z2 + x1 * x1).sqrt(), (z2 + y1 * y1).sqrt(), (z2 + x0 * x0).sqrt()];
+        let c = [
+            (x1 * x1 + y0 * y0 + z2).sqrt(),
+            (x1 * x1 + y1 * y1 + z2).sqrt(),
+            (x0 * x0 + y1 * y1 + z2).sqrt(),
+            (x0 * x0 + y0 * y0 + z2).sqrt(),
+        ];
+        if !(r.iter().all(|&r| r > 0.0)) {
+            return None;
+        }
+        // Interior angle g_i between planes i and i+1: cos g = -n_i . n_(i+1), sin g =
+        // |n_i x n_(i+1)| = |z0| * (distance to their shared corner) / (r_i r_(i+1)).
+        let g = |cos_num: f64, i: usize, j: usize| {
+            let rr = r[i] * r[j];
+            (cos_num / rr, -z0 * c[i] / rr)
+        };
+        let g0 = g(x1 * y0, 0, 1);
+        let g1 = g(-x1 * y1, 1, 2);
+        let g2 = g(x0 * y1, 2, 3);
+        let g3 = g(-x0 * y0, 3, 0);
+        let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
+        // e^(i (g0 + g1 + g2 + g3)) = e^(i (S + 2 pi)); e^(i k) = conj(e^(i (g2 + g3))).
+        let g23 = mul(g2, g3);
+        let e = mul(mul(g0, g1), g23);
+        let mut s = libm::atan2(e.1, e.0);
+        if s < 0.0 {
+            s += std::f64::consts::TAU;
+        }
+        SPHERICAL_SOLID_ANGLE.contains(&s).then_some(SphericalRect {
+            x0,
+            y0,
+            z0,
+            x1,
+            y1,
+            b0: -y0 / r[0],
+            b1: y1 / r[2],
+            k: (g23.0, -g23.1),
+            s,
+        })
+    }
+}
+
+impl SphericalRect {
+    /// The point of uniform numbers `u` as the quad's (a, b), uniform in solid angle.
+    fn sample(&self, u: Vec2) -> (f32, f32) {
+        let (x0, y0, z0, x1, y1) = (self.x0, self.y0, self.z0, self.x1, self.y1);
+        // au = u.x S + k.
+        let (su, cu) = libm::sincos(u.x as f64 * self.s);
+        let (ca, sa) = (cu * self.k.0 - su * self.k.1, su * self.k.0 + cu * self.k.1);
+        let fu = (ca * self.b0 - self.b1) / sa;
+        let cu = (1.0 / (fu * fu + self.b0 * self.b0).sqrt()).copysign(fu).clamp(-1.0, 1.0);
+        let xu = (-(cu * z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(x0, x1);
+        let d2 = xu * xu + z0 * z0;
+        let h0 = y0 / (d2 + y0 * y0).sqrt();
+        let h1 = y1 / (d2 + y1 * y1).sqrt();
+        let hv = h0 + u.y as f64 * (h1 - h0);
+        let yv = if hv * hv < 1.0 - 1e-12 { hv * d2.sqrt() / (1.0 - hv * hv).sqrt() } else { y1 };
+        let a = ((xu - x0) / (x1 - x0)).clamp(0.0, 1.0);
+        let b = ((yv.clamp(y0, y1) - y0) / (y1 - y0)).clamp(0.0, 1.0);
+        (a as f32, b as f32)
     }
 }
 
@@ -173,9 +302,75 @@ mod tests {
 
     #[test]
     fn area_pdf_matches_geometry() {
-        let q = Quad::new(Vec3A::new(-1.0, -1.0, 2.0), Vec3A::X * 2.0, Vec3A::Y * 2.0).unwrap();
+        // A parallelogram (not a rectangle) is sampled by area.
+        let q = Quad::new(Vec3A::new(-1.5, -1.0, 2.0), Vec3A::X * 2.0, Vec3A::new(1.0, 2.0, 0.0)).unwrap();
         let ls = q.sample_solid_angle(Vec3A::ZERO, Vec2::splat(0.5));
         assert!((ls.p - Vec3A::new(0.0, 0.0, 2.0)).length() < 1e-6);
         assert!((ls.pdf - 4.0 / 4.0).abs() < 1e-6, "dist^2 / (A cos) = 4 / 4");
+        assert_eq!(q.pdf_solid_angle(Vec3A::ZERO, ls.p), ls.pdf);
+    }
+
+    /// Solid angle of `q` seen from `o` by brute force: a fine grid of area elements.
+    fn solid_angle_by_area(q: &Quad, o: Vec3A) -> f64 {
+        let m = 1000;
+        let mut sum = 0.0f64;
+        for i in 0..m {
+            for j in 0..m {
+                let p = q.q + (i as f32 + 0.5) / m as f32 * q.u + (j as f32 + 0.5) / m as f32 * q.v;
+                let d = p - o;
+                let r2 = d.length_squared() as f64;
+                sum += (q.n.dot(d).abs() as f64 / r2.sqrt()) / r2;
+            }
+        }
+        sum * q.area as f64 / (m * m) as f64
+    }
+
+    #[test]
+    fn spherical_rectangles_have_the_solid_angle_of_the_quad() {
+        let q = Quad::new(Vec3A::new(-1.0, 0.5, 2.0), Vec3A::X * 3.0, Vec3A::new(0.0, 1.0, 1.0)).unwrap();
+        for o in
+            [Vec3A::ZERO, Vec3A::new(0.3, 1.2, 2.4), Vec3A::new(2.0, -1.0, 1.5), Vec3A::new(0.0, 1.0, 1.4)]
+        {
+            let exact = solid_angle_by_area(&q, o);
+            let r = q.spherical(o).expect("in range");
+            assert!((r.s / exact - 1.0).abs() < 1e-4, "{o}: {} vs {exact}", r.s);
+        }
+        // Tiny solid angles fall back to area sampling, with its density.
+        let far = Vec3A::new(0.0, 0.0, -200.0);
+        assert!(q.spherical(far).is_none());
+        let ls = q.sample_solid_angle(far, Vec2::new(0.3, 0.6));
+        assert_eq!(ls.pdf, area_to_solid_angle(1.0 / q.area, far, ls.p, q.n));
+    }
+
+    #[test]
+    fn spherical_samples_are_uniform_in_solid_angle() {
+        // Chi-square test of the sampled directions against uniform density in solid angle:
+        // bins are a grid on the quad, each expecting its own solid angle over the total.
+        let q = Quad::new(Vec3A::new(-1.0, -1.0, 1.0), Vec3A::X * 2.5, Vec3A::Y * 2.0).unwrap();
+        let o = Vec3A::new(0.2, 0.1, 0.4);
+        let total = q.spherical(o).unwrap().s;
+        let g = 8;
+        let mut observed = vec![0usize; g * g];
+        let n = 200_000;
+        let mut rng = crate::testing::uniform(11);
+        for _ in 0..n {
+            let ls = q.sample_solid_angle(o, Vec2::new(rng(), rng()));
+            assert!((ls.pdf as f64 * total - 1.0).abs() < 1e-5);
+            let ph = ls.p - q.q;
+            let (a, b) = (ph.dot(q.u) / q.u.length_squared(), ph.dot(q.v) / q.v.length_squared());
+            observed[((a * g as f32) as usize).min(g - 1) * g + ((b * g as f32) as usize).min(g - 1)] += 1;
+        }
+        let mut chi2 = 0.0;
+        for i in 0..g {
+            for j in 0..g {
+                let (fu, fv) = (1.0 / g as f32, 1.0 / g as f32);
+                let cell =
+                    Quad::new(q.q + i as f32 * fu * q.u + j as f32 * fv * q.v, q.u * fu, q.v * fv).unwrap();
+                let expected = solid_angle_by_area(&cell, o) / total * n as f64;
+                chi2 += (observed[i * g + j] as f64 - expected).powi(2) / expected;
+            }
+        }
+        // 63 degrees of freedom: the 99.9% quantile is about 103.
+        assert!(chi2 < 103.0, "chi2 {chi2}");
     }
 }
