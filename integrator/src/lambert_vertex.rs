@@ -8,7 +8,7 @@
 use crate::material::power_heuristic;
 use crate::path::{self, PathState, ShadowRay};
 use crate::sampler::{Dims, Sampler};
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -186,8 +186,67 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     }
 }
 
-/// Gathers the kernel's inputs for a Lambertian hit, with the random numbers of the vertex's
-/// dimensions.
+/// The numbers a Lambertian vertex reads (those it does not need are left at zero).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexSamples {
+    /// Which light.
+    pub light_pick: f32,
+    /// Where on it.
+    pub light: Vec2,
+    /// The next direction.
+    pub dir: Vec2,
+    /// Russian roulette.
+    pub roulette: f32,
+}
+
+impl VertexSamples {
+    /// The numbers of the vertex after `depth` bounces, one path at a time.
+    #[inline]
+    pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
+        let lights = !scene.lights.is_empty();
+        Self {
+            light_pick: path::light_choice(scene, sampler, depth),
+            light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
+            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
+            roulette: if depth + 1 >= scene.settings.rr_depth {
+                sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// The same numbers for `LANES` paths at once (the same bits, computed across lanes).
+    #[inline]
+    pub fn draw_lanes(
+        scene: &RenderScene,
+        samplers: &[Sampler; LANES],
+        depths: &[u32; LANES],
+    ) -> [Self; LANES] {
+        let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
+        let pick = if scene.lights.prims.len() > 1 {
+            crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
+        } else {
+            [0.0; LANES]
+        };
+        let light = if scene.lights.is_empty() {
+            [Vec2::ZERO; LANES]
+        } else {
+            crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
+        };
+        let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
+        let rr = crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE));
+        let rr_depth = scene.settings.rr_depth;
+        std::array::from_fn(|l| Self {
+            light_pick: pick[l],
+            light: light[l],
+            dir: dir[l],
+            roulette: if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 },
+        })
+    }
+}
+
+/// Gathers the kernel's inputs for a Lambertian hit, with the vertex's numbers `u`.
 #[inline]
 pub fn gather(
     scene: &RenderScene,
@@ -196,7 +255,7 @@ pub fn gather(
     wo: Vec3A,
     albedo: Vec3,
     time: f32,
-    sampler: &Sampler,
+    u: &VertexSamples,
 ) -> LambertIn {
     let mut i = LambertIn {
         p: sp.p.into(),
@@ -211,16 +270,13 @@ pub fn gather(
         ..Default::default()
     };
     if !scene.lights.is_empty()
-        && let Some(lp) = path::pick_light(scene, sp.p, time, st.depth, sampler)
+        && let Some(lp) = path::pick_light(scene, sp.p, time, u.light_pick, u.light)
     {
         (i.wi, i.le, i.pdf_light, i.target) = (lp.wi.into(), lp.le, lp.pdf, lp.target.into());
     }
-    let u = sampler.get_2d(Dims::vertex(st.depth, Dims::BSDF));
-    i.u_dir = [u.x, u.y];
+    i.u_dir = [u.dir.x, u.dir.y];
     i.rr_on = i.depth_after >= scene.settings.rr_depth;
-    if i.rr_on {
-        i.u_rr = sampler.get_1d(Dims::vertex(st.depth, Dims::ROULETTE));
-    }
+    i.u_rr = u.roulette;
     i
 }
 

@@ -5,7 +5,7 @@
 
 use crate::material::{self, power_heuristic};
 use crate::sampler::{Dims, Sampler};
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
@@ -87,24 +87,20 @@ pub(crate) struct LightPick {
     pub target: Vec3A,
 }
 
-/// Picks a light and a point on it as seen from `p` (the vertex after `depth` bounces); `None`
-/// when it sends nothing towards `p`.
+/// Picks a light with `u_pick` and a point on it with `u` as seen from `p`; `None` when it
+/// sends nothing towards `p`.
 #[inline]
 pub(crate) fn pick_light(
     scene: &RenderScene,
     p: Vec3A,
     time: f32,
-    depth: u32,
-    sampler: &Sampler,
+    u_pick: f32,
+    u: Vec2,
 ) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
-    // One light needs no choice.
-    let (light, pmf) = match lights.prims.len() {
-        1 => (0, 1.0),
-        _ => lights.pick(sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK))),
-    };
-    let ls = lights.sample(geo, light, p, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)), time);
+    let (light, pmf) = lights.pick(u_pick);
+    let ls = lights.sample(geo, light, p, u, time);
     let to = ls.p - p;
     let dist = to.length();
     if !(dist > 0.0) {
@@ -124,6 +120,13 @@ pub(crate) fn pick_light(
     }
     let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
     Some(LightPick { wi, le, pdf, target })
+}
+
+/// The number that chooses the light at the vertex after `depth` bounces (one light needs
+/// none).
+#[inline]
+pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -> f32 {
+    if scene.lights.prims.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
 }
 
 /// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
@@ -188,7 +191,8 @@ pub fn scatter_in_medium(
     let shadow = if scene.lights.is_empty() {
         None
     } else {
-        pick_light(scene, p, time, depth, sampler).map(|lp| {
+        let u_pick = light_choice(scene, sampler, depth);
+        pick_light(scene, p, time, u_pick, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT))).map(|lp| {
             let contribution = st.beta * lp.le * (ISOTROPIC * power_heuristic(lp.pdf, ISOTROPIC) / lp.pdf);
             ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
         })

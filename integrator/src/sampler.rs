@@ -120,6 +120,32 @@ impl Sampler {
     }
 }
 
+/// [`Sampler::get_1d`] for `N` samplers of one kind at once, each at its own dimension: the
+/// same integer operations lane by lane (so the same bits), in loops that LLVM vectorises.
+#[inline]
+pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N] {
+    if s[0].kind != SamplerKind::Sobol {
+        return std::array::from_fn(|l| s[l].get_1d(dim[l]));
+    }
+    let h: [u64; N] = std::array::from_fn(|l| s[l].hash(dim[l]));
+    let i: [u32; N] = std::array::from_fn(|l| shuffle(s[l].index, h[l] as u32));
+    std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32)))
+}
+
+/// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]).
+#[inline]
+pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
+    if s[0].kind != SamplerKind::Sobol {
+        return std::array::from_fn(|l| s[l].get_2d(dim[l]));
+    }
+    let h: [u64; N] = std::array::from_fn(|l| s[l].hash(dim[l]));
+    let sy: [u32; N] = std::array::from_fn(|l| mix64(h[l]) as u32);
+    let i: [u32; N] = std::array::from_fn(|l| shuffle(s[l].index, h[l] as u32));
+    let x: [f32; N] = std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32)));
+    let y: [f32; N] = std::array::from_fn(|l| to_unit(owen_sobol(i[l], true, sy[l])));
+    std::array::from_fn(|l| Vec2::new(x[l], y[l]))
+}
+
 /// The top 24 bits of `x` as a float in [0, 1).
 #[inline]
 fn to_unit(x: u32) -> f32 {
@@ -396,6 +422,20 @@ mod tests {
                     (var - Vec2::splat(1.0 / 12.0)).abs().max_element() < 0.005,
                     "{kind:?} {s}/{n}: {var}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_give_the_bits_of_one_sampler_at_a_time() {
+        for kind in KINDS {
+            let s: [Sampler; 8] =
+                std::array::from_fn(|l| Sampler::new(kind, 4, 100 + l as u32, 3 * l as u32, 64));
+            let dim: [u32; 8] = std::array::from_fn(|l| Dims::vertex(l as u32, Dims::LIGHT));
+            let (one, two) = (get_1d_lanes(&s, &dim), get_2d_lanes(&s, &dim));
+            for l in 0..8 {
+                assert_eq!(one[l].to_bits(), s[l].get_1d(dim[l]).to_bits());
+                assert_eq!(two[l], s[l].get_2d(dim[l]));
             }
         }
     }

@@ -280,6 +280,11 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         }
     }
     for chunk in live.chunks(LANES) {
+        // The vertex's numbers for all lanes at once (a short last chunk repeats its first path).
+        let at = |l: usize| chunk[l.min(chunk.len() - 1)] as usize;
+        let samplers = std::array::from_fn(|l| p.sampler[at(l)]);
+        let depths = std::array::from_fn(|l| p.depth[at(l)]);
+        let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
         let mut n = 0;
         for &i in chunk {
             let s = i as usize;
@@ -288,15 +293,8 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
                 unreachable!("the Lambertian queue holds Lambertian hits")
             };
             (slots[n], states[n]) = (i, p.state(s));
-            let input = lambert_vertex::gather(
-                scene,
-                &states[n],
-                &hit.surface,
-                -p.dir[s],
-                albedo,
-                p.time[s],
-                &p.sampler[s],
-            );
+            let input =
+                lambert_vertex::gather(scene, &states[n], &hit.surface, -p.dir[s], albedo, p.time[s], &u[n]);
             ins.set(n, &input);
             n += 1;
         }
