@@ -264,6 +264,7 @@ pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Samp
     let s = scene.settings;
     let pixel = y * s.width + x;
     let sampler = Sampler::new(s.sampler, s.seed, pixel, index, s.spp);
+    let sampler = if scene.camera.has_aperture() { sampler.with_lens() } else { sampler };
     let offset = sampler.get_2d(Dims::PIXEL);
     // The lens and time are sampled only where the camera has an aperture and something moves
     // while the shutter is open.
