@@ -203,14 +203,7 @@ fn shuffle(index: u32, seed: u32) -> u32 {
 /// the five bits of the digit position computes in five steps.
 #[inline]
 fn owen_sobol(i: u32, second: bool, seed: u32) -> u32 {
-    let mut a = i;
-    if second {
-        a ^= (a >> 1) & 0x5555_5555;
-        a ^= (a >> 2) & 0x3333_3333;
-        a ^= (a >> 4) & 0x0f0f_0f0f;
-        a ^= (a >> 8) & 0x00ff_00ff;
-        a ^= (a >> 16) & 0x0000_ffff;
-    }
+    let a = if second { pascal(i) } else { i };
     // `a` holds the digits least significant first (bit j is digit j of the fraction), which is
     // the order the scrambler takes.
     owen_reversed(a, seed).reverse_bits()
@@ -353,6 +346,18 @@ fn partner(dim: u32, lens: bool) -> (u32, bool) {
     }
 }
 
+/// Sobol's dimension 1 before bit reversal: bit j of the result is the parity of the bits k of
+/// `i` with j a bit-subset of k.
+#[inline]
+fn pascal(mut a: u32) -> u32 {
+    a ^= (a >> 1) & 0x5555_5555;
+    a ^= (a >> 2) & 0x3333_3333;
+    a ^= (a >> 4) & 0x0f0f_0f0f;
+    a ^= (a >> 8) & 0x00ff_00ff;
+    a ^= (a >> 16) & 0x0000_ffff;
+    a
+}
+
 /// Sample `s` of `n` of a correlated multi-jittered pattern seeded by `h`: stratified in 2D and
 /// in both 1D projections, then shifted by a random toroidal offset so that every sample is
 /// uniform on its own (an unbiased estimator even when `n` is not a product of strata counts).
@@ -476,17 +481,7 @@ mod tests {
         for k in 1..32 {
             v[k] = v[k - 1] ^ (v[k - 1] >> 1);
         }
-        let unscrambled = |i: u32, second: bool| {
-            let mut a = i;
-            if second {
-                a ^= (a >> 1) & 0x5555_5555;
-                a ^= (a >> 2) & 0x3333_3333;
-                a ^= (a >> 4) & 0x0f0f_0f0f;
-                a ^= (a >> 8) & 0x00ff_00ff;
-                a ^= (a >> 16) & 0x0000_ffff;
-            }
-            a.reverse_bits()
-        };
+        let unscrambled = |i: u32, second: bool| if second { pascal(i) } else { i }.reverse_bits();
         for i in [0u32, 1, 2, 3, 5, 12, 255, 1 << 20, 0xdead_beef, u32::MAX] {
             let expect = (0..32).filter(|&k| i >> k & 1 == 1).fold(0, |x, k| x ^ v[k]);
             assert_eq!(unscrambled(i, true), expect, "{i}");
