@@ -134,7 +134,7 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "4,16,64,256,1024")]
         spp: Vec<u32>,
         /// Folder of the reference EXRs.
-        #[arg(long, default_value = "../shared/refs")]
+        #[arg(long, default_value = "tests/references")]
         refs: PathBuf,
         /// Only these scenes (file stems, e.g. cornell).
         #[arg(long, value_delimiter = ',')]

@@ -1,6 +1,7 @@
-//! `pathwave bench-rays`: BVH build time and traversal rates on the rays of
-//! `../shared/refs/ANCHORS.md` (primary, diffuse-bounce and shadow rays on the 1M-triangle knot
-//! and on cornell-diffuse), so that our figures sit beside Embree's measured the same way.
+//! `pathwave bench-rays`: BVH build time and traversal rates on the rays that
+//! `benches/embree/anchor.c` traces with Embree (primary, diffuse-bounce and shadow rays on the
+//! 1M-triangle knot and on cornell-diffuse), so that our figures sit beside Embree's measured
+//! the same way.
 
 use crate::engine::geometry::{Geometry, Primitive};
 use crate::engine::mesh::{MeshBlas, MeshData};

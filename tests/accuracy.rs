@@ -1,5 +1,5 @@
-//! Accuracy against independent ground-truth renders (`../shared/refs`, linear EXR made with
-//! another renderer): block means must agree within the noise estimated from the render itself,
+//! Accuracy against independent ground-truth renders (`tests/references`, linear EXR made
+//! with another renderer): block means must agree within the noise estimated from the render itself,
 //! and the same test must reject the scene with a deliberate 5% error (an albedo, a density).
 //!
 //! The noise estimate is the pixels' sample variance over the sample count. For the

@@ -30,8 +30,8 @@ impl MeshData {
         self.triangles[i as usize].map(|v| self.positions[v as usize])
     }
 
-    /// The (2,3) torus-knot tube of `../shared/refs/ANCHORS.md` with `rings` rings of `segments`
-    /// vertices: `2 rings segments` triangles (1,000,000 for 2000 x 250).
+    /// The (2,3) torus-knot tube of the Embree comparison (`benches/embree/anchor.c`) with
+    /// `rings` rings of `segments` vertices: `2 rings segments` triangles (1,000,000 for 2000 x 250).
     pub fn knot(rings: u32, segments: u32) -> Self {
         use std::f64::consts::TAU;
         let mut positions = Vec::with_capacity((rings * segments) as usize);

@@ -23,9 +23,9 @@ pub fn inline(text: &str) -> SceneDesc {
     parse(text, Path::new("<test>")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A reference image from `../shared/refs`.
+/// A reference image from `tests/references`.
 pub fn reference(name: &str) -> LinearImage {
-    read_linear(&root().join("../shared/refs").join(name)).unwrap_or_else(|e| panic!("{e}"))
+    read_linear(&root().join("tests/references").join(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Renders with the reference path tracer on the current rayon pool.
