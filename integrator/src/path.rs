@@ -205,8 +205,8 @@ pub fn scatter_in_medium(
     (shadow, next)
 }
 
-/// Russian roulette after `rr_depth` bounces with the number `u()` (drawn only if needed): false when the path ends;
-/// survivors are reweighted.
+/// Russian roulette after `rr_depth` bounces with the number `u()` (drawn only if needed):
+/// false when the path ends; survivors are reweighted.
 #[inline]
 fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) -> bool {
     if st.depth >= scene.settings.rr_depth {
