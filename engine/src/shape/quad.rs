@@ -343,6 +343,37 @@ mod tests {
     }
 
     #[test]
+    fn light_samples_are_finite_points_of_the_quad_from_anywhere() {
+        // Points near the plane, on it, at the corners, far and very close: every sample lies
+        // on the quad with a finite positive density (or none, exactly on the plane) and the
+        // density evaluated at it agrees with the one sampled.
+        let q = Quad::new(Vec3A::new(-1.0, -1.0, 0.0), Vec3A::X * 2.0, Vec3A::Y * 3.0).unwrap();
+        let mut rng = crate::testing::signed(5);
+        let mut u = crate::testing::uniform(9);
+        for k in 0..20_000 {
+            let scale = 10f32.powi(k % 9 - 5);
+            let z = match k % 4 {
+                0 => 0.0,
+                1 => rng() * 1e-6,
+                _ => rng() * scale,
+            };
+            let o = Vec3A::new(rng() * 2.0 * scale, rng() * 2.0 * scale, z);
+            let ls = q.sample_solid_angle(o, Vec2::new(u().min(0.999_999), u().min(0.999_999)));
+            assert!(ls.p.is_finite(), "{o}: {}", ls.p);
+            let ph = ls.p - q.q;
+            assert!(
+                ph.z.abs() <= 1e-6
+                    && (-1e-5..=2.0 + 1e-5).contains(&ph.x)
+                    && (-1e-5..=3.0 + 1e-5).contains(&ph.y)
+            );
+            assert!(ls.pdf >= 0.0 && !ls.pdf.is_nan(), "{o}: pdf {}", ls.pdf);
+            if ls.pdf.is_finite() && ls.pdf > 0.0 {
+                assert_eq!(q.pdf_solid_angle(o, ls.p), ls.pdf, "{o}");
+            }
+        }
+    }
+
+    #[test]
     fn spherical_samples_are_uniform_in_solid_angle() {
         // Chi-square test of the sampled directions against uniform density in solid angle:
         // bins are a grid on the quad, each expecting its own solid angle over the total.
