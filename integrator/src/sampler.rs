@@ -158,14 +158,61 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
     std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32)))
 }
 
-/// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]).
+/// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
+/// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
+/// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
+/// table look-ups per coordinate in [`owen_sobol_hi`].
 #[inline]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_2d(dim[l]));
     }
-    let h: [u64; N] = std::array::from_fn(|l| s[l].hash(dim[l]));
-    std::array::from_fn(|l| sobol_2d(s[l].key, s[l].index, partner(dim[l], s[l].lens), h[l]))
+    let part: [(u32, bool); N] = std::array::from_fn(|l| partner(dim[l], s[l].lens));
+    let hi = part[0].1;
+    if part.iter().any(|p| p.1 != hi) {
+        return std::array::from_fn(|l| s[l].get_2d(dim[l]));
+    }
+    let (mut key, mut index, mut group) = ([0u64; N], [0u32; N], [0u32; N]);
+    for l in 0..N {
+        (key[l], index[l], group[l]) = (s[l].key, s[l].index, part[l].0);
+    }
+    let mut h = [0u64; N];
+    for l in 0..N {
+        h[l] = dim_hash(key[l], dim[l]);
+    }
+    let mut hs = h;
+    if hi {
+        for l in 0..N {
+            hs[l] = dim_hash(key[l], group[l]);
+        }
+    }
+    let mut i = [0u32; N];
+    for l in 0..N {
+        i[l] = shuffle(index[l], hs[l] as u32);
+    }
+    // The unscrambled coordinates, digits least significant first.
+    let (mut ax, mut ay) = ([0u32; N], [0u32; N]);
+    if hi {
+        for k in 0..32 {
+            let (cx, cy) = (SOBOL_2_3_REVERSED[0][k], SOBOL_2_3_REVERSED[1][k]);
+            for l in 0..N {
+                let bit = ((i[l] << (31 - k)) as i32 >> 31) as u32;
+                ax[l] ^= cx & bit;
+                ay[l] ^= cy & bit;
+            }
+        }
+    } else {
+        for l in 0..N {
+            (ax[l], ay[l]) = (i[l], pascal(i[l]));
+        }
+    }
+    let mut out = [Vec2::ZERO; N];
+    for l in 0..N {
+        let x = owen_reversed(ax[l], (h[l] >> 32) as u32).reverse_bits();
+        let y = owen_reversed(ay[l], mix64(h[l]) as u32).reverse_bits();
+        out[l] = Vec2::new(to_unit(x), to_unit(y));
+    }
+    out
 }
 
 /// The top 24 bits of `x` as a float in [0, 1).
@@ -283,6 +330,18 @@ const SOBOL_2_3: [[u32; 32]; 2] = [
         0x5005_0093,
     ],
 ];
+
+/// [`SOBOL_2_3`] with each column's bits reversed (the first digit in the lowest bit).
+const SOBOL_2_3_REVERSED: [[u32; 32]; 2] = {
+    let mut t = [[0u32; 32]; 2];
+    let mut k = 0;
+    while k < 32 {
+        t[0][k] = SOBOL_2_3[0][k].reverse_bits();
+        t[1][k] = SOBOL_2_3[1][k].reverse_bits();
+        k += 1;
+    }
+    t
+};
 
 /// [`SOBOL_2_3`] as byte tables: entry (b, v) is the xor of the columns of the set bits of byte
 /// value v at byte b of the index, so that a point takes four look-ups.
@@ -585,14 +644,21 @@ mod tests {
 
     #[test]
     fn lanes_give_the_bits_of_one_sampler_at_a_time() {
-        for kind in KINDS {
-            let s: [Sampler; 8] =
-                std::array::from_fn(|l| Sampler::new(kind, 4, 100 + l as u32, 3 * l as u32, 64));
-            let dim: [u32; 8] = std::array::from_fn(|l| Dims::vertex(l as u32, Dims::LIGHT));
+        // Light points (Sobol's dimensions 2 and 3, paired), BSDF directions (0 and 1), and with
+        // a lens the first light point alone among paired ones.
+        for (kind, lens, slot) in KINDS
+            .into_iter()
+            .flat_map(|k| [(k, false, Dims::LIGHT), (k, true, Dims::LIGHT), (k, false, Dims::BSDF)])
+        {
+            let s: [Sampler; 8] = std::array::from_fn(|l| {
+                let s = Sampler::new(kind, 4, 100 + l as u32, 3 * l as u32, 64);
+                if lens { s.with_lens() } else { s }
+            });
+            let dim: [u32; 8] = std::array::from_fn(|l| Dims::vertex(l as u32, slot));
             let (one, two) = (get_1d_lanes(&s, &dim), get_2d_lanes(&s, &dim));
             for l in 0..8 {
                 assert_eq!(one[l].to_bits(), s[l].get_1d(dim[l]).to_bits());
-                assert_eq!(two[l], s[l].get_2d(dim[l]));
+                assert_eq!(two[l], s[l].get_2d(dim[l]), "{kind:?} lens {lens} slot {slot} lane {l}");
             }
         }
     }
