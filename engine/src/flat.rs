@@ -45,7 +45,7 @@ impl RayStream {
 /// Quads and spheres as parallel arrays, with their primitive indices.
 #[derive(Default, Debug)]
 pub struct FlatPrims {
-    quads: Vec<[[f32; 3]; 5]>,
+    quads: Vec<[[f32; 3]; 4]>,
     quad_id: Vec<u32>,
     spheres: Vec<([f32; 3], f32)>,
     sphere_id: Vec<u32>,

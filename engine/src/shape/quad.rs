@@ -16,10 +16,15 @@ pub struct Quad {
     pub v: Vec3A,
     /// Unit normal `normalize(u x v)`.
     pub n: Vec3A,
-    /// `(u x v) / |u x v|^2`, which turns cross products into the coordinates (a, b).
-    w: Vec3A,
+    /// `v x w` and `w x u` for `w = (u x v) / |u x v|^2`: the coordinates (a, b) of a point
+    /// `q + ph` of the plane are `ea . ph` and `eb . ph` (the triple products `w . (ph x v)`
+    /// and `w . (u x ph)`), with nothing to compute per ray.
+    ea: Vec3A,
+    eb: Vec3A,
     /// Area `|u x v|`.
     pub area: f32,
+    /// [`Self::point_error`].
+    err: f32,
     /// The edges are perpendicular: lights are sampled by solid angle.
     rect: bool,
 }
@@ -67,7 +72,12 @@ impl Quad {
         let len = cs.length();
         let (n, w, area) = (cs / len, cs / (k * len * len), k * len);
         let rect = u.normalize().dot(v.normalize()).abs() < 1e-5;
-        (k > 0.0 && w.is_finite() && area.is_finite()).then_some(Self { q, u, v, n, w, area, rect })
+        let (ea, eb) = (v.cross(w), w.cross(u));
+        // Conditioning of the edges, for `point_error`.
+        let cond = (u.length() * v.length() / area).max(1.0);
+        let err = gamma(4) * (q.abs() + u.abs() + v.abs()).max_element() * cond;
+        let finite = w.is_finite() && ea.is_finite() && eb.is_finite() && area.is_finite();
+        (k > 0.0 && finite).then_some(Self { q, u, v, n, ea, eb, area, err, rect })
     }
 
     /// Error bound of points computed as `q + a u + b v`, scaled by the conditioning
@@ -77,8 +87,7 @@ impl Quad {
     /// tests). For perpendicular edges the factor is 1.
     #[inline]
     pub fn point_error(&self) -> f32 {
-        let cond = (self.u.length() * self.v.length() / self.area).max(1.0);
-        gamma(4) * (self.q.abs() + self.u.abs() + self.v.abs()).max_element() * cond
+        self.err
     }
 
     /// Bounding box.
@@ -96,18 +105,18 @@ impl Quad {
         quad_t(self.kernel(), o.to_array(), d.to_array(), tmax)
     }
 
-    /// The data of the intersection kernel: q, u, v, n, w.
+    /// The data of the intersection kernel: q, n, ea, eb.
     #[inline]
-    pub fn kernel(&self) -> [[f32; 3]; 5] {
-        [self.q, self.u, self.v, self.n, self.w].map(|x| x.to_array())
+    pub fn kernel(&self) -> [[f32; 3]; 4] {
+        [self.q, self.n, self.ea, self.eb].map(|x| x.to_array())
     }
 
     /// Surface data at the point `p`, re-projected onto the plane as `Q + a u + b v`.
     #[inline]
     pub fn surface(&self, p: Vec3A) -> SurfacePoint {
         let ph = p - self.q;
-        let a = self.w.dot(ph.cross(self.v)).clamp(0.0, 1.0);
-        let b = self.w.dot(self.u.cross(ph)).clamp(0.0, 1.0);
+        let a = self.ea.dot(ph).clamp(0.0, 1.0);
+        let b = self.eb.dot(ph).clamp(0.0, 1.0);
         SurfacePoint {
             p: self.q + a * self.u + b * self.v,
             n: self.n,
@@ -233,21 +242,19 @@ fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-#[inline(always)]
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-/// The quad test on plain numbers (`k` = q, u, v, n, w), branch-free so that a loop over many
+/// The quad test on plain numbers (`k` = q, n, ea, eb), branch-free so that a loop over many
 /// rays vectorises; the single-ray and the stream tests both use it, so they agree to the bit.
+/// The hit point is formed relative to the corner, `(o - q) + t d`, which stays accurate far
+/// from the origin.
 #[inline(always)]
-pub fn quad_t(k: [[f32; 3]; 5], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
-    let [q, u, v, n, w] = k;
+pub fn quad_t(k: [[f32; 3]; 4], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
+    let [q, n, ea, eb] = k;
+    let oq = [o[0] - q[0], o[1] - q[1], o[2] - q[2]];
     let denom = dot(n, d);
-    let t = dot(n, [q[0] - o[0], q[1] - o[1], q[2] - o[2]]) / denom;
-    let ph = [o[0] + t * d[0] - q[0], o[1] + t * d[1] - q[1], o[2] + t * d[2] - q[2]];
-    let a = dot(w, cross(ph, v));
-    let b = dot(w, cross(u, ph));
+    let t = -dot(n, oq) / denom;
+    let ph = [oq[0] + t * d[0], oq[1] + t * d[1], oq[2] + t * d[2]];
+    let a = dot(ea, ph);
+    let b = dot(eb, ph);
     let hit = denom != 0.0 && t > 0.0 && t < tmax && a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0;
     if hit { t } else { f32::INFINITY }
 }
