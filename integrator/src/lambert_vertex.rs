@@ -246,11 +246,28 @@ impl VertexSamples {
     }
 }
 
+/// What the kernel reads of the path's state.
+#[derive(Clone, Copy, Debug)]
+pub struct PathIn {
+    /// Throughput.
+    pub beta: Vec3,
+    /// Squared IOR ratios crossed.
+    pub eta_scale: f32,
+    /// Bounces so far.
+    pub depth: u32,
+}
+
+impl From<&PathState> for PathIn {
+    fn from(st: &PathState) -> Self {
+        Self { beta: st.beta, eta_scale: st.eta_scale, depth: st.depth }
+    }
+}
+
 /// Gathers the kernel's inputs for a Lambertian hit, with the vertex's numbers `u`.
 #[inline]
 pub fn gather(
     scene: &RenderScene,
-    st: &PathState,
+    st: PathIn,
     sp: &SurfacePoint,
     wo: Vec3A,
     albedo: Vec3,

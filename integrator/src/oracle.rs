@@ -100,7 +100,8 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
             }
             if let Material::Lambertian { albedo } = *mat {
                 let u = lambert_vertex::VertexSamples::draw(scene, sampler, st.depth);
-                let input = lambert_vertex::gather(scene, &st, &hit.surface, wo, albedo, ray.time, &u);
+                let input =
+                    lambert_vertex::gather(scene, (&st).into(), &hit.surface, wo, albedo, ray.time, &u);
                 let out = lambert_vertex::lambert(&input);
                 break 'vertex lambert_vertex::apply(&input, &out, &mut st, ray.time);
             }

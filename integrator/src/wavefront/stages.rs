@@ -262,12 +262,12 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
 }
 
 /// Lambertian hits: inputs are gathered 8 paths at a time into lane arrays,
-/// the branch-free kernel runs on all lanes at once (vectorised), and outputs are applied.
+/// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
+/// straight to the paths' arrays and the queues (what [`lambert_vertex::apply`] does to one
+/// path's state in the reference path tracer).
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
     let max_depth = scene.settings.max_depth;
-    let mut slots = [0u32; LANES];
-    let mut states = [path::PathState::new(glam::Vec3A::ZERO); LANES];
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut live = std::mem::take(&mut q.scratch);
@@ -285,26 +285,39 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         let samplers = std::array::from_fn(|l| p.sampler[at(l)]);
         let depths = std::array::from_fn(|l| p.depth[at(l)]);
         let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
-        let mut n = 0;
-        for &i in chunk {
+        for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let hit = p.hit[s];
+            let hit = &p.hit[s];
             let Material::Lambertian { albedo } = scene.material_at(hit.material, &hit.surface) else {
                 unreachable!("the Lambertian queue holds Lambertian hits")
             };
-            (slots[n], states[n]) = (i, p.state(s));
+            let path =
+                lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
             let input =
-                lambert_vertex::gather(scene, &states[n], &hit.surface, -p.dir[s], albedo, p.time[s], &u[n]);
-            ins.set(n, &input);
-            n += 1;
+                lambert_vertex::gather(scene, path, &hit.surface, -p.dir[s], albedo, p.time[s], &u[l]);
+            ins.set(l, &input);
         }
         lambert_vertex::lambert_lanes(&ins, &mut outs);
-        for l in 0..n {
-            let (i, s) = (slots[l], slots[l] as usize);
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
             let (input, out) = (ins.get(l), outs.get(l));
-            let (shadow, next) = lambert_vertex::apply(&input, &out, &mut states[l], p.time[s]);
-            route(p, q, i, shadow, next);
-            p.set_state(s, &states[l]);
+            let time = p.time[s];
+            if out.shadow {
+                q.shadow.push(i, &Ray { origin: out.so.into(), dir: out.sd.into(), time }, out.contribution);
+            }
+            if out.pdf > 0.0 {
+                p.beta[s] = out.beta;
+                p.delta[s] = false;
+                p.prev_pdf[s] = out.pdf;
+                p.prev_p[s] = input.p.into();
+                p.depth[s] = input.depth_after;
+            }
+            if out.pdf > 0.0 && out.alive {
+                p.set_ray(s, Ray { origin: out.o.into(), dir: out.d.into(), time });
+                q.next.push(i);
+            } else {
+                q.finished.push(i);
+            }
         }
     }
     q.scratch = live;
