@@ -31,6 +31,22 @@ impl RayStream {
         }
     }
 
+    /// Makes the stream `n` rays long, ray `k` being `ray(k)` (origin, direction): one pass
+    /// of plain stores where pushing would check capacity six times per ray.
+    #[inline]
+    pub fn fill_with(&mut self, n: usize, mut ray: impl FnMut(usize) -> ([f32; 3], [f32; 3])) {
+        self.o.iter_mut().chain(self.d.iter_mut()).for_each(|a| a.resize(n, 0.0));
+        let [ox, oy, oz] = &mut self.o;
+        let [dx, dy, dz] = &mut self.d;
+        let (ox, oy, oz) = (&mut ox[..n], &mut oy[..n], &mut oz[..n]);
+        let (dx, dy, dz) = (&mut dx[..n], &mut dy[..n], &mut dz[..n]);
+        for k in 0..n {
+            let (o, d) = ray(k);
+            (ox[k], oy[k], oz[k]) = (o[0], o[1], o[2]);
+            (dx[k], dy[k], dz[k]) = (d[0], d[1], d[2]);
+        }
+    }
+
     /// Number of rays.
     pub fn len(&self) -> usize {
         self.o[0].len()

@@ -25,11 +25,12 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         return;
     };
     let st = &mut q.stream;
-    st.rays.clear();
-    for &i in &q.active {
-        st.rays.push(p.origin[i as usize].to_array(), p.dir[i as usize].to_array());
-    }
     let n = q.active.len();
+    let active = &q.active;
+    st.rays.fill_with(n, |k| {
+        let i = active[k] as usize;
+        (p.origin[i].to_array(), p.dir[i].to_array())
+    });
     st.t.clear();
     st.t.resize(n, f32::INFINITY);
     st.prim.resize(n, 0);
