@@ -94,30 +94,32 @@ impl Sampler {
     /// Dimension `dim` as one number in [0, 1).
     #[inline]
     pub fn get_1d(&self, dim: u32) -> f32 {
+        let h = self.hash(dim);
         match self.kind {
             SamplerKind::Sobol => {
-                let [shuffled, sx, _] = sobol_seeds(self.key, dim);
-                to_unit(owen_sobol(shuffle(self.index, shuffled), false, sx))
+                let i = shuffle(self.index, h as u32);
+                to_unit(owen_sobol(i, false, (h >> 32) as u32))
             }
-            SamplerKind::Stratified => stratified_1d(self.index, self.spp, self.hash(dim)),
-            SamplerKind::Independent => to_unit((mix64(self.hash(dim) ^ self.index as u64) >> 32) as u32),
+            SamplerKind::Stratified => stratified_1d(self.index, self.spp, h),
+            SamplerKind::Independent => to_unit((mix64(h ^ self.index as u64) >> 32) as u32),
         }
     }
 
     /// Dimension `dim` as two numbers in [0, 1).
     #[inline]
     pub fn get_2d(&self, dim: u32) -> Vec2 {
+        let h = self.hash(dim);
         match self.kind {
-            SamplerKind::Sobol => sobol_2d(self.key, self.index, dim, partner(dim, self.lens)),
-            SamplerKind::Stratified => cmj_2d(self.index, self.spp, self.hash(dim)),
+            SamplerKind::Sobol => sobol_2d(self.key, self.index, partner(dim, self.lens), h),
+            SamplerKind::Stratified => cmj_2d(self.index, self.spp, h),
             SamplerKind::Independent => {
-                let r = mix64(self.hash(dim) ^ self.index as u64);
+                let r = mix64(h ^ self.index as u64);
                 Vec2::new(to_unit((r >> 32) as u32), to_unit(r as u32))
             }
         }
     }
 
-    /// The hash of (pixel, dimension) that seeds a stratified or independent dimension.
+    /// The hash of (pixel, dimension) that seeds a dimension's scramble.
     #[inline]
     fn hash(&self, dim: u32) -> u64 {
         dim_hash(self.key, dim)
@@ -129,34 +131,14 @@ fn dim_hash(key: u64, dim: u32) -> u64 {
     mix64(key ^ (dim as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15))
 }
 
-/// Chris Wellons' `lowbias32` ("Prospecting for Hash Functions", 2018; the hash-prospector
-/// project): a bijective 32-bit mixer of low bias in two 32-bit multiplies, which AVX2 does
-/// for 8 lanes in one instruction each where a 64-bit multiply takes about seven.
+/// A 2D Sobol dimension of pixel `key`, sample `index`, with `h` its [`dim_hash`], and its
+/// [`partner`] (`group`, `hi`): the index shuffled as the partner's, the two coordinates
+/// scrambled by their own seeds.
 #[inline]
-fn lowbias32(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7feb_352d);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846c_a68b);
-    x ^ (x >> 16)
-}
-
-/// The seeds of Sobol dimension `dim` of pixel `key`: its index shuffle's and the scrambles
-/// of its two coordinates.
-#[inline]
-fn sobol_seeds(key: u64, dim: u32) -> [u32; 3] {
-    let a = lowbias32((key ^ (key >> 32)) as u32 ^ (dim + 1).wrapping_mul(0x9e37_79b9));
-    [a, lowbias32(a ^ 0x5163_3e2d), lowbias32(a ^ 0x68bc_21eb)]
-}
-
-/// 2D Sobol dimension `dim` of pixel `key`, sample `index`, with its [`partner`] (`group`,
-/// `hi`): the index shuffled as the partner's, the two coordinates scrambled by their own
-/// seeds.
-#[inline]
-fn sobol_2d(key: u64, index: u32, dim: u32, (group, hi): (u32, bool)) -> Vec2 {
-    let [own, sx, sy] = sobol_seeds(key, dim);
-    let hs = if hi { sobol_seeds(key, group)[0] } else { own };
-    let i = shuffle(index, hs);
+fn sobol_2d(key: u64, index: u32, (group, hi): (u32, bool), h: u64) -> Vec2 {
+    let hs = if hi { dim_hash(key, group) } else { h };
+    let i = shuffle(index, hs as u32);
+    let (sx, sy) = ((h >> 32) as u32, mix64(h) as u32);
     if hi {
         Vec2::new(to_unit(owen_sobol_hi(i, false, sx)), to_unit(owen_sobol_hi(i, true, sy)))
     } else {
@@ -171,13 +153,14 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_1d(dim[l]));
     }
-    let seeds: [[u32; 3]; N] = std::array::from_fn(|l| sobol_seeds(s[l].key, dim[l]));
-    let i: [u32; N] = std::array::from_fn(|l| shuffle(s[l].index, seeds[l][0]));
-    std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, seeds[l][1])))
+    let h: [u64; N] = std::array::from_fn(|l| s[l].hash(dim[l]));
+    let i: [u32; N] = std::array::from_fn(|l| shuffle(s[l].index, h[l] as u32));
+    std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32)))
 }
 
 /// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
-/// runs over all lanes before the next, as plain integer loops that LLVM vectorises; Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
+/// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
+/// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
 /// table look-ups per coordinate in [`owen_sobol_hi`].
 #[inline]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
@@ -193,18 +176,19 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     for l in 0..N {
         (key[l], index[l], group[l]) = (s[l].key, s[l].index, part[l].0);
     }
-    let (mut hs, mut sx, mut sy) = ([0u32; N], [0u32; N], [0u32; N]);
+    let mut h = [0u64; N];
     for l in 0..N {
-        [hs[l], sx[l], sy[l]] = sobol_seeds(key[l], dim[l]);
+        h[l] = dim_hash(key[l], dim[l]);
     }
+    let mut hs = h;
     if hi {
         for l in 0..N {
-            hs[l] = sobol_seeds(key[l], group[l])[0];
+            hs[l] = dim_hash(key[l], group[l]);
         }
     }
     let mut i = [0u32; N];
     for l in 0..N {
-        i[l] = shuffle(index[l], hs[l]);
+        i[l] = shuffle(index[l], hs[l] as u32);
     }
     // The unscrambled coordinates, digits least significant first.
     let (mut ax, mut ay) = ([0u32; N], [0u32; N]);
@@ -224,8 +208,8 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     }
     let mut out = [Vec2::ZERO; N];
     for l in 0..N {
-        let x = owen_reversed(ax[l], sx[l]).reverse_bits();
-        let y = owen_reversed(ay[l], sy[l]).reverse_bits();
+        let x = owen_reversed(ax[l], (h[l] >> 32) as u32).reverse_bits();
+        let y = owen_reversed(ay[l], mix64(h[l]) as u32).reverse_bits();
         out[l] = Vec2::new(to_unit(x), to_unit(y));
     }
     out
