@@ -168,7 +168,7 @@ pub struct ShadowQueue {
 
 impl ShadowQueue {
     /// Appends a shadow ray of path `slot`.
-    #[inline(always)]
+    #[inline]
     pub fn push(&mut self, slot: u32, ray: &Ray, contribution: Vec3) {
         self.rays.push(ray.origin.to_array(), ray.dir.to_array());
         self.time.push(ray.time);
