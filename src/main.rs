@@ -691,7 +691,7 @@ fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
     let sh = wavefront::Stage::TraceShadowRays as usize;
     let rays = st.items[ix] + st.items[sh];
     eprintln!(
-        "{} iterations, mean queue occupancy {:.1}%; {} rays ({} closest, {} shadow): {:.2} Mrays/s; {:.3} M samples/s; {} NaN/Inf discarded",
+        "{} iterations, mean queue occupancy {:.1}%; {} rays ({} closest, {} shadow): {:.2} Mrays/s; {:.3} M samples/s; {} NaN/Inf discarded; lanes {}",
         st.iterations,
         100.0 * st.occupancy_sum / st.iterations.max(1) as f64,
         rays,
@@ -699,7 +699,8 @@ fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
         st.items[sh],
         rays as f64 / wall / 1e6,
         st.paths as f64 / wall / 1e6,
-        non_finite
+        non_finite,
+        pathwave::engine::simd::isa_name()
     );
 }
 

@@ -118,6 +118,14 @@ impl FlatPrims {
     /// Closest hits of a stream: on return `t[i]` and `id[i]` hold ray i's hit (`u32::MAX`
     /// and the initial `t[i]` on a miss). `t` must hold each ray's tmax on entry.
     pub fn intersect_stream(&self, rays: &RayStream, t: &mut [f32], id: &mut [u32]) {
+        crate::simd::lanes(
+            #[inline(always)]
+            || self.intersect_stream_lanes(rays, t, id),
+        )
+    }
+
+    #[inline(always)]
+    fn intersect_stream_lanes(&self, rays: &RayStream, t: &mut [f32], id: &mut [u32]) {
         let n = rays.len();
         let (t, id) = (&mut t[..n], &mut id[..n]);
         id.fill(u32::MAX);
@@ -147,6 +155,14 @@ impl FlatPrims {
     /// Occlusion of a stream with tmax = 1 for every ray (shadow rays aimed at a light point):
     /// `hit[i]` becomes true when something lies on ray i with t in (0, 1).
     pub fn occluded_stream(&self, rays: &RayStream, hit: &mut [bool]) {
+        crate::simd::lanes(
+            #[inline(always)]
+            || self.occluded_stream_lanes(rays, hit),
+        )
+    }
+
+    #[inline(always)]
+    fn occluded_stream_lanes(&self, rays: &RayStream, hit: &mut [bool]) {
         let n = rays.len();
         let hit = &mut hit[..n];
         hit.fill(false);

@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod render_scene;
 pub mod scene;
 pub mod shape;
+pub mod simd;
 pub mod texture;
 pub mod world;
 

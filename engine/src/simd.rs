@@ -1,0 +1,68 @@
+//! Run-time choice of the instruction set for the loops that compute across lanes (ray
+//! streams, sample numbers, shading kernels).
+//!
+//! The build's baseline is AVX2 + FMA (`x86-64-v3`). Where the CPU also has AVX-512 (F, DQ, BW,
+//! VL), [`lanes`] runs its closure compiled for it: 16 lanes of `f32` per instruction instead of
+//! 8, and native 64-bit integer multiplies for the sample hashes. The loops are lane-parallel
+//! IEEE operations (no reductions across lanes, no FMA contraction: Rust never fuses a multiply
+//! and an add on its own), so both instruction sets give the same bits, which
+//! `tests/isa.rs` checks on a whole render. `PATHWAVE_ISA=avx2` keeps the baseline (to compare,
+//! or to work around a CPU that clocks down under AVX-512).
+//!
+//! Why not the `multiversion` crate: it offers no way to choose the baseline at run time on a
+//! CPU that has the wider set, which the equal-bits test and the override need; the mechanism
+//! is the one below, a `#[target_feature]` function into which the closure is inlined.
+
+use std::sync::OnceLock;
+
+/// The environment variable that can hold the lane loops to the baseline (`avx2`).
+pub const ISA_VAR: &str = "PATHWAVE_ISA";
+
+/// Whether the lane loops run with AVX-512 (decided once per process).
+#[inline]
+pub fn avx512() -> bool {
+    static ON: OnceLock<bool> = OnceLock::new();
+    *ON.get_or_init(|| {
+        let allowed = std::env::var(ISA_VAR).map_or(true, |v| !v.eq_ignore_ascii_case("avx2"));
+        allowed && cpu_has_avx512()
+    })
+}
+
+/// Whether the CPU has the AVX-512 subsets the lane loops use, whatever [`ISA_VAR`] says.
+#[cfg(target_arch = "x86_64")]
+pub fn cpu_has_avx512() -> bool {
+    is_x86_feature_detected!("avx512f")
+        && is_x86_feature_detected!("avx512dq")
+        && is_x86_feature_detected!("avx512bw")
+        && is_x86_feature_detected!("avx512vl")
+}
+
+/// Whether the CPU has the AVX-512 subsets the lane loops use (never, off x86-64).
+#[cfg(not(target_arch = "x86_64"))]
+pub fn cpu_has_avx512() -> bool {
+    false
+}
+
+/// The instruction set the lane loops run with, for logs and benchmark records.
+pub fn isa_name() -> &'static str {
+    if avx512() { "avx512" } else { "avx2" }
+}
+
+/// Runs `f`, compiled for AVX-512 when [`avx512`] allows. Mark the closure
+/// `#[inline(always)]` and keep its hot callees `#[inline]`: only code inlined into it is
+/// compiled for the wider set.
+#[inline(always)]
+pub fn lanes<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if avx512() {
+        // SAFETY: `avx512` checked at run time that the CPU has every feature enabled below.
+        return unsafe { with_avx512(f) };
+    }
+    f()
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512bw,avx512vl")]
+unsafe fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
