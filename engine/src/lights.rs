@@ -19,6 +19,39 @@ pub struct LightTable {
     cdf: Vec<f32>,
     /// For each primitive, its light index or [`NO_LIGHT`].
     pub light_of_prim: Vec<u32>,
+    /// Every light as a [`QuadLight`] (indexed like `prims`), when all of them are quads that
+    /// do not move: the integrator then samples them across lanes.
+    pub quads: Option<Vec<QuadLight>>,
+}
+
+/// A quad light as plain numbers, for sampling many points at once: what
+/// [`crate::shape::quad::Quad::sample_solid_angle`] reads when it samples by area, and the
+/// light's emission (without textures). Computed with the same operations as the quad's own
+/// methods, so that a lane-wise sampler reproduces their bits.
+#[derive(Clone, Copy, Debug)]
+pub struct QuadLight {
+    /// Corner.
+    pub q: [f32; 3],
+    /// Edges.
+    pub u: [f32; 3],
+    /// Second edge.
+    pub v: [f32; 3],
+    /// Unit normal.
+    pub n: [f32; 3],
+    /// `q + 0.5 (u + v)`, where the spherical-rectangle bound measures from.
+    pub center: [f32; 3],
+    /// Area.
+    pub area: f32,
+    /// `1 / area`.
+    pub inv_area: f32,
+    /// Error bound of its points.
+    pub err: f32,
+    /// The edges are perpendicular: points close to the light take the spherical rectangle.
+    pub rect: bool,
+    /// Emitted radiance.
+    pub emit: [f32; 3],
+    /// Emits on both sides.
+    pub two_sided: bool,
 }
 
 impl LightTable {
@@ -53,6 +86,19 @@ impl LightTable {
         if let Some(last) = t.cdf.last_mut() {
             *last = 1.0;
         }
+        let still = geometry.velocity.is_none();
+        t.quads = t
+            .prims
+            .iter()
+            .map(|&prim| {
+                match (&geometry.prims[prim as usize], materials[geometry.material[prim as usize] as usize]) {
+                    (Primitive::Quad(q), Material::DiffuseLight { emit, two_sided }) if still => {
+                        Some(q.light(emit.to_array(), two_sided))
+                    }
+                    _ => None,
+                }
+            })
+            .collect();
         t
     }
 

@@ -75,18 +75,18 @@ pub struct LambertOut {
 }
 
 #[inline(always)]
-fn sel3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
+pub(crate) fn sel3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
     Vec3::new(if c { a.x } else { b.x }, if c { a.y } else { b.y }, if c { a.z } else { b.z })
 }
 
 #[inline(always)]
-fn dot(a: Vec3, b: Vec3) -> f32 {
+pub(crate) fn dot(a: Vec3, b: Vec3) -> f32 {
     a.x * b.x + a.y * b.y + a.z * b.z
 }
 
 /// `offset_ray_origin` on plain numbers: error bound along the normal, then one ulp further.
 #[inline(always)]
-fn offset(p: Vec3, err: f32, n: Vec3) -> Vec3 {
+pub(crate) fn offset(p: Vec3, err: f32, n: Vec3) -> Vec3 {
     let d = err * (n.x.abs() + n.y.abs() + n.z.abs());
     let o = Vec3::new(d * n.x, d * n.y, d * n.z);
     let po = Vec3::new(p.x + o.x, p.y + o.y, p.z + o.z);
@@ -274,6 +274,26 @@ pub fn gather(
     time: f32,
     u: &VertexSamples,
 ) -> LambertIn {
+    let mut i = gather_surface(scene, st, sp, wo, albedo, u);
+    if !scene.lights.is_empty()
+        && let Some(lp) = path::pick_light(scene, sp.p, time, u.light_pick, u.light)
+    {
+        (i.wi, i.le, i.pdf_light, i.target) = (lp.wi.into(), lp.le, lp.pdf, lp.target.into());
+    }
+    i
+}
+
+/// [`gather`] without the light sample (left at zero), for callers that sample lights across
+/// lanes ([`crate::light_lanes`]) and set it with [`LambertInLanes::set_lights`].
+#[inline]
+pub fn gather_surface(
+    scene: &RenderScene,
+    st: PathIn,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    albedo: Vec3,
+    u: &VertexSamples,
+) -> LambertIn {
     let mut i = LambertIn {
         p: sp.p.into(),
         n: sp.ns.into(),
@@ -286,11 +306,6 @@ pub fn gather(
         depth_after: st.depth + 1,
         ..Default::default()
     };
-    if !scene.lights.is_empty()
-        && let Some(lp) = path::pick_light(scene, sp.p, time, u.light_pick, u.light)
-    {
-        (i.wi, i.le, i.pdf_light, i.target) = (lp.wi.into(), lp.le, lp.pdf, lp.target.into());
-    }
     i.u_dir = [u.dir.x, u.dir.y];
     i.rr_on = i.depth_after >= scene.settings.rr_depth;
     i.u_rr = u.roulette;
@@ -328,17 +343,17 @@ pub const LANES: usize = 8;
 /// A structure of `[_; LANES]` arrays mirroring a struct, with per-lane get and set: kernel
 /// loops over such locals vectorise (contiguous, and no aliasing to prove).
 macro_rules! lanes {
-    ($lanes:ident for $t:ident { $($f:ident : $kind:tt),* $(,)? }) => {
+    ($vis:vis $lanes:ident for $t:ident { $($f:ident : $kind:tt),* $(,)? }) => {
         #[doc = concat!("`", stringify!($t), "` for ", "8 lanes, one array per component.")]
         #[derive(Clone, Copy, Default)]
-        pub struct $lanes { $($f: lanes!(@ty $kind),)* }
+        $vis struct $lanes { $($f: lanes!(@ty $kind),)* }
         impl $lanes {
             /// Lane `l`.
             #[inline(always)]
-            pub fn get(&self, l: usize) -> $t { $t { $($f: lanes!(@get self.$f, l, $kind),)* } }
+            $vis fn get(&self, l: usize) -> $t { $t { $($f: lanes!(@get self.$f, l, $kind),)* } }
             /// Sets lane `l`.
             #[inline(always)]
-            pub fn set(&mut self, l: usize, v: &$t) { $(lanes!(@set self.$f, l, v.$f, $kind);)* }
+            $vis fn set(&mut self, l: usize, v: &$t) { $(lanes!(@set self.$f, l, v.$f, $kind);)* }
         }
     };
     (@ty v3) => { [[f32; LANES]; 3] };
@@ -352,14 +367,24 @@ macro_rules! lanes {
     (@set $a:expr, $l:expr, $v:expr, $k:ty) => { $a[$l] = $v; };
 }
 
-lanes!(LambertInLanes for LambertIn {
+pub(crate) use lanes;
+
+lanes!(pub LambertInLanes for LambertIn {
     p: v3, n: v3, ng: v3, err: f32, wo: v3, albedo: v3, beta: v3, eta_scale: f32, depth_after: u32,
     wi: v3, le: v3, pdf_light: f32, target: v3, u_dir: f2, u_rr: f32, rr_on: bool,
 });
 
-lanes!(LambertOutLanes for LambertOut {
+lanes!(pub LambertOutLanes for LambertOut {
     shadow: bool, so: v3, sd: v3, contribution: v3, alive: bool, o: v3, d: v3, beta: v3, pdf: f32,
 });
+
+impl LambertInLanes {
+    /// Sets every lane's light sample.
+    #[inline]
+    pub fn set_lights(&mut self, l: &crate::light_lanes::LightLanes) {
+        (self.wi, self.le, self.pdf_light, self.target) = (l.wi, l.le, l.pdf, l.target);
+    }
+}
 
 /// Runs the kernel on all lanes.
 #[inline(never)]

@@ -6,6 +6,7 @@ pub mod aov;
 pub mod denoise;
 pub mod film;
 pub mod lambert_vertex;
+pub mod light_lanes;
 pub mod material;
 pub mod oracle;
 pub mod path;

@@ -6,7 +6,7 @@ pub(crate) mod sphere;
 mod transformed_sphere;
 mod triangle;
 
-pub use quad::Quad;
+pub use quad::{Quad, SPHERICAL_MIN_ESTIMATE};
 pub use sphere::Sphere;
 pub use transformed_sphere::TransformedSphere;
 pub use triangle::Triangle;

@@ -4,6 +4,7 @@
 use super::queues::{Paths, Queues};
 use crate::aov;
 use crate::lambert_vertex;
+use crate::light_lanes;
 use crate::material;
 use crate::path;
 use glam::{Vec3, Vec3A};
@@ -286,6 +287,8 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         let samplers = std::array::from_fn(|l| p.sampler[at(l)]);
         let depths = std::array::from_fn(|l| p.depth[at(l)]);
         let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
+        let mut at = [glam::Vec3::ZERO; LANES];
+        let mut times = [0.0; LANES];
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let hit = &p.hit[s];
@@ -294,10 +297,12 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             };
             let path =
                 lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
-            let input =
-                lambert_vertex::gather(scene, path, &hit.surface, -p.dir[s], albedo, p.time[s], &u[l]);
+            let input = lambert_vertex::gather_surface(scene, path, &hit.surface, -p.dir[s], albedo, &u[l]);
             ins.set(l, &input);
+            (at[l], times[l]) = (hit.surface.p.into(), p.time[s]);
         }
+        // A short last chunk leaves its last lanes at the origin: their samples go unread.
+        ins.set_lights(&light_lanes::sample(scene, &at, &times, &u));
         lambert_vertex::lambert_lanes(&ins, &mut outs);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;

@@ -1,0 +1,267 @@
+//! Next-event estimation's light samples for [`LANES`] shading points at once: what
+//! [`path::pick_light`] computes for each, with the same operations in the same order (so the
+//! same bits), run as one branch-free kernel across lanes where every light is a quad that does
+//! not move ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads)) and the scene
+//! has no textures. Points close enough to a rectangle for its spherical-rectangle sampling,
+//! and every point of other scenes, take [`path::pick_light`] itself.
+
+use crate::lambert_vertex::{LANES, VertexSamples, dot, lanes, offset, sel3};
+use crate::path;
+use glam::Vec3;
+use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::shape::SPHERICAL_MIN_ESTIMATE;
+
+/// Lane arrays, one per coordinate.
+type V3 = [[f32; LANES]; 3];
+
+/// The light sample of each lane, as the Lambertian kernel reads it (all zero where there is
+/// none: no lights, or a light that sends nothing towards the point).
+#[derive(Clone, Copy, Default)]
+pub struct LightLanes {
+    /// Unit direction to the light point.
+    pub wi: V3,
+    /// Radiance it sends towards the shading point.
+    pub le: V3,
+    /// Solid-angle density, light choice included.
+    pub pdf: [f32; LANES],
+    /// The light point offset off the light, for the shadow ray to aim at.
+    pub target: V3,
+}
+
+impl LightLanes {
+    fn set(&mut self, l: usize, lp: &path::LightPick) {
+        for a in 0..3 {
+            (self.wi[a][l], self.le[a][l], self.target[a][l]) = (lp.wi[a], lp.le[a], lp.target[a]);
+        }
+        self.pdf[l] = lp.pdf;
+    }
+}
+
+/// The light samples of the shading points `p` (lane by lane, with the paths' `time` and
+/// numbers `u`).
+#[inline]
+pub fn sample(
+    scene: &RenderScene,
+    p: &[Vec3; LANES],
+    time: &[f32; LANES],
+    u: &[VertexSamples; LANES],
+) -> LightLanes {
+    let mut out = LightLanes::default();
+    if scene.lights.is_empty() {
+        return out;
+    }
+    let scalar = |out: &mut LightLanes, l: usize| {
+        if let Some(lp) = path::pick_light(scene, p[l].into(), time[l], u[l].light_pick, u[l].light) {
+            out.set(l, &lp);
+        }
+    };
+    let quads = match &scene.lights.quads {
+        Some(quads) if !scene.features.textures => quads,
+        _ => {
+            (0..LANES).for_each(|l| scalar(&mut out, l));
+            return out;
+        }
+    };
+    let mut ins = QuadInLanes::default();
+    for l in 0..LANES {
+        let (light, pmf) = scene.lights.pick(u[l].light_pick);
+        let q = &quads[light];
+        ins.set(
+            l,
+            &QuadIn {
+                q: q.q.into(),
+                u: q.u.into(),
+                v: q.v.into(),
+                n: q.n.into(),
+                center: q.center.into(),
+                area: q.area,
+                inv_area: q.inv_area,
+                err: q.err,
+                rect: q.rect,
+                emit: q.emit.into(),
+                two_sided: q.two_sided,
+                pmf,
+                from: p[l],
+                uv: u[l].light.to_array(),
+            },
+        );
+    }
+    let mut outs = QuadOutLanes::default();
+    quads_by_area_lanes(&ins, &mut outs);
+    for l in 0..LANES {
+        let o = outs.get(l);
+        if o.spherical {
+            scalar(&mut out, l);
+        } else {
+            for a in 0..3 {
+                (out.wi[a][l], out.le[a][l], out.target[a][l]) = (o.wi[a], o.le[a], o.target[a]);
+            }
+            out.pdf[l] = o.pdf;
+        }
+    }
+    out
+}
+
+/// What [`quad_by_area`] reads: the lane's light (see
+/// [`QuadLight`](pathwave_engine::lights::QuadLight)), its pick probability, the shading point
+/// and the two numbers.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuadIn {
+    q: Vec3,
+    u: Vec3,
+    v: Vec3,
+    n: Vec3,
+    center: Vec3,
+    area: f32,
+    inv_area: f32,
+    err: f32,
+    rect: bool,
+    emit: Vec3,
+    two_sided: bool,
+    pmf: f32,
+    from: Vec3,
+    uv: [f32; 2],
+}
+
+/// What [`quad_by_area`] writes: the light sample (zero when the light sends nothing), or
+/// `spherical` when the quad samples this point by spherical rectangle instead.
+#[derive(Clone, Copy, Debug, Default)]
+struct QuadOut {
+    wi: Vec3,
+    le: Vec3,
+    pdf: f32,
+    target: Vec3,
+    spherical: bool,
+}
+
+lanes!(QuadInLanes for QuadIn {
+    q: v3, u: v3, v: v3, n: v3, center: v3, area: f32, inv_area: f32, err: f32, rect: bool,
+    emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
+});
+
+lanes!(QuadOutLanes for QuadOut { wi: v3, le: v3, pdf: f32, target: v3, spherical: bool });
+
+/// [`quad_by_area`] on all lanes.
+#[inline(never)]
+fn quads_by_area_lanes(i: &QuadInLanes, o: &mut QuadOutLanes) {
+    for l in 0..LANES {
+        o.set(l, &quad_by_area(&i.get(l)));
+    }
+}
+
+/// A point of the quad sampled by area as `Quad::sample_solid_angle` and `LightTable::sample`
+/// do, and what `path::pick_light` derives from it, branch-free.
+#[inline(always)]
+fn quad_by_area(i: &QuadIn) -> QuadOut {
+    let from = i.from;
+    // `Quad::spherical`'s bound, from the quad's centre.
+    let c = Vec3::new(i.center.x - from.x, i.center.y - from.y, i.center.z - from.z);
+    let d2 = dot(c, c);
+    let spherical = i.rect && !(i.area * dot(i.n, c).abs() < SPHERICAL_MIN_ESTIMATE * d2 * d2.sqrt());
+    // The point (`+ 0.0`: the light's zero motion offset that `LightTable::sample` adds) and
+    // its density by area, in solid angle.
+    let [a, b] = i.uv;
+    let lp = Vec3::new(
+        i.q.x + a * i.u.x + b * i.v.x + 0.0,
+        i.q.y + a * i.u.y + b * i.v.y + 0.0,
+        i.q.z + a * i.u.z + b * i.v.z + 0.0,
+    );
+    let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
+    let dist2 = dot(d, d);
+    let dist = dist2.sqrt();
+    let cos = (dot(i.n, d) / dist).abs();
+    let pdf_area = if cos <= 0.0 { 0.0 } else { i.inv_area * dist2 / cos };
+    // Direction, emission, density and the target off the light.
+    let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
+    let cos_out = dot(i.n, Vec3::new(-wi.x, -wi.y, -wi.z));
+    let le = sel3(i.two_sided || cos_out > 0.0, i.emit, Vec3::ZERO);
+    let pdf = pdf_area * i.pmf;
+    let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
+    let side = sel3(dot(i.n, wi) < 0.0, i.n, Vec3::new(-i.n.x, -i.n.y, -i.n.z));
+    let target = offset(lp, i.err, side);
+    QuadOut {
+        wi: sel3(ok, wi, Vec3::ZERO),
+        le: sel3(ok, le, Vec3::ZERO),
+        pdf: if ok { pdf } else { 0.0 },
+        target: sel3(ok, target, Vec3::ZERO),
+        spherical,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::TestRng;
+    use glam::Vec2;
+    use pathwave_engine::scene::parse;
+    use pathwave_engine::world::SceneWorld;
+
+    /// Three quad lights of different power (a rectangle, a two-sided rectangle and a
+    /// parallelogram) in a box.
+    const LIGHTS: &str = r#"Scene(
+        camera: (look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 40),
+        render: (width: 8, height: 8),
+        materials: {
+            "white": Lambertian(albedo: (0.7, 0.7, 0.7)),
+            "a": DiffuseLight(emit: (10, 10, 10)),
+            "b": DiffuseLight(emit: (2, 3, 4), two_sided: true),
+            "c": DiffuseLight(emit: (1, 0, 0)),
+        },
+        objects: [
+            (shape: Quad(q: (-2, -2, 2), u: (4, 0, 0), v: (0, 4, 0)), material: "white"),
+            (shape: Quad(q: (-0.5, 1.9, -0.5), u: (1, 0, 0), v: (0, 0, 1)), material: "a"),
+            (shape: Quad(q: (1, -1, 0), u: (0, 1, 0), v: (0, 0, 0.5)), material: "b"),
+            (shape: Quad(q: (-1.5, -1.9, 0), u: (1, 0, 0.2), v: (0.3, 0, 1)), material: "c"),
+        ],
+    )"#;
+
+    #[test]
+    fn lanes_give_the_bits_of_pick_light() {
+        let desc = parse(LIGHTS, std::path::Path::new("<test>")).unwrap();
+        let scene = SceneWorld::render_scene(&desc);
+        assert_eq!(scene.lights.quads.as_ref().map(Vec::len), Some(3), "all three lights as quads");
+        let mut rng = TestRng::new(11);
+        let (mut lit, mut spherical) = (0, 0);
+        for _ in 0..4000 {
+            // Points anywhere in the box, some of them close to a light.
+            let p: [Vec3; LANES] = std::array::from_fn(|_| {
+                let near = rng.next_1d() < 0.3;
+                let s = if near { 0.3 } else { 2.0 };
+                let c = if near { Vec3::new(0.0, 1.7, 0.0) } else { Vec3::ZERO };
+                c + s * Vec3::new(
+                    rng.next_1d() * 2.0 - 1.0,
+                    rng.next_1d() * 2.0 - 1.0,
+                    rng.next_1d() * 2.0 - 1.0,
+                )
+            });
+            let u: [VertexSamples; LANES] = std::array::from_fn(|_| VertexSamples {
+                light_pick: rng.next_1d(),
+                light: Vec2::new(rng.next_1d(), rng.next_1d()),
+                ..Default::default()
+            });
+            let got = sample(&scene, &p, &[0.0; LANES], &u);
+            for l in 0..LANES {
+                let want = path::pick_light(&scene, p[l].into(), 0.0, u[l].light_pick, u[l].light);
+                let bits = |v: [f32; 3]| v.map(f32::to_bits);
+                let lane = |a: &V3| [a[0][l], a[1][l], a[2][l]];
+                match want {
+                    Some(w) => {
+                        assert_eq!(bits(lane(&got.wi)), bits(w.wi.to_array()), "wi at {}", p[l]);
+                        assert_eq!(bits(lane(&got.le)), bits(w.le.to_array()), "le at {}", p[l]);
+                        assert_eq!(got.pdf[l].to_bits(), w.pdf.to_bits(), "pdf at {}", p[l]);
+                        assert_eq!(bits(lane(&got.target)), bits(w.target.to_array()), "target at {}", p[l]);
+                        lit += 1;
+                    }
+                    None => assert_eq!(got.pdf[l], 0.0, "no sample at {}", p[l]),
+                }
+                // Which lanes the spherical rectangle took, as the kernel decided.
+                let q = &scene.lights.quads.as_ref().unwrap()[scene.lights.pick(u[l].light_pick).0];
+                let c = Vec3::from(q.center) - p[l];
+                spherical += (q.rect
+                    && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())
+                    as u32;
+            }
+        }
+        assert!(lit > 10_000 && spherical > 500, "lit {lit}, spherical {spherical}");
+    }
+}
