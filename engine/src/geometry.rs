@@ -43,13 +43,14 @@ impl Primitive {
         }
     }
 
-    /// Surface data at a point found by [`Self::intersect`].
+    /// Surface data at a point found by [`Self::intersect`]; spheres leave their texture
+    /// coordinates at zero unless `uv` (quads and triangles have theirs for free).
     #[inline(always)]
-    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+    pub fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
         match self {
-            Primitive::Sphere(s) => s.surface(p),
+            Primitive::Sphere(s) => s.surface_with(p, uv),
             Primitive::Quad(q) => q.surface(p),
-            Primitive::TransformedSphere(s) => s.surface(p),
+            Primitive::TransformedSphere(s) => s.surface_with(p, uv),
             Primitive::Triangle(t) => t.surface(p),
         }
     }
@@ -169,18 +170,25 @@ impl Geometry {
     /// Closest hit with `t` in `(0, tmax)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
+        self.intersect_uv(ray, tmax, true)
+    }
+
+    /// [`Self::intersect`], with texture coordinates in the hit only if `uv` (see
+    /// [`Primitive::surface`]).
+    #[inline]
+    pub fn intersect_uv(&self, ray: &Ray, tmax: f32, uv: bool) -> Option<Hit> {
         // One traversal loop each for still and moving geometry: the still one does no motion
         // arithmetic per primitive.
         match &self.velocity {
-            None => self.intersect_with(ray, tmax, |_| ray.origin),
-            Some(v) => self.intersect_with(ray, tmax, |slot| ray.origin - v[slot] * ray.time),
+            None => self.intersect_with(ray, tmax, uv, |_| ray.origin),
+            Some(v) => self.intersect_with(ray, tmax, uv, |slot| ray.origin - v[slot] * ray.time),
         }
     }
 
     /// [`Self::intersect`], with `origin(slot)` the ray origin relative to primitive `slot`
     /// at rest.
     #[inline(always)]
-    fn intersect_with(&self, ray: &Ray, tmax: f32, origin: impl Fn(usize) -> Vec3A) -> Option<Hit> {
+    fn intersect_with(&self, ray: &Ray, tmax: f32, uv: bool, origin: impl Fn(usize) -> Vec3A) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let mut prim = u32::MAX;
         let best = bvh.closest(ray.origin, ray.dir, tmax, |first, count, mut best| {
@@ -192,50 +200,50 @@ impl Geometry {
             }
             best
         });
-        (prim != u32::MAX).then(|| self.hit(ray, best, prim))
+        (prim != u32::MAX).then(|| self.hit(ray, best, prim, uv))
     }
 
-    /// The hit record of primitive `prim` at distance `t`.
+    /// The hit record of primitive `prim` at distance `t` (texture coordinates if `uv`).
     #[inline]
-    pub fn hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
+    pub fn hit(&self, ray: &Ray, t: f32, prim: u32, uv: bool) -> Hit {
         if self.velocity.is_none() {
-            return self.static_hit(ray, t, prim);
+            return self.static_hit(ray, t, prim, uv);
         }
         Hit {
             t,
             prim,
             material: self.material[prim as usize],
-            surface: self.moving_surface(prim, ray.at(t), ray.time),
+            surface: self.moving_surface(prim, ray.at(t), ray.time, uv),
         }
     }
 
     /// [`Self::hit`] for geometry without motion (flat lists exist only then).
     #[inline(always)]
-    pub fn static_hit(&self, ray: &Ray, t: f32, prim: u32) -> Hit {
+    pub fn static_hit(&self, ray: &Ray, t: f32, prim: u32, uv: bool) -> Hit {
         debug_assert!(self.velocity.is_none());
         Hit {
             t,
             prim,
             material: self.material[prim as usize],
-            surface: self.prims[prim as usize].surface(ray.at(t)),
+            surface: self.prims[prim as usize].surface(ray.at(t), uv),
         }
     }
 
-    /// Surface data of primitive `prim` at the point `p` at `time`.
+    /// Surface data of primitive `prim` at the point `p` at `time`, with texture coordinates.
     #[inline]
     pub fn surface(&self, prim: u32, p: Vec3A, time: f32) -> SurfacePoint {
         if self.velocity.is_none() {
-            return self.prims[prim as usize].surface(p);
+            return self.prims[prim as usize].surface(p, true);
         }
-        self.moving_surface(prim, p, time)
+        self.moving_surface(prim, p, time, true)
     }
 
     /// [`Self::surface`] in scenes with motion (kept out of line).
     #[inline(never)]
-    fn moving_surface(&self, prim: u32, p: Vec3A, time: f32) -> SurfacePoint {
+    fn moving_surface(&self, prim: u32, p: Vec3A, time: f32, uv: bool) -> SurfacePoint {
         // The primitive where it is at `time`: found at rest, moved back.
         let off = self.offset(prim, time);
-        let mut surface = self.prims[prim as usize].surface(p - off);
+        let mut surface = self.prims[prim as usize].surface(p - off, uv);
         surface.err += crate::math::gamma(2) * (surface.p.abs() + off.abs()).max_element();
         surface.p += off;
         surface

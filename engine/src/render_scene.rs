@@ -174,7 +174,7 @@ impl RenderScene {
     /// Closest hit with `t` in `(0, tmax)` among primitives and instances.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
-        let hit = self.geometry.intersect(ray, tmax);
+        let hit = self.geometry.intersect_uv(ray, tmax, self.features.textures);
         if !self.features.instances {
             return hit;
         }

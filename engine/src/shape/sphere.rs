@@ -47,12 +47,21 @@ impl Sphere {
     /// Surface data at the point `p` (re-projected onto the sphere).
     #[inline]
     pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+        self.surface_with(p, true)
+    }
+
+    /// [`Self::surface`], with the texture coordinates (an `atan2` and an `acos`) only if `uv`
+    /// (else zero): scenes without textures never read them.
+    #[inline]
+    pub fn surface_with(&self, p: Vec3A, uv: bool) -> SurfacePoint {
         let d = p - self.center;
         let n = d / d.length();
         let p = self.center + self.radius * n;
-        let u = ((-n.z).atan2(n.x) + PI) / (2.0 * PI);
-        let v = (-n.y).clamp(-1.0, 1.0).acos() / PI;
-        SurfacePoint { p, n, ns: n, uv: Vec2::new(u, v), err: self.point_error() }
+        let uv = match uv {
+            true => Vec2::new(((-n.z).atan2(n.x) + PI) / (2.0 * PI), (-n.y).clamp(-1.0, 1.0).acos() / PI),
+            false => Vec2::ZERO,
+        };
+        SurfacePoint { p, n, ns: n, uv, err: self.point_error() }
     }
 
     /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when

@@ -52,7 +52,13 @@ impl TransformedSphere {
     /// Surface data at the world point `p`.
     #[inline]
     pub fn surface(&self, p: Vec3A) -> SurfacePoint {
-        let local = self.sphere.surface(self.object_from_world.transform_point3a(p));
+        self.surface_with(p, true)
+    }
+
+    /// [`Self::surface`], with texture coordinates only if `uv` (see [`Sphere::surface_with`]).
+    #[inline]
+    pub fn surface_with(&self, p: Vec3A, uv: bool) -> SurfacePoint {
+        let local = self.sphere.surface_with(self.object_from_world.transform_point3a(p), uv);
         let m = self.world_from_object;
         // |M| times the object-space error, plus the rounding of M p + t.
         let norm = m.matrix3.x_axis.abs() + m.matrix3.y_axis.abs() + m.matrix3.z_axis.abs();

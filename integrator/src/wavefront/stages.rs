@@ -41,7 +41,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
         // Flat lists exist only for geometry without motion.
         let ray = p.ray(i as usize);
-        let hit = (prim != u32::MAX).then(|| geo.static_hit(&ray, t, prim));
+        let hit = (prim != u32::MAX).then(|| geo.static_hit(&ray, t, prim, scene.features.textures));
         // Instances behind the primitives' hit are not looked at.
         let hit = match scene.features.instances {
             true => scene.instances.intersect(&ray, t).or(hit),
