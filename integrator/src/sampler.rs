@@ -161,17 +161,15 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 /// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
 /// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
 /// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
-/// table look-ups per coordinate in [`owen_sobol_hi`].
+/// table look-ups per coordinate in [`owen_sobol_hi`]. Lanes may mix dimensions paired with
+/// their [`partner`] and dimensions that are not (paths at different depths under a lens).
 #[inline]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_2d(dim[l]));
     }
     let part: [(u32, bool); N] = std::array::from_fn(|l| partner(dim[l], s[l].lens));
-    let hi = part[0].1;
-    if part.iter().any(|p| p.1 != hi) {
-        return std::array::from_fn(|l| s[l].get_2d(dim[l]));
-    }
+    let any_hi = part.iter().any(|p| p.1);
     let (mut key, mut index, mut group) = ([0u64; N], [0u32; N], [0u32; N]);
     for l in 0..N {
         (key[l], index[l], group[l]) = (s[l].key, s[l].index, part[l].0);
@@ -180,8 +178,10 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     for l in 0..N {
         h[l] = dim_hash(key[l], dim[l]);
     }
+    // The hash that shuffles the index: the partner's (a dimension that is not paired is its
+    // own partner).
     let mut hs = h;
-    if hi {
+    if any_hi {
         for l in 0..N {
             hs[l] = dim_hash(key[l], group[l]);
         }
@@ -190,20 +190,25 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     for l in 0..N {
         i[l] = shuffle(index[l], hs[l] as u32);
     }
-    // The unscrambled coordinates, digits least significant first.
+    // The unscrambled coordinates, digits least significant first: Sobol's dimensions 0 and 1,
+    // or 2 and 3 for paired lanes.
     let (mut ax, mut ay) = ([0u32; N], [0u32; N]);
-    if hi {
+    for l in 0..N {
+        (ax[l], ay[l]) = (i[l], pascal(i[l]));
+    }
+    if any_hi {
+        let (mut bx, mut by) = ([0u32; N], [0u32; N]);
         for k in 0..32 {
             let (cx, cy) = (SOBOL_2_3_REVERSED[0][k], SOBOL_2_3_REVERSED[1][k]);
             for l in 0..N {
                 let bit = ((i[l] << (31 - k)) as i32 >> 31) as u32;
-                ax[l] ^= cx & bit;
-                ay[l] ^= cy & bit;
+                bx[l] ^= cx & bit;
+                by[l] ^= cy & bit;
             }
         }
-    } else {
         for l in 0..N {
-            (ax[l], ay[l]) = (i[l], pascal(i[l]));
+            let hi = part[l].1;
+            (ax[l], ay[l]) = (if hi { bx[l] } else { ax[l] }, if hi { by[l] } else { ay[l] });
         }
     }
     let mut out = [Vec2::ZERO; N];
