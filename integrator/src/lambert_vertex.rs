@@ -235,8 +235,13 @@ impl VertexSamples {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
-        let rr = crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE));
         let rr_depth = scene.settings.rr_depth;
+        // Roulette's number only where some lane plays it.
+        let rr = if depths.iter().any(|&d| d + 1 >= rr_depth) {
+            crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE))
+        } else {
+            [0.0; LANES]
+        };
         std::array::from_fn(|l| Self {
             light_pick: pick[l],
             light: light[l],
