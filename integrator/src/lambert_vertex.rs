@@ -351,7 +351,7 @@ macro_rules! lanes {
     ($vis:vis $lanes:ident for $t:ident { $($f:ident : $kind:tt),* $(,)? }) => {
         #[doc = concat!("`", stringify!($t), "` for ", "8 lanes, one array per component.")]
         #[derive(Clone, Copy, Default)]
-        $vis struct $lanes { $($f: lanes!(@ty $kind),)* }
+        $vis struct $lanes { $(#[doc = concat!("`", stringify!($f), "` of every lane.")] $vis $f: lanes!(@ty $kind),)* }
         impl $lanes {
             /// Lane `l`.
             #[inline(always)]

@@ -176,6 +176,30 @@ impl ShadowQueue {
         self.slot.push(slot);
     }
 
+    /// Appends the shadow rays of lanes `pick` (in order) of a group of paths: lane `l`
+    /// belongs to path `slot[l]`, leaves at time `time[l]` from `o` along `d` (one array per
+    /// coordinate) and adds `contribution` if unoccluded. One capacity check per array, not
+    /// one per ray.
+    #[inline]
+    pub fn extend_lanes<const N: usize>(
+        &mut self,
+        pick: &[usize],
+        slot: &[u32],
+        time: &[f32; N],
+        o: &[[f32; N]; 3],
+        d: &[[f32; N]; 3],
+        contribution: &[[f32; N]; 3],
+    ) {
+        for a in 0..3 {
+            self.rays.o[a].extend(pick.iter().map(|&l| o[a][l]));
+            self.rays.d[a].extend(pick.iter().map(|&l| d[a][l]));
+        }
+        self.time.extend(pick.iter().map(|&l| time[l]));
+        let c = contribution;
+        self.contribution.extend(pick.iter().map(|&l| Vec3::new(c[0][l], c[1][l], c[2][l])));
+        self.slot.extend(pick.iter().map(|&l| slot[l]));
+    }
+
     /// Empties the queue, keeping its storage.
     pub fn clear(&mut self) {
         self.rays.clear();

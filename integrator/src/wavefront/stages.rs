@@ -304,22 +304,29 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         // A short last chunk leaves its last lanes at the origin: their samples go unread.
         ins.set_lights(&light_lanes::sample(scene, &at, &times, &u));
         lambert_vertex::lambert_lanes(&ins, &mut outs);
+        // The shadow rays, lanes that made one first.
+        let (mut pick, mut n) = ([0; LANES], 0);
+        for l in 0..chunk.len() {
+            pick[n] = l;
+            n += outs.shadow[l] as usize;
+        }
+        q.shadow.extend_lanes(&pick[..n], chunk, &times, &outs.so, &outs.sd, &outs.contribution);
+        let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let (input, out) = (ins.get(l), outs.get(l));
-            let time = p.time[s];
-            if out.shadow {
-                q.shadow.push(i, &Ray { origin: out.so.into(), dir: out.sd.into(), time }, out.contribution);
-            }
-            if out.pdf > 0.0 {
-                p.beta[s] = out.beta;
+            let pdf = outs.pdf[l];
+            if pdf > 0.0 {
+                p.beta[s] = v3(&outs.beta, l);
                 p.delta[s] = false;
-                p.prev_pdf[s] = out.pdf;
-                p.prev_p[s] = input.p.into();
-                p.depth[s] = input.depth_after;
+                p.prev_pdf[s] = pdf;
+                p.prev_p[s] = v3(&ins.p, l).into();
+                p.depth[s] = ins.depth_after[l];
             }
-            if out.pdf > 0.0 && out.alive {
-                p.set_ray(s, Ray { origin: out.o.into(), dir: out.d.into(), time });
+            if pdf > 0.0 && outs.alive[l] {
+                p.set_ray(
+                    s,
+                    Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },
+                );
                 q.next.push(i);
             } else {
                 q.finished.push(i);
