@@ -289,7 +289,7 @@ pub fn gather(
 }
 
 /// [`gather`] without the light sample (left at zero), for callers that sample lights across
-/// lanes ([`crate::light_lanes`]) and set it with [`LambertInLanes::set_lights`].
+/// lanes ([`crate::light_lanes::LightSampler`]).
 #[inline]
 pub fn gather_surface(
     scene: &RenderScene,
@@ -355,6 +355,7 @@ macro_rules! lanes {
         impl $lanes {
             /// Lane `l`.
             #[inline(always)]
+            #[allow(dead_code)]
             $vis fn get(&self, l: usize) -> $t { $t { $($f: lanes!(@get self.$f, l, $kind),)* } }
             /// Sets lane `l`.
             #[inline(always)]
@@ -382,14 +383,6 @@ lanes!(pub LambertInLanes for LambertIn {
 lanes!(pub LambertOutLanes for LambertOut {
     shadow: bool, so: v3, sd: v3, contribution: v3, alive: bool, o: v3, d: v3, beta: v3, pdf: f32,
 });
-
-impl LambertInLanes {
-    /// Sets every lane's light sample.
-    #[inline]
-    pub fn set_lights(&mut self, l: &crate::light_lanes::LightLanes) {
-        (self.wi, self.le, self.pdf_light, self.target) = (l.wi, l.le, l.pdf, l.target);
-    }
-}
 
 /// Runs the kernel on all lanes.
 #[inline(never)]

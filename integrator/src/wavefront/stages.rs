@@ -272,6 +272,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     let max_depth = scene.settings.max_depth;
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
+    let mut lights = light_lanes::LightSampler::new(scene);
     let mut live = std::mem::take(&mut q.scratch);
     live.clear();
     for &i in queue {
@@ -302,7 +303,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             (at[l], times[l]) = (hit.surface.p.into(), p.time[s]);
         }
         // A short last chunk leaves its last lanes at the origin: their samples go unread.
-        ins.set_lights(&light_lanes::sample(scene, &at, &times, &u));
+        lights.sample(&at, &times, &u, &mut ins);
         lambert_vertex::lambert_lanes(&ins, &mut outs);
         // The shadow rays, lanes that made one first.
         let (mut pick, mut n) = ([0; LANES], 0);
