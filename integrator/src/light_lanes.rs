@@ -152,9 +152,14 @@ lanes!(QuadOutLanes for QuadOut { wi: v3, le: v3, pdf: f32, target: v3, spherica
 /// [`quad_by_area`] on all lanes.
 #[inline(never)]
 fn quads_by_area_lanes(i: &QuadInLanes, o: &mut QuadOutLanes) {
-    for l in 0..LANES {
-        o.set(l, &quad_by_area(&i.get(l)));
-    }
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            for l in 0..LANES {
+                o.set(l, &quad_by_area(&i.get(l)));
+            }
+        },
+    )
 }
 
 /// A point of the quad sampled by area as `Quad::sample_solid_angle` and `LightTable::sample`

@@ -148,7 +148,7 @@ fn sobol_2d(key: u64, index: u32, (group, hi): (u32, bool), h: u64) -> Vec2 {
 
 /// [`Sampler::get_1d`] for `N` samplers of one kind at once, each at its own dimension: the
 /// same integer operations lane by lane (so the same bits), in loops that LLVM vectorises.
-#[inline]
+#[inline(always)]
 pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N] {
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_1d(dim[l]));
@@ -163,7 +163,7 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 /// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
 /// table look-ups per coordinate in [`owen_sobol_hi`]. Lanes may mix dimensions paired with
 /// their [`partner`] and dimensions that are not (paths at different depths under a lens).
-#[inline]
+#[inline(always)]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_2d(dim[l]));

@@ -263,7 +263,7 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     }
 }
 
-/// Lambertian hits: inputs are gathered 8 paths at a time into lane arrays,
+/// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
 /// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
 /// straight to the paths' arrays and the queues (what [`lambert_vertex::apply`] does to one
 /// path's state in the reference path tracer).
