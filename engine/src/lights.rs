@@ -19,9 +19,9 @@ pub struct LightTable {
     cdf: Vec<f32>,
     /// For each primitive, its light index or [`NO_LIGHT`].
     pub light_of_prim: Vec<u32>,
-    /// Every light as a [`QuadLight`] (indexed like `prims`), when all of them are quads that
-    /// do not move: the integrator then samples them across lanes.
-    pub quads: Option<Vec<QuadLight>>,
+    /// Each light as a [`QuadLight`] (indexed like `prims`) where it is a quad, in scenes where
+    /// nothing moves: the integrator samples those across lanes.
+    pub quads: Vec<Option<QuadLight>>,
 }
 
 /// A quad light as plain numbers, for sampling many points at once: what

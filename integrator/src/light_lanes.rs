@@ -1,9 +1,10 @@
 //! Next-event estimation's light samples for [`LANES`] shading points at once: what
 //! [`path::pick_light`] computes for each, with the same operations in the same order (so the
-//! same bits), run as one branch-free kernel across lanes where every light is a quad that does
-//! not move ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads)) and the scene
-//! has no textures. Points close enough to a rectangle for its spherical-rectangle sampling,
-//! and every point of other scenes, take [`path::pick_light`] itself.
+//! same bits), run as one branch-free kernel across lanes for the lanes whose picked light is
+//! a quad ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads): scenes without
+//! motion) in a scene without textures. Points close enough to a rectangle for its
+//! spherical-rectangle sampling, lanes that picked another kind of light, and every point of
+//! other scenes take [`path::pick_light`] itself.
 
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;
@@ -15,8 +16,8 @@ use pathwave_engine::shape::SPHERICAL_MIN_ESTIMATE;
 /// Samples the lights for groups of [`LANES`] shading points; one per shading loop.
 pub struct LightSampler<'a> {
     scene: &'a RenderScene,
-    /// The lights as quads, when the lanes can sample them.
-    quads: Option<&'a [QuadLight]>,
+    /// The lights as quads where they are, when the lanes can sample some.
+    quads: Option<&'a [Option<QuadLight>]>,
     /// The kernel's inputs; with one light, its fields stay filled in from one group to the next.
     ins: QuadInLanes,
     outs: QuadOutLanes,
@@ -25,12 +26,11 @@ pub struct LightSampler<'a> {
 impl<'a> LightSampler<'a> {
     /// A sampler for `scene`'s lights.
     pub fn new(scene: &'a RenderScene) -> Self {
-        let quads = match &scene.lights.quads {
-            Some(quads) if !scene.features.textures && !quads.is_empty() => Some(quads.as_slice()),
-            _ => None,
-        };
+        let quads = &scene.lights.quads;
+        let quads =
+            (!scene.features.textures && quads.iter().any(Option::is_some)).then_some(quads.as_slice());
         let mut me = Self { scene, quads, ins: QuadInLanes::default(), outs: QuadOutLanes::default() };
-        if let Some([one]) = quads {
+        if let Some([Some(one)]) = quads {
             let pmf = scene.lights.pick(0.0).1;
             (0..LANES).for_each(|l| me.ins.set(l, &QuadIn::new(one, pmf)));
         }
@@ -68,10 +68,15 @@ impl<'a> LightSampler<'a> {
             return;
         };
         let ins = &mut self.ins;
+        // Lanes whose light is not a quad (their inputs left as they were) go to `pick_light`.
+        let mut other = [false; LANES];
         if quads.len() > 1 {
             for l in 0..LANES {
                 let (light, pmf) = scene.lights.pick(u[l].light_pick);
-                ins.set(l, &QuadIn::new(&quads[light], pmf));
+                match &quads[light] {
+                    Some(q) => ins.set(l, &QuadIn::new(q, pmf)),
+                    None => other[l] = true,
+                }
             }
         }
         for l in 0..LANES {
@@ -83,7 +88,7 @@ impl<'a> LightSampler<'a> {
         quads_by_area_lanes(ins, &mut self.outs);
         let o = &self.outs;
         (out.wi, out.le, out.pdf_light, out.target) = (o.wi, o.le, o.pdf, o.target);
-        for l in (0..LANES).filter(|&l| o.spherical[l]) {
+        for l in (0..LANES).filter(|&l| o.spherical[l] || other[l]) {
             scalar(out, l);
         }
     }
@@ -236,12 +241,18 @@ mod tests {
             .replace(r#"material: "b""#, r#"material: "white""#)
             .replace(r#"material: "c""#, r#"material: "white""#);
         check_against_pick_light(&one, 1);
+        // A sphere light among quads: its lanes take `pick_light`.
+        let sphere = LIGHTS.replace(
+            r#"Quad(q: (-1.5, -1.9, 0), u: (1, 0, 0.2), v: (0.3, 0, 1))"#,
+            r#"Sphere(center: (-1, -1.5, 0.5), radius: 0.3)"#,
+        );
+        check_against_pick_light(&sphere, 2);
     }
 
     fn check_against_pick_light(text: &str, lights: usize) {
         let desc = parse(text, std::path::Path::new("<test>")).unwrap();
         let scene = SceneWorld::render_scene(&desc);
-        assert_eq!(scene.lights.quads.as_ref().map(Vec::len), Some(lights), "every light as a quad");
+        assert_eq!(scene.lights.quads.iter().flatten().count(), lights, "the quad lights");
         let mut rng = TestRng::new(11);
         let mut sampler = LightSampler::new(&scene);
         let (mut lit, mut spherical) = (0, 0);
@@ -279,11 +290,12 @@ mod tests {
                     None => assert_eq!(got.pdf_light[l], 0.0, "no sample at {}", p[l]),
                 }
                 // Which lanes the spherical rectangle took, as the kernel decided.
-                let q = &scene.lights.quads.as_ref().unwrap()[scene.lights.pick(u[l].light_pick).0];
-                let c = Vec3::from(q.center) - p[l];
-                spherical += (q.rect
-                    && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())
-                    as u32;
+                if let Some(q) = &scene.lights.quads[scene.lights.pick(u[l].light_pick).0] {
+                    let c = Vec3::from(q.center) - p[l];
+                    spherical += (q.rect
+                        && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())
+                        as u32;
+                }
             }
         }
         assert!(lit > 5_000 && spherical > 500, "lit {lit}, spherical {spherical}");
