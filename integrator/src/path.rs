@@ -261,15 +261,37 @@ pub fn scatter(
 /// The first ray of sample `index` of pixel (x, y), and its random stream.
 #[inline]
 pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
+    let sampler = camera_sampler(scene, x, y, index);
+    let u = CameraSamples {
+        pixel: sampler.get_2d(Dims::PIXEL),
+        lens: if scene.camera.has_aperture() { sampler.get_2d(Dims::LENS) } else { glam::Vec2::ZERO },
+        time: if scene.features.motion { sampler.get_1d(Dims::TIME) } else { 0.0 },
+    };
+    (camera_ray_with(scene, x, y, &u), sampler)
+}
+
+/// The random stream of sample `index` of pixel (x, y).
+#[inline]
+pub fn camera_sampler(scene: &RenderScene, x: u32, y: u32, index: u32) -> Sampler {
     let s = scene.settings;
-    let pixel = y * s.width + x;
-    let sampler = Sampler::new(s.sampler, s.seed, pixel, index, s.spp);
-    let sampler = if scene.camera.has_aperture() { sampler.with_lens() } else { sampler };
-    let offset = sampler.get_2d(Dims::PIXEL);
-    // The lens and time are sampled only where the camera has an aperture and something moves
-    // while the shutter is open.
-    let lens = if scene.camera.has_aperture() { sampler.get_2d(Dims::LENS) } else { glam::Vec2::ZERO };
-    let time = if scene.features.motion { sampler.get_1d(Dims::TIME) } else { 0.0 };
-    let ray = scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + offset, lens, time);
-    (ray, sampler)
+    let sampler = Sampler::new(s.sampler, s.seed, y * s.width + x, index, s.spp);
+    if scene.camera.has_aperture() { sampler.with_lens() } else { sampler }
+}
+
+/// The numbers a camera ray reads: the lens and time are drawn only where the camera has an
+/// aperture and something moves while the shutter is open (else zero).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CameraSamples {
+    /// Position in the pixel.
+    pub pixel: glam::Vec2,
+    /// Point on the lens.
+    pub lens: glam::Vec2,
+    /// Time in the shutter interval.
+    pub time: f32,
+}
+
+/// The camera ray through pixel (x, y) with the numbers `u`.
+#[inline]
+pub fn camera_ray_with(scene: &RenderScene, x: u32, y: u32, u: &CameraSamples) -> Ray {
+    scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + u.pixel, u.lens, u.time)
 }

@@ -17,7 +17,9 @@ mod stages;
 
 use crate::aov::Aovs;
 use crate::film::{Film, PixelAccumulator, clamp_sample};
+use crate::lambert_vertex::LANES;
 use crate::path;
+use crate::sampler::{self, Dims, Sampler};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::material::Material;
@@ -229,19 +231,32 @@ fn render_tile(
     loop {
         let fresh = q.free.len().min((work - next_sample) as usize);
         timed(&mut stats, Stage::GenerateCameraRays, fresh, || {
-            while next_sample < work {
-                let Some(slot) = q.free.pop() else { break };
-                let (px, index) = ((next_sample / spp) as u32, samples.start + (next_sample % spp) as u32);
-                let (x, y) = tile.pixel(px);
-                let (ray, sampler) = path::camera_ray(scene, x, y, index);
-                let s = slot as usize;
-                p.set_ray(s, ray);
-                p.set_state(s, &path::PathState::new(ray.origin));
-                p.sampler[s] = sampler;
-                p.pixel[s] = px;
-                p.guide[s] = Guide::NEW;
-                q.active.push(slot);
-                next_sample += 1;
+            // The new paths' numbers are drawn across lanes, a group at a time.
+            for group in (0..fresh).step_by(LANES) {
+                let m = LANES.min(fresh - group);
+                // Lanes past `m` repeat the last: drawn, not used.
+                let which: [(u32, u32); LANES] = std::array::from_fn(|l| {
+                    let k = next_sample + l.min(m - 1) as u64;
+                    ((k / spp) as u32, samples.start + (k % spp) as u32)
+                });
+                let samplers: [Sampler; LANES] = std::array::from_fn(|l| {
+                    let (x, y) = tile.pixel(which[l].0);
+                    path::camera_sampler(scene, x, y, which[l].1)
+                });
+                let u = camera_samples(scene, &samplers);
+                for l in 0..m {
+                    let slot = q.free.pop().expect("a free slot for every new path");
+                    let (x, y) = tile.pixel(which[l].0);
+                    let ray = path::camera_ray_with(scene, x, y, &u[l]);
+                    let s = slot as usize;
+                    p.set_ray(s, ray);
+                    p.set_state(s, &path::PathState::new(ray.origin));
+                    p.sampler[s] = samplers[l];
+                    p.pixel[s] = which[l].0;
+                    p.guide[s] = Guide::NEW;
+                    q.active.push(slot);
+                }
+                next_sample += m as u64;
             }
         });
         if q.active.is_empty() {
@@ -290,6 +305,26 @@ fn render_tile(
         q.next.clear();
     }
     TileResult { film, guides: guide_sums, stats }
+}
+
+/// [`path::camera_ray`]'s numbers for `LANES` samples at once (the same bits).
+#[inline]
+fn camera_samples(scene: &RenderScene, s: &[Sampler; LANES]) -> [path::CameraSamples; LANES] {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            let pixel = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
+            let lens = match scene.camera.has_aperture() {
+                true => sampler::get_2d_lanes(s, &[Dims::LENS; LANES]),
+                false => [glam::Vec2::ZERO; LANES],
+            };
+            let time = match scene.features.motion {
+                true => sampler::get_1d_lanes(s, &[Dims::TIME; LANES]),
+                false => [0.0; LANES],
+            };
+            std::array::from_fn(|l| path::CameraSamples { pixel: pixel[l], lens: lens[l], time: time[l] })
+        },
+    )
 }
 
 /// Runs a stage under its tracing span, recording its time and item count.
