@@ -222,6 +222,40 @@ fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) ->
     true
 }
 
+/// The numbers BSDF sampling reads at a vertex: the direction's two, the lobe's and Russian
+/// roulette's.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ScatterSamples {
+    /// The direction.
+    pub dir: Vec2,
+    /// The lobe.
+    pub lobe: f32,
+    /// Russian roulette.
+    pub roulette: f32,
+}
+
+impl ScatterSamples {
+    /// The numbers of the vertex after `depth` bounces.
+    #[inline]
+    pub fn draw(sampler: &Sampler, depth: u32) -> Self {
+        Self {
+            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
+            lobe: sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
+            roulette: sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE)),
+        }
+    }
+
+    /// The same numbers for `N` paths at once (the same bits, computed across lanes).
+    #[inline(always)]
+    pub fn draw_lanes<const N: usize>(samplers: &[Sampler; N], depths: &[u32; N]) -> [Self; N] {
+        let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
+        let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
+        let lobe = crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE));
+        let roulette = crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE));
+        std::array::from_fn(|l| Self { dir: dir[l], lobe: lobe[l], roulette: roulette[l] })
+    }
+}
+
 /// Samples the BSDF, updates the throughput, applies Russian roulette; returns the next ray, or
 /// `None` when the path ends.
 #[inline]
@@ -234,14 +268,21 @@ pub fn scatter(
     time: f32,
     sampler: &Sampler,
 ) -> Option<Ray> {
-    let depth = st.depth;
-    let bs = material::sample(
-        mat,
-        wo,
-        sp.ns,
-        sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-        sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
-    )?;
+    scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(sampler, st.depth))
+}
+
+/// [`scatter`] with the vertex's numbers `u` drawn already.
+#[inline]
+pub fn scatter_with(
+    scene: &RenderScene,
+    st: &mut PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    mat: &Material,
+    time: f32,
+    u: &ScatterSamples,
+) -> Option<Ray> {
+    let bs = material::sample(mat, wo, sp.ns, u.dir, u.lobe)?;
     // A direction on one side of the shading normal and the other of the surface ends the
     // path (with vertex normals; without them the two sides agree).
     if bs.wi.dot(sp.n) * bs.wi.dot(sp.ns) <= 0.0 {
@@ -255,7 +296,7 @@ pub fn scatter(
     let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
-    roulette(scene, st, || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))).then_some(ray)
+    roulette(scene, st, || u.roulette).then_some(ray)
 }
 
 /// The first ray of sample `index` of pixel (x, y), and its random stream.

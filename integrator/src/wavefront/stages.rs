@@ -7,6 +7,7 @@ use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::material;
 use crate::path;
+use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
@@ -240,20 +241,37 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     if kind == MaterialKind::Lambertian {
         shade_lambertian_lanes(scene, p, q, &queue);
     } else {
+        use lambert_vertex::LANES;
+        let mut live = std::mem::take(&mut q.scratch);
+        live.clear();
         for &i in &queue {
-            let s = i as usize;
-            let mut st = p.state(s);
-            if st.depth == scene.settings.max_depth {
+            if p.depth[i as usize] == scene.settings.max_depth {
                 q.finished.push(i);
-                continue;
+            } else {
+                live.push(i);
             }
-            let hit = p.hit[s];
-            let mat = &scene.material_at(hit.material, &hit.surface);
-            debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
-            let next = path::scatter(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &p.sampler[s]);
-            route(p, q, i, None, next);
-            p.set_state(s, &st);
         }
+        for chunk in live.chunks(LANES) {
+            // The numbers of all lanes at once (a short last chunk repeats its last path).
+            let at = |l: usize| chunk[l.min(chunk.len() - 1)] as usize;
+            let samplers: [Sampler; LANES] = std::array::from_fn(|l| p.sampler[at(l)]);
+            let depths: [u32; LANES] = std::array::from_fn(|l| p.depth[at(l)]);
+            let u = pathwave_engine::simd::lanes(
+                #[inline(always)]
+                || path::ScatterSamples::draw_lanes(&samplers, &depths),
+            );
+            for (l, &i) in chunk.iter().enumerate() {
+                let s = i as usize;
+                let mut st = p.state(s);
+                let hit = p.hit[s];
+                let mat = &scene.material_at(hit.material, &hit.surface);
+                debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
+                let next = path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
+                route(p, q, i, None, next);
+                p.set_state(s, &st);
+            }
+        }
+        q.scratch = live;
     }
     queue.clear();
     match kind {
