@@ -124,6 +124,18 @@ impl Paths {
         self.time[i] = r.time;
     }
 
+    /// The samplers and depths of the paths in `slots` (at most `N`), lane by lane; a short
+    /// group repeats its last path in the remaining lanes.
+    #[inline]
+    pub fn sampler_lanes<const N: usize>(&self, slots: &[u32]) -> ([Sampler; N], [u32; N]) {
+        let last = slots[slots.len() - 1] as usize;
+        let (mut samplers, mut depths) = ([self.sampler[last]; N], [self.depth[last]; N]);
+        for (l, &i) in slots.iter().enumerate().take(N) {
+            (samplers[l], depths[l]) = (self.sampler[i as usize], self.depth[i as usize]);
+        }
+        (samplers, depths)
+    }
+
     /// Gathers the path state of slot `i`.
     #[inline]
     pub fn state(&self, i: usize) -> PathState {

@@ -7,7 +7,6 @@ use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::material;
 use crate::path;
-use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::material::Material;
@@ -252,10 +251,8 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
             }
         }
         for chunk in live.chunks(LANES) {
-            // The numbers of all lanes at once (a short last chunk repeats its last path).
-            let at = |l: usize| chunk[l.min(chunk.len() - 1)] as usize;
-            let samplers: [Sampler; LANES] = std::array::from_fn(|l| p.sampler[at(l)]);
-            let depths: [u32; LANES] = std::array::from_fn(|l| p.depth[at(l)]);
+            // The numbers of all lanes at once.
+            let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
             let u = pathwave_engine::simd::lanes(
                 #[inline(always)]
                 || path::ScatterSamples::draw_lanes(&samplers, &depths),
@@ -301,10 +298,8 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         }
     }
     for chunk in live.chunks(LANES) {
-        // The vertex's numbers for all lanes at once (a short last chunk repeats its first path).
-        let at = |l: usize| chunk[l.min(chunk.len() - 1)] as usize;
-        let samplers = std::array::from_fn(|l| p.sampler[at(l)]);
-        let depths = std::array::from_fn(|l| p.depth[at(l)]);
+        // The vertex's numbers for all lanes at once.
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
         let mut at = [glam::Vec3::ZERO; LANES];
         let mut times = [0.0; LANES];
