@@ -188,17 +188,19 @@ enum Integrator {
     Oracle,
 }
 
-/// Logs to stderr by `RUST_LOG`; with a trace file, also records every span for Perfetto. The
-/// returned guard flushes the trace when dropped.
+/// Logs to stderr by `RUST_LOG` (warnings and errors when it is unset); with a trace file,
+/// also records every span for Perfetto. The returned guard flushes the trace when dropped.
 fn init_tracing(trace: Option<&PathBuf>) -> Option<tracing_chrome::FlushGuard> {
     use tracing_subscriber::prelude::*;
     fn fmt<S>() -> impl tracing_subscriber::Layer<S>
     where
         S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
     {
-        tracing_subscriber::fmt::layer()
-            .with_writer(std::io::stderr)
-            .with_filter(tracing_subscriber::EnvFilter::from_default_env())
+        tracing_subscriber::fmt::layer().with_writer(std::io::stderr).with_filter(
+            tracing_subscriber::EnvFilter::builder()
+                .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
+                .from_env_lossy(),
+        )
     }
     match trace {
         Some(path) => {

@@ -38,3 +38,21 @@ fn avx512_and_avx2_render_the_same_bits() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn an_unknown_instruction_set_is_reported_and_the_render_goes_on() {
+    let dir = std::env::temp_dir().join(format!("pathwave-isa-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", "scenes/cornell.ron", "--spp", "1", "--width", "16", "--height", "16", "-q", "-o"])
+        .arg(dir.join("c.png"))
+        .env(pathwave::engine::simd::ISA_VAR, "sse9")
+        .env_remove("RUST_LOG")
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("PATHWAVE_ISA=\"sse9\" names no instruction set"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

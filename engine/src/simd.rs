@@ -15,16 +15,33 @@
 
 use std::sync::OnceLock;
 
-/// The environment variable that can hold the lane loops to the baseline (`avx2`).
+/// The environment variable that chooses the lane loops' instruction set: `avx2` (the
+/// baseline), `avx512` or `auto` (the default: AVX-512 where the CPU has it).
 pub const ISA_VAR: &str = "PATHWAVE_ISA";
 
-/// Whether the lane loops run with AVX-512 (decided once per process).
+/// Whether the lane loops run with AVX-512 (decided once per process). A value of
+/// [`ISA_VAR`] that names no set, or AVX-512 on a CPU without it, is reported as a warning and
+/// the CPU's best set is used.
 #[inline]
 pub fn avx512() -> bool {
     static ON: OnceLock<bool> = OnceLock::new();
     *ON.get_or_init(|| {
-        let allowed = std::env::var(ISA_VAR).map_or(true, |v| !v.eq_ignore_ascii_case("avx2"));
-        allowed && cpu_has_avx512()
+        let wanted = std::env::var(ISA_VAR).unwrap_or_default().to_ascii_lowercase();
+        match wanted.as_str() {
+            "avx2" => false,
+            "" | "auto" => cpu_has_avx512(),
+            "avx512" if cpu_has_avx512() => true,
+            "avx512" => {
+                tracing::warn!("{ISA_VAR}=avx512, but this CPU lacks AVX-512 (F, DQ, BW, VL): using AVX2");
+                false
+            }
+            other => {
+                tracing::warn!(
+                    "{ISA_VAR}={other:?} names no instruction set (avx2, avx512 or auto): using auto"
+                );
+                cpu_has_avx512()
+            }
+        }
     })
 }
 
