@@ -223,7 +223,7 @@ fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) ->
 }
 
 /// The numbers BSDF sampling reads at a vertex: the direction's two, the lobe's and Russian
-/// roulette's.
+/// roulette's (drawn only at depths where roulette is played, else zero).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ScatterSamples {
     /// The direction.
@@ -237,21 +237,31 @@ pub struct ScatterSamples {
 impl ScatterSamples {
     /// The numbers of the vertex after `depth` bounces.
     #[inline]
-    pub fn draw(sampler: &Sampler, depth: u32) -> Self {
+    pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
+        let plays = depth + 1 >= scene.settings.rr_depth;
         Self {
             dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
             lobe: sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
-            roulette: sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE)),
+            roulette: if plays { sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE)) } else { 0.0 },
         }
     }
 
-    /// The same numbers for `N` paths at once (the same bits, computed across lanes).
+    /// The same numbers for `N` paths at once (the same bits, computed across lanes; roulette's
+    /// where some lane plays it).
     #[inline(always)]
-    pub fn draw_lanes<const N: usize>(samplers: &[Sampler; N], depths: &[u32; N]) -> [Self; N] {
+    pub fn draw_lanes<const N: usize>(
+        scene: &RenderScene,
+        samplers: &[Sampler; N],
+        depths: &[u32; N],
+    ) -> [Self; N] {
         let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
         let lobe = crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE));
-        let roulette = crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE));
+        let rr_depth = scene.settings.rr_depth;
+        let roulette = match depths.iter().any(|&d| d + 1 >= rr_depth) {
+            true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE)),
+            false => [0.0; N],
+        };
         std::array::from_fn(|l| Self { dir: dir[l], lobe: lobe[l], roulette: roulette[l] })
     }
 }
@@ -268,7 +278,7 @@ pub fn scatter(
     time: f32,
     sampler: &Sampler,
 ) -> Option<Ray> {
-    scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(sampler, st.depth))
+    scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(scene, sampler, st.depth))
 }
 
 /// [`scatter`] with the vertex's numbers `u` drawn already.

@@ -255,7 +255,7 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
             let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
             let u = pathwave_engine::simd::lanes(
                 #[inline(always)]
-                || path::ScatterSamples::draw_lanes(&samplers, &depths),
+                || path::ScatterSamples::draw_lanes(scene, &samplers, &depths),
             );
             for (l, &i) in chunk.iter().enumerate() {
                 let s = i as usize;
