@@ -65,8 +65,8 @@ pub fn run(
             }
             let samples = film.width as f64 * film.height as f64 * spp as f64;
             let mrays = stats.map(|s| {
-                let rays = s.items[wavefront::Stage::IntersectClosest as usize]
-                    + s.items[wavefront::Stage::TraceShadowRays as usize];
+                let rays = s.items[wavefront::Stage::IntersectClosest.index()]
+                    + s.items[wavefront::Stage::TraceShadowRays.index()];
                 rays as f64 / seconds / 1e6
             });
             let row = Row {

@@ -675,7 +675,8 @@ fn bench(
 fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
     let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
     eprintln!("{:<22} {:>7} {:>12} {:>10} {:>9}", "stage", "time %", "items", "M items/s", "calls");
-    for (k, stage) in wavefront::Stage::ALL.iter().enumerate() {
+    for stage in wavefront::Stage::ALL {
+        let k = stage.index();
         if st.calls[k] == 0 {
             continue;
         }
@@ -689,8 +690,8 @@ fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
             st.calls[k]
         );
     }
-    let ix = wavefront::Stage::IntersectClosest as usize;
-    let sh = wavefront::Stage::TraceShadowRays as usize;
+    let ix = wavefront::Stage::IntersectClosest.index();
+    let sh = wavefront::Stage::TraceShadowRays.index();
     let rays = st.items[ix] + st.items[sh];
     eprintln!(
         "{} iterations, mean queue occupancy {:.1}%; {} rays ({} closest, {} shadow): {:.2} Mrays/s; {:.3} M samples/s; {} NaN/Inf discarded; lanes {}",

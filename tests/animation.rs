@@ -285,8 +285,8 @@ fn camera_and_emission_keys_reach_the_scene_and_only_changes_rebuild() {
     .unwrap();
     let mut w = SceneWorld::new(&desc);
     let emit = |s: &pathwave::engine::render_scene::RenderScene| match s.materials[0] {
-        Material::DiffuseLight { emit, .. } => emit.x,
-        _ => panic!("the light"),
+        Material::DiffuseLight(l) => l.emit.x,
+        other => panic!("the light is {other:?}"),
     };
     let at = |w: &mut SceneWorld, t: f32| {
         w.set_time(t, t);

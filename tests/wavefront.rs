@@ -141,7 +141,8 @@ fn trace_file_names_the_stages_and_stats_print_a_table() {
 /// Shading loops exist only for material kinds that some object uses.
 #[test]
 fn unused_materials_add_no_shading_loop() {
-    use pathwave::integrator::wavefront::{MaterialKind, material_kinds};
+    use pathwave::engine::material::MaterialKind;
+    use pathwave::integrator::wavefront::material_kinds;
     let diffuse = SceneWorld::render_scene(&scene("cornell-diffuse.ron"));
     assert_eq!(material_kinds(&diffuse), vec![MaterialKind::Lambertian]);
     let with_unused = inline(

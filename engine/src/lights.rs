@@ -2,7 +2,7 @@
 //! what probability (proportional to emitted power).
 
 use crate::geometry::{Geometry, Primitive};
-use crate::material::Material;
+use crate::material::{Emission, Material};
 use crate::shape::LightSample;
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -60,7 +60,7 @@ impl LightTable {
         let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
         let mut power = Vec::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
-            let Material::DiffuseLight { emit, two_sided } = materials[m as usize] else {
+            let Some(Emission { emit, two_sided }) = materials[m as usize].emission() else {
                 continue;
             };
             let area = match prim {
@@ -91,8 +91,9 @@ impl LightTable {
             .prims
             .iter()
             .map(|&prim| {
-                match (&geometry.prims[prim as usize], materials[geometry.material[prim as usize] as usize]) {
-                    (Primitive::Quad(q), Material::DiffuseLight { emit, two_sided }) if still => {
+                let emission = materials[geometry.material[prim as usize] as usize].emission();
+                match (&geometry.prims[prim as usize], emission) {
+                    (Primitive::Quad(q), Some(Emission { emit, two_sided })) if still => {
                         Some(q.light(emit.to_array(), two_sided))
                     }
                     _ => None,

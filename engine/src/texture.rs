@@ -222,13 +222,19 @@ impl Textures {
     }
 }
 
-/// Which of a material's colours come from textures.
+/// The most colours one material may take from textures.
+pub const MAX_TEXTURED_COLORS: usize = 2;
+
+/// Which of a material's colours come from textures, by colour slot (see
+/// [`crate::material::Colors`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct MaterialTextures {
-    /// Albedo (Lambertian, Metal).
-    pub albedo: Option<TextureId>,
-    /// Emitted radiance (DiffuseLight).
-    pub emit: Option<TextureId>,
+pub struct MaterialTextures(pub [Option<TextureId>; MAX_TEXTURED_COLORS]);
+
+impl MaterialTextures {
+    /// True when some colour comes from a texture.
+    pub fn any(&self) -> bool {
+        self.0.iter().any(Option::is_some)
+    }
 }
 
 /// Ken Perlin's lattice noise with random unit gradients (RTNW ch. 5), from a fixed seed.

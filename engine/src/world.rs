@@ -11,8 +11,8 @@ use crate::media::{Boundary, Media, Medium, Volume};
 use crate::mesh::{MeshBlas, MeshData};
 use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
 use crate::scene::{
-    Albedo, BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc,
-    TextureDesc, compose,
+    BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc, TextureDesc,
+    compose,
 };
 use crate::shape::{Quad, Sphere, TransformedSphere, Triangle};
 use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
@@ -167,10 +167,9 @@ pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials
     let mut changed = false;
     for (id, track) in &keys.0 {
         let new = track.at(t).max(Vec3::ZERO);
-        if let Material::DiffuseLight { emit, .. } = &mut materials.bypass_change_detection().0[*id as usize]
-            && *emit != new
-        {
-            *emit = new;
+        let m = &mut materials.bypass_change_detection().0[*id as usize];
+        if m.emission().is_some_and(|e| e.emit != new) {
+            m.set_emission(new);
             changed = true;
         }
     }
@@ -690,53 +689,10 @@ fn texture_id(desc: &SceneDesc, name: &str) -> TextureId {
 
 /// A material's parameters (textured colours hold the texture's mean) and its textures.
 fn material(desc: &SceneDesc, m: &MaterialDesc, textures: &Textures) -> (Material, MaterialTextures) {
-    let mut tex = MaterialTextures::default();
-    let color = |c: Vec3Or, slot: &mut Option<TextureId>| match c {
-        Vec3Or::Value(v) => v,
-        Vec3Or::Texture(name) => {
-            let id = texture_id(desc, name);
-            *slot = Some(id);
-            textures.mean(id)
-        }
-    };
-    let m = match m {
-        MaterialDesc::Lambertian { albedo } => {
-            Material::Lambertian { albedo: color(albedo.into(), &mut tex.albedo).min(Vec3::ONE) }
-        }
-        MaterialDesc::Metal { albedo, fuzz } => Material::Metal {
-            albedo: color(albedo.into(), &mut tex.albedo).min(Vec3::ONE),
-            fuzz: fuzz.0.min(1.0),
-        },
-        MaterialDesc::Dielectric { ior, fresnel } => Material::Dielectric { ior: ior.0, fresnel: *fresnel },
-        MaterialDesc::DiffuseLight { emit, two_sided } => {
-            Material::DiffuseLight { emit: color(emit.into(), &mut tex.emit), two_sided: *two_sided }
-        }
-    };
-    (m, tex)
-}
-
-/// A colour of either kind, as a plain value or a texture name.
-enum Vec3Or<'a> {
-    Value(Vec3),
-    Texture(&'a str),
-}
-
-impl<'a> From<&'a Color<Albedo>> for Vec3Or<'a> {
-    fn from(c: &'a Color<Albedo>) -> Self {
-        match c {
-            Color::Value(v) => Vec3Or::Value(v.0),
-            Color::Texture(n) => Vec3Or::Texture(n),
-        }
-    }
-}
-
-impl<'a> From<&'a Color<Rgb>> for Vec3Or<'a> {
-    fn from(c: &'a Color<Rgb>) -> Self {
-        match c {
-            Color::Value(v) => Vec3Or::Value(v.0),
-            Color::Texture(n) => Vec3Or::Texture(n),
-        }
-    }
+    Material::build(m, &mut |name| {
+        let id = texture_id(desc, name);
+        (id, textures.mean(id))
+    })
 }
 
 /// A bevy_ecs world holding a scene, with its update schedule.
@@ -754,7 +710,7 @@ impl SceneWorld {
         let textures = build_textures(desc);
         let (mats, per_material): (Vec<Material>, _) =
             desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
-        let emits = |id: usize| matches!(mats[id], Material::DiffuseLight { .. });
+        let emits = |id: usize| mats[id].is_emissive();
         // Boxes and quads whose keyframes turn or scale them become meshes, so that they blur
         // by their motion over the shutter as instances do (not at their mid-shutter pose).
         let shapes: Vec<ShapeDesc> = desc
@@ -932,7 +888,8 @@ mod tests {
         assert_eq!(rebuilds(&w), 2);
 
         // A material edit rebuilds (the light table depends on it): the light goes dark.
-        w.world.resource_mut::<Materials>().0[1] = Material::Lambertian { albedo: Vec3::ONE };
+        w.world.resource_mut::<Materials>().0[1] =
+            crate::material::lambertian::Lambertian { albedo: Vec3::ONE }.into();
         let dark = w.update();
         assert_eq!(rebuilds(&w), 3);
         assert!(dark.lights.is_empty());

@@ -177,7 +177,7 @@ fn scenes_instance_meshes_unless_they_emit() {
     let s = w.update();
     assert_eq!((s.instances.list.len(), s.instances.blas.len()), (2, 1));
     assert_eq!((s.geometry.prims.len(), s.lights.prims.len()), (1, 1), "the emitter stays a primitive");
-    assert!(matches!(s.materials[s.geometry.material[0] as usize], Material::DiffuseLight { .. }));
+    assert!(matches!(s.materials[s.geometry.material[0] as usize], Material::DiffuseLight(_)));
     let n = w.world.query_filtered::<(), With<Instanced>>().iter(&w.world).count();
     assert_eq!(n, 2);
     std::fs::remove_dir_all(&dir).unwrap();

@@ -8,10 +8,10 @@
 //! its expectation, in scenes with media): the denoiser filters the rest and adds it back, so
 //! lights and their antialiased edges stay as sharp as rendered.
 
-use crate::material::dielectric::refract;
 use crate::path;
 use glam::Vec3;
-use pathwave_engine::material::Material;
+use pathwave_engine::material::Specular;
+use pathwave_engine::material::dielectric::refract;
 use pathwave_engine::math::{Ray, offset_ray_origin, reflect};
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
@@ -64,16 +64,6 @@ pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
     out
 }
 
-/// The albedo guide of a material: its reflectance, 1 for glass, an emitter's clamped radiance.
-#[inline]
-pub fn albedo(m: &Material) -> Vec3 {
-    match *m {
-        Material::Lambertian { albedo } | Material::Metal { albedo, .. } => albedo,
-        Material::Dielectric { .. } => Vec3::ONE,
-        Material::DiffuseLight { emit, .. } => emit.clamp(Vec3::ZERO, Vec3::ONE),
-    }
-}
-
 /// The sky's albedo guide: its radiance, clamped.
 #[inline]
 pub fn sky_albedo(radiance: Vec3) -> Vec3 {
@@ -110,16 +100,17 @@ fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
         let wo = -ray.dir.normalize();
         let ns = if sp.ns.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
         let last = bounce == MAX_SPECULAR;
-        let dir = match scene.material_at(h.material, sp) {
-            Material::Metal { albedo, fuzz } if fuzz == 0.0 && !last => {
-                tint *= albedo;
+        let m = scene.material_at(h.material, sp);
+        let dir = match m.specular() {
+            Specular::Mirror if !last => {
+                tint *= m.albedo();
                 reflect(wo, ns)
             }
-            Material::Dielectric { ior, .. } if !last => {
+            Specular::Glass { ior } if !last => {
                 let eta = if sp.ns.dot(wo) >= 0.0 { ior } else { 1.0 / ior };
                 refract(wo, ns, eta).unwrap_or_else(|| reflect(wo, ns))
             }
-            m => return [tint * albedo(&m), ns.into(), emission],
+            _ => return [tint * m.albedo(), ns.into(), emission],
         };
         last_n = ns.into();
         let side = if dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };

@@ -5,8 +5,7 @@
 //! runs it one path at a time; the wavefront runs it over arrays, where it vectorises across
 //! paths. Inputs are gathered and outputs applied by shared code, so both compute the same bits.
 
-use crate::material::power_heuristic;
-use crate::path::{self, PathState, ShadowRay};
+use crate::path::{self, PathState, ShadowRay, power_heuristic};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::Ray;
@@ -416,8 +415,8 @@ pub fn lambert_lanes(i: &LambertInLanes, o: &mut LambertOutLanes) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::testing::{chi2, chi2_critical};
     use glam::Vec2;
+    use pathwave_engine::material::chi2::{chi2, chi2_critical};
 
     #[test]
     fn polynomial_sine_and_cosine_are_accurate_on_the_quarter() {

@@ -1,5 +1,6 @@
-//! pathwave's integrators: how materials scatter light, samplers, the film, and the reference
-//! (megakernel) path tracer that the wavefront integrator is tested against.
+//! pathwave's integrators: the per-vertex steps of a path, samplers, the film, the wavefront
+//! integrator and the reference (megakernel) path tracer it is tested against. How each
+//! material scatters light is the engine's (`pathwave_engine::material`).
 #![warn(missing_docs)]
 
 pub mod aov;
@@ -7,7 +8,6 @@ pub mod denoise;
 pub mod film;
 pub mod lambert_vertex;
 pub mod light_lanes;
-pub mod material;
 pub mod oracle;
 pub mod path;
 pub mod sampler;

@@ -5,12 +5,11 @@
 
 use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex;
-use crate::material;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
 use crate::tile::Tile;
 use glam::Vec3;
-use pathwave_engine::material::Material;
+use pathwave_engine::material::Shading;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
@@ -98,15 +97,26 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
             if st.depth == scene.settings.max_depth {
                 break 'path;
             }
-            if let Material::Lambertian { albedo } = *mat {
-                let u = lambert_vertex::VertexSamples::draw(scene, sampler, st.depth);
-                let input =
-                    lambert_vertex::gather(scene, (&st).into(), &hit.surface, wo, albedo, ray.time, &u);
-                let out = lambert_vertex::lambert(&input);
-                break 'vertex lambert_vertex::apply(&input, &out, &mut st, ray.time);
+            match mat.shading() {
+                Shading::Diffuse => {
+                    let u = lambert_vertex::VertexSamples::draw(scene, sampler, st.depth);
+                    let input = lambert_vertex::gather(
+                        scene,
+                        (&st).into(),
+                        &hit.surface,
+                        wo,
+                        mat.albedo(),
+                        ray.time,
+                        &u,
+                    );
+                    let out = lambert_vertex::lambert(&input);
+                    lambert_vertex::apply(&input, &out, &mut st, ray.time)
+                }
+                Shading::Sampled => {
+                    (None, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
+                }
+                Shading::Emitter => unreachable!("emitters end the path above"),
             }
-            debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
-            (None, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
         };
         if let Some(s) = shadow {
             path::trace_shadow(scene, &mut st, &s);

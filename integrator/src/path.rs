@@ -3,7 +3,6 @@
 //! what an emitter hit adds (MIS-weighted), the light sample that becomes a shadow ray, and
 //! BSDF sampling with Russian roulette.
 
-use crate::material::{self, power_heuristic};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
@@ -54,6 +53,16 @@ pub struct ShadowRay {
     pub ray: Ray,
     /// Throughput times the MIS-weighted light estimate.
     pub contribution: Vec3,
+}
+
+/// Power heuristic (beta = 2) weight of the strategy with density `a` against `b` (Veach 1997).
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2.is_infinite() {
+        return 1.0;
+    }
+    if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
 }
 
 /// A ray left the scene: add the background.
@@ -292,7 +301,7 @@ pub fn scatter_with(
     time: f32,
     u: &ScatterSamples,
 ) -> Option<Ray> {
-    let bs = material::sample(mat, wo, sp.ns, u.dir, u.lobe)?;
+    let bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
     // A direction on one side of the shading normal and the other of the surface ends the
     // path (with vertex normals; without them the two sides agree).
     if bs.wi.dot(sp.n) * bs.wi.dot(sp.ns) <= 0.0 {
@@ -300,7 +309,8 @@ pub fn scatter_with(
     }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
-    st.delta = bs.delta;
+    // No light sampling happened here: an emitter the new ray meets counts in full.
+    st.delta = true;
     st.prev_pdf = bs.pdf;
     st.prev_p = sp.p;
     let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };

@@ -44,13 +44,13 @@ pub fn render_threads(desc: &SceneDesc, threads: usize) -> Film {
 pub fn scale_albedo(desc: &mut SceneDesc, name: &str, factor: f32) {
     use pathwave::engine::scene::{Albedo, Color, MaterialDesc};
     let (_, m) = desc.materials.0.iter_mut().find(|(n, _)| n == name).expect("material exists");
-    match m {
-        MaterialDesc::Lambertian { albedo: Color::Value(albedo) }
-        | MaterialDesc::Metal { albedo: Color::Value(albedo), .. } => {
-            *albedo = Albedo((albedo.0 * factor).min(Vec3::ONE))
-        }
-        _ => panic!("{name} has no albedo colour"),
-    }
+    let albedo = match m {
+        MaterialDesc::Lambertian(d) => &mut d.albedo,
+        MaterialDesc::Metal(d) => &mut d.albedo,
+        _ => panic!("{name} is neither Lambertian nor Metal"),
+    };
+    let Color::Value(a) = albedo else { panic!("{name}'s albedo is a texture") };
+    *a = Albedo((a.0 * factor).min(Vec3::ONE));
 }
 
 /// Block-mean comparison of a render with a reference: the image is cut into `block` x `block`

@@ -2,7 +2,7 @@
 //! the ones documented on each field.
 
 use super::values::*;
-use crate::material::Fresnel;
+pub use crate::material::MaterialDesc;
 use crate::render_scene::SamplerKind;
 use crate::texture::{TextureImage, Wrap};
 use crate::world::{MAX_COORDINATE, world_primitives};
@@ -204,41 +204,6 @@ fn white() -> Rgb {
 
 fn sky_blue() -> Rgb {
     Rgb(Vec3::new(0.5, 0.7, 1.0))
-}
-
-/// A material as written in the scene.
-#[derive(Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields, rename = "Material")]
-pub enum MaterialDesc {
-    /// `Lambertian(albedo: (r, g, b))`.
-    Lambertian {
-        /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
-        albedo: Color<Albedo>,
-    },
-    /// `Metal(albedo: (r, g, b), fuzz: 0.1)`.
-    Metal {
-        /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
-        albedo: Color<Albedo>,
-        /// Blur in [0, 1] (default 0; larger values are clamped to 1).
-        #[serde(default)]
-        fuzz: NonNegative,
-    },
-    /// `Dielectric(ior: 1.5, fresnel: Exact)`.
-    Dielectric {
-        /// Index of refraction (> 0).
-        ior: Positive,
-        /// `Exact` (default) or `Schlick`.
-        #[serde(default)]
-        fresnel: Fresnel,
-    },
-    /// `DiffuseLight(emit: (r, g, b), two_sided: false)`.
-    DiffuseLight {
-        /// Emitted radiance, or a texture.
-        emit: Color<Rgb>,
-        /// Emit on both sides (default false: only on the side of the normal).
-        #[serde(default)]
-        two_sided: bool,
-    },
 }
 
 /// A colour written out, or the name of a texture from `textures`.

@@ -42,7 +42,7 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
         names
             .materials
             .iter()
-            .filter(|(_, m)| matches!(m, super::MaterialDesc::DiffuseLight { .. }))
+            .filter(|(_, m)| m.kind().shading() == crate::material::Shading::Emitter)
             .map(|(n, _)| n.clone())
             .collect(),
         names.textures.0.iter().map(|(n, _)| n.clone()).collect(),

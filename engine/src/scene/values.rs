@@ -52,6 +52,12 @@ impl<'de> Deserialize<'de> for Rgb {
     }
 }
 
+impl From<Rgb> for Vec3 {
+    fn from(c: Rgb) -> Vec3 {
+        c.0
+    }
+}
+
 /// A reflectance `(r, g, b)` with every component in [0, 1] (more would create energy).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Albedo(pub Vec3);
@@ -61,6 +67,12 @@ impl<'de> Deserialize<'de> for Albedo {
         let v = vec3(d)?;
         let ok = v.min_element() >= 0.0 && v.max_element() <= 1.0;
         check::<D, _>(ok, Albedo(v), &format!("expected an albedo with components in [0, 1], found {v}"))
+    }
+}
+
+impl From<Albedo> for Vec3 {
+    fn from(c: Albedo) -> Vec3 {
+        c.0
     }
 }
 

@@ -4,8 +4,8 @@
 //! iteration runs `generate_camera_rays` (fill free slots with new pixel samples),
 //! `intersect_closest` (which also samples free-flight distances in scenes with media),
 //! `handle_escaped`, `handle_emissive`, `shade_medium`, one shading loop per material kind
-//! present (`shade_lambertian`, `shade_metal`, `shade_dielectric`; they write continuation rays
-//! and shadow rays), `trace_shadow_rays` and `accumulate_film` (finished paths free their slot).
+//! present (`shade_lambertian`, `shade_metal`, ...: one per kind in the engine's material
+//! registry that is not an emitter; they write continuation rays and shadow rays), `trace_shadow_rays` and `accumulate_film` (finished paths free their slot).
 //! Paths that end are replaced by new camera samples until the tile's samples are done.
 //!
 //! Every sample is computed by the same per-vertex code as the reference path tracer and pixel
@@ -22,11 +22,10 @@ use crate::path;
 use crate::sampler::{self, Dims, Sampler};
 use crate::tile::Tile;
 use glam::Vec3;
-use pathwave_engine::material::Material;
+use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::render_scene::RenderScene;
 use queues::{Guide, Paths, Queues};
 use rayon::prelude::*;
-pub use stages::MaterialKind;
 use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
@@ -61,35 +60,80 @@ pub enum Stage {
     HandleEmissive,
     /// Scattering in media.
     ShadeMedium,
-    /// Lambertian shading.
-    ShadeLambertian,
-    /// Metal shading.
-    ShadeMetal,
-    /// Dielectric shading.
-    ShadeDielectric,
+    /// The shading loop of one material kind (not an emitter).
+    Shade(MaterialKind),
     /// Occlusion tests.
     TraceShadowRays,
     /// Finished paths into the film.
     AccumulateFilm,
 }
 
-impl Stage {
-    /// All stages in pipeline order.
-    pub const ALL: [Stage; 11] = [
-        Stage::GenerateCameraRays,
-        Stage::IntersectClosest,
-        Stage::RecordGuides,
-        Stage::HandleEscaped,
-        Stage::HandleEmissive,
-        Stage::ShadeMedium,
-        Stage::ShadeLambertian,
-        Stage::ShadeMetal,
-        Stage::ShadeDielectric,
-        Stage::TraceShadowRays,
-        Stage::AccumulateFilm,
-    ];
+/// How many stages there are apart from the shading loops.
+const FIXED_STAGES: usize = 8;
 
-    /// The stage's name (also its tracing span name).
+/// The material kinds that have a shading loop (every kind but the emitters).
+const SHADED_KINDS: usize = {
+    let mut n = 0;
+    let mut k = 0;
+    while k < MaterialKind::COUNT {
+        if !matches!(MaterialKind::ALL[k].shading(), Shading::Emitter) {
+            n += 1;
+        }
+        k += 1;
+    }
+    n
+};
+
+impl Stage {
+    /// Slots in per-stage arrays ([`Stage::index`]); emitters' slots stay unused.
+    pub const SLOTS: usize = FIXED_STAGES + MaterialKind::COUNT;
+
+    /// All stages in pipeline order.
+    pub const ALL: [Stage; FIXED_STAGES + SHADED_KINDS] = {
+        let mut all = [Stage::GenerateCameraRays; FIXED_STAGES + SHADED_KINDS];
+        let head = [
+            Stage::GenerateCameraRays,
+            Stage::IntersectClosest,
+            Stage::RecordGuides,
+            Stage::HandleEscaped,
+            Stage::HandleEmissive,
+            Stage::ShadeMedium,
+        ];
+        let mut n = 0;
+        while n < head.len() {
+            all[n] = head[n];
+            n += 1;
+        }
+        let mut k = 0;
+        while k < MaterialKind::COUNT {
+            let kind = MaterialKind::ALL[k];
+            if !matches!(kind.shading(), Shading::Emitter) {
+                all[n] = Stage::Shade(kind);
+                n += 1;
+            }
+            k += 1;
+        }
+        all[n] = Stage::TraceShadowRays;
+        all[n + 1] = Stage::AccumulateFilm;
+        all
+    };
+
+    /// Where the stage's figures are in [`Stats`]' arrays.
+    pub const fn index(self) -> usize {
+        match self {
+            Stage::GenerateCameraRays => 0,
+            Stage::IntersectClosest => 1,
+            Stage::RecordGuides => 2,
+            Stage::HandleEscaped => 3,
+            Stage::HandleEmissive => 4,
+            Stage::ShadeMedium => 5,
+            Stage::TraceShadowRays => 6,
+            Stage::AccumulateFilm => 7,
+            Stage::Shade(kind) => FIXED_STAGES + kind as usize,
+        }
+    }
+
+    /// The stage's name (also its tracing span's).
     pub fn name(self) -> &'static str {
         match self {
             Stage::GenerateCameraRays => "generate_camera_rays",
@@ -98,9 +142,7 @@ impl Stage {
             Stage::HandleEscaped => "handle_escaped",
             Stage::HandleEmissive => "handle_emissive",
             Stage::ShadeMedium => "shade_medium",
-            Stage::ShadeLambertian => "shade_lambertian",
-            Stage::ShadeMetal => "shade_metal",
-            Stage::ShadeDielectric => "shade_dielectric",
+            Stage::Shade(kind) => kind.stage_name(),
             Stage::TraceShadowRays => "trace_shadow_rays",
             Stage::AccumulateFilm => "accumulate_film",
         }
@@ -110,12 +152,12 @@ impl Stage {
 /// Per-stage time and item counts, summed over workers.
 #[derive(Clone, Debug, Default)]
 pub struct Stats {
-    /// Time spent in each stage (summed over threads), indexed like [`Stage::ALL`].
-    pub time: [Duration; Stage::ALL.len()],
+    /// Time spent in each stage (summed over threads), indexed by [`Stage::index`].
+    pub time: [Duration; Stage::SLOTS],
     /// Items (rays or paths) each stage consumed.
-    pub items: [u64; Stage::ALL.len()],
+    pub items: [u64; Stage::SLOTS],
     /// Stage invocations with a non-empty queue.
-    pub calls: [u64; Stage::ALL.len()],
+    pub calls: [u64; Stage::SLOTS],
     /// Wavefront iterations.
     pub iterations: u64,
     /// Sum over iterations of the fraction of slots that held a live path.
@@ -127,7 +169,7 @@ pub struct Stats {
 impl Stats {
     /// The sums of two sets of statistics.
     pub fn merge(mut self, o: Stats) -> Stats {
-        for k in 0..Stage::ALL.len() {
+        for k in 0..Stage::SLOTS {
             self.time[k] += o.time[k];
             self.items[k] += o.items[k];
             self.calls[k] += o.calls[k];
@@ -271,14 +313,9 @@ fn render_tile(
         timed(&mut stats, Stage::HandleEscaped, q.escaped.len(), || stages::handle_escaped(scene, p, q));
         timed(&mut stats, Stage::HandleEmissive, q.emissive.len(), || stages::handle_emissive(scene, p, q));
         timed(&mut stats, Stage::ShadeMedium, q.medium.len(), || stages::shade_medium(scene, p, q));
-        for (kind, stage, len) in [
-            (MaterialKind::Lambertian, Stage::ShadeLambertian, q.lambertian.len()),
-            (MaterialKind::Metal, Stage::ShadeMetal, q.metal.len()),
-            (MaterialKind::Dielectric, Stage::ShadeDielectric, q.dielectric.len()),
-        ] {
-            if kinds.contains(&kind) {
-                timed(&mut stats, stage, len, || stages::shade(scene, p, q, kind));
-            }
+        for &kind in &kinds {
+            let len = q.shade[kind as usize].len();
+            timed(&mut stats, Stage::Shade(kind), len, || stages::shade(scene, p, q, kind));
         }
         timed(&mut stats, Stage::TraceShadowRays, q.shadow.len(), || stages::trace_shadow_rays(scene, p, q));
         timed(&mut stats, Stage::AccumulateFilm, q.finished.len(), || {
@@ -333,7 +370,7 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
     if items == 0 {
         return;
     }
-    let k = stage as usize;
+    let k = stage.index();
     let _span = match stage {
         Stage::GenerateCameraRays => tracing::trace_span!("generate_camera_rays"),
         Stage::IntersectClosest => tracing::trace_span!("intersect_closest"),
@@ -341,9 +378,7 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
         Stage::HandleEscaped => tracing::trace_span!("handle_escaped"),
         Stage::HandleEmissive => tracing::trace_span!("handle_emissive"),
         Stage::ShadeMedium => tracing::trace_span!("shade_medium"),
-        Stage::ShadeLambertian => tracing::trace_span!("shade_lambertian"),
-        Stage::ShadeMetal => tracing::trace_span!("shade_metal"),
-        Stage::ShadeDielectric => tracing::trace_span!("shade_dielectric"),
+        Stage::Shade(kind) => kind.stage_span(),
         Stage::TraceShadowRays => tracing::trace_span!("trace_shadow_rays"),
         Stage::AccumulateFilm => tracing::trace_span!("accumulate_film"),
     }
@@ -355,24 +390,13 @@ fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
     stats.calls[k] += 1;
 }
 
-/// The material kinds that have a shading loop and that some primitive uses: queues of kinds
-/// the scene does not use (even if it defines such materials) are never visited.
+/// The material kinds that have a shading loop and that some primitive uses, in registry
+/// order: queues of kinds the scene does not use (even if it defines such materials) are never
+/// visited.
 pub fn material_kinds(scene: &RenderScene) -> Vec<MaterialKind> {
-    let mut used = vec![false; scene.materials.len()];
+    let mut used = [false; MaterialKind::COUNT];
     for &m in scene.geometry.material.iter().chain(scene.instances.list.iter().map(|i| &i.material)) {
-        used[m as usize] = true;
+        used[scene.materials[m as usize].kind() as usize] = true;
     }
-    let mut kinds = Vec::new();
-    for (m, _) in scene.materials.iter().zip(&used).filter(|(_, u)| **u) {
-        let k = match m {
-            Material::Lambertian { .. } => MaterialKind::Lambertian,
-            Material::Metal { .. } => MaterialKind::Metal,
-            Material::Dielectric { .. } => MaterialKind::Dielectric,
-            Material::DiffuseLight { .. } => continue,
-        };
-        if !kinds.contains(&k) {
-            kinds.push(k);
-        }
-    }
-    kinds
+    MaterialKind::ALL.into_iter().filter(|&k| used[k as usize] && k.shading() != Shading::Emitter).collect()
 }

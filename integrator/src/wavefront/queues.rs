@@ -6,6 +6,7 @@ use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::flat::RayStream;
 use pathwave_engine::geometry::Hit;
+use pathwave_engine::material::MaterialKind;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::SamplerKind;
 
@@ -248,12 +249,8 @@ pub struct Queues {
     pub escaped: Vec<u32>,
     /// Hits on emitters.
     pub emissive: Vec<u32>,
-    /// Hits by material kind.
-    pub lambertian: Vec<u32>,
-    /// Hits on metal.
-    pub metal: Vec<u32>,
-    /// Hits on glass.
-    pub dielectric: Vec<u32>,
+    /// Hits by material kind (indexed by [`MaterialKind`]; emitters' stay empty).
+    pub shade: [Vec<u32>; MaterialKind::COUNT],
     /// Rays that scattered in a medium before reaching a surface.
     pub medium: Vec<u32>,
     /// Paths that ended; their radiance goes to the film.

@@ -5,11 +5,10 @@ use super::queues::{Paths, Queues};
 use crate::aov;
 use crate::lambert_vertex;
 use crate::light_lanes;
-use crate::material;
 use crate::path;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
-use pathwave_engine::material::Material;
+use pathwave_engine::material::{MaterialKind, Shading, Specular};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
@@ -69,11 +68,10 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
         return;
     };
     p.hit[i as usize] = hit;
-    match scene.materials[hit.material as usize] {
-        Material::Lambertian { .. } => q.lambertian.push(i),
-        Material::Metal { .. } => q.metal.push(i),
-        Material::Dielectric { .. } => q.dielectric.push(i),
-        Material::DiffuseLight { .. } => q.emissive.push(i),
+    let kind = scene.materials[hit.material as usize].kind();
+    match kind.shading() {
+        Shading::Emitter => q.emissive.push(i),
+        Shading::Diffuse | Shading::Sampled => q.shade[kind as usize].push(i),
     }
 }
 
@@ -114,8 +112,8 @@ fn route(p: &mut Paths, q: &mut Queues, i: u32, shadow: Option<path::ShadowRay>,
 pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
     // Glass refracts in most paths and reflects in a few; the guides follow the refraction (as
     // the separate pass does): a path that came back off glass shows the glass.
-    let queues = [&q.escaped, &q.emissive, &q.lambertian, &q.metal, &q.dielectric, &q.medium];
-    for &i in queues.into_iter().flatten() {
+    let queues = [&q.escaped, &q.emissive, &q.medium].into_iter().chain(&q.shade);
+    for &i in queues.flatten() {
         let g = &mut p.guide[i as usize];
         if g.open && g.glass && p.dir[i as usize].dot(g.normal.into()) > 0.0 {
             let normal = g.normal;
@@ -142,10 +140,10 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             if p.depth[s] == 0 {
                 p.guide[s].emission = p.beta[s] * mat.emitted(hit.surface.n.dot(-p.dir[s]));
             }
-            p.guide[s].close(aov::albedo(&mat), facing(hit.surface.ns, p.dir[s]));
+            p.guide[s].close(mat.albedo(), facing(hit.surface.ns, p.dir[s]));
         }
     }
-    for queue in [&q.lambertian, &q.metal, &q.dielectric] {
+    for queue in &q.shade {
         for &i in queue {
             let s = i as usize;
             if !p.guide[s].open {
@@ -153,14 +151,15 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             }
             let hit = p.hit[s];
             let ns = facing(hit.surface.ns, p.dir[s]);
-            match scene.material_at(hit.material, &hit.surface) {
+            let m = scene.material_at(hit.material, &hit.surface);
+            match m.specular() {
                 // The chain goes on: the next hit of the path records.
-                Material::Metal { albedo, fuzz } if fuzz == 0.0 => {
+                Specular::Mirror => {
                     let g = &mut p.guide[s];
-                    (g.tint, g.normal, g.glass) = (g.tint * albedo, ns, false);
+                    (g.tint, g.normal, g.glass) = (g.tint * m.albedo(), ns, false);
                 }
-                Material::Dielectric { .. } => (p.guide[s].normal, p.guide[s].glass) = (ns, true),
-                m => p.guide[s].close(aov::albedo(&m), ns),
+                Specular::Glass { .. } => (p.guide[s].normal, p.guide[s].glass) = (ns, true),
+                Specular::No => p.guide[s].close(m.albedo(), ns),
             }
         }
     }
@@ -173,7 +172,7 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             match hit.t.is_finite() {
                 true => {
                     let m = scene.material_at(hit.material, &hit.surface);
-                    p.guide[s].close(aov::albedo(&m), facing(hit.surface.ns, p.dir[s]));
+                    p.guide[s].close(m.albedo(), facing(hit.surface.ns, p.dir[s]));
                 }
                 false => p.guide[s].close(aov::sky_albedo(scene.background.radiance(p.dir[s])), Vec3::ZERO),
             }
@@ -228,54 +227,52 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     q.medium.clear();
 }
 
-/// One shading loop for the hits of one material kind: Lambertian hits go through the lane
-/// kernel (light sampling into the shadow queue, BSDF sampling into the next iteration's
-/// queue); the delta materials only sample their BSDF. Which queue is the `kind` argument.
+/// One shading loop for the hits of one material kind: kinds shaded as
+/// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
+/// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
+/// their BSDF.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
-    let mut queue = std::mem::take(match kind {
-        MaterialKind::Lambertian => &mut q.lambertian,
-        MaterialKind::Metal => &mut q.metal,
-        MaterialKind::Dielectric => &mut q.dielectric,
-    });
-    if kind == MaterialKind::Lambertian {
-        shade_lambertian_lanes(scene, p, q, &queue);
-    } else {
-        use lambert_vertex::LANES;
-        let mut live = std::mem::take(&mut q.scratch);
-        live.clear();
-        for &i in &queue {
-            if p.depth[i as usize] == scene.settings.max_depth {
-                q.finished.push(i);
-            } else {
-                live.push(i);
-            }
-        }
-        for chunk in live.chunks(LANES) {
-            // The numbers of all lanes at once.
-            let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
-            let u = pathwave_engine::simd::lanes(
-                #[inline(always)]
-                || path::ScatterSamples::draw_lanes(scene, &samplers, &depths),
-            );
-            for (l, &i) in chunk.iter().enumerate() {
-                let s = i as usize;
-                let mut st = p.state(s);
-                let hit = p.hit[s];
-                let mat = &scene.material_at(hit.material, &hit.surface);
-                debug_assert!(!material::has_smooth_part(mat), "only Lambertian surfaces sample lights");
-                let next = path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
-                route(p, q, i, None, next);
-                p.set_state(s, &st);
-            }
-        }
-        q.scratch = live;
+    let mut queue = std::mem::take(&mut q.shade[kind as usize]);
+    match kind.shading() {
+        Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
+        Shading::Sampled => shade_sampled(scene, p, q, &queue),
+        Shading::Emitter => unreachable!("emitters have no shading queue"),
     }
     queue.clear();
-    match kind {
-        MaterialKind::Lambertian => q.lambertian = queue,
-        MaterialKind::Metal => q.metal = queue,
-        MaterialKind::Dielectric => q.dielectric = queue,
+    q.shade[kind as usize] = queue;
+}
+
+/// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
+/// drawn at once, then BSDF sampling path by path.
+fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use lambert_vertex::LANES;
+    let mut live = std::mem::take(&mut q.scratch);
+    live.clear();
+    for &i in queue {
+        if p.depth[i as usize] == scene.settings.max_depth {
+            q.finished.push(i);
+        } else {
+            live.push(i);
+        }
     }
+    for chunk in live.chunks(LANES) {
+        // The numbers of all lanes at once.
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let u = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || path::ScatterSamples::draw_lanes(scene, &samplers, &depths),
+        );
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let mut st = p.state(s);
+            let hit = p.hit[s];
+            let mat = &scene.material_at(hit.material, &hit.surface);
+            let next = path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
+            route(p, q, i, None, next);
+            p.set_state(s, &st);
+        }
+    }
+    q.scratch = live;
 }
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
@@ -306,9 +303,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let hit = &p.hit[s];
-            let Material::Lambertian { albedo } = scene.material_at(hit.material, &hit.surface) else {
-                unreachable!("the Lambertian queue holds Lambertian hits")
-            };
+            let albedo = scene.albedo_at(hit.material, &hit.surface);
             let path =
                 lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
             let input = lambert_vertex::gather_surface(scene, path, &hit.surface, -p.dir[s], albedo, &u[l]);
@@ -397,15 +392,4 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             p.l[sq.slot[k] as usize] += sq.contribution[k];
         }
     }
-}
-
-/// The material kinds that have a shading loop.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MaterialKind {
-    /// Lambertian (with light sampling).
-    Lambertian,
-    /// Metal.
-    Metal,
-    /// Dielectric.
-    Dielectric,
 }

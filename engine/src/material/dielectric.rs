@@ -2,10 +2,63 @@
 //! exact Fresnel equations for unpolarised light or Schlick's approximation, and total internal
 //! reflection (SEED.md 2.4.2). Radiance is scaled by 1/eta^2 on refraction.
 
-use super::BsdfSample;
-use glam::{Vec3, Vec3A};
-use pathwave_engine::material::Fresnel;
-use pathwave_engine::math::reflect;
+use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
+use crate::math::reflect;
+use crate::scene::Positive;
+use glam::{Vec2, Vec3, Vec3A};
+
+/// How a dielectric computes its reflectance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+pub enum Fresnel {
+    /// The exact Fresnel equations for unpolarised light (default).
+    #[default]
+    Exact,
+    /// Schlick's approximation (what SEED.md's original renderer used).
+    Schlick,
+}
+
+/// `Dielectric(ior: 1.5, fresnel: Exact)`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct DielectricDesc {
+    /// Index of refraction (> 0).
+    pub ior: Positive,
+    /// `Exact` (default) or `Schlick`.
+    #[serde(default)]
+    pub fresnel: Fresnel,
+}
+
+/// Smooth clear dielectric (glass), with reflection and refraction weighted by Fresnel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dielectric {
+    /// Index of refraction inside (outside is 1).
+    pub ior: f32,
+    /// Exact or Schlick reflectance.
+    pub fresnel: Fresnel,
+}
+
+impl MaterialModel for Dielectric {
+    type Desc = DielectricDesc;
+    const SHADING: Shading = Shading::Sampled;
+
+    fn build(desc: &DielectricDesc, _colors: &mut Colors) -> Self {
+        Self { ior: desc.ior.0, fresnel: desc.fresnel }
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3A, n: Vec3A, _u: Vec2, uc: f32) -> Option<BsdfSample> {
+        sample(self.ior, self.fresnel, wo, n, uc)
+    }
+
+    /// Glass shows as white in the albedo guide.
+    fn albedo(&self) -> Vec3 {
+        Vec3::ONE
+    }
+
+    fn specular(&self) -> Specular {
+        Specular::Glass { ior: self.ior }
+    }
+}
 
 /// Exact unpolarised Fresnel reflectance. `cos_i` >= 0 is measured on the incident side and
 /// `eta` = n_transmitted / n_incident.
@@ -58,10 +111,10 @@ pub fn sample(ior: f32, fresnel: Fresnel, wo: Vec3A, n: Vec3A, uc: f32) -> Optio
         Fresnel::Schlick => fresnel_schlick(cos_i, eta),
     };
     if uc < f {
-        return Some(BsdfSample { wi: reflect(wo, nf), weight: Vec3::ONE, pdf: f, delta: true, eta: 1.0 });
+        return Some(BsdfSample { wi: reflect(wo, nf), weight: Vec3::ONE, pdf: f, eta: 1.0 });
     }
     let wi = refract(wo, nf, eta)?.normalize();
-    Some(BsdfSample { wi, weight: Vec3::splat(1.0 / (eta * eta)), pdf: 1.0 - f, delta: true, eta })
+    Some(BsdfSample { wi, weight: Vec3::splat(1.0 / (eta * eta)), pdf: 1.0 - f, eta })
 }
 
 #[cfg(test)]
@@ -110,11 +163,11 @@ mod tests {
         let n = Vec3A::Z;
         let wo = Vec3A::new(0.7, 0.0, 0.3).normalize();
         let f = fresnel_exact(wo.z, 1.5);
-        let mut s = crate::sampler::TestRng::new(9);
+        let mut r = crate::testing::uniform(9);
         let total = 200_000;
         let mut reflected = 0;
         for _ in 0..total {
-            let b = sample(1.5, Fresnel::Exact, wo, n, s.next_1d()).unwrap();
+            let b = sample(1.5, Fresnel::Exact, wo, n, r()).unwrap();
             if b.wi.dot(n) > 0.0 {
                 reflected += 1;
                 assert_eq!(b.weight, Vec3::ONE);

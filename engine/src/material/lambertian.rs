@@ -1,9 +1,51 @@
 //! Lambertian diffuse reflection, two-sided, sampled with the cosine density (SEED.md 12.3).
+//! The integrators shade it with their Lambertian lane kernel (light sampling and MIS);
+//! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 
-use super::BsdfSample;
+use super::{BsdfSample, Colors, MaterialModel, Shading};
+use crate::math::{Frame, concentric_disk};
+use crate::scene::{Albedo, Color};
 use glam::{Vec2, Vec3, Vec3A};
-use pathwave_engine::math::{Frame, concentric_disk};
 use std::f32::consts::FRAC_1_PI;
+
+/// `Lambertian(albedo: (r, g, b))`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct LambertianDesc {
+    /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
+    pub albedo: Color<Albedo>,
+}
+
+/// Ideal diffuse reflector, two-sided.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lambertian {
+    /// Reflectance in [0, 1].
+    pub albedo: Vec3,
+}
+
+impl MaterialModel for Lambertian {
+    type Desc = LambertianDesc;
+    const SHADING: Shading = Shading::Diffuse;
+
+    fn build(desc: &LambertianDesc, colors: &mut Colors) -> Self {
+        Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE) }
+    }
+
+    #[inline]
+    fn set_color(&mut self, _slot: usize, value: Vec3) {
+        self.albedo = value.clamp(Vec3::ZERO, Vec3::ONE);
+    }
+
+    #[inline]
+    fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, _uc: f32) -> Option<BsdfSample> {
+        sample(self.albedo, wo, n, u)
+    }
+
+    #[inline]
+    fn albedo(&self) -> Vec3 {
+        self.albedo
+    }
+}
 
 /// Cosine-weighted direction about +z: density `cos(theta) / pi`.
 #[inline]
@@ -23,7 +65,7 @@ pub fn sample(albedo: Vec3, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> 
         return None;
     }
     let wi = Frame::from_normal(nf).to_world(local);
-    Some(BsdfSample { wi, weight: albedo, pdf, delta: false, eta: 1.0 })
+    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0 })
 }
 
 /// `f |cos|` and pdf.
@@ -40,7 +82,7 @@ pub fn eval(albedo: Vec3, wo: Vec3A, wi: Vec3A, n: Vec3A) -> (Vec3, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::material::testing::{chi2, chi2_critical};
+    use crate::material::chi2::{chi2, chi2_critical};
 
     #[test]
     fn sampling_matches_cosine_pdf_chi2() {

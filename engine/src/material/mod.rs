@@ -1,0 +1,458 @@
+//! Materials: what each kind is made of, how a scene writes it, and how it scatters light.
+//!
+//! Each kind lives in its own file as a type implementing [`MaterialModel`] (its parameters,
+//! its RON description, its BSDF and its tests). The [`registry!`] invocation below is the one
+//! list of kinds: it generates the [`Material`] enum the integrators read, the
+//! [`MaterialDesc`] enum the scene parser fills (`Kind(field: value, ...)`), and
+//! [`MaterialKind`], which names the shading queues, stages and statistics. Adding a material
+//! means its file, one line in that list, and its RON description in the README.
+//!
+//! Directions point away from the surface (`wo` towards the previous vertex, `wi` towards the
+//! next); `n` is the unit shading normal.
+
+pub mod chi2;
+pub mod dielectric;
+pub mod diffuse_light;
+pub mod lambertian;
+pub mod metal;
+#[cfg(feature = "test-material")]
+pub mod test_diffuse;
+
+use crate::texture::{MAX_TEXTURED_COLORS, MaterialTextures, TextureId};
+use glam::{Vec2, Vec3, Vec3A};
+
+pub use dielectric::Fresnel;
+
+registry! {
+    Lambertian(lambertian::Lambertian),
+    Metal(metal::Metal),
+    Dielectric(dielectric::Dielectric),
+    DiffuseLight(diffuse_light::DiffuseLight),
+    #[cfg(feature = "test-material")]
+    TestDiffuse(test_diffuse::TestDiffuse),
+}
+
+/// How the integrators shade a hit on a material kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shading {
+    /// An emitter with a black BSDF: the path adds its MIS-weighted emission and ends. No
+    /// shading queue.
+    Emitter,
+    /// A Lambertian reflector of reflectance [`MaterialModel::albedo`]: the Lambertian lane
+    /// kernel samples a light and the cosine lobe, weighted by multiple importance sampling.
+    Diffuse,
+    /// Only [`MaterialModel::sample`] is used: no light sampling, so an emitter that the sampled
+    /// ray meets counts in full.
+    Sampled,
+}
+
+/// How the denoiser's guides see a material (see the integrator's `aov` module): perfect mirrors
+/// and glass hand the guides on to what they show.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Specular {
+    /// The guides record this surface's albedo.
+    No,
+    /// A perfect mirror tinted by [`MaterialModel::albedo`].
+    Mirror,
+    /// Glass with this index of refraction.
+    Glass {
+        /// Index of refraction inside.
+        ior: f32,
+    },
+}
+
+/// An emitter's radiance, for light sampling.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Emission {
+    /// Emitted radiance.
+    pub emit: Vec3,
+    /// Emits on both sides; otherwise only on the side of the geometric normal.
+    pub two_sided: bool,
+}
+
+/// A sampled scattering direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    /// Unit direction of the next ray.
+    pub wi: Vec3A,
+    /// Throughput factor `f * |cos| / pdf`.
+    pub weight: Vec3,
+    /// Density of `wi` (for delta lobes: the discrete probability of the chosen lobe).
+    pub pdf: f32,
+    /// Relative index of refraction crossed (1 for reflection); Russian roulette divides it out.
+    pub eta: f32,
+}
+
+/// One kind of material. Colours are linear RGB.
+pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static {
+    /// Its parameters as a scene writes them, inside `Kind(...)`.
+    type Desc: serde::de::DeserializeOwned + std::fmt::Debug + Clone;
+
+    /// How the integrators shade it.
+    const SHADING: Shading;
+
+    /// The material of a description. Colours go through `colors`, which gives a texture's
+    /// mean and remembers the texture: [`Self::set_color`] later sets the value at a hit.
+    fn build(desc: &Self::Desc, colors: &mut Colors) -> Self;
+
+    /// Sets the `slot`-th colour taken from `colors` in [`Self::build`] (a texture's value).
+    fn set_color(&mut self, slot: usize, value: Vec3) {
+        let _ = (slot, value);
+    }
+
+    /// Samples the next direction from numbers `u` and `uc` in [0, 1); `None` when the path is
+    /// absorbed. Emitters do not scatter.
+    fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
+        let _ = (wo, n, u, uc);
+        None
+    }
+
+    /// Reflectance: the [`Shading::Diffuse`] kernel's, the mirror's tint, and the denoiser's
+    /// albedo guide.
+    fn albedo(&self) -> Vec3;
+
+    /// What light sampling needs of an emitter; `None` for everything else.
+    fn emission(&self) -> Option<Emission> {
+        None
+    }
+
+    /// Sets an emitter's radiance (keyframed emission).
+    fn set_emission(&mut self, emit: Vec3) {
+        let _ = emit;
+    }
+
+    /// How the denoiser's guides see it.
+    fn specular(&self) -> Specular {
+        Specular::No
+    }
+}
+
+/// The colours of one material being built: plain values, or textures whose mean stands in
+/// until a hit evaluates them.
+pub struct Colors<'a> {
+    texture: &'a mut dyn FnMut(&str) -> (TextureId, Vec3),
+    slots: MaterialTextures,
+    next: usize,
+}
+
+impl<'a> Colors<'a> {
+    /// Colours resolved through `texture`, which returns a texture name's id and mean.
+    pub fn new(texture: &'a mut dyn FnMut(&str) -> (TextureId, Vec3)) -> Self {
+        Self { texture, slots: MaterialTextures::default(), next: 0 }
+    }
+
+    /// The next colour slot's value: the colour written out, or the texture's mean.
+    pub fn get<T: Copy + Into<Vec3>>(&mut self, c: &crate::scene::Color<T>) -> Vec3 {
+        let slot = self.next;
+        assert!(slot < MAX_TEXTURED_COLORS, "a material has at most {MAX_TEXTURED_COLORS} colours");
+        self.next += 1;
+        match c {
+            crate::scene::Color::Value(v) => (*v).into(),
+            crate::scene::Color::Texture(name) => {
+                let (id, mean) = (self.texture)(name);
+                self.slots.0[slot] = Some(id);
+                mean
+            }
+        }
+    }
+
+    /// Which colour slots came from textures.
+    pub fn textures(&self) -> MaterialTextures {
+        self.slots
+    }
+}
+
+/// Generates, from one list of `Variant(module::Type)`, the enums [`Material`], [`MaterialDesc`]
+/// and [`MaterialKind`] with their dispatch.
+macro_rules! registry {
+    ($($(#[$attr:meta])* $variant:ident($module:ident::$ty:ident)),+ $(,)?) => {
+        /// A material: one of the registered kinds.
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum Material {
+            $($(#[$attr])* #[doc = concat!("See [`", stringify!($module), "::", stringify!($ty), "`].")]
+            $variant($module::$ty),)+
+        }
+
+        /// A material as written in the scene: `Kind(field: value, ...)`.
+        #[derive(Clone, Debug)]
+        pub enum MaterialDesc {
+            $($(#[$attr])* #[doc = concat!("`", stringify!($variant), "(...)`.")]
+            $variant(<$module::$ty as MaterialModel>::Desc),)+
+        }
+
+        /// The registered kinds, in registry order.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        #[repr(u8)]
+        pub enum MaterialKind {
+            $($(#[$attr])* #[doc = concat!("[`", stringify!($module), "::", stringify!($ty), "`].")]
+            $variant,)+
+        }
+
+        /// Counts the kinds (a variant per kind, then the count).
+        #[allow(dead_code)]
+        enum KindCount {
+            $($(#[$attr])* $variant,)+
+            Count,
+        }
+
+        impl MaterialKind {
+            /// How many kinds there are.
+            pub const COUNT: usize = KindCount::Count as usize;
+
+            /// Every kind, in registry order.
+            pub const ALL: [MaterialKind; Self::COUNT] = {
+                let mut all = [MaterialKind::from_index(0); Self::COUNT];
+                let mut i = 0;
+                while i < Self::COUNT {
+                    all[i] = MaterialKind::from_index(i);
+                    i += 1;
+                }
+                all
+            };
+
+            const fn from_index(i: usize) -> Self {
+                $($(#[$attr])* if i == KindCount::$variant as usize {
+                    return MaterialKind::$variant;
+                })+
+                panic!("no such material kind")
+            }
+
+            /// The kind's name in lower case (its module's): stage and span names use it.
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $($(#[$attr])* MaterialKind::$variant => stringify!($module),)+
+                }
+            }
+
+            /// Its shading stage's name, `shade_<name>`.
+            pub const fn stage_name(self) -> &'static str {
+                match self {
+                    $($(#[$attr])* MaterialKind::$variant => concat!("shade_", stringify!($module)),)+
+                }
+            }
+
+            /// A `trace`-level span for its shading stage, named [`Self::stage_name`] (tracing
+            /// names spans at compile time, so the registry makes one per kind).
+            pub fn stage_span(self) -> tracing::Span {
+                match self {
+                    $($(#[$attr])* MaterialKind::$variant => {
+                        tracing::trace_span!(concat!("shade_", stringify!($module)))
+                    })+
+                }
+            }
+
+            /// The name a scene writes, `Lambertian` in `Lambertian(...)`.
+            pub const fn variant_name(self) -> &'static str {
+                match self {
+                    $($(#[$attr])* MaterialKind::$variant => stringify!($variant),)+
+                }
+            }
+
+            /// How the integrators shade it.
+            pub const fn shading(self) -> Shading {
+                match self {
+                    $($(#[$attr])* MaterialKind::$variant => <$module::$ty as MaterialModel>::SHADING,)+
+                }
+            }
+        }
+
+        impl Material {
+            /// Its kind.
+            #[inline]
+            pub const fn kind(&self) -> MaterialKind {
+                match self {
+                    $($(#[$attr])* Material::$variant(_) => MaterialKind::$variant,)+
+                }
+            }
+
+            /// Builds the material of a description; `texture` resolves a texture name to its id
+            /// and mean. Returns the material and which of its colours are textured.
+            pub fn build(
+                desc: &MaterialDesc,
+                texture: &mut dyn FnMut(&str) -> (TextureId, Vec3),
+            ) -> (Material, MaterialTextures) {
+                let mut colors = Colors::new(texture);
+                let m = match desc {
+                    $($(#[$attr])* MaterialDesc::$variant(d) => {
+                        Material::$variant(<$module::$ty as MaterialModel>::build(d, &mut colors))
+                    })+
+                };
+                (m, colors.textures())
+            }
+
+            /// See [`MaterialModel::set_color`].
+            #[inline]
+            pub fn set_color(&mut self, slot: usize, value: Vec3) {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.set_color(slot, value),)+
+                }
+            }
+
+            /// See [`MaterialModel::sample`].
+            #[inline]
+            pub fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.sample(wo, n, u, uc),)+
+                }
+            }
+
+            /// See [`MaterialModel::albedo`].
+            #[inline]
+            pub fn albedo(&self) -> Vec3 {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.albedo(),)+
+                }
+            }
+
+            /// See [`MaterialModel::emission`].
+            #[inline]
+            pub fn emission(&self) -> Option<Emission> {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.emission(),)+
+                }
+            }
+
+            /// See [`MaterialModel::set_emission`].
+            pub fn set_emission(&mut self, emit: Vec3) {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.set_emission(emit),)+
+                }
+            }
+
+            /// See [`MaterialModel::specular`].
+            #[inline]
+            pub fn specular(&self) -> Specular {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.specular(),)+
+                }
+            }
+        }
+
+        $($(#[$attr])*
+        impl From<$module::$ty> for Material {
+            fn from(m: $module::$ty) -> Self {
+                Material::$variant(m)
+            }
+        })+
+
+        impl MaterialDesc {
+            /// Its kind.
+            pub fn kind(&self) -> MaterialKind {
+                match self {
+                    $($(#[$attr])* MaterialDesc::$variant(_) => MaterialKind::$variant,)+
+                }
+            }
+        }
+
+        impl<'de> serde::Deserialize<'de> for MaterialDesc {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                struct Kinds;
+                impl<'de> serde::de::Visitor<'de> for Kinds {
+                    type Value = MaterialDesc;
+                    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                        f.write_str("a material such as Lambertian(albedo: (0.5, 0.5, 0.5))")
+                    }
+                    fn visit_enum<A: serde::de::EnumAccess<'de>>(self, data: A) -> Result<MaterialDesc, A::Error> {
+                        use serde::de::VariantAccess;
+                        let (VariantName(name), variant) = data.variant()?;
+                        $($(#[$attr])* if name == stringify!($variant) {
+                            return variant
+                                .struct_variant(&[], Fields::<<$module::$ty as MaterialModel>::Desc>::default())
+                                .map(MaterialDesc::$variant);
+                        })+
+                        Err(serde::de::Error::unknown_variant(&name, &VARIANT_NAMES))
+                    }
+                }
+                d.deserialize_enum("Material", &VARIANT_NAMES, Kinds)
+            }
+        }
+    };
+}
+use registry;
+
+/// The names a scene may write, for parser messages.
+static VARIANT_NAMES: [&str; MaterialKind::COUNT] = {
+    let mut names = [""; MaterialKind::COUNT];
+    let mut i = 0;
+    while i < MaterialKind::COUNT {
+        names[i] = MaterialKind::ALL[i].variant_name();
+        i += 1;
+    }
+    names
+};
+
+/// The name of a kind as the scene writes it (an identifier).
+struct VariantName(String);
+
+impl<'de> serde::Deserialize<'de> for VariantName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Name;
+        impl<'de> serde::de::Visitor<'de> for Name {
+            type Value = VariantName;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("the name of a material kind")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<VariantName, E> {
+                Ok(VariantName(v.to_owned()))
+            }
+        }
+        d.deserialize_identifier(Name)
+    }
+}
+
+/// Reads a kind's fields (`Kind(field: value, ...)`) into its description type.
+struct Fields<T>(std::marker::PhantomData<T>);
+
+impl<T> Default for Fields<T> {
+    fn default() -> Self {
+        Self(std::marker::PhantomData)
+    }
+}
+
+impl<'de, T: serde::Deserialize<'de>> serde::de::Visitor<'de> for Fields<T> {
+    type Value = T;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("the material's fields")
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+        T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+    }
+}
+
+impl Material {
+    /// Radiance emitted towards a direction making cosine `cos_out` with the normal.
+    #[inline]
+    pub fn emitted(&self, cos_out: f32) -> Vec3 {
+        match self.emission() {
+            Some(e) if e.two_sided || cos_out > 0.0 => e.emit,
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// True for emitters.
+    #[inline]
+    pub fn is_emissive(&self) -> bool {
+        self.kind().shading() == Shading::Emitter
+    }
+
+    /// How the integrators shade it.
+    #[inline]
+    pub fn shading(&self) -> Shading {
+        self.kind().shading()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kinds_are_listed_once_in_registry_order() {
+        for (i, k) in MaterialKind::ALL.iter().enumerate() {
+            assert_eq!(*k as usize, i);
+        }
+        assert_eq!(MaterialKind::ALL[0].stage_name(), "shade_lambertian");
+        assert_eq!(MaterialKind::DiffuseLight.name(), "diffuse_light");
+        assert_eq!(MaterialKind::DiffuseLight.shading(), Shading::Emitter);
+    }
+}
