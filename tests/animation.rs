@@ -410,3 +410,46 @@ const SPIN_BOX_SCENE: &str = r#"Scene(
 fn a_spinning_box_averages_its_still_images() {
     blurs_like_its_stills(SPIN_BOX_SCENE, "spinning box", |s| s.instances.list[0].motion.is_some());
 }
+
+/// Rotation keys turn by the angles written: a 0 to 720 degree track turns the object twice,
+/// and a track to -90 degrees turns it the negative way (read from the instance's transform).
+#[test]
+fn rotation_keys_turn_by_the_angles_written() {
+    let text = |keys: &str| {
+        format!(
+            r#"Scene(
+                camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+                materials: {{ "m": Lambertian(albedo: (0.5, 0.5, 0.5)) }},
+                objects: [(shape: Mesh(file: "assets/knot-2k.obj"), material: "m",
+                           animate: (rotate: Linear({keys})))],
+            )"#
+        )
+    };
+    // The angle about +y by which the object's +x axis has turned, in (-180, 180].
+    let angle_at = |desc: &pathwave::engine::scene::SceneDesc, t: f32| {
+        let mut w = SceneWorld::new(desc);
+        w.set_time(t, t);
+        let x = w.update().instances.list[0].world_from_object.transform_vector3(glam::Vec3::X);
+        (-x.z).atan2(x.x).to_degrees()
+    };
+    let wrap = |d: f32| (d + 540.0).rem_euclid(360.0) - 180.0;
+    let path = root().join("scenes/inline.ron");
+    let twice = pathwave::engine::scene::parse(
+        &text("[(0, AxisAngle(axis: (0, 1, 0), degrees: 0)), (2, AxisAngle(axis: (0, 1, 0), degrees: 720))]"),
+        &path,
+    )
+    .unwrap();
+    for k in 0..=16 {
+        let t = k as f32 / 8.0;
+        let got = angle_at(&twice, t);
+        assert!(wrap(got - 360.0 * t).abs() < 0.01, "at {t} s: {got} degrees, expected {}", 360.0 * t);
+    }
+    let back =
+        pathwave::engine::scene::parse(&text("[(0, Euler((0, 0, 0))), (1, Euler((0, -90, 0)))]"), &path)
+            .unwrap();
+    for k in 1..=4 {
+        let t = k as f32 / 4.0;
+        let got = angle_at(&back, t);
+        assert!((got + 90.0 * t).abs() < 0.01, "at {t} s: {got} degrees, expected {}", -90.0 * t);
+    }
+}

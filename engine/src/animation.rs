@@ -1,6 +1,7 @@
 //! Keyframes: tracks of `(time, value)` keys in seconds, interpolated linearly or with a
-//! Catmull-Rom spline (`Linear([..])`, `Smooth([..])` in RON); rotations by quaternion slerp.
-//! Before the first key a track holds the first value, after the last the last.
+//! Catmull-Rom spline (`Linear([..])`, `Smooth([..])` in RON). Rotations interpolate the angles
+//! as written (see [`RotationTrack`]), so 0 to 720 degrees is two turns. Before the first key a
+//! track holds the first value, after the last the last.
 
 use crate::scene::{Direction, Finite, Rgb, V3};
 use glam::{Quat, Vec3};
@@ -64,12 +65,20 @@ impl Keyed for Vec3 {
     }
 }
 
-impl Keyed for Quat {
-    fn lerp(a: Self, b: Self, s: f32) -> Self {
-        a.slerp(b, s)
-    }
-    fn catmull_rom(_: Self, p1: Self, p2: Self, _: Self, s: f32) -> Self {
-        p1.slerp(p2, s * s * (3.0 - 2.0 * s))
+impl<T> Track<T> {
+    /// The segment holding `time`: `Err(key)` before the first key or after the last, else
+    /// `Ok((i, s))` for the segment from key `i` to key `i + 1` at parameter `s` in [0, 1).
+    fn segment(&self, time: f32) -> Result<(usize, f32), usize> {
+        let k = &self.keys;
+        let last = k.len() - 1;
+        if !(time > k[0].0) {
+            return Err(0);
+        }
+        if time >= k[last].0 {
+            return Err(last);
+        }
+        let i = k.partition_point(|(t, _)| *t <= time) - 1;
+        Ok((i, (time - k[i].0) / (k[i + 1].0 - k[i].0)))
     }
 }
 
@@ -78,15 +87,10 @@ impl<T: Keyed> Track<T> {
     pub fn at(&self, time: f32) -> T {
         let k = &self.keys;
         let last = k.len() - 1;
-        if !(time > k[0].0) {
-            return k[0].1;
-        }
-        if time >= k[last].0 {
-            return k[last].1;
-        }
-        // The segment [k[i], k[i + 1]] holding `time`.
-        let i = k.partition_point(|(t, _)| *t <= time) - 1;
-        let s = (time - k[i].0) / (k[i + 1].0 - k[i].0);
+        let (i, s) = match self.segment(time) {
+            Ok(seg) => seg,
+            Err(key) => return k[key].1,
+        };
         match self.interpolation {
             Interpolation::Linear => T::lerp(k[i].1, k[i + 1].1, s),
             Interpolation::Smooth => {
@@ -157,22 +161,96 @@ enum RawRotation {
     AxisAngle { axis: Direction, degrees: Finite },
 }
 
-impl<'de> Deserialize<'de> for Track<Quat> {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let mut t = track(d, |r: RawRotation| match r {
-            RawRotation::Euler(v) => {
-                let r = v.0 * (std::f32::consts::PI / 180.0);
-                Quat::from_euler(glam::EulerRot::ZYX, r.z, r.y, r.x)
-            }
-            RawRotation::AxisAngle { axis, degrees } => Quat::from_axis_angle(axis.0, degrees.0.to_radians()),
-        })?;
-        // Slerp takes the short way: keep neighbouring keys in one hemisphere.
-        for i in 1..t.keys.len() {
-            if t.keys[i].1.dot(t.keys[i - 1].1) < 0.0 {
-                t.keys[i].1 = -t.keys[i].1;
-            }
+/// A rotation key, its angles kept as written (radians), turns included.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rotation {
+    /// Angles about x, y and z, applied in that order.
+    Euler(Vec3),
+    /// An angle about a unit axis.
+    AxisAngle {
+        /// Unit axis.
+        axis: Vec3,
+        /// Angle.
+        angle: f32,
+    },
+}
+
+impl Rotation {
+    /// The rotation as a quaternion.
+    pub fn quat(self) -> Quat {
+        match self {
+            Rotation::Euler(r) => Quat::from_euler(glam::EulerRot::ZYX, r.z, r.y, r.x),
+            Rotation::AxisAngle { axis, angle } => Quat::from_axis_angle(axis, angle),
         }
-        Ok(t)
+    }
+
+    /// This key's angles in the terms of `like`: the three Euler angles when both are Euler
+    /// keys, the angle (in every component) when both turn about the same axis.
+    fn angles_like(self, like: Rotation) -> Option<Vec3> {
+        match (self, like) {
+            (Rotation::Euler(r), Rotation::Euler(_)) => Some(r),
+            (Rotation::AxisAngle { axis, angle }, Rotation::AxisAngle { axis: a, .. })
+                if axis.dot(a) > 1.0 - 1e-6 =>
+            {
+                Some(Vec3::splat(angle))
+            }
+            _ => None,
+        }
+    }
+
+    /// The rotation of `like`'s kind (and axis) with angles `v`.
+    fn with_angles(like: Rotation, v: Vec3) -> Rotation {
+        match like {
+            Rotation::Euler(_) => Rotation::Euler(v),
+            Rotation::AxisAngle { axis, .. } => Rotation::AxisAngle { axis, angle: v.x },
+        }
+    }
+}
+
+/// Rotation keys. Between two `Euler` keys the three angles are interpolated, and between two
+/// `AxisAngle` keys about the same axis the angle is, like any number (`Smooth`: Catmull-Rom
+/// through the neighbouring keys of the same kind): 0 to 720 degrees turns twice and 0 to -90
+/// turns the negative way. Between keys of different kinds or axes the rotation takes the
+/// shortest way (slerp; eased by smoothstep for `Smooth`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RotationTrack(pub Track<Rotation>);
+
+impl RotationTrack {
+    /// The rotation at `time`.
+    pub fn at(&self, time: f32) -> Quat {
+        let k = &self.0.keys;
+        let (i, s) = match self.0.segment(time) {
+            Ok(seg) => seg,
+            Err(key) => return k[key].1.quat(),
+        };
+        let (a, b) = (k[i].1, k[i + 1].1);
+        let smooth = self.0.interpolation == Interpolation::Smooth;
+        let Some((pa, pb)) = a.angles_like(a).zip(b.angles_like(a)) else {
+            let s = if smooth { s * s * (3.0 - 2.0 * s) } else { s };
+            return a.quat().slerp(b.quat(), s);
+        };
+        let v = match smooth {
+            false => pa.lerp(pb, s),
+            true => {
+                // Neighbours of another kind or axis count as the segment's end keys repeated.
+                let p0 = i.checked_sub(1).and_then(|j| k[j].1.angles_like(a)).unwrap_or(pa);
+                let p3 = k.get(i + 2).and_then(|n| n.1.angles_like(a)).unwrap_or(pb);
+                Vec3::catmull_rom(p0, pa, pb, p3, s)
+            }
+        };
+        Rotation::with_angles(a, v).quat()
+    }
+}
+
+impl<'de> Deserialize<'de> for RotationTrack {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let t = track(d, |r: RawRotation| match r {
+            RawRotation::Euler(v) => Rotation::Euler(v.0 * (std::f32::consts::PI / 180.0)),
+            RawRotation::AxisAngle { axis, degrees } => {
+                Rotation::AxisAngle { axis: axis.0.normalize(), angle: degrees.0.to_radians() }
+            }
+        })?;
+        Ok(RotationTrack(t))
     }
 }
 
@@ -186,7 +264,7 @@ pub struct ObjectAnimation {
     pub translate: Option<Track<Vec3>>,
     /// Rotation keys.
     #[serde(default)]
-    pub rotate: Option<Track<Quat>>,
+    pub rotate: Option<RotationTrack>,
     /// Scale keys (per axis).
     #[serde(default)]
     pub scale: Option<Track<Vec3>>,
@@ -245,15 +323,59 @@ mod tests {
         assert!((line.at(1.5) - 1.5).abs() < 1e-6);
     }
 
+    fn rotation(text: &str) -> RotationTrack {
+        ron::from_str(text).unwrap()
+    }
+
+    /// The angle of `q` about `axis`, in degrees in (-180, 180] (q must turn about that axis).
+    fn degrees_about(q: Quat, axis: Vec3) -> f32 {
+        let (a, angle) = q.to_axis_angle();
+        let signed = if a.dot(axis) < 0.0 { -angle } else { angle };
+        let d = signed.to_degrees();
+        if d > 180.0 {
+            d - 360.0
+        } else if d <= -180.0 {
+            d + 360.0
+        } else {
+            d
+        }
+    }
+
     #[test]
-    fn rotations_slerp_the_short_way() {
-        let t: Track<Quat> =
-            ron::from_str("Linear([(0, Euler((0, 0, 0))), (1, AxisAngle(axis: (0, 1, 0), degrees: 270))])")
-                .unwrap();
-        // 270 degrees about +y is -90 the short way: halfway is -45.
-        let half = t.at(0.5);
-        let expect = Quat::from_axis_angle(Vec3::Y, -45f32.to_radians());
-        assert!(half.dot(expect).abs() > 0.99999, "{half}");
+    fn rotations_turn_by_the_angles_written() {
+        // Two full turns about y over two seconds: the object's angle at t is 360 t degrees.
+        for keys in [
+            "Linear([(0, Euler((0, 0, 0))), (2, Euler((0, 720, 0)))])",
+            "Linear([(0, AxisAngle(axis: (0, 2, 0), degrees: 0)), (2, AxisAngle(axis: (0, 1, 0), degrees: 720))])",
+        ] {
+            let t = rotation(keys);
+            for k in 0..=16 {
+                let time = k as f32 / 8.0;
+                let expect = degrees_about(Quat::from_rotation_y((360.0 * time).to_radians()), Vec3::Y);
+                let got = degrees_about(t.at(time), Vec3::Y);
+                let diff = (got - expect + 540.0).rem_euclid(360.0) - 180.0;
+                assert!(diff.abs() < 1e-2, "{keys} at {time}: {got} vs {expect}");
+            }
+            // A quarter of the way is half a turn: the short way would not have moved at all.
+            assert!(degrees_about(t.at(0.5), Vec3::Y).abs() > 179.9);
+        }
+        // -90 degrees turns the negative way; 270 turns the positive way (not -90 the short way).
+        let neg = rotation("Linear([(0, Euler((0, 0, 0))), (1, Euler((0, -90, 0)))])");
+        assert!((degrees_about(neg.at(0.5), Vec3::Y) + 45.0).abs() < 1e-3);
+        let pos = rotation("Linear([(0, Euler((0, 0, 0))), (1, AxisAngle(axis: (0, 1, 0), degrees: 270))])");
+        // Keys of different kinds: the shortest way, -45 halfway.
+        assert!((degrees_about(pos.at(0.5), Vec3::Y) + 45.0).abs() < 1e-3);
+        let pos = rotation("Linear([(0, Euler((0, 0, 0))), (1, Euler((0, 270, 0)))])");
+        assert!((degrees_about(pos.at(0.5), Vec3::Y) - 135.0).abs() < 1e-3);
+        // Smooth keys of a steady spin pass through their keys with no easing between them.
+        let spin = rotation(
+            "Smooth([(0, Euler((0, 0, 0))), (1, Euler((0, 90, 0))), (2, Euler((0, 180, 0))), (3, Euler((0, 270, 0)))])",
+        );
+        assert!((degrees_about(spin.at(1.5), Vec3::Y) - 135.0).abs() < 1e-3);
+        assert!(
+            (degrees_about(spin.at(2.0), Vec3::Y) - 180.0).abs() < 1e-3
+                || (degrees_about(spin.at(2.0), Vec3::Y) + 180.0).abs() < 1e-3
+        );
         let bad = ron::from_str::<Track<f32>>("Linear([(1, 0), (1, 2)])").unwrap_err().to_string();
         assert!(bad.contains("key times must increase"), "{bad}");
     }
