@@ -95,12 +95,21 @@ pub struct Sequence<'a> {
     pub quiet: bool,
 }
 
+/// One frame as `run` hands it to its renderer.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameInfo {
+    /// The frame number.
+    pub frame: u32,
+    /// How long the ECS update took (keyframes, BVH rebuilds and refits, extraction).
+    pub update: std::time::Duration,
+}
+
 /// Renders the sequence; `render` turns a scene into an image (and reports its own progress).
 /// Prints frame i/N with the overall ETA, then a summary of per-frame times.
 pub fn run(
     world: &mut SceneWorld,
     seq: &Sequence,
-    mut render: impl FnMut(&RenderScene) -> LinearImage,
+    mut render: impl FnMut(&RenderScene, FrameInfo) -> LinearImage,
 ) -> Result<(), String> {
     let gif = Path::new(seq.output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
     if gif && Path::new(seq.output).exists() && !seq.overwrite {
@@ -134,9 +143,14 @@ pub fn run(
         if let Some(dir) = path.as_ref().and_then(|p| p.parent()).filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }
+        let _span = tracing::info_span!("frame", frame).entered();
         let t0 = Instant::now();
-        let scene = scene_at(world, frame, seq.fps, seq.shutter);
-        let img = render(&scene);
+        let scene = {
+            let _span = tracing::info_span!("scene_update", frame).entered();
+            scene_at(world, frame, seq.fps, seq.shutter)
+        };
+        let update = t0.elapsed();
+        let img = render(&scene, FrameInfo { frame, update });
         match &path {
             Some(p) => {
                 io::write(p, &img)?;
@@ -144,6 +158,7 @@ pub fn run(
             None => images.push(img),
         }
         let secs = t0.elapsed().as_secs_f64();
+        tracing::info!(frame, update_ms = update.as_secs_f64() * 1e3, "frame rendered in {secs:.2} s");
         times.push((frame, secs));
         if !seq.quiet {
             let done = times.len() as f64;

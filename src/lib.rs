@@ -8,6 +8,7 @@ pub mod checkpoint;
 pub mod io;
 pub mod metrics;
 pub mod raybench;
+pub mod trace;
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

@@ -5,7 +5,7 @@ use pathwave::checkpoint::{self, Checkpoint};
 use pathwave::engine::{render_scene::SamplerKind, scene, world::SceneWorld};
 use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::{animate, bench, metrics};
+use pathwave::{animate, bench, metrics, trace};
 use std::io::Write;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -37,27 +37,19 @@ enum Command {
         /// Scale samples down so that no component exceeds MAX (biased; off by default).
         #[arg(long, value_name = "MAX")]
         clamp: Option<f32>,
-        /// List the pixels that discarded NaN/Inf samples.
-        #[arg(short, long)]
-        verbose: bool,
+        #[command(flatten)]
+        log: LogArgs,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
-        /// No progress bar.
-        #[arg(short, long)]
-        quiet: bool,
         /// Which integrator renders.
         #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
         integrator: Integrator,
         /// Paths in flight per worker (wavefront).
         #[arg(long, default_value_t = 256)]
         batch: usize,
-        /// Print per-stage statistics (wavefront).
-        #[arg(long)]
-        stats: bool,
-        /// Write a Chrome/Perfetto trace of the render (one span per stage and batch).
-        #[arg(long, value_name = "FILE.json")]
-        trace: Option<PathBuf>,
+        #[command(flatten)]
+        profile: ProfileArgs,
         /// Evaluate keyframes at this time (seconds); the camera's shutter opens and closes
         /// relative to it.
         #[arg(long, default_value_t = 0.0)]
@@ -123,9 +115,10 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
-        /// Only the summary.
-        #[arg(short, long)]
-        quiet: bool,
+        #[command(flatten)]
+        log: LogArgs,
+        #[command(flatten)]
+        profile: ProfileArgs,
     },
     /// Run time against error: render the scenes that have references at several sample
     /// counts with both integrators; print a markdown table, optionally write an SVG plot.
@@ -188,40 +181,98 @@ enum Integrator {
     Oracle,
 }
 
-/// Logs to stderr by `RUST_LOG` (warnings and errors when it is unset); with a trace file,
-/// also records every span for Perfetto. The returned guard flushes the trace when dropped.
-fn init_tracing(trace: Option<&PathBuf>) -> Option<tracing_chrome::FlushGuard> {
+/// How much `render` and `animate` say on stderr.
+#[derive(clap::Args, Clone, Copy, Debug)]
+struct LogArgs {
+    /// More on stderr: -v logs the scene, BVH builds, passes and frames (info) and lists the
+    /// pixels that discarded NaN/Inf samples; -vv adds debug logs and every span's duration.
+    /// RUST_LOG, when set, chooses the log levels instead.
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    verbose: u8,
+    /// Less on stderr: no progress or per-frame lines, only warnings, errors and the summary.
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+}
+
+/// Where `render` and `animate` say where the time goes.
+#[derive(clap::Args, Clone, Debug)]
+struct ProfileArgs {
+    /// Print per-stage statistics (wavefront): time share, items, rate and calls, and queue
+    /// occupancy (`animate`: a line per frame with its scene update and stage shares, then
+    /// the table for the sequence).
+    #[arg(long)]
+    stats: bool,
+    /// Write a Chrome trace (open it in ui.perfetto.dev): scene load, ECS systems, frames,
+    /// passes and tiles as spans, each tile's stages with their items, and counter tracks.
+    #[arg(long, value_name = "FILE.json")]
+    trace: Option<PathBuf>,
+}
+
+/// One subscriber for every subcommand. Log lines go to stderr at the level `log` asks for
+/// (warnings by default and with -q, info with -v, debug with -vv, which also logs each
+/// span's duration when it closes) unless RUST_LOG sets the levels; colours only on a
+/// terminal. With a trace file, the Chrome layer takes every span and stage report of
+/// pathwave's crates; the returned file is finished by the caller.
+fn init_tracing(log: LogArgs, trace: Option<&Path>) -> Result<Option<trace::TraceFile>, String> {
+    use std::io::IsTerminal;
+    use tracing::level_filters::LevelFilter;
     use tracing_subscriber::prelude::*;
-    fn fmt<S>() -> impl tracing_subscriber::Layer<S>
-    where
-        S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
-    {
-        tracing_subscriber::fmt::layer().with_writer(std::io::stderr).with_filter(
-            tracing_subscriber::EnvFilter::builder()
-                .with_default_directive(tracing::level_filters::LevelFilter::WARN.into())
-                .from_env_lossy(),
-        )
-    }
-    match trace {
+    // Quiet silences progress and per-frame lines, never warnings.
+    let level = match log.verbose {
+        0 => LevelFilter::WARN,
+        1 => LevelFilter::INFO,
+        _ => LevelFilter::DEBUG,
+    };
+    let filter = match std::env::var("RUST_LOG") {
+        Ok(v) if !v.trim().is_empty() => tracing_subscriber::EnvFilter::builder().parse_lossy(v),
+        _ => tracing_subscriber::EnvFilter::default().add_directive(level.into()),
+    };
+    let spans = match filter.max_level_hint().is_some_and(|l| l >= LevelFilter::DEBUG) {
+        true => tracing_subscriber::fmt::format::FmtSpan::CLOSE,
+        false => tracing_subscriber::fmt::format::FmtSpan::NONE,
+    };
+    let fmt = tracing_subscriber::fmt::layer()
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .with_span_events(spans)
+        .with_filter(filter);
+    let ours = || {
+        tracing_subscriber::filter::Targets::new()
+            .with_target("pathwave", tracing::Level::TRACE)
+            .with_target("pathwave_engine", tracing::Level::TRACE)
+            .with_target("pathwave_integrator", tracing::Level::TRACE)
+    };
+    let (chrome, file) = match trace {
         Some(path) => {
-            let (chrome, guard) = tracing_chrome::ChromeLayerBuilder::new().file(path).build();
-            tracing_subscriber::registry().with(chrome).with(fmt()).init();
-            Some(guard)
+            let (layer, file) = trace::create(path)?;
+            (Some(layer.with_filter(ours())), Some(file))
         }
-        None => {
-            tracing_subscriber::registry().with(fmt()).init();
-            None
-        }
-    }
+        None => (None, None),
+    };
+    // Built with `--features tracy`: the Tracy profiler can connect while pathwave runs.
+    #[cfg(feature = "tracy")]
+    let tracy = Some(tracing_tracy::TracyLayer::default().with_filter(ours()));
+    #[cfg(not(feature = "tracy"))]
+    let tracy: Option<tracing_subscriber::layer::Identity> = None;
+    tracing_subscriber::registry().with(fmt).with(chrome).with(tracy).init();
+    Ok(file)
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let trace = match &cli.command {
-        Command::Render { trace, .. } => trace.clone(),
-        _ => None,
+    let (log, trace) = match &cli.command {
+        Command::Render { log, profile, .. } | Command::Animate { log, profile, .. } => {
+            (*log, profile.trace.clone())
+        }
+        _ => (LogArgs { verbose: 0, quiet: false }, None),
     };
-    let guard = init_tracing(trace.as_ref());
+    let trace_file = match init_tracing(log, trace.as_deref()) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let result = match cli.command {
         Command::Render {
             scene,
@@ -229,13 +280,11 @@ fn main() -> ExitCode {
             image,
             max_depth,
             clamp,
-            verbose,
+            log,
             threads,
-            quiet,
             integrator,
             batch,
-            stats,
-            trace: _,
+            profile,
             time,
             denoise,
             aov,
@@ -244,7 +293,16 @@ fn main() -> ExitCode {
             samples,
         } => {
             let overrides = Overrides { image, max_depth, clamp };
-            let how = How { integrator, batch, stats, threads, quiet, verbose, denoise, aov };
+            let how = How {
+                integrator,
+                batch,
+                stats: profile.stats,
+                threads,
+                quiet: log.quiet,
+                verbose: log.verbose > 0,
+                denoise,
+                aov,
+            };
             let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose();
             samples.and_then(|samples| {
                 // A part is kept in its checkpoint for `merge`.
@@ -254,10 +312,22 @@ fn main() -> ExitCode {
             })
         }
         Command::Merge { parts, output } => merge(&parts, &output),
-        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, image, threads, quiet } => {
+        Command::Animate {
+            scene,
+            output,
+            frames,
+            fps,
+            shutter,
+            overwrite,
+            shard,
+            image,
+            threads,
+            log,
+            profile,
+        } => {
             let overrides = Overrides { image, max_depth: None, clamp: None };
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
-            animate(&scene, &output, seq, overrides, threads, quiet)
+            animate(&scene, &output, seq, overrides, threads, log.quiet, profile.stats)
         }
         Command::Compare { a, b } => compare(&a, &b),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
@@ -269,10 +339,13 @@ fn main() -> ExitCode {
             bench(&spp, &refs, &only, batch, svg, denoise, threads)
         }
     };
-    drop(guard);
-    if let Some(t) = trace.filter(|_| result.is_ok()) {
-        eprintln!("trace written to {} (open it in ui.perfetto.dev)", t.display());
-    }
+    let result = match (trace_file, result) {
+        (Some(file), Ok(())) => file.finish().map(|()| {
+            let t = trace.expect("a trace file has a path");
+            eprintln!("trace written to {} (open it in ui.perfetto.dev)", t.display());
+        }),
+        (_, result) => result,
+    };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -329,7 +402,15 @@ struct How {
 
 /// Loads a scene and applies the command line's overrides.
 fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
+    let _span = tracing::info_span!("load_scene", file = %path.display()).entered();
     let mut desc = scene::load(path).map_err(|e| e.to_string())?;
+    tracing::info!(
+        file = %path.display(),
+        objects = desc.objects.len(),
+        materials = desc.materials.0.len(),
+        textures = desc.textures.0.len(),
+        "scene parsed"
+    );
     let r = &mut desc.render;
     r.spp = o.image.spp.unwrap_or(r.spp);
     r.width = o.image.width.unwrap_or(r.width);
@@ -344,6 +425,30 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         r.clamp = Some(scene::Positive(c));
     }
     Ok(desc)
+}
+
+/// Logs what the integrators will see of a scene (info).
+fn log_scene(scene: &pathwave::engine::render_scene::RenderScene) {
+    use pathwave::engine::geometry::Primitive;
+    let prims = &scene.geometry.prims;
+    let triangles = prims.iter().filter(|p| matches!(p, Primitive::Triangle(_))).count();
+    let instanced: usize =
+        scene.instances.list.iter().map(|i| scene.instances.blas[i.blas as usize].mesh.triangles.len()).sum();
+    let s = scene.settings;
+    tracing::info!(
+        primitives = prims.len(),
+        triangles,
+        instances = scene.instances.list.len(),
+        meshes = scene.instances.blas.len(),
+        instanced_triangles = instanced,
+        lights = scene.lights.prims.len(),
+        features = ?scene.features,
+        "scene ready: {}x{} at {} spp, max depth {}",
+        s.width,
+        s.height,
+        s.spp,
+        s.max_depth
+    );
 }
 
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
@@ -369,6 +474,7 @@ fn animate(
     o: Overrides,
     threads: Option<usize>,
     quiet: bool,
+    stats: bool,
 ) -> Result<(), String> {
     let desc = load(path, &o)?;
     let a = &desc.animation;
@@ -388,10 +494,49 @@ fn animate(
     let pool = pool(threads)?;
     let mut world = SceneWorld::new(&desc);
     let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: args.overwrite, quiet };
-    animate::run(&mut world, &seq, |scene| {
-        let (film, _) = pool.install(|| wavefront::render(scene, wavefront::Options::default(), &|_, _| {}));
+    let mut total: Option<(wavefront::Stats, f64, u64)> = None;
+    let mut logged = false;
+    animate::run(&mut world, &seq, |scene, info| {
+        if !logged {
+            log_scene(scene);
+            logged = true;
+        }
+        let start = Instant::now();
+        let (film, st) = pool.install(|| wavefront::render(scene, wavefront::Options::default(), &|_, _| {}));
+        let secs = start.elapsed().as_secs_f64();
+        if stats {
+            eprintln!(
+                "frame {}: scene update {:.2} ms, render {secs:.2} s, {}",
+                info.frame,
+                info.update.as_secs_f64() * 1e3,
+                stage_shares(&st)
+            );
+            let bad = film.non_finite();
+            total = Some(match total.take() {
+                Some((t, s, n)) => (t.merge(st), s + secs, n + bad),
+                None => (st, secs, bad),
+            });
+        }
         LinearImage { width: film.width, height: film.height, pixels: film.mean() }
-    })
+    })?;
+    if let Some((st, secs, non_finite)) = &total {
+        eprintln!("the sequence's frames together:");
+        print_stats(st, *secs, *non_finite);
+    }
+    Ok(())
+}
+
+/// Each stage's share of the time, `name 12.3%`, largest first.
+fn stage_shares(st: &wavefront::Stats) -> String {
+    let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
+    let mut shares: Vec<(f64, &str)> = wavefront::Stage::ALL
+        .iter()
+        .filter(|s| st.calls[s.index()] > 0)
+        .map(|s| (st.time[s.index()].as_secs_f64() / total.max(1e-12), s.name()))
+        .collect();
+    shares.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let list: Vec<String> = shares.iter().map(|(f, n)| format!("{n} {:.1}%", 100.0 * f)).collect();
+    list.join(", ")
 }
 
 fn render(
@@ -410,6 +555,7 @@ fn render(
     let shutter = desc.camera.shutter;
     world.set_time(time + shutter.0, time + shutter.1);
     let scene = world.update();
+    log_scene(&scene);
     let s = scene.settings;
     let ckpt_path = checkpoint::path_for(output);
     let key = checkpoint::key(
@@ -483,6 +629,7 @@ fn render(
         let total = (hi - lo - first_spp) as usize * tiles;
         let progress = |done: usize, _| bar.update(before + done * k, total);
         let pass_start = Instant::now();
+        let span = tracing::info_span!("pass", first = range.start, samples = k).entered();
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(&scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
@@ -491,6 +638,15 @@ fn render(
                 (film, Some(stats))
             }
         });
+        drop(span);
+        let secs = pass_start.elapsed().as_secs_f64();
+        tracing::info!(
+            "pass: samples {}..{} of {} in {secs:.2} s, {:.3} M samples/s",
+            range.start,
+            range.end,
+            s.spp,
+            s.width as f64 * s.height as f64 * k as f64 / secs.max(1e-9) / 1e6
+        );
         film.merge(&part);
         stats = match (stats, st) {
             (Some(a), Some(b)) => Some(a.merge(b)),

@@ -453,3 +453,54 @@ fn rotation_keys_turn_by_the_angles_written() {
         assert!((got + 90.0 * t).abs() < 0.01, "at {t} s: {got} degrees, expected {}", -90.0 * t);
     }
 }
+
+/// `animate --stats --trace -v` reports each frame's stages and scene update, the sequence's
+/// table, the BVH updates in the log, and a trace with frames, updates and tiles.
+#[test]
+fn animate_reports_stages_and_bvh_updates_per_frame() {
+    let dir = temp("profile");
+    let scene = root().join("scenes/animation-bounce.ron");
+    let trace = dir.join("t.json");
+    let err = run(pathwave()
+        .env_remove("RUST_LOG")
+        .arg("animate")
+        .arg(&scene)
+        .args(["-o", dir.join("f_{frame:02}.png").to_str().unwrap(), "--frames", "0..3"])
+        .args(["--spp", "2", "--width", "32", "--height", "24", "-v", "--stats", "--trace"])
+        .arg(&trace));
+    for frame in 0..3 {
+        let line = err.lines().find(|l| l.starts_with(&format!("frame {frame}: scene update")));
+        let line = line.unwrap_or_else(|| panic!("no stats line for frame {frame}:\n{err}"));
+        assert!(line.contains("intersect_closest") && line.contains("shade_lambertian"), "{line}");
+    }
+    assert!(err.contains("the sequence's frames together:"), "{err}");
+    assert!(err.contains("primitives' BVH built in"), "the log names the BVH build:\n{err}");
+    assert!(err.contains("instances' TLAS"), "the log names the instances' updates:\n{err}");
+    assert_eq!(err.matches("frame rendered in").count(), 3, "{err}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
+    let events = json["traceEvents"].as_array().unwrap();
+    let count = |name: &str| events.iter().filter(|e| e["name"] == name).count();
+    assert_eq!((count("frame"), count("scene_update")), (3, 3));
+    assert!(count("tile") >= 3 * 4 && count("intersect_closest") == count("tile"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `render -q` prints only the summary when nothing goes wrong; `-v` logs the scene, the
+/// build and the pass.
+#[test]
+fn log_levels_follow_quiet_and_verbose() {
+    let dir = temp("log");
+    let scene = root().join("scenes/cornell.ron");
+    let args = ["--spp", "1", "--width", "16", "--height", "16", "-o"];
+    let out = dir.join("c.png");
+    let quiet =
+        run(pathwave().env_remove("RUST_LOG").arg("render").arg(&scene).args(args).arg(&out).arg("-q"));
+    assert_eq!(quiet.lines().count(), 1, "only the summary:\n{quiet}");
+    let loud =
+        run(pathwave().env_remove("RUST_LOG").arg("render").arg(&scene).args(args).arg(&out).arg("-v"));
+    for what in ["scene parsed", "scene ready", "primitives' BVH built in", "pass: samples 0..1 of 1"] {
+        assert!(loud.contains(what), "-v lacks {what:?}:\n{loud}");
+    }
+    assert!(!loud.contains("\u{1b}["), "no colour codes when stderr is not a terminal");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -128,13 +128,47 @@ fn trace_file_names_the_stages_and_stats_print_a_table() {
     for stage in ["generate_camera_rays", "intersect_closest", "shade_lambertian", "trace_shadow_rays"] {
         assert!(stderr.contains(stage), "--stats lacks {stage}:\n{stderr}");
     }
-    let json = std::fs::read_to_string(&trace).unwrap();
-    let text = json.trim_end().trim_end_matches(',');
-    assert!(text.starts_with('['), "a Chrome trace is a JSON array");
-    for stage in ["wavefront_render", "intersect_closest", "handle_escaped", "shade_metal", "accumulate_film"]
-    {
-        assert!(json.contains(&format!("\"name\":\"{stage}\"")), "trace lacks {stage}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&trace).unwrap()).unwrap();
+    let events = json["traceEvents"].as_array().expect("a trace-event file");
+    let named = |name: &str| events.iter().filter(move |e| e["name"] == name).collect::<Vec<_>>();
+    let interval = |e: &serde_json::Value| {
+        let ts = e["ts"].as_f64().unwrap();
+        (ts, ts + e["dur"].as_f64().unwrap())
+    };
+    // Outer spans with their fields as args.
+    for span in ["load_scene", "rebuild_geometry", "pass", "wavefront_render"] {
+        assert_eq!(named(span).len(), 1, "one {span} span");
     }
+    assert_eq!(named("pass")[0]["args"]["samples"], 2);
+    assert!(named("load_scene")[0]["args"]["file"].as_str().unwrap().ends_with("cornell.ron"));
+    // One tile span per 16x16 tile, inside the pass; each stage once per tile, inside its
+    // tile on the same thread, with its items.
+    let tiles = named("tile");
+    assert_eq!(tiles.len(), 4, "32x32 is four tiles");
+    let pass = interval(named("pass")[0]);
+    for t in &tiles {
+        let (a, b) = interval(t);
+        assert!(a >= pass.0 && b <= pass.1, "a tile outside its pass");
+    }
+    for stage in
+        ["generate_camera_rays", "intersect_closest", "shade_lambertian", "shade_metal", "accumulate_film"]
+    {
+        let list = named(stage);
+        assert_eq!(list.len(), 4, "{stage}: once per tile");
+        for e in list {
+            assert!(e["args"]["items"].as_u64().unwrap() > 0, "{stage} has items");
+            let (a, b) = interval(e);
+            let inside = tiles.iter().any(|t| {
+                let (ta, tb) = interval(t);
+                t["tid"] == e["tid"] && a >= ta - 1e-3 && b <= tb + 1e-3
+            });
+            assert!(inside, "{stage} at {a}..{b} lies in no tile of its thread");
+        }
+    }
+    // Counter tracks.
+    let counters = events.iter().filter(|e| e["ph"] == "C").count();
+    assert_eq!(counters, 3 * 4, "three counters per tile");
+    assert_eq!(named("queue occupancy %").len(), 4);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

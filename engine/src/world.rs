@@ -323,6 +323,7 @@ pub fn rebuild_geometry(
         return;
     }
     let _span = tracing::info_span!("rebuild_geometry").entered();
+    let start = std::time::Instant::now();
     let mut objs: Vec<_> = objects.iter().collect();
     objs.sort_by_key(|(e, ..)| *e);
     out.entities = objs.iter().map(|(e, ..)| *e).collect();
@@ -337,6 +338,13 @@ pub fn rebuild_geometry(
     }
     let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
     out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
+    tracing::info!(
+        primitives = geometry.prims.len(),
+        lights = out.lights.prims.len(),
+        moving = geometry.velocity.is_some(),
+        "primitives' BVH built in {:.2} ms",
+        start.elapsed().as_secs_f64() * 1e3
+    );
     out.geometry = Arc::new(geometry);
     out.rebuilds += 1;
 }
@@ -383,6 +391,7 @@ pub fn update_instances(
     let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
     if gone || !reshaped.is_empty() || out.builds == 0 {
         let _span = tracing::info_span!("rebuild_instances").entered();
+        let start = std::time::Instant::now();
         let mut objs: Vec<_> = objects.iter().collect();
         objs.sort_by_key(|(e, ..)| *e);
         let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
@@ -410,6 +419,14 @@ pub fn update_instances(
         // Meshes no instance uses any more are dropped.
         library.blas.retain(|_, b| blas.iter().any(|x| Arc::ptr_eq(x, b)));
         out.instances = Arc::new(Instances::build(blas, list, camera.0.shutter));
+        if !out.instances.list.is_empty() {
+            tracing::info!(
+                instances = out.instances.list.len(),
+                meshes = out.instances.blas.len(),
+                "instances' TLAS built in {:.2} ms (BLAS of new meshes included)",
+                start.elapsed().as_secs_f64() * 1e3
+            );
+        }
         out.entities = entities;
         out.builds += 1;
         return;
@@ -419,6 +436,8 @@ pub fn update_instances(
     if moved.is_empty() && stopped.is_empty() && !new_shutter {
         return;
     }
+    let _span = tracing::info_span!("move_instances").entered();
+    let start = std::time::Instant::now();
     let out = &mut *out;
     let instances = Arc::make_mut(&mut out.instances);
     instances.shutter = camera.0.shutter;
@@ -429,12 +448,19 @@ pub fn update_instances(
             tracing::error!("instance not moved: its new transform is singular");
         }
     }
-    if instances.refit() {
+    let how = if instances.refit() {
         out.refits += 1;
+        "refitted"
     } else {
         *instances = Instances::build(instances.blas.clone(), instances.list.clone(), camera.0.shutter);
         out.builds += 1;
-    }
+        "rebuilt (a refit would have loosened it too much)"
+    };
+    tracing::info!(
+        instances = instances.list.len(),
+        "instances' TLAS {how} in {:.2} ms",
+        start.elapsed().as_secs_f64() * 1e3
+    );
 }
 
 /// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,

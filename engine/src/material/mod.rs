@@ -231,16 +231,6 @@ macro_rules! registry {
                 }
             }
 
-            /// A `trace`-level span for its shading stage, named [`Self::stage_name`] (tracing
-            /// names spans at compile time, so the registry makes one per kind).
-            pub fn stage_span(self) -> tracing::Span {
-                match self {
-                    $($(#[$attr])* MaterialKind::$variant => {
-                        tracing::trace_span!(concat!("shade_", stringify!($module)))
-                    })+
-                }
-            }
-
             /// The name a scene writes, `Lambertian` in `Lambertian(...)`.
             pub const fn variant_name(self) -> &'static str {
                 match self {

@@ -207,7 +207,12 @@ pub fn render_samples(
             || (Paths::with_slots(batch), Queues::default()),
             |(paths, queues), t| {
                 let tile = Tile::new(t, s.width, s.height);
+                let span = tracing::trace_span!("tile", index = t, samples = samples.len()).entered();
                 let out = render_tile(scene, &tile, samples.clone(), batch, opts.guides, paths, queues);
+                if tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE) {
+                    trace_tile(&out.stats, batch);
+                }
+                drop(span);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 out
             },
@@ -240,6 +245,37 @@ pub fn render_samples(
     }
     film.guides = guides;
     (film, stats)
+}
+
+/// Reports a tile's stages to the trace: each stage's time summed over the tile's iterations,
+/// laid out in pipeline order from the tile's start (target `pathwave::stage`, see the CLI's
+/// `trace` module), with its items and calls; then the tile's counters (target
+/// `pathwave::counter`): mean queue occupancy, rays per second and paths in flight.
+fn trace_tile(st: &Stats, batch: usize) {
+    let total: f64 = st.time.iter().map(Duration::as_secs_f64).sum::<f64>() * 1e6;
+    let mut ago = total;
+    for stage in Stage::ALL {
+        let k = stage.index();
+        if st.calls[k] == 0 {
+            continue;
+        }
+        let dur = st.time[k].as_secs_f64() * 1e6;
+        tracing::trace!(
+            target: "pathwave::stage",
+            name = stage.name(),
+            ago_us = ago,
+            dur_us = dur,
+            items = st.items[k],
+            calls = st.calls[k]
+        );
+        ago -= dur;
+    }
+    let occupancy = st.occupancy_sum / st.iterations.max(1) as f64;
+    let rays = st.items[Stage::IntersectClosest.index()] + st.items[Stage::TraceShadowRays.index()];
+    let counter = |name: &str, value: f64| tracing::trace!(target: "pathwave::counter", name, value);
+    counter("queue occupancy %", 100.0 * occupancy);
+    counter("paths in flight", occupancy * batch as f64);
+    counter("Mrays/s (one thread)", rays as f64 / total.max(1e-9));
 }
 
 /// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
@@ -364,25 +400,14 @@ fn camera_samples(scene: &RenderScene, s: &[Sampler; LANES]) -> [path::CameraSam
     )
 }
 
-/// Runs a stage under its tracing span, recording its time and item count.
+/// Runs a stage, recording its time and item count (traces get them once per tile, from
+/// [`trace_tile`]).
 #[inline]
 fn timed(stats: &mut Stats, stage: Stage, items: usize, f: impl FnOnce()) {
     if items == 0 {
         return;
     }
     let k = stage.index();
-    let _span = match stage {
-        Stage::GenerateCameraRays => tracing::trace_span!("generate_camera_rays"),
-        Stage::IntersectClosest => tracing::trace_span!("intersect_closest"),
-        Stage::RecordGuides => tracing::trace_span!("record_guides"),
-        Stage::HandleEscaped => tracing::trace_span!("handle_escaped"),
-        Stage::HandleEmissive => tracing::trace_span!("handle_emissive"),
-        Stage::ShadeMedium => tracing::trace_span!("shade_medium"),
-        Stage::Shade(kind) => kind.stage_span(),
-        Stage::TraceShadowRays => tracing::trace_span!("trace_shadow_rays"),
-        Stage::AccumulateFilm => tracing::trace_span!("accumulate_film"),
-    }
-    .entered();
     let start = Instant::now();
     f();
     stats.time[k] += start.elapsed();
