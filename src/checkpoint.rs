@@ -63,10 +63,7 @@ impl Checkpoint {
             }
             out.extend_from_slice(&non_finite.to_le_bytes());
         }
-        crate::io::atomically(path, |tmp| {
-            std::fs::write(tmp, &out)
-                .map_err(|e| format!("{}: cannot write the checkpoint: {e}", path.display()))
-        })
+        crate::io::atomically(path, &out)
     }
 
     /// Reads a checkpoint written by [`Self::save`].

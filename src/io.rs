@@ -23,28 +23,41 @@ pub fn read_linear(path: &Path) -> Result<LinearImage, String> {
 }
 
 /// Writes `.exr` (linear float) or `.png` (clamped to [0, 1], sRGB); returns how many pixels a
-/// PNG clamped. The file appears whole or not at all: it is written under a temporary name
-/// beside it and renamed.
+/// PNG clamped. The image is encoded in memory, then written with [`atomically`].
 pub fn write(path: &Path, img: &LinearImage) -> Result<usize, String> {
-    atomically(path, |tmp| write_now(tmp, img))
+    let (bytes, clamped) = encode(path, img)?;
+    atomically(path, &bytes)?;
+    Ok(clamped)
 }
 
-/// Runs `write` on a temporary path in `path`'s directory (same extension, so that encoders
-/// picked by extension work) and renames the result to `path`; removes it on failure.
-pub fn atomically<T>(path: &Path, write: impl FnOnce(&Path) -> Result<T, String>) -> Result<T, String> {
-    let name = path
-        .file_name()
-        .and_then(|n| n.to_str())
-        .ok_or_else(|| format!("{}: not a file name", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.{}.tmp.{}", name, std::process::id(), extension(path)));
-    let out = write(&tmp).and_then(|v| {
-        std::fs::rename(&tmp, path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(v)
-    });
-    if out.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    out
+/// Writes `bytes` to `path` whole or not at all: to a temporary file beside it (`tempfile`),
+/// synced to the disk and checked, then renamed over `path`. On any failure the previous file
+/// is left as it was and the error names `path`.
+pub fn atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    use std::io::Write;
+    let fail = |e: std::io::Error| format!("{}: cannot write: {e}", path.display());
+    let mut tmp = temp_beside(path).map_err(fail)?;
+    tmp.write_all(bytes).map_err(fail)?;
+    tmp.as_file().sync_all().map_err(fail)?;
+    tmp.persist(path).map_err(|e| fail(e.error))?;
+    Ok(())
+}
+
+/// A temporary file in `path`'s directory, named after it, created with the permissions a
+/// new file gets (0o666 less the umask, not `tempfile`'s private 0o600), since it becomes
+/// `path`.
+pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let prefix = format!(".{name}.");
+    let mut b = tempfile::Builder::new();
+    b.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    b.tempfile_in(dir)
 }
 
 fn extension(path: &Path) -> String {
@@ -70,10 +83,10 @@ fn srgb8(img: &LinearImage) -> (Vec<u8>, usize) {
 /// Writes an animated GIF (sRGB, clamped, 256 colours per frame) played at `fps`, atomically.
 pub fn write_gif(path: &Path, frames: &[LinearImage], fps: f32) -> Result<(), String> {
     use image::codecs::gif::{GifEncoder, Repeat};
-    atomically(path, |tmp| {
-        let err = |e: image::ImageError| format!("{}: {e}", path.display());
-        let file = std::fs::File::create(tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
-        let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+    let err = |e: image::ImageError| format!("{}: {e}", path.display());
+    let mut bytes = Vec::new();
+    {
+        let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
         enc.set_repeat(Repeat::Infinite).map_err(err)?;
         let delay = image::Delay::from_numer_denom_ms(1000, fps.max(1e-3).round().max(1.0) as u32);
         for f in frames {
@@ -82,29 +95,31 @@ pub fn write_gif(path: &Path, frames: &[LinearImage], fps: f32) -> Result<(), St
             let buf = image::RgbaImage::from_raw(f.width, f.height, rgba).expect("size");
             enc.encode_frame(image::Frame::from_parts(buf, 0, 0, delay)).map_err(err)?;
         }
-        Ok(())
-    })
+    }
+    atomically(path, &bytes)
 }
 
-fn write_now(path: &Path, img: &LinearImage) -> Result<usize, String> {
-    let ext = extension(path);
+/// The file's bytes for `path`'s format, and how many pixels a PNG clamped.
+fn encode(path: &Path, img: &LinearImage) -> Result<(Vec<u8>, usize), String> {
     let err = |e: image::ImageError| format!("{}: {e}", path.display());
-    match ext.as_str() {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    let clamped = match extension(path).as_str() {
         "exr" => {
             let data: Vec<f32> = img.pixels.iter().flat_map(|p| p.to_array()).collect();
             let buf: Rgb32FImage = ImageBuffer::from_raw(img.width, img.height, data).expect("size matches");
-            buf.save(path).map_err(err)?;
-            Ok(0)
+            buf.write_to(&mut bytes, image::ImageFormat::OpenExr).map_err(err)?;
+            0
         }
         "png" => {
             let (data, clamped) = srgb8(img);
             let buf: RgbImage =
                 ImageBuffer::<Rgb<u8>, _>::from_raw(img.width, img.height, data).expect("size");
-            buf.save(path).map_err(err)?;
-            Ok(clamped)
+            buf.write_to(&mut bytes, image::ImageFormat::Png).map_err(err)?;
+            clamped
         }
-        _ => Err(format!("{}: unknown output format (use .png or .exr)", path.display())),
-    }
+        _ => return Err(format!("{}: unknown output format (use .png or .exr)", path.display())),
+    };
+    Ok((bytes.into_inner(), clamped))
 }
 
 /// The sRGB transfer function (linear to encoded).

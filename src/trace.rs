@@ -66,16 +66,7 @@ pub fn create(path: &Path) -> Result<(ChromeLayer, TraceFile), String> {
         return Err(format!("{}: a trace is written as JSON (.json)", path.display()));
     }
     let fail = |e: std::io::Error| format!("{}: cannot write the trace: {e}", path.display());
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".part")
-        .tempfile_in(dir)
-        .map_err(fail)?;
+    let tmp = crate::io::temp_beside(path).map_err(fail)?;
     let mut out = Out { file: Some(BufWriter::with_capacity(1 << 20, tmp)), error: None };
     out.event("{\"displayTimeUnit\":\"ms\",\"traceEvents\":[\n");
     let meta = format!(
@@ -102,6 +93,13 @@ impl TraceFile {
         tmp.as_file().sync_all().map_err(fail)?;
         tmp.persist(&self.path).map_err(|e| fail(e.error))?;
         Ok(())
+    }
+}
+
+impl Drop for TraceFile {
+    fn drop(&mut self) {
+        // Unfinished: the temporary file goes (the layer, which lives on, shares `out`).
+        drop(self.out.lock().unwrap_or_else(|p| p.into_inner()).file.take());
     }
 }
 

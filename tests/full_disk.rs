@@ -1,0 +1,78 @@
+//! A write that fails (here: a full disk) keeps the previous file and exits non-zero with a
+//! message naming the user's path. Needs root to mount a 64 KiB tmpfs; skipped (with a message)
+//! otherwise.
+
+mod common;
+
+use common::root;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A mounted tmpfs, unmounted when dropped.
+struct Tmpfs(PathBuf);
+
+impl Tmpfs {
+    fn mount(size: &str) -> Option<Tmpfs> {
+        let dir = std::env::temp_dir().join(format!("pathwave-full-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).ok()?;
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(&dir)
+            .status()
+            .is_ok_and(|s| s.success());
+        ok.then_some(Tmpfs(dir))
+    }
+
+    /// Fills the disk.
+    fn fill(&self) {
+        let mut f = std::fs::File::create(self.0.join("fill")).unwrap();
+        let block = vec![0u8; 4096];
+        while std::io::Write::write_all(&mut f, &block).is_ok() {}
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+        let _ = std::fs::remove_dir(&self.0);
+    }
+}
+
+fn render(out: &Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", "scenes/cornell.ron", "--width", "32", "--height", "32", "-q", "-o"])
+        .arg(out)
+        .args(extra)
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_full_disk_keeps_the_previous_image_trace_and_checkpoint() {
+    let Some(fs) = Tmpfs::mount("1m") else {
+        eprintln!("skipped: mounting a tmpfs needs root");
+        return;
+    };
+    let (image, trace) = (fs.0.join("c.png"), fs.0.join("t.json"));
+    let first =
+        render(&image, &["--spp", "1", "--checkpoint-every", "1000", "--trace", trace.to_str().unwrap()]);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    let ckpt = fs.0.join("c.png.ckpt");
+    let before: Vec<Vec<u8>> = [&image, &trace, &ckpt].iter().map(|p| std::fs::read(p).unwrap()).collect();
+    fs.fill();
+    let second =
+        render(&image, &["--spp", "2", "--checkpoint-every", "1000", "--trace", trace.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert!(!second.status.success(), "a write to a full disk succeeded:\n{stderr}");
+    assert!(stderr.contains(fs.0.to_str().unwrap()), "the error names no path of the user's:\n{stderr}");
+    for (p, old) in [&image, &trace, &ckpt].iter().zip(&before) {
+        assert_eq!(&std::fs::read(p).unwrap(), old, "{} changed", p.display());
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(&fs.0)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left behind: {leftovers:?}");
+}
