@@ -171,7 +171,8 @@ pub fn run(
     if gif && !images.is_empty() {
         io::write_gif(Path::new(seq.output), &images, seq.fps)?;
     }
-    let sum: f64 = times.iter().map(|t| t.1).sum();
+    // A fold from +0 (an empty f64 sum is -0.0, printed as -0.00).
+    let sum = times.iter().fold(0.0, |a, t| a + t.1);
     eprintln!(
         "{} frames rendered, {skipped} skipped (already there), {sum:.2} s in all{}",
         times.len(),

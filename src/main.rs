@@ -6,11 +6,9 @@ use pathwave::engine::{render_scene::SamplerKind, scene, world::SceneWorld};
 use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics, trace};
-use std::io::Write;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Mutex;
 use std::time::Instant;
 
 #[derive(Parser)]
@@ -258,7 +256,42 @@ fn init_tracing(log: LogArgs, trace: Option<&Path>) -> Result<Option<trace::Trac
     Ok(file)
 }
 
+/// The binary is built for x86-64-v3 (`.cargo/config.toml`: the same instructions, so the same
+/// bits, on every machine); on a CPU without the instructions it was built with it would die of
+/// an illegal instruction somewhere. Say so instead, first thing.
+#[cfg(target_arch = "x86_64")]
+fn check_cpu() -> Result<(), String> {
+    let have = [
+        ("AVX", !cfg!(target_feature = "avx") || std::arch::is_x86_feature_detected!("avx")),
+        ("AVX2", !cfg!(target_feature = "avx2") || std::arch::is_x86_feature_detected!("avx2")),
+        ("FMA", !cfg!(target_feature = "fma") || std::arch::is_x86_feature_detected!("fma")),
+        ("BMI1", !cfg!(target_feature = "bmi1") || std::arch::is_x86_feature_detected!("bmi1")),
+        ("BMI2", !cfg!(target_feature = "bmi2") || std::arch::is_x86_feature_detected!("bmi2")),
+        ("F16C", !cfg!(target_feature = "f16c") || std::arch::is_x86_feature_detected!("f16c")),
+        ("LZCNT", !cfg!(target_feature = "lzcnt") || std::arch::is_x86_feature_detected!("lzcnt")),
+        ("MOVBE", !cfg!(target_feature = "movbe") || std::arch::is_x86_feature_detected!("movbe")),
+    ];
+    let missing: Vec<&str> = have.iter().filter(|(_, ok)| !ok).map(|(name, _)| *name).collect();
+    match missing.is_empty() {
+        true => Ok(()),
+        false => Err(format!(
+            "this CPU lacks {}: pathwave is built for x86-64-v3 CPUs (Intel Haswell, AMD Excavator \
+             or later); see the README for building for older ones",
+            missing.join(", ")
+        )),
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn check_cpu() -> Result<(), String> {
+    Ok(())
+}
+
 fn main() -> ExitCode {
+    if let Err(e) = check_cpu() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     let cli = Cli::parse();
     let (log, trace) = match &cli.command {
         Command::Render { log, profile, .. } | Command::Animate { log, profile, .. } => {
@@ -602,10 +635,20 @@ fn render(
                     s.spp
                 );
             }
-            if part {
-                eprintln!("{}: resuming samples {lo}..{hi} at {}", ckpt_path.display(), lo + ckpt.film.spp);
+            let (have, want) = (ckpt.film.spp, hi - lo);
+            if have > want {
+                return Err(format!(
+                    "{}: the checkpoint holds {have} samples per pixel, more than the {want} asked for; \
+                     ask for at least {have} with --spp (or render without --resume)",
+                    ckpt_path.display()
+                ));
+            }
+            if have == want {
+                eprintln!("{}: complete ({have} spp); writing its image", ckpt_path.display());
+            } else if part {
+                eprintln!("{}: resuming samples {lo}..{hi} at {}", ckpt_path.display(), lo + have);
             } else {
-                eprintln!("{}: resuming at {} of {} spp", ckpt_path.display(), ckpt.film.spp, s.spp);
+                eprintln!("{}: resuming at {have} of {} spp", ckpt_path.display(), s.spp);
             }
             film = ckpt.film;
         } else if !how.quiet {
@@ -615,7 +658,7 @@ fn render(
     let first_spp = film.spp;
     let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid(s.width, s.height);
     let tiles = (tiles_x * tiles_y) as usize;
-    let bar = Progress::new(how.quiet);
+    let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
     let mut stats: Option<wavefront::Stats> = None;
     let mut last_save = Instant::now();
     // Without checkpoints, one pass; with them, passes sized to take about half the interval
@@ -626,8 +669,7 @@ fn render(
         let range = next..(next + pass).min(hi);
         let k = range.len();
         let before = (film.spp - first_spp) as usize * tiles;
-        let total = (hi - lo - first_spp) as usize * tiles;
-        let progress = |done: usize, _| bar.update(before + done * k, total);
+        let progress = |done: usize, _| bar.update(before + done * k);
         let pass_start = Instant::now();
         let span = tracing::info_span!("pass", first = range.start, samples = k).entered();
         let (part, st) = pool.install(|| match how.integrator {
@@ -640,13 +682,14 @@ fn render(
         });
         drop(span);
         let secs = pass_start.elapsed().as_secs_f64();
+        let msps = s.width as f64 * s.height as f64 * k as f64 / secs.max(1e-9) / 1e6;
         tracing::info!(
-            "pass: samples {}..{} of {} in {secs:.2} s, {:.3} M samples/s",
+            "pass: samples {}..{} of {} in {secs:.2} s, {msps:.3} M samples/s",
             range.start,
             range.end,
-            s.spp,
-            s.width as f64 * s.height as f64 * k as f64 / secs.max(1e-9) / 1e6
+            s.spp
         );
+        bar.pass_done(range.start, range.end, s.spp, secs, msps);
         film.merge(&part);
         stats = match (stats, st) {
             (Some(a), Some(b)) => Some(a.merge(b)),
@@ -766,8 +809,8 @@ fn post_process(
         io::write(&sibling("albedo"), &image(aovs.albedo.clone()))?;
         io::write(&sibling("normal"), &image(normal))?;
         match film.guides {
-            Some(_) => eprintln!("guides recorded during the render"),
-            None => eprintln!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
+            Some(_) => tracing::info!("guides recorded during the render"),
+            None => tracing::info!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
         }
     }
     if !how.denoise {
@@ -778,7 +821,9 @@ fn post_process(
     let variance = film.variance_of_mean();
     let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
     let guides = if film.guides.is_some() { String::new() } else { format!(" (guides {aov_secs:.2} s)") };
-    eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
+    if !how.quiet {
+        eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
+    }
     Ok(image(out))
 }
 
@@ -868,58 +913,58 @@ fn compare(a: &Path, b: &Path) -> Result<(), String> {
     if (x.width, x.height) != (r.width, r.height) {
         return Err(format!("sizes differ: {}x{} vs {}x{}", x.width, x.height, r.width, r.height));
     }
+    let (mx, mr) = (metrics::mean(&x.pixels), metrics::mean(&r.pixels));
+    // Against a black reference a relative difference of means says nothing.
+    let relative = match mr > 0.0 {
+        true => format!(" ({:+.3}%)", 100.0 * (mx / mr - 1.0)),
+        false => String::new(),
+    };
     println!(
-        "relMSE {:.6}  RMSE {:.6}  mean {:.6} vs {:.6} ({:+.3}%)",
+        "relMSE {:.6}  RMSE {:.6}  mean {mx:.6} vs {mr:.6}{relative}",
         metrics::rel_mse(&x.pixels, &r.pixels),
         metrics::rmse(&x.pixels, &r.pixels),
-        metrics::mean(&x.pixels),
-        metrics::mean(&r.pixels),
-        100.0 * (metrics::mean(&x.pixels) / metrics::mean(&r.pixels) - 1.0),
     );
     Ok(())
 }
 
-/// A progress bar with ETA on stderr, redrawn at most ten times a second.
+/// Render progress: an `indicatif` bar with ETA on a terminal. When stderr is not a terminal
+/// the bar hides itself and each pass prints one line instead (`pass_done`), so that
+/// `2> log.txt` stays readable.
 struct Progress {
-    quiet: bool,
-    start: Instant,
-    last: Mutex<Option<Instant>>,
+    bar: indicatif::ProgressBar,
+    lines: bool,
 }
 
 impl Progress {
-    fn new(quiet: bool) -> Self {
-        Self { quiet, start: Instant::now(), last: Mutex::new(None) }
+    fn new(quiet: bool, total: usize) -> Self {
+        use std::io::IsTerminal;
+        let bar = match quiet {
+            true => indicatif::ProgressBar::hidden(),
+            false => indicatif::ProgressBar::new(total as u64),
+        };
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "Rendering [{bar:40}] {percent:>3}% {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("a valid template")
+            .progress_chars("=> "),
+        );
+        Self { bar, lines: !quiet && !std::io::stderr().is_terminal() }
     }
 
-    fn update(&self, done: usize, total: usize) {
-        if self.quiet {
-            return;
+    /// `done` of the whole render's tile passes are done.
+    fn update(&self, done: usize) {
+        self.bar.set_position(done as u64);
+    }
+
+    /// One pass finished (a line when there is no bar, unless the info log just said it).
+    fn pass_done(&self, first: u32, end: u32, spp: u32, secs: f64, msps: f64) {
+        if self.lines && !tracing::enabled!(tracing::Level::INFO) {
+            eprintln!("pass: samples {first}..{end} of {spp} in {secs:.2} s, {msps:.3} M samples/s");
         }
-        let mut last = self.last.lock().unwrap();
-        let now = Instant::now();
-        if done < total && last.is_some_and(|t| now.duration_since(t).as_millis() < 100) {
-            return;
-        }
-        *last = Some(now);
-        let f = done as f64 / total as f64;
-        let elapsed = self.start.elapsed().as_secs_f64();
-        let eta = if f > 0.0 { elapsed * (1.0 - f) / f } else { 0.0 };
-        let width = 40;
-        let filled = (f * width as f64) as usize;
-        eprint!(
-            "\rRendering: [{}{}] {:5.1}% {:.1}s elapsed, ETA {:.1}s ",
-            "+".repeat(filled),
-            " ".repeat(width - filled),
-            100.0 * f,
-            elapsed,
-            eta
-        );
-        let _ = std::io::stderr().flush();
     }
 
     fn finish(&self) {
-        if !self.quiet {
-            eprintln!();
-        }
+        self.bar.finish_and_clear();
     }
 }

@@ -502,5 +502,12 @@ fn log_levels_follow_quiet_and_verbose() {
         assert!(loud.contains(what), "-v lacks {what:?}:\n{loud}");
     }
     assert!(!loud.contains("\u{1b}["), "no colour codes when stderr is not a terminal");
+    // Into a file, progress is a line per pass (three passes of one sample), no bar.
+    let passes = ["--spp", "3", "--width", "16", "--height", "16", "--checkpoint-every", "0", "-o"];
+    let log = run(pathwave().env_remove("RUST_LOG").arg("render").arg(&scene).args(passes).arg(&out));
+    assert!(!log.contains('\r'), "no bar redraws in a file:\n{log}");
+    for k in 0..3 {
+        assert!(log.contains(&format!("pass: samples {k}..{} of 3", k + 1)), "no line for pass {k}:\n{log}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
