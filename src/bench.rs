@@ -6,7 +6,6 @@
 use crate::engine::{scene, world::SceneWorld};
 use crate::integrator::{denoise as denoiser, oracle, wavefront};
 use crate::{io, metrics};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -130,91 +129,76 @@ pub fn table_row(r: &Row) -> String {
     )
 }
 
-/// A log-log plot of relMSE against seconds, one polyline per (scene, integrator).
-pub fn svg(rows: &[Row]) -> String {
-    let (w, h, m) = (720.0, 480.0, 60.0);
-    let lx = |s: f64| s.max(1e-3).log10();
-    let ly = |e: f64| e.max(1e-9).log10();
-    let (x0, x1) = bounds(rows.iter().map(|r| lx(r.seconds)));
-    let (y0, y1) = bounds(rows.iter().map(|r| ly(r.rel_mse)));
-    let px = |s: f64| m + (lx(s) - x0) / (x1 - x0) * (w - 2.0 * m);
-    let py = |e: f64| h - m - (ly(e) - y0) / (y1 - y0) * (h - 2.0 * m);
-    let mut out = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-    );
-    for d in (x0.floor() as i32)..=(x1.ceil() as i32) {
-        let x = m + (d as f64 - x0) / (x1 - x0) * (w - 2.0 * m);
-        if (m..=w - m).contains(&x) {
-            let _ = writeln!(
-                out,
-                "<line x1=\"{x:.1}\" y1=\"{m}\" x2=\"{x:.1}\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{x:.1}\" y=\"{}\" text-anchor=\"middle\">1e{d} s</text>",
-                h - m,
-                h - m + 18.0
-            );
+/// A log-log plot of relMSE against seconds, one line per (scene, integrator): solid for the
+/// wavefront, dashed for the oracle, dotted for the denoised wavefront (plotters' SVG backend).
+pub fn svg(rows: &[Row]) -> Result<String, String> {
+    use plotters::prelude::*;
+    let fail = |e: &dyn std::fmt::Display| format!("the time-against-error plot: {e}");
+    let range = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+        if lo.is_finite() && hi > lo { (lo / 1.3)..(hi * 1.3) } else { 1e-3..1.0 }
+    };
+    let xs = range(&mut rows.iter().map(|r| r.seconds));
+    let ys = range(&mut rows.iter().map(|r| r.rel_mse));
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (720, 480)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(64)
+            .build_cartesian_2d(xs.log_scale(), ys.log_scale())
+            .map_err(|e| fail(&e))?;
+        chart
+            .configure_mesh()
+            .x_desc("render seconds")
+            .y_desc("relMSE against the reference")
+            .x_label_formatter(&|v| format!("{v:.3}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| fail(&e))?;
+        let mut series: Vec<(&str, &str)> = Vec::new();
+        for r in rows {
+            if !series.contains(&(r.scene.as_str(), r.integrator)) {
+                series.push((r.scene.as_str(), r.integrator));
+            }
         }
-    }
-    for d in (y0.floor() as i32)..=(y1.ceil() as i32) {
-        let y = h - m - (d as f64 - y0) / (y1 - y0) * (h - 2.0 * m);
-        if (m..=h - m).contains(&y) {
-            let _ = writeln!(
-                out,
-                "<line x1=\"{m}\" y1=\"{y:.1}\" x2=\"{}\" y2=\"{y:.1}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">1e{d}</text>",
-                w - m,
-                m - 6.0,
-                y + 4.0
-            );
+        let mut scenes: Vec<&str> = series.iter().map(|s| s.0).collect();
+        scenes.dedup();
+        for (scene, integrator) in series {
+            // A colour per scene, a dash per integrator.
+            let k = scenes.iter().position(|s| *s == scene).unwrap_or(0);
+            let colour = Palette99::pick(k).stroke_width(2);
+            let points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.scene == scene && r.integrator == integrator)
+                .map(|r| (r.seconds, r.rel_mse))
+                .collect();
+            let (dash, gap) = match integrator {
+                "oracle" => (6, 4),
+                "wavefront + denoiser" => (2, 3),
+                _ => (1000, 0),
+            };
+            let legend = colour;
+            chart
+                .draw_series(DashedLineSeries::new(points, dash, gap, colour))
+                .map_err(|e| fail(&e))?
+                .label(format!("{scene} {integrator}"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], legend));
         }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| fail(&e))?;
+        root.present().map_err(|e| fail(&e))?;
     }
-    let _ = writeln!(
-        out,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">render seconds (log)</text>",
-        w / 2.0,
-        h - 12.0
-    );
-    let _ = writeln!(
-        out,
-        "<text x=\"16\" y=\"{}\" transform=\"rotate(-90 16 {})\" text-anchor=\"middle\">relMSE vs reference (log)</text>",
-        h / 2.0,
-        h / 2.0
-    );
-    let colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"];
-    let mut series: Vec<(String, &str)> = Vec::new();
-    for r in rows {
-        if !series.iter().any(|(s, i)| *s == r.scene && *i == r.integrator) {
-            series.push((r.scene.clone(), r.integrator));
-        }
-    }
-    for (k, (scene, integrator)) in series.iter().enumerate() {
-        let colour = colours[k % colours.len()];
-        let dash = match *integrator {
-            "oracle" => " stroke-dasharray=\"6 4\"",
-            "wavefront + denoiser" => " stroke-dasharray=\"2 3\"",
-            _ => "",
-        };
-        let pts: Vec<String> = rows
-            .iter()
-            .filter(|r| r.scene == *scene && r.integrator == *integrator)
-            .map(|r| format!("{:.1},{:.1}", px(r.seconds), py(r.rel_mse)))
-            .collect();
-        let _ = writeln!(
-            out,
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"2\"{dash}/>",
-            pts.join(" ")
-        );
-        let _ = writeln!(
-            out,
-            "<text x=\"{}\" y=\"{}\" fill=\"{colour}\">{scene} {integrator}</text>",
-            w - m - 170.0,
-            m + 16.0 * k as f64
-        );
-    }
-    out.push_str("</svg>\n");
-    out
-}
-
-fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
-    if lo.is_finite() && hi > lo { (lo - 0.1, hi + 0.1) } else { (0.0, 1.0) }
+    Ok(out)
 }
 
 /// The default scenes: those in `scenes/` with a reference `<name>.exr` in `refs`, by name.
@@ -233,22 +217,9 @@ pub fn default_scenes(refs: &Path) -> Vec<(PathBuf, PathBuf)> {
     out
 }
 
-/// "2026-11-22" for the current UTC date.
+/// "2026-11-22" for the current UTC date (`jiff`).
 pub fn today() -> String {
-    let days = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs() / 86_400)
-        .unwrap_or(0) as i64;
-    // Howard Hinnant's civil_from_days.
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    format!("{}-{m:02}-{d:02}", yoe + era * 400 + (m <= 2) as i64)
+    jiff::Timestamp::now().to_zoned(jiff::tz::TimeZone::UTC).date().to_string()
 }
 
 /// The CPU model and core count, from /proc/cpuinfo where available.

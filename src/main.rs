@@ -867,7 +867,7 @@ fn bench(
         println!("{}", bench::table_row(r));
     }
     if let Some(path) = svg {
-        std::fs::write(&path, bench::svg(&rows)).map_err(|e| format!("{}: {e}", path.display()))?;
+        io::atomically(&path, bench::svg(&rows)?.as_bytes())?;
     }
     Ok(())
 }

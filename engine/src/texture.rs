@@ -37,11 +37,27 @@ pub struct TextureImage {
     pub texels: Vec<Vec3>,
 }
 
+/// Why an image texture cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum TextureError {
+    /// Reading or decoding failed.
+    #[error("cannot read the image {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What `image` said.
+        source: image::ImageError,
+    },
+    /// No pixels.
+    #[error("the image {} is empty", .0.display())]
+    Empty(std::path::PathBuf),
+}
+
 impl TextureImage {
     /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
     /// once, here, through a 256-entry table; float images are already linear.
-    pub fn load(path: &Path) -> Result<Self, String> {
-        let img = image::open(path).map_err(|e| format!("cannot read the image {}: {e}", path.display()))?;
+    pub fn load(path: &Path) -> Result<Self, TextureError> {
+        let img = image::open(path).map_err(|source| TextureError::Read { path: path.to_owned(), source })?;
         let (width, height) = (img.width(), img.height());
         let texels = match img {
             image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
@@ -56,7 +72,7 @@ impl TextureImage {
             }
         };
         if width == 0 || height == 0 {
-            return Err(format!("the image {} is empty", path.display()));
+            return Err(TextureError::Empty(path.to_owned()));
         }
         Ok(Self { width, height, texels })
     }

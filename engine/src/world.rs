@@ -560,10 +560,27 @@ pub fn extract_render_scene(
 /// arithmetic (extent squared times primitive count) overflows `f32`.
 pub const MAX_COORDINATE: f32 = 1e15;
 
+/// Why a placed shape cannot be rendered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ShapeError {
+    /// A triangle whose corners are collinear.
+    #[error("a triangle {0}, {1}, {2} has no area")]
+    FlatTriangle(Vec3A, Vec3A, Vec3A),
+    /// A quad whose edges are parallel (or tiny).
+    #[error("a quad with edges {0} and {1} has no area (or less than 1e-38)")]
+    FlatQuad(Vec3A, Vec3A),
+    /// A sphere under a singular transform.
+    #[error("the transform flattens the sphere")]
+    FlatSphere,
+    /// Coordinates beyond [`MAX_COORDINATE`].
+    #[error("the object reaches beyond {MAX_COORDINATE:e} units from the origin")]
+    TooFar,
+}
+
 /// Appends the world-space primitives of `shape` placed by `m`; an error says why the placed
 /// shape cannot be rendered (a quad or ellipsoid flattened to nothing, or coordinates beyond
 /// [`MAX_COORDINATE`]). Scene files are checked with it at load.
-pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), String> {
+pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
     let start = out.len();
     match *shape {
         ShapeDesc::Mesh(ref mesh) => {
@@ -589,7 +606,7 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
                 let center = m.transform_point3a(sphere.center);
                 out.push(Primitive::Sphere(Sphere { center, radius: radius * s }));
             } else {
-                let ts = TransformedSphere::new(sphere, *m).ok_or("the transform flattens the sphere")?;
+                let ts = TransformedSphere::new(sphere, *m).ok_or(ShapeError::FlatSphere)?;
                 out.push(Primitive::TransformedSphere(ts));
             }
         }
@@ -598,7 +615,7 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
             let [a, b, c] = [a, b, c].map(|p| m.transform_point3a(p.into()));
             // A mirroring transform flips the winding; keep the normal facing the same side.
             let (b, c) = if m.matrix3.determinant() < 0.0 { (c, b) } else { (b, c) };
-            let t = Triangle::new(a, b, c).ok_or_else(|| format!("a triangle {a}, {b}, {c} has no area"))?;
+            let t = Triangle::new(a, b, c).ok_or(ShapeError::FlatTriangle(a, b, c))?;
             out.push(Primitive::Triangle(t));
         }
         ShapeDesc::Box { min, max } => {
@@ -619,7 +636,7 @@ pub fn world_primitives(shape: &ShapeDesc, m: &Affine3A, out: &mut Vec<Primitive
     });
     if far {
         out.truncate(start);
-        return Err(format!("the object reaches beyond {MAX_COORDINATE:e} units from the origin"));
+        return Err(ShapeError::TooFar);
     }
     Ok(())
 }
@@ -643,14 +660,13 @@ fn flat_mesh(shape: &ShapeDesc) -> Option<MeshData> {
     Some(mesh)
 }
 
-fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) -> Result<(), String> {
+fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
     let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
     // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
     if m.matrix3.determinant() < 0.0 {
         std::mem::swap(&mut u, &mut v);
     }
-    let quad = Quad::new(q, u, v)
-        .ok_or_else(|| format!("a quad with edges {u} and {v} has no area (or less than 1e-38)"))?;
+    let quad = Quad::new(q, u, v).ok_or(ShapeError::FlatQuad(u, v))?;
     out.push(Primitive::Quad(quad));
     Ok(())
 }

@@ -715,7 +715,7 @@ impl TryFrom<RawObject> for ObjectDesc {
         if r.animate.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `animate` is for surfaces".into());
         }
-        world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new())?;
+        world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
         Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion, animate: r.animate })
     }
 }

@@ -1,10 +1,10 @@
 //! Scene loading errors with a position in the file.
 
-use std::fmt;
 use std::path::PathBuf;
 
 /// An error in a scene file: where it is and what was expected.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}{}: {message}", path.display(), position(*.line, *.col))]
 pub struct SceneError {
     /// The file.
     pub path: PathBuf,
@@ -16,14 +16,7 @@ pub struct SceneError {
     pub message: String,
 }
 
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.line == 0 {
-            write!(f, "{}: {}", self.path.display(), self.message)
-        } else {
-            write!(f, "{}:{}:{}: {}", self.path.display(), self.line, self.col, self.message)
-        }
-    }
+/// `:line:col`, or nothing for an error without a position.
+fn position(line: usize, col: usize) -> String {
+    if line == 0 { String::new() } else { format!(":{line}:{col}") }
 }
-
-impl std::error::Error for SceneError {}
