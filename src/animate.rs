@@ -96,10 +96,14 @@ pub struct Sequence<'a> {
 }
 
 /// One frame as `run` hands it to its renderer.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct FrameInfo {
     /// The frame number.
     pub frame: u32,
+    /// When its shutter opens (seconds).
+    pub open: f32,
+    /// The file it will be written to (`None` for a GIF's frames).
+    pub path: Option<PathBuf>,
     /// How long the ECS update took (keyframes, BVH rebuilds and refits, extraction).
     pub update: std::time::Duration,
 }
@@ -109,7 +113,7 @@ pub struct FrameInfo {
 pub fn run(
     world: &mut SceneWorld,
     seq: &Sequence,
-    mut render: impl FnMut(&RenderScene, FrameInfo) -> LinearImage,
+    mut render: impl FnMut(&RenderScene, &FrameInfo) -> Result<LinearImage, String>,
 ) -> Result<(), String> {
     let gif = Path::new(seq.output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
     if gif && Path::new(seq.output).exists() && !seq.overwrite {
@@ -150,7 +154,8 @@ pub fn run(
             scene_at(world, frame, seq.fps, seq.shutter)
         };
         let update = t0.elapsed();
-        let img = render(&scene, FrameInfo { frame, update });
+        let open = frame_time(frame, seq.fps, seq.shutter).0;
+        let img = render(&scene, &FrameInfo { frame, open, path: path.clone(), update })?;
         match &path {
             Some(p) => {
                 io::write(p, &img)?;

@@ -25,45 +25,14 @@ enum Command {
         /// The scene file.
         scene: PathBuf,
         /// Output image; the extension picks the format (.png or .exr).
-        #[arg(short, long)]
+        #[arg(short, long, visible_alias = "outfile")]
         output: PathBuf,
         #[command(flatten)]
-        image: ImageArgs,
-        /// Maximum bounces (overrides the scene).
-        #[arg(long)]
-        max_depth: Option<u32>,
-        /// Scale samples down so that no component exceeds MAX (biased; off by default).
-        #[arg(long, value_name = "MAX")]
-        clamp: Option<f32>,
-        #[command(flatten)]
-        log: LogArgs,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
-        threads: Option<usize>,
-        /// Which integrator renders.
-        #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
-        integrator: Integrator,
-        /// Paths in flight per worker (wavefront).
-        #[arg(long, default_value_t = 256)]
-        batch: usize,
-        #[command(flatten)]
-        profile: ProfileArgs,
+        args: RenderArgs,
         /// Evaluate keyframes at this time (seconds); the camera's shutter opens and closes
         /// relative to it.
         #[arg(long, default_value_t = 0.0)]
         time: f32,
-        /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
-        /// output gets the denoised image, NAME.noisy.EXT the render as it came.
-        #[arg(long)]
-        denoise: bool,
-        /// Also write the denoiser's guides: NAME.albedo.EXT and NAME.normal.EXT (normals as
-        /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
-        #[arg(long)]
-        aov: bool,
-        /// Render in passes and, every SECS seconds, save the samples so far to OUT.ckpt and
-        /// the image so far to OUT (the checkpoint is kept at the end, for --resume --spp).
-        #[arg(long, value_name = "SECS")]
-        checkpoint_every: Option<f64>,
         /// Continue from OUT.ckpt if it exists (same scene and settings; the result has the
         /// bits of an uninterrupted render); checkpoints every 60 s unless --checkpoint-every.
         #[arg(long)]
@@ -89,7 +58,7 @@ enum Command {
         /// The scene file.
         scene: PathBuf,
         /// Output pattern, e.g. out/frame_{frame:04}.png (or .exr), or anim.gif.
-        #[arg(short, long)]
+        #[arg(short, long, visible_alias = "outfile")]
         output: String,
         /// Frames A..B (B excluded) or A..=B (default: 0..the scene's `animation.frames`).
         #[arg(long)]
@@ -109,14 +78,7 @@ enum Command {
         #[arg(long, value_name = "I/N")]
         shard: Option<String>,
         #[command(flatten)]
-        image: ImageArgs,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
-        threads: Option<usize>,
-        #[command(flatten)]
-        log: LogArgs,
-        #[command(flatten)]
-        profile: ProfileArgs,
+        args: RenderArgs,
     },
     /// Run time against error: render the scenes that have references at several sample
     /// counts with both integrators; print a markdown table, optionally write an SVG plot.
@@ -177,6 +139,76 @@ enum Integrator {
     Wavefront,
     /// The reference path tracer, one path at a time.
     Oracle,
+}
+
+/// What `render` and `animate` share: every setting that changes a sample or an output.
+#[derive(clap::Args, Clone, Debug)]
+struct RenderArgs {
+    #[command(flatten)]
+    image: ImageArgs,
+    /// Maximum bounces (overrides the scene).
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Scale samples down so that no component exceeds MAX (biased; off by default).
+    #[arg(long, value_name = "MAX")]
+    clamp: Option<f32>,
+    /// Which integrator renders.
+    #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
+    integrator: Integrator,
+    /// Paths in flight per worker (wavefront).
+    #[arg(long, default_value_t = 256)]
+    batch: usize,
+    /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
+    /// output gets the denoised image, NAME.noisy.EXT the render as it came.
+    #[arg(long)]
+    denoise: bool,
+    /// Also write the denoiser's guides: NAME.albedo.EXT and NAME.normal.EXT (normals as
+    /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
+    #[arg(long)]
+    aov: bool,
+    /// Render in passes and, every SECS seconds, save the samples so far to OUT.ckpt (render:
+    /// and the image so far to OUT; animate: a killed frame resumes from its checkpoint). The
+    /// checkpoint is kept at the end, to add samples later.
+    #[arg(long, value_name = "SECS")]
+    checkpoint_every: Option<f64>,
+    /// Worker threads (default: all cores).
+    #[arg(short, long, visible_alias = "nthreads")]
+    threads: Option<usize>,
+    #[command(flatten)]
+    log: LogArgs,
+    #[command(flatten)]
+    profile: ProfileArgs,
+}
+
+impl RenderArgs {
+    /// The scene overrides.
+    fn overrides(&self) -> Overrides {
+        Overrides { image: self.image, max_depth: self.max_depth, clamp: self.clamp }
+    }
+
+    /// How to render.
+    fn how(&self) -> How {
+        How {
+            integrator: self.integrator,
+            batch: self.batch,
+            stats: self.profile.stats,
+            threads: self.threads,
+            quiet: self.log.quiet,
+            verbose: self.log.verbose > 0,
+            denoise: self.denoise,
+            aov: self.aov,
+        }
+    }
+
+    /// `--checkpoint-every`, a number of seconds >= 0.
+    fn checkpoint_every(&self) -> Result<Option<f64>, String> {
+        match self.checkpoint_every {
+            Some(s) if !(s >= 0.0 && s.is_finite()) => {
+                Err(format!("--checkpoint-every takes a number of seconds >= 0, not {s}"))
+            }
+            other => Ok(other),
+        }
+    }
 }
 
 /// How much `render` and `animate` say on stderr.
@@ -294,8 +326,8 @@ fn main() -> ExitCode {
     }
     let cli = Cli::parse();
     let (log, trace) = match &cli.command {
-        Command::Render { log, profile, .. } | Command::Animate { log, profile, .. } => {
-            (*log, profile.trace.clone())
+        Command::Render { args, .. } | Command::Animate { args, .. } => {
+            (args.log, args.profile.trace.clone())
         }
         _ => (LogArgs { verbose: 0, quiet: false }, None),
     };
@@ -307,60 +339,18 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Render {
-            scene,
-            output,
-            image,
-            max_depth,
-            clamp,
-            log,
-            threads,
-            integrator,
-            batch,
-            profile,
-            time,
-            denoise,
-            aov,
-            checkpoint_every,
-            resume,
-            samples,
-        } => {
-            let overrides = Overrides { image, max_depth, clamp };
-            let how = How {
-                integrator,
-                batch,
-                stats: profile.stats,
-                threads,
-                quiet: log.quiet,
-                verbose: log.verbose > 0,
-                denoise,
-                aov,
-            };
-            let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose();
-            samples.and_then(|samples| {
-                // A part is kept in its checkpoint for `merge`.
-                let checkpoint = (checkpoint_every.is_some() || resume || samples.is_some())
-                    .then(|| Checkpointing { every: checkpoint_every.unwrap_or(60.0).max(0.0), resume });
-                render(&scene, &output, overrides, &how, time, checkpoint, samples)
-            })
-        }
+        Command::Render { scene, output, args, time, resume, samples } => (|| {
+            let every = args.checkpoint_every()?;
+            let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose()?;
+            // A part is kept in its checkpoint for `merge`.
+            let checkpoint = (every.is_some() || resume || samples.is_some())
+                .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
+            render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples)
+        })(),
         Command::Merge { parts, output } => merge(&parts, &output),
-        Command::Animate {
-            scene,
-            output,
-            frames,
-            fps,
-            shutter,
-            overwrite,
-            shard,
-            image,
-            threads,
-            log,
-            profile,
-        } => {
-            let overrides = Overrides { image, max_depth: None, clamp: None };
+        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, args } => {
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
-            animate(&scene, &output, seq, overrides, threads, log.quiet, profile.stats)
+            animate(&scene, &output, seq, &args)
         }
         Command::Compare { a, b } => compare(&a, &b),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
@@ -500,33 +490,38 @@ struct SequenceArgs {
     shard: Option<String>,
 }
 
-fn animate(
-    path: &Path,
-    output: &str,
-    args: SequenceArgs,
-    o: Overrides,
-    threads: Option<usize>,
-    quiet: bool,
-    stats: bool,
-) -> Result<(), String> {
-    let desc = load(path, &o)?;
+fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
+    let desc = load(path, &args.overrides())?;
     let a = &desc.animation;
-    let frames = match &args.frames {
+    let frames = match &seq_args.frames {
         Some(f) => animate::parse_range(f, "--frames")?,
         None => (0, a.frames.get()),
     };
-    let fps = args.fps.unwrap_or(a.fps.0);
+    let fps = seq_args.fps.unwrap_or(a.fps.0);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps takes a number > 0, not {fps}"));
     }
-    let shutter = args.shutter.unwrap_or(a.shutter.0);
+    let shutter = seq_args.shutter.unwrap_or(a.shutter.0);
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
     }
-    let shard = args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
-    let pool = pool(threads)?;
+    let shard = seq_args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
+    let every = args.checkpoint_every()?;
+    let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    if gif && (args.denoise || args.aov || every.is_some()) {
+        return Err(format!(
+            "{output}: --denoise, --aov and --checkpoint-every write files beside each frame; \
+             render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
+        ));
+    }
+    // A frame killed half way resumes from its checkpoint.
+    let checkpointing = every.map(|every| Checkpointing { every, resume: true });
+    let pool = pool(args.threads)?;
     let mut world = SceneWorld::new(&desc);
-    let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: args.overwrite, quiet };
+    let quiet = args.log.quiet;
+    let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: seq_args.overwrite, quiet };
+    // Frames report one line each (from `animate::run`), not a bar or a line per pass.
+    let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
     let mut logged = false;
     animate::run(&mut world, &seq, |scene, info| {
@@ -534,23 +529,33 @@ fn animate(
             log_scene(scene);
             logged = true;
         }
-        let start = Instant::now();
-        let (film, st) = pool.install(|| wavefront::render(scene, wavefront::Options::default(), &|_, _| {}));
-        let secs = start.elapsed().as_secs_f64();
-        if stats {
-            eprintln!(
-                "frame {}: scene update {:.2} ms, render {secs:.2} s, {}",
-                info.frame,
-                info.update.as_secs_f64() * 1e3,
-                stage_shares(&st)
-            );
-            let bad = film.non_finite();
-            total = Some(match total.take() {
-                Some((t, s, n)) => (t.merge(st), s + secs, n + bad),
-                None => (st, secs, bad),
-            });
+        let r = match &info.path {
+            Some(out) => {
+                let key = settings_key(path, scene, &how, info.open)?;
+                render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false)?
+            }
+            // A GIF's frames: no checkpoints, no files beside them (refused above).
+            None => render_image(scene, 0, Path::new(output), &how, None, None, &pool, false)?,
+        };
+        if args.profile.stats {
+            match &r.stats {
+                Some(st) => eprintln!(
+                    "frame {}: scene update {:.2} ms, render {:.2} s, {}",
+                    info.frame,
+                    info.update.as_secs_f64() * 1e3,
+                    r.secs,
+                    stage_shares(st)
+                ),
+                None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+            }
+            if let Some(st) = r.stats.clone() {
+                total = Some(match total.take() {
+                    Some((t, s, n)) => (t.merge(st), s + r.secs, n + r.non_finite),
+                    None => (st, r.secs, r.non_finite),
+                });
+            }
         }
-        LinearImage { width: film.width, height: film.height, pixels: film.mean() }
+        Ok(r.img)
     })?;
     if let Some((st, secs, non_finite)) = &total {
         eprintln!("the sequence's frames together:");
@@ -583,21 +588,91 @@ fn render(
 ) -> Result<(), String> {
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
-    let start = Instant::now();
     let mut world = SceneWorld::new(&desc);
     let shutter = desc.camera.shutter;
     world.set_time(time + shutter.0, time + shutter.1);
     let scene = world.update();
     log_scene(&scene);
     let s = scene.settings;
-    let ckpt_path = checkpoint::path_for(output);
-    let key = checkpoint::key(
+    let key = settings_key(path, &scene, how, time)?;
+    let r = render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true)?;
+    if how.stats {
+        match &r.stats {
+            Some(st) => print_stats(st, r.secs, r.non_finite),
+            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        }
+    }
+    let clamped = io::write(output, &r.img)?;
+    eprintln!(
+        "{}: {}x{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
+        output.display(),
+        s.width,
+        s.height,
+        r.spp,
+        r.secs,
+        r.new_samples / r.secs.max(1e-9) / 1e6,
+        pool.current_num_threads(),
+        r.non_finite,
+        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
+        match checkpointing {
+            Some(_) => format!("; checkpoint {}", checkpoint::path_for(output).display()),
+            None => String::new(),
+        },
+    );
+    Ok(())
+}
+
+/// The checkpoint key of a render: the scene file's bytes and every setting that changes a
+/// sample (a checkpoint of other settings is refused).
+fn settings_key(
+    path: &Path,
+    scene: &pathwave::engine::render_scene::RenderScene,
+    how: &How,
+    time: f32,
+) -> Result<u64, String> {
+    let s = scene.settings;
+    Ok(checkpoint::key(
         &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
         &format!(
             "{}x{} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?}",
             s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator, s.sampler
         ),
-    );
+    ))
+}
+
+/// One rendered image, before it is written.
+struct Rendered {
+    /// The image (denoised when asked for).
+    img: LinearImage,
+    /// Samples per pixel in it.
+    spp: u32,
+    /// Samples rendered by this run (not those resumed).
+    new_samples: f64,
+    /// Per-stage statistics (wavefront).
+    stats: Option<wavefront::Stats>,
+    /// Seconds, from the start of rendering to the image.
+    secs: f64,
+    /// NaN/Inf samples discarded.
+    non_finite: u64,
+}
+
+/// Renders `scene` into the image meant for `output`, as `render` and each frame of `animate`
+/// do: from its checkpoint when resuming, in passes that save checkpoints (and, with
+/// `partial`, the image so far) when asked, then denoised or with guides when asked.
+#[allow(clippy::too_many_arguments)]
+fn render_image(
+    scene: &pathwave::engine::render_scene::RenderScene,
+    key: u64,
+    output: &Path,
+    how: &How,
+    checkpointing: Option<&Checkpointing>,
+    samples: Option<(u32, u32)>,
+    pool: &rayon::ThreadPool,
+    partial: bool,
+) -> Result<Rendered, String> {
+    let start = Instant::now();
+    let s = scene.settings;
+    let ckpt_path = checkpoint::path_for(output);
     // The sample indices this run owns: all of them, or a range with --samples (one machine's
     // share of a frame, added to the others by `pathwave merge`).
     let (lo, hi) = samples.unwrap_or((0, s.spp));
@@ -606,7 +681,7 @@ fn render(
     }
     let part = (lo, hi) != (0, s.spp);
     let mut film = Film::new(s.width, s.height);
-    if checkpointing.as_ref().is_some_and(|c| c.resume) {
+    if checkpointing.is_some_and(|c| c.resume) {
         if ckpt_path.exists() {
             let ckpt = Checkpoint::load(&ckpt_path)?;
             if ckpt.key != key {
@@ -673,10 +748,10 @@ fn render(
         let pass_start = Instant::now();
         let span = tracing::info_span!("pass", first = range.start, samples = k).entered();
         let (part, st) = pool.install(|| match how.integrator {
-            Integrator::Oracle => (oracle::render_samples(&scene, range.clone(), &progress), None),
+            Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
                 let opts = wavefront::Options { batch: how.batch, guides: how.denoise || how.aov };
-                let (film, stats) = wavefront::render_samples(&scene, opts, range.clone(), &progress);
+                let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }
         });
@@ -695,11 +770,11 @@ fn render(
             (Some(a), Some(b)) => Some(a.merge(b)),
             (a, b) => a.or(b),
         };
-        if let Some(c) = &checkpointing {
+        if let Some(c) = checkpointing {
             let finished = lo + film.spp == hi;
             if last_save.elapsed().as_secs_f64() >= c.every || finished {
                 // The image so far first: once a checkpoint exists, so does an image.
-                if !finished {
+                if !finished && partial {
                     io::write(
                         output,
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
@@ -715,12 +790,6 @@ fn render(
     }
     let secs = start.elapsed().as_secs_f64();
     bar.finish();
-    if how.stats {
-        match &stats {
-            Some(st) => print_stats(st, secs, film.non_finite()),
-            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
-        }
-    }
     if how.verbose {
         for &(i, n) in &film.non_finite_pixels() {
             eprintln!("NaN/Inf: {n} samples discarded at pixel {},{}", i % film.width, i / film.width);
@@ -728,25 +797,18 @@ fn render(
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
     let img = if how.denoise || how.aov {
-        post_process(&scene, &film, lo..lo + film.spp, img, output, how, &pool)?
+        post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?
     } else {
         img
     };
-    let clamped = io::write(output, &img)?;
-    let samples = s.width as f64 * s.height as f64 * (film.spp - first_spp) as f64;
-    eprintln!(
-        "{}: {}x{} {} spp in {secs:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
-        output.display(),
-        s.width,
-        s.height,
-        film.spp,
-        samples / secs / 1e6,
-        pool.current_num_threads(),
-        film.non_finite(),
-        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
-        if checkpointing.is_some() { format!("; checkpoint {}", ckpt_path.display()) } else { String::new() },
-    );
-    Ok(())
+    Ok(Rendered {
+        img,
+        spp: film.spp,
+        new_samples: s.width as f64 * s.height as f64 * (film.spp - first_spp) as f64,
+        stats,
+        secs,
+        non_finite: film.non_finite(),
+    })
 }
 
 fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {

@@ -511,3 +511,66 @@ fn log_levels_follow_quiet_and_verbose() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `render --help` and `animate --help` list the same sample and output flags.
+#[test]
+fn render_and_animate_share_their_flags() {
+    let help = |cmd: &str| {
+        let out = pathwave().args([cmd, "--help"]).output().unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let (render, animate) = (help("render"), help("animate"));
+    for flag in [
+        "--spp",
+        "--width",
+        "--height",
+        "--seed",
+        "--sampler",
+        "--max-depth",
+        "--clamp",
+        "--integrator",
+        "--batch",
+        "--denoise",
+        "--aov",
+        "--checkpoint-every",
+        "--threads",
+        "--verbose",
+        "--quiet",
+        "--stats",
+        "--trace",
+        "--outfile",
+        "--nthreads",
+    ] {
+        assert!(
+            render.contains(flag) && animate.contains(flag),
+            "{flag} is not in both:\n{render}\n{animate}"
+        );
+    }
+}
+
+/// `animate` with the render flags: per-frame checkpoints, denoised frames with their noisy
+/// twins, a depth override; a GIF refuses the flags that write beside frames.
+#[test]
+fn animate_takes_the_render_flags() {
+    let dir = temp("flags");
+    let scene = root().join("scenes/animation-bounce.ron");
+    let pattern = dir.join("f_{frame:02}.png");
+    run(pathwave()
+        .arg("animate")
+        .arg(&scene)
+        .args(["-o", pattern.to_str().unwrap(), "--frames", "0..2", "-q"])
+        .args(["--spp", "2", "--width", "32", "--height", "24", "--max-depth", "3"])
+        .args(["--checkpoint-every", "0", "--denoise", "--integrator", "oracle"]));
+    for f in ["f_00.png", "f_00.noisy.png", "f_00.png.ckpt", "f_01.png", "f_01.noisy.png", "f_01.png.ckpt"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let gif = pathwave()
+        .arg("animate")
+        .arg(&scene)
+        .args(["-o", dir.join("a.gif").to_str().unwrap(), "--frames", "0..2", "--denoise"])
+        .output()
+        .unwrap();
+    assert!(!gif.status.success());
+    assert!(String::from_utf8_lossy(&gif.stderr).contains("rather than a GIF"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
