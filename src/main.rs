@@ -2,7 +2,8 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::checkpoint::{self, Checkpoint};
-use pathwave::engine::{render_scene::SamplerKind, scene, world::SceneWorld};
+use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
+use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics, trace};
@@ -152,6 +153,11 @@ struct RenderArgs {
     /// Scale samples down so that no component exceeds MAX (biased; off by default).
     #[arg(long, value_name = "MAX")]
     clamp: Option<f32>,
+    /// Render only the window x0..x1, y0..y1 (fractions of the image, as pbrt-v4's crop
+    /// window): the output has the window's size and the bits of those pixels in the whole
+    /// image.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_delimiter = ',')]
+    crop: Option<Vec<f32>>,
     /// Which integrator renders.
     #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
     integrator: Integrator,
@@ -183,7 +189,12 @@ struct RenderArgs {
 impl RenderArgs {
     /// The scene overrides.
     fn overrides(&self) -> Overrides {
-        Overrides { image: self.image, max_depth: self.max_depth, clamp: self.clamp }
+        Overrides {
+            image: self.image,
+            max_depth: self.max_depth,
+            clamp: self.clamp,
+            crop: self.crop.clone(),
+        }
     }
 
     /// How to render.
@@ -402,6 +413,7 @@ struct Overrides {
     image: ImageArgs,
     max_depth: Option<u32>,
     clamp: Option<f32>,
+    crop: Option<Vec<f32>>,
 }
 
 /// `--checkpoint-every` and `--resume`.
@@ -446,6 +458,21 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
             return Err(format!("--clamp takes a finite number > 0, not {c}"));
         }
         r.clamp = Some(scene::Positive(c));
+    }
+    if let Some(c) = &o.crop {
+        let c: [f32; 4] = c.as_slice().try_into().map_err(|_| {
+            format!("--crop takes four numbers x0,x1,y0,y1 (a crop window), not {}", c.len())
+        })?;
+        r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
+    }
+    if let Some(c) = r.crop
+        && PixelWindow::crop(r.width.get(), r.height.get(), c.0).is_none()
+    {
+        let [x0, x1, y0, y1] = c.0;
+        return Err(format!(
+            "the crop window ({x0}, {x1}, {y0}, {y1}) holds no pixel of a {}x{} image",
+            r.width, r.height
+        ));
     }
     Ok(desc)
 }
@@ -604,10 +631,14 @@ fn render(
     }
     let clamped = io::write(output, &r.img)?;
     eprintln!(
-        "{}: {}x{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
+        "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
         output.display(),
-        s.width,
-        s.height,
+        s.window.w,
+        s.window.h,
+        match s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height }) {
+            true => String::new(),
+            false => format!(" (crop at {},{} of {}x{})", s.window.x0, s.window.y0, s.width, s.height),
+        },
         r.spp,
         r.secs,
         r.new_samples / r.secs.max(1e-9) / 1e6,
@@ -634,8 +665,8 @@ fn settings_key(
     Ok(checkpoint::key(
         &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
         &format!(
-            "{}x{} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?}",
-            s.width, s.height, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator, s.sampler
+            "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?}",
+            s.width, s.height, s.window, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator, s.sampler
         ),
     ))
 }
@@ -680,7 +711,7 @@ fn render_image(
         return Err(format!("--samples {lo}..{hi} goes beyond the {} samples per pixel", s.spp));
     }
     let part = (lo, hi) != (0, s.spp);
-    let mut film = Film::new(s.width, s.height);
+    let mut film = Film::new(s.window.w, s.window.h);
     if checkpointing.is_some_and(|c| c.resume) {
         if ckpt_path.exists() {
             let ckpt = Checkpoint::load(&ckpt_path)?;
@@ -731,7 +762,7 @@ fn render_image(
         }
     }
     let first_spp = film.spp;
-    let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid(s.width, s.height);
+    let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid_of(&s.window);
     let tiles = (tiles_x * tiles_y) as usize;
     let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
     let mut stats: Option<wavefront::Stats> = None;
@@ -757,7 +788,7 @@ fn render_image(
         });
         drop(span);
         let secs = pass_start.elapsed().as_secs_f64();
-        let msps = s.width as f64 * s.height as f64 * k as f64 / secs.max(1e-9) / 1e6;
+        let msps = s.window.len() as f64 * k as f64 / secs.max(1e-9) / 1e6;
         tracing::info!(
             "pass: samples {}..{} of {} in {secs:.2} s, {msps:.3} M samples/s",
             range.start,
@@ -804,7 +835,7 @@ fn render_image(
     Ok(Rendered {
         img,
         spp: film.spp,
-        new_samples: s.width as f64 * s.height as f64 * (film.spp - first_spp) as f64,
+        new_samples: s.window.len() as f64 * (film.spp - first_spp) as f64,
         stats,
         secs,
         non_finite: film.non_finite(),

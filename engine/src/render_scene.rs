@@ -13,13 +13,57 @@ use crate::texture::{MaterialTextures, Textures};
 use glam::{Vec3, Vec3A};
 use std::sync::Arc;
 
+/// A rectangle of pixels: columns `x0..x0 + w`, rows `y0..y0 + h`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelWindow {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width (>= 1).
+    pub w: u32,
+    /// Height (>= 1).
+    pub h: u32,
+}
+
+impl PixelWindow {
+    /// The crop window `(x0, x1, y0, y1)`, fractions of the image as pbrt-v4's `cropwindow`
+    /// (pixels from `ceil(x0 width)` up to `ceil(x1 width)`, the same for rows); `None` when it
+    /// holds no pixel.
+    pub fn crop(width: u32, height: u32, [x0, x1, y0, y1]: [f32; 4]) -> Option<Self> {
+        // In f32, as pbrt-v4 computes it: 0.1 * 40 rounds to 4 exactly (in f64 it is above 4).
+        let px = |f: f32, n: u32| ((f * n as f32).ceil() as u32).min(n);
+        let (a, b, c, d) = (px(x0, width), px(x1, width), px(y0, height), px(y1, height));
+        (b > a && d > c).then_some(Self { x0: a, y0: c, w: b - a, h: d - c })
+    }
+
+    /// The index of image pixel (x, y) in a film of this window (row-major).
+    #[inline]
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        ((y - self.y0) * self.w + (x - self.x0)) as usize
+    }
+
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.w as usize * self.h as usize
+    }
+
+    /// True when it holds no pixel (never, for a window made by [`Self::crop`]).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 /// Image size and sampling settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
-    /// Width in pixels.
+    /// Width in pixels (of the whole image: the camera's).
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
+    /// The pixels to render: the crop window, or the whole image. Films and the images
+    /// written have its size; every pixel has the bits it has in the whole image.
+    pub window: PixelWindow,
     /// Samples per pixel.
     pub spp: u32,
     /// Maximum number of bounces.

@@ -9,7 +9,7 @@ use crate::lights::LightTable;
 use crate::material::Material;
 use crate::media::{Boundary, Media, Medium, Volume};
 use crate::mesh::{MeshBlas, MeshData};
-use crate::render_scene::{Background, Features, RenderScene, RenderSettings};
+use crate::render_scene::{Background, Features, PixelWindow, RenderScene, RenderSettings};
 use crate::scene::{
     BackgroundDesc, Body, CameraDesc, Color, MaterialDesc, Positive, Rgb, SceneDesc, ShapeDesc, TextureDesc,
     compose,
@@ -810,9 +810,15 @@ impl SceneWorld {
             }
         }
         let r = desc.render;
+        let (width, height) = (r.width.get(), r.height.get());
+        let whole = PixelWindow { x0: 0, y0: 0, w: width, h: height };
+        // A window too small to hold a pixel at this size (the CLI refuses it first) falls
+        // back to the whole image.
+        let window = r.crop.and_then(|c| PixelWindow::crop(width, height, c.0)).unwrap_or(whole);
         world.insert_resource(Settings(RenderSettings {
-            width: r.width.get(),
-            height: r.height.get(),
+            width,
+            height,
+            window,
             spp: r.spp.get(),
             max_depth: r.max_depth,
             rr_depth: r.rr_depth,

@@ -38,12 +38,13 @@ pub struct Aovs {
 /// sample range, and `emission` is exactly what its camera rays met).
 pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
     let _span = tracing::info_span!("render_aovs", samples = samples.len()).entered();
-    let (w, h) = (scene.settings.width, scene.settings.height);
+    let win = scene.settings.window;
+    let (w, h) = (win.w, win.h);
     let n = samples.len().max(1) as f32;
-    let rows: Vec<Vec<[Vec3; 3]>> = (0..h)
+    let rows: Vec<Vec<[Vec3; 3]>> = (win.y0..win.y0 + h)
         .into_par_iter()
         .map(|y| {
-            (0..w)
+            (win.x0..win.x0 + w)
                 .map(|x| {
                     let mut sum = [Vec3::ZERO; 3];
                     for index in samples.clone() {

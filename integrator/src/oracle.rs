@@ -31,13 +31,13 @@ pub fn render_samples(
     let s = scene.settings;
     let _span =
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = Tile::grid(s.width, s.height);
+    let (tx, ty) = Tile::grid_of(&s.window);
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let tiles: Vec<Vec<PixelAccumulator>> = (0..tx * ty)
         .into_par_iter()
         .map(|t| {
-            let tile = Tile::new(t, s.width, s.height);
+            let tile = Tile::in_window(t, &s.window);
             let out = (0..tile.len())
                 .map(|i| tile.pixel(i))
                 .map(|(x, y)| render_pixel(scene, x, y, samples.clone()))
@@ -46,13 +46,13 @@ pub fn render_samples(
             out
         })
         .collect();
-    let mut film = Film::new(s.width, s.height);
+    let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
     for (t, accs) in tiles.into_iter().enumerate() {
-        let tile = Tile::new(t as u32, s.width, s.height);
+        let tile = Tile::in_window(t as u32, &s.window);
         for (i, acc) in accs.iter().enumerate() {
             let (x, y) = tile.pixel(i as u32);
-            film.set_pixel((y * s.width + x) as usize, acc);
+            film.set_pixel(s.window.index(x, y), acc);
         }
     }
     film

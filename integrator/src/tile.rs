@@ -1,5 +1,7 @@
 //! Square image tiles: the unit of work that integrators hand to rayon.
 
+use pathwave_engine::render_scene::PixelWindow;
+
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
 
@@ -27,6 +29,17 @@ impl Tile {
         let tiles_x = width.div_ceil(TILE);
         let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
         Self { x0, y0, w: (x0 + TILE).min(width) - x0, h: (y0 + TILE).min(height) - y0 }
+    }
+
+    /// Number of tiles across and down a window of the image.
+    pub fn grid_of(window: &PixelWindow) -> (u32, u32) {
+        Self::grid(window.w, window.h)
+    }
+
+    /// Tile `t` (row-major) of a window of the image, in image coordinates.
+    pub fn in_window(t: u32, window: &PixelWindow) -> Self {
+        let tile = Self::new(t, window.w, window.h);
+        Self { x0: window.x0 + tile.x0, y0: window.y0 + tile.y0, ..tile }
     }
 
     /// Image coordinates of pixel `i` (row-major within the tile).

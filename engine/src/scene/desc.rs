@@ -160,6 +160,34 @@ pub struct RenderDesc {
     pub clamp: Option<Positive>,
     /// How the samples' random numbers are made: `Sobol` (default), `Stratified`, `Independent`.
     pub sampler: SamplerKind,
+    /// Render only this window `(x0, x1, y0, y1)`, fractions of the image in [0, 1] as
+    /// pbrt-v4's crop window (default: the whole image).
+    pub crop: Option<CropWindow>,
+}
+
+/// `(x0, x1, y0, y1)` in [0, 1], x0 < x1 and y0 < y1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CropWindow(pub [f32; 4]);
+
+impl<'de> Deserialize<'de> for CropWindow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let (x0, x1, y0, y1) = <(UnitInterval, UnitInterval, UnitInterval, UnitInterval)>::deserialize(d)?;
+        let w = [x0.0, x1.0, y0.0, y1.0];
+        CropWindow::new(w).map_err(D::Error::custom)
+    }
+}
+
+impl CropWindow {
+    /// Checks `(x0, x1, y0, y1)`.
+    pub fn new(w: [f32; 4]) -> Result<Self, String> {
+        let [x0, x1, y0, y1] = w;
+        if !w.iter().all(|v| (0.0..=1.0).contains(v)) || !(x0 < x1 && y0 < y1) {
+            return Err(format!(
+                "a crop window is (x0, x1, y0, y1) with 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1, not ({x0}, {x1}, {y0}, {y1})"
+            ));
+        }
+        Ok(Self(w))
+    }
 }
 
 impl Default for RenderDesc {
@@ -174,6 +202,7 @@ impl Default for RenderDesc {
             seed: 0,
             clamp: None,
             sampler: SamplerKind::default(),
+            crop: None,
         }
     }
 }

@@ -197,7 +197,7 @@ pub fn render_samples(
     let s = scene.settings;
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = Tile::grid(s.width, s.height);
+    let (tx, ty) = Tile::grid_of(&s.window);
     let total = (tx * ty) as usize;
     let done = AtomicUsize::new(0);
     let batch = opts.batch.max(1);
@@ -206,7 +206,7 @@ pub fn render_samples(
         .map_init(
             || (Paths::with_slots(batch), Queues::default()),
             |(paths, queues), t| {
-                let tile = Tile::new(t, s.width, s.height);
+                let tile = Tile::in_window(t, &s.window);
                 let span = tracing::trace_span!("tile", index = t, samples = samples.len()).entered();
                 let out = render_tile(scene, &tile, samples.clone(), batch, opts.guides, paths, queues);
                 if tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE) {
@@ -218,12 +218,12 @@ pub fn render_samples(
             },
         )
         .collect();
-    let mut film = Film::new(s.width, s.height);
+    let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
-    let n = s.width as usize * s.height as usize;
+    let n = s.window.len();
     let mut guides = opts.guides.then(|| Aovs {
-        width: s.width,
-        height: s.height,
+        width: s.window.w,
+        height: s.window.h,
         albedo: vec![Vec3::ZERO; n],
         normal: vec![Vec3::ZERO; n],
         emission: vec![Vec3::ZERO; n],
@@ -231,10 +231,10 @@ pub fn render_samples(
     let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
     for (t, r) in results.into_iter().enumerate() {
-        let tile = Tile::new(t as u32, s.width, s.height);
+        let tile = Tile::in_window(t as u32, &s.window);
         for (i, acc) in r.film.iter().enumerate() {
             let (x, y) = tile.pixel(i as u32);
-            let k = (y * s.width + x) as usize;
+            let k = s.window.index(x, y);
             film.set_pixel(k, acc);
             if let (Some(g), Some(sums)) = (&mut guides, &r.guides) {
                 let [a, n, e] = sums[i];
