@@ -177,6 +177,10 @@ struct RenderArgs {
     /// checkpoint is kept at the end, to add samples later.
     #[arg(long, value_name = "SECS")]
     checkpoint_every: Option<f64>,
+    /// Set a parameter the scene declares (`parameters: { "NAME": "default" }`, used as
+    /// `$NAME`) to VALUE, RON text; repeatable.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
     /// Worker threads (default: all cores).
     #[arg(short, long, visible_alias = "nthreads")]
     threads: Option<usize>,
@@ -194,12 +198,14 @@ impl RenderArgs {
             max_depth: self.max_depth,
             clamp: self.clamp,
             crop: self.crop.clone(),
+            define: self.define.clone(),
         }
     }
 
     /// How to render.
     fn how(&self) -> How {
         How {
+            defines: self.define.clone(),
             integrator: self.integrator,
             batch: self.batch,
             stats: self.profile.stats,
@@ -414,6 +420,7 @@ struct Overrides {
     max_depth: Option<u32>,
     clamp: Option<f32>,
     crop: Option<Vec<f32>>,
+    define: Vec<String>,
 }
 
 /// `--checkpoint-every` and `--resume`.
@@ -425,6 +432,8 @@ struct Checkpointing {
 }
 
 struct How {
+    /// The -D parameter overrides (they change the scene, so they are in checkpoint keys).
+    defines: Vec<String>,
     verbose: bool,
     denoise: bool,
     aov: bool,
@@ -438,7 +447,15 @@ struct How {
 /// Loads a scene and applies the command line's overrides.
 fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
     let _span = tracing::info_span!("load_scene", file = %path.display()).entered();
-    let mut desc = scene::load(path).map_err(|e| e.to_string())?;
+    let defines = o
+        .define
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((n, v)) if !n.trim().is_empty() => Ok((n.trim().to_owned(), v.to_owned())),
+            _ => Err(format!("-D takes NAME=VALUE (a parameter the scene declares), not {d:?}")),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut desc = scene::load_with(path, &defines).map_err(|e| e.to_string())?;
     tracing::info!(
         file = %path.display(),
         objects = desc.objects.len(),
@@ -460,9 +477,10 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         r.clamp = Some(scene::Positive(c));
     }
     if let Some(c) = &o.crop {
-        let c: [f32; 4] = c.as_slice().try_into().map_err(|_| {
-            format!("--crop takes four numbers x0,x1,y0,y1 (a crop window), not {}", c.len())
-        })?;
+        let c: [f32; 4] = c
+            .as_slice()
+            .try_into()
+            .map_err(|_| format!("--crop takes four numbers x0,x1,y0,y1 (a crop window), not {}", c.len()))?;
         r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
     }
     if let Some(c) = r.crop
@@ -665,8 +683,17 @@ fn settings_key(
     Ok(checkpoint::key(
         &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
         &format!(
-            "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?}",
-            s.width, s.height, s.window, s.seed, s.max_depth, s.rr_depth, s.clamp, how.integrator, s.sampler
+            "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?} defines {:?}",
+            s.width,
+            s.height,
+            s.window,
+            s.seed,
+            s.max_depth,
+            s.rr_depth,
+            s.clamp,
+            how.integrator,
+            s.sampler,
+            how.defines
         ),
     ))
 }

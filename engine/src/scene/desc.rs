@@ -15,6 +15,10 @@ use std::num::NonZeroU32;
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields, rename = "Scene")]
 pub struct SceneDesc {
+    /// Declared parameters and their defaults, as RON text: `$name` elsewhere in the file
+    /// stands for the value (substituted before parsing; `-D name=value` overrides).
+    #[serde(default)]
+    pub parameters: std::collections::BTreeMap<String, String>,
     /// The camera.
     pub camera: CameraDesc,
     /// Image size and sampling (all fields have defaults).

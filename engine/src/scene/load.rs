@@ -9,13 +9,18 @@ use std::path::Path;
 
 /// Reads and parses the scene file at `path`.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+    load_with(path, &[])
+}
+
+/// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
+pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|e| SceneError {
         path: path.to_owned(),
         line: 0,
         col: 0,
         message: format!("cannot read the scene: {e}"),
     })?;
-    parse(&text, path)
+    parse_with(&text, path, overrides)
 }
 
 /// Parses scene text; `path` only names the source in errors.
@@ -24,16 +29,27 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// object's `material` (and every texture name) against them while the parser still knows
 /// where that name stands, and reads image files.
 pub fn parse(text: &str, path: &Path) -> Result<SceneDesc, SceneError> {
+    parse_with(text, path, &[])
+}
+
+/// [`parse`] with `(name, value)` overrides of the scene's declared parameters: every `$name`
+/// becomes the override's value or the declared default (see the `params` module).
+pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let substituted = super::params::Substituted::new(text, overrides, path)?;
+    let text = substituted.text.as_str();
     let options = ron::Options::default().with_default_extension(Extensions::IMPLICIT_SOME);
-    let error = |e: ron::error::SpannedError| SceneError {
-        path: path.to_owned(),
-        line: e.span.start.line,
-        col: e.span.start.col,
-        message: match take_current_object() {
-            Some(i) => format!("in objects[{i}]: {}", e.code),
-            None => e.code.to_string(),
-        },
+    let error = |e: ron::error::SpannedError| {
+        let (line, col) = substituted.map_position(e.span.start.line, e.span.start.col);
+        SceneError {
+            path: path.to_owned(),
+            line,
+            col,
+            message: match take_current_object() {
+                Some(i) => format!("in objects[{i}]: {}", e.code),
+                None => e.code.to_string(),
+            },
+        }
     };
     let names: SceneDesc = options.from_str(text).map_err(error)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();

@@ -4,9 +4,10 @@
 mod desc;
 mod error;
 mod load;
+mod params;
 mod values;
 
 pub use desc::*;
 pub use error::SceneError;
-pub use load::{load, parse};
+pub use load::{load, load_with, parse, parse_with};
 pub use values::*;
