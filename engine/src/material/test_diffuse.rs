@@ -2,17 +2,9 @@
 //! reflector shaded by BSDF sampling alone, through the generic sampled-material stage. It
 //! converges to the same image as `Lambertian`, with more noise.
 
+use super::lambertian::LambertianDesc;
 use super::{BsdfSample, Colors, MaterialModel, Shading};
-use crate::scene::{Albedo, Color};
 use glam::{Vec2, Vec3, Vec3A};
-
-/// `TestDiffuse(albedo: (r, g, b))`.
-#[derive(serde::Deserialize, Debug, Clone)]
-#[serde(deny_unknown_fields)]
-pub struct TestDiffuseDesc {
-    /// Reflectance, components in [0, 1], or a texture.
-    pub albedo: Color<Albedo>,
-}
 
 /// Diffuse reflector without light sampling.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,11 +13,12 @@ pub struct TestDiffuse {
     pub albedo: Vec3,
 }
 
+/// Written as `TestDiffuse(albedo: (r, g, b))`, the fields of a Lambertian.
 impl MaterialModel for TestDiffuse {
-    type Desc = TestDiffuseDesc;
+    type Desc = LambertianDesc;
     const SHADING: Shading = Shading::Sampled;
 
-    fn build(desc: &TestDiffuseDesc, colors: &mut Colors) -> Self {
+    fn build(desc: &LambertianDesc, colors: &mut Colors) -> Self {
         Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE) }
     }
 
