@@ -43,6 +43,31 @@ pub fn atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Checks an output before any work: a format `write` knows (`.png`, `.exr`; `.gif` too when
+/// `gif`), a folder that exists and takes a new file, and not one of `inputs` (the scene, the
+/// parts being merged), which it would replace.
+pub fn check_output(path: &Path, inputs: &[&Path], gif: bool) -> Result<(), String> {
+    let ext = extension(path);
+    let known = ext == "png" || ext == "exr" || (gif && ext == "gif");
+    if !known {
+        let formats = if gif { ".png, .exr or .gif" } else { ".png or .exr" };
+        return Err(format!("{}: unknown output format (use {formats})", path.display()));
+    }
+    if let Some(input) = inputs.iter().find(|i| same_file(path, i)) {
+        return Err(format!("{}: the output would replace an input ({})", path.display(), input.display()));
+    }
+    // The folder must take a new file (a temporary one, removed at once).
+    temp_beside(path).map(drop).map_err(|e| format!("{}: cannot write there: {e}", path.display()))
+}
+
+/// True when both paths exist and name the same file.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
 /// A temporary file in `path`'s directory, named after it, created with the permissions a
 /// new file gets (0o666 less the umask, not `tempfile`'s private 0o600), since it becomes
 /// `path`.

@@ -536,6 +536,18 @@ struct SequenceArgs {
 }
 
 fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
+    // Frame folders are created as frames come; the format and the scene are checked now.
+    let first = match Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif")) {
+        true => PathBuf::from(output),
+        false => animate::frame_path(output, 0)?,
+    };
+    if io::same_file(path, &first) {
+        return Err(format!("{output}: the output would replace the scene {}", path.display()));
+    }
+    let ext = first.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if !["png", "exr", "gif"].contains(&ext.as_str()) {
+        return Err(format!("{output}: unknown output format (use .png, .exr or .gif)"));
+    }
     let desc = load(path, &args.overrides())?;
     let a = &desc.animation;
     let frames = match &seq_args.frames {
@@ -631,6 +643,7 @@ fn render(
     checkpointing: Option<Checkpointing>,
     samples: Option<(u32, u32)>,
 ) -> Result<(), String> {
+    io::check_output(output, &[path], false)?;
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
     let mut world = SceneWorld::new(&desc);
@@ -870,13 +883,22 @@ fn render_image(
 }
 
 fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+    let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
+    io::check_output(output, &inputs, false)?;
+    let ckpt = checkpoint::path_for(output);
+    if let Some(p) = parts.iter().find(|p| io::same_file(p, &ckpt)) {
+        return Err(format!(
+            "{}: the merged checkpoint would replace the part {}",
+            ckpt.display(),
+            p.display()
+        ));
+    }
     let loaded = parts.iter().map(|p| Checkpoint::load(p)).collect::<Result<Vec<_>, _>>()?;
     let (merged, hi) = checkpoint::merge(&loaded)?;
     let f = &merged.film;
     io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() })?;
     let lo = merged.first_sample;
     if lo + f.spp == hi {
-        let ckpt = checkpoint::path_for(output);
         merged.save(&ckpt)?;
         eprintln!(
             "{}: samples {lo}..{hi} of {} from {} parts{}; checkpoint {}",

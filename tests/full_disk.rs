@@ -76,3 +76,45 @@ fn a_full_disk_keeps_the_previous_image_trace_and_checkpoint() {
         .collect();
     assert!(leftovers.is_empty(), "temporary files left behind: {leftovers:?}");
 }
+
+/// Outputs are checked before any rendering: an unknown format, a missing or read-only
+/// folder, and the scene itself are refused at once, and the scene is left intact.
+#[test]
+fn outputs_are_checked_before_the_work() {
+    let dir = std::env::temp_dir().join(format!("pathwave-outputs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.ron");
+    std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
+    let before = std::fs::read(&scene).unwrap();
+    for (out, says) in [
+        (dir.join("late.jpg"), "unknown output format"),
+        (dir.join("missing/c.png"), "cannot write there"),
+        (scene.clone(), "unknown output format"),
+        (dir.join("s.ron.png"), ""),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .arg("render")
+            .arg(&scene)
+            .args(["--spp", "1", "--width", "8", "--height", "8", "-q", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.success(), says.is_empty(), "{}: {err}", out.display());
+        assert!(err.contains(says), "{}: {err}", out.display());
+    }
+    // The scene named as the output of a PNG-named scene file.
+    let png_scene = dir.join("scene.png");
+    std::fs::copy(&scene, &png_scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&png_scene)
+        .args(["--spp", "1", "-q", "-o"])
+        .arg(&png_scene)
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("would replace an input"));
+    assert_eq!(std::fs::read(&png_scene).unwrap(), before);
+    assert_eq!(std::fs::read(&scene).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
