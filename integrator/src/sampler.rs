@@ -518,11 +518,6 @@ impl TestRng {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         to_unit((mix64(self.0) >> 32) as u32)
     }
-
-    pub(crate) fn next_2d(&mut self) -> Vec2 {
-        let x = self.next_1d();
-        Vec2::new(x, self.next_1d())
-    }
 }
 
 #[cfg(test)]
