@@ -34,7 +34,11 @@ pub fn frame_path(pattern: &str, frame: u32) -> Result<PathBuf, String> {
     Ok(PathBuf::from(format!("{}{number}{}", &pattern[..start], &pattern[end + 1..])))
 }
 
-/// Parses `A..B` (B excluded) or `A..=B` given to `flag`.
+/// The end of frame and sample ranges: 2^24, the last integer an f32 (a frame's time, a
+/// sample count in the film's arithmetic) holds exactly.
+pub const MAX_INDEX: u32 = 1 << 24;
+
+/// Parses `A..B` (B excluded) or `A..=B` given to `flag`, B at most [`MAX_INDEX`].
 pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
     let bad = || format!("{flag} takes A..B or A..=B, not {s}");
     let (a, b, inclusive) = match s.split_once("..=") {
@@ -45,11 +49,15 @@ pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
         }
     };
     let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
-    let b = if inclusive { b + 1 } else { b };
-    if b <= a {
-        return Err(format!("{flag} {s} is empty"));
+    let b = if inclusive { b.checked_add(1) } else { Some(b) };
+    match b {
+        Some(b) if b > MAX_INDEX => {
+            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24: frame times are f32 seconds)"))
+        }
+        Some(b) if b > a => Ok((a, b)),
+        Some(_) => Err(format!("{flag} {s} is empty")),
+        None => Err(format!("{flag} {s}: indices stop at {MAX_INDEX}")),
     }
-    Ok((a, b))
 }
 
 /// Parses `I/N` (shard I of N, 0 <= I < N).
@@ -203,6 +211,11 @@ mod tests {
         assert_eq!(parse_range("3..7", "--frames").unwrap(), (3, 7));
         assert_eq!(parse_range("3..=7", "--frames").unwrap(), (3, 8));
         assert!(parse_range("7..3", "--frames").is_err() && parse_range("x", "--frames").is_err());
+        // Near u32::MAX nothing wraps; beyond 2^24 (exact f32 frame times) is refused.
+        assert!(parse_range("0..=4294967295", "--frames").unwrap_err().contains("indices stop at"));
+        assert!(parse_range("4294967290..=4294967295", "--frames").is_err());
+        assert!(parse_range("0..16777217", "--frames").is_err());
+        assert_eq!(parse_range("0..16777216", "--frames").unwrap(), (0, 1 << 24));
         assert_eq!(frame_time(12, 24.0, 0.5), (0.5, 0.5 + 0.5 / 24.0));
         assert_eq!(parse_shard("1/3").unwrap(), (1, 3));
         assert!(parse_shard("3/3").is_err() && parse_shard("1").is_err() && parse_shard("a/2").is_err());

@@ -644,6 +644,9 @@ fn render(
     samples: Option<(u32, u32)>,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
+    if !(time.is_finite() && time.abs() <= 1e7) {
+        return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
+    }
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
     let mut world = SceneWorld::new(&desc);

@@ -103,6 +103,15 @@ fn outputs_are_checked_before_the_work() {
         assert_eq!(o.status.success(), says.is_empty(), "{}: {err}", out.display());
         assert!(err.contains(says), "{}: {err}", out.display());
     }
+    // A time that is no time.
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&scene)
+        .args(["--spp", "1", "-q", "--time", "NaN", "-o"])
+        .arg(dir.join("t.png"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--time takes seconds"));
     // The scene named as the output of a PNG-named scene file.
     let png_scene = dir.join("scene.png");
     std::fs::copy(&scene, &png_scene).unwrap();

@@ -425,3 +425,12 @@ fn animation_errors_name_the_key() {
     ));
     assert!(e.line == 8 && e.message.contains("media do not move"), "{e}");
 }
+
+/// Values the README bounds are refused, not clamped: a fuzz of 2 (README: [0, 1]).
+#[test]
+fn metal_fuzz_beyond_one_is_refused() {
+    let text = with_material(r#""blurry": Metal(albedo: (0.5, 0.5, 0.5), fuzz: 2),"#);
+    let e = err(&text);
+    assert_eq!(e.line, 5, "{e}");
+    assert!(e.message.contains("expected a number in [0, 1], found 2"), "{e}");
+}

@@ -4,7 +4,7 @@
 
 use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::math::reflect;
-use crate::scene::{Albedo, Color, NonNegative};
+use crate::scene::{Albedo, Color, UnitInterval};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// `Metal(albedo: (r, g, b), fuzz: 0.1)`.
@@ -13,9 +13,13 @@ use glam::{Vec2, Vec3, Vec3A};
 pub struct MetalDesc {
     /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
     pub albedo: Color<Albedo>,
-    /// Blur in [0, 1] (default 0; larger values are clamped to 1).
-    #[serde(default)]
-    pub fuzz: NonNegative,
+    /// Blur in [0, 1] (default 0).
+    #[serde(default = "no_fuzz")]
+    pub fuzz: UnitInterval,
+}
+
+fn no_fuzz() -> UnitInterval {
+    UnitInterval(0.0)
 }
 
 /// Mirror reflection scaled by `albedo`, blurred by `fuzz` in [0, 1].
@@ -32,7 +36,7 @@ impl MaterialModel for Metal {
     const SHADING: Shading = Shading::Sampled;
 
     fn build(desc: &MetalDesc, colors: &mut Colors) -> Self {
-        Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE), fuzz: desc.fuzz.0.min(1.0) }
+        Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE), fuzz: desc.fuzz.0 }
     }
 
     #[inline]
