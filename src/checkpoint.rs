@@ -1,16 +1,22 @@
 //! Checkpoints of a render in progress: the film's exact per-pixel sums and its sample count,
 //! so that a render resumed from one finishes with the bits of an uninterrupted render.
 //!
-//! The file is binary, little-endian: the magic `PWCKPT01`, a 64-bit key (a hash of the scene
-//! file and of every setting that changes what a sample is), the image width and height, the
-//! samples per pixel the render was started for, the index of its first sample and the count
-//! done (the samples `first..first + count` of every pixel), then per pixel the three sums and
-//! three sums of squares as fixed-point `i128` and the count of discarded samples (`u64`).
+//! The file is binary, little-endian: the magic `PWCKPT02` (the format's version), a 64-bit key
+//! (a hash of the scene file and of every setting that changes what a sample is), the image
+//! width and height, the samples per pixel the render was started for, the index of its first
+//! sample and the count done (the samples `first..first + count` of every pixel), then per
+//! pixel the three sums and three sums of squares as fixed-point `i128` and the count of
+//! discarded samples (`u64`), and last the XXH3-64 checksum of everything before it. A file
+//! that fails any check (version, checksum, sizes, counts) is refused with what is wrong.
 
 use crate::integrator::film::{Film, PixelAccumulator};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"PWCKPT01";
+const MAGIC: &[u8; 8] = b"PWCKPT02";
+/// The first format's magic (no checksum), refused with a message of its own.
+const MAGIC_V1: &[u8; 8] = b"PWCKPT01";
+/// Bytes of the checksum at the end.
+const CHECKSUM_BYTES: usize = 8;
 /// Bytes per pixel: six `i128` and one `u64`.
 const PIXEL_BYTES: usize = 6 * 16 + 8;
 /// Bytes before the pixels.
@@ -63,31 +69,48 @@ impl Checkpoint {
             }
             out.extend_from_slice(&non_finite.to_le_bytes());
         }
+        let checksum = xxhash_rust::xxh3::xxh3_64(&out);
+        out.extend_from_slice(&checksum.to_le_bytes());
         crate::io::atomically(path, &out)
     }
 
     /// Reads a checkpoint written by [`Self::save`].
     pub fn load(path: &Path) -> Result<Self, String> {
         let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let bad = |what: &str| format!("{}: not a pathwave checkpoint ({what})", path.display());
-        if bytes.len() < HEADER_BYTES || &bytes[..8] != MAGIC {
-            return Err(bad("no PWCKPT01 header"));
+        Self::from_bytes(&bytes, path)
+    }
+
+    /// Reads a checkpoint's bytes; `path` names it in errors.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self, String> {
+        let bad = |what: &str| format!("{}: not a usable pathwave checkpoint ({what})", path.display());
+        if bytes.starts_with(MAGIC_V1) {
+            return Err(bad("written by an older pathwave, without a checksum; render without --resume"));
+        }
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || &bytes[..8] != MAGIC {
+            return Err(bad("no PWCKPT02 header"));
+        }
+        let (body, tail) = bytes.split_at(bytes.len() - CHECKSUM_BYTES);
+        if xxhash_rust::xxh3::xxh3_64(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
+            return Err(bad("its checksum does not match: the file is damaged"));
         }
         let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
         let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
         let (width, height, target_spp) = (u32_at(16), u32_at(20), u32_at(24));
         let (first_sample, spp) = (u32_at(28), u32_at(32));
-        let pixels = width as usize * height as usize;
-        if bytes.len() != HEADER_BYTES + pixels * PIXEL_BYTES {
+        let expected = (width as u64 * height as u64)
+            .checked_mul(PIXEL_BYTES as u64)
+            .and_then(|n| n.checked_add((HEADER_BYTES + CHECKSUM_BYTES) as u64));
+        if width == 0 || height == 0 || expected != Some(bytes.len() as u64) {
+            return Err(bad(&format!("{} bytes do not hold a {width}x{height} image", bytes.len())));
+        }
+        if first_sample.checked_add(spp).is_none_or(|end| end > target_spp) {
             return Err(bad(&format!(
-                "{} bytes where a {width}x{height} image needs {}",
-                bytes.len(),
-                HEADER_BYTES + pixels * PIXEL_BYTES
+                "samples {first_sample}..+{spp} do not fit the {target_spp} per pixel it was started for"
             )));
         }
         let mut film = Film::new(width, height);
         film.spp = spp;
-        for (p, chunk) in film.pixels.iter_mut().zip(bytes[HEADER_BYTES..].chunks_exact(PIXEL_BYTES)) {
+        for (p, chunk) in film.pixels.iter_mut().zip(body[HEADER_BYTES..].chunks_exact(PIXEL_BYTES)) {
             let i128_at = |k: usize| i128::from_le_bytes(chunk[16 * k..16 * k + 16].try_into().unwrap());
             let non_finite = u64::from_le_bytes(chunk[96..104].try_into().unwrap());
             *p = PixelAccumulator::from_raw(

@@ -135,3 +135,41 @@ fn parts_rendered_apart_merge_into_the_whole_render() {
     assert!(!out("x.exr").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A damaged checkpoint is refused, never resumed into a wrong image: every one of 3000
+/// random single-bit flips (and a truncation) fails to load, and `--resume` on a flipped file
+/// exits non-zero leaving the image as it was.
+#[test]
+fn damaged_checkpoints_are_refused() {
+    let dir = temp("damaged");
+    let out = dir.join("c.exr");
+    assert!(pathwave(&out, 2, &["--checkpoint-every", "0"]).status().unwrap().success());
+    let ckpt = dir.join("c.exr.ckpt");
+    let good = std::fs::read(&ckpt).unwrap();
+    assert!(Checkpoint::load(&ckpt).is_ok());
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    for _ in 0..3000 {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        let bit = (s % (good.len() as u64 * 8)) as usize;
+        let mut bad = good.clone();
+        bad[bit / 8] ^= 1 << (bit % 8);
+        assert!(Checkpoint::from_bytes(&bad, &ckpt).is_err(), "a flip of bit {bit} went unnoticed");
+    }
+    assert!(Checkpoint::from_bytes(&good[..good.len() - 1], &ckpt).is_err());
+    // Through the command line: the spp field (bytes 32..36) flipped.
+    let image = std::fs::read(&out).unwrap();
+    let mut bad = good.clone();
+    bad[32] ^= 0x80;
+    std::fs::write(&ckpt, &bad).unwrap();
+    let o = pathwave(&out, 8, &["--resume"]).output().unwrap();
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("checksum"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(std::fs::read(&out).unwrap(), image);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
