@@ -175,10 +175,29 @@ mod tests {
         c.save(&path).unwrap();
         assert_eq!(Checkpoint::load(&path).unwrap(), c);
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::write(&path, &bytes[..bytes.len() - 1]).unwrap();
-        assert!(Checkpoint::load(&path).unwrap_err().contains("bytes where a 3x2 image needs"));
-        std::fs::write(&path, b"PNG....").unwrap();
-        assert!(Checkpoint::load(&path).unwrap_err().contains("not a pathwave checkpoint"));
+        let truncated = Checkpoint::from_bytes(&bytes[..bytes.len() - 1], &path).unwrap_err();
+        assert!(truncated.contains("checksum does not match"), "{truncated}");
+        // Consistent checksums over inconsistent contents: each field check speaks.
+        let resealed = |edit: &dyn Fn(&mut Vec<u8>)| {
+            let mut b = bytes[..bytes.len() - CHECKSUM_BYTES].to_vec();
+            edit(&mut b);
+            let sum = xxhash_rust::xxh3::xxh3_64(&b);
+            b.extend_from_slice(&sum.to_le_bytes());
+            Checkpoint::from_bytes(&b, &path).unwrap_err()
+        };
+        let wide = resealed(&|b| b[16..20].copy_from_slice(&4u32.to_le_bytes()));
+        assert!(wide.contains("do not hold a 4x2 image"), "{wide}");
+        let wrapped = resealed(&|b| {
+            b[16..20].copy_from_slice(&0x1_0000u32.to_le_bytes());
+            b[20..24].copy_from_slice(&0x1_0000u32.to_le_bytes());
+        });
+        assert!(wrapped.contains("do not hold a 65536x65536 image"), "{wrapped}");
+        let many = resealed(&|b| b[32..36].copy_from_slice(&62u32.to_le_bytes()));
+        assert!(many.contains("do not fit the 64 per pixel"), "{many}");
+        let png = Checkpoint::from_bytes(b"PNG....", &path).unwrap_err();
+        assert!(png.contains("not a usable pathwave checkpoint"), "{png}");
+        let v1 = Checkpoint::from_bytes(b"PWCKPT01 and the rest of an old file", &path).unwrap_err();
+        assert!(v1.contains("older pathwave"), "{v1}");
         std::fs::remove_file(&path).unwrap();
         assert_ne!(key(b"scene", "settings"), key(b"scene", "settingz"));
         assert_ne!(key(b"scene", "settings"), key(b"scen", "esettings"));
