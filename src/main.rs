@@ -161,9 +161,9 @@ struct RenderArgs {
     /// Which integrator renders.
     #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
     integrator: Integrator,
-    /// Paths in flight per worker (wavefront).
-    #[arg(long, default_value_t = 256)]
-    batch: usize,
+    /// Paths in flight per worker (wavefront), 1 to 65536.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    batch: u32,
     /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
     /// output gets the denoised image, NAME.noisy.EXT the render as it came.
     #[arg(long)]
@@ -207,7 +207,7 @@ impl RenderArgs {
         How {
             defines: self.define.clone(),
             integrator: self.integrator,
-            batch: self.batch,
+            batch: self.batch as usize,
             stats: self.profile.stats,
             threads: self.threads,
             quiet: self.log.quiet,
@@ -483,6 +483,7 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
             .map_err(|_| format!("--crop takes four numbers x0,x1,y0,y1 (a crop window), not {}", c.len()))?;
         r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
     }
+    check_size(r.width.get(), r.height.get())?;
     if let Some(c) = r.crop
         && PixelWindow::crop(r.width.get(), r.height.get(), c.0).is_none()
     {
@@ -493,6 +494,32 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         ));
     }
     Ok(desc)
+}
+
+/// The largest image side.
+const MAX_SIDE: u32 = 1 << 16;
+
+/// Refuses an image whose side is beyond [`MAX_SIDE`] or whose film (exact sums, the mean,
+/// the guides) would not fit in the memory the system has available, before any work.
+fn check_size(width: u32, height: u32) -> Result<(), String> {
+    if width > MAX_SIDE || height > MAX_SIDE {
+        return Err(format!("a {width}x{height} image: each side is at most {MAX_SIDE} pixels"));
+    }
+    // Per pixel: the accumulator, the mean and a copy for the output, the three guides.
+    let per_pixel = std::mem::size_of::<pathwave::integrator::film::PixelAccumulator>() + 6 * 12;
+    let need = width as u64 * height as u64 * per_pixel as u64;
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?.to_owned();
+        line.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kib| kib * 1024)
+    });
+    match available {
+        Some(have) if need > have => Err(format!(
+            "a {width}x{height} image needs about {} MiB for its film, more than the {} MiB available",
+            need >> 20,
+            have >> 20
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Logs what the integrators will see of a scene (info).

@@ -40,14 +40,10 @@ pub struct TextureImage {
 /// Why an image texture cannot be used.
 #[derive(Debug, thiserror::Error)]
 pub enum TextureError {
-    /// Reading or decoding failed.
-    #[error("cannot read the image {}: {source}", path.display())]
-    Read {
-        /// The file.
-        path: std::path::PathBuf,
-        /// What `image` said.
-        source: image::ImageError,
-    },
+    /// Reading or decoding failed (or the file or the image is beyond the bounds of
+    /// [`crate::scene::files`]).
+    #[error("{0}")]
+    Read(String),
     /// No pixels.
     #[error("the image {} is empty", .0.display())]
     Empty(std::path::PathBuf),
@@ -57,7 +53,7 @@ impl TextureImage {
     /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
     /// once, here, through a 256-entry table; float images are already linear.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
-        let img = image::open(path).map_err(|source| TextureError::Read { path: path.to_owned(), source })?;
+        let img = crate::scene::files::decode_image(path).map_err(TextureError::Read)?;
         let (width, height) = (img.width(), img.height());
         let texels = match img {
             image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {

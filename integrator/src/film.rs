@@ -22,7 +22,7 @@ pub struct Film {
 impl Film {
     /// An empty film.
     pub fn new(width: u32, height: u32) -> Self {
-        let pixels = vec![PixelAccumulator::default(); (width * height) as usize];
+        let pixels = vec![PixelAccumulator::default(); width as usize * height as usize];
         Self { width, height, spp: 0, pixels, guides: None }
     }
 

@@ -414,7 +414,11 @@ pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
 fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let (models, _) = tobj::load_obj(path, &options)
+    let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
+    // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
+    // (a device, a folder elsewhere) is never opened.
+    let no_materials = |_: &std::path::Path| Ok((Vec::new(), Default::default()));
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, no_materials)
         .map_err(|e| format!("cannot read the mesh {}: {e}", path.display()))?;
     let (mut positions, mut triangles) = (Vec::new(), Vec::new());
     // Vertex normals and uvs count only if every model has them.

@@ -3,6 +3,7 @@
 
 mod desc;
 mod error;
+pub mod files;
 mod load;
 mod params;
 mod values;

@@ -1,0 +1,70 @@
+//! Whatever a scene, an asset or a flag says, work and memory stay bounded: only regular
+//! files are read, within a size; `mtllib` is never opened; images that decode too large are
+//! refused; image sizes and batches from flags are bounded up front.
+
+mod common;
+
+use common::root;
+use pathwave::engine::scene::parse;
+use std::path::Path;
+use std::process::Command;
+
+fn scene_with(textures: &str, material: &str, shape: &str) -> String {
+    format!(
+        r#"Scene(
+            camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+            textures: {{ {textures} }},
+            materials: {{ "m": {material} }},
+            objects: [(shape: {shape}, material: "m")],
+        )"#
+    )
+}
+
+const LAMBERT: &str = "Lambertian(albedo: (0.5, 0.5, 0.5))";
+const SPHERE: &str = "Sphere(center: (0, 0, 0), radius: 1)";
+
+#[test]
+fn assets_are_read_within_bounds() {
+    let dir = std::env::temp_dir().join(format!("pathwave-limits-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let at = dir.join("s.ron");
+    // A device is not a mesh (it would read forever).
+    let e = parse(&scene_with("", LAMBERT, r#"Mesh(file: "/dev/zero")"#), &at).unwrap_err();
+    assert!(e.message.contains("is not a regular file"), "{e}");
+    // `mtllib` naming a device is ignored; the mesh loads.
+    std::fs::write(dir.join("m.obj"), "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    parse(&scene_with("", LAMBERT, r#"Mesh(file: "m.obj")"#), &at).unwrap();
+    // A small file that decodes to an image wider than 32768 pixels.
+    image::GrayImage::new(40_000, 1).save(dir.join("wide.png")).unwrap();
+    let textured = scene_with(r#""w": Image(file: "wide.png")"#, r#"Lambertian(albedo: "w")"#, SPHERE);
+    let e = parse(&textured, &at).unwrap_err();
+    assert!(e.message.contains("cannot read the image") && e.message.contains("wide.png"), "{e}");
+    // A folder is not an image.
+    std::fs::create_dir_all(dir.join("folder.png")).unwrap();
+    let folder = scene_with(r#""f": Image(file: "folder.png")"#, r#"Lambertian(albedo: "f")"#, SPHERE);
+    assert!(parse(&folder, &at).unwrap_err().message.contains("not a regular file"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sizes_and_batches_from_flags_are_bounded_up_front() {
+    let run = |extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .args(["render", "scenes/cornell.ron", "--spp", "1", "-q", "-o"])
+            .arg(std::env::temp_dir().join(format!("pathwave-limits-{}.png", std::process::id())))
+            .args(extra)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (ok, err) = run(&["--width", "100000", "--height", "100000"]);
+    assert!(!ok && err.contains("each side is at most 65536"), "{err}");
+    // 60000 x 60000 pixels need hundreds of GiB: refused before any allocation.
+    if Path::new("/proc/meminfo").exists() {
+        let (ok, err) = run(&["--width", "60000", "--height", "60000"]);
+        assert!(!ok && err.contains("more than the") && err.contains("MiB available"), "{err}");
+    }
+    let (ok, err) = run(&["--batch", "1000000000000"]);
+    assert!(!ok && err.contains("--batch"), "{err}");
+}
