@@ -47,6 +47,18 @@ fn assets_are_read_within_bounds() {
 }
 
 #[test]
+fn turbulence_octaves_are_bounded() {
+    let at = Path::new("t.ron");
+    let ok = scene_with(r#""n": Turbulence(scale: 4, depth: 24)"#, r#"Lambertian(albedo: "n")"#, SPHERE);
+    parse(&ok, at).unwrap();
+    for depth in ["0", "25", "4000000000"] {
+        let t = format!(r#""n": Marble(scale: 4, depth: {depth})"#);
+        let e = parse(&scene_with(&t, r#"Lambertian(albedo: "n")"#, SPHERE), at).unwrap_err();
+        assert!(e.message.contains("expected 1 to 24 octaves"), "{depth}: {e}");
+    }
+}
+
+#[test]
 fn sizes_and_batches_from_flags_are_bounded_up_front() {
     let run = |extra: &[&str]| {
         let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))

@@ -323,8 +323,8 @@ pub enum TextureDesc {
     Turbulence {
         /// Frequency.
         scale: Positive,
-        /// Octaves (default 7).
-        #[serde(default = "seven")]
+        /// Octaves, 1 to [`MAX_OCTAVES`] (default 7).
+        #[serde(default = "seven", deserialize_with = "octaves")]
         depth: u32,
         /// Colour the turbulence multiplies (default white).
         #[serde(default = "white")]
@@ -334,8 +334,8 @@ pub enum TextureDesc {
     Marble {
         /// Frequency.
         scale: Positive,
-        /// Octaves of the turbulence (default 7).
-        #[serde(default = "seven")]
+        /// Octaves of the turbulence, 1 to [`MAX_OCTAVES`] (default 7).
+        #[serde(default = "seven", deserialize_with = "octaves")]
         depth: u32,
         /// Colour of the veins' bright parts (default white).
         #[serde(default = "white")]
@@ -345,6 +345,18 @@ pub enum TextureDesc {
 
 fn seven() -> u32 {
     7
+}
+
+/// The most octaves of turbulence: the 25th would weigh 2^-24 of the first, below what an f32
+/// sum keeps (and a depth of billions made one texture lookup run for minutes).
+pub const MAX_OCTAVES: u32 = 24;
+
+fn octaves<'de, D: Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    let n = u32::deserialize(d)?;
+    match (1..=MAX_OCTAVES).contains(&n) {
+        true => Ok(n),
+        false => Err(D::Error::custom(format!("expected 1 to {MAX_OCTAVES} octaves, found {n}"))),
+    }
 }
 
 /// An image file, read when the scene is loaded.
