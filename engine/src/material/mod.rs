@@ -217,14 +217,7 @@ macro_rules! registry {
                 panic!("no such material kind")
             }
 
-            /// The kind's name in lower case (its module's): stage and span names use it.
-            pub const fn name(self) -> &'static str {
-                match self {
-                    $($(#[$attr])* MaterialKind::$variant => stringify!($module),)+
-                }
-            }
-
-            /// Its shading stage's name, `shade_<name>`.
+            /// Its shading stage's (and trace span's) name, `shade_` and its module's name.
             pub const fn stage_name(self) -> &'static str {
                 match self {
                     $($(#[$attr])* MaterialKind::$variant => concat!("shade_", stringify!($module)),)+
@@ -442,7 +435,7 @@ mod tests {
             assert_eq!(*k as usize, i);
         }
         assert_eq!(MaterialKind::ALL[0].stage_name(), "shade_lambertian");
-        assert_eq!(MaterialKind::DiffuseLight.name(), "diffuse_light");
+        assert_eq!(MaterialKind::DiffuseLight.stage_name(), "shade_diffuse_light");
         assert_eq!(MaterialKind::DiffuseLight.shading(), Shading::Emitter);
     }
 }
