@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use pathwave::animate;
-use pathwave::engine::world::{SceneGeometry, SceneInstances, SceneWorld};
+use pathwave::engine::world::{SceneGeometry, SceneInstances, SceneLights, SceneWorld};
 use pathwave::integrator::wavefront;
 use pathwave::io::read_linear;
 use std::path::{Path, PathBuf};
@@ -308,14 +308,16 @@ fn camera_and_emission_keys_reach_the_scene_and_only_changes_rebuild() {
             512,
         )
     );
-    let rebuilds = |w: &SceneWorld| w.world.resource::<SceneGeometry>().rebuilds;
-    let before = rebuilds(&w);
+    let tables = |w: &SceneWorld| w.world.resource::<SceneLights>().rebuilds;
+    let geometry = |w: &SceneWorld| w.world.resource::<SceneGeometry>().rebuilds;
+    let (before, shapes) = (tables(&w), geometry(&w));
     // Between 1 and 2 s the radiance holds: the light table is not rebuilt.
     at(&mut w, 1.2);
-    let b = rebuilds(&w);
+    let b = tables(&w);
     at(&mut w, 1.6);
-    assert_eq!(rebuilds(&w), b, "a frame where nothing the geometry depends on changed rebuilt it");
+    assert_eq!(tables(&w), b, "a frame where nothing the light table depends on changed rebuilt it");
     assert!(b > before, "the radiance change from 2 to 3 reached the light table");
+    assert_eq!(geometry(&w), shapes, "a change of radiance rebuilt the geometry");
 }
 
 #[test]

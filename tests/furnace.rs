@@ -152,3 +152,80 @@ fn plane_under_a_sphere_light_matches_the_closed_form() {
     };
     assert_all_pixels_near(&film, expected);
 }
+
+/// Writes a `w` x `h` lat-long EXR of radiance `texel(column, row)` and returns its path.
+fn env_map(name: &str, w: u32, h: u32, texel: impl Fn(u32, u32) -> f32) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("pathwave-furnace-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    let img = image::Rgb32FImage::from_fn(w, h, |x, y| image::Rgb([texel(x, y); 3]));
+    img.save(&path).unwrap();
+    path
+}
+
+/// The white furnace under an environment map of radiance 1: the map is sampled as a light
+/// (by its luminance, here uniform) and combined with BSDF sampling by MIS, so the weights of
+/// both strategies must sum to one on every kind of surface; every pixel is 1, in both
+/// integrators.
+#[test]
+fn white_furnace_under_an_environment_map_is_one_everywhere() {
+    let map = env_map("white.exr", 16, 8, |_, _| 1.0);
+    let desc = inline(&format!(
+        r#"Scene(
+            camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
+            render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
+            background: Environment(file: "{}"),
+            materials: {{
+                "white": Lambertian(albedo: (1, 1, 1)),
+                "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
+                "glass": Dielectric(ior: 1.5),
+            }},
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
+                (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
+                (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
+            ],
+        )"#,
+        map.display()
+    ));
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    assert_eq!(scene.lights.len(), 1, "the map is a light");
+    assert_all_pixels_near(&render(&desc), |_| Some(1.0));
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_all_pixels_near(&film, |_| Some(1.0));
+}
+
+/// A diffuse floor under a map that is dim but for a bright band of rows near the zenith shows
+/// `rho E / pi`, E the map's irradiance on the floor computed here by quadrature.
+#[test]
+fn a_floor_under_a_bright_band_matches_quadrature() {
+    let (w, h) = (64u32, 32u32);
+    // Rows 2..5 (theta from 2/32 to 5/32 of pi) shine 50; the rest 0.1.
+    let band = |y: u32| if (2..5).contains(&y) { 50.0 } else { 0.1 };
+    let map = env_map("band.exr", w, h, |_, y| band(y));
+    let desc = inline(&format!(
+        r#"Scene(
+            camera: (look_from: (0, 6, 0), look_at: (0, 0, 0), vup: (0, 0, -1), vfov: 30),
+            render: (width: 24, height: 24, spp: 64),
+            background: Environment(file: "{}"),
+            materials: {{ "floor": Lambertian(albedo: (0.5, 0.5, 0.5)) }},
+            objects: [ (shape: Quad(q: (-1000, 0, -1000), u: (0, 0, 2000), v: (2000, 0, 0)), material: "floor") ],
+        )"#,
+        map.display()
+    ));
+    // Irradiance on an upward floor: integral of L(theta) cos(theta) sin(theta) dtheta dphi over
+    // the upper hemisphere, L bilinear between row centres (clamped above the first).
+    let n = 200_000;
+    let mut e = 0.0f64;
+    for k in 0..n {
+        let theta = (k as f64 + 0.5) / n as f64 * std::f64::consts::FRAC_PI_2;
+        let y = theta / std::f64::consts::PI * h as f64 - 0.5;
+        let (y0, f) = (y.floor(), y - y.floor());
+        let row = |r: f64| band(r.clamp(0.0, (h - 1) as f64) as u32) as f64;
+        let l = row(y0) * (1.0 - f) + row(y0 + 1.0) * f;
+        e += l * theta.cos() * theta.sin() * (std::f64::consts::FRAC_PI_2 / n as f64) * std::f64::consts::TAU;
+    }
+    let expected = (0.5 * e / std::f64::consts::PI) as f32;
+    assert_all_pixels_near(&render(&desc), |_| Some(expected));
+}

@@ -1,5 +1,8 @@
-//! The emitter table used for next-event estimation: which primitives can be sampled and with
-//! what probability (proportional to emitted power).
+//! The emitter table used for next-event estimation: which lights can be sampled and with what
+//! probability. Emitting primitives, point and spot lights share one share of the choices in
+//! proportion to their power; each light at infinity (the environment, a directional light)
+//! takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power estimate for them
+//! depends on a scene radius and would starve the finite lights of a large scene.
 
 use crate::geometry::{Geometry, Primitive};
 use crate::material::{Emission, Material};
@@ -9,18 +12,123 @@ use glam::{Vec2, Vec3, Vec3A};
 /// Marks a primitive that is not in the light table.
 pub const NO_LIGHT: u32 = u32::MAX;
 
-/// Emissive primitives that next-event estimation samples.
+/// Lights that are not primitives, as a scene writes them (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PunctualLight {
+    /// An isotropic point light of radiant intensity `intensity` (W/sr): irradiance
+    /// `intensity * cos / d^2` at distance `d`.
+    Point {
+        /// Where it is.
+        position: Vec3A,
+        /// Radiant intensity.
+        intensity: Vec3,
+    },
+    /// A point light shining into a cone: the intensity towards a direction at angle `theta` from
+    /// `axis` is `intensity * smoothstep(cos_total, cos_falloff, cos theta)` (pbrt-v4's
+    /// `SpotLight`): full inside `falloff_start`, none outside `cone_angle`.
+    Spot {
+        /// Where it is.
+        position: Vec3A,
+        /// Unit direction of the cone's axis.
+        axis: Vec3A,
+        /// Radiant intensity on the axis.
+        intensity: Vec3,
+        /// Cosine of the angle where the falloff starts.
+        cos_falloff: f32,
+        /// Cosine of the cone's half angle.
+        cos_total: f32,
+    },
+    /// Parallel light from one direction, of irradiance `irradiance` (W/m^2) on a surface
+    /// facing it.
+    Directional {
+        /// Unit direction towards the light.
+        to_light: Vec3A,
+        /// Irradiance.
+        irradiance: Vec3,
+    },
+}
+
+impl PunctualLight {
+    /// Its power divided by pi (the unit the table compares lights in).
+    fn power_over_pi(&self, radius: f32) -> f32 {
+        match *self {
+            PunctualLight::Point { intensity, .. } => 4.0 * luminance(intensity),
+            PunctualLight::Spot { intensity, cos_falloff, cos_total, .. } => {
+                2.0 * luminance(intensity) * ((1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_total))
+            }
+            PunctualLight::Directional { irradiance, .. } => radius * radius * luminance(irradiance),
+        }
+    }
+
+    /// At infinity: takes its own share of the light choices.
+    fn infinite(&self) -> bool {
+        matches!(self, PunctualLight::Directional { .. })
+    }
+
+    /// The light seen from `from`: the unit direction towards it, the distance (infinite for a
+    /// directional light) and the radiance-like factor that, divided by the choice's
+    /// probability, is the light's estimate (`intensity / d^2` or the irradiance).
+    #[inline]
+    pub fn illuminate(&self, from: Vec3A) -> (Vec3A, f32, Vec3) {
+        match *self {
+            PunctualLight::Point { position, intensity } => {
+                let to = position - from;
+                let d2 = to.length_squared();
+                let d = d2.sqrt();
+                (to / d, d, intensity / d2)
+            }
+            PunctualLight::Spot { position, axis, intensity, cos_falloff, cos_total } => {
+                let to = position - from;
+                let d2 = to.length_squared();
+                let d = d2.sqrt();
+                let wi = to / d;
+                let falloff = smoothstep(cos_total, cos_falloff, -wi.dot(axis));
+                (wi, d, intensity * (falloff / d2))
+            }
+            PunctualLight::Directional { to_light, irradiance } => (to_light, f32::INFINITY, irradiance),
+        }
+    }
+}
+
+/// Hermite smoothstep of `x` between `a` and `b` (0 below `a`, 1 above `b`).
+#[inline]
+fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    if a == b {
+        return if x < a { 0.0 } else { 1.0 };
+    }
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A light of the table that is not a primitive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum OtherLight {
+    /// A point, spot or directional light.
+    Punctual(PunctualLight),
+    /// The background, sampled by its own distribution.
+    Environment,
+}
+
+/// What next-event estimation samples.
 #[derive(Default, Debug)]
 pub struct LightTable {
-    /// Primitive index of each light.
+    /// Primitive index of each emitting primitive: lights `0..prims.len()`.
     pub prims: Vec<u32>,
+    /// The other lights: lights `prims.len()..`.
+    pub others: Vec<OtherLight>,
+    /// Centre of a sphere that holds the scene (shadow rays to lights at infinity end beyond it).
+    pub center: Vec3A,
+    /// Its radius.
+    pub radius: f32,
+    /// The light index of the environment, when it is sampled.
+    pub environment: Option<u32>,
     /// Probability of picking each light.
     pub pmf: Vec<f32>,
     cdf: Vec<f32>,
     /// For each primitive, its light index or [`NO_LIGHT`].
     pub light_of_prim: Vec<u32>,
-    /// Each light as a [`QuadLight`] (indexed like `prims`) where it is a quad, in scenes where
-    /// nothing moves: the integrator samples those across lanes.
+    /// Each light as a [`QuadLight`] (indexed like the lights) where it is a quad, in scenes
+    /// where nothing moves: the integrator samples those across lanes.
     pub quads: Vec<Option<QuadLight>>,
 }
 
@@ -54,10 +162,25 @@ pub struct QuadLight {
     pub two_sided: bool,
 }
 
+/// What [`LightTable::build`] reads besides the geometry.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LightInputs<'a> {
+    /// The point, spot and directional lights.
+    pub punctual: &'a [PunctualLight],
+    /// The background is sampled as a light.
+    pub environment: bool,
+    /// A box that holds the scene (primitives and instances).
+    pub bounds: Option<(Vec3A, Vec3A)>,
+}
+
 impl LightTable {
-    /// Collects the emitters of `geometry`.
-    pub fn build(geometry: &Geometry, materials: &[Material]) -> Self {
+    /// Collects the emitters of `geometry` and the lights of `inputs`.
+    pub fn build(geometry: &Geometry, materials: &[Material], inputs: LightInputs) -> Self {
         let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
+        if let Some((lo, hi)) = inputs.bounds {
+            t.center = (lo + hi) * 0.5;
+            t.radius = (hi - lo).length() * 0.5;
+        }
         let mut power = Vec::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
             let Some(Emission { emit, two_sided }) = materials[m as usize].emission() else {
@@ -76,20 +199,41 @@ impl LightTable {
                 power.push(p);
             }
         }
-        let total: f32 = power.iter().sum();
+        let mut infinite = Vec::new();
+        for l in inputs.punctual {
+            let p = l.power_over_pi(t.radius);
+            if p > 0.0 {
+                infinite.push(l.infinite());
+                t.others.push(OtherLight::Punctual(*l));
+                power.push(p);
+            }
+        }
+        if inputs.environment {
+            t.environment = Some((t.prims.len() + t.others.len()) as u32);
+            t.others.push(OtherLight::Environment);
+            infinite.push(true);
+            power.push(1.0);
+        }
+        // Finite lights share one share in proportion to power; each infinite one has a share.
+        infinite.splice(0..0, std::iter::repeat_n(false, t.prims.len()));
+        let shares = infinite.iter().filter(|&&i| i).count() + infinite.iter().any(|&i| !i) as usize;
+        let finite: f32 = power.iter().zip(&infinite).filter(|(_, i)| !**i).map(|(p, _)| p).sum();
         let mut acc = 0.0;
-        for p in power {
-            t.pmf.push(p / total);
-            acc += p / total;
+        for (p, inf) in power.into_iter().zip(infinite) {
+            let pmf = match (inf, shares) {
+                (false, 1) => p / finite,
+                (false, _) => p / finite / shares as f32,
+                (true, _) => 1.0 / shares as f32,
+            };
+            t.pmf.push(pmf);
+            acc += pmf;
             t.cdf.push(acc);
         }
         if let Some(last) = t.cdf.last_mut() {
             *last = 1.0;
         }
         let still = geometry.velocity.is_none();
-        t.quads = t
-            .prims
-            .iter()
+        t.quads = (t.prims.iter())
             .map(|&prim| {
                 let emission = materials[geometry.material[prim as usize] as usize].emission();
                 match (&geometry.prims[prim as usize], emission) {
@@ -99,13 +243,38 @@ impl LightTable {
                     _ => None,
                 }
             })
+            .chain(t.others.iter().map(|_| None))
             .collect();
         t
     }
 
     /// True when there is nothing to sample.
     pub fn is_empty(&self) -> bool {
-        self.prims.is_empty()
+        self.pmf.is_empty()
+    }
+
+    /// How many lights there are.
+    pub fn len(&self) -> usize {
+        self.pmf.len()
+    }
+
+    /// The light `light` when it is not a primitive.
+    #[inline]
+    pub fn other(&self, light: usize) -> Option<&OtherLight> {
+        self.others.get(light.wrapping_sub(self.prims.len()))
+    }
+
+    /// The probability of choosing the environment (0 when it is not sampled).
+    #[inline]
+    pub fn environment_pmf(&self) -> f32 {
+        self.environment.map_or(0.0, |l| self.pmf[l as usize])
+    }
+
+    /// The end of a shadow ray from `from` towards a light at infinity in direction `wi`: a
+    /// point beyond everything in the scene.
+    #[inline]
+    pub fn beyond(&self, from: Vec3A, wi: Vec3A) -> Vec3A {
+        from + wi * (2.0 * ((from - self.center).length() + self.radius) + 1.0)
     }
 
     /// Picks a light with `u` in [0, 1): (light index, probability).
@@ -115,7 +284,8 @@ impl LightTable {
         (i, self.pmf[i])
     }
 
-    /// Samples a point on light `light`, where it is at `time`, as seen from `from`.
+    /// Samples a point on light `light` (a primitive), where it is at `time`, as seen from
+    /// `from`.
     #[inline]
     pub fn sample(&self, geometry: &Geometry, light: usize, from: Vec3A, u: Vec2, time: f32) -> LightSample {
         let prim = self.prims[light];

@@ -2,6 +2,7 @@
 //! systems have run, never queried in a hot loop.
 
 use crate::camera::Camera;
+use crate::environment::EnvironmentMap;
 use crate::geometry::{Geometry, Hit};
 use crate::instances::Instances;
 use crate::lights::LightTable;
@@ -113,7 +114,7 @@ impl std::str::FromStr for SamplerKind {
 }
 
 /// Radiance arriving from outside the scene.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum Background {
     /// The same radiance in every direction (black is `Constant(0)`).
     Constant(Vec3),
@@ -124,6 +125,8 @@ pub enum Background {
         /// Radiance straight up.
         top: Vec3,
     },
+    /// A lat-long HDR map, sampled as a light.
+    Environment(Arc<EnvironmentMap>),
 }
 
 impl Background {
@@ -136,6 +139,16 @@ impl Background {
                 let a = 0.5 * (dir.y / dir.length() + 1.0);
                 bottom.lerp(top, a)
             }
+            Background::Environment(ref map) => map.radiance(dir),
+        }
+    }
+
+    /// The map that samples it as a light, where it is one.
+    #[inline]
+    pub fn sampler(&self) -> Option<&EnvironmentMap> {
+        match self {
+            Background::Environment(map) => Some(map),
+            _ => None,
         }
     }
 }

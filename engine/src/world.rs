@@ -3,9 +3,10 @@
 //! [`RenderScene`].
 
 use crate::camera::Camera;
+use crate::environment::EnvironmentMap;
 use crate::geometry::{Geometry, Primitive};
 use crate::instances::{Instance, Instances, ShutterMotion};
-use crate::lights::LightTable;
+use crate::lights::{LightInputs, LightTable, PunctualLight};
 use crate::material::Material;
 use crate::media::{Boundary, Media, Medium, Volume};
 use crate::mesh::{MeshBlas, MeshData};
@@ -197,16 +198,27 @@ pub struct CameraParams(pub CameraDesc, pub Option<CameraDesc>);
 pub struct Settings(pub RenderSettings);
 
 /// Light from outside.
-#[derive(Resource, Clone, Copy, Debug)]
+#[derive(Resource, Clone, Debug)]
 pub struct BackgroundLight(pub Background);
 
-/// World-space primitives, BVH and emitter table, rebuilt by [`rebuild_geometry`].
+/// The point, spot and directional lights.
+#[derive(Resource, Clone, Debug, Default)]
+pub struct PunctualLights(pub Vec<PunctualLight>);
+
+/// The light table, rebuilt by [`rebuild_lights`].
+#[derive(Resource, Default)]
+pub struct SceneLights {
+    /// What next-event estimation samples.
+    pub lights: Arc<LightTable>,
+    /// How many times it was rebuilt.
+    pub rebuilds: u64,
+}
+
+/// World-space primitives and BVH, rebuilt by [`rebuild_geometry`].
 #[derive(Resource, Default)]
 pub struct SceneGeometry {
     /// Primitives and BVH.
     pub geometry: Arc<Geometry>,
-    /// Emitters.
-    pub lights: Arc<LightTable>,
     /// How many times the geometry was rebuilt (for tests and statistics).
     pub rebuilds: u64,
     /// The entities it was built from, sorted.
@@ -278,9 +290,9 @@ pub struct Extracted(pub Option<Arc<RenderScene>>);
 #[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Update;
 
-/// Rebuilds primitives, BVH and light table when a shape, transform, material id or motion
-/// changed, an object or its motion was removed, the materials changed (the light table depends
-/// on them), or, in scenes with motion, the camera (its shutter bounds the sweeps).
+/// Rebuilds primitives and BVH when a shape, transform, material id or motion changed, an
+/// object or its motion was removed, or, in scenes with motion, the camera (its shutter bounds
+/// the sweeps).
 #[allow(clippy::type_complexity)]
 #[allow(clippy::too_many_arguments)]
 pub fn rebuild_geometry(
@@ -299,7 +311,6 @@ pub fn rebuild_geometry(
     mut removed_material: RemovedComponents<MaterialId>,
     mut stopped: RemovedComponents<Motion>,
     mut not_instanced: RemovedComponents<Instanced>,
-    materials: Res<Materials>,
     camera: Res<CameraParams>,
 ) {
     // Only removals from entities the geometry was built from matter (not from volumes or
@@ -314,12 +325,7 @@ pub fn rebuild_geometry(
         | not_instanced.read().any(|e| objects.contains(e));
     // The shutter bounds the sweep of moving objects.
     let moving = out.geometry.velocity.is_some();
-    if !(removed
-        || !changed.is_empty()
-        || materials.is_changed()
-        || (moving && camera.is_changed())
-        || out.rebuilds == 0)
-    {
+    if !(removed || !changed.is_empty() || (moving && camera.is_changed()) || out.rebuilds == 0) {
         return;
     }
     let _span = tracing::info_span!("rebuild_geometry").entered();
@@ -337,10 +343,8 @@ pub fn rebuild_geometry(
         velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
     }
     let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
-    out.lights = Arc::new(LightTable::build(&geometry, &materials.0));
     tracing::info!(
         primitives = geometry.prims.len(),
-        lights = out.lights.prims.len(),
         moving = geometry.velocity.is_some(),
         "primitives' BVH built in {:.2} ms",
         start.elapsed().as_secs_f64() * 1e3
@@ -507,11 +511,44 @@ pub fn rebuild_media(
     out.rebuilds += 1;
 }
 
+/// Rebuilds the light table when the primitives, the instances (they bound the scene), the
+/// materials (which emit), the punctual lights or the background changed.
+pub fn rebuild_lights(
+    mut out: ResMut<SceneLights>,
+    geometry: Res<SceneGeometry>,
+    instances: Res<SceneInstances>,
+    materials: Res<Materials>,
+    punctual: Res<PunctualLights>,
+    background: Res<BackgroundLight>,
+) {
+    let any = geometry.is_changed()
+        || instances.is_changed()
+        || materials.is_changed()
+        || punctual.is_changed()
+        || background.is_changed();
+    if !any && out.rebuilds > 0 {
+        return;
+    }
+    let geo = &geometry.geometry;
+    let inst = &instances.instances;
+    let boxes =
+        (geo.prims.iter().map(|p| p.aabb())).chain((0..inst.list.len()).map(|i| inst.world_bounds(i)));
+    let bounds = boxes.fold(None, |acc: Option<(Vec3A, Vec3A)>, b| {
+        let (lo, hi) = (b.min, b.max);
+        Some(acc.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))))
+    });
+    let inputs = LightInputs { punctual: &punctual.0, environment: background.0.sampler().is_some(), bounds };
+    out.lights = Arc::new(LightTable::build(geo, &materials.0, inputs));
+    out.rebuilds += 1;
+    tracing::info!(lights = out.lights.len(), "light table built");
+}
+
 /// Builds a new [`RenderScene`] when anything it holds changed.
 #[allow(clippy::too_many_arguments)]
 pub fn extract_render_scene(
     geometry: Res<SceneGeometry>,
     instances: Res<SceneInstances>,
+    lights: Res<SceneLights>,
     media: Res<SceneMedia>,
     textures: Res<SceneTextures>,
     materials: Res<Materials>,
@@ -522,6 +559,7 @@ pub fn extract_render_scene(
 ) {
     let any = geometry.is_changed()
         || instances.is_changed()
+        || lights.is_changed()
         || media.is_changed()
         || textures.is_changed()
         || materials.is_changed()
@@ -545,11 +583,11 @@ pub fn extract_render_scene(
             .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
         camera,
         settings: s,
-        background: background.0,
+        background: background.0.clone(),
         materials: materials.0.clone(),
         geometry: geometry.geometry.clone(),
         instances: instances.instances.clone(),
-        lights: geometry.lights.clone(),
+        lights: lights.lights.clone(),
         media: media.media.clone(),
         textures: textures.textures.clone(),
         material_textures: textures.per_material.clone(),
@@ -840,11 +878,20 @@ impl SceneWorld {
             })
             .collect();
         world.insert_resource(EmitKeys(emit_keys));
-        world.insert_resource(BackgroundLight(match desc.background {
+        world.insert_resource(BackgroundLight(match &desc.background {
             BackgroundDesc::Black => Background::Constant(Vec3::ZERO),
             BackgroundDesc::Constant(c) => Background::Constant(c.0),
             BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
+            BackgroundDesc::Environment { file, scale, rotate } => {
+                let img = &file.image;
+                let texels = img.texels.clone();
+                Background::Environment(Arc::new(EnvironmentMap::new(
+                    img.width, img.height, texels, scale.0, rotate.0,
+                )))
+            }
         }));
+        world.insert_resource(PunctualLights(desc.lights.iter().map(|l| l.to_light()).collect()));
+        world.init_resource::<SceneLights>();
         world.init_resource::<SceneGeometry>();
         world.init_resource::<SceneInstances>();
         world.init_resource::<MeshLibrary>();
@@ -855,6 +902,7 @@ impl SceneWorld {
             (
                 (animate_objects, animate_camera, animate_emission),
                 (rebuild_geometry, update_instances, rebuild_media),
+                rebuild_lights,
                 extract_render_scene,
             )
                 .chain(),
@@ -932,15 +980,18 @@ mod tests {
         // Moving an object rebuilds.
         let e = w.world.query_filtered::<Entity, With<Shape>>().iter(&w.world).next().unwrap();
         w.world.entity_mut(e).insert(Transform(Affine3A::from_translation(Vec3::X)));
-        w.update();
+        let moved = w.update();
         assert_eq!(rebuilds(&w), 2);
 
-        // A material edit rebuilds (the light table depends on it): the light goes dark.
+        // A material edit rebuilds the light table, not the geometry: the light goes dark.
+        let tables = w.world.resource::<SceneLights>().rebuilds;
         w.world.resource_mut::<Materials>().0[1] =
             crate::material::lambertian::Lambertian { albedo: Vec3::ONE }.into();
         let dark = w.update();
-        assert_eq!(rebuilds(&w), 3);
+        assert_eq!(rebuilds(&w), 2);
+        assert_eq!(w.world.resource::<SceneLights>().rebuilds, tables + 1);
         assert!(dark.lights.is_empty());
+        assert!(Arc::ptr_eq(&dark.geometry, &moved.geometry));
 
         // Spawning and despawning rebuild; the removal is seen after clear_trackers.
         let s = w
@@ -952,12 +1003,12 @@ mod tests {
             ))
             .id();
         assert_eq!(w.update().geometry.prims.len(), 3);
-        assert_eq!(rebuilds(&w), 4);
+        assert_eq!(rebuilds(&w), 3);
         w.world.despawn(s);
         assert_eq!(w.update().geometry.prims.len(), 2);
-        assert_eq!(rebuilds(&w), 5);
+        assert_eq!(rebuilds(&w), 4);
         w.update();
-        assert_eq!(rebuilds(&w), 5);
+        assert_eq!(rebuilds(&w), 4);
     }
 
     #[test]

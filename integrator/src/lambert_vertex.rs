@@ -40,6 +40,8 @@ pub struct LambertIn {
     pub le: Vec3,
     /// Its solid-angle density, light choice included (0: no light sample).
     pub pdf_light: f32,
+    /// The light is a point, spot or directional light: no MIS weight.
+    pub delta_light: bool,
     /// The light point offset off the light, for the shadow ray to aim at.
     pub target: Vec3,
     /// Random numbers: direction.
@@ -146,7 +148,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let (co, ci) = (dot(i.wo, n), dot(wi, n));
     let c = ci.abs() * FRAC_1_PI;
     let f = i.albedo * c;
-    let w = power_heuristic(i.pdf_light, c);
+    let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { c });
     let contribution = i.beta * (f * i.le * (w / i.pdf_light));
     // Directions must leave on the same side of the surface and of the shading normal.
     let cig = dot(wi, ng);
@@ -236,7 +238,7 @@ impl VertexSamples {
         depths: &[u32; LANES],
     ) -> [Self; LANES] {
         let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
-        let pick = if scene.lights.prims.len() > 1 {
+        let pick = if scene.lights.len() > 1 {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
         } else {
             [0.0; LANES]
@@ -295,7 +297,8 @@ pub fn gather(
     if !scene.lights.is_empty()
         && let Some(lp) = path::pick_light(scene, sp.p, time, u.light_pick, u.light)
     {
-        (i.wi, i.le, i.pdf_light, i.target) = (lp.wi.into(), lp.le, lp.pdf, lp.target.into());
+        (i.wi, i.le, i.pdf_light, i.target, i.delta_light) =
+            (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta);
     }
     i
 }
@@ -392,7 +395,7 @@ pub(crate) use lanes;
 
 lanes!(pub LambertInLanes for LambertIn {
     p: v3, n: v3, ng: v3, err: f32, wo: v3, albedo: v3, beta: v3, eta_scale: f32, depth_after: u32,
-    wi: v3, le: v3, pdf_light: f32, target: v3, u_dir: f2, u_rr: f32, rr_on: bool,
+    wi: v3, le: v3, pdf_light: f32, delta_light: bool, target: v3, u_dir: f2, u_rr: f32, rr_on: bool,
 });
 
 lanes!(pub LambertOutLanes for LambertOut {

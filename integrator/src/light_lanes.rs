@@ -37,7 +37,8 @@ impl<'a> LightSampler<'a> {
         me
     }
 
-    /// Sets the light sample fields (`wi`, `le`, `pdf_light`, `target`) of every lane of `out`
+    /// Sets the light sample fields (`wi`, `le`, `pdf_light`, `delta_light`, `target`) of every
+    /// lane of `out`
     /// for the shading points `p`, at the paths' `time`, with their numbers `u`: zero where
     /// there is none (no lights, or a light that sends nothing towards the point).
     #[inline]
@@ -51,16 +52,15 @@ impl<'a> LightSampler<'a> {
         let scene = self.scene;
         let scalar = |out: &mut LambertInLanes, l: usize| {
             let lp = path::pick_light(scene, p[l].into(), time[l], u[l].light_pick, u[l].light);
-            let (wi, le, pdf, target) = lp.map_or((Vec3::ZERO, Vec3::ZERO, 0.0, Vec3::ZERO), |lp| {
-                (lp.wi.into(), lp.le, lp.pdf, lp.target.into())
-            });
+            let (wi, le, pdf, target, delta): (Vec3, Vec3, f32, Vec3, bool) =
+                lp.map_or(Default::default(), |lp| (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta));
             for a in 0..3 {
                 (out.wi[a][l], out.le[a][l], out.target[a][l]) = (wi[a], le[a], target[a]);
             }
-            out.pdf_light[l] = pdf;
+            (out.pdf_light[l], out.delta_light[l]) = (pdf, delta);
         };
         if scene.lights.is_empty() {
-            (out.wi, out.le, out.pdf_light, out.target) = Default::default();
+            (out.wi, out.le, out.pdf_light, out.delta_light, out.target) = Default::default();
             return;
         }
         let Some(quads) = self.quads else {
@@ -88,6 +88,7 @@ impl<'a> LightSampler<'a> {
         quads_by_area_lanes(ins, &mut self.outs);
         let o = &self.outs;
         (out.wi, out.le, out.pdf_light, out.target) = (o.wi, o.le, o.pdf, o.target);
+        out.delta_light = [false; LANES];
         for l in (0..LANES).filter(|&l| o.spherical[l] || other[l]) {
             scalar(out, l);
         }

@@ -6,6 +6,7 @@
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
+use pathwave_engine::lights::OtherLight;
 use pathwave_engine::material::Material;
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::render_scene::RenderScene;
@@ -65,10 +66,16 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 == 0.0 { 0.0 } else { a2 / (a2 + b2) }
 }
 
-/// A ray left the scene: add the background.
+/// A ray left the scene: add the background (MIS-weighted where it is sampled as a light).
 #[inline]
 pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
-    st.l += st.beta * scene.background.radiance(dir);
+    let le = scene.background.radiance(dir);
+    let pmf = scene.lights.environment_pmf();
+    let w = match (st.delta || pmf == 0.0, scene.background.sampler()) {
+        (false, Some(env)) => power_heuristic(st.prev_pdf, pmf * env.pdf(dir)),
+        _ => 1.0,
+    };
+    st.l += st.beta * le * w;
 }
 
 /// A ray hit an emitter (whose BSDF is black: the path ends).
@@ -89,11 +96,14 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, 
 
 /// A light sample seen from a point: the direction to it, the emitted radiance arriving, the
 /// density (solid angle, light choice included) and the offset point on the light to aim at.
+/// For a point, spot or directional light (`delta`), `le / pdf` is its estimate and `pdf` the
+/// choice's probability alone: BSDF sampling cannot reach it, so there is no MIS weight.
 pub(crate) struct LightPick {
     pub wi: Vec3A,
     pub le: Vec3,
     pub pdf: f32,
     pub target: Vec3A,
+    pub delta: bool,
 }
 
 /// Picks a light with `u_pick` and a point on it with `u` as seen from `p`; `None` when it
@@ -109,6 +119,9 @@ pub(crate) fn pick_light(
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
     let (light, pmf) = lights.pick(u_pick);
+    if let Some(other) = lights.other(light) {
+        return pick_other(scene, other, pmf, p, u);
+    }
     let ls = lights.sample(geo, light, p, u, time);
     let to = ls.p - p;
     let dist = to.length();
@@ -128,14 +141,44 @@ pub(crate) fn pick_light(
         return None;
     }
     let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
-    Some(LightPick { wi, le, pdf, target })
+    Some(LightPick { wi, le, pdf, target, delta: false })
+}
+
+/// [`pick_light`] for a light that is not a primitive, chosen with probability `pmf`.
+#[inline(never)]
+fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
+    match light {
+        OtherLight::Punctual(l) => {
+            let (wi, dist, le) = l.illuminate(p);
+            if le == Vec3::ZERO || !(dist > 0.0) {
+                return None;
+            }
+            let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
+            Some(LightPick { wi, le, pdf: pmf, target, delta: true })
+        }
+        OtherLight::Environment => {
+            let env = scene.background.sampler()?;
+            let s = env.sample(u)?;
+            let pdf = s.pdf * pmf;
+            if s.radiance == Vec3::ZERO || !(pdf > 0.0) {
+                return None;
+            }
+            Some(LightPick {
+                wi: s.dir,
+                le: s.radiance,
+                pdf,
+                target: scene.lights.beyond(p, s.dir),
+                delta: false,
+            })
+        }
+    }
 }
 
 /// The number that chooses the light at the vertex after `depth` bounces (one light needs
 /// none).
 #[inline]
 pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -> f32 {
-    if scene.lights.prims.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
+    if scene.lights.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
 }
 
 /// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
@@ -202,7 +245,8 @@ pub fn scatter_in_medium(
     } else {
         let u_pick = light_choice(scene, sampler, depth);
         pick_light(scene, p, time, u_pick, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT))).map(|lp| {
-            let contribution = st.beta * lp.le * (ISOTROPIC * power_heuristic(lp.pdf, ISOTROPIC) / lp.pdf);
+            let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, ISOTROPIC) };
+            let contribution = st.beta * lp.le * (ISOTROPIC * w / lp.pdf);
             ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
         })
     };
