@@ -15,6 +15,9 @@ pub mod dielectric;
 pub mod diffuse_light;
 pub mod lambertian;
 pub mod metal;
+pub mod microfacet;
+pub mod rough_conductor;
+pub mod rough_dielectric;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 
@@ -27,6 +30,8 @@ registry! {
     Lambertian(lambertian::Lambertian),
     Metal(metal::Metal),
     Dielectric(dielectric::Dielectric),
+    RoughConductor(rough_conductor::RoughConductor),
+    RoughDielectric(rough_dielectric::RoughDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
