@@ -65,7 +65,7 @@ pub fn sample(albedo: Vec3, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> 
         return None;
     }
     let wi = Frame::from_normal(nf).to_world(local);
-    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0 })
+    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0, delta: false })
 }
 
 /// `f |cos|` and pdf.

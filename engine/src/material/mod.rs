@@ -15,6 +15,9 @@ pub mod dielectric;
 pub mod diffuse_light;
 pub mod lambertian;
 pub mod metal;
+pub mod microfacet;
+pub mod rough_conductor;
+pub mod rough_dielectric;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 
@@ -27,6 +30,8 @@ registry! {
     Lambertian(lambertian::Lambertian),
     Metal(metal::Metal),
     Dielectric(dielectric::Dielectric),
+    RoughConductor(rough_conductor::RoughConductor),
+    RoughDielectric(rough_dielectric::RoughDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
@@ -44,6 +49,11 @@ pub enum Shading {
     /// Only [`MaterialModel::sample`] is used: no light sampling, so an emitter that the sampled
     /// ray meets counts in full.
     Sampled,
+    /// A BSDF that can be evaluated: the integrators sample a light and the BSDF and weight
+    /// both by multiple importance sampling (power heuristic), using [`MaterialModel::eval`] for
+    /// the light's direction and the pdf of [`MaterialModel::sample`] for the BSDF's. A BSDF
+    /// sample marked [`BsdfSample::delta`] has no density: an emitter it meets counts in full.
+    Glossy,
 }
 
 /// How the denoiser's guides see a material (see the integrator's `aov` module): perfect mirrors
@@ -81,6 +91,26 @@ pub struct BsdfSample {
     pub pdf: f32,
     /// Relative index of refraction crossed (1 for reflection); Russian roulette divides it out.
     pub eta: f32,
+    /// The sampled lobe is a delta (a mirror, a smooth refraction, or Metal's fuzzed mirror,
+    /// whose density is not evaluated): `pdf` is then not a density in solid angle, and an
+    /// emitter the ray meets gets no MIS weight (it counts in full). False for lobes with a
+    /// density that [`MaterialModel::eval`] reproduces.
+    pub delta: bool,
+}
+
+/// A BSDF evaluated for a pair of directions (see [`MaterialModel::eval`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfEval {
+    /// `f(wo, wi) * |wi . n|`.
+    pub f_cos: Vec3,
+    /// Density in solid angle with which [`MaterialModel::sample`] would produce `wi` from
+    /// `wo`, lobe choice included (0 where it never does, and for delta lobes).
+    pub pdf: f32,
+}
+
+impl BsdfEval {
+    /// No scattering, zero density.
+    pub const ZERO: Self = Self { f_cos: Vec3::ZERO, pdf: 0.0 };
 }
 
 /// One kind of material. Colours are linear RGB.
@@ -105,6 +135,14 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
         let _ = (wo, n, u, uc);
         None
+    }
+
+    /// The BSDF's non-delta part for directions `wo` and `wi` about the unit shading normal `n`:
+    /// `f |wi . n|` and the density of `wi` under [`Self::sample`]. Zero by default: kinds
+    /// shaded [`Shading::Glossy`] implement it.
+    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        let _ = (wo, wi, n);
+        BsdfEval::ZERO
     }
 
     /// Reflectance: the [`Shading::Diffuse`] kernel's, the mirror's tint, and the denoiser's
@@ -276,6 +314,14 @@ macro_rules! registry {
             pub fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
                 match self {
                     $($(#[$attr])* Material::$variant(m) => m.sample(wo, n, u, uc),)+
+                }
+            }
+
+            /// See [`MaterialModel::eval`].
+            #[inline]
+            pub fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.eval(wo, wi, n),)+
                 }
             }
 

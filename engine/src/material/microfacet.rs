@@ -1,0 +1,383 @@
+//! The isotropic GGX (Trowbridge-Reitz) microfacet distribution shared by the rough materials.
+//!
+//! Sources:
+//! - Walter, Marschner, Li and Torrance 2007, "Microfacet Models for Refraction through Rough
+//!   Surfaces" (EGSR): the GGX distribution `D`, its Smith shadowing `G1`, and the reflection
+//!   and transmission BSDFs through the half vector.
+//! - Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs" (JCGT
+//!   3(2)): the distribution of visible normals `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)`,
+//!   which integrates to one, and `G1 = 1 / (1 + Lambda)`.
+//! - Heitz 2018, "Sampling the GGX Distribution of Visible Normals" (JCGT 7(4)): the sampling
+//!   routine [`Ggx::sample_visible`].
+//!
+//! Everything here works in a local frame whose z axis is the (macro) normal: use [`to_local`]
+//! with [`Frame::from_normal`]. Shadowing-masking is the separable Smith form
+//! `G(wo, wi) = G1(wo) G1(wi)` (not the height-correlated one).
+
+use crate::math::Frame;
+use glam::{Vec2, Vec3A};
+use std::f32::consts::{PI, TAU};
+
+/// Below this alpha a rough material is treated as smooth (a delta mirror or smooth glass): the
+/// lobe is then under a milliradian wide, a mirror in any image, while its density (up to
+/// `1 / (pi alpha^2)`) grows huge and ill-conditioned in f32. pbrt-v4's
+/// `TrowbridgeReitzDistribution::EffectivelySmooth` (Pharr, Jakob and Humphreys 2023) uses the
+/// same threshold.
+pub const SMOOTH_ALPHA: f32 = 1e-3;
+
+/// A roughness `alpha` in [0, 1] as a scene writes it: the GGX width, the scale of the
+/// microfacet slopes (0 is smooth).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roughness(pub f32);
+
+impl<'de> serde::Deserialize<'de> for Roughness {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = f32::deserialize(d)?;
+        if (0.0..=1.0).contains(&v) {
+            Ok(Roughness(v))
+        } else {
+            Err(serde::de::Error::custom(format!("expected a roughness alpha in [0, 1], found {v}")))
+        }
+    }
+}
+
+/// `v` in the frame `f`: (v.t, v.b, v.n).
+#[inline]
+pub fn to_local(f: &Frame, v: Vec3A) -> Vec3A {
+    Vec3A::new(v.dot(f.t), v.dot(f.b), v.dot(f.n))
+}
+
+/// Squared sine of a unit local vector's polar angle, from its x and y (exact near the pole,
+/// where `1 - z^2` would cancel).
+#[inline]
+fn sin2(w: Vec3A) -> f32 {
+    w.x * w.x + w.y * w.y
+}
+
+/// The isotropic GGX distribution of width `alpha` (> 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ggx {
+    /// Width: the roughness.
+    pub alpha: f32,
+}
+
+impl Ggx {
+    /// The distribution of normals at the unit local microfacet normal `m`:
+    /// `D(m) = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2)`, written as
+    /// `alpha^2 / (pi (alpha^2 cos^2 + sin^2)^2)` (no division by cos); 0 below the surface.
+    /// Normalised so that the integral of `D(m) cos(theta_m)` over the hemisphere is 1.
+    #[inline]
+    pub fn d(&self, m: Vec3A) -> f32 {
+        if m.z <= 0.0 {
+            return 0.0;
+        }
+        let a2 = self.alpha * self.alpha;
+        let t = a2 * m.z * m.z + sin2(m);
+        if t <= 0.0 {
+            return 0.0;
+        }
+        a2 / (PI * t * t)
+    }
+
+    /// Smith masking of the unit local direction `w` (either side; the side tests are the
+    /// BSDF's): `G1 = 1 / (1 + Lambda) = 2 / (1 + sqrt(1 + alpha^2 tan^2))`, written as
+    /// `2 |cos| / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`. 0 at grazing.
+    #[inline]
+    pub fn g1(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        if den > 0.0 { 2.0 * c / den } else { 0.0 }
+    }
+
+    /// `G1(w) / |cos(w)|`, finite at grazing: `2 / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
+    #[inline]
+    pub fn g1_over_cos(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        if den > 0.0 { 2.0 / den } else { 0.0 }
+    }
+
+    /// Separable shadowing-masking `G1(wo) G1(wi)`.
+    #[inline]
+    pub fn g(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        self.g1(wo) * self.g1(wi)
+    }
+
+    /// Density of visible normals seen from `wo` (local, `wo.z > 0`):
+    /// `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)` (Heitz 2014, eq. 2 of Heitz 2018).
+    #[inline]
+    pub fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
+        if wo.z <= 0.0 {
+            return 0.0;
+        }
+        self.g1_over_cos(wo) * wo.dot(m).max(0.0) * self.d(m)
+    }
+
+    /// Samples a visible microfacet normal from `wo` (local, `wo.z > 0`) and `u` in [0, 1]^2,
+    /// with density [`Self::pdf_visible`]: Heitz 2018, listing 1 (isotropic). The result may
+    /// be degenerate (`m.z == 0`) at the boundary of the domain; callers check.
+    #[inline]
+    pub fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        let a = self.alpha;
+        // Section 3.2: stretch the view direction to the hemisphere configuration.
+        let vh = Vec3A::new(a * wo.x, a * wo.y, wo.z).normalize();
+        // Section 4.1: orthonormal basis about it.
+        let lensq = vh.x * vh.x + vh.y * vh.y;
+        let t1 = if lensq > 0.0 { Vec3A::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3A::X };
+        let t2 = vh.cross(t1);
+        // Section 4.2: a point of the projected area, a disk warped towards the visible half.
+        let r = u.x.clamp(0.0, 1.0).sqrt();
+        let phi = TAU * u.y;
+        let p1 = r * phi.cos();
+        let p2 = r * phi.sin();
+        let s = 0.5 * (1.0 + vh.z);
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
+        // Section 4.3: reprojection onto the hemisphere.
+        let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+        // Section 3.4: back to the ellipsoid configuration.
+        Vec3A::new(a * nh.x, a * nh.y, nh.z.max(0.0)).normalize_or_zero()
+    }
+}
+
+/// Test support: chi-square of a direction sampler with the cells packed about a lobe.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::*;
+    use crate::material::chi2::{chi2, chi2_critical};
+    use std::f64::consts::PI as PI64;
+
+    /// A monotone map of [a, b] onto [0, 1] that spends its resolution near `c` (scale `s`):
+    /// `x' = (asinh((x - c) / s) - A) / (B - A)`, with A and B its values at a and b.
+    #[derive(Clone, Copy, Debug)]
+    struct Squeeze {
+        c: f64,
+        s: f64,
+        lo: f64,
+        hi: f64,
+    }
+
+    impl Squeeze {
+        fn new(a: f64, b: f64, c: f64, s: f64) -> Self {
+            let c = c.clamp(a, b);
+            Self { c, s, lo: ((a - c) / s).asinh(), hi: ((b - c) / s).asinh() }
+        }
+
+        fn fwd(&self, x: f64) -> f64 {
+            ((((x - self.c) / self.s).asinh() - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0)
+        }
+
+        /// The inverse and its derivative `dx / dx'`.
+        fn inv(&self, y: f64) -> (f64, f64) {
+            let t = self.lo + y * (self.hi - self.lo);
+            (self.c + self.s * t.sinh(), self.s * (self.hi - self.lo) * t.cosh())
+        }
+    }
+
+    /// A bijection of the sphere, in the frame of a normal, made of one map of `z = cos(theta)`
+    /// per hemisphere (each onto itself, so the horizon stays on a boundary of [`chi2`]'s
+    /// rings: the densities jump there) and one of the azimuth, both packed about a centre
+    /// direction. Solid angle is `dz dphi`, so densities scale by `dz/dz' dphi/dphi'`.
+    pub(crate) struct Warp {
+        frame: Frame,
+        up: Squeeze,
+        down: Squeeze,
+        phi: Squeeze,
+        phi_c: f64,
+    }
+
+    impl Warp {
+        /// Packs the cells about `centre` (unit) over a width of about `width` radians.
+        pub(crate) fn new(n: Vec3A, centre: Vec3A, width: f64) -> Self {
+            let frame = Frame::from_normal(n);
+            let c = to_local(&frame, centre);
+            let (z, sin) = (c.z as f64, ((c.x * c.x + c.y * c.y) as f64).sqrt());
+            // Widths of the lobe in z (about width^2 at the pole) and in azimuth.
+            let sz = width * width.max(sin);
+            let sp = width / width.max(sin);
+            Self {
+                frame,
+                up: Squeeze::new(0.0, 1.0, z, sz),
+                down: Squeeze::new(-1.0, 0.0, z, sz),
+                phi: Squeeze::new(-PI64, PI64, 0.0, sp),
+                phi_c: (c.y as f64).atan2(c.x as f64),
+            }
+        }
+
+        /// Angle in [-pi, pi) relative to `phi_c`.
+        fn wrap(&self, phi: f64) -> f64 {
+            (phi - self.phi_c + PI64).rem_euclid(2.0 * PI64) - PI64
+        }
+
+        fn direction(&self, z: f64, phi: f64) -> Vec3A {
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            self.frame.to_world(Vec3A::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, z as f32))
+        }
+
+        pub(crate) fn fwd(&self, w: Vec3A) -> Vec3A {
+            let l = to_local(&self.frame, w);
+            let z = l.z as f64;
+            let z2 = if z >= 0.0 { self.up.fwd(z) } else { self.down.fwd(z) - 1.0 };
+            let p2 = -PI64 + 2.0 * PI64 * self.phi.fwd(self.wrap((l.y as f64).atan2(l.x as f64)));
+            self.direction(z2, p2)
+        }
+
+        /// The inverse and the Jacobian `|dz/dz'| |dphi/dphi'|`.
+        pub(crate) fn inv(&self, w: Vec3A) -> (Vec3A, f64) {
+            let l = to_local(&self.frame, w);
+            let z2 = l.z as f64;
+            let (z, jz) = if z2 >= 0.0 { self.up.inv(z2) } else { self.down.inv(z2 + 1.0) };
+            let (p, jp) = self.phi.inv(((l.y as f64).atan2(l.x as f64) + PI64) / (2.0 * PI64));
+            (self.direction(z, p + self.phi_c), jz * jp / (2.0 * PI64))
+        }
+    }
+
+    /// Chi-square statistic of `sample` against the solid-angle density `pdf` over the whole
+    /// sphere, in the cells of [`chi2`] about `n` after a [`Warp`] about `centre` with `width`
+    /// (`count` draws; `None` draws count nowhere, so `pdf` integrates to the probability of
+    /// `Some`); asserts it is below the critical value at significance 1e-4 and returns the
+    /// degrees of freedom.
+    pub(crate) fn assert_chi2(
+        what: &str,
+        mut sample: impl FnMut(Vec2, f32) -> Option<Vec3A>,
+        pdf: impl Fn(Vec3A) -> f32,
+        (n, centre, width): (Vec3A, Vec3A, f32),
+        count: usize,
+    ) -> usize {
+        let warp = Warp::new(n, centre, width as f64);
+        let (stat, dof) = chi2(
+            |u, uc| sample(u, uc).map(|w| warp.fwd(w)),
+            |w| {
+                let (v, jac) = warp.inv(w);
+                (pdf(v) as f64 * jac) as f32
+            },
+            n,
+            -1.0,
+            count,
+        );
+        assert!(stat < chi2_critical(dof.max(1)), "{what}: chi2 {stat} dof {dof}");
+        dof
+    }
+
+    #[test]
+    fn warp_round_trips_and_its_jacobian_integrates_to_the_sphere() {
+        let n = Vec3A::new(0.3, -0.5, 0.8).normalize();
+        let f = Frame::from_normal(n);
+        for (centre, width) in [(n, 0.05), (f.to_world(Vec3A::new(0.99, 0.0, 0.1)), 0.2), (-n, 0.6)] {
+            let warp = Warp::new(n, centre.normalize(), width);
+            let mut r = crate::testing::signed(5);
+            for _ in 0..1000 {
+                let w = Vec3A::new(r(), r(), r()).normalize();
+                let w2 = warp.fwd(w);
+                assert_eq!(w.dot(n) >= 0.0, w2.dot(n) >= 0.0, "hemispheres map onto themselves");
+                let (back, _) = warp.inv(w2);
+                assert!((back - w).length() < 1e-4, "{w} {back}");
+            }
+            // The Jacobian integrates to the sphere's solid angle (midpoint rule in z', phi').
+            let (nz, np) = (400, 400);
+            let mut sum = 0.0;
+            for i in 0..nz {
+                for j in 0..np {
+                    let z = -1.0 + 2.0 * (i as f64 + 0.5) / nz as f64;
+                    let p = -PI64 + 2.0 * PI64 * (j as f64 + 0.5) / np as f64;
+                    let s = (1.0 - z * z).sqrt();
+                    let l = Vec3A::new((s * p.cos()) as f32, (s * p.sin()) as f32, z as f32);
+                    sum += warp.inv(f.to_world(l)).1;
+                }
+            }
+            let area = sum * 4.0 * PI64 / (nz * np) as f64;
+            assert!((area / (4.0 * PI64) - 1.0).abs() < 1e-3, "{area}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Integral over the hemisphere of `g(theta, phi)` in spherical coordinates, midpoint rule
+    /// in theta (fine, for narrow lobes) and phi, in f64.
+    fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
+        let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
+        let mut sum = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            for j in 0..np {
+                let p = (j as f64 + 0.5) * dp;
+                let m = Vec3A::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
+                sum += g(m) * t.sin();
+            }
+        }
+        sum * dt * dp
+    }
+
+    #[test]
+    fn d_cos_integrates_to_one() {
+        for alpha in [0.01f32, 0.05, 0.2, 0.6, 1.0] {
+            let ggx = Ggx { alpha };
+            // Isotropic: one azimuth suffices.
+            let i = hemisphere(200_000, 1, |m| (ggx.d(m) * m.z) as f64);
+            assert!((i - 1.0).abs() < 1e-3, "alpha {alpha}: {i}");
+        }
+    }
+
+    #[test]
+    fn d_matches_the_textbook_form() {
+        let ggx = Ggx { alpha: 0.3 };
+        for t in [0.0f32, 0.2, 0.7, 1.2, 1.5] {
+            let m = Vec3A::new(t.sin(), 0.0, t.cos());
+            let a2 = 0.09f32;
+            let reference = a2 / (PI * t.cos().powi(4) * (a2 + t.tan().powi(2)).powi(2));
+            assert!((ggx.d(m) - reference).abs() <= 1e-4 * reference, "{t}");
+        }
+        assert_eq!(ggx.d(Vec3A::new(1.0, 0.0, 0.0)), 0.0);
+        assert_eq!(ggx.d(-Vec3A::Z), 0.0);
+    }
+
+    #[test]
+    fn g1_matches_one_over_one_plus_lambda() {
+        for alpha in [0.05f32, 0.5, 1.0] {
+            let ggx = Ggx { alpha };
+            for t in [0.0f32, 0.5, 1.0, 1.4, 1.55] {
+                let w = Vec3A::new(t.sin(), 0.0, t.cos());
+                let lambda = ((1.0 + alpha * alpha * t.tan().powi(2)).sqrt() - 1.0) / 2.0;
+                assert!((ggx.g1(w) - 1.0 / (1.0 + lambda)).abs() < 1e-5, "{alpha} {t}");
+                assert!((ggx.g1_over_cos(w) * t.cos() - ggx.g1(w)).abs() < 1e-5);
+            }
+            assert_eq!(ggx.g1(Vec3A::X), 0.0);
+            assert_eq!(ggx.g1(Vec3A::Z), 1.0);
+        }
+    }
+
+    #[test]
+    fn visible_normals_integrate_to_one() {
+        // The integral of D_wo(m) over the hemisphere is 1 exactly when G1 is D's Smith masking.
+        for alpha in [0.05f32, 0.3, 1.0] {
+            let ggx = Ggx { alpha };
+            for deg in [0.0f32, 60.0, 85.0] {
+                let t = deg.to_radians();
+                let wo = Vec3A::new(t.sin(), 0.0, t.cos());
+                let i = hemisphere(4000, 180, |m| ggx.pdf_visible(wo, m) as f64);
+                assert!((i - 1.0).abs() < 2e-3, "alpha {alpha}, {deg} deg: {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn visible_normal_sampling_matches_its_pdf_chi2() {
+        for alpha in [0.05f32, 0.2, 0.6] {
+            let ggx = Ggx { alpha };
+            for deg in [5.0f32, 60.0, 85.0] {
+                let t = deg.to_radians();
+                let wo = Vec3A::new(t.sin(), 0.0, t.cos());
+                let dof = testing::assert_chi2(
+                    &format!("alpha {alpha}, {deg} deg"),
+                    |u, _| Some(ggx.sample_visible(wo, u)).filter(|m| m.z > 0.0),
+                    |m| ggx.pdf_visible(wo, m),
+                    (Vec3A::Z, Vec3A::Z, alpha),
+                    300_000,
+                );
+                assert!(dof > 50, "{dof}");
+            }
+        }
+    }
+}
