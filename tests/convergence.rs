@@ -84,3 +84,10 @@ fn cornell_smoke_converges() {
 fn mesh_converges() {
     check("mesh", reference_noise(0.00234, 64, 4096));
 }
+
+#[test]
+fn materials_env_converges() {
+    // materials-env.exr and materials-env-B.exr are independent renders.
+    let (a, b) = (reference("materials-env.exr"), reference("materials-env-B.exr"));
+    check("materials-env", rel_mse(&a.pixels, &b.pixels) / 2.0);
+}

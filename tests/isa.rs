@@ -31,6 +31,7 @@ fn avx512_and_avx2_render_the_same_bits() {
         "scenes/cornell.ron",
         "scenes/cornell-smoke.ron",
         "scenes/spheres-sky.ron",
+        "scenes/materials-env.ron",
     ] {
         let a = render(scene, "avx2", &dir.join("a.exr"));
         let b = render(scene, "avx512", &dir.join("b.exr"));

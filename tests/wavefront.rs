@@ -41,6 +41,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
         ("spheres-sky.ron", 0),
         // Flat primitives and instances of a mesh.
         ("mesh.ron", 2),
+        // Rough materials, an environment map and a point light.
+        ("materials-env.ron", 2),
     ] {
         let desc = small(name, 6);
         let oracle = render_threads(&desc, 2);

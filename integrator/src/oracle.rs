@@ -115,6 +115,10 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
                 Shading::Sampled => {
                     (None, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
                 }
+                Shading::Glossy => {
+                    let u = path::GlossySamples::draw(scene, sampler, st.depth);
+                    path::shade_glossy(scene, &mut st, &hit.surface, wo, mat, ray.time, &u)
+                }
                 Shading::Emitter => unreachable!("emitters end the path above"),
             }
         };

@@ -7,7 +7,7 @@ use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::lights::OtherLight;
-use pathwave_engine::material::Material;
+use pathwave_engine::material::{Material, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -353,14 +353,75 @@ pub fn scatter_with(
     }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
-    // No light sampling happened here: an emitter the new ray meets counts in full.
-    st.delta = true;
+    // Where no light was sampled (every kind but glossy ones) or the lobe is a delta, an
+    // emitter the new ray meets counts in full.
+    st.delta = bs.delta || mat.shading() != Shading::Glossy;
     st.prev_pdf = bs.pdf;
     st.prev_p = sp.p;
     let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
     roulette(scene, st, || u.roulette).then_some(ray)
+}
+
+/// The numbers a [`Shading::Glossy`] vertex reads: the light's choice and point, then the
+/// BSDF's (see [`ScatterSamples`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GlossySamples {
+    /// Which light.
+    pub light_pick: f32,
+    /// Where on it.
+    pub light: Vec2,
+    /// BSDF sampling and roulette.
+    pub bsdf: ScatterSamples,
+}
+
+impl GlossySamples {
+    /// The numbers of the vertex after `depth` bounces.
+    #[inline]
+    pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
+        let lights = !scene.lights.is_empty();
+        Self {
+            light_pick: light_choice(scene, sampler, depth),
+            light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
+            bsdf: ScatterSamples::draw(scene, sampler, depth),
+        }
+    }
+}
+
+/// A vertex on a [`Shading::Glossy`] material: next-event estimation with the BSDF evaluated
+/// towards the light sample and weighted against BSDF sampling by MIS (power heuristic; point,
+/// spot and directional lights in full), then BSDF sampling and Russian roulette as in
+/// [`scatter_with`]. Returns the shadow ray (if any) and the next ray (`None`: the path ends).
+#[inline]
+pub fn shade_glossy(
+    scene: &RenderScene,
+    st: &mut PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    mat: &Material,
+    time: f32,
+    u: &GlossySamples,
+) -> (Option<ShadowRay>, Option<Ray>) {
+    let shadow = match scene.lights.is_empty() {
+        true => None,
+        false => pick_light(scene, sp.p, time, u.light_pick, u.light).and_then(|lp| {
+            // The light must lie on the same side of the surface for both normals.
+            let (cg, cs) = (lp.wi.dot(sp.n), lp.wi.dot(sp.ns));
+            if cg * cs <= 0.0 {
+                return None;
+            }
+            let e = mat.eval(wo, lp.wi, sp.ns);
+            if e.f_cos == Vec3::ZERO {
+                return None;
+            }
+            let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, e.pdf) };
+            let origin = offset_ray_origin(sp.p, sp.err, if cg > 0.0 { sp.n } else { -sp.n });
+            let contribution = st.beta * e.f_cos * lp.le * (w / lp.pdf);
+            Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
+        }),
+    };
+    (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf))
 }
 
 /// The first ray of sample `index` of pixel (x, y), and its random stream.

@@ -54,6 +54,17 @@ fn sin2(w: Vec3A) -> f32 {
     w.x * w.x + w.y * w.y
 }
 
+/// The form of the Smith shadowing-masking term.
+#[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Smith {
+    /// `G = G1(wo) G1(wi)` (the default, as Mitsuba 3's microfacet plugins).
+    #[default]
+    Separable,
+    /// `G = 1 / (1 + Lambda(wo) + Lambda(wi))` (Heitz 2014, section 6; pbrt-v4's): correlates
+    /// masking and shadowing by microfacet height, so slightly brighter at grazing angles.
+    HeightCorrelated,
+}
+
 /// The isotropic GGX distribution of width `alpha` (> 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ggx {
@@ -101,6 +112,23 @@ impl Ggx {
     #[inline]
     pub fn g(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         self.g1(wo) * self.g1(wi)
+    }
+
+    /// `G(wo, wi) / G1(wo)` under `smith`: what is left of the shadowing-masking in a sample's
+    /// weight once visible-normal sampling has divided out `G1(wo)`. Separable: `G1(wi)`;
+    /// height-correlated: `(1 + Lambda(wo)) / (1 + Lambda(wo) + Lambda(wi))`, written with
+    /// `1 + Lambda = 1 / G1` so that grazing directions give 0, not infinities.
+    #[inline]
+    pub fn shadowing(&self, smith: Smith, wo: Vec3A, wi: Vec3A) -> f32 {
+        let gi = self.g1(wi);
+        match smith {
+            Smith::Separable => gi,
+            Smith::HeightCorrelated => {
+                let go = self.g1(wo);
+                let den = gi + go - go * gi;
+                if den > 0.0 { gi / den } else { 0.0 }
+            }
+        }
     }
 
     /// Density of visible normals seen from `wo` (local, `wo.z > 0`):
@@ -345,6 +373,30 @@ mod tests {
             }
             assert_eq!(ggx.g1(Vec3A::X), 0.0);
             assert_eq!(ggx.g1(Vec3A::Z), 1.0);
+        }
+    }
+
+    /// Height-correlated: `G / G1(wo) = G1(wo)^-1 / (1 + Lambda(wo) + Lambda(wi))`, never below
+    /// the separable form, equal to it when one direction is normal.
+    #[test]
+    fn height_correlated_shadowing_matches_its_lambda_form() {
+        for alpha in [0.05f32, 0.5, 1.0] {
+            let ggx = Ggx { alpha };
+            let lambda = |t: f32| ((1.0 + alpha * alpha * t.tan().powi(2)).sqrt() - 1.0) / 2.0;
+            for to in [0.0f32, 0.7, 1.3, 1.55] {
+                for ti in [0.0f32, 0.4, 1.2, 1.5] {
+                    let (wo, wi) = (Vec3A::new(to.sin(), 0.0, to.cos()), Vec3A::new(0.0, ti.sin(), ti.cos()));
+                    let g2 = 1.0 / (1.0 + lambda(to) + lambda(ti));
+                    let hc = ggx.shadowing(Smith::HeightCorrelated, wo, wi) * ggx.g1(wo);
+                    let sep = ggx.shadowing(Smith::Separable, wo, wi) * ggx.g1(wo);
+                    assert!((hc - g2).abs() < 1e-5, "{alpha} {to} {ti}: {hc} vs {g2}");
+                    assert!(hc >= sep - 1e-6);
+                    if to == 0.0 || ti == 0.0 {
+                        assert!((hc - sep).abs() < 1e-6);
+                    }
+                }
+            }
+            assert_eq!(ggx.shadowing(Smith::HeightCorrelated, Vec3A::Z, Vec3A::X), 0.0);
         }
     }
 

@@ -8,7 +8,7 @@
 //! 4% of the normals beyond 45 degrees, and 69% at alpha 1 and normal incidence, 1 - ln 2
 //! being left). Below [`SMOOTH_ALPHA`] it is a smooth mirror.
 
-use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, to_local};
+use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::math::{Frame, reflect};
 use crate::scene::{Albedo, Color, Rgb};
@@ -29,6 +29,9 @@ pub struct RoughConductorDesc {
     /// Imaginary part (absorption) of the complex index of refraction per channel (>= 0).
     #[serde(default)]
     pub k: Option<Rgb>,
+    /// `Separable` (default) or `HeightCorrelated` Smith shadowing-masking.
+    #[serde(default)]
+    pub smith: Smith,
 }
 
 /// Three finite numbers > 0 `(r, g, b)`.
@@ -67,6 +70,8 @@ pub struct RoughConductor {
     pub alpha: f32,
     /// Complex index of refraction; `None`: Fresnel 1.
     pub ior: Option<ComplexIor>,
+    /// The shadowing-masking term's form.
+    pub smith: Smith,
 }
 
 impl RoughConductor {
@@ -97,7 +102,7 @@ impl MaterialModel for RoughConductor {
                 Some(ComplexIor { eta: eta.map_or(Vec3::ONE, |e| e.0), k: k.map_or(Vec3::ZERO, |k| k.0) })
             }
         };
-        Self { tint: colors.get(&desc.tint).min(Vec3::ONE), alpha: desc.alpha.0, ior }
+        Self { tint: colors.get(&desc.tint).min(Vec3::ONE), alpha: desc.alpha.0, ior, smith: desc.smith }
     }
 
     #[inline]
@@ -133,8 +138,9 @@ impl MaterialModel for RoughConductor {
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        // f cos_i / pdf: D and G1(wo) / cos_o cancel, leaving F G1(wi).
-        let weight = self.tint * self.fresnel(cos_om.min(1.0)) * ggx.g1(li);
+        // f cos_i / pdf: D and G1(wo) / cos_o cancel, leaving F G / G1(wo) (F G1(wi) when
+        // separable).
+        let weight = self.tint * self.fresnel(cos_om.min(1.0)) * ggx.shadowing(self.smith, lo, li);
         let wi = frame.to_world(li).normalize();
         Some(BsdfSample { wi, weight, pdf, eta: 1.0, delta: false })
     }
@@ -154,13 +160,13 @@ impl MaterialModel for RoughConductor {
             return BsdfEval::ZERO;
         }
         let ggx = Ggx { alpha: self.alpha };
-        // D_wo(m) / (4 wo.m) = D G1(wo) / (4 cos_o), which is also f cos_i / (F G1(wi)) with
-        // f cos_i = F D G1(wo) G1(wi) / (4 cos_o).
+        // D_wo(m) / (4 wo.m) = D G1(wo) / (4 cos_o), which is also f cos_i / (F G / G1(wo))
+        // with f cos_i = F D G / (4 cos_o).
         let pdf = ggx.d(m) * ggx.g1_over_cos(lo) * 0.25;
         if !(pdf > 0.0 && pdf.is_finite()) {
             return BsdfEval::ZERO;
         }
-        let f_cos = self.tint * self.fresnel(cos_om.min(1.0)) * (pdf * ggx.g1(li));
+        let f_cos = self.tint * self.fresnel(cos_om.min(1.0)) * (pdf * ggx.shadowing(self.smith, lo, li));
         BsdfEval { f_cos, pdf }
     }
 
@@ -265,7 +271,7 @@ mod tests {
         ComplexIor { eta: Vec3::new(0.143, 0.374, 1.442), k: Vec3::new(3.983, 2.385, 1.603) };
 
     fn conductor(alpha: f32, ior: Option<ComplexIor>) -> RoughConductor {
-        RoughConductor { tint: Vec3::ONE, alpha, ior }
+        RoughConductor { tint: Vec3::ONE, alpha, ior, smith: Smith::Separable }
     }
 
     /// A normal that is not an axis, and the direction `deg` degrees from it.
@@ -330,10 +336,12 @@ mod tests {
     #[test]
     fn sample_weight_and_pdf_agree_with_eval() {
         let mut r = crate::testing::uniform(7);
-        for ior in [None, Some(GOLD)] {
+        for (ior, smith) in
+            [(None, Smith::Separable), (Some(GOLD), Smith::Separable), (None, Smith::HeightCorrelated)]
+        {
             for alpha in [0.01f32, 0.05, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0, 89.5] {
-                    let m = RoughConductor { tint: Vec3::new(0.9, 0.6, 0.3), alpha, ior };
+                    let m = RoughConductor { tint: Vec3::new(0.9, 0.6, 0.3), alpha, ior, smith };
                     let (n, wo) = setup(deg);
                     for _ in 0..200 {
                         let Some(s) = m.sample(wo, n, Vec2::new(r(), r()), r()) else { continue };
@@ -411,7 +419,12 @@ mod tests {
             frame.to_world(Vec3A::new(s * phi.cos(), s * phi.sin(), z))
         };
         for alpha in [0.05f32, 0.3, 1.0] {
-            let m = RoughConductor { tint: Vec3::new(0.9, 0.6, 0.3), alpha, ior: Some(GOLD) };
+            let m = RoughConductor {
+                tint: Vec3::new(0.9, 0.6, 0.3),
+                alpha,
+                ior: Some(GOLD),
+                smith: Smith::Separable,
+            };
             for _ in 0..500 {
                 let (wo, wi) = (dir(), dir());
                 let a = m.eval(wo, wi, n).f_cos / wi.dot(n);
@@ -438,7 +451,12 @@ mod tests {
     #[test]
     fn smooth_alpha_is_a_tinted_fresnel_mirror() {
         for alpha in [0.0f32, 5e-4] {
-            let m = RoughConductor { tint: Vec3::new(0.9, 0.6, 0.3), alpha, ior: Some(GOLD) };
+            let m = RoughConductor {
+                tint: Vec3::new(0.9, 0.6, 0.3),
+                alpha,
+                ior: Some(GOLD),
+                smith: Smith::Separable,
+            };
             let n = Vec3A::Z;
             let wo = Vec3A::new(0.6, 0.0, 0.8);
             let s = m.sample(wo, n, Vec2::new(0.3, 0.7), 0.2).unwrap();
@@ -494,7 +512,8 @@ mod tests {
             Material::RoughConductor(RoughConductor {
                 tint: Vec3::new(0.9, 0.6, 0.3),
                 alpha: 0.15,
-                ior: None
+                ior: None,
+                smith: Smith::Separable,
             })
         );
         assert_eq!(m.shading(), Shading::Glossy);
@@ -503,7 +522,12 @@ mod tests {
         );
         assert_eq!(
             m,
-            Material::RoughConductor(RoughConductor { tint: Vec3::ONE, alpha: 0.3, ior: Some(GOLD) })
+            Material::RoughConductor(RoughConductor {
+                tint: Vec3::ONE,
+                alpha: 0.3,
+                ior: Some(GOLD),
+                smith: Smith::Separable
+            })
         );
         let Material::RoughConductor(c) = build("RoughConductor(tint: (1, 1, 1), alpha: 0.3, k: (3, 2, 1))")
         else {

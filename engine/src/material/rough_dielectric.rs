@@ -17,7 +17,7 @@
 //! Below [`SMOOTH_ALPHA`] (or with `ior` 1) it is the smooth dielectric.
 
 use super::dielectric::{Fresnel, fresnel_exact, refract};
-use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, to_local};
+use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::math::{Frame, reflect};
 use crate::scene::Positive;
@@ -31,6 +31,9 @@ pub struct RoughDielectricDesc {
     pub ior: Positive,
     /// GGX roughness in [0, 1]; below 1e-3 smooth glass.
     pub alpha: Roughness,
+    /// `Separable` (default) or `HeightCorrelated` Smith shadowing-masking.
+    #[serde(default)]
+    pub smith: Smith,
 }
 
 /// Rough clear dielectric: GGX reflection and transmission weighted by Fresnel.
@@ -40,6 +43,8 @@ pub struct RoughDielectric {
     pub ior: f32,
     /// GGX roughness in [0, 1].
     pub alpha: f32,
+    /// The shadowing-masking term's form.
+    pub smith: Smith,
 }
 
 impl RoughDielectric {
@@ -69,7 +74,7 @@ impl MaterialModel for RoughDielectric {
     const SHADING: Shading = Shading::Glossy;
 
     fn build(desc: &RoughDielectricDesc, _colors: &mut Colors) -> Self {
-        Self { ior: desc.ior.0, alpha: desc.alpha.0 }
+        Self { ior: desc.ior.0, alpha: desc.alpha.0, smith: desc.smith }
     }
 
     /// A visible normal from `u`, then reflection if `uc < F`, refraction otherwise; `None` when
@@ -94,8 +99,8 @@ impl MaterialModel for RoughDielectric {
             if li.z <= 0.0 {
                 return None;
             }
-            // f cos_i / pdf = G1(wi): F, D and G1(wo) / cos_o cancel.
-            (li, pdf_m / (4.0 * cos_om) * fr, ggx.g1(li), 1.0)
+            // f cos_i / pdf = G / G1(wo): F, D and G1(wo) / cos_o cancel.
+            (li, pdf_m / (4.0 * cos_om) * fr, ggx.shadowing(self.smith, lo, li), 1.0)
         } else {
             let li = refract(lo, m, eta)?.normalize();
             let cos_im = li.dot(m);
@@ -103,8 +108,8 @@ impl MaterialModel for RoughDielectric {
                 return None;
             }
             let den = (cos_im + cos_om / eta).powi(2);
-            // f cos_i / pdf = G1(wi) / eta^2 (the radiance scaling).
-            (li, pdf_m * -cos_im / den * (1.0 - fr), ggx.g1(li) / (eta * eta), eta)
+            // f cos_i / pdf = G / G1(wo) / eta^2 (the radiance scaling).
+            (li, pdf_m * -cos_im / den * (1.0 - fr), ggx.shadowing(self.smith, lo, li) / (eta * eta), eta)
         };
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
@@ -138,12 +143,12 @@ impl MaterialModel for RoughDielectric {
         let d_wo = ggx.g1_over_cos(lo) * cos_om * ggx.d(m);
         let (f_cos, pdf) = if reflection {
             let pdf_r = d_wo / (4.0 * cos_om);
-            (pdf_r * fr * ggx.g1(li), pdf_r * fr)
+            (pdf_r * fr * ggx.shadowing(self.smith, lo, li), pdf_r * fr)
         } else {
             let den = (cos_im + cos_om / eta).powi(2);
             // |d h / d wi| = |wi.h| / (wi.h + wo.h / eta)^2 (Walter et al. eq. 17).
             let pdf_t = d_wo * -cos_im / den;
-            (pdf_t * (1.0 - fr) * ggx.g1(li) / (eta * eta), pdf_t * (1.0 - fr))
+            (pdf_t * (1.0 - fr) * ggx.shadowing(self.smith, lo, li) / (eta * eta), pdf_t * (1.0 - fr))
         };
         if !(pdf > 0.0 && pdf.is_finite() && f_cos.is_finite()) {
             return BsdfEval::ZERO;
@@ -182,7 +187,7 @@ mod tests {
     fn chi2_both_lobes(inside: bool) {
         for alpha in ALPHAS {
             for deg in ANGLES {
-                let m = RoughDielectric { ior: 1.5, alpha };
+                let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
                 let (n, wo) = setup(deg, inside);
                 let (eta, nf) = m.side(wo, n).unwrap();
                 let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
@@ -226,7 +231,7 @@ mod tests {
         for inside in [false, true] {
             for alpha in [0.01f32, 0.05, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0, 89.5] {
-                    let m = RoughDielectric { ior: 1.5, alpha };
+                    let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
                     let (n, wo) = setup(deg, inside);
                     let (eta, nf) = m.side(wo, n).unwrap();
                     let (mut reflected, mut transmitted) = (0, 0);
@@ -301,7 +306,12 @@ mod tests {
             for alpha in [0.05f32, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0] {
                     let (n, wo) = setup(deg, inside);
-                    let (e, se) = energy_by_sampling(&RoughDielectric { ior: 1.5, alpha }, wo, n, 50_000);
+                    let (e, se) = energy_by_sampling(
+                        &RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable },
+                        wo,
+                        n,
+                        50_000,
+                    );
                     let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
                     assert!(e <= 1.0 + 3.0 * se + 1e-4, "{what}: {e}");
                     // Single scattering loses much at alpha 1 and grazing incidence (0.39).
@@ -316,7 +326,7 @@ mod tests {
         for inside in [false, true] {
             for alpha in [0.3f32, 1.0] {
                 for deg in [0.0f32, 60.0] {
-                    let m = RoughDielectric { ior: 1.5, alpha };
+                    let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
                     let (n, wo) = setup(deg, inside);
                     let q = energy_by_quadrature(&m, wo, n);
                     let (e, se) = energy_by_sampling(&m, wo, n, 100_000);
@@ -344,7 +354,7 @@ mod tests {
         let index = |w: Vec3A| if w.dot(n) > 0.0 { 1.0 } else { ior };
         let mut nonzero = 0;
         for alpha in [0.1f32, 0.3, 1.0] {
-            let m = RoughDielectric { ior, alpha };
+            let m = RoughDielectric { ior, alpha, smith: Smith::Separable };
             for k in 0..2000 {
                 let (wo, wi) = (dir(k % 2 == 0), dir(k % 3 == 0));
                 let a = m.eval(wo, wi, n).f_cos.x / wi.dot(n).abs() / index(wo).powi(2);
@@ -358,7 +368,10 @@ mod tests {
 
     #[test]
     fn smooth_alpha_is_the_smooth_dielectric() {
-        for m in [RoughDielectric { ior: 1.5, alpha: 0.0 }, RoughDielectric { ior: 1.5, alpha: 5e-4 }] {
+        for m in [
+            RoughDielectric { ior: 1.5, alpha: 0.0, smith: Smith::Separable },
+            RoughDielectric { ior: 1.5, alpha: 5e-4, smith: Smith::Separable },
+        ] {
             for inside in [false, true] {
                 let (n, wo) = setup(40.0, inside);
                 for uc in [0.01f32, 0.5, 0.99] {
@@ -372,17 +385,20 @@ mod tests {
             }
             assert_eq!(m.specular(), Specular::Glass { ior: 1.5 });
         }
-        let index_matched = RoughDielectric { ior: 1.0, alpha: 0.3 };
+        let index_matched = RoughDielectric { ior: 1.0, alpha: 0.3, smith: Smith::Separable };
         let wo = Vec3A::new(0.6, 0.0, 0.8);
         let s = index_matched.sample(wo, Vec3A::Z, Vec2::new(0.3, 0.6), 0.5).unwrap();
         assert!(s.delta && (s.wi + wo).length() < 1e-6, "passes straight through");
-        assert_eq!(RoughDielectric { ior: 1.5, alpha: 0.2 }.specular(), Specular::No);
-        assert_eq!(RoughDielectric { ior: 1.5, alpha: 0.2 }.albedo(), Vec3::ONE);
+        assert_eq!(
+            RoughDielectric { ior: 1.5, alpha: 0.2, smith: Smith::Separable }.specular(),
+            Specular::No
+        );
+        assert_eq!(RoughDielectric { ior: 1.5, alpha: 0.2, smith: Smith::Separable }.albedo(), Vec3::ONE);
     }
 
     #[test]
     fn grazing_and_degenerate_directions_give_nothing() {
-        let m = RoughDielectric { ior: 1.5, alpha: 0.3 };
+        let m = RoughDielectric { ior: 1.5, alpha: 0.3, smith: Smith::Separable };
         let n = Vec3A::Z;
         assert!(m.sample(Vec3A::X, n, Vec2::splat(0.4), 0.5).is_none());
         assert_eq!(m.eval(Vec3A::X, Vec3A::Z, n), BsdfEval::ZERO);
@@ -411,7 +427,14 @@ mod tests {
         };
         let d = parse("RoughDielectric(ior: 1.5, alpha: 0.1)").unwrap();
         let (m, _) = crate::material::Material::build(&d, &mut |_| unreachable!());
-        assert_eq!(m, crate::material::Material::RoughDielectric(RoughDielectric { ior: 1.5, alpha: 0.1 }));
+        assert_eq!(
+            m,
+            crate::material::Material::RoughDielectric(RoughDielectric {
+                ior: 1.5,
+                alpha: 0.1,
+                smith: Smith::Separable
+            })
+        );
         assert_eq!(m.shading(), Shading::Glossy);
         let e = parse("RoughDielectric(ior: 1.5, alpha: 2)").unwrap_err();
         assert!(e.contains("expected a roughness alpha in [0, 1], found 2"), "{e}");

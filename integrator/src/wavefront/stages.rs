@@ -71,7 +71,7 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
     let kind = scene.materials[hit.material as usize].kind();
     match kind.shading() {
         Shading::Emitter => q.emissive.push(i),
-        Shading::Diffuse | Shading::Sampled => q.shade[kind as usize].push(i),
+        Shading::Diffuse | Shading::Sampled | Shading::Glossy => q.shade[kind as usize].push(i),
     }
 }
 
@@ -230,12 +230,13 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 /// One shading loop for the hits of one material kind: kinds shaded as
 /// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
 /// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
-/// their BSDF.
+/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, path by path.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
     let mut queue = std::mem::take(&mut q.shade[kind as usize]);
     match kind.shading() {
         Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
         Shading::Sampled => shade_sampled(scene, p, q, &queue),
+        Shading::Glossy => shade_glossy(scene, p, q, &queue),
         Shading::Emitter => unreachable!("emitters have no shading queue"),
     }
     queue.clear();
@@ -273,6 +274,24 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
         }
     }
     q.scratch = live;
+}
+
+/// Hits on a [`Shading::Glossy`] kind: [`path::shade_glossy`] path by path.
+fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    for &i in queue {
+        let s = i as usize;
+        let mut st = p.state(s);
+        if st.depth == scene.settings.max_depth {
+            q.finished.push(i);
+            continue;
+        }
+        let hit = p.hit[s];
+        let mat = &scene.material_at(hit.material, &hit.surface);
+        let u = path::GlossySamples::draw(scene, &p.sampler[s], st.depth);
+        let (shadow, next) = path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u);
+        route(p, q, i, shadow, next);
+        p.set_state(s, &st);
+    }
 }
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
