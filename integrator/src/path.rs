@@ -71,9 +71,9 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
     let le = scene.background.radiance(dir);
     let pmf = scene.lights.environment_pmf();
-    let w = match (st.delta || pmf == 0.0, scene.background.sampler()) {
-        (false, Some(env)) => power_heuristic(st.prev_pdf, pmf * env.pdf(dir)),
-        _ => 1.0,
+    let w = match st.delta || pmf == 0.0 {
+        false => power_heuristic(st.prev_pdf, pmf * scene.background.pdf(dir)),
+        true => 1.0,
     };
     st.l += st.beta * le * w;
 }
@@ -157,8 +157,7 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
             Some(LightPick { wi, le, pdf: pmf, target, delta: true })
         }
         OtherLight::Environment => {
-            let env = scene.background.sampler()?;
-            let s = env.sample(u)?;
+            let s = scene.background.sample(u)?;
             let pdf = s.pdf * pmf;
             if s.radiance == Vec3::ZERO || !(pdf > 0.0) {
                 return None;
