@@ -1,6 +1,8 @@
 //! The emitter table used for next-event estimation: which lights can be sampled and with what
-//! probability. Emitting primitives, point and spot lights share one share of the choices in
-//! proportion to their power; each light at infinity (the environment, a directional light)
+//! probability. Emitting primitives, point and spot lights share one share of the choices, half
+//! in proportion to their power and half evenly (a defensive mixture: power alone starves a large
+//! dim light near the camera, an even choice wastes samples on irrelevant ones; measured in
+//! benches/RESULTS.md); each light at infinity (the environment, a directional light)
 //! takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power estimate for them
 //! depends on a scene radius and would starve the finite lights of a large scene.
 
@@ -49,14 +51,15 @@ pub enum PunctualLight {
 }
 
 impl PunctualLight {
-    /// Its power divided by pi (the unit the table compares lights in).
-    fn power_over_pi(&self, radius: f32) -> f32 {
+    /// Its power divided by pi (the unit the table compares finite lights in); for a
+    /// directional light, which takes a share of its own, the luminance of its irradiance.
+    fn power_over_pi(&self) -> f32 {
         match *self {
             PunctualLight::Point { intensity, .. } => 4.0 * luminance(intensity),
             PunctualLight::Spot { intensity, cos_falloff, cos_total, .. } => {
                 2.0 * luminance(intensity) * ((1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_total))
             }
-            PunctualLight::Directional { irradiance, .. } => radius * radius * luminance(irradiance),
+            PunctualLight::Directional { irradiance, .. } => luminance(irradiance),
         }
     }
 
@@ -201,7 +204,7 @@ impl LightTable {
         }
         let mut infinite = Vec::new();
         for l in inputs.punctual {
-            let p = l.power_over_pi(t.radius);
+            let p = l.power_over_pi();
             if p > 0.0 {
                 infinite.push(l.infinite());
                 t.others.push(OtherLight::Punctual(*l));
@@ -214,16 +217,19 @@ impl LightTable {
             infinite.push(true);
             power.push(1.0);
         }
-        // Finite lights share one share in proportion to power; each infinite one has a share.
+        // Finite lights share one share, half in proportion to power and half evenly; each
+        // infinite one has a share.
         infinite.splice(0..0, std::iter::repeat_n(false, t.prims.len()));
         let shares = infinite.iter().filter(|&&i| i).count() + infinite.iter().any(|&i| !i) as usize;
         let finite: f32 = power.iter().zip(&infinite).filter(|(_, i)| !**i).map(|(p, _)| p).sum();
+        let count = infinite.iter().filter(|&&i| !i).count() as f32;
         let mut acc = 0.0;
         for (p, inf) in power.into_iter().zip(infinite) {
-            let pmf = match (inf, shares) {
-                (false, 1) => p / finite,
-                (false, _) => p / finite / shares as f32,
-                (true, _) => 1.0 / shares as f32,
+            let pmf = match (inf, shares, count == 1.0) {
+                (false, 1, true) => p / finite,
+                (false, 1, false) => 0.5 * (p / finite) + 0.5 / count,
+                (false, _, _) => (0.5 * (p / finite) + 0.5 / count) / shares as f32,
+                (true, _, _) => 1.0 / shares as f32,
             };
             t.pmf.push(pmf);
             acc += pmf;
@@ -328,4 +334,57 @@ impl LightTable {
 #[inline]
 pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(x: f32, i: f32) -> PunctualLight {
+        PunctualLight::Point { position: Vec3A::new(x, 1.0, 0.0), intensity: Vec3::splat(i) }
+    }
+
+    /// Finite lights: half by power, half evenly; each light at infinity a share of its own.
+    #[test]
+    fn choices_mix_power_and_even_shares() {
+        let geo = Geometry::default();
+        let table = |punctual: &[PunctualLight], environment| {
+            LightTable::build(&geo, &[], LightInputs { punctual, environment, bounds: None })
+        };
+        let one = table(&[point(0.0, 5.0)], false);
+        assert_eq!(one.pmf, [1.0]);
+        let two = table(&[point(0.0, 1.0), point(1.0, 3.0)], false);
+        assert_eq!(two.pmf, [0.375, 0.625]);
+        let sun = PunctualLight::Directional { to_light: Vec3A::Y, irradiance: Vec3::ONE };
+        let three = table(&[point(0.0, 1.0), point(1.0, 3.0), sun], true);
+        assert_eq!(three.pmf, [0.375 / 3.0, 0.625 / 3.0, 1.0 / 3.0, 1.0 / 3.0]);
+        assert_eq!(three.environment, Some(3));
+        assert_eq!(three.pick(0.99), (3, 1.0 / 3.0));
+        assert!(matches!(three.other(2), Some(OtherLight::Punctual(PunctualLight::Directional { .. }))));
+        assert!(three.other(0).is_some() && LightTable::default().other(0).is_none());
+        // A light that sends nothing is not in the table.
+        assert!(table(&[point(0.0, 0.0)], false).is_empty());
+    }
+
+    /// A spot light is full inside its falloff angle, dark beyond its cone, smooth between.
+    #[test]
+    fn spot_falloff_is_a_smoothstep_of_the_cosine() {
+        let (cos_total, cos_falloff) = (30f32.to_radians().cos(), 20f32.to_radians().cos());
+        let spot = PunctualLight::Spot {
+            position: Vec3A::ZERO,
+            axis: -Vec3A::Y,
+            intensity: Vec3::ONE,
+            cos_falloff,
+            cos_total,
+        };
+        let at = |deg: f32| {
+            let r = deg.to_radians();
+            spot.illuminate(Vec3A::new(r.sin(), -r.cos(), 0.0)).2.x
+        };
+        assert_eq!(at(0.0), 1.0);
+        assert_eq!(at(19.9), 1.0);
+        assert_eq!(at(30.1), 0.0);
+        let mid = at(25.0);
+        assert!(mid > 0.0 && mid < 1.0 && at(22.0) > mid && mid > at(28.0));
+    }
 }
