@@ -6,7 +6,7 @@
 //! processes (on one machine or several sharing the output directory) split a sequence.
 
 use crate::engine::world::SceneWorld;
-use crate::io::{self, LinearImage};
+use crate::io;
 use pathwave_engine::render_scene::RenderScene;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -121,7 +121,7 @@ pub struct FrameInfo {
 pub fn run(
     world: &mut SceneWorld,
     seq: &Sequence,
-    mut render: impl FnMut(&RenderScene, &FrameInfo) -> Result<LinearImage, String>,
+    mut render: impl FnMut(&RenderScene, &FrameInfo) -> Result<io::Output, String>,
 ) -> Result<(), String> {
     let gif = Path::new(seq.output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
     if gif && Path::new(seq.output).exists() && !seq.overwrite {
@@ -163,12 +163,12 @@ pub fn run(
         };
         let update = t0.elapsed();
         let open = frame_time(frame, seq.fps, seq.shutter).0;
-        let img = render(&scene, &FrameInfo { frame, open, path: path.clone(), update })?;
+        let out = render(&scene, &FrameInfo { frame, open, path: path.clone(), update })?;
         match &path {
             Some(p) => {
-                io::write(p, &img)?;
+                io::write_output(p, &out)?;
             }
-            None => images.push(img),
+            None => images.push(out.img),
         }
         let secs = t0.elapsed().as_secs_f64();
         tracing::info!(frame, update_ms = update.as_secs_f64() * 1e3, "frame rendered in {secs:.2} s");

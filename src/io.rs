@@ -151,3 +151,170 @@ fn encode(path: &Path, img: &LinearImage) -> Result<(Vec<u8>, usize), String> {
 pub fn srgb_oetf(c: f32) -> f32 {
     if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }
+
+/// An image as written: the beauty, the layers an EXR carries beside it (AOVs) and the header's
+/// metadata. A PNG holds the beauty only.
+pub struct Output {
+    /// The beauty.
+    pub img: LinearImage,
+    /// Further layers (EXR only).
+    pub layers: Vec<ExrLayer<'static>>,
+    /// String attributes of an EXR's header.
+    pub metadata: Vec<(&'static str, String)>,
+}
+
+impl Output {
+    /// The beauty alone.
+    pub fn plain(img: LinearImage) -> Self {
+        Self { img, layers: Vec::new(), metadata: Vec::new() }
+    }
+}
+
+/// Writes `out` to `path`: with layers, an EXR with the beauty as `R`, `G`, `B`, `A` (1), every
+/// layer as named channels (float) and the metadata; else as [`write`] does (a PNG of the
+/// beauty, or an EXR of it alone, as `merge` and resumed renders write it, to the same bytes);
+/// returns how many pixels a PNG clamped.
+pub fn write_output(path: &Path, out: &Output) -> Result<usize, String> {
+    if extension(path) != "exr" || out.layers.is_empty() {
+        return write(path, &out.img);
+    }
+    let n = out.img.pixels.len();
+    let beauty = out.img.pixels.iter().flat_map(|p| [p.x, p.y, p.z, 1.0]).collect();
+    let mut layers = vec![ExrLayer { name: "", channels: &["R", "G", "B", "A"], data: beauty }];
+    for l in &out.layers {
+        assert_eq!(l.data.len(), n * l.channels.len(), "layer {}", l.name);
+        layers.push(ExrLayer { name: l.name, channels: l.channels, data: l.data.clone() });
+    }
+    write_exr_layers(path, (out.img.width, out.img.height), &layers, false, &out.metadata)?;
+    Ok(0)
+}
+
+/// One layer of a multi-layer EXR: channels `name.C` for each `C` of `channels` (the beauty,
+/// with an empty name, has bare `R`, `G`, `B`), and the samples pixel by pixel, row 0 on top,
+/// `channels.len()` per pixel.
+pub struct ExrLayer<'a> {
+    /// Prefix of its channels (`albedo`), empty for the beauty.
+    pub name: &'a str,
+    /// Its channels' names (`R`, `G`, `B`; `X`, `Y`, `Z`; `Z`).
+    pub channels: &'a [&'a str],
+    /// The samples.
+    pub data: Vec<f32>,
+}
+
+/// Writes one EXR file holding `layers` of a `width` x `height` image as channels of one part
+/// (pbrt-v4's and Blender's convention: `R`, `G`, `B`, `albedo.R`, `normal.X`, `depth.Z`, ...),
+/// as 16-bit halves when `half` (else 32-bit floats), with `metadata` as string attributes of
+/// the header; atomically, as [`write`] does.
+pub fn write_exr_layers(
+    path: &Path,
+    (width, height): (u32, u32),
+    layers: &[ExrLayer],
+    half: bool,
+    metadata: &[(&str, String)],
+) -> Result<(), String> {
+    use exr::prelude::*;
+    let n = (width * height) as usize;
+    let mut list = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
+    for layer in layers {
+        let k = layer.channels.len();
+        assert_eq!(layer.data.len(), n * k, "layer {}: {k} samples per pixel", layer.name);
+        for (c, channel) in layer.channels.iter().enumerate() {
+            let samples = layer.data.iter().skip(c).step_by(k).copied();
+            let samples = match half {
+                true => FlatSamples::F16(samples.map(f16::from_f32).collect()),
+                false => FlatSamples::F32(samples.collect()),
+            };
+            let name = match layer.name.is_empty() {
+                true => channel.to_string(),
+                false => format!("{}.{channel}", layer.name),
+            };
+            list.push(AnyChannel::new(name.as_str(), samples));
+        }
+    }
+    let mut attributes =
+        LayerAttributes { software_name: Some(Text::from("pathwave")), ..Default::default() };
+    for (key, value) in metadata {
+        attributes.other.insert(Text::from(*key), AttributeValue::Text(Text::from(value.as_str())));
+    }
+    let size = Vec2(width as usize, height as usize);
+    let image =
+        Image::from_layer(Layer::new(size, attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(list)));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    atomically(path, &bytes.into_inner())
+}
+
+/// Every channel of an EXR file by name, as f32 samples row by row (the first part only),
+/// with the image's size and the header's string attributes.
+pub fn read_exr_channels(path: &Path) -> Result<ExrChannels, String> {
+    use exr::prelude::*;
+    let err = |e: exr::error::Error| format!("{}: {e}", path.display());
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(err)?;
+    let layer = &image.layer_data;
+    let channels = (layer.channel_data.list.iter())
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    let metadata = (layer.attributes.other.iter())
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok(ExrChannels { width: layer.size.0 as u32, height: layer.size.1 as u32, channels, metadata })
+}
+
+/// What [`read_exr_channels`] returns.
+#[derive(Debug)]
+pub struct ExrChannels {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Each channel's name and samples, in the file's (alphabetical) order.
+    pub channels: Vec<(String, Vec<f32>)>,
+    /// String attributes of the header.
+    pub metadata: Vec<(String, String)>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A beauty with albedo, normal and depth layers: one file whose channels read back by name
+    /// (float and half), with its metadata, and which the plain reader sees as the beauty.
+    #[test]
+    fn layers_and_metadata_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (5u32, 3u32);
+        let n = (w * h) as usize;
+        let beauty: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f32, 0.5, 2.0)).collect();
+        let flat = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+        let albedo = vec![0.25f32; 3 * n];
+        let depth: Vec<f32> = (0..n).map(|i| 10.0 + i as f32).collect();
+        for half in [false, true] {
+            let path = dir.path().join(format!("l{half}.exr"));
+            let layers = [
+                ExrLayer { name: "", channels: &["R", "G", "B"], data: flat(&beauty) },
+                ExrLayer { name: "albedo", channels: &["R", "G", "B"], data: albedo.clone() },
+                ExrLayer { name: "depth", channels: &["Z"], data: depth.clone() },
+            ];
+            write_exr_layers(&path, (w, h), &layers, half, &[("spp", "16".into())]).unwrap();
+            let got = read_exr_channels(&path).unwrap();
+            let names: Vec<&str> = got.channels.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, ["B", "G", "R", "albedo.B", "albedo.G", "albedo.R", "depth.Z"]);
+            assert_eq!((got.width, got.height), (w, h));
+            assert_eq!(got.channels[6].1, depth, "depth (exact in half too: small integers)");
+            assert_eq!(got.channels[2].1, beauty.iter().map(|p| p.x).collect::<Vec<_>>());
+            assert!(got.metadata.contains(&("spp".to_string(), "16".to_string())));
+            let plain = read_linear(&path).unwrap();
+            assert_eq!(plain.pixels, beauty, "the plain reader sees the beauty");
+        }
+    }
+}

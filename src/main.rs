@@ -125,13 +125,28 @@ enum Command {
         #[arg(long, value_name = "N")]
         scaling: Option<u32>,
     },
-    /// Print RMSE and relMSE of image A against reference B (and both means).
+    /// Print RMSE and relMSE of image A against reference B (and both means). EXR and HDR
+    /// files are linear (an EXR's beauty: R, G, B); an 8-bit file (PNG, JPEG) is sRGB-encoded,
+    /// so comparing one with a linear file needs `--encoded` to say how to read it.
     Compare {
         /// The image to judge.
         a: PathBuf,
         /// The reference.
         b: PathBuf,
+        /// How to read an 8-bit file compared with a linear one: `decode` its sRGB values to
+        /// linear, or compare them `as-stored` (in [0, 1]).
+        #[arg(long, value_enum)]
+        encoded: Option<Encoded>,
     },
+}
+
+/// How `compare` reads an sRGB-encoded file beside a linear one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Encoded {
+    /// Decode sRGB to linear.
+    Decode,
+    /// Compare the stored values.
+    AsStored,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -168,10 +183,20 @@ struct RenderArgs {
     /// output gets the denoised image, NAME.noisy.EXT the render as it came.
     #[arg(long)]
     denoise: bool,
-    /// Also write the denoiser's guides: NAME.albedo.EXT and NAME.normal.EXT (normals as
-    /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
-    #[arg(long)]
-    aov: bool,
+    /// Also write AOVs, a comma-separated list of albedo, normal, depth, variance, noisy (a bare
+    /// `--aov`: albedo,normal). An EXR output holds them as layers of the same file (`albedo.R`,
+    /// `normal.X`, `depth.Z`, `variance.R`, `noisy.R`, ...); beside a PNG, albedo and normal go
+    /// to NAME.albedo.png and NAME.normal.png (normals mapped to 0.5 + 0.5 n), and depth and
+    /// variance need an EXR. `noisy` (the render before denoising) needs --denoise.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        num_args = 0..,
+        default_missing_values = ["albedo", "normal"],
+        value_name = "AOV,.."
+    )]
+    aov: Option<Vec<Aov>>,
     /// Render in passes and, every SECS seconds, save the samples so far to OUT.ckpt (render:
     /// and the image so far to OUT; animate: a killed frame resumes from its checkpoint). The
     /// checkpoint is kept at the end, to add samples later.
@@ -213,7 +238,7 @@ impl RenderArgs {
             quiet: self.log.quiet,
             verbose: self.log.verbose > 0,
             denoise: self.denoise,
-            aov: self.aov,
+            aov: self.aov.clone().unwrap_or_default(),
         }
     }
 
@@ -369,7 +394,7 @@ fn main() -> ExitCode {
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
             animate(&scene, &output, seq, &args)
         }
-        Command::Compare { a, b } => compare(&a, &b),
+        Command::Compare { a, b, encoded } => compare(&a, &b, encoded),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
             pathwave::raybench::run((rings, segments), Some(&scene))
                 .and_then(|_| instances.map_or(Ok(()), |p| pathwave::raybench::instance_update(&p, 100)))
@@ -431,12 +456,52 @@ struct Checkpointing {
     resume: bool,
 }
 
+/// An image beside the render (`--aov`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Aov {
+    /// Mean albedo of the first surface that is not a perfect mirror or glass (the denoiser's
+    /// guide).
+    Albedo,
+    /// Its camera-facing shading normal, averaged (the denoiser's guide).
+    Normal,
+    /// Mean distance along the camera rays to the first surface (infinity where none).
+    Depth,
+    /// Variance of each pixel's mean, per channel.
+    Variance,
+    /// The render before denoising.
+    Noisy,
+}
+
+impl How {
+    /// Whether the denoiser's guides are needed.
+    fn guides(&self) -> bool {
+        self.denoise || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
+    }
+
+    /// Refuses, before any work, AOVs that `output` cannot hold or that need `--denoise`.
+    fn check_aovs(&self, output: &Path) -> Result<(), String> {
+        let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        for a in &self.aov {
+            match a {
+                Aov::Depth | Aov::Variance if !exr => {
+                    return Err(
+                        format!("{}: --aov {a:?} needs an .exr output", output.display()).to_lowercase()
+                    );
+                }
+                Aov::Noisy if !self.denoise => return Err("--aov noisy needs --denoise".into()),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
 struct How {
     /// The -D parameter overrides (they change the scene, so they are in checkpoint keys).
     defines: Vec<String>,
     verbose: bool,
     denoise: bool,
-    aov: bool,
+    aov: Vec<Aov>,
     integrator: Integrator,
     batch: usize,
     stats: bool,
@@ -591,8 +656,9 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     }
     let shard = seq_args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
     let every = args.checkpoint_every()?;
+    args.how().check_aovs(&first)?;
     let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    if gif && (args.denoise || args.aov || every.is_some()) {
+    if gif && (args.denoise || args.aov.is_some() || every.is_some()) {
         return Err(format!(
             "{output}: --denoise, --aov and --checkpoint-every write files beside each frame; \
              render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
@@ -616,11 +682,14 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
         let r = match &info.path {
             Some(out) => {
                 let key = settings_key(path, scene, &how, info.open)?;
-                render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false)?
+                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false)?;
+                let metadata = metadata(key, scene, &r);
+                (r, metadata)
             }
             // A GIF's frames: no checkpoints, no files beside them (refused above).
-            None => render_image(scene, 0, Path::new(output), &how, None, None, &pool, false)?,
+            None => (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false)?, Vec::new()),
         };
+        let (r, metadata) = r;
         if args.profile.stats {
             match &r.stats {
                 Some(st) => eprintln!(
@@ -639,7 +708,7 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
                 });
             }
         }
-        Ok(r.img)
+        Ok(io::Output { img: r.img, layers: r.layers, metadata })
     })?;
     if let Some((st, secs, non_finite)) = &total {
         eprintln!("the sequence's frames together:");
@@ -671,6 +740,7 @@ fn render(
     samples: Option<(u32, u32)>,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
+    how.check_aovs(output)?;
     if !(time.is_finite() && time.abs() <= 1e7) {
         return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
     }
@@ -690,7 +760,8 @@ fn render(
             None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
         }
     }
-    let clamped = io::write(output, &r.img)?;
+    let metadata = metadata(key, &scene, &r);
+    let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
     eprintln!(
         "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
         output.display(),
@@ -741,10 +812,28 @@ fn settings_key(
     ))
 }
 
+/// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a
+/// hash of the scene file and the settings that change the image), samples per pixel and seed.
+/// Not the render time: the same render gives the same bytes.
+fn metadata(
+    key: u64,
+    scene: &pathwave::engine::render_scene::RenderScene,
+    r: &Rendered,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("pathwave:version", env!("CARGO_PKG_VERSION").to_string()),
+        ("pathwave:scene_key", format!("{key:016x}")),
+        ("pathwave:spp", r.spp.to_string()),
+        ("pathwave:seed", scene.settings.seed.to_string()),
+    ]
+}
+
 /// One rendered image, before it is written.
 struct Rendered {
     /// The image (denoised when asked for).
     img: LinearImage,
+    /// The AOVs an EXR output holds as layers.
+    layers: Vec<io::ExrLayer<'static>>,
     /// Samples per pixel in it.
     spp: u32,
     /// Samples rendered by this run (not those resumed).
@@ -851,7 +940,7 @@ fn render_image(
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
-                let opts = wavefront::Options { batch: how.batch, guides: how.denoise || how.aov };
+                let opts = wavefront::Options { batch: how.batch, guides: how.guides() };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }
@@ -897,13 +986,13 @@ fn render_image(
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
-    let img = if how.denoise || how.aov {
-        post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?
-    } else {
-        img
+    let (img, layers) = match how.guides() || !how.aov.is_empty() {
+        true => post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?,
+        false => (img, Vec::new()),
     };
     Ok(Rendered {
         img,
+        layers,
         spp: film.spp,
         new_samples: s.window.len() as f64 * (film.spp - first_spp) as f64,
         stats,
@@ -950,8 +1039,9 @@ fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// Renders the guides, writes them (`--aov`) and returns the image denoised (`--denoise`,
-/// which first writes the image as rendered beside the output).
+/// Renders the guides and the AOVs asked for, writes those a PNG cannot hold beside it, and
+/// returns the image, denoised with `--denoise` (which also keeps the image as rendered: a
+/// `noisy` layer, or a file beside the output), with the layers of an EXR output.
 fn post_process(
     scene: &pathwave::engine::render_scene::RenderScene,
     film: &Film,
@@ -960,13 +1050,14 @@ fn post_process(
     output: &Path,
     how: &How,
     pool: &rayon::ThreadPool,
-) -> Result<LinearImage, String> {
+) -> Result<(LinearImage, Vec<io::ExrLayer<'static>>), String> {
     let start = Instant::now();
     // Recorded by the wavefront on the way, or traced now from the render's own camera rays
     // (the oracle, a resumed render), so that the emission they met comes out exactly.
-    let aovs = match &film.guides {
-        Some(g) => g.clone(),
-        None => pool.install(|| aov::render(scene, samples.clone())),
+    let aovs = match (&film.guides, how.guides()) {
+        (Some(g), _) => g.clone(),
+        (None, true) => pool.install(|| aov::render(scene, samples.clone())),
+        (None, false) => aov::Aovs::default(),
     };
     let aov_secs = start.elapsed().as_secs_f64();
     let sibling = |tag: &str| {
@@ -975,20 +1066,50 @@ fn post_process(
         output.with_file_name(format!("{stem}.{tag}.{ext}"))
     };
     let image = |pixels| LinearImage { width: img.width, height: img.height, pixels };
-    if how.aov {
-        let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        let normal = aovs.normal.iter().map(|n| if exr { *n } else { 0.5 + 0.5 * *n }).collect();
-        io::write(&sibling("albedo"), &image(aovs.albedo.clone()))?;
-        io::write(&sibling("normal"), &image(normal))?;
+    let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let flat = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+    let rgb: &'static [&'static str] = &["R", "G", "B"];
+    let mut layers = Vec::new();
+    for a in &how.aov {
+        match (a, exr) {
+            (Aov::Albedo, true) => {
+                layers.push(io::ExrLayer { name: "albedo", channels: rgb, data: flat(&aovs.albedo) })
+            }
+            (Aov::Normal, true) => layers.push(io::ExrLayer {
+                name: "normal",
+                channels: &["X", "Y", "Z"],
+                data: flat(&aovs.normal),
+            }),
+            (Aov::Albedo, false) => io::write(&sibling("albedo"), &image(aovs.albedo.clone())).map(drop)?,
+            (Aov::Normal, false) => {
+                let normal = aovs.normal.iter().map(|n| 0.5 + 0.5 * *n).collect();
+                io::write(&sibling("normal"), &image(normal)).map(drop)?
+            }
+            (Aov::Depth, _) => {
+                let depth = pool.install(|| aov::depth(scene, samples.clone()));
+                layers.push(io::ExrLayer { name: "depth", channels: &["Z"], data: depth })
+            }
+            (Aov::Variance, _) => layers.push(io::ExrLayer {
+                name: "variance",
+                channels: rgb,
+                data: flat(&film.variance_of_mean()),
+            }),
+            (Aov::Noisy, _) => {}
+        }
+    }
+    if how.guides() {
         match film.guides {
             Some(_) => tracing::info!("guides recorded during the render"),
             None => tracing::info!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
         }
     }
     if !how.denoise {
-        return Ok(img);
+        return Ok((img, layers));
     }
-    io::write(&sibling("noisy"), &img)?;
+    match exr && how.aov.contains(&Aov::Noisy) {
+        true => layers.push(io::ExrLayer { name: "noisy", channels: rgb, data: flat(&img.pixels) }),
+        false => io::write(&sibling("noisy"), &img).map(drop)?,
+    }
     let start = Instant::now();
     let variance = film.variance_of_mean();
     let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
@@ -996,7 +1117,7 @@ fn post_process(
     if !how.quiet {
         eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
     }
-    Ok(image(out))
+    Ok((image(out), layers))
 }
 
 fn bench(
@@ -1080,8 +1201,28 @@ fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
     );
 }
 
-fn compare(a: &Path, b: &Path) -> Result<(), String> {
-    let (x, r) = (io::read_linear(a)?, io::read_linear(b)?);
+fn compare(a: &Path, b: &Path, encoded: Option<Encoded>) -> Result<(), String> {
+    let linear = |p: &Path| {
+        let e = p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+        e == "exr" || e == "hdr"
+    };
+    let read = |p: &Path| -> Result<LinearImage, String> {
+        let mut img = io::read_linear(p)?;
+        if !linear(p) && encoded == Some(Encoded::Decode) {
+            img.pixels.iter_mut().for_each(|c| *c = c.map(pathwave::engine::texture::srgb_to_linear));
+        }
+        Ok(img)
+    };
+    if linear(a) != linear(b) && encoded.is_none() {
+        let (enc, lin) = if linear(a) { (b, a) } else { (a, b) };
+        return Err(format!(
+            "{} is sRGB-encoded and {} linear: pass --encoded decode to decode the first to linear, \
+             or --encoded as-stored to compare the stored values",
+            enc.display(),
+            lin.display()
+        ));
+    }
+    let (x, r) = (read(a)?, read(b)?);
     if (x.width, x.height) != (r.width, r.height) {
         return Err(format!("sizes differ: {}x{} vs {}x{}", x.width, x.height, r.width, r.height));
     }

@@ -131,11 +131,18 @@ fn the_command_line_keeps_the_render_beside_the_denoised_image() {
     // The render as it came is kept, to the bit; the output is something else.
     assert_eq!(read("x.noisy.exr"), read("plain.exr"));
     assert_ne!(read("x.exr"), read("plain.exr"));
-    let (albedo, normal) = (read("x.albedo.exr"), read("x.normal.exr"));
-    assert!(albedo.pixels.iter().all(|a| a.min_element() >= 0.0 && a.max_element() <= 1.0));
+    // The guides are layers of the output.
+    let layers = pathwave::io::read_exr_channels(&dir.join("x.exr")).unwrap();
+    let channel = |name: &str| &layers.channels.iter().find(|(n, _)| n == name).expect(name).1;
     assert!(
-        normal.pixels.iter().all(|n| n.length() <= 1.0 + 1e-5) && normal.pixels.iter().any(|n| n.x < -0.5)
+        ["albedo.R", "albedo.G", "albedo.B"]
+            .iter()
+            .all(|c| channel(c).iter().all(|a| (0.0..=1.0).contains(a)))
     );
+    let n =
+        |i: usize| glam::Vec3::new(channel("normal.X")[i], channel("normal.Y")[i], channel("normal.Z")[i]);
+    let count = channel("normal.X").len();
+    assert!((0..count).all(|i| n(i).length() <= 1.0 + 1e-5) && (0..count).any(|i| n(i).x < -0.5));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -167,4 +174,75 @@ fn the_wavefront_records_the_guides_the_separate_pass_traces() {
         assert!(n <= 4, "{what}: {n} pixels differ");
     }
     assert!(recorded.emission.iter().any(|e| e.x > 1.0), "the light is seen");
+}
+
+/// `--aov albedo,normal,depth,variance,noisy` with `--denoise` and an EXR output: one file with
+/// the beauty and each AOV as named channels, and the render's metadata; a PNG output refuses
+/// the AOVs it cannot hold, and `noisy` needs `--denoise`, both before any work.
+#[test]
+fn aovs_are_layers_of_one_exr() {
+    let dir = std::env::temp_dir().join(format!("pathwave-layers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |out: &str, extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .args([
+                "render",
+                "scenes/cornell.ron",
+                "--spp",
+                "4",
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "-q",
+                "-o",
+            ])
+            .arg(dir.join(out))
+            .args(extra)
+            .current_dir(root())
+            .output()
+            .unwrap()
+    };
+    let o = run("l.exr", &["--denoise", "--aov", "albedo,normal,depth,variance,noisy"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let l = pathwave::io::read_exr_channels(&dir.join("l.exr")).unwrap();
+    let names: Vec<&str> = l.channels.iter().map(|(n, _)| n.as_str()).collect();
+    for c in ["R", "G", "B", "A", "albedo.R", "normal.X", "normal.Z", "depth.Z", "variance.B", "noisy.G"] {
+        assert!(names.contains(&c), "{c} missing from {names:?}");
+    }
+    assert!(!dir.join("l.noisy.exr").exists(), "the noisy image is a layer, not a file");
+    let meta = |k: &str| l.metadata.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+    assert_eq!(meta("pathwave:spp").as_deref(), Some("4"));
+    assert!(meta("pathwave:scene_key").is_some() && meta("pathwave:seed").as_deref() == Some("0"));
+    // The camera looks into the box from 800 units before it: depths between, infinity beside
+    // it (the image is wider than the box).
+    let depth = &l.channels.iter().find(|(n, _)| n == "depth.Z").unwrap().1;
+    assert!(depth.iter().all(|&d| (700.0..1600.0).contains(&d) || d == f32::INFINITY));
+    assert!(depth.iter().filter(|d| d.is_finite()).count() > depth.len() / 2);
+    for (out, extra, what) in [
+        ("p.png", vec!["--aov", "depth"], "needs an .exr output"),
+        ("n.exr", vec!["--aov", "noisy"], "needs --denoise"),
+    ] {
+        let o = run(out, &extra);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(what), "{extra:?}: {err}");
+        assert!(!dir.join(out).exists());
+    }
+    // `compare` reads the layered file's beauty, and refuses an sRGB PNG against a linear EXR
+    // unless told how to read the PNG.
+    assert!(run("p.png", &[]).status.success());
+    let compare = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .arg("compare")
+            .args([dir.join("p.png"), dir.join("l.exr")])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let refused = compare(&[]);
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--encoded decode"));
+    let decoded = compare(&["--encoded", "decode"]);
+    assert!(decoded.status.success() && String::from_utf8_lossy(&decoded.stdout).contains("relMSE"));
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -65,6 +65,31 @@ pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
     out
 }
 
+/// Per pixel, the mean distance along the camera rays of samples `samples` to the first
+/// surface they meet (mirrors and glass included), over the rays that meet one; infinity where
+/// none does. Distances are in world units from the ray's origin on the lens.
+pub fn depth(scene: &RenderScene, samples: Range<u32>) -> Vec<f32> {
+    let _span = tracing::info_span!("render_depth", samples = samples.len()).entered();
+    let win = scene.settings.window;
+    (win.y0..win.y0 + win.h)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let samples = samples.clone();
+            (win.x0..win.x0 + win.w).map(move |x| {
+                let (mut sum, mut n) = (0.0f64, 0u32);
+                for index in samples.clone() {
+                    let ray = path::camera_ray(scene, x, y, index).0;
+                    if let Some(h) = scene.intersect(&ray, f32::INFINITY) {
+                        sum += (h.t * ray.dir.length()) as f64;
+                        n += 1;
+                    }
+                }
+                if n == 0 { f32::INFINITY } else { (sum / n as f64) as f32 }
+            })
+        })
+        .collect()
+}
+
 /// The sky's albedo guide: its radiance, clamped.
 #[inline]
 pub fn sky_albedo(radiance: Vec3) -> Vec3 {
