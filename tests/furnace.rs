@@ -24,28 +24,28 @@ fn assert_all_pixels_near(film: &pathwave::integrator::film::Film, expected: imp
 /// Albedo-1 surfaces of every kind (diffuse, mirror, glass) under a uniform sky of radiance 1:
 /// nothing is absorbed, so every pixel is 1 whatever the paths do (Russian roulette, glass
 /// radiance scaling by 1/eta^2 and back, concave crevices that need many bounces).
+/// Albedo-1 diffuse, fuzzed-mirror and glass objects on a ground sphere under `BACKGROUND`.
+const FURNACE: &str = r#"Scene(
+    camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
+    render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
+    background: BACKGROUND,
+    materials: {
+        "white": Lambertian(albedo: (1, 1, 1)),
+        "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
+        "glass": Dielectric(ior: 1.5),
+    },
+    objects: [
+        (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+        (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
+        (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
+        (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
+        (shape: Box(a: (-0.5, 0, 1.2), b: (0.5, 0.6, 2)), material: "white", transform: [RotateY(30)]),
+    ],
+)"#;
+
 #[test]
 fn white_furnace_is_one_everywhere() {
-    let desc = inline(
-        r#"Scene(
-            camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
-            render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
-            background: Constant((1, 1, 1)),
-            materials: {
-                "white": Lambertian(albedo: (1, 1, 1)),
-                "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
-                "glass": Dielectric(ior: 1.5),
-            },
-            objects: [
-                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
-                (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
-                (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
-                (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
-                (shape: Box(a: (-0.5, 0, 1.2), b: (0.5, 0.6, 2)), material: "white",
-                 transform: [RotateY(30)]),
-            ],
-        )"#,
-    );
+    let desc = inline(&FURNACE.replace("BACKGROUND", "Constant((1, 1, 1))"));
     let film = render(&desc);
     let mean = film.mean();
     let avg: f32 = mean.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / (3 * mean.len()) as f32;
@@ -170,25 +170,9 @@ fn env_map(name: &str, w: u32, h: u32, texel: impl Fn(u32, u32) -> f32) -> std::
 #[test]
 fn white_furnace_under_an_environment_map_is_one_everywhere() {
     let map = env_map("white.exr", 16, 8, |_, _| 1.0);
-    let desc = inline(&format!(
-        r#"Scene(
-            camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
-            render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
-            background: Environment(file: "{}"),
-            materials: {{
-                "white": Lambertian(albedo: (1, 1, 1)),
-                "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
-                "glass": Dielectric(ior: 1.5),
-            }},
-            objects: [
-                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
-                (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
-                (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
-                (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
-            ],
-        )"#,
-        map.display()
-    ));
+    let desc = inline(
+        &FURNACE.replace("BACKGROUND", &format!("Environment(file: {:?})", map.display().to_string())),
+    );
     let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
     assert_eq!(scene.lights.len(), 1, "the map is a light");
     assert_all_pixels_near(&render(&desc), |_| Some(1.0));
