@@ -297,10 +297,13 @@ impl LatLongSampler {
     /// The density in solid angle of sampling `dir` (any non-zero length): the grid density
     /// p(u, v) / (2 pi^2 sin theta); 0 at the poles, where sin theta = 0.
     pub fn pdf(&self, dir: Vec3A) -> f32 {
-        match self.grid_uv(dir) {
-            Some((uv, sin_theta)) if sin_theta > 0.0 => self.dist.pdf(uv) / (2.0 * PI * PI * sin_theta),
-            _ => 0.0,
-        }
+        self.grid_uv(dir).map_or(0.0, |at| self.pdf_at(at))
+    }
+
+    /// [`Self::pdf`] at the grid's (u, v) and sin theta of a direction.
+    #[inline]
+    fn pdf_at(&self, (uv, sin_theta): (Vec2, f32)) -> f32 {
+        if sin_theta > 0.0 { self.dist.pdf(uv) / (2.0 * PI * PI * sin_theta) } else { 0.0 }
     }
 }
 
@@ -416,7 +419,22 @@ impl EnvironmentMap {
     /// here), scaled, interpolated bilinearly between texel centres. Black for a zero or
     /// non-finite direction. Never negative or NaN.
     pub fn radiance(&self, dir: Vec3A) -> Vec3 {
-        let Some((uv, _)) = map_uv(dir, self.u_offset) else { return Vec3::ZERO };
+        map_uv(dir, self.u_offset).map_or(Vec3::ZERO, |(uv, _)| self.radiance_at(uv))
+    }
+
+    /// [`Self::radiance`] and [`Self::pdf`] of one direction, its (u, v) found once (the
+    /// sampler's grid and the map share the rotation).
+    #[inline]
+    pub fn radiance_pdf(&self, dir: Vec3A) -> (Vec3, f32) {
+        match map_uv(dir, self.u_offset) {
+            Some(at) => (self.radiance_at(at.0), self.sampler.as_ref().map_or(0.0, |s| s.pdf_at(at))),
+            None => (Vec3::ZERO, 0.0),
+        }
+    }
+
+    /// The bilinear lookup at the map's (u, v).
+    #[inline]
+    fn radiance_at(&self, uv: Vec2) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
         // The same product u * W as the sampler's cell lookup (cell_of), so that a lookup in
         // cell i reads only columns i - 1 ..= i + 1, which that cell's bound covers.

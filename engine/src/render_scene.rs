@@ -163,6 +163,15 @@ impl Background {
         }
     }
 
+    /// [`Self::radiance`] and [`Self::pdf`] of one direction (a map looks it up once).
+    #[inline]
+    pub fn radiance_pdf(&self, dir: Vec3A) -> (Vec3, f32) {
+        match self {
+            Background::Environment(map) => map.radiance_pdf(dir),
+            _ => (self.radiance(dir), 0.0),
+        }
+    }
+
     /// The solid-angle density with which [`Self::sample`] gives `dir`.
     #[inline]
     pub fn pdf(&self, dir: Vec3A) -> f32 {

@@ -69,11 +69,13 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 /// A ray left the scene: add the background (MIS-weighted where it is sampled as a light).
 #[inline]
 pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
-    let le = scene.background.radiance(dir);
     let pmf = scene.lights.environment_pmf();
-    let w = match st.delta || pmf == 0.0 {
-        false => power_heuristic(st.prev_pdf, pmf * scene.background.pdf(dir)),
-        true => 1.0,
+    let (le, w) = match st.delta || pmf == 0.0 {
+        false => {
+            let (le, pdf) = scene.background.radiance_pdf(dir);
+            (le, power_heuristic(st.prev_pdf, pmf * pdf))
+        }
+        true => (scene.background.radiance(dir), 1.0),
     };
     st.l += st.beta * le * w;
 }
