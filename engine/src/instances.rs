@@ -6,7 +6,7 @@ use crate::bvh8::Bvh8;
 use crate::geometry::Hit;
 use crate::math::{Ray, gamma, transform_box};
 use crate::mesh::MeshBlas;
-use crate::shape::SurfacePoint;
+use crate::shape::{SurfacePoint, adapt_shading_normal};
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::sync::Arc;
@@ -282,10 +282,19 @@ impl Instances {
     /// World-space surface data of triangle `tri` of `inst` hit by `ray` at `t`: found in
     /// object space (re-projected onto the triangle, so the ray's rounding does not enter) and
     /// moved back, with the error bound of [`crate::shape::TransformedSphere`] plus the motion
-    /// offset's rounding.
+    /// offset's rounding. Without vertex normals the shading normal is the geometric one.
+    ///
+    /// With vertex normals the shading normal is adapted to the ray ([`adapt_shading_normal`]),
+    /// and the point moves along `n` by half the height `h` of the smooth surface over the
+    /// triangle ([`crate::mesh::terminator_lift`], Hanika 2021) while `err` grows by
+    /// `h / (2 |n|_1)`: [`crate::math::offset_ray_origin`] then puts a ray that leaves on `n`'s
+    /// side (the side the normals point to) `h` higher than it would have, at the smooth
+    /// surface, and a ray on the other side exactly where it would have. This is done in world
+    /// space, where the offset is applied (a transform that is not a similarity would break
+    /// the cancellation in object space).
     fn surface(&self, inst: &Instance, tri: u32, ray: &Ray, t: f32) -> SurfacePoint {
         let (o, d) = self.object_ray(inst, ray);
-        let local = self.blas[inst.blas as usize].surface(tri, o + t * d);
+        let (local, lift) = self.blas[inst.blas as usize].surface(tri, o + t * d);
         let (m, normal_to_world, off) = match &inst.motion {
             Some(motion) => {
                 let m = motion.world_from_object(ray.time);
@@ -295,19 +304,30 @@ impl Instances {
         };
         let norm = |a: &Mat3A| (a.x_axis.abs() + a.y_axis.abs() + a.z_axis.abs()).max_element();
         let scale = norm(&m.matrix3);
-        let world_p = m.transform_point3a(local.p) + off;
+        let mut p = m.transform_point3a(local.p) + off;
         let magnitude = scale * local.p.abs().max_element() + m.translation.abs().max_element();
-        let n = (normal_to_world * local.n).normalize();
-        // The shading normal's side decides (the file's normals say where outside is).
-        let ns = (normal_to_world * local.ns).normalize();
-        SurfacePoint {
-            p: world_p,
-            n: if n.dot(ns) < 0.0 { -n } else { n },
-            ns,
-            uv: local.uv,
-            err: scale * local.err
-                + gamma(4) * magnitude
-                + gamma(2) * (world_p.abs().max_element() + off.abs().max_element()),
+        let mut err = scale * local.err
+            + gamma(4) * magnitude
+            + gamma(2) * (p.abs().max_element() + off.abs().max_element());
+        let n_world = normal_to_world * local.n;
+        let mut n = n_world.normalize();
+        let mut ns = n;
+        if local.ns != local.n {
+            // Smooth shading. The shading normal's side decides (the file's normals say where
+            // outside is); then it is adapted to the ray that arrives.
+            ns = (normal_to_world * local.ns).normalize();
+            if n.dot(ns) < 0.0 {
+                n = -n;
+            }
+            ns = adapt_shading_normal(n, ns, -ray.dir.normalize());
+            if lift > 0.0 {
+                // The object-space height along the unit object normal is lift / |M^-T n|
+                // along the world normal.
+                let h = lift / n_world.length();
+                p += (0.5 * h) * n;
+                err += 0.5 * h * (1.0 + gamma(4)) / n.abs().element_sum() + gamma(2) * p.abs().max_element();
+            }
         }
+        SurfacePoint { p, n, ns, uv: local.uv, err }
     }
 }

@@ -150,10 +150,12 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let f = i.albedo * c;
     let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { c });
     let contribution = i.beta * (f * i.le * (w / i.pdf_light));
-    // Directions must leave on the same side of the surface and of the shading normal.
+    // The light must lie on wo's side of the shading normal, and leaves from that side: on
+    // the outer side (ci > 0: ng is on the shading normal's side) whatever the facet says, on
+    // the inner side only where the facet agrees (`path::leaving_side`).
     let cig = dot(wi, ng);
-    let shadow = i.pdf_light > 0.0 && co * ci > 0.0 && cig * ci > 0.0;
-    let so = offset(p, i.err, sel3(cig > 0.0, ng, -ng));
+    let shadow = i.pdf_light > 0.0 && co * ci > 0.0 && (ci > 0.0 || cig < 0.0);
+    let so = offset(p, i.err, sel3(ci > 0.0, ng, -ng));
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
     let (dx, dy) = disk(i.u_dir);
@@ -165,8 +167,11 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let t = Vec3::new(1.0 + sign * nf.x * nf.x * a, sign * b, -sign * nf.x);
     let bt = Vec3::new(b, sign + nf.y * nf.y * a, -nf.y);
     let d = t * dx + bt * dy + nf * z;
-    let dg = dot(d, ng);
-    let o = offset(p, i.err, sel3(dg > 0.0, ng, -ng));
+    // The same rule for the sampled direction (on wo's side of the shading normal but for
+    // rounding).
+    let (dg, ds) = (dot(d, ng), dot(d, n));
+    let leaves = (ds > 0.0 && co > 0.0) || dg * ds > 0.0;
+    let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
     // Russian roulette.
     let beta = i.beta * i.albedo;
     let rr = (beta * i.eta_scale).max_element();
@@ -179,7 +184,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
         so,
         sd: i.target - so,
         contribution,
-        alive: pdf > 0.0 && survive && dg * dot(d, n) > 0.0,
+        alive: pdf > 0.0 && survive && leaves,
         o,
         d,
         beta,

@@ -320,6 +320,33 @@ impl ScatterSamples {
     }
 }
 
+/// The side of the surface (`sp.n` or `-sp.n`) a ray scattered from `wo` into `wi` leaves
+/// from, or `None` when it may not leave.
+///
+/// The side is the shading normal's: with vertex normals (a smooth-shaded mesh) the two normals
+/// disagree about some directions, and the shading normal describes the surface the mesh
+/// stands for. A direction on `sp.n`'s side of the shading normal, scattered from a `wo` also
+/// there (a reflection on the outside the vertex normals point to), leaves whatever the flat
+/// triangle says: it starts at the smooth surface (the hit point is lifted for it, after
+/// Hanika 2021: [`pathwave_engine::mesh::terminator_lift`]) and the mesh itself decides what it
+/// meets, so the terminator follows the smooth surface instead of the facets. Every other direction the two
+/// normals disagree about ends the path as before: a transmission through the shading normal
+/// that stays on `wo`'s side of the facet, and a reflection on the inner side, where the point
+/// is not lifted. Without vertex normals the two normals are one and every direction not in
+/// the tangent plane leaves, with the same operations as before (the second test is not
+/// reached), so flat surfaces pay nothing.
+///
+/// Light sampling and BSDF sampling call it alike, so both estimate one integral and their
+/// MIS weights stay consistent.
+#[inline]
+pub fn leaving_side(sp: &SurfacePoint, wo: Vec3A, wi: Vec3A) -> Option<Vec3A> {
+    let (cg, cs) = (wi.dot(sp.n), wi.dot(sp.ns));
+    if cg * cs <= 0.0 && !(cs > 0.0 && wo.dot(sp.ns) > 0.0) {
+        return None;
+    }
+    Some(if cs > 0.0 { sp.n } else { -sp.n })
+}
+
 /// Samples the BSDF, updates the throughput, applies Russian roulette; returns the next ray, or
 /// `None` when the path ends.
 #[inline]
@@ -347,11 +374,7 @@ pub fn scatter_with(
     u: &ScatterSamples,
 ) -> Option<Ray> {
     let bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
-    // A direction on one side of the shading normal and the other of the surface ends the
-    // path (with vertex normals; without them the two sides agree).
-    if bs.wi.dot(sp.n) * bs.wi.dot(sp.ns) <= 0.0 {
-        return None;
-    }
+    let side = leaving_side(sp, wo, bs.wi)?;
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
     // Where no light was sampled (every kind but glossy ones) or the lobe is a delta, an
@@ -359,7 +382,6 @@ pub fn scatter_with(
     st.delta = bs.delta || mat.shading() != Shading::Glossy;
     st.prev_pdf = bs.pdf;
     st.prev_p = sp.p;
-    let side = if bs.wi.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
     roulette(scene, st, || u.roulette).then_some(ray)
@@ -407,17 +429,14 @@ pub fn shade_glossy(
     let shadow = match scene.lights.is_empty() {
         true => None,
         false => pick_light(scene, sp.p, time, u.light_pick, u.light).and_then(|lp| {
-            // The light must lie on the same side of the surface for both normals.
-            let (cg, cs) = (lp.wi.dot(sp.n), lp.wi.dot(sp.ns));
-            if cg * cs <= 0.0 {
-                return None;
-            }
+            // The same directions leave as in BSDF sampling, from the same side.
+            let side = leaving_side(sp, wo, lp.wi)?;
             let e = mat.eval(wo, lp.wi, sp.ns);
             if e.f_cos == Vec3::ZERO {
                 return None;
             }
             let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, e.pdf) };
-            let origin = offset_ray_origin(sp.p, sp.err, if cg > 0.0 { sp.n } else { -sp.n });
+            let origin = offset_ray_origin(sp.p, sp.err, side);
             let contribution = st.beta * e.f_cos * lp.le * (w / lp.pdf);
             Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
         }),

@@ -125,3 +125,36 @@ impl BlockStats {
         self.chi2_dof < 1.0 + 5.0 * (2.0 / self.blocks as f64).sqrt() && self.max_z < 6.0
     }
 }
+
+/// A UV sphere of radius 1 with `rings` x `segments` quads as triangles, with or without
+/// vertex normals (`vn`).
+pub fn sphere_obj(rings: u32, segments: u32, normals: bool) -> String {
+    let mut s = String::new();
+    let mut verts = Vec::new();
+    for i in 0..=rings {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..segments {
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            verts.push([theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()]);
+        }
+    }
+    for v in &verts {
+        s += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+        if normals {
+            s += &format!("vn {} {} {}\n", v[0], v[1], v[2]);
+        }
+    }
+    let at = |i: u32, j: u32| i * segments + j % segments + 1;
+    let face = |a: u32, b: u32, c: u32| {
+        if normals { format!("f {a}//{a} {b}//{b} {c}//{c}\n") } else { format!("f {a} {b} {c}\n") }
+    };
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            // Outward winding: (b - a) x (c - a) points away from the centre.
+            s += &face(a, c, b);
+            s += &face(a, d, c);
+        }
+    }
+    s
+}
