@@ -2,9 +2,10 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::checkpoint::{self, Checkpoint};
+use pathwave::denoiser::{self, Denoiser};
 use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
-use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
+use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics, trace};
 use std::num::NonZeroU32;
@@ -164,10 +165,13 @@ struct RenderArgs {
     /// Paths in flight per worker (wavefront), 1 to 65536.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     batch: u32,
-    /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
-    /// output gets the denoised image, NAME.noisy.EXT the render as it came.
-    #[arg(long)]
-    denoise: bool,
+    /// Denoise with `oidn` (Intel Open Image Denoise, guided by albedo and normals; a build with
+    /// `--features oidn`, where a bare --denoise means it) or `atrous` (pathwave's à-trous filter,
+    /// guided by albedo, normals and the per-pixel variance; a bare --denoise in other builds):
+    /// the output gets the denoised image, NAME.noisy.EXT the render as it came.
+    #[arg(long, value_name = "oidn|atrous", num_args = 0..=1,
+          default_missing_value = Denoiser::DEFAULT_NAME, value_parser = Denoiser::parse)]
+    denoise: Option<Denoiser>,
     /// Also write the denoiser's guides: NAME.albedo.EXT and NAME.normal.EXT (normals as
     /// stored in EXR, mapped to 0.5 + 0.5 n in PNG).
     #[arg(long)]
@@ -435,7 +439,7 @@ struct How {
     /// The -D parameter overrides (they change the scene, so they are in checkpoint keys).
     defines: Vec<String>,
     verbose: bool,
-    denoise: bool,
+    denoise: Option<Denoiser>,
     aov: bool,
     integrator: Integrator,
     batch: usize,
@@ -592,7 +596,7 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     let shard = seq_args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
     let every = args.checkpoint_every()?;
     let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    if gif && (args.denoise || args.aov || every.is_some()) {
+    if gif && (args.denoise.is_some() || args.aov || every.is_some()) {
         return Err(format!(
             "{output}: --denoise, --aov and --checkpoint-every write files beside each frame; \
              render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
@@ -851,7 +855,7 @@ fn render_image(
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
-                let opts = wavefront::Options { batch: how.batch, guides: how.denoise || how.aov };
+                let opts = wavefront::Options { batch: how.batch, guides: how.denoise.is_some() || how.aov };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }
@@ -897,7 +901,7 @@ fn render_image(
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
-    let img = if how.denoise || how.aov {
+    let img = if how.denoise.is_some() || how.aov {
         post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?
     } else {
         img
@@ -985,16 +989,17 @@ fn post_process(
             None => tracing::info!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
         }
     }
-    if !how.denoise {
+    let Some(which) = how.denoise else {
         return Ok(img);
-    }
+    };
     io::write(&sibling("noisy"), &img)?;
     let start = Instant::now();
     let variance = film.variance_of_mean();
-    let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
+    let threads = pool.current_num_threads();
+    let out = pool.install(|| denoiser::denoise(which, &img.pixels, &variance, &aovs, threads))?;
     let guides = if film.guides.is_some() { String::new() } else { format!(" (guides {aov_secs:.2} s)") };
     if !how.quiet {
-        eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
+        eprintln!("denoised ({}) in {:.2} s{guides}", which.name(), start.elapsed().as_secs_f64());
     }
     Ok(image(out))
 }

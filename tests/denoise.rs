@@ -168,3 +168,18 @@ fn the_wavefront_records_the_guides_the_separate_pass_traces() {
     }
     assert!(recorded.emission.iter().any(|e| e.x > 1.0), "the light is seen");
 }
+
+/// A build without `--features oidn` refuses `--denoise oidn`, naming the feature and the set-up.
+#[cfg(not(feature = "oidn"))]
+#[test]
+fn oidn_without_the_feature_says_how_to_get_it() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", "scenes/cornell-diffuse.ron", "-o", "never.png", "--denoise", "oidn"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("--features oidn") && err.contains("scripts/setup-oidn.sh"), "{err}");
+    assert!(!root().join("never.png").exists());
+}
