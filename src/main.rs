@@ -100,9 +100,12 @@ enum Command {
         /// Write a log-log plot of relMSE against seconds.
         #[arg(long, value_name = "FILE.svg")]
         svg: Option<PathBuf>,
-        /// Also the wavefront's images denoised (seconds include the guides and the filter).
-        #[arg(long)]
-        denoise: bool,
+        /// Also the wavefront's images denoised by each of these (oidn, atrous; a bare --denoise:
+        /// every one this build has). Seconds include the render recording the guides and the
+        /// filter.
+        #[arg(long, value_name = "oidn,atrous", num_args = 0..=1, value_delimiter = ',',
+              value_parser = Denoiser::parse)]
+        denoise: Option<Vec<Denoiser>>,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
@@ -380,7 +383,11 @@ fn main() -> ExitCode {
                 .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
         }
         Command::Bench { spp, refs, only, batch, svg, denoise, threads } => {
-            bench(&spp, &refs, &only, batch, svg, denoise, threads)
+            let denoise = match denoise {
+                Some(d) if d.is_empty() => Denoiser::AVAILABLE.to_vec(),
+                d => d.unwrap_or_default(),
+            };
+            bench(&spp, &refs, &only, batch, svg, &denoise, threads)
         }
     };
     let result = match (trace_file, result) {
@@ -1010,7 +1017,7 @@ fn bench(
     only: &[String],
     batch: usize,
     svg: Option<PathBuf>,
-    denoise: bool,
+    denoise: &[Denoiser],
     threads: Option<usize>,
 ) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new()
