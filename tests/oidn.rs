@@ -61,16 +61,16 @@ fn oidn_reaches_the_figures_of_its_own_tool_and_keeps_the_means() {
 #[test]
 fn the_albedo_guide_matters() {
     // OIDN takes a normal only beside an albedo: without the albedo it has the colour alone.
-    // On cornell (glass, a mirror, caustics) the guides measured 0.0036 against 0.0044 without.
-    let r = reference("cornell.exr");
-    let (noisy, _, aovs) = render16("cornell");
+    // On cornell-diffuse the guides measured relMSE 0.00025 against 0.00035 without.
+    let r = reference("cornell-diffuse.exr");
+    let (noisy, _, aovs) = render16("cornell-diffuse");
     let guided = oidn::denoise(&noisy, &aovs, &oidn::Options::default()).unwrap();
     let opts = oidn::Options { albedo: false, ..Default::default() };
     let blind = oidn::denoise(&noisy, &aovs, &opts).unwrap();
     let (e_guided, e_blind) = (rel_mse(&guided, &r.pixels), rel_mse(&blind, &r.pixels));
     let apart = rel_mse(&blind, &guided);
     eprintln!("relMSE with the guides {e_guided:.6}, without {e_blind:.6}; between the two {apart:.6}");
-    assert!(e_blind > 1.1 * e_guided, "the guides gain too little: {e_guided} against {e_blind}");
+    assert!(e_blind > 1.2 * e_guided, "the guides gain too little: {e_guided} against {e_blind}");
     assert!(apart > 0.1 * e_guided, "the albedo changes too little: {apart}");
 }
 

@@ -1,6 +1,9 @@
 //! Intel Open Image Denoise's `RT` filter on the HDR render with the albedo and normal guides,
 //! through the C API of the `oidn` crate (`oidn::sys`), on OIDN's CPU device with images shared
-//! with pathwave's own buffers (no copies into OIDN buffers).
+//! with pathwave's own buffers (no copies into OIDN buffers). By default the guides are first
+//! denoised by OIDN's own filters (its recommendation for guides that are not noise-free: the
+//! render's guides are means over its own camera rays, noisy where a pixel holds sub-pixel
+//! detail, a lens or motion) and emitters seen directly are kept out of the filter ([`Options`]).
 //!
 //! The C API rather than the crate's `RayTracing` wrapper: prefiltering a guide runs the filter
 //! with that guide as its only input (`albedo` or `normal`, no `color`), which the wrapper cannot
@@ -25,22 +28,66 @@ pub enum Aux {
     Clean,
 }
 
-/// Filter settings.
+/// OIDN's `quality`: which size of network runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    /// OIDN's default.
+    High,
+    /// Smaller networks, faster.
+    Balanced,
+    /// The smallest.
+    Fast,
+}
+
+impl Quality {
+    fn raw(self) -> i32 {
+        (match self {
+            Self::High => sys::OIDNQuality_OIDN_QUALITY_HIGH,
+            Self::Balanced => sys::OIDNQuality_OIDN_QUALITY_BALANCED,
+            Self::Fast => sys::OIDNQuality_OIDN_QUALITY_FAST,
+        }) as i32
+    }
+}
+
+/// Filter settings. The defaults, measured at 16 spp on cornell-diffuse, cornell, spheres-sky,
+/// mesh and cornell-smoke (benches/RESULTS.md): prefiltered guides cut relMSE against the
+/// guides as rendered by 20-25% on spheres-sky and cornell-smoke (and 7% on cornell, whose mean
+/// moves -0.3% instead of -0.7%), and cost 4-8% on cornell-diffuse and mesh; prefilters of
+/// balanced quality (OIDN's standard networks, where high quality runs its large ones) give the
+/// same figures within 2% in 60% of the time. Taking out the emitters seen directly cuts relMSE
+/// by 19-38% where an area light is in view (and RMSE by 40%: OIDN otherwise reshapes the light
+/// and its edge) and changes nothing under a sky.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Options {
+    /// The quality of the filter on the render.
+    pub quality: Quality,
+    /// The quality of the filters on the guides (with [`Aux::Prefiltered`]).
+    pub prefilter_quality: Quality,
     /// Guide with the albedo.
     pub albedo: bool,
     /// Guide with the normal too (OIDN takes a normal only beside an albedo).
     pub normal: bool,
     /// How the guides are given.
     pub aux: Aux,
+    /// Take the radiance of emitting surfaces seen directly (the guides' `emission`, exact) out of
+    /// the render before filtering and add it back after, where a pixel's camera rays all met
+    /// surfaces facing one way; the background stays in (OIDN is trained with skies in view).
+    pub emitters: bool,
     /// OIDN's worker threads, 0 for all cores.
     pub threads: usize,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { albedo: true, normal: true, aux: Aux::Prefiltered, threads: 0 }
+        Self {
+            quality: Quality::High,
+            prefilter_quality: Quality::Balanced,
+            albedo: true,
+            normal: true,
+            aux: Aux::Prefiltered,
+            emitters: true,
+            threads: 0,
+        }
     }
 }
 
@@ -141,6 +188,10 @@ impl Filter {
         unsafe { sys::oidnSetFilterBool(self.0, name.as_ptr(), value) };
     }
 
+    fn quality(&self, q: Quality) {
+        unsafe { sys::oidnSetFilterInt(self.0, c"quality".as_ptr(), q.raw()) };
+    }
+
     fn run(&self, device: &Device, what: &str) -> Result<(), String> {
         unsafe {
             sys::oidnCommitFilter(self.0);
@@ -173,11 +224,24 @@ pub fn denoise(color: &[Vec3], aovs: &Aovs, o: &Options) -> Result<Vec<Vec3>, St
                 let f = Filter::new(device)?;
                 f.image(name, g, w, h);
                 f.image(c"output", g, w, h);
+                f.quality(o.prefilter_quality);
                 f.run(device, &format!("prefiltering the {} guide", name.to_string_lossy()))?;
             }
         }
     }
-    let mut input = color.to_vec();
+    // A pixel whose camera rays met surfaces of one orientation has a unit normal guide; where
+    // they also met the background, or surfaces turned other ways, the mean is shorter.
+    let direct: Vec<Vec3> = match o.emitters {
+        true => aovs
+            .emission
+            .iter()
+            .zip(&aovs.normal)
+            .map(|(e, n)| if n.length_squared() > 0.98 { *e } else { Vec3::ZERO })
+            .collect(),
+        false => vec![Vec3::ZERO; w * h],
+    };
+    // The rest of the pixel is >= 0 but for rounding.
+    let mut input: Vec<Vec3> = color.iter().zip(&direct).map(|(c, e)| (*c - *e).max(Vec3::ZERO)).collect();
     let mut out = vec![Vec3::ZERO; w * h];
     let f = Filter::new(device)?;
     f.image(c"color", &mut input, w, h);
@@ -189,7 +253,8 @@ pub fn denoise(color: &[Vec3], aovs: &Aovs, o: &Options) -> Result<Vec<Vec3>, St
     }
     f.image(c"output", &mut out, w, h);
     f.flag(c"hdr", true);
+    f.quality(o.quality);
     f.flag(c"cleanAux", albedo.is_some() && o.aux != Aux::AsIs);
     f.run(device, "denoising the render")?;
-    Ok(out)
+    Ok(out.iter().zip(&direct).map(|(c, e)| *c + *e).collect())
 }
