@@ -3,10 +3,12 @@
 //! library without LD_LIBRARY_PATH (scripts/setup-oidn.sh installs it and prints OIDN_DIR).
 
 fn main() {
-    println!("cargo::rerun-if-env-changed=OIDN_DIR");
+    // Without these the script would run again whenever any file of the package changes.
+    println!("cargo::rerun-if-changed=build.rs");
     if std::env::var_os("CARGO_FEATURE_OIDN").is_none() {
         return;
     }
+    println!("cargo::rerun-if-env-changed=OIDN_DIR");
     // Without OIDN_DIR the crate looks for the library with pkg-config (a system install, found
     // by the loader's own paths).
     let Some(dir) = std::env::var_os("OIDN_DIR").filter(|d| !d.is_empty()) else { return };
