@@ -60,6 +60,20 @@ impl Denoiser {
     }
 }
 
+/// Checks before a render that `which` can run on `threads` threads (OIDN: makes its device).
+pub fn prepare(which: Denoiser, threads: usize) -> Result<(), String> {
+    match which {
+        Denoiser::Atrous => Ok(()),
+        #[cfg(feature = "oidn")]
+        Denoiser::Oidn => oidn::ready(threads),
+        #[cfg(not(feature = "oidn"))]
+        Denoiser::Oidn => {
+            let _ = threads;
+            Err(NOT_BUILT.to_string())
+        }
+    }
+}
+
 /// Denoises `color` (per-pixel means; `variance`, the variance of each mean, only guides the
 /// à-trous filter) with the guides `aovs`. The à-trous filter runs on the current rayon pool,
 /// OIDN on `threads` threads of its own (0: all cores).

@@ -612,6 +612,9 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     // A frame killed half way resumes from its checkpoint.
     let checkpointing = every.map(|every| Checkpointing { every, resume: true });
     let pool = pool(args.threads)?;
+    if let Some(d) = args.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
     let mut world = SceneWorld::new(&desc);
     let quiet = args.log.quiet;
     let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: seq_args.overwrite, quiet };
@@ -687,6 +690,9 @@ fn render(
     }
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
+    if let Some(d) = how.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
     let mut world = SceneWorld::new(&desc);
     let shutter = desc.camera.shutter;
     world.set_time(time + shutter.0, time + shutter.1);

@@ -204,17 +204,30 @@ impl Filter {
     }
 }
 
+/// The process's device for `threads` threads, made now if it is not there (the lock holds
+/// `Some`).
+fn device(threads: usize) -> Result<std::sync::MutexGuard<'static, Option<Device>>, String> {
+    let mut lock = DEVICE.lock().unwrap_or_else(|p| p.into_inner());
+    if lock.as_ref().is_none_or(|d| d.threads != threads) {
+        *lock = None;
+        *lock = Some(Device::new(threads)?);
+    }
+    Ok(lock)
+}
+
+/// Makes the CPU device now (kept for the denoising to come): a library without its CPU device
+/// fails here, before a render, rather than after it.
+pub fn ready(threads: usize) -> Result<(), String> {
+    device(threads).map(drop)
+}
+
 /// Denoises the HDR image `color` (per-pixel means, linear) with the guides `aovs`.
 pub fn denoise(color: &[Vec3], aovs: &Aovs, o: &Options) -> Result<Vec<Vec3>, String> {
     let _span = tracing::info_span!("oidn", width = aovs.width, height = aovs.height).entered();
     let (w, h) = (aovs.width as usize, aovs.height as usize);
     assert!(color.len() == w * h && aovs.albedo.len() == w * h && aovs.normal.len() == w * h);
-    let mut lock = DEVICE.lock().unwrap_or_else(|p| p.into_inner());
-    if lock.as_ref().is_none_or(|d| d.threads != o.threads) {
-        *lock = None;
-        *lock = Some(Device::new(o.threads)?);
-    }
-    let device = lock.as_ref().expect("made above");
+    let lock = device(o.threads)?;
+    let device = lock.as_ref().expect("made by device()");
     // The guides, owned: prefiltering denoises them in place.
     let mut albedo = o.albedo.then(|| aovs.albedo.clone());
     let mut normal = (o.albedo && o.normal).then(|| aovs.normal.clone());
