@@ -1,10 +1,12 @@
 //! `pathwave bench`: run time against error. Renders scenes that have a reference image at a
-//! series of sample counts with each integrator (and, if asked, the wavefront's image denoised),
-//! and reports seconds, throughput and error (relMSE, RMSE) as a markdown table and a log-log
-//! plot (SVG) of relMSE against seconds.
+//! series of sample counts with each integrator (and, if asked, the wavefront's image denoised
+//! by each denoiser asked for), and reports seconds, throughput, error (relMSE, RMSE) and the
+//! image mean against the reference's as a markdown table and a log-log plot (SVG) of relMSE
+//! against seconds.
 
+use crate::denoiser::{self, Denoiser};
 use crate::engine::{scene, world::SceneWorld};
-use crate::integrator::{denoise as denoiser, oracle, wavefront};
+use crate::integrator::{oracle, wavefront};
 use crate::{io, metrics};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -14,7 +16,7 @@ use std::time::Instant;
 pub struct Row {
     /// Scene file stem.
     pub scene: String,
-    /// "wavefront", "oracle" or "wavefront + denoiser".
+    /// "wavefront", "oracle", "wavefront + OIDN" or "wavefront + à-trous".
     pub integrator: &'static str,
     /// Samples per pixel.
     pub spp: u32,
@@ -28,17 +30,27 @@ pub struct Row {
     pub rel_mse: f64,
     /// Root mean squared error.
     pub rmse: f64,
+    /// The image mean relative to the reference's, minus 1.
+    pub mean: f64,
+}
+
+/// The `integrator` of a row denoised by `d`.
+pub fn label(d: Denoiser) -> &'static str {
+    match d {
+        Denoiser::Oidn => "wavefront + OIDN",
+        Denoiser::Atrous => "wavefront + à-trous",
+    }
 }
 
 /// Renders `scene_path` at each of `spp` with both integrators and compares with `reference`;
-/// with `denoise`, also the wavefront's image denoised (rendered again recording the guides;
-/// its seconds include that render and the filter).
+/// also the wavefront's image denoised by each of `denoisers` (rendered again recording the
+/// guides; a row's seconds are that render's and its filter's).
 pub fn run(
     scene_path: &Path,
     reference: &Path,
     spps: &[u32],
     batch: usize,
-    denoise: bool,
+    denoisers: &[Denoiser],
 ) -> Result<Vec<Row>, String> {
     let reference = io::read_linear(reference)?;
     let name = scene_path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
@@ -77,47 +89,59 @@ pub fn run(
                 mrays,
                 rel_mse: metrics::rel_mse(&mean, &reference.pixels),
                 rmse: metrics::rmse(&mean, &reference.pixels),
+                mean: relative_mean(&mean, &reference.pixels),
             };
             eprintln!("{}", table_row(&row));
-            if denoise && integrator == "wavefront" {
-                // Rendered again, recording the guides on the way.
+            rows.push(row.clone());
+            if denoisers.is_empty() || integrator != "wavefront" {
+                continue;
+            }
+            // Rendered again, recording the guides on the way.
+            let start = Instant::now();
+            let opts = wavefront::Options { batch, guides: true };
+            let (film, _) = wavefront::render(&scene, opts, &|_, _| {});
+            let (noisy, variance) = (film.mean(), film.variance_of_mean());
+            let render_secs = start.elapsed().as_secs_f64();
+            let aovs = film.guides.as_ref().expect("the wavefront recorded the guides");
+            for &d in denoisers {
                 let start = Instant::now();
-                let opts = wavefront::Options { batch, guides: true };
-                let (film, _) = wavefront::render(&scene, opts, &|_, _| {});
-                let aovs = film.guides.as_ref().expect("the wavefront recorded the guides");
-                let out =
-                    denoiser::denoise(&film.mean(), &film.variance_of_mean(), aovs, &Default::default());
-                let seconds = start.elapsed().as_secs_f64();
+                let out = denoiser::denoise(d, &noisy, &variance, aovs, rayon::current_num_threads())?;
+                let seconds = render_secs + start.elapsed().as_secs_f64();
                 let denoised = Row {
-                    integrator: "wavefront + denoiser",
+                    integrator: label(d),
                     seconds,
                     msamples: samples / seconds / 1e6,
                     mrays: None,
                     rel_mse: metrics::rel_mse(&out, &reference.pixels),
                     rmse: metrics::rmse(&out, &reference.pixels),
+                    mean: relative_mean(&out, &reference.pixels),
                     ..row.clone()
                 };
                 eprintln!("{}", table_row(&denoised));
-                rows.push(row);
                 rows.push(denoised);
-            } else {
-                rows.push(row);
             }
         }
     }
     Ok(rows)
 }
 
+/// `x`'s mean over pixels and channels relative to the reference's, minus 1 (0 against a black
+/// reference).
+fn relative_mean(x: &[glam::Vec3], reference: &[glam::Vec3]) -> f64 {
+    let r = metrics::mean(reference);
+    if r > 0.0 { metrics::mean(x) / r - 1.0 } else { 0.0 }
+}
+
 /// The markdown table header.
 pub fn table_header() -> String {
-    "| scene | integrator | spp | seconds | M samples/s | M rays/s | relMSE | RMSE |\n|---|---|---|---|---|---|---|---|"
+    "| scene | integrator | spp | seconds | M samples/s | M rays/s | relMSE | RMSE | mean vs reference |\n|---|---|---|---|---|---|---|---|---|"
         .to_string()
 }
 
 /// One markdown table row.
 pub fn table_row(r: &Row) -> String {
     format!(
-        "| {} | {} | {} | {:.3} | {:.3} | {} | {:.6} | {:.5} |",
+        "| {} | {} | {} | {:.3} | {:.3} | {} | {:.6} | {:.5} | {:+.3}% |",
         r.scene,
         r.integrator,
         r.spp,
@@ -125,12 +149,14 @@ pub fn table_row(r: &Row) -> String {
         r.msamples,
         r.mrays.map_or("-".to_string(), |m| format!("{m:.2}")),
         r.rel_mse,
-        r.rmse
+        r.rmse,
+        100.0 * r.mean
     )
 }
 
 /// A log-log plot of relMSE against seconds, one line per (scene, integrator): solid for the
-/// wavefront, dashed for the oracle, dotted for the denoised wavefront (plotters' SVG backend).
+/// wavefront, dashed for the oracle, dotted for the wavefront with the à-trous filter, long
+/// dashes with OIDN (plotters' SVG backend).
 pub fn svg(rows: &[Row]) -> Result<String, String> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| format!("the time-against-error plot: {e}");
@@ -179,7 +205,8 @@ pub fn svg(rows: &[Row]) -> Result<String, String> {
                 .collect();
             let (dash, gap) = match integrator {
                 "oracle" => (6, 4),
-                "wavefront + denoiser" => (2, 3),
+                "wavefront + à-trous" => (2, 3),
+                "wavefront + OIDN" => (14, 4),
                 _ => (1000, 0),
             };
             let legend = colour;

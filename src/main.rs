@@ -2,9 +2,10 @@
 
 use clap::{Parser, Subcommand};
 use pathwave::checkpoint::{self, Checkpoint};
+use pathwave::denoiser::{self, Denoiser};
 use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
-use pathwave::integrator::{aov, denoise, film::Film, oracle, wavefront};
+use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::{animate, bench, metrics, trace};
 use std::num::NonZeroU32;
@@ -99,9 +100,12 @@ enum Command {
         /// Write a log-log plot of relMSE against seconds.
         #[arg(long, value_name = "FILE.svg")]
         svg: Option<PathBuf>,
-        /// Also the wavefront's images denoised (seconds include the guides and the filter).
-        #[arg(long)]
-        denoise: bool,
+        /// Also the wavefront's images denoised by each of these (oidn, atrous; a bare --denoise:
+        /// every one this build has). Seconds include the render recording the guides and the
+        /// filter.
+        #[arg(long, value_name = "oidn,atrous", num_args = 0..=1, value_delimiter = ',',
+              value_parser = Denoiser::parse)]
+        denoise: Option<Vec<Denoiser>>,
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
@@ -179,10 +183,13 @@ struct RenderArgs {
     /// Paths in flight per worker (wavefront), 1 to 65536.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     batch: u32,
-    /// Denoise (à-trous filter guided by albedo, normals and the per-pixel variance): the
-    /// output gets the denoised image, NAME.noisy.EXT the render as it came.
-    #[arg(long)]
-    denoise: bool,
+    /// Denoise with `oidn` (Intel Open Image Denoise, guided by albedo and normals; a build with
+    /// `--features oidn`, where a bare --denoise means it) or `atrous` (pathwave's à-trous filter,
+    /// guided by albedo, normals and the per-pixel variance; a bare --denoise in other builds):
+    /// the output gets the denoised image, NAME.noisy.EXT the render as it came.
+    #[arg(long, value_name = "oidn|atrous", num_args = 0..=1,
+          default_missing_value = Denoiser::DEFAULT_NAME, value_parser = Denoiser::parse)]
+    denoise: Option<Denoiser>,
     /// Also write AOVs, a comma-separated list of albedo, normal, depth, variance, noisy (a bare
     /// `--aov`: albedo,normal). An EXR output holds them as layers of the same file (`albedo.R`,
     /// `normal.X`, `depth.Z`, `variance.R`, `noisy.R`, ...); beside a PNG, albedo and normal go
@@ -401,7 +408,11 @@ fn main() -> ExitCode {
                 .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
         }
         Command::Bench { spp, refs, only, batch, svg, denoise, threads } => {
-            bench(&spp, &refs, &only, batch, svg, denoise, threads)
+            let denoise = match denoise {
+                Some(d) if d.is_empty() => Denoiser::AVAILABLE.to_vec(),
+                d => d.unwrap_or_default(),
+            };
+            bench(&spp, &refs, &only, batch, svg, &denoise, threads)
         }
     };
     let result = match (trace_file, result) {
@@ -475,7 +486,7 @@ enum Aov {
 impl How {
     /// Whether the denoiser's guides are needed.
     fn guides(&self) -> bool {
-        self.denoise || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
+        self.denoise.is_some() || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
     }
 
     /// Refuses, before any work, AOVs that `output` cannot hold or that need `--denoise`.
@@ -488,7 +499,7 @@ impl How {
                         format!("{}: --aov {a:?} needs an .exr output", output.display()).to_lowercase()
                     );
                 }
-                Aov::Noisy if !self.denoise => return Err("--aov noisy needs --denoise".into()),
+                Aov::Noisy if self.denoise.is_none() => return Err("--aov noisy needs --denoise".into()),
                 _ => {}
             }
         }
@@ -500,7 +511,7 @@ struct How {
     /// The -D parameter overrides (they change the scene, so they are in checkpoint keys).
     defines: Vec<String>,
     verbose: bool,
-    denoise: bool,
+    denoise: Option<Denoiser>,
     aov: Vec<Aov>,
     integrator: Integrator,
     batch: usize,
@@ -658,7 +669,7 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     let every = args.checkpoint_every()?;
     args.how().check_aovs(&first)?;
     let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
-    if gif && (args.denoise || args.aov.is_some() || every.is_some()) {
+    if gif && (args.denoise.is_some() || args.aov.is_some() || every.is_some()) {
         return Err(format!(
             "{output}: --denoise, --aov and --checkpoint-every write files beside each frame; \
              render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
@@ -667,6 +678,9 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     // A frame killed half way resumes from its checkpoint.
     let checkpointing = every.map(|every| Checkpointing { every, resume: true });
     let pool = pool(args.threads)?;
+    if let Some(d) = args.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
     let mut world = SceneWorld::new(&desc);
     let quiet = args.log.quiet;
     let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: seq_args.overwrite, quiet };
@@ -746,6 +760,9 @@ fn render(
     }
     let desc = load(path, &o)?;
     let pool = pool(how.threads)?;
+    if let Some(d) = how.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
     let mut world = SceneWorld::new(&desc);
     let shutter = desc.camera.shutter;
     world.set_time(time + shutter.0, time + shutter.1);
@@ -1103,19 +1120,20 @@ fn post_process(
             None => tracing::info!("guides ({} rays per pixel) in {aov_secs:.2} s", samples.len()),
         }
     }
-    if !how.denoise {
+    let Some(which) = how.denoise else {
         return Ok((img, layers));
-    }
+    };
     match exr && how.aov.contains(&Aov::Noisy) {
         true => layers.push(io::ExrLayer { name: "noisy", channels: rgb, data: flat(&img.pixels) }),
         false => io::write(&sibling("noisy"), &img).map(drop)?,
     }
     let start = Instant::now();
     let variance = film.variance_of_mean();
-    let out = pool.install(|| denoise::denoise(&img.pixels, &variance, &aovs, &denoise::Options::default()));
+    let threads = pool.current_num_threads();
+    let out = pool.install(|| denoiser::denoise(which, &img.pixels, &variance, &aovs, threads))?;
     let guides = if film.guides.is_some() { String::new() } else { format!(" (guides {aov_secs:.2} s)") };
     if !how.quiet {
-        eprintln!("denoised in {:.2} s{guides}", start.elapsed().as_secs_f64());
+        eprintln!("denoised ({}) in {:.2} s{guides}", which.name(), start.elapsed().as_secs_f64());
     }
     Ok((image(out), layers))
 }
@@ -1126,7 +1144,7 @@ fn bench(
     only: &[String],
     batch: usize,
     svg: Option<PathBuf>,
-    denoise: bool,
+    denoise: &[Denoiser],
     threads: Option<usize>,
 ) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new()

@@ -246,3 +246,18 @@ fn aovs_are_layers_of_one_exr() {
     assert!(decoded.status.success() && String::from_utf8_lossy(&decoded.stdout).contains("relMSE"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A build without `--features oidn` refuses `--denoise oidn`, naming the feature and the set-up.
+#[cfg(not(feature = "oidn"))]
+#[test]
+fn oidn_without_the_feature_says_how_to_get_it() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", "scenes/cornell-diffuse.ron", "-o", "never.png", "--denoise", "oidn"])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("--features oidn") && err.contains("scripts/setup-oidn.sh"), "{err}");
+    assert!(!root().join("never.png").exists());
+}
