@@ -2,7 +2,7 @@
 //! series of sample counts with each integrator (and, if asked, the wavefront's image denoised
 //! by each denoiser asked for), and reports seconds, throughput, error (relMSE, RMSE) and the
 //! image mean against the reference's as a markdown table and a log-log plot (SVG) of relMSE
-//! against seconds.
+//! against seconds, with another renderer's run beside it where given ([`anchor_rows`]).
 
 use crate::denoiser::{self, Denoiser};
 use crate::engine::{scene, world::SceneWorld};
@@ -16,7 +16,7 @@ use std::time::Instant;
 pub struct Row {
     /// Scene file stem.
     pub scene: String,
-    /// "wavefront", "oracle", "wavefront + OIDN" or "wavefront + à-trous".
+    /// "wavefront", "oracle", "wavefront + OIDN", "wavefront + à-trous" or [`MITSUBA`].
     pub integrator: &'static str,
     /// Samples per pixel.
     pub spp: u32,
@@ -28,10 +28,54 @@ pub struct Row {
     pub mrays: Option<f64>,
     /// Error against the reference.
     pub rel_mse: f64,
-    /// Root mean squared error.
+    /// Root mean squared error (NaN where not known).
     pub rmse: f64,
-    /// The image mean relative to the reference's, minus 1.
+    /// The image mean relative to the reference's, minus 1 (NaN where not known).
     pub mean: f64,
+}
+
+/// The `integrator` of rows read by [`anchor_rows`].
+pub const MITSUBA: &str = "Mitsuba 3";
+
+/// Mitsuba's rows from a side-by-side run (`side_by_side.py` of the Mitsuba anchor prints one
+/// JSON object per line with `scene`, `spp`, `mitsuba_s` and `mitsuba_relmse`; other lines are
+/// skipped), for the scenes of `pixels` (scene name, pixel count), so that its curve is drawn
+/// beside pathwave's. Its times come from that run: compare them only with pathwave's from
+/// the same sitting.
+pub fn anchor_rows(path: &Path, pixels: &[(String, u64)]) -> Result<Vec<Row>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("--anchor {}: {e}", path.display()))?;
+    let mut rows = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let Ok(serde_json::Value::Object(v)) = serde_json::from_str(line) else { continue };
+        let field = |k: &str| v.get(k).and_then(|x| x.as_f64()).filter(|x| x.is_finite() && *x > 0.0);
+        let scene = v.get("scene").and_then(|x| x.as_str());
+        let (Some(scene), Some(spp), Some(seconds), Some(rel_mse)) =
+            (scene, field("spp"), field("mitsuba_s"), field("mitsuba_relmse"))
+        else {
+            return Err(format!(
+                "--anchor {}:{}: expected scene, spp, mitsuba_s and mitsuba_relmse (positive numbers)",
+                path.display(),
+                n + 1
+            ));
+        };
+        let Some(&(_, px)) = pixels.iter().find(|(s, _)| s == scene) else { continue };
+        let spp = spp as u32;
+        rows.push(Row {
+            scene: scene.to_string(),
+            integrator: MITSUBA,
+            spp,
+            seconds,
+            msamples: px as f64 * spp as f64 / seconds / 1e6,
+            mrays: None,
+            rel_mse,
+            rmse: f64::NAN,
+            mean: f64::NAN,
+        });
+    }
+    if rows.is_empty() {
+        return Err(format!("--anchor {}: no rows for the scenes benchmarked", path.display()));
+    }
+    Ok(rows)
 }
 
 /// The `integrator` of a row denoised by `d`.
@@ -141,7 +185,7 @@ pub fn table_header() -> String {
 /// One markdown table row.
 pub fn table_row(r: &Row) -> String {
     format!(
-        "| {} | {} | {} | {:.3} | {:.3} | {} | {:.6} | {:.5} | {:+.3}% |",
+        "| {} | {} | {} | {:.3} | {:.3} | {} | {:.6} | {} | {} |",
         r.scene,
         r.integrator,
         r.spp,
@@ -149,14 +193,14 @@ pub fn table_row(r: &Row) -> String {
         r.msamples,
         r.mrays.map_or("-".to_string(), |m| format!("{m:.2}")),
         r.rel_mse,
-        r.rmse,
-        100.0 * r.mean
+        if r.rmse.is_nan() { "-".to_string() } else { format!("{:.5}", r.rmse) },
+        if r.mean.is_nan() { "-".to_string() } else { format!("{:+.3}%", 100.0 * r.mean) },
     )
 }
 
 /// A log-log plot of relMSE against seconds, one line per (scene, integrator): solid for the
 /// wavefront, dashed for the oracle, dotted for the wavefront with the à-trous filter, long
-/// dashes with OIDN (plotters' SVG backend).
+/// dashes with OIDN, dash-dots for Mitsuba (plotters' SVG backend).
 pub fn svg(rows: &[Row]) -> Result<String, String> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| format!("the time-against-error plot: {e}");
@@ -207,6 +251,7 @@ pub fn svg(rows: &[Row]) -> Result<String, String> {
                 "oracle" => (6, 4),
                 "wavefront + à-trous" => (2, 3),
                 "wavefront + OIDN" => (14, 4),
+                MITSUBA => (10, 3),
                 _ => (1000, 0),
             };
             let legend = colour;
@@ -261,4 +306,32 @@ pub fn machine() -> String {
         model.unwrap_or("unknown CPU"),
         std::thread::available_parallelism().map_or(0, |n| n.get())
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn anchor_rows_read_a_side_by_side_run() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("anchor.jsonl");
+        let run = r#"{"scene": "cornell", "spp": 64, "pathwave_s": 1.16, "mitsuba_s": 2.0, "pathwave_relmse": 0.0668, "mitsuba_relmse": 0.0666, "equal_error_time_ratio": 0.607}
+wrote /tmp/mitsuba-anchor/sky.exr
+{"scene": "mesh", "spp": 64, "mitsuba_s": 6.4, "mitsuba_relmse": 0.0011}
+| scene | spp | pathwave s |"#;
+        std::fs::write(&path, run).unwrap();
+        let rows = anchor_rows(&path, &[("cornell".into(), 1000)]).unwrap();
+        assert_eq!(rows.len(), 1, "only the scenes benchmarked");
+        let r = &rows[0];
+        assert_eq!((r.scene.as_str(), r.integrator, r.spp), ("cornell", MITSUBA, 64));
+        assert_eq!((r.seconds, r.rel_mse, r.msamples), (2.0, 0.0666, 1000.0 * 64.0 / 2.0 / 1e6));
+        assert!(table_row(r).ends_with("| 0.066600 | - | - |"), "{}", table_row(r));
+        // An object without Mitsuba's fields is an error naming the line.
+        std::fs::write(&path, "{\"scene\": \"cornell\", \"spp\": 64}\n").unwrap();
+        let e = anchor_rows(&path, &[("cornell".into(), 1000)]).unwrap_err();
+        assert!(e.contains("anchor.jsonl:1: expected"), "{e}");
+        std::fs::write(&path, "nothing\n").unwrap();
+        assert!(anchor_rows(&path, &[("cornell".into(), 1000)]).unwrap_err().contains("no rows"));
+    }
 }

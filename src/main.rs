@@ -109,6 +109,10 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(short, long)]
         threads: Option<usize>,
+        /// Add Mitsuba's rows and curve from the JSON lines a side-by-side run printed (e.g.
+        /// `side_by_side.py ... > anchor.jsonl`), for the scenes benchmarked.
+        #[arg(long, value_name = "FILE.jsonl")]
+        anchor: Option<PathBuf>,
     },
     /// BVH build time and traversal rates (Mrays/s) on the knot of ANCHORS.md and on a scene's
     /// geometry: primary, diffuse-bounce and shadow rays on 1 and 2 threads.
@@ -407,12 +411,12 @@ fn main() -> ExitCode {
                 .and_then(|_| instances.map_or(Ok(()), |p| pathwave::raybench::instance_update(&p, 100)))
                 .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
         }
-        Command::Bench { spp, refs, only, batch, svg, denoise, threads } => {
+        Command::Bench { spp, refs, only, batch, svg, denoise, threads, anchor } => {
             let denoise = match denoise {
                 Some(d) if d.is_empty() => Denoiser::AVAILABLE.to_vec(),
                 d => d.unwrap_or_default(),
             };
-            bench(&spp, &refs, &only, batch, svg, &denoise, threads)
+            bench(&spp, &refs, &only, batch, svg, &denoise, threads, anchor.as_deref())
         }
     };
     let result = match (trace_file, result) {
@@ -1146,6 +1150,7 @@ fn bench(
     svg: Option<PathBuf>,
     denoise: &[Denoiser],
     threads: Option<usize>,
+    anchor: Option<&Path>,
 ) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
@@ -1161,12 +1166,25 @@ fn bench(
             names.join(", ")
         ));
     }
+    let scenes: Vec<_> =
+        scenes.into_iter().filter(|(s, _)| only.is_empty() || only.contains(&stem(s))).collect();
+    // The anchor's file is read before the work, so that a bad one fails at once.
+    let anchor = match anchor {
+        Some(path) => {
+            let mut pixels = Vec::new();
+            for (scene, reference) in &scenes {
+                let r = io::read_linear(reference)?;
+                pixels.push((stem(scene), r.width as u64 * r.height as u64));
+            }
+            bench::anchor_rows(path, &pixels)?
+        }
+        None => Vec::new(),
+    };
     let mut rows = Vec::new();
     for (scene, reference) in scenes {
-        if only.is_empty() || only.contains(&stem(&scene)) {
-            rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch, denoise))?);
-        }
+        rows.extend(pool.install(|| bench::run(&scene, &reference, spps, batch, denoise))?);
     }
+    rows.extend(anchor);
     println!(
         "{}, {} threads, {}, batch {batch}\n",
         bench::today(),
