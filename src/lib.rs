@@ -9,6 +9,7 @@ pub mod denoiser;
 pub mod io;
 pub mod metrics;
 pub mod raybench;
+pub mod shard;
 pub mod trace;
 
 pub use pathwave_engine as engine;

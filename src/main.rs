@@ -7,7 +7,7 @@ use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::{animate, bench, metrics, trace};
+use pathwave::{animate, bench, metrics, shard, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -40,9 +40,14 @@ enum Command {
         #[arg(long)]
         resume: bool,
         /// Render only sample indices A..B of each pixel (of --spp) and keep them in OUT.ckpt,
-        /// for `pathwave merge` to add to the other parts.
-        #[arg(long, value_name = "A..B")]
+        /// for `pathwave merge` to add to the other parts; `auto`: this task's share, from a
+        /// Slurm job array's or a Kubernetes Indexed Job's environment.
+        #[arg(long, value_name = "A..B|auto")]
         samples: Option<String>,
+        /// With `--samples auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+        /// PATHWAVE_SHARD_COUNT).
+        #[arg(long, value_name = "N")]
+        shard_count: Option<u32>,
     },
     /// Merge checkpoints holding disjoint sample ranges of one render (from `render
     /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
@@ -76,9 +81,14 @@ enum Command {
         #[arg(long)]
         overwrite: bool,
         /// Render only every N-th frame from the I-th (I/N, 0-based), so that N processes split
-        /// the sequence (frame files only, not a GIF).
-        #[arg(long, value_name = "I/N")]
+        /// the sequence (frame files only, not a GIF); `auto`: this task's, from a Slurm job
+        /// array's or a Kubernetes Indexed Job's environment.
+        #[arg(long, value_name = "I/N|auto")]
         shard: Option<String>,
+        /// With `--shard auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+        /// PATHWAVE_SHARD_COUNT).
+        #[arg(long, value_name = "N")]
+        shard_count: Option<u32>,
         #[command(flatten)]
         args: RenderArgs,
     },
@@ -388,17 +398,17 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Render { scene, output, args, time, resume, samples } => (|| {
+        Command::Render { scene, output, args, time, resume, samples, shard_count } => (|| {
             let every = args.checkpoint_every()?;
-            let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose()?;
+            let samples = samples.as_deref().map(|r| shard::Samples::parse(r, shard_count)).transpose()?;
             // A part is kept in its checkpoint for `merge`.
             let checkpoint = (every.is_some() || resume || samples.is_some())
                 .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
             render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples)
         })(),
         Command::Merge { parts, output } => merge(&parts, &output),
-        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, args } => {
-            let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
+        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, shard_count, args } => {
+            let seq = SequenceArgs { frames, fps, shutter, overwrite, shard, shard_count };
             animate(&scene, &output, seq, &args)
         }
         Command::Compare { a, b, encoded } => compare(&a, &b, encoded),
@@ -636,6 +646,7 @@ struct SequenceArgs {
     shutter: Option<f32>,
     overwrite: bool,
     shard: Option<String>,
+    shard_count: Option<u32>,
 }
 
 fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
@@ -665,7 +676,10 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
     }
-    let shard = seq_args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
+    let shard = match seq_args.shard.as_deref() {
+        Some(s) => shard::parse_shard(s, seq_args.shard_count).map(|t| (t.index, t.count))?,
+        None => (0, 1),
+    };
     let every = args.checkpoint_every()?;
     args.how().check_aovs(&first)?;
     let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
@@ -751,7 +765,7 @@ fn render(
     how: &How,
     time: f32,
     checkpointing: Option<Checkpointing>,
-    samples: Option<(u32, u32)>,
+    samples: Option<shard::Samples>,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
@@ -759,6 +773,7 @@ fn render(
         return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
     }
     let desc = load(path, &o)?;
+    let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     let pool = pool(how.threads)?;
     if let Some(d) = how.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
