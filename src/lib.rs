@@ -6,6 +6,7 @@ pub mod animate;
 pub mod bench;
 pub mod checkpoint;
 pub mod denoiser;
+pub mod farm;
 pub mod io;
 pub mod metrics;
 pub mod raybench;

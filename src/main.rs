@@ -7,7 +7,7 @@ use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::{animate, bench, metrics, shard, trace};
+use pathwave::{animate, bench, farm, metrics, shard, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -92,6 +92,12 @@ enum Command {
         #[command(flatten)]
         args: RenderArgs,
     },
+    /// Render on a cluster: shares of the work as tasks of a Slurm job array, then a job that
+    /// checks and merges them.
+    Farm {
+        #[command(subcommand)]
+        farm: FarmCommand,
+    },
     /// Run time against error: render the scenes that have references at several sample
     /// counts with both integrators; print a markdown table, optionally write an SVG plot.
     Bench {
@@ -152,6 +158,22 @@ enum Command {
         #[arg(long, value_enum)]
         encoded: Option<Encoded>,
     },
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Write an sbatch job array whose tasks render every N-th frame (`animate --shard auto`)
+    /// or, with --split-samples, a share of one image's samples (`render --samples auto`), and
+    /// a merge job that runs after all of them have succeeded; submit both.
+    Slurm {
+        #[command(flatten)]
+        job: farm::SlurmArgs,
+        #[command(flatten)]
+        args: Box<RenderArgs>,
+    },
+    /// Check that every task's share is there and whole, and merge sample shares into the
+    /// image; name what is missing (task, samples or frames) and write nothing if anything is.
+    Merge(farm::MergeArgs),
 }
 
 /// How `compare` reads an sRGB-encoded file beside a linear one.
@@ -383,7 +405,12 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    let cli = Cli::parse();
+    // The matches too: a farm passes the render flags given to it on to its tasks.
+    let matches = <Cli as clap::CommandFactory>::command().get_matches();
+    let cli = match <Cli as clap::FromArgMatches>::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.format(&mut <Cli as clap::CommandFactory>::command()).exit(),
+    };
     let (log, trace) = match &cli.command {
         Command::Render { args, .. } | Command::Animate { args, .. } => {
             (args.log, args.profile.trace.clone())
@@ -411,6 +438,21 @@ fn main() -> ExitCode {
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard, shard_count };
             animate(&scene, &output, seq, &args)
         }
+        Command::Farm { farm: FarmCommand::Slurm { job, args } } => {
+            match matches.subcommand_matches("farm").and_then(|m| m.subcommand_matches("slurm")) {
+                Some(m) => farm_slurm(&job, &args, m),
+                None => Err("farm slurm: its flags are not where clap puts them".into()),
+            }
+        }
+        Command::Farm { farm: FarmCommand::Merge(m) } => match (m.spp, &m.parts, &m.frames) {
+            (Some(spp), Some(parts), _) => {
+                farm::check_samples(parts, m.tasks, spp).and_then(|p| merge(&p, Path::new(&m.output)))
+            }
+            (_, _, Some(f)) => animate::parse_range(f, "--frames")
+                .and_then(|f| farm::check_frames(&m.output, f, m.tasks))
+                .map(|()| eprintln!("{}: every frame is there", m.output)),
+            _ => Err("farm merge takes --spp with --parts, or --frames".into()),
+        },
         Command::Compare { a, b, encoded } => compare(&a, &b, encoded),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
             pathwave::raybench::run((rings, segments), Some(&scene))
@@ -743,6 +785,24 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
         print_stats(st, *secs, *non_finite);
     }
     Ok(())
+}
+
+/// `pathwave farm slurm`: checks the scene and the options, then writes and submits the jobs.
+fn farm_slurm(job: &farm::SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Result<(), String> {
+    if args.profile.trace.is_some() {
+        return Err("--trace: every task would write the same file; trace one share by hand".into());
+    }
+    if job.split_samples && (args.denoise.is_some() || args.aov.is_some()) {
+        return Err("--split-samples: the merge adds samples; it does not denoise or write AOVs".into());
+    }
+    let desc = load(&job.scene, &args.overrides())?;
+    let flags = <RenderArgs as clap::Args>::augment_args(clap::Command::new("render"));
+    let forwarded = farm::forwarded(&flags, matches)?;
+    let plan = farm::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
+    if let farm::Work::Frames { first, .. } = plan.work {
+        args.how().check_aovs(&animate::frame_path(&plan.output, first)?)?;
+    }
+    plan.submit(job.dry_run)
 }
 
 /// Each stage's share of the time, `name 12.3%`, largest first.
