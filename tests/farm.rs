@@ -1,10 +1,11 @@
 //! Render farms. `--samples auto` and `--shard auto` take the task from a Slurm job array's or a
 //! Kubernetes Indexed Job's environment; `pathwave farm merge` names the shares that are missing
-//! or unfinished and writes nothing; and on a real one-node Slurm, started here (munged,
-//! slurmctld and slurmd on the loopback address, in a temporary folder), `pathwave farm slurm`
-//! renders a 4-task sample split and a 3-task sharded sequence to the bytes of one machine's
-//! renders, also when a task is killed mid-way and requeued. That test is skipped, with a message, where Slurm and munge are
-//! not installed or the tests do not run as root (slurmd starts jobs as their user).
+//! or unfinished and writes nothing; the Kubernetes example in docs/ renders what one machine
+//! renders; and on a real one-node Slurm, started here (munged, slurmctld and slurmd on the
+//! loopback address, in a temporary folder), `pathwave farm slurm` renders a 4-task sample
+//! split and a 3-task sharded sequence to the bytes of one machine's renders, also when a task
+//! is killed mid-way and requeued. That test is skipped, with a message, where Slurm and munge
+//! are not installed or the tests do not run as root (slurmd starts jobs as their user).
 
 mod common;
 use common::root;
@@ -230,6 +231,97 @@ fn a_dry_run_prints_the_jobs_with_the_render_flags() {
     let err = split(&["--tasks", "2"]);
     assert!(err.contains("needs {frame}") && err.contains("--split-samples"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The block scalars (`- |`) of a YAML document: the shell scripts its containers run.
+fn scripts(doc: &str) -> Vec<String> {
+    let lines: Vec<&str> = doc.lines().collect();
+    let indent = |l: &str| l.len() - l.trim_start().len();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        if l.trim() != "- |" {
+            continue;
+        }
+        let body: Vec<&str> = lines[i + 1..]
+            .iter()
+            .take_while(|b| b.trim().is_empty() || indent(b) > indent(l))
+            .copied()
+            .collect();
+        let cut = body.iter().filter(|b| !b.trim().is_empty()).map(|b| indent(b)).min().unwrap_or(0);
+        out.push(body.iter().map(|b| b.get(cut..).unwrap_or("")).collect::<Vec<_>>().join("\n"));
+    }
+    out
+}
+
+/// The value of `key: value` in a YAML document, if any.
+fn field<'a>(doc: &'a str, key: &str) -> Option<&'a str> {
+    doc.lines()
+        .find_map(|l| l.trim().strip_prefix(key)?.strip_prefix(':'))
+        .map(|v| v.trim().trim_matches('"'))
+}
+
+#[test]
+fn the_kubernetes_example_renders_what_one_machine_renders() {
+    // docs/kubernetes.yaml's Indexed Jobs, then docs/kubernetes-merge.yaml's Job, each pod's
+    // script run with JOB_COMPLETION_INDEX set as Kubernetes sets it, in a folder standing for
+    // the shared volume (`workingDir`), with pathwave on the PATH as in the image.
+    let data = temp("k8s");
+    std::os::unix::fs::symlink(root().join("scenes"), data.join("scenes")).unwrap();
+    let bin = Path::new(env!("CARGO_BIN_EXE_pathwave")).parent().unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let mut pods = 0;
+    for file in ["docs/kubernetes.yaml", "docs/kubernetes-merge.yaml"] {
+        let text = std::fs::read_to_string(root().join(file)).unwrap();
+        for doc in text.split("\n---\n").filter(|d| field(d, "kind") == Some("Job")) {
+            let indexed = field(doc, "completionMode") == Some("Indexed");
+            let completions: u32 = field(doc, "completions").map_or(1, |c| c.parse().unwrap());
+            if indexed {
+                // The pods' count of shares must be the Job's.
+                let count = doc.lines().skip_while(|l| !l.contains("name: PATHWAVE_SHARD_COUNT")).nth(1);
+                let count = count.and_then(|l| field(l, "value")).unwrap_or_else(|| panic!("{file}: {doc}"));
+                assert_eq!(count, completions.to_string(), "{file}: PATHWAVE_SHARD_COUNT is not completions");
+            }
+            let script = scripts(doc);
+            assert_eq!(script.len(), 1, "{file}: one script a pod:\n{doc}");
+            for index in 0..completions {
+                let mut c = Command::new("sh");
+                c.arg("-c").arg(&script[0]).current_dir(&data).env("PATH", &path);
+                for v in TASK_VARS {
+                    c.env_remove(v);
+                }
+                if indexed {
+                    c.env("JOB_COMPLETION_INDEX", index.to_string())
+                        .env("PATHWAVE_SHARD_COUNT", completions.to_string());
+                }
+                run(&mut c);
+                pods += 1;
+            }
+        }
+    }
+    assert_eq!(pods, 3 + 4 + 1, "the example's pods");
+    // One machine, the same flags.
+    let single = data.join("single");
+    run(pathwave().args(["animate", "scenes/animation-bounce.ron", "--frames", "0..12"]).args([
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--spp",
+        "4",
+        "-q",
+        "-o",
+        single.join("f_{frame:04}.png").to_str().unwrap(),
+    ]));
+    same_frames(&single, &data.join("out/frames"), 12);
+    let still = single.join("cornell.png");
+    run(pathwave()
+        .args(["render", "scenes/cornell.ron", "--width", "64", "--height", "64", "--spp", "16", "-q", "-o"])
+        .arg(&still));
+    assert!(
+        bytes(&still) == bytes(&data.join("out/cornell.png")),
+        "the merged image differs from one render"
+    );
+    std::fs::remove_dir_all(&data).unwrap();
 }
 
 /// A one-node Slurm cluster on this machine: munged, slurmctld and slurmd on the loopback
