@@ -532,15 +532,20 @@ fn job_logs(dir: &Path) -> String {
 impl Drop for Slurm {
     fn drop(&mut self) {
         let _ = self.command("scancel").args(["--partition", "farm"]).status();
-        // Each daemon by its process id, the last started first: SIGTERM, then SIGKILL.
+        // Each daemon by its process id, the last started first: SIGTERM (with procps' kill,
+        // where there is one), then SIGKILL.
         while let Some((name, mut child)) = self.daemons.pop() {
-            let _ = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
+            let term = Command::new("kill").args(["-TERM", &child.id().to_string()]).status();
             let start = Instant::now();
-            while child.try_wait().ok().flatten().is_none() && start.elapsed() < Duration::from_secs(10) {
+            let running = |c: &mut Child| c.try_wait().ok().flatten().is_none();
+            while term.as_ref().is_ok_and(|s| s.success())
+                && running(&mut child)
+                && start.elapsed().as_secs() < 10
+            {
                 std::thread::sleep(Duration::from_millis(50));
             }
-            if child.try_wait().ok().flatten().is_none() {
-                eprintln!("{name} did not stop on SIGTERM: killed");
+            if running(&mut child) {
+                eprintln!("{name}: stopped with SIGKILL");
                 let _ = child.kill();
                 let _ = child.wait();
             }
