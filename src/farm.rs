@@ -388,8 +388,9 @@ impl Job {
         };
         println!("  {result}:  {} (complete once job {merge_id} has succeeded)", self.output);
         println!(
-            "  a failed task cancels the merge job; submitting the same command again renders only \
-             what is missing"
+            "  a failed task cancels the merge job: `sh {}` names what is missing, and submitting \
+             the same command again renders only that",
+            merge_path.display()
         );
         Ok(())
     }
@@ -455,7 +456,7 @@ pub fn check_samples(parts: &Path, tasks: u32, spp: u32) -> Result<Vec<PathBuf>,
     match problems.is_empty() {
         true => Ok(found),
         false => Err(format!(
-            "{} of {tasks} shares are not ready, so nothing is merged:\n  {}",
+            "shares not ready ({} of {tasks}), so nothing is merged:\n  {}",
             problems.len(),
             problems.join("\n  ")
         )),

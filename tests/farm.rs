@@ -151,7 +151,7 @@ fn the_merge_names_missing_and_unfinished_shares_and_writes_nothing() {
     // Task 1 stopped after 2 of its 4 samples (4..8); task 2 never ran.
     run(&mut share(1, "4..6"));
     let err = fails(&mut merge());
-    assert!(err.contains("2 of 4 shares are not ready, so nothing is merged"), "{err}");
+    assert!(err.contains("shares not ready (2 of 4), so nothing is merged"), "{err}");
     assert!(err.contains("task 1 (samples 4..8): unfinished, 2 of its 4 samples per pixel"), "{err}");
     assert!(err.contains("task 2 (samples 8..12):") && err.contains("task-2.exr.ckpt is missing"), "{err}");
     assert!(!err.contains("task 0") && !err.contains("task 3"), "{err}");
@@ -492,6 +492,19 @@ impl Slurm {
 
     /// Waits for the jobs to leave the queue, then checks that each succeeded.
     fn wait(&self, jobs: &[&str], logs: &Path) {
+        self.settle(jobs, logs);
+        for job in jobs {
+            let states = self.state(job);
+            assert!(
+                !states.is_empty() && states.lines().all(|s| s == "COMPLETED"),
+                "job {job}: {states}\n{}",
+                job_logs(logs)
+            );
+        }
+    }
+
+    /// Waits for the jobs to leave the queue (done, failed or cancelled).
+    fn settle(&self, jobs: &[&str], logs: &Path) {
         let list = jobs.join(",");
         let active = || {
             let out = self.command("squeue").args(["-h", "-j", &list, "-o", "%i %T"]).output().unwrap();
@@ -507,14 +520,6 @@ impl Slurm {
                 panic!("jobs still queued after 2 minutes:\n{now}\n{}\n{}", job_logs(logs), self.logs());
             }
             std::thread::sleep(Duration::from_millis(200));
-        }
-        for job in jobs {
-            let states = self.state(job);
-            assert!(
-                !states.is_empty() && states.lines().all(|s| s == "COMPLETED"),
-                "job {job}: {states}\n{}",
-                job_logs(logs)
-            );
         }
     }
 }
@@ -584,10 +589,40 @@ fn slurm_job_arrays_render_the_bits_of_one_machine() {
     same_frames(&work.join("single"), &work.join("farm"), 12);
     eprintln!("split and sequence done at {:.1} s", started.elapsed().as_secs_f64());
 
+    // Task 2 fails (its share's checkpoint is damaged): Slurm cancels the merge job, whose
+    // script, run by hand, names the share. Submitted again, the other tasks only write their
+    // shares out again, and the image is the same.
+    let parts = work.join("failed.png.farm/parts");
+    std::fs::create_dir_all(&parts).unwrap();
+    std::fs::write(parts.join("task-2.exr.ckpt"), b"damaged").unwrap();
+    let failed = path("failed.png");
+    let failing = [&still[..], &["-o", &failed, "--tasks", "4", "--split-samples"]].concat();
+    let (array, merge) = slurm.submit(&failing);
+    let logs = work.join("failed.png.farm/logs");
+    slurm.settle(&[&array, &merge], &logs);
+    let states = slurm.state(&array);
+    assert_eq!(states.lines().filter(|s| *s == "FAILED").count(), 1, "{states}\n{}", job_logs(&logs));
+    assert_eq!(slurm.state(&merge), "CANCELLED", "{}", job_logs(&logs));
+    let err = fails(Command::new("sh").arg(work.join("failed.png.farm/merge.sbatch")));
+    assert!(
+        err.contains("task 2 (samples 8..12): ") && err.contains("not a usable pathwave checkpoint"),
+        "{err}"
+    );
+    assert!(!work.join("failed.png").exists());
+    std::fs::remove_file(parts.join("task-2.exr.ckpt")).unwrap();
+    let (array, merge) = slurm.submit(&failing);
+    slurm.wait(&[&array, &merge], &logs);
+    let log = std::fs::read_to_string(logs.join("task-0.log")).unwrap();
+    assert!(log.contains("complete (4 spp); writing its image"), "{log}");
+    assert!(bytes(&work.join("failed.png")) == bytes(&work.join("single.png")), "the image differs");
+    eprintln!("failed task and resubmission done at {:.1} s", started.elapsed().as_secs_f64());
+
     // Task 1 of a longer split is requeued (killed, then queued again) once it has saved a
     // checkpoint; it resumes from it, and the merge still gives the bits of one render.
     let long = ["scenes/cornell.ron", "--width", "64", "--height", "64", "--spp", "2048", "-q"];
-    let mut reference = pathwave().arg("render").args(long).args(["-o", &path("long.png")]).spawn().unwrap();
+    let mut reference = pathwave();
+    let reference = reference.arg("render").args(long).args(["-o", &path("long.png")]);
+    let reference = reference.stderr(Stdio::piped()).spawn().unwrap();
     let farm = [
         "-o",
         &path("requeued.png"),
@@ -618,7 +653,8 @@ fn slurm_job_arrays_render_the_bits_of_one_machine() {
     );
     let logs = work.join("requeued.png.farm/logs");
     slurm.wait(&[&array, &merge], &logs);
-    assert!(reference.wait().unwrap().success());
+    let reference = reference.wait_with_output().unwrap();
+    assert!(reference.status.success(), "{}", String::from_utf8_lossy(&reference.stderr));
     let log = std::fs::read_to_string(logs.join("task-1.log")).unwrap();
     assert!(log.contains("DUE TO JOB REQUEUE") && log.contains("resuming samples 512..1024 at"), "{log}");
     assert!(
