@@ -190,9 +190,17 @@ impl Job {
                     ));
                 }
                 if let Some(fps) = args.fps {
+                    if !(fps.is_finite() && fps > 0.0) {
+                        return Err(format!("--fps takes a number > 0, not {fps}"));
+                    }
                     render_args.push(format!("--fps={fps}"));
                 }
                 if let Some(shutter) = args.shutter {
+                    if !(0.0..=1.0).contains(&shutter) {
+                        return Err(format!(
+                            "--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"
+                        ));
+                    }
                     render_args.push(format!("--shutter={shutter}"));
                 }
                 Work::Frames { first, end }
@@ -534,9 +542,13 @@ pub fn forwarded(flags: &clap::Command, matches: &clap::ArgMatches) -> Result<Ve
     Ok(out)
 }
 
-/// `path` as text (scripts are text).
+/// `path` as text for a script: UTF-8, without control characters (a line break would end a
+/// comment line of the script).
 fn utf8(path: &Path) -> Result<&str, String> {
-    path.to_str().ok_or_else(|| format!("{}: a farm needs paths in UTF-8", path.display()))
+    match path.to_str() {
+        Some(s) if !s.chars().any(char::is_control) => Ok(s),
+        _ => Err(format!("{}: a farm needs paths in UTF-8 without control characters", path.display())),
+    }
 }
 
 /// `pattern` with its `{frame...}` field written as `frames` (the default job folder's name).

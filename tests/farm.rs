@@ -216,6 +216,7 @@ fn a_dry_run_prints_the_jobs_with_the_render_flags() {
     for (extra, says) in [
         (&["--tasks", "5", "--frames", "0..4"][..], "frames 0..4 keep at most 4 tasks busy"),
         (&["--tasks", "2", "--frames", "0..4", "--time", "1 day"], "not a Slurm time"),
+        (&["--tasks", "2", "--frames", "0..4", "--fps", "0"], "--fps takes a number > 0"),
         (&["--tasks", "2", "--frames", "0..4", "--trace", "t.json"], "every task would write the same file"),
     ] {
         let err = fails(&mut farm(extra));
