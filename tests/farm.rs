@@ -453,7 +453,7 @@ impl Slurm {
             if start.elapsed() > Duration::from_secs(60) {
                 panic!("waited a minute for {what}\n{}", self.logs());
             }
-            std::thread::sleep(Duration::from_millis(100));
+            std::thread::sleep(Duration::from_millis(20));
         }
     }
 
@@ -633,7 +633,7 @@ fn slurm_job_arrays_render_the_bits_of_one_machine() {
         "-t",
         "1",
         "--checkpoint-every",
-        "0.2",
+        "0.1",
     ];
     let (array, merge) = slurm.submit(&[&long[..], &farm].concat());
     let ckpt = work.join("requeued.png.farm/parts/task-1.exr.ckpt");
