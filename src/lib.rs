@@ -6,9 +6,11 @@ pub mod animate;
 pub mod bench;
 pub mod checkpoint;
 pub mod denoiser;
+pub mod farm;
 pub mod io;
 pub mod metrics;
 pub mod raybench;
+pub mod shard;
 pub mod trace;
 
 pub use pathwave_engine as engine;

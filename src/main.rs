@@ -7,7 +7,7 @@ use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
-use pathwave::{animate, bench, metrics, trace};
+use pathwave::{animate, bench, farm, metrics, shard, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -40,9 +40,14 @@ enum Command {
         #[arg(long)]
         resume: bool,
         /// Render only sample indices A..B of each pixel (of --spp) and keep them in OUT.ckpt,
-        /// for `pathwave merge` to add to the other parts.
-        #[arg(long, value_name = "A..B")]
+        /// for `pathwave merge` to add to the other parts; `auto`: this task's share, from a
+        /// Slurm job array's or a Kubernetes Indexed Job's environment.
+        #[arg(long, value_name = "A..B|auto")]
         samples: Option<String>,
+        /// With `--samples auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+        /// PATHWAVE_SHARD_COUNT).
+        #[arg(long, value_name = "N")]
+        shard_count: Option<u32>,
     },
     /// Merge checkpoints holding disjoint sample ranges of one render (from `render
     /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
@@ -76,11 +81,22 @@ enum Command {
         #[arg(long)]
         overwrite: bool,
         /// Render only every N-th frame from the I-th (I/N, 0-based), so that N processes split
-        /// the sequence (frame files only, not a GIF).
-        #[arg(long, value_name = "I/N")]
+        /// the sequence (frame files only, not a GIF); `auto`: this task's, from a Slurm job
+        /// array's or a Kubernetes Indexed Job's environment.
+        #[arg(long, value_name = "I/N|auto")]
         shard: Option<String>,
+        /// With `--shard auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+        /// PATHWAVE_SHARD_COUNT).
+        #[arg(long, value_name = "N")]
+        shard_count: Option<u32>,
         #[command(flatten)]
         args: RenderArgs,
+    },
+    /// Render on a cluster: shares of the work as tasks of a Slurm job array, then a job that
+    /// checks and merges them.
+    Farm {
+        #[command(subcommand)]
+        farm: FarmCommand,
     },
     /// Run time against error: render the scenes that have references at several sample
     /// counts with both integrators; print a markdown table, optionally write an SVG plot.
@@ -146,6 +162,22 @@ enum Command {
         #[arg(long, value_enum)]
         encoded: Option<Encoded>,
     },
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Write an sbatch job array whose tasks render every N-th frame (`animate --shard auto`)
+    /// or, with --split-samples, a share of one image's samples (`render --samples auto`), and
+    /// a merge job that runs after all of them have succeeded; submit both.
+    Slurm {
+        #[command(flatten)]
+        job: farm::SlurmArgs,
+        #[command(flatten)]
+        args: Box<RenderArgs>,
+    },
+    /// Check that every task's share is there and whole, and merge sample shares into the
+    /// image; name what is missing (task, samples or frames) and write nothing if anything is.
+    Merge(farm::MergeArgs),
 }
 
 /// How `compare` reads an sRGB-encoded file beside a linear one.
@@ -377,7 +409,12 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    let cli = Cli::parse();
+    // The matches too: a farm passes the render flags given to it on to its tasks.
+    let matches = <Cli as clap::CommandFactory>::command().get_matches();
+    let cli = match <Cli as clap::FromArgMatches>::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.format(&mut <Cli as clap::CommandFactory>::command()).exit(),
+    };
     let (log, trace) = match &cli.command {
         Command::Render { args, .. } | Command::Animate { args, .. } => {
             (args.log, args.profile.trace.clone())
@@ -392,19 +429,34 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Render { scene, output, args, time, resume, samples } => (|| {
+        Command::Render { scene, output, args, time, resume, samples, shard_count } => (|| {
             let every = args.checkpoint_every()?;
-            let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose()?;
+            let samples = samples.as_deref().map(|r| shard::Samples::parse(r, shard_count)).transpose()?;
             // A part is kept in its checkpoint for `merge`.
             let checkpoint = (every.is_some() || resume || samples.is_some())
                 .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
             render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples)
         })(),
         Command::Merge { parts, output } => merge(&parts, &output),
-        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, args } => {
-            let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
+        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, shard_count, args } => {
+            let seq = SequenceArgs { frames, fps, shutter, overwrite, shard, shard_count };
             animate(&scene, &output, seq, &args)
         }
+        Command::Farm { farm: FarmCommand::Slurm { job, args } } => {
+            match matches.subcommand_matches("farm").and_then(|m| m.subcommand_matches("slurm")) {
+                Some(m) => farm_slurm(&job, &args, m),
+                None => Err("farm slurm: its flags are not where clap puts them".into()),
+            }
+        }
+        Command::Farm { farm: FarmCommand::Merge(m) } => match (m.spp, &m.parts, &m.frames) {
+            (Some(spp), Some(parts), _) => {
+                farm::check_samples(parts, m.tasks, spp).and_then(|p| merge(&p, Path::new(&m.output)))
+            }
+            (_, _, Some(f)) => animate::parse_range(f, "--frames")
+                .and_then(|f| farm::check_frames(&m.output, f, m.tasks))
+                .map(|()| eprintln!("{}: every frame is there", m.output)),
+            _ => Err("farm merge takes --spp with --parts, or --frames".into()),
+        },
         Command::Compare { a, b, encoded } => compare(&a, &b, encoded),
         Command::BenchRays { rings, segments, scene, instances, scaling } => {
             pathwave::raybench::run((rings, segments), Some(&scene))
@@ -640,6 +692,7 @@ struct SequenceArgs {
     shutter: Option<f32>,
     overwrite: bool,
     shard: Option<String>,
+    shard_count: Option<u32>,
 }
 
 fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
@@ -669,7 +722,10 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
     }
-    let shard = seq_args.shard.as_deref().map_or(Ok((0, 1)), animate::parse_shard)?;
+    let shard = match seq_args.shard.as_deref() {
+        Some(s) => shard::parse_shard(s, seq_args.shard_count).map(|t| (t.index, t.count))?,
+        None => (0, 1),
+    };
     let every = args.checkpoint_every()?;
     args.how().check_aovs(&first)?;
     let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
@@ -735,6 +791,24 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     Ok(())
 }
 
+/// `pathwave farm slurm`: checks the scene and the options, then writes and submits the jobs.
+fn farm_slurm(job: &farm::SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Result<(), String> {
+    if args.profile.trace.is_some() {
+        return Err("--trace: every task would write the same file; trace one share by hand".into());
+    }
+    if job.split_samples && (args.denoise.is_some() || args.aov.is_some()) {
+        return Err("--split-samples: the merge adds samples; it does not denoise or write AOVs".into());
+    }
+    let desc = load(&job.scene, &args.overrides())?;
+    let flags = <RenderArgs as clap::Args>::augment_args(clap::Command::new("render"));
+    let forwarded = farm::forwarded(&flags, matches)?;
+    let plan = farm::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
+    if let farm::Work::Frames { first, .. } = plan.work {
+        args.how().check_aovs(&animate::frame_path(&plan.output, first)?)?;
+    }
+    plan.submit(job.dry_run)
+}
+
 /// Each stage's share of the time, `name 12.3%`, largest first.
 fn stage_shares(st: &wavefront::Stats) -> String {
     let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
@@ -755,7 +829,7 @@ fn render(
     how: &How,
     time: f32,
     checkpointing: Option<Checkpointing>,
-    samples: Option<(u32, u32)>,
+    samples: Option<shard::Samples>,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
@@ -763,6 +837,7 @@ fn render(
         return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
     }
     let desc = load(path, &o)?;
+    let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     let pool = pool(how.threads)?;
     if let Some(d) = how.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
