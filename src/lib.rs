@@ -8,8 +8,10 @@ pub mod checkpoint;
 pub mod denoiser;
 pub mod io;
 pub mod metrics;
+pub mod preview;
 pub mod raybench;
 pub mod trace;
+pub mod view;
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

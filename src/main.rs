@@ -7,6 +7,7 @@ use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
+use pathwave::view::{self, ViewArgs, Viewers};
 use pathwave::{animate, bench, metrics, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -43,6 +44,8 @@ enum Command {
         /// for `pathwave merge` to add to the other parts.
         #[arg(long, value_name = "A..B")]
         samples: Option<String>,
+        #[command(flatten)]
+        view: ViewArgs,
     },
     /// Merge checkpoints holding disjoint sample ranges of one render (from `render
     /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
@@ -388,13 +391,13 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Render { scene, output, args, time, resume, samples } => (|| {
+        Command::Render { scene, output, args, time, resume, samples, view } => (|| {
             let every = args.checkpoint_every()?;
             let samples = samples.as_deref().map(|r| animate::parse_range(r, "--samples")).transpose()?;
             // A part is kept in its checkpoint for `merge`.
             let checkpoint = (every.is_some() || resume || samples.is_some())
                 .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
-            render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples)
+            render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples, &view)
         })(),
         Command::Merge { parts, output } => merge(&parts, &output),
         Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, args } => {
@@ -688,6 +691,8 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
     let mut logged = false;
+    // Frames are not shown while they render.
+    let nv = &mut Viewers::default();
     animate::run(&mut world, &seq, |scene, info| {
         if !logged {
             log_scene(scene);
@@ -696,12 +701,14 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
         let r = match &info.path {
             Some(out) => {
                 let key = settings_key(path, scene, &how, info.open)?;
-                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false)?;
+                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
                 let metadata = metadata(key, scene, &r);
                 (r, metadata)
             }
             // A GIF's frames: no checkpoints, no files beside them (refused above).
-            None => (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false)?, Vec::new()),
+            None => {
+                (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false, nv)?, Vec::new())
+            }
         };
         let (r, metadata) = r;
         if args.profile.stats {
@@ -744,6 +751,7 @@ fn stage_shares(st: &wavefront::Stats) -> String {
     list.join(", ")
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render(
     path: &Path,
     output: &Path,
@@ -752,6 +760,7 @@ fn render(
     time: f32,
     checkpointing: Option<Checkpointing>,
     samples: Option<(u32, u32)>,
+    view: &ViewArgs,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
@@ -770,7 +779,9 @@ fn render(
     log_scene(&scene);
     let s = scene.settings;
     let key = settings_key(path, &scene, how, time)?;
-    let r = render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true)?;
+    let mut viewers = Viewers::open(view, &output.display().to_string(), &s);
+    let r =
+        render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
     if how.stats {
         match &r.stats {
             Some(st) => print_stats(st, r.secs, r.non_finite),
@@ -865,7 +876,8 @@ struct Rendered {
 
 /// Renders `scene` into the image meant for `output`, as `render` and each frame of `animate`
 /// do: from its checkpoint when resuming, in passes that save checkpoints (and, with
-/// `partial`, the image so far) when asked, then denoised or with guides when asked.
+/// `partial`, the image so far) when asked, or show the image to `viewers` (passes of 1, 2, 4,
+/// ... spp, until a viewer stops the render), then denoised or with guides when asked.
 #[allow(clippy::too_many_arguments)]
 fn render_image(
     scene: &pathwave::engine::render_scene::RenderScene,
@@ -876,6 +888,7 @@ fn render_image(
     samples: Option<(u32, u32)>,
     pool: &rayon::ThreadPool,
     partial: bool,
+    viewers: &mut Viewers,
 ) -> Result<Rendered, String> {
     let start = Instant::now();
     let s = scene.settings;
@@ -943,9 +956,11 @@ fn render_image(
     let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
     let mut stats: Option<wavefront::Stats> = None;
     let mut last_save = Instant::now();
-    // Without checkpoints, one pass; with them, passes sized to take about half the interval
-    // (measured on the pass before), starting with one sample per pixel.
-    let mut pass = if checkpointing.is_some() { 1 } else { hi - lo };
+    // Without checkpoints or viewers, one pass; with checkpoints, passes sized to take about
+    // half the interval (measured on the pass before), starting with one sample per pixel; with
+    // viewers, no longer than doubling the samples (and at most `view::MAX_PASS`).
+    let mut pass = if checkpointing.is_some() || viewers.progressive() { 1 } else { hi - lo };
+    let mut passes = 0;
     while lo + film.spp < hi {
         let next = lo + film.spp;
         let range = next..(next + pass).min(hi);
@@ -977,11 +992,18 @@ fn render_image(
             (Some(a), Some(b)) => Some(a.merge(b)),
             (a, b) => a.or(b),
         };
+        passes += 1;
+        let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
+        let left = hi - lo - film.spp;
+        let go_on = !viewers.progressive() || {
+            let eta = std::time::Duration::from_secs_f64(per_sample * left as f64);
+            viewers.show(&film, &view::Pass { number: passes, spp: film.spp, target: hi - lo, eta })
+        };
         if let Some(c) = checkpointing {
             let finished = lo + film.spp == hi;
-            if last_save.elapsed().as_secs_f64() >= c.every || finished {
+            if last_save.elapsed().as_secs_f64() >= c.every || finished || !go_on {
                 // The image so far first: once a checkpoint exists, so does an image.
-                if !finished && partial {
+                if !finished && partial && go_on {
                     io::write(
                         output,
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
@@ -991,8 +1013,15 @@ fn render_image(
                     .save(&ckpt_path)?;
                 last_save = Instant::now();
             }
-            let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
             pass = ((c.every / 2.0 / per_sample.max(1e-9)) as u32).clamp(1, s.spp);
+        }
+        if viewers.progressive() {
+            let doubling = view::next_pass(film.spp, left, per_sample, view::MAX_PASS);
+            pass = if checkpointing.is_some() { pass.min(doubling) } else { doubling };
+        }
+        if !go_on {
+            eprintln!("stopped at {} of {} spp: the window was closed", film.spp, hi - lo);
+            break;
         }
     }
     let secs = start.elapsed().as_secs_f64();
