@@ -10,6 +10,7 @@ pub mod io;
 pub mod metrics;
 pub mod preview;
 pub mod raybench;
+pub mod tev;
 pub mod trace;
 pub mod view;
 

@@ -1,5 +1,6 @@
 //! Looking at a render while it runs: progressive passes (1, 2, 4, ... samples per pixel) shown
-//! after each pass in a window (`--preview`, [`crate::preview`]).
+//! after each pass in a window (`--preview`, [`crate::preview`]) or in the tev image viewer
+//! (`--tev HOST:PORT`, [`crate::tev`]).
 //!
 //! The film keeps exact sums, so a render done in passes has the bits of a render done at once:
 //! passes change when the image can be seen, never what it is.
@@ -15,6 +16,10 @@ pub struct ViewArgs {
     /// closing the window stops the render and keeps what it has.
     #[arg(long)]
     pub preview: bool,
+    /// Render in passes and stream the image after each to the tev image viewer listening on
+    /// HOST:PORT (tev's default is 127.0.0.1:14158).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub tev: Option<String>,
 }
 
 /// Where a render stands after a pass.
@@ -54,7 +59,7 @@ pub trait Viewer {
     fn note(&mut self, _text: &str) {}
 }
 
-/// The viewers of a render: none (one pass), or a window (passes).
+/// The viewers of a render: none (one pass), or a window and/or tev (passes).
 #[derive(Default)]
 pub struct Viewers {
     list: Vec<Box<dyn Viewer>>,
@@ -62,8 +67,8 @@ pub struct Viewers {
 }
 
 impl Viewers {
-    /// Opens what `args` asks for, for the image of `s` (the window shows its crop window)
-    /// called `name`. A viewer that cannot
+    /// Opens what `args` asks for, for the image of `s` (the window shows its crop window, tev
+    /// the whole image with the crop window filled in) called `name`. A viewer that cannot
     /// start says why on stderr and the render goes on without it (still in passes).
     pub fn open(args: &ViewArgs, name: &str, s: &RenderSettings) -> Self {
         let mut list: Vec<Box<dyn Viewer>> = Vec::new();
@@ -73,7 +78,15 @@ impl Viewers {
                 Err(e) => eprintln!("--preview: {e}; rendering without a window"),
             }
         }
-        Self { list, progressive: args.preview }
+        if let Some(addr) = &args.tev {
+            list.push(Box::new(crate::tev::Tev::connect(
+                addr,
+                name,
+                (s.width, s.height),
+                (s.window.x0, s.window.y0),
+            )));
+        }
+        Self { list, progressive: args.preview || args.tev.is_some() }
     }
 
     /// Whether the render goes in passes.
