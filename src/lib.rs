@@ -13,6 +13,7 @@ pub mod raybench;
 pub mod tev;
 pub mod trace;
 pub mod view;
+pub mod watch;
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

@@ -47,6 +47,9 @@ enum Command {
         #[command(flatten)]
         view: ViewArgs,
     },
+    /// Render a scene in passes into a window (or tev) and render it again whenever it or a
+    /// file it loads changes; a scene with an error shows the error and keeps the last image.
+    Watch(pathwave::watch::WatchArgs),
     /// Merge checkpoints holding disjoint sample ranges of one render (from `render
     /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
     Merge {
@@ -400,6 +403,7 @@ fn main() -> ExitCode {
             render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples, &view)
         })(),
         Command::Merge { parts, output } => merge(&parts, &output),
+        Command::Watch(args) => pathwave::watch::run(args),
         Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, args } => {
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard };
             animate(&scene, &output, seq, &args)

@@ -113,11 +113,15 @@ impl Preview {
 impl Viewer for Preview {
     fn show(&mut self, film: &Film, pass: &Pass) -> bool {
         self.send(Message::Image(srgb_0rgb(film), format!("{} - {}", self.name, pass.describe())));
-        self.open.load(Ordering::Relaxed)
+        !self.closed()
     }
 
     fn note(&mut self, text: &str) {
         self.send(Message::Title(format!("{} - {text}", self.name)));
+    }
+
+    fn closed(&self) -> bool {
+        !self.open.load(Ordering::Relaxed)
     }
 }
 

@@ -57,6 +57,10 @@ pub trait Viewer {
     /// Says something that is not an image (a scene's error in watch mode); a window shows it
     /// in its title.
     fn note(&mut self, _text: &str) {}
+    /// Whether the viewer was closed (its window).
+    fn closed(&self) -> bool {
+        false
+    }
 }
 
 /// The viewers of a render: none (one pass), or a window and/or tev (passes).
@@ -101,6 +105,11 @@ impl Viewers {
             go_on &= v.show(film, pass);
         }
         go_on
+    }
+
+    /// Whether a viewer was closed.
+    pub fn closed(&self) -> bool {
+        self.list.iter().any(|v| v.closed())
     }
 
     /// Says `text` to every viewer.
