@@ -1024,7 +1024,7 @@ fn render_image(
             pass = if checkpointing.is_some() { pass.min(doubling) } else { doubling };
         }
         if !go_on {
-            eprintln!("stopped at {} of {} spp: the window was closed", film.spp, hi - lo);
+            eprintln!("stopped at {} of {} spp: the preview window was closed", film.spp, hi - lo);
             break;
         }
     }

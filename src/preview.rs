@@ -12,8 +12,11 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 
-/// Redraws per second (the window shows the last pass; this only repaints and reads keys).
-const FPS: usize = 15;
+/// Event polls per second: often enough to see a short tap of Esc (minifb keeps only whether
+/// a key is down when it polls).
+const FPS: usize = 60;
+/// The image is drawn again (over whatever covered it) at least this often.
+const REDRAW: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// What the render sends the window.
 enum Message {
@@ -63,6 +66,7 @@ impl Preview {
                 let _ = ready.send(Ok(()));
                 window.set_target_fps(FPS);
                 let mut pixels = vec![0u32; w * h];
+                let mut drawn: Option<std::time::Instant> = None;
                 loop {
                     // The latest image; the render is over when the sender is gone.
                     loop {
@@ -70,13 +74,23 @@ impl Preview {
                             Ok(Message::Image(p, t)) => {
                                 pixels = p;
                                 window.set_title(&t);
+                                drawn = None;
                             }
                             Ok(Message::Title(t)) => window.set_title(&t),
                             Err(mpsc::TryRecvError::Empty) => break,
                             Err(mpsc::TryRecvError::Disconnected) => return,
                         }
                     }
-                    let shown = window.update_with_buffer(&pixels, w, h).is_ok();
+                    let shown = match drawn.is_some_and(|d| d.elapsed() < REDRAW) {
+                        true => {
+                            window.update();
+                            true
+                        }
+                        false => {
+                            drawn = Some(std::time::Instant::now());
+                            window.update_with_buffer(&pixels, w, h).is_ok()
+                        }
+                    };
                     if !shown || !window.is_open() || window.is_key_down(Key::Escape) {
                         still_open.store(false, Ordering::Relaxed);
                         return;

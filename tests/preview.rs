@@ -179,3 +179,56 @@ fn the_window_shows_the_passes_under_xvfb() {
     assert_eq!(std::fs::read(&shown).unwrap(), std::fs::read(&plain).unwrap());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn esc_stops_the_render_and_keeps_what_it_has() {
+    let xvfb = match Xvfb::start() {
+        Ok(x) => x,
+        Err(e) => {
+            println!("skipped: no X server to show the window on ({e}); install Xvfb (xvfb)");
+            return;
+        }
+    };
+    if Command::new("xdotool").arg("version").output().is_err() {
+        println!("skipped: no xdotool to press Esc with; install it (xdotool)");
+        return;
+    }
+    let dir = temp("esc");
+    let shown = dir.join("shown.png");
+    let spp = 4096;
+    let mut child = pathwave(&shown, 64, spp, &["--preview", "--checkpoint-every", "1000"])
+        .env("DISPLAY", &xvfb.1)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let xdotool =
+        |args: &[&str]| Command::new("xdotool").args(args).env("DISPLAY", &xvfb.1).output().unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let log = std::thread::spawn(move || std::io::read_to_string(stderr).unwrap());
+    // Esc over the window (the keyboard goes where the pointer is) until the render ends.
+    let start = Instant::now();
+    let mut pressed = 0;
+    while child.try_wait().unwrap().is_none() {
+        assert!(start.elapsed() < Duration::from_secs(120), "the render did not end");
+        let found = xdotool(&["search", "--name", "shown.png"]);
+        if let Some(id) = String::from_utf8_lossy(&found.stdout).split_whitespace().next() {
+            xdotool(&["mousemove", "--window", id, "10", "10"]);
+            xdotool(&["key", "Escape"]);
+            pressed += 1;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let log = log.join().unwrap();
+    assert!(child.wait().unwrap().success(), "{log}");
+    println!("Esc pressed {pressed} times");
+    let stopped = log.lines().find_map(|l| l.strip_prefix("stopped at ")).unwrap_or_else(|| panic!("{log}"));
+    let k: u32 = stopped.split_whitespace().next().unwrap().parse().unwrap();
+    assert!(k < spp, "{log}");
+    // What it has: the image of the first k samples (a k-spp render's), and their checkpoint.
+    let ckpt = pathwave::checkpoint::Checkpoint::load(&dir.join("shown.png.ckpt")).unwrap();
+    assert_eq!(ckpt.film.spp, k);
+    let plain = dir.join("plain.png");
+    assert!(pathwave(&plain, 64, k, &["-q"]).status().unwrap().success());
+    assert_eq!(std::fs::read(&shown).unwrap(), std::fs::read(&plain).unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
