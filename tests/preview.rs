@@ -135,7 +135,7 @@ fn the_window_shows_the_passes_under_xvfb() {
     };
     let dir = temp("xvfb");
     let shown = dir.join("shown.png");
-    let (size, spp) = (64, 256);
+    let (size, spp) = (64, 512);
     let mut child = pathwave(&shown, size, spp, &["--preview", "-q"])
         .env("DISPLAY", &xvfb.1)
         .stderr(Stdio::piped())
