@@ -89,8 +89,9 @@ fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-/// sRGB 8-bit pixels (clamped to [0, 1]) and how many were clamped.
-fn srgb8(img: &LinearImage) -> (Vec<u8>, usize) {
+/// sRGB 8-bit pixels (clamped to [0, 1]) and how many were clamped: the PNG output's tone
+/// mapping, which the preview window shares.
+pub fn srgb8(img: &LinearImage) -> (Vec<u8>, usize) {
     let mut clamped = 0;
     let data = img
         .pixels

@@ -9,9 +9,13 @@ pub mod denoiser;
 pub mod farm;
 pub mod io;
 pub mod metrics;
+pub mod preview;
 pub mod raybench;
 pub mod shard;
+pub mod tev;
 pub mod trace;
+pub mod view;
+pub mod watch;
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

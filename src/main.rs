@@ -7,6 +7,7 @@ use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
 use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
+use pathwave::view::{self, ViewArgs, Viewers};
 use pathwave::{animate, bench, farm, metrics, shard, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -48,7 +49,12 @@ enum Command {
         /// PATHWAVE_SHARD_COUNT).
         #[arg(long, value_name = "N")]
         shard_count: Option<u32>,
+        #[command(flatten)]
+        view: ViewArgs,
     },
+    /// Render a scene in passes into a window (or tev) and render it again whenever it or a
+    /// file it loads changes; a scene with an error shows the error and keeps the last image.
+    Watch(pathwave::watch::WatchArgs),
     /// Merge checkpoints holding disjoint sample ranges of one render (from `render
     /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
     Merge {
@@ -429,15 +435,16 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Render { scene, output, args, time, resume, samples, shard_count } => (|| {
+        Command::Render { scene, output, args, time, resume, samples, shard_count, view } => (|| {
             let every = args.checkpoint_every()?;
             let samples = samples.as_deref().map(|r| shard::Samples::parse(r, shard_count)).transpose()?;
             // A part is kept in its checkpoint for `merge`.
             let checkpoint = (every.is_some() || resume || samples.is_some())
                 .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
-            render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples)
+            render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples, &view)
         })(),
         Command::Merge { parts, output } => merge(&parts, &output),
+        Command::Watch(args) => pathwave::watch::run(args),
         Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, shard_count, args } => {
             let seq = SequenceArgs { frames, fps, shutter, overwrite, shard, shard_count };
             animate(&scene, &output, seq, &args)
@@ -748,6 +755,8 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
     let mut logged = false;
+    // Frames are not shown while they render.
+    let nv = &mut Viewers::default();
     animate::run(&mut world, &seq, |scene, info| {
         if !logged {
             log_scene(scene);
@@ -756,12 +765,14 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
         let r = match &info.path {
             Some(out) => {
                 let key = settings_key(path, scene, &how, info.open)?;
-                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false)?;
+                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
                 let metadata = metadata(key, scene, &r);
                 (r, metadata)
             }
             // A GIF's frames: no checkpoints, no files beside them (refused above).
-            None => (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false)?, Vec::new()),
+            None => {
+                (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false, nv)?, Vec::new())
+            }
         };
         let (r, metadata) = r;
         if args.profile.stats {
@@ -822,6 +833,7 @@ fn stage_shares(st: &wavefront::Stats) -> String {
     list.join(", ")
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render(
     path: &Path,
     output: &Path,
@@ -830,6 +842,7 @@ fn render(
     time: f32,
     checkpointing: Option<Checkpointing>,
     samples: Option<shard::Samples>,
+    view: &ViewArgs,
 ) -> Result<(), String> {
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
@@ -849,7 +862,9 @@ fn render(
     log_scene(&scene);
     let s = scene.settings;
     let key = settings_key(path, &scene, how, time)?;
-    let r = render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true)?;
+    let mut viewers = Viewers::open(view, &output.display().to_string(), &s);
+    let r =
+        render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
     if how.stats {
         match &r.stats {
             Some(st) => print_stats(st, r.secs, r.non_finite),
@@ -944,7 +959,8 @@ struct Rendered {
 
 /// Renders `scene` into the image meant for `output`, as `render` and each frame of `animate`
 /// do: from its checkpoint when resuming, in passes that save checkpoints (and, with
-/// `partial`, the image so far) when asked, then denoised or with guides when asked.
+/// `partial`, the image so far) when asked, or show the image to `viewers` (passes of 1, 2, 4,
+/// ... spp, until a viewer stops the render), then denoised or with guides when asked.
 #[allow(clippy::too_many_arguments)]
 fn render_image(
     scene: &pathwave::engine::render_scene::RenderScene,
@@ -955,6 +971,7 @@ fn render_image(
     samples: Option<(u32, u32)>,
     pool: &rayon::ThreadPool,
     partial: bool,
+    viewers: &mut Viewers,
 ) -> Result<Rendered, String> {
     let start = Instant::now();
     let s = scene.settings;
@@ -1022,9 +1039,11 @@ fn render_image(
     let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
     let mut stats: Option<wavefront::Stats> = None;
     let mut last_save = Instant::now();
-    // Without checkpoints, one pass; with them, passes sized to take about half the interval
-    // (measured on the pass before), starting with one sample per pixel.
-    let mut pass = if checkpointing.is_some() { 1 } else { hi - lo };
+    // Without checkpoints or viewers, one pass; with checkpoints, passes sized to take about
+    // half the interval (measured on the pass before), starting with one sample per pixel; with
+    // viewers, no longer than doubling the samples (and at most `view::MAX_PASS`).
+    let mut pass = if checkpointing.is_some() || viewers.progressive() { 1 } else { hi - lo };
+    let mut passes = 0;
     while lo + film.spp < hi {
         let next = lo + film.spp;
         let range = next..(next + pass).min(hi);
@@ -1056,11 +1075,18 @@ fn render_image(
             (Some(a), Some(b)) => Some(a.merge(b)),
             (a, b) => a.or(b),
         };
+        passes += 1;
+        let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
+        let left = hi - lo - film.spp;
+        let go_on = !viewers.progressive() || {
+            let eta = std::time::Duration::from_secs_f64(per_sample * left as f64);
+            viewers.show(&film, &view::Pass { number: passes, spp: film.spp, target: hi - lo, eta })
+        };
         if let Some(c) = checkpointing {
             let finished = lo + film.spp == hi;
-            if last_save.elapsed().as_secs_f64() >= c.every || finished {
+            if last_save.elapsed().as_secs_f64() >= c.every || finished || !go_on {
                 // The image so far first: once a checkpoint exists, so does an image.
-                if !finished && partial {
+                if !finished && partial && go_on {
                     io::write(
                         output,
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
@@ -1070,8 +1096,15 @@ fn render_image(
                     .save(&ckpt_path)?;
                 last_save = Instant::now();
             }
-            let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
             pass = ((c.every / 2.0 / per_sample.max(1e-9)) as u32).clamp(1, s.spp);
+        }
+        if viewers.progressive() {
+            let doubling = view::next_pass(film.spp, left, per_sample, view::MAX_PASS);
+            pass = if checkpointing.is_some() { pass.min(doubling) } else { doubling };
+        }
+        if !go_on {
+            eprintln!("stopped at {} of {} spp: the preview window was closed", film.spp, hi - lo);
+            break;
         }
     }
     let secs = start.elapsed().as_secs_f64();

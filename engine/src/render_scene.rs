@@ -114,7 +114,7 @@ impl std::str::FromStr for SamplerKind {
 }
 
 /// Radiance arriving from outside the scene.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Background {
     /// The same radiance in every direction (black is `Constant(0)`).
     Constant(Vec3),

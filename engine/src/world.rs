@@ -47,12 +47,12 @@ pub struct Motion {
 /// the primitive BVH. Scenes mark every mesh whose material does not emit; emitting meshes
 /// stay primitives, so that light sampling finds their triangles. An instanced entity whose
 /// shape is not a mesh is skipped (with an error).
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
 pub struct Instanced;
 
 /// Keyframed placement: the system [`animate_objects`] sets the entity's [`Transform`] and
 /// [`Motion`] from it for the current [`FrameTime`].
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Clone, Debug, PartialEq)]
 pub struct Animated {
     /// The static transform the keyframed one is applied after.
     pub base: Affine3A,
@@ -73,7 +73,7 @@ pub struct FrameTime {
 }
 
 /// The camera as the scene file places it, and its keyframes.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Clone, Debug, PartialEq)]
 pub struct CameraKeys {
     /// The camera without keyframes.
     pub base: CameraDesc,
@@ -82,7 +82,7 @@ pub struct CameraKeys {
 }
 
 /// Emitted radiance keyframes: (material id, keys).
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct EmitKeys(pub Vec<(u32, crate::animation::Track<Vec3>)>);
 
 /// Places keyframed objects for the frame's shutter: rotation and scale as at mid-shutter,
@@ -179,12 +179,16 @@ pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials
     }
 }
 
+/// The entity's place in the scene file's `objects` (what [`SceneWorld::reload`] pairs).
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct ObjectIndex(pub u32);
+
 /// Index into the [`Materials`] resource.
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MaterialId(pub u32);
 
 /// All materials.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Materials(pub Vec<Material>);
 
 /// The camera as described (turned into a [`Camera`] for the image size at extraction), and,
@@ -194,15 +198,15 @@ pub struct Materials(pub Vec<Material>);
 pub struct CameraParams(pub CameraDesc, pub Option<CameraDesc>);
 
 /// Image and sampling settings.
-#[derive(Resource, Clone, Copy, Debug)]
+#[derive(Resource, Clone, Copy, Debug, PartialEq)]
 pub struct Settings(pub RenderSettings);
 
 /// Light from outside.
-#[derive(Resource, Clone, Debug)]
+#[derive(Resource, Clone, Debug, PartialEq)]
 pub struct BackgroundLight(pub Background);
 
 /// The point, spot and directional lights.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct PunctualLights(pub Vec<PunctualLight>);
 
 /// The light table, rebuilt by [`rebuild_lights`].
@@ -710,7 +714,7 @@ fn push_quad(m: &Affine3A, q: Vec3A, u: Vec3A, v: Vec3A, out: &mut Vec<Primitive
 }
 
 /// The scene's textures, and which material colours use them.
-#[derive(Resource, Clone, Debug, Default)]
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct SceneTextures {
     /// All textures.
     pub textures: Arc<Textures>,
@@ -822,8 +826,8 @@ impl SceneWorld {
             .collect();
         world.insert_resource(Materials(mats));
         world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
-        for ((obj, instanced), shape) in desc.objects.iter().zip(instanced).zip(shapes) {
-            let placed = (Transform(compose(&obj.transform)), Shape(shape));
+        for (i, ((obj, instanced), shape)) in desc.objects.iter().zip(instanced).zip(shapes).enumerate() {
+            let placed = (Transform(compose(&obj.transform)), Shape(shape), ObjectIndex(i as u32));
             match &obj.body {
                 Body::Surface(name) => {
                     let id = names

@@ -8,6 +8,8 @@ use pathwave::integrator::{film::Film, oracle};
 use pathwave::io::{LinearImage, read_linear};
 use std::path::{Path, PathBuf};
 
+pub mod tev;
+
 /// The repository root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

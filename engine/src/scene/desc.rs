@@ -73,7 +73,7 @@ impl Default for AnimationDesc {
 }
 
 /// Thin-lens camera.
-#[derive(Deserialize, Debug, Clone, Copy)]
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
 #[serde(try_from = "RawCamera")]
 pub struct CameraDesc {
     /// Eye position.

@@ -1,0 +1,146 @@
+//! `pathwave watch`: an edited material colour is shown after a reload that rebuilds only the
+//! light table; a syntax error is reported with file:line:col and the last image stays; the
+//! fix brings back the first image, bit for bit.
+
+mod common;
+use common::root;
+use common::tev::{Packet, Received, fake_tev};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// A running `pathwave watch` and its stderr lines; killed when dropped.
+struct Watch {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    log: Vec<String>,
+}
+
+impl Watch {
+    fn start(scene: &Path, out: &Path, tev: &str) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .args(["watch", "--width", "32", "--height", "32", "--spp", "4", "--tev", tev, "-o"])
+            .arg(out)
+            .arg(scene)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (tx, lines) = mpsc::channel();
+        let stderr = BufReader::new(child.stderr.take().unwrap());
+        std::thread::spawn(move || {
+            for line in stderr.lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        Watch { child, lines, log: Vec::new() }
+    }
+
+    /// The next line that contains every one of `words` (within a minute).
+    fn wait_for(&mut self, words: &[&str]) -> String {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log.push(line.clone());
+                    if words.iter().all(|w| line.contains(w)) {
+                        return line;
+                    }
+                }
+                Err(_) => panic!("no line with {words:?}; stderr:\n{}", self.log.join("\n")),
+            }
+        }
+    }
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Replaces the file as an editor saving it does: a new file renamed over the old one.
+fn save(path: &Path, text: &str) {
+    let tmp = path.with_extension("ron.swp");
+    std::fs::write(&tmp, text).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+/// The R, G, B planes of the last image update tev got, and how many packets came.
+fn shown(received: &Received) -> (Vec<Vec<f32>>, usize) {
+    let packets = received.lock().unwrap();
+    let last = packets.iter().rev().find_map(|p| match p {
+        Packet::Update { planes, .. } => Some(planes[..3].to_vec()),
+        Packet::Create { .. } => None,
+    });
+    (last.expect("an image update"), packets.len())
+}
+
+fn bits(planes: &[Vec<f32>]) -> Vec<u32> {
+    planes.iter().flatten().map(|f| f.to_bits()).collect()
+}
+
+#[test]
+fn watch_shows_edits_keeps_the_last_image_on_an_error_and_rebuilds_only_what_changed() {
+    let dir: PathBuf = std::env::temp_dir().join(format!("pathwave-watch-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.ron");
+    let original = std::fs::read_to_string(root().join("scenes/cornell.ron")).unwrap();
+    std::fs::write(&scene, &original).unwrap();
+    let out = dir.join("out.exr");
+    let (addr, received, _server) = fake_tev(None);
+    let mut watch = Watch::start(&scene, &out, &addr);
+
+    watch.wait_for(&["loaded in"]);
+    watch.wait_for(&["done, 4 spp"]);
+    let (first, _) = shown(&received);
+    // What tev shows is the film, which -o wrote.
+    let written = pathwave::io::read_linear(&out).unwrap();
+    let film: Vec<Vec<f32>> = (0..3).map(|k| written.pixels.iter().map(|p| p[k]).collect()).collect();
+    assert_eq!(bits(&first), bits(&film));
+
+    // The red wall turns blue: the materials change, the light table follows, nothing else.
+    let red = r#""red": Lambertian(albedo: (0.65, 0.05, 0.05)),"#;
+    assert!(original.contains(red));
+    save(&scene, &original.replace(red, r#""red": Lambertian(albedo: (0.05, 0.05, 0.65)),"#));
+    let line = watch.wait_for(&["reloaded", "materials changed"]);
+    assert!(
+        line.contains("0 objects changed, 0 added, 0 removed, materials changed; light table rebuilt; BVH, TLAS, BLAS, media kept"),
+        "{line}"
+    );
+    watch.wait_for(&["done, 4 spp"]);
+    let (blue, _) = shown(&received);
+    let mean = |p: &Vec<f32>| p.iter().sum::<f32>() / p.len() as f32;
+    assert!(mean(&blue[2]) > mean(&first[2]) && mean(&blue[0]) < mean(&first[0]), "the wall is not bluer");
+
+    // A typo: its place in the file is reported, the last image stays on show.
+    let typo = original.replace("vfov: 40,", "vfov: 40 oops,");
+    let at = typo.lines().position(|l| l.contains("oops")).unwrap() + 1;
+    save(&scene, &typo);
+    let error = watch.wait_for(&["error:"]);
+    assert!(error.contains(&format!("scene.ron:{at}:")), "{error}");
+    let (_, count) = shown(&received);
+    std::thread::sleep(Duration::from_millis(500));
+    let (still, later) = shown(&received);
+    assert_eq!((bits(&still), later), (bits(&blue), count), "the image changed after the error");
+    assert!(watch.child.try_wait().unwrap().is_none(), "watch ended on the error");
+
+    // Fixed: back to the first scene, and to the first image's bits.
+    save(&scene, &original);
+    let line = watch.wait_for(&["reloaded", "materials changed"]);
+    assert!(line.contains("light table rebuilt; BVH, TLAS, BLAS, media kept"), "{line}");
+    watch.wait_for(&["done, 4 spp"]);
+    assert_eq!(bits(&shown(&received).0), bits(&first), "the reloaded world renders another image");
+    // Reading the files to reload them is no change: nothing more happens.
+    std::thread::sleep(Duration::from_millis(400));
+    let more: Vec<String> = watch.lines.try_iter().collect();
+    assert!(more.is_empty(), "reloads with no edit: {more:?}");
+    drop(watch);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
