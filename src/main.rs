@@ -586,14 +586,7 @@ struct How {
 /// Loads a scene and applies the command line's overrides.
 fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
     let _span = tracing::info_span!("load_scene", file = %path.display()).entered();
-    let defines = o
-        .define
-        .iter()
-        .map(|d| match d.split_once('=') {
-            Some((n, v)) if !n.trim().is_empty() => Ok((n.trim().to_owned(), v.to_owned())),
-            _ => Err(format!("-D takes NAME=VALUE (a parameter the scene declares), not {d:?}")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let defines = scene::parse_defines(&o.define)?;
     let mut desc = scene::load_with(path, &defines).map_err(|e| e.to_string())?;
     tracing::info!(
         file = %path.display(),

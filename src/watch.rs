@@ -204,14 +204,7 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
     if let Some(out) = &args.output {
         io::check_output(out, &[&args.scene], false)?;
     }
-    let defines = args
-        .define
-        .iter()
-        .map(|d| match d.split_once('=') {
-            Some((n, v)) if !n.trim().is_empty() => Ok((n.trim().to_owned(), v.to_owned())),
-            _ => Err(format!("-D takes NAME=VALUE (a parameter the scene declares), not {d:?}")),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let defines = scene::parse_defines(&args.define)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()

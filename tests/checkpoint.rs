@@ -2,7 +2,6 @@
 //! render; a checkpoint of other settings is refused.
 
 mod common;
-use common::root;
 use pathwave::checkpoint::Checkpoint;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -16,13 +15,8 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn pathwave(out: &Path, spp: u32, extra: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pathwave"));
-    c.args(["render", "scenes/cornell.ron", "--width", "96", "--height", "96", "-q", "-o"])
-        .arg(out)
-        .arg("--spp")
-        .arg(spp.to_string())
-        .args(extra)
-        .current_dir(root());
+    let mut c = common::render_cornell(out, (96, 96), spp, extra);
+    c.arg("-q");
     c
 }
 

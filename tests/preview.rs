@@ -2,7 +2,6 @@
 //! goes on; under Xvfb the window shows the passes with the PNG output's tone mapping.
 
 mod common;
-use common::root;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -16,15 +15,7 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn pathwave(out: &Path, size: u32, spp: u32, extra: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pathwave"));
-    let size = size.to_string();
-    c.args(["render", "scenes/cornell.ron", "--width", &size, "--height", &size, "-o"])
-        .arg(out)
-        .arg("--spp")
-        .arg(spp.to_string())
-        .args(extra)
-        .current_dir(root());
-    c
+    common::render_cornell(out, (size, size), spp, extra)
 }
 
 #[test]

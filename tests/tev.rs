@@ -3,7 +3,6 @@
 //! reported once while the render goes on.
 
 mod common;
-use common::root;
 use common::tev::{Packet, fake_tev};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -16,14 +15,7 @@ fn temp(name: &str) -> PathBuf {
 }
 
 fn pathwave(out: &Path, spp: u32, extra: &[&str]) -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_pathwave"));
-    c.args(["render", "scenes/cornell.ron", "--width", "64", "--height", "48", "-o"])
-        .arg(out)
-        .arg("--spp")
-        .arg(spp.to_string())
-        .args(extra)
-        .current_dir(root());
-    c
+    common::render_cornell(out, (64, 48), spp, extra)
 }
 
 #[test]

@@ -15,6 +15,32 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// `pathwave render scenes/cornell.ron` at `width` x `height` and `spp` into `out`, with `extra`
+/// flags, from the repository root.
+pub fn render_cornell(
+    out: &Path,
+    (width, height): (u32, u32),
+    spp: u32,
+    extra: &[&str],
+) -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"));
+    c.args([
+        "render",
+        "scenes/cornell.ron",
+        "--width",
+        &width.to_string(),
+        "--height",
+        &height.to_string(),
+        "-o",
+    ])
+    .arg(out)
+    .arg("--spp")
+    .arg(spp.to_string())
+    .args(extra)
+    .current_dir(root());
+    c
+}
+
 /// A scene from `scenes/`.
 pub fn scene(name: &str) -> SceneDesc {
     load(&root().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"))

@@ -12,6 +12,17 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     load_with(path, &[])
 }
 
+/// `-D NAME=VALUE` arguments as the `(name, value)` overrides [`load_with`] takes.
+pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, String> {
+    defines
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((n, v)) if !n.trim().is_empty() => Ok((n.trim().to_owned(), v.to_owned())),
+            _ => Err(format!("-D takes NAME=VALUE (a parameter the scene declares), not {d:?}")),
+        })
+        .collect()
+}
+
 /// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
 pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };

@@ -10,5 +10,5 @@ mod values;
 
 pub use desc::*;
 pub use error::SceneError;
-pub use load::{load, load_with, parse, parse_with};
+pub use load::{load, load_with, parse, parse_defines, parse_with};
 pub use values::*;
