@@ -37,7 +37,8 @@ pub fn atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
     use std::io::Write;
     let fail = |e: std::io::Error| format!("{}: cannot write: {e}", path.display());
     let mut tmp = temp_beside(path).map_err(fail)?;
-    tmp.write_all(bytes).map_err(fail)?;
+    // Through the `File`: `NamedTempFile`'s own methods add the temporary file's name to errors.
+    tmp.as_file_mut().write_all(bytes).map_err(fail)?;
     tmp.as_file().sync_all().map_err(fail)?;
     tmp.persist(path).map_err(|e| fail(e.error))?;
     Ok(())
@@ -71,6 +72,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// A temporary file in `path`'s directory, named after it, created with the permissions a
 /// new file gets (0o666 less the umask, not `tempfile`'s private 0o600), since it becomes
 /// `path`.
+/// Its errors do not name the temporary file ([`without_temp_name`]).
 pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -82,7 +84,20 @@ pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     b.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    b.tempfile_in(dir)
+    b.tempfile_in(dir).map_err(without_temp_name)
+}
+
+/// `e` without the temporary file's name, which `tempfile` wraps around the system's errors
+/// (the user knows the output's path, not the temporary name): its kind ("permission denied",
+/// "no storage space").
+pub fn without_temp_name(e: std::io::Error) -> std::io::Error {
+    match e.get_ref() {
+        Some(_) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::io::Error::new(e.kind(), "no such folder")
+        }
+        Some(_) => std::io::Error::from(e.kind()),
+        None => e,
+    }
 }
 
 fn extension(path: &Path) -> String {
