@@ -15,9 +15,10 @@ pub struct LinearImage {
     pub pixels: Vec<Vec3>,
 }
 
-/// Reads any image `image` can decode (EXR stays linear; 8-bit files are returned as stored).
+/// Reads any image `image` can decode (EXR stays linear; 8-bit files are returned as stored),
+/// within the bounds of textures ([`crate::engine::scene::files::decode_image`]).
 pub fn read_linear(path: &Path) -> Result<LinearImage, String> {
-    let img = image::open(path).map_err(|e| format!("{}: {e}", path.display()))?.into_rgb32f();
+    let img = crate::engine::scene::files::decode_image(path)?.into_rgb32f();
     let pixels = img.pixels().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
     Ok(LinearImage { width: img.width(), height: img.height(), pixels })
 }

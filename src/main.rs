@@ -811,8 +811,9 @@ fn settings_key(
     time: f32,
 ) -> Result<u64, String> {
     let s = scene.settings;
+    use pathwave::engine::scene::files;
     Ok(checkpoint::key(
-        &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
+        &files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?,
         &format!(
             "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?} defines {:?}",
             s.width,
