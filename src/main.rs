@@ -899,6 +899,16 @@ fn render_image(
                     ckpt_path.display()
                 ));
             }
+            if (ckpt.film.width, ckpt.film.height) != (s.window.w, s.window.h) {
+                return Err(format!(
+                    "{}: the checkpoint holds a {}x{} image, this render makes {}x{}",
+                    ckpt_path.display(),
+                    ckpt.film.width,
+                    ckpt.film.height,
+                    s.window.w,
+                    s.window.h
+                ));
+            }
             if ckpt.first_sample != lo {
                 return Err(format!(
                     "{}: the checkpoint holds samples from {}, this run renders {lo}..{hi}",
