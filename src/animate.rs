@@ -52,7 +52,7 @@ pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
     let b = if inclusive { b.checked_add(1) } else { Some(b) };
     match b {
         Some(b) if b > MAX_INDEX => {
-            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24: frame times are f32 seconds)"))
+            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24, exact as f32)"))
         }
         Some(b) if b > a => Ok((a, b)),
         Some(_) => Err(format!("{flag} {s} is empty")),

@@ -229,7 +229,7 @@ pub fn write_exr_layers(
     metadata: &[(&str, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
-    let n = (width * height) as usize;
+    let n = width as usize * height as usize;
     let mut list = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
     for layer in layers {
         let k = layer.channels.len();
