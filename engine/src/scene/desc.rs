@@ -556,8 +556,13 @@ pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec
 
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
 fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    parse_obj(&super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?, path)
+}
+
+/// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
+/// fans); `path` names the file in errors.
+pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
     // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
     // (a device, a folder elsewhere) is never opened.
     let no_materials = |_: &std::path::Path| Ok((Vec::new(), Default::default()));
