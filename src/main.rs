@@ -106,8 +106,8 @@ enum Command {
         #[arg(long, value_name = "oidn,atrous", num_args = 0..=1, value_delimiter = ',',
               value_parser = Denoiser::parse)]
         denoise: Option<Vec<Denoiser>>,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
+        /// Worker threads, 1 to 1024 (default: all cores).
+        #[arg(short, long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
         threads: Option<usize>,
     },
     /// BVH build time and traversal rates (Mrays/s) on the knot of ANCHORS.md and on a scene's
@@ -213,8 +213,9 @@ struct RenderArgs {
     /// `$NAME`) to VALUE, RON text; repeatable.
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     define: Vec<String>,
-    /// Worker threads (default: all cores).
-    #[arg(short, long, visible_alias = "nthreads")]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(short, long, visible_alias = "nthreads",
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
     threads: Option<usize>,
     #[command(flatten)]
     log: LogArgs,
@@ -560,6 +561,13 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
     }
     check_size(r.width.get(), r.height.get())?;
+    if r.spp.get() > MAX_SPP || r.max_depth > MAX_DEPTH {
+        return Err(format!(
+            "{} spp, max depth {}: at most {MAX_SPP} samples per pixel and {MAX_DEPTH} bounces \
+             (from the scene or --spp, --max-depth)",
+            r.spp, r.max_depth
+        ));
+    }
     if let Some(c) = r.crop
         && PixelWindow::crop(r.width.get(), r.height.get(), c.0).is_none()
     {
@@ -574,6 +582,12 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
 
 /// The largest image side.
 const MAX_SIDE: u32 = 1 << 16;
+/// The most samples per pixel: sample indices stop at 2^24 (as `--samples` ranges do).
+const MAX_SPP: u32 = animate::MAX_INDEX;
+/// The most bounces: with more, a closed box of mirrors makes a render that never ends.
+const MAX_DEPTH: u32 = 1024;
+/// The most worker threads.
+const MAX_THREADS: u64 = 1024;
 
 /// Refuses an image whose side is beyond [`MAX_SIDE`] or whose film (exact sums, the mean,
 /// the guides) would not fit in the memory the system has available, before any work.
