@@ -62,7 +62,7 @@ fn turbulence_octaves_are_bounded() {
 fn sizes_and_batches_from_flags_are_bounded_up_front() {
     let run = |extra: &[&str]| {
         let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
-            .args(["render", "scenes/cornell.ron", "--spp", "1", "-q", "-o"])
+            .args(["render", "scenes/cornell.ron", "-q", "-o"])
             .arg(std::env::temp_dir().join(format!("pathwave-limits-{}.png", std::process::id())))
             .args(extra)
             .current_dir(root())
@@ -79,4 +79,34 @@ fn sizes_and_batches_from_flags_are_bounded_up_front() {
     }
     let (ok, err) = run(&["--batch", "1000000000000"]);
     assert!(!ok && err.contains("--batch"), "{err}");
+    for (flags, says) in [
+        (&["--spp", "20000000"][..], "at most 16777216 samples per pixel"),
+        (&["--max-depth", "4294967295"], "1024 bounces"),
+        (&["--threads", "100000"], "not in 1..=1024"),
+    ] {
+        let (ok, err) = run(flags);
+        assert!(!ok && err.contains(says), "{flags:?}: {err}");
+    }
+}
+
+/// Paths on the command line that are not files (a device, a pipe) are refused, not read
+/// until memory runs out; a frame pattern cannot ask for a gigantic name.
+#[test]
+fn hostile_paths_on_the_command_line_are_refused() {
+    let dir = std::env::temp_dir().join(format!("pathwave-paths-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave")).args(args).current_dir(root()).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let out = dir.join("m.png");
+    let out = out.to_str().unwrap();
+    let (ok, err) = run(&["merge", "/dev/zero", "-o", out]);
+    assert!(!ok && err.contains("/dev/zero is not a regular file"), "{err}");
+    let (ok, err) = run(&["compare", "--encoded", "decode", "/dev/zero", "tests/references/cornell.exr"]);
+    assert!(!ok && err.contains("/dev/zero is not a regular file"), "{err}");
+    let pattern = dir.join("{frame:099999999999}.png");
+    let (ok, err) = run(&["animate", "scenes/animation-bounce.ron", "-o", pattern.to_str().unwrap()]);
+    assert!(!ok && err.contains("N at most 10"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
