@@ -675,6 +675,10 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps takes a number > 0, not {fps}"));
     }
+    // The times of the frames stay where --time may go.
+    if frames.1 as f32 / fps > 1e7 {
+        return Err(format!("frames up to {} at {fps} fps reach beyond 1e7 seconds", frames.1));
+    }
     let shutter = seq_args.shutter.unwrap_or(a.shutter.0);
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));

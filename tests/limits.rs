@@ -108,5 +108,9 @@ fn hostile_paths_on_the_command_line_are_refused() {
     let pattern = dir.join("{frame:099999999999}.png");
     let (ok, err) = run(&["animate", "scenes/animation-bounce.ron", "-o", pattern.to_str().unwrap()]);
     assert!(!ok && err.contains("N at most 10"), "{err}");
+    // Frame times stay within --time's bound.
+    let pattern = dir.join("{frame}.png");
+    let (ok, err) = run(&["animate", "scenes/motion.ron", "--fps", "1e-30", "-o", pattern.to_str().unwrap()]);
+    assert!(!ok && err.contains("beyond 1e7 seconds"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
