@@ -17,7 +17,8 @@ fuzz_target!(|data: &[u8]| {
     let Ok(img) = decode_image_bytes(data.to_vec(), path, 64) else { return };
     let Ok(tex) = TextureImage::from_image(img, path) else { return };
     let ok = |v: glam::Vec3| v.is_finite() && v.min_element() >= 0.0;
-    let uvs = [(0.0, 0.0), (0.3, 0.9), (1.0, 1.0), (-2.5, 7.25), (1e30, -1e30), (f32::INFINITY, f32::NEG_INFINITY)];
+    let uvs =
+        [(0.0, 0.0), (0.3, 0.9), (1.0, 1.0), (-2.5, 7.25), (1e30, -1e30), (f32::INFINITY, f32::NEG_INFINITY)];
     for (u, v) in uvs {
         for wrap in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
             let c = tex.bilinear(Vec2::new(u, v), wrap);
