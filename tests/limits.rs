@@ -114,3 +114,27 @@ fn hostile_paths_on_the_command_line_are_refused() {
     assert!(!ok && err.contains("beyond 1e7 seconds"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Face indices that refer to no vertex, texture coordinate or normal are refused with the
+/// line (the `obj` fuzzer found a relative normal index before the first normal overflowing
+/// inside tobj).
+#[test]
+fn obj_indices_beyond_the_lists_are_refused() {
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+    for (face, says) in [
+        ("f 1//-16 2//1 3//1", "line 6: index -16 refers to no normal"),
+        ("f 1/9223372036854775807 2/1 3/1", "index 9223372036854775807 refers to no texture coordinate"),
+        ("f -9223372036854775808 2 3", "refers to no vertex"),
+        ("f 1 2 4", "index 4 refers to no vertex"),
+    ] {
+        let err =
+            pathwave::engine::scene::parse_obj(format!("{head}{face}\n").as_bytes(), Path::new("m.obj"))
+                .unwrap_err();
+        assert!(err.contains("the mesh m.obj") && err.contains(says), "{face}: {err}");
+    }
+    let ok = pathwave::engine::scene::parse_obj(
+        format!("{head}f -3/-1/-1 -2/1/1 3/1/1\n").as_bytes(),
+        Path::new("m.obj"),
+    );
+    assert_eq!(ok.unwrap().triangles.len(), 1);
+}

@@ -562,6 +562,7 @@ fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
 /// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
 /// fans); `path` names the file in errors.
 pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    check_obj_indices(bytes, path)?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
     // (a device, a folder elsewhere) is never opened.
@@ -600,6 +601,42 @@ pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::Me
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
     Ok(crate::mesh::MeshData { positions, triangles, normals, uvs })
+}
+
+/// Refuses face indices that refer to no vertex, texture coordinate or normal: a relative
+/// (negative) one before the first, or one beyond the file's last. tobj (4.0.5) multiplies
+/// texture and normal indices unchecked, so such an index overflowed inside it (found by the
+/// `obj` fuzzer).
+fn check_obj_indices(bytes: &[u8], path: &std::path::Path) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["v", "vt", "vn"];
+    // Lines as tobj reads them (one that is not UTF-8 is its error).
+    let lines = || bytes.split(|&b| b == b'\n').filter_map(|l| std::str::from_utf8(l).ok());
+    let kind = |l: &str| l.split_whitespace().next().and_then(|w| KINDS.iter().position(|k| *k == w));
+    let mut total = [0u64; 3];
+    lines().filter_map(kind).for_each(|k| total[k] += 1);
+    let mut seen = [0u64; 3];
+    for (n, line) in lines().enumerate() {
+        if let Some(k) = kind(line) {
+            seen[k] += 1;
+        }
+        let mut words = line.split_whitespace();
+        if !matches!(words.next(), Some("f" | "l")) {
+            continue;
+        }
+        for (k, index) in words.flat_map(|w| w.split('/').take(3).enumerate()) {
+            let Ok(i) = index.parse::<i64>() else { continue };
+            let refers = if i < 0 { i.unsigned_abs() <= seen[k] } else { i as u64 <= total[k] };
+            if !refers {
+                let what = ["vertex", "texture coordinate", "normal"][k];
+                return Err(format!(
+                    "the mesh {}: line {}: index {i} refers to no {what}",
+                    path.display(),
+                    n + 1
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.
