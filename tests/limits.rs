@@ -137,4 +137,12 @@ fn obj_indices_beyond_the_lists_are_refused() {
         Path::new("m.obj"),
     );
     assert_eq!(ok.unwrap().triangles.len(), 1);
+    // A vertex normal of 1e38 is normalised at load (its square overflowed when interpolated).
+    let m = pathwave::engine::scene::parse_obj(
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1e38 0 -1\nf 1//1 2//1 3//1\n",
+        Path::new("m.obj"),
+    )
+    .unwrap();
+    let n = m.normals.unwrap()[0];
+    assert!(n.abs_diff_eq(glam::Vec3A::X, 1e-6), "{n}");
 }

@@ -589,7 +589,15 @@ pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::Me
             _ => uvs = None,
         }
     }
-    let normals = normals.filter(|n| n.iter().all(|v| v.is_finite()));
+    // Vertex normals of unit length, as written when they are (within 1e-4), else normalised
+    // (scaled down first: the square of a component of 1e38 overflowed when they were
+    // interpolated, found by the obj fuzzer), or zero.
+    let unit = |n: glam::Vec3A| match (n.length_squared() - 1.0).abs() < 1e-4 {
+        true => n,
+        false => (n / n.abs().max_element()).normalize_or_zero(),
+    };
+    let normals =
+        normals.filter(|n| n.iter().all(|v| v.is_finite())).map(|n| n.into_iter().map(unit).collect());
     let uvs = uvs.filter(|u| u.iter().all(|v| v.is_finite()));
     if !positions.iter().all(|p| p.is_finite()) {
         return Err(format!("the mesh {} has a vertex that is not a finite number", path.display()));
