@@ -13,21 +13,20 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// The output path of `frame`: `{frame}` in `pattern` becomes the number, `{frame:0N}` the
-/// number padded with zeros to N digits.
+/// number padded with zeros to N digits (at most 10, the digits of the largest `u32`).
 pub fn frame_path(pattern: &str, frame: u32) -> Result<PathBuf, String> {
     let Some(start) = pattern.find("{frame") else {
         return Err(format!("the output {pattern} needs {{frame}} or {{frame:04}} (or end in .gif)"));
     };
     let end = start + pattern[start..].find('}').ok_or_else(|| format!("unclosed {{ in {pattern}"))?;
     let spec = &pattern[start + "{frame".len()..end];
-    let number = match spec {
-        "" => frame.to_string(),
-        s if s.starts_with(":0") && s[2..].parse::<usize>().is_ok() => {
-            format!("{frame:0width$}", width = s[2..].parse::<usize>().unwrap())
-        }
-        s => {
+    let width = spec.strip_prefix(":0").and_then(|n| n.parse::<usize>().ok());
+    let number = match (spec, width) {
+        ("", _) => frame.to_string(),
+        (_, Some(width)) if width <= 10 => format!("{frame:0width$}"),
+        (s, _) => {
             return Err(format!(
-                "unknown frame format {{frame{s}}} in {pattern}: use {{frame}} or {{frame:04}}"
+                "unknown frame format {{frame{s}}} in {pattern}: use {{frame}} or {{frame:0N}}, N at most 10"
             ));
         }
     };
@@ -52,7 +51,7 @@ pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
     let b = if inclusive { b.checked_add(1) } else { Some(b) };
     match b {
         Some(b) if b > MAX_INDEX => {
-            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24: frame times are f32 seconds)"))
+            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24, exact as f32)"))
         }
         Some(b) if b > a => Ok((a, b)),
         Some(_) => Err(format!("{flag} {s} is empty")),
@@ -208,6 +207,8 @@ mod tests {
         assert_eq!(frame_path("{frame}.exr", 12).unwrap(), PathBuf::from("12.exr"));
         assert!(frame_path("out.png", 1).is_err());
         assert!(frame_path("f{frame:x}.png", 1).unwrap_err().contains("unknown frame format"));
+        // A width of 10^11 zeros would ask for 100 GB.
+        assert!(frame_path("f{frame:099999999999}.png", 1).unwrap_err().contains("N at most 10"));
         assert_eq!(parse_range("3..7", "--frames").unwrap(), (3, 7));
         assert_eq!(parse_range("3..=7", "--frames").unwrap(), (3, 8));
         assert!(parse_range("7..3", "--frames").is_err() && parse_range("x", "--frames").is_err());

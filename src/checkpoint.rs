@@ -21,6 +21,8 @@ const CHECKSUM_BYTES: usize = 8;
 const PIXEL_BYTES: usize = 6 * 16 + 8;
 /// Bytes before the pixels.
 const HEADER_BYTES: usize = 8 + 8 + 5 * 4;
+/// The largest checkpoint read: that of the largest image `render` makes (65536 x 65536).
+pub const MAX_BYTES: u64 = (HEADER_BYTES + CHECKSUM_BYTES) as u64 + ((PIXEL_BYTES as u64) << 32);
 
 /// A render in progress.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,6 +57,11 @@ pub fn key(scene_file: &[u8], settings: &str) -> u64 {
 impl Checkpoint {
     /// Writes the checkpoint to `path` (whole or not at all).
     pub fn save(&self, path: &Path) -> Result<(), String> {
+        crate::io::atomically(path, &self.to_bytes())
+    }
+
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
         let f = &self.film;
         let mut out = Vec::with_capacity(HEADER_BYTES + f.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
@@ -71,12 +78,13 @@ impl Checkpoint {
         }
         let checksum = xxhash_rust::xxh3::xxh3_64(&out);
         out.extend_from_slice(&checksum.to_le_bytes());
-        crate::io::atomically(path, &out)
+        out
     }
 
-    /// Reads a checkpoint written by [`Self::save`].
+    /// Reads a checkpoint written by [`Self::save`]: a regular file (not a device or a pipe)
+    /// of at most [`MAX_BYTES`].
     pub fn load(path: &Path) -> Result<Self, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = crate::engine::scene::files::read_bounded(path, MAX_BYTES, "checkpoint")?;
         Self::from_bytes(&bytes, path)
     }
 

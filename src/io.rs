@@ -15,9 +15,10 @@ pub struct LinearImage {
     pub pixels: Vec<Vec3>,
 }
 
-/// Reads any image `image` can decode (EXR stays linear; 8-bit files are returned as stored).
+/// Reads any image `image` can decode (EXR stays linear; 8-bit files are returned as stored),
+/// within the bounds of textures ([`crate::engine::scene::files::decode_image`]).
 pub fn read_linear(path: &Path) -> Result<LinearImage, String> {
-    let img = image::open(path).map_err(|e| format!("{}: {e}", path.display()))?.into_rgb32f();
+    let img = crate::engine::scene::files::decode_image(path)?.into_rgb32f();
     let pixels = img.pixels().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
     Ok(LinearImage { width: img.width(), height: img.height(), pixels })
 }
@@ -37,7 +38,8 @@ pub fn atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
     use std::io::Write;
     let fail = |e: std::io::Error| format!("{}: cannot write: {e}", path.display());
     let mut tmp = temp_beside(path).map_err(fail)?;
-    tmp.write_all(bytes).map_err(fail)?;
+    // Through the `File`: `NamedTempFile`'s own methods add the temporary file's name to errors.
+    tmp.as_file_mut().write_all(bytes).map_err(fail)?;
     tmp.as_file().sync_all().map_err(fail)?;
     tmp.persist(path).map_err(|e| fail(e.error))?;
     Ok(())
@@ -71,6 +73,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// A temporary file in `path`'s directory, named after it, created with the permissions a
 /// new file gets (0o666 less the umask, not `tempfile`'s private 0o600), since it becomes
 /// `path`.
+/// Its errors do not name the temporary file ([`without_temp_name`]).
 pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -82,7 +85,20 @@ pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     b.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    b.tempfile_in(dir)
+    b.tempfile_in(dir).map_err(without_temp_name)
+}
+
+/// `e` without the temporary file's name, which `tempfile` wraps around the system's errors
+/// (the user knows the output's path, not the temporary name): its kind ("permission denied",
+/// "no storage space").
+pub fn without_temp_name(e: std::io::Error) -> std::io::Error {
+    match e.get_ref() {
+        Some(_) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::io::Error::new(e.kind(), "no such folder")
+        }
+        Some(_) => std::io::Error::from(e.kind()),
+        None => e,
+    }
 }
 
 fn extension(path: &Path) -> String {
@@ -214,7 +230,7 @@ pub fn write_exr_layers(
     metadata: &[(&str, String)],
 ) -> Result<(), String> {
     use exr::prelude::*;
-    let n = (width * height) as usize;
+    let n = width as usize * height as usize;
     let mut list = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
     for layer in layers {
         let k = layer.channels.len();

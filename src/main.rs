@@ -128,8 +128,8 @@ enum Command {
         #[arg(long, value_name = "oidn,atrous", num_args = 0..=1, value_delimiter = ',',
               value_parser = Denoiser::parse)]
         denoise: Option<Vec<Denoiser>>,
-        /// Worker threads (default: all cores).
-        #[arg(short, long)]
+        /// Worker threads, 1 to 1024 (default: all cores).
+        #[arg(short, long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
         threads: Option<usize>,
         /// Add Mitsuba's rows and curve from the JSON lines a side-by-side run printed (e.g.
         /// `side_by_side.py ... > anchor.jsonl`), for the scenes benchmarked.
@@ -255,8 +255,9 @@ struct RenderArgs {
     /// `$NAME`) to VALUE, RON text; repeatable.
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     define: Vec<String>,
-    /// Worker threads (default: all cores).
-    #[arg(short, long, visible_alias = "nthreads")]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(short, long, visible_alias = "nthreads",
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
     threads: Option<usize>,
     #[command(flatten)]
     log: LogArgs,
@@ -616,6 +617,13 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
     }
     check_size(r.width.get(), r.height.get())?;
+    if r.spp.get() > MAX_SPP || r.max_depth > MAX_DEPTH {
+        return Err(format!(
+            "{} spp, max depth {}: at most {MAX_SPP} samples per pixel and {MAX_DEPTH} bounces \
+             (from the scene or --spp, --max-depth)",
+            r.spp, r.max_depth
+        ));
+    }
     if let Some(c) = r.crop
         && PixelWindow::crop(r.width.get(), r.height.get(), c.0).is_none()
     {
@@ -630,6 +638,12 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
 
 /// The largest image side.
 const MAX_SIDE: u32 = 1 << 16;
+/// The most samples per pixel: sample indices stop at 2^24 (as `--samples` ranges do).
+const MAX_SPP: u32 = animate::MAX_INDEX;
+/// The most bounces: with more, a closed box of mirrors makes a render that never ends.
+const MAX_DEPTH: u32 = 1024;
+/// The most worker threads.
+const MAX_THREADS: u64 = 1024;
 
 /// Refuses an image whose side is beyond [`MAX_SIDE`] or whose film (exact sums, the mean,
 /// the guides) would not fit in the memory the system has available, before any work.
@@ -717,6 +731,10 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
     let fps = seq_args.fps.unwrap_or(a.fps.0);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps takes a number > 0, not {fps}"));
+    }
+    // The times of the frames stay where --time may go.
+    if frames.1 as f32 / fps > 1e7 {
+        return Err(format!("frames up to {} at {fps} fps reach beyond 1e7 seconds", frames.1));
     }
     let shutter = seq_args.shutter.unwrap_or(a.shutter.0);
     if !(0.0..=1.0).contains(&shutter) {
@@ -898,8 +916,9 @@ fn settings_key(
     time: f32,
 ) -> Result<u64, String> {
     let s = scene.settings;
+    use pathwave::engine::scene::files;
     Ok(checkpoint::key(
-        &std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?,
+        &files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?,
         &format!(
             "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?} defines {:?}",
             s.width,
@@ -985,6 +1004,16 @@ fn render_image(
                     "{}: the checkpoint is of another scene or other settings (size, seed, depth, \
                      clamp, time, integrator or sampler); remove it or render without --resume",
                     ckpt_path.display()
+                ));
+            }
+            if (ckpt.film.width, ckpt.film.height) != (s.window.w, s.window.h) {
+                return Err(format!(
+                    "{}: the checkpoint holds a {}x{} image, this render makes {}x{}",
+                    ckpt_path.display(),
+                    ckpt.film.width,
+                    ckpt.film.height,
+                    s.window.w,
+                    s.window.h
                 ));
             }
             if ckpt.first_sample != lo {

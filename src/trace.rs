@@ -65,7 +65,7 @@ pub fn create(path: &Path) -> Result<(ChromeLayer, TraceFile), String> {
     if path.extension().is_none_or(|e| !e.eq_ignore_ascii_case("json")) {
         return Err(format!("{}: a trace is written as JSON (.json)", path.display()));
     }
-    let fail = |e: std::io::Error| format!("{}: cannot write the trace: {e}", path.display());
+    let fail = |e| format!("{}: cannot write the trace: {}", path.display(), crate::io::without_temp_name(e));
     let tmp = crate::io::temp_beside(path).map_err(fail)?;
     let mut out = Out { file: Some(BufWriter::with_capacity(1 << 20, tmp)), error: None };
     out.event("{\"displayTimeUnit\":\"ms\",\"traceEvents\":[\n");
@@ -84,7 +84,9 @@ impl TraceFile {
     pub fn finish(self) -> Result<(), String> {
         let mut out = self.out.lock().unwrap_or_else(|p| p.into_inner());
         out.event("\n]}\n");
-        let fail = |e: std::io::Error| format!("{}: cannot write the trace: {e}", self.path.display());
+        let fail = |e| {
+            format!("{}: cannot write the trace: {}", self.path.display(), crate::io::without_temp_name(e))
+        };
         if let Some(e) = out.error.take() {
             return Err(fail(e));
         }

@@ -167,3 +167,24 @@ fn damaged_checkpoints_are_refused() {
     assert_eq!(std::fs::read(&out).unwrap(), image);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A checkpoint whose checksum holds but whose image has the render's key and pixel count in
+/// another shape (96 x 96 resealed as 48 x 192) is refused with what is wrong; it made the
+/// film merge panic.
+#[test]
+fn a_resealed_checkpoint_of_another_size_is_refused() {
+    let dir = temp("reshaped");
+    let out = dir.join("c.exr");
+    assert!(pathwave(&out, 2, &["--checkpoint-every", "0"]).status().unwrap().success());
+    let ckpt = dir.join("c.exr.ckpt");
+    let mut c = Checkpoint::load(&ckpt).unwrap();
+    (c.film.width, c.film.height) = (48, 192);
+    c.save(&ckpt).unwrap();
+    let image = std::fs::read(&out).unwrap();
+    let o = pathwave(&out, 4, &["--resume"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("holds a 48x192 image, this render makes 96x96"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(std::fs::read(&out).unwrap(), image);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -66,6 +66,7 @@ fn a_full_disk_keeps_the_previous_image_trace_and_checkpoint() {
     let stderr = String::from_utf8_lossy(&second.stderr);
     assert!(!second.status.success(), "a write to a full disk succeeded:\n{stderr}");
     assert!(stderr.contains(fs.0.to_str().unwrap()), "the error names no path of the user's:\n{stderr}");
+    assert!(!stderr.contains(".tmp"), "the error names a temporary file:\n{stderr}");
     for (p, old) in [&image, &trace, &ckpt].iter().zip(&before) {
         assert_eq!(&std::fs::read(p).unwrap(), old, "{} changed", p.display());
     }
@@ -88,7 +89,7 @@ fn outputs_are_checked_before_the_work() {
     let before = std::fs::read(&scene).unwrap();
     for (out, says) in [
         (dir.join("late.jpg"), "unknown output format"),
-        (dir.join("missing/c.png"), "cannot write there"),
+        (dir.join("missing/c.png"), "cannot write there: no such folder"),
         (scene.clone(), "unknown output format"),
         (dir.join("s.ron.png"), ""),
     ] {
@@ -124,6 +125,47 @@ fn outputs_are_checked_before_the_work() {
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("would replace an input"));
     assert_eq!(std::fs::read(&png_scene).unwrap(), before);
+    // A trace into a missing folder, before any work (it panicked in tracing-chrome once).
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&scene)
+        .args(["--spp", "1", "-q", "--trace"])
+        .arg(dir.join("missing/t.json"))
+        .arg("-o")
+        .arg(dir.join("t.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("missing/t.json: cannot write the trace: no such folder"),
+        "{err}"
+    );
+    assert!(!dir.join("t.png").exists(), "rendered before the trace was refused");
+    // merge's output over one of its parts, and its checkpoint over another.
+    let part = dir.join("p.png.ckpt");
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&scene)
+        .args(["--spp", "2", "--width", "8", "--height", "8", "--samples", "0..1", "-q", "-o"])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let part_bytes = std::fs::read(&part).unwrap();
+    for (out, says) in
+        [(part.clone(), "unknown output format"), (dir.join("p.png"), "would replace the part")]
+    {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .arg("merge")
+            .arg(&part)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{}: {err}", out.display());
+        assert_eq!(std::fs::read(&part).unwrap(), part_bytes);
+    }
     assert_eq!(std::fs::read(&scene).unwrap(), before);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -62,7 +62,7 @@ fn turbulence_octaves_are_bounded() {
 fn sizes_and_batches_from_flags_are_bounded_up_front() {
     let run = |extra: &[&str]| {
         let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
-            .args(["render", "scenes/cornell.ron", "--spp", "1", "-q", "-o"])
+            .args(["render", "scenes/cornell.ron", "-q", "-o"])
             .arg(std::env::temp_dir().join(format!("pathwave-limits-{}.png", std::process::id())))
             .args(extra)
             .current_dir(root())
@@ -79,4 +79,70 @@ fn sizes_and_batches_from_flags_are_bounded_up_front() {
     }
     let (ok, err) = run(&["--batch", "1000000000000"]);
     assert!(!ok && err.contains("--batch"), "{err}");
+    for (flags, says) in [
+        (&["--spp", "20000000"][..], "at most 16777216 samples per pixel"),
+        (&["--max-depth", "4294967295"], "1024 bounces"),
+        (&["--threads", "100000"], "not in 1..=1024"),
+    ] {
+        let (ok, err) = run(flags);
+        assert!(!ok && err.contains(says), "{flags:?}: {err}");
+    }
+}
+
+/// Paths on the command line that are not files (a device, a pipe) are refused, not read
+/// until memory runs out; a frame pattern cannot ask for a gigantic name.
+#[test]
+fn hostile_paths_on_the_command_line_are_refused() {
+    let dir = std::env::temp_dir().join(format!("pathwave-paths-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave")).args(args).current_dir(root()).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let out = dir.join("m.png");
+    let out = out.to_str().unwrap();
+    let (ok, err) = run(&["merge", "/dev/zero", "-o", out]);
+    assert!(!ok && err.contains("/dev/zero is not a regular file"), "{err}");
+    let (ok, err) = run(&["compare", "--encoded", "decode", "/dev/zero", "tests/references/cornell.exr"]);
+    assert!(!ok && err.contains("/dev/zero is not a regular file"), "{err}");
+    let pattern = dir.join("{frame:099999999999}.png");
+    let (ok, err) = run(&["animate", "scenes/animation-bounce.ron", "-o", pattern.to_str().unwrap()]);
+    assert!(!ok && err.contains("N at most 10"), "{err}");
+    // Frame times stay within --time's bound.
+    let pattern = dir.join("{frame}.png");
+    let (ok, err) = run(&["animate", "scenes/motion.ron", "--fps", "1e-30", "-o", pattern.to_str().unwrap()]);
+    assert!(!ok && err.contains("beyond 1e7 seconds"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Face indices that refer to no vertex, texture coordinate or normal are refused with the
+/// line (the `obj` fuzzer found a relative normal index before the first normal overflowing
+/// inside tobj).
+#[test]
+fn obj_indices_beyond_the_lists_are_refused() {
+    let head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n";
+    for (face, says) in [
+        ("f 1//-16 2//1 3//1", "line 6: index -16 refers to no normal"),
+        ("f 1/9223372036854775807 2/1 3/1", "index 9223372036854775807 refers to no texture coordinate"),
+        ("f -9223372036854775808 2 3", "refers to no vertex"),
+        ("f 1 2 4", "index 4 refers to no vertex"),
+    ] {
+        let err =
+            pathwave::engine::scene::parse_obj(format!("{head}{face}\n").as_bytes(), Path::new("m.obj"))
+                .unwrap_err();
+        assert!(err.contains("the mesh m.obj") && err.contains(says), "{face}: {err}");
+    }
+    let ok = pathwave::engine::scene::parse_obj(
+        format!("{head}f -3/-1/-1 -2/1/1 3/1/1\n").as_bytes(),
+        Path::new("m.obj"),
+    );
+    assert_eq!(ok.unwrap().triangles.len(), 1);
+    // A vertex normal of 1e38 is normalised at load (its square overflowed when interpolated).
+    let m = pathwave::engine::scene::parse_obj(
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1e38 0 -1\nf 1//1 2//1 3//1\n",
+        Path::new("m.obj"),
+    )
+    .unwrap();
+    let n = m.normals.unwrap()[0];
+    assert!(n.abs_diff_eq(glam::Vec3A::X, 1e-6), "{n}");
 }

@@ -326,14 +326,19 @@ pub struct EnvSample {
     pub pdf: f32,
 }
 
+/// The brightest texel component of an [`EnvironmentMap`], after scaling: brighter ones are
+/// clamped to it, so that luminances and their sums over the largest maps stay finite (a
+/// texel of 3e38, finite in the file, has an infinite luminance).
+pub const MAX_RADIANCE: f32 = 1e30;
+
 /// An infinitely distant lat-long HDR environment (see the module documentation for the
 /// mapping and the rotation), importance-sampled by luminance.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvironmentMap {
     width: u32,
     height: u32,
-    /// Row-major from the top row, already multiplied by the scale; no negative or non-finite
-    /// component.
+    /// Row-major from the top row, already multiplied by the scale; every component in
+    /// [0, [`MAX_RADIANCE`]].
     texels: Vec<Vec3>,
     u_offset: f32,
     /// `None` when the map is black.
@@ -345,7 +350,7 @@ impl EnvironmentMap {
     /// A map of `width` x `height` linear RGB `texels` (row-major, the top row first), its
     /// radiance multiplied by `scale`, rotated by `rotate_degrees` about +y (positive =
     /// counter-clockwise seen from above; see the module documentation). Components that are
-    /// negative or not finite after scaling count as 0.
+    /// negative or not finite after scaling count as 0, those above [`MAX_RADIANCE`] as it.
     ///
     /// # Panics
     /// If the size is 0 or `texels.len() != width * height`.
@@ -357,7 +362,7 @@ impl EnvironmentMap {
             .into_iter()
             .map(|t| {
                 let t = t * scale;
-                Vec3::new(clean(t.x), clean(t.y), clean(t.z))
+                Vec3::new(clean(t.x), clean(t.y), clean(t.z)).min(Vec3::splat(MAX_RADIANCE))
             })
             .collect();
         let lum: Vec<f32> = texels.iter().map(|&t| luminance(t)).collect();
@@ -1009,5 +1014,16 @@ mod tests {
             .filter(|_| m.sample(Vec2::new(r(), r())).unwrap().dir.dot(sun) > 5f32.to_radians().cos())
             .count();
         assert!(near > 4000, "{near} of 20000 samples near the sun");
+    }
+
+    /// Found by the image fuzzer: a texel of 3e38 (finite in an HDR file) had an infinite
+    /// luminance, and the map an infinite power.
+    #[test]
+    fn texels_brighter_than_the_bound_are_clamped_to_it() {
+        let m = EnvironmentMap::new(2, 1, vec![Vec3::splat(3e38), Vec3::ONE], 1.0, 0.0);
+        assert!(m.power_estimate().is_finite() && m.power_estimate() > 0.0, "{}", m.power_estimate());
+        let s = m.sample(Vec2::new(0.1, 0.5)).unwrap();
+        assert!(s.radiance.max_element() <= MAX_RADIANCE && s.radiance.min_element() > 0.0, "{s:?}");
+        assert!(s.pdf.is_finite() && s.pdf > 0.0, "{s:?}");
     }
 }

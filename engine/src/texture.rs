@@ -53,12 +53,19 @@ impl TextureImage {
     /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
     /// once, here, through a 256-entry table; float images are already linear.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
-        let img = crate::scene::files::decode_image(path).map_err(TextureError::Read)?;
+        Self::from_image(crate::scene::files::decode_image(path).map_err(TextureError::Read)?, path)
+    }
+
+    /// A decoded image's texels (as [`Self::load`] reads them); `path` names it in errors.
+    pub fn from_image(img: image::DynamicImage, path: &Path) -> Result<Self, TextureError> {
         let (width, height) = (img.width(), img.height());
         let texels = match img {
-            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => {
-                img.into_rgb32f().pixels().map(|p| Vec3::from_array(p.0)).collect()
-            }
+            // A float file may hold NaN, infinities or negative values: they read as 0.
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => img
+                .into_rgb32f()
+                .pixels()
+                .map(|p| Vec3::from_array(p.0.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
+                .collect(),
             _ => {
                 let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
                 img.into_rgb8()
@@ -77,8 +84,10 @@ impl TextureImage {
     #[inline]
     pub fn bilinear(&self, uv: Vec2, wrap: Wrap) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
-        let x = uv.x * w as f32 - 0.5;
-        let y = (1.0 - uv.y) * h as f32 - 0.5;
+        // Within +-2^31 texels, so that the indices below cannot overflow (a uv of 1e38 or
+        // infinity from a mesh file); NaN stays NaN and reads texel 0.
+        let x = (uv.x * w as f32 - 0.5).clamp(-2.1e9, 2.1e9);
+        let y = ((1.0 - uv.y) * h as f32 - 0.5).clamp(-2.1e9, 2.1e9);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);

@@ -71,7 +71,7 @@ impl Film {
 
     /// Samples whose value was NaN, infinite or above [`MAX_SAMPLE`]; they were counted as zero.
     pub fn non_finite(&self) -> u64 {
-        self.pixels.iter().map(|p| p.non_finite).sum()
+        self.pixels.iter().fold(0u64, |n, p| n.saturating_add(p.non_finite))
     }
 
     /// Pixels (row-major index) that discarded non-finite samples, with how many.
@@ -160,7 +160,7 @@ impl PixelAccumulator {
             self.sum[c] = self.sum[c].saturating_add(o.sum[c]);
             self.sum_sq[c] = self.sum_sq[c].saturating_add(o.sum_sq[c]);
         }
-        self.non_finite += o.non_finite;
+        self.non_finite = self.non_finite.saturating_add(o.non_finite);
     }
 
     /// The exact state: fixed-point sums and sums of squares (2^50 units) and the count of

@@ -556,8 +556,14 @@ pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec
 
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
 fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    parse_obj(&super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?, path)
+}
+
+/// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
+/// fans); `path` names the file in errors.
+pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    check_obj_indices(bytes, path)?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
-    let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
     // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
     // (a device, a folder elsewhere) is never opened.
     let no_materials = |_: &std::path::Path| Ok((Vec::new(), Default::default()));
@@ -583,7 +589,15 @@ fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
             _ => uvs = None,
         }
     }
-    let normals = normals.filter(|n| n.iter().all(|v| v.is_finite()));
+    // Vertex normals of unit length, as written when they are (within 1e-4), else normalised
+    // (scaled down first: the square of a component of 1e38 overflowed when they were
+    // interpolated, found by the obj fuzzer), or zero.
+    let unit = |n: glam::Vec3A| match (n.length_squared() - 1.0).abs() < 1e-4 {
+        true => n,
+        false => (n / n.abs().max_element()).normalize_or_zero(),
+    };
+    let normals =
+        normals.filter(|n| n.iter().all(|v| v.is_finite())).map(|n| n.into_iter().map(unit).collect());
     let uvs = uvs.filter(|u| u.iter().all(|v| v.is_finite()));
     if !positions.iter().all(|p| p.is_finite()) {
         return Err(format!("the mesh {} has a vertex that is not a finite number", path.display()));
@@ -595,6 +609,42 @@ fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
     Ok(crate::mesh::MeshData { positions, triangles, normals, uvs })
+}
+
+/// Refuses face indices that refer to no vertex, texture coordinate or normal: a relative
+/// (negative) one before the first, or one beyond the file's last. tobj (4.0.5) multiplies
+/// texture and normal indices unchecked, so such an index overflowed inside it (found by the
+/// `obj` fuzzer).
+fn check_obj_indices(bytes: &[u8], path: &std::path::Path) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["v", "vt", "vn"];
+    // Lines as tobj reads them (one that is not UTF-8 is its error).
+    let lines = || bytes.split(|&b| b == b'\n').filter_map(|l| std::str::from_utf8(l).ok());
+    let kind = |l: &str| l.split_whitespace().next().and_then(|w| KINDS.iter().position(|k| *k == w));
+    let mut total = [0u64; 3];
+    lines().filter_map(kind).for_each(|k| total[k] += 1);
+    let mut seen = [0u64; 3];
+    for (n, line) in lines().enumerate() {
+        if let Some(k) = kind(line) {
+            seen[k] += 1;
+        }
+        let mut words = line.split_whitespace();
+        if !matches!(words.next(), Some("f" | "l")) {
+            continue;
+        }
+        for (k, index) in words.flat_map(|w| w.split('/').take(3).enumerate()) {
+            let Ok(i) = index.parse::<i64>() else { continue };
+            let refers = if i < 0 { i.unsigned_abs() <= seen[k] } else { i as u64 <= total[k] };
+            if !refers {
+                let what = ["vertex", "texture coordinate", "normal"][k];
+                return Err(format!(
+                    "the mesh {}: line {}: index {i} refers to no {what}",
+                    path.display(),
+                    n + 1
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The `textures: { "name": Texture(..), .. }` map, in file order; names are unique.

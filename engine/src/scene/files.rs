@@ -38,13 +38,18 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
 /// Decodes an image file within [`MAX_IMAGE_SIDE`] and 1 GiB of decoded pixels (`image`'s
 /// limits), so that a small file that expands to a huge image is refused.
 pub fn decode_image(path: &Path) -> Result<image::DynamicImage, String> {
-    let bytes = read_bounded(path, MAX_ASSET_BYTES, "image")?;
+    decode_image_bytes(read_bounded(path, MAX_ASSET_BYTES, "image")?, path, MAX_IMAGE_SIDE)
+}
+
+/// Decodes the bytes of an image file (format guessed from them) within `max_side` pixels a
+/// side and 1 GiB of decoded pixels; `path` names the file in errors.
+pub fn decode_image_bytes(bytes: Vec<u8>, path: &Path, max_side: u32) -> Result<image::DynamicImage, String> {
     let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| format!("cannot read the image {}: {e}", path.display()))?;
     let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_IMAGE_SIDE);
-    limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    limits.max_image_width = Some(max_side);
+    limits.max_image_height = Some(max_side);
     limits.max_alloc = Some(MAX_ASSET_BYTES);
     reader.limits(limits);
     reader.decode().map_err(|e| format!("cannot read the image {}: {e}", path.display()))
