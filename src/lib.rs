@@ -17,5 +17,8 @@ pub mod trace;
 pub mod view;
 pub mod watch;
 
+/// The most worker threads `--threads` takes.
+pub const MAX_THREADS: u64 = 1024;
+
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

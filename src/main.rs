@@ -8,7 +8,7 @@ use pathwave::engine::{scene, world::SceneWorld};
 use pathwave::integrator::{aov, film::Film, oracle, wavefront};
 use pathwave::io::{self, LinearImage};
 use pathwave::view::{self, ViewArgs, Viewers};
-use pathwave::{animate, bench, farm, metrics, shard, trace};
+use pathwave::{MAX_THREADS, animate, bench, farm, metrics, shard, trace};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -642,8 +642,6 @@ const MAX_SIDE: u32 = 1 << 16;
 const MAX_SPP: u32 = animate::MAX_INDEX;
 /// The most bounces: with more, a closed box of mirrors makes a render that never ends.
 const MAX_DEPTH: u32 = 1024;
-/// The most worker threads.
-const MAX_THREADS: u64 = 1024;
 
 /// Refuses an image whose side is beyond [`MAX_SIDE`] or whose film (exact sums, the mean,
 /// the guides) would not fit in the memory the system has available, before any work.

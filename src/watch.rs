@@ -42,7 +42,7 @@ pub struct WatchArgs {
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
     /// Worker threads (default: all cores).
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=crate::MAX_THREADS))]
     pub threads: Option<usize>,
 }
 
