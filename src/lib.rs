@@ -8,6 +8,7 @@ pub mod checkpoint;
 pub mod denoiser;
 pub mod farm;
 pub mod io;
+pub mod limits;
 pub mod metrics;
 pub mod preview;
 pub mod raybench;

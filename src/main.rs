@@ -616,14 +616,7 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
             .map_err(|_| format!("--crop takes four numbers x0,x1,y0,y1 (a crop window), not {}", c.len()))?;
         r.crop = Some(scene::CropWindow::new(c).map_err(|e| format!("--crop: {e}"))?);
     }
-    check_size(r.width.get(), r.height.get())?;
-    if r.spp.get() > MAX_SPP || r.max_depth > MAX_DEPTH {
-        return Err(format!(
-            "{} spp, max depth {}: at most {MAX_SPP} samples per pixel and {MAX_DEPTH} bounces \
-             (from the scene or --spp, --max-depth)",
-            r.spp, r.max_depth
-        ));
-    }
+    pathwave::limits::check_render(r)?;
     if let Some(c) = r.crop
         && PixelWindow::crop(r.width.get(), r.height.get(), c.0).is_none()
     {
@@ -634,36 +627,6 @@ fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
         ));
     }
     Ok(desc)
-}
-
-/// The largest image side.
-const MAX_SIDE: u32 = 1 << 16;
-/// The most samples per pixel: sample indices stop at 2^24 (as `--samples` ranges do).
-const MAX_SPP: u32 = animate::MAX_INDEX;
-/// The most bounces: with more, a closed box of mirrors makes a render that never ends.
-const MAX_DEPTH: u32 = 1024;
-
-/// Refuses an image whose side is beyond [`MAX_SIDE`] or whose film (exact sums, the mean,
-/// the guides) would not fit in the memory the system has available, before any work.
-fn check_size(width: u32, height: u32) -> Result<(), String> {
-    if width > MAX_SIDE || height > MAX_SIDE {
-        return Err(format!("a {width}x{height} image: each side is at most {MAX_SIDE} pixels"));
-    }
-    // Per pixel: the accumulator, the mean and a copy for the output, the three guides.
-    let per_pixel = std::mem::size_of::<pathwave::integrator::film::PixelAccumulator>() + 6 * 12;
-    let need = width as u64 * height as u64 * per_pixel as u64;
-    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
-        let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?.to_owned();
-        line.split_whitespace().nth(1)?.parse::<u64>().ok().map(|kib| kib * 1024)
-    });
-    match available {
-        Some(have) if need > have => Err(format!(
-            "a {width}x{height} image needs about {} MiB for its film, more than the {} MiB available",
-            need >> 20,
-            have >> 20
-        )),
-        _ => Ok(()),
-    }
 }
 
 /// Logs what the integrators will see of a scene (info).

@@ -93,6 +93,7 @@ fn load(args: &WatchArgs, defines: &[(String, String)]) -> Result<SceneDesc, Str
     r.spp = args.spp.unwrap_or(r.spp);
     r.width = args.width.unwrap_or(r.width);
     r.height = args.height.unwrap_or(r.height);
+    crate::limits::check_render(r)?;
     Ok(desc)
 }
 
@@ -203,6 +204,16 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
     }
     if let Some(out) = &args.output {
         io::check_output(out, &[&args.scene], false)?;
+    }
+    // Flags beyond the bounds fail at once; a scene beyond them is reported like any error in
+    // it, and the watch waits for the fix.
+    let side = args.width.max(args.height).map_or(0, |s| s.get());
+    if side > crate::limits::MAX_SIDE || args.spp.is_some_and(|s| s.get() > crate::limits::MAX_SPP) {
+        return Err(format!(
+            "--width, --height and --spp take at most {} pixels and {} samples per pixel",
+            crate::limits::MAX_SIDE,
+            crate::limits::MAX_SPP
+        ));
     }
     let defines = scene::parse_defines(&args.define)?;
     let pool = rayon::ThreadPoolBuilder::new()

@@ -89,6 +89,25 @@ fn sizes_and_batches_from_flags_are_bounded_up_front() {
     }
 }
 
+#[test]
+fn watch_takes_the_bounds_of_render() {
+    // Flags beyond them fail at once (the watch would otherwise wait for a fix of the scene).
+    for (flags, says) in [
+        (&["--width", "100000"][..], "at most 65536 pixels"),
+        (&["--spp", "20000000"], "16777216 samples per pixel"),
+        (&["-t", "0"], "not in 1..=1024"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .args(["watch", "scenes/cornell.ron"])
+            .args(flags)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{flags:?}: {err}");
+    }
+}
+
 /// Paths on the command line that are not files (a device, a pipe) are refused, not read
 /// until memory runs out; a frame pattern cannot ask for a gigantic name.
 #[test]
