@@ -1,8 +1,8 @@
 //! `pathwave animate`: renders a sequence. Each frame sets the ECS world's frame time (the
 //! systems move keyframed objects, camera and emitters, and the BVH systems refit or rebuild
 //! only what moved), renders with ray times spread over the frame's shutter, and writes the
-//! image atomically. Frames whose file exists are skipped unless overwriting, so a killed run
-//! resumes where it stopped. `--shard I/N` renders every N-th frame from the I-th, so that N
+//! image atomically. Frames whose file exists (and is not empty) are skipped unless
+//! overwriting, so a killed run resumes where it stopped. `--shard I/N` renders every N-th frame from the I-th, so that N
 //! processes (on one machine or several sharing the output directory) split a sequence.
 
 use crate::engine::world::SceneWorld;
@@ -115,6 +115,12 @@ pub struct FrameInfo {
     pub update: std::time::Duration,
 }
 
+/// Whether a frame's file is there: a regular file that is not empty (versions before atomic
+/// writes left empty frames on a full disk; those are rendered again).
+pub fn frame_written(path: &Path) -> bool {
+    path.metadata().is_ok_and(|m| m.is_file() && m.len() > 0)
+}
+
 /// Renders the sequence; `render` turns a scene into an image (and reports its own progress).
 /// Prints frame i/N with the overall ETA, then a summary of per-frame times.
 pub fn run(
@@ -142,7 +148,7 @@ pub fn run(
     for (i, frame) in frames.into_iter().enumerate() {
         let path = if gif { None } else { Some(frame_path(seq.output, frame)?) };
         if let Some(p) = &path
-            && p.exists()
+            && frame_written(p)
             && !seq.overwrite
         {
             skipped += 1;

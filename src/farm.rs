@@ -480,7 +480,7 @@ pub fn check_frames(pattern: &str, (first, end): (u32, u32), tasks: u32) -> Resu
     let mut missing: Vec<Vec<(u32, PathBuf)>> = vec![Vec::new(); tasks.min(end - first) as usize];
     for frame in first..end {
         let path = animate::frame_path(pattern, frame)?;
-        if !path.exists() {
+        if !animate::frame_written(&path) {
             missing[((frame - first) % tasks) as usize].push((frame, path));
         }
     }
@@ -588,7 +588,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let pattern = format!("{}/f{{frame}}.png", dir.path().display());
         for f in [0, 1, 2, 3, 5, 6] {
-            std::fs::write(dir.path().join(format!("f{f}.png")), b"").unwrap();
+            std::fs::write(dir.path().join(format!("f{f}.png")), b"frame").unwrap();
         }
         check_frames(&pattern, (0, 4), 3).unwrap();
         let err = check_frames(&pattern, (0, 9), 3).unwrap_err();

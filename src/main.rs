@@ -66,7 +66,7 @@ enum Command {
         output: PathBuf,
     },
     /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
-    /// an animated GIF when the output ends in .gif. Existing frames are skipped.
+    /// an animated GIF when the output ends in .gif. Existing frames are skipped (empty files are rendered again).
     Animate {
         /// The scene file.
         scene: PathBuf,

@@ -167,6 +167,13 @@ fn a_killed_sequence_resumes_without_redoing_frames() {
     }
     assert!((0..12).all(|i| frame(i).exists()));
     assert!(log.contains(&format!("{} skipped", done.len())), "{log}");
+    // An empty frame (what versions before atomic writes left on a full disk) is not skipped.
+    std::fs::write(frame(0), b"").unwrap();
+    let mut c = pathwave();
+    args(&mut c);
+    let log = run(&mut c);
+    assert!(log.contains("1 frames rendered, 11 skipped"), "{log}");
+    assert!(read_linear(&frame(0)).is_ok(), "frame 0 was written again");
     // --overwrite renders them all.
     let mut c = pathwave();
     args(&mut c);
