@@ -1,34 +1,44 @@
 //! Checkpoints of a render in progress: the film's exact per-pixel sums and its sample count,
 //! so that a render resumed from one finishes with the bits of an uninterrupted render.
 //!
-//! The file is binary, little-endian: the magic `PWCKPT02` (the format's version), a 64-bit key
-//! (a hash of the scene file and of every setting that changes what a sample is), the image
-//! width and height, the samples per pixel the render was started for, the index of its first
+//! The file is binary, little-endian: the magic `PWCKPT03` (the format's version), a 64-bit key
+//! (a hash of the scene file and of every setting that changes what a sample is), those
+//! settings as text (a `u32` byte count, then UTF-8 lines `name: value`, so that a refusal can
+//! say which setting differs), the image width and height, the samples per pixel the render was started for, the index of its first
 //! sample and the count done (the samples `first..first + count` of every pixel), then per
 //! pixel the three sums and three sums of squares as fixed-point `i128` and the count of
 //! discarded samples (`u64`), and last the XXH3-64 checksum of everything before it. A file
 //! that fails any check (version, checksum, sizes, counts) is refused with what is wrong.
+//! Checkpoints of format 2 (`PWCKPT02`: the same without the settings' text) are still read.
 
 use crate::integrator::film::{Film, PixelAccumulator};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"PWCKPT02";
+const MAGIC: &[u8; 8] = b"PWCKPT03";
+/// Format 2's magic: no settings' text (read with empty [`Checkpoint::settings`]).
+const MAGIC_V2: &[u8; 8] = b"PWCKPT02";
 /// The first format's magic (no checksum), refused with a message of its own.
 const MAGIC_V1: &[u8; 8] = b"PWCKPT01";
 /// Bytes of the checksum at the end.
 const CHECKSUM_BYTES: usize = 8;
 /// Bytes per pixel: six `i128` and one `u64`.
 const PIXEL_BYTES: usize = 6 * 16 + 8;
-/// Bytes before the pixels.
+/// Bytes before the pixels, but for the settings' text (and its count, in format 3).
 const HEADER_BYTES: usize = 8 + 8 + 5 * 4;
+/// The longest settings' text: its `-D` values are the only long part.
+pub const MAX_SETTINGS_BYTES: usize = 1 << 20;
 /// The largest checkpoint read: that of the largest image `render` makes (65536 x 65536).
-pub const MAX_BYTES: u64 = (HEADER_BYTES + CHECKSUM_BYTES) as u64 + ((PIXEL_BYTES as u64) << 32);
+pub const MAX_BYTES: u64 =
+    (HEADER_BYTES + 4 + MAX_SETTINGS_BYTES + CHECKSUM_BYTES) as u64 + ((PIXEL_BYTES as u64) << 32);
 
 /// A render in progress.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Checkpoint {
     /// What the samples depend on (see [`key`]).
     pub key: u64,
+    /// The settings in the key, one `name: value` per line ([`settings_text`]); empty for a
+    /// checkpoint of format 2, which kept only the key.
+    pub settings: String,
     /// Samples per pixel the render was started for (the count its sample pattern is
     /// stratified for).
     pub target_spp: u32,
@@ -54,6 +64,49 @@ pub fn key(scene_file: &[u8], settings: &str) -> u64 {
     h
 }
 
+/// The settings' text of a checkpoint: one `name: value` line per setting, in the given order.
+pub fn settings_text(settings: &[(&str, String)]) -> String {
+    settings.iter().map(|(name, value)| format!("{name}: {value}\n")).collect()
+}
+
+/// The settings whose values differ between two settings' texts, as `(name, value in a,
+/// value in b)`, in `a`'s order and then `b`'s (a setting missing on one side reads as
+/// `(none)`).
+pub fn differences<'a>(a: &'a str, b: &'a str) -> Vec<(&'a str, &'a str, &'a str)> {
+    let parse = |t: &'a str| t.lines().map(|l| l.split_once(": ").unwrap_or((l, ""))).collect::<Vec<_>>();
+    let (a, b) = (parse(a), parse(b));
+    let find = |list: &[(&'a str, &'a str)], name: &str| list.iter().find(|e| e.0 == name).map(|e| e.1);
+    let mut out = Vec::new();
+    for &(name, va) in &a {
+        let vb = find(&b, name).unwrap_or("(none)");
+        if va != vb {
+            out.push((name, va, vb));
+        }
+    }
+    for &(name, vb) in &b {
+        if find(&a, name).is_none() {
+            out.push((name, "(none)", vb));
+        }
+    }
+    out
+}
+
+/// Why two renders' keys differ, in words: the settings that differ (`a` and `b` name the
+/// sides, e.g. "the checkpoint" and "this render"), or else the scene file.
+pub fn mismatch(a_name: &str, a: &str, b_name: &str, b: &str) -> String {
+    if a.is_empty() || b.is_empty() {
+        return "its settings are not recorded: it was written by an older pathwave".into();
+    }
+    let diff = differences(a, b);
+    if diff.is_empty() {
+        return "same settings: the scene file has changed".into();
+    }
+    diff.iter()
+        .map(|(name, va, vb)| format!("{name} {va} in {a_name}, {vb} in {b_name}"))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 impl Checkpoint {
     /// Writes the checkpoint to `path` (whole or not at all).
     pub fn save(&self, path: &Path) -> Result<(), String> {
@@ -63,9 +116,12 @@ impl Checkpoint {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let f = &self.film;
-        let mut out = Vec::with_capacity(HEADER_BYTES + f.pixels.len() * PIXEL_BYTES);
+        let mut out =
+            Vec::with_capacity(HEADER_BYTES + 4 + self.settings.len() + f.pixels.len() * PIXEL_BYTES);
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&self.key.to_le_bytes());
+        out.extend_from_slice(&(self.settings.len() as u32).to_le_bytes());
+        out.extend_from_slice(self.settings.as_bytes());
         for v in [f.width, f.height, self.target_spp, self.first_sample, f.spp] {
             out.extend_from_slice(&v.to_le_bytes());
         }
@@ -94,20 +150,35 @@ impl Checkpoint {
         if bytes.starts_with(MAGIC_V1) {
             return Err(bad("written by an older pathwave, without a checksum; render without --resume"));
         }
-        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || &bytes[..8] != MAGIC {
-            return Err(bad("no PWCKPT02 header"));
+        let v2 = bytes.starts_with(MAGIC_V2);
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || !(v2 || bytes.starts_with(MAGIC)) {
+            return Err(bad("no PWCKPT03 or PWCKPT02 header"));
         }
         let (body, tail) = bytes.split_at(bytes.len() - CHECKSUM_BYTES);
         if xxhash_rust::xxh3::xxh3_64(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
             return Err(bad("its checksum does not match: the file is damaged"));
         }
-        let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
         let key = u64::from_le_bytes(bytes[8..16].try_into().unwrap());
-        let (width, height, target_spp) = (u32_at(16), u32_at(20), u32_at(24));
-        let (first_sample, spp) = (u32_at(28), u32_at(32));
+        // Format 3 holds the settings' text after the key; format 2 none.
+        let (settings, at) = match v2 {
+            true => (String::new(), 16),
+            false => {
+                let n = u32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
+                if n > MAX_SETTINGS_BYTES || 20 + n + HEADER_BYTES - 16 > body.len() {
+                    return Err(bad(&format!("a settings' text of {n} bytes does not fit")));
+                }
+                let text = std::str::from_utf8(&bytes[20..20 + n])
+                    .map_err(|_| bad("its settings' text is not UTF-8"))?;
+                (text.to_string(), 20 + n)
+            }
+        };
+        let u32_at = |i: usize| u32::from_le_bytes(bytes[at + i..at + i + 4].try_into().unwrap());
+        let (width, height, target_spp) = (u32_at(0), u32_at(4), u32_at(8));
+        let (first_sample, spp) = (u32_at(12), u32_at(16));
+        let pixels_at = at + 5 * 4;
         let expected = (width as u64 * height as u64)
             .checked_mul(PIXEL_BYTES as u64)
-            .and_then(|n| n.checked_add((HEADER_BYTES + CHECKSUM_BYTES) as u64));
+            .and_then(|n| n.checked_add((pixels_at + CHECKSUM_BYTES) as u64));
         if width == 0 || height == 0 || expected != Some(bytes.len() as u64) {
             return Err(bad(&format!("{} bytes do not hold a {width}x{height} image", bytes.len())));
         }
@@ -118,7 +189,7 @@ impl Checkpoint {
         }
         let mut film = Film::new(width, height);
         film.spp = spp;
-        for (p, chunk) in film.pixels.iter_mut().zip(body[HEADER_BYTES..].chunks_exact(PIXEL_BYTES)) {
+        for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..].chunks_exact(PIXEL_BYTES)) {
             let i128_at = |k: usize| i128::from_le_bytes(chunk[16 * k..16 * k + 16].try_into().unwrap());
             let non_finite = u64::from_le_bytes(chunk[96..104].try_into().unwrap());
             *p = PixelAccumulator::from_raw(
@@ -127,7 +198,7 @@ impl Checkpoint {
                 non_finite,
             );
         }
-        Ok(Self { key, target_spp, first_sample, film })
+        Ok(Self { key, settings, target_spp, first_sample, film })
     }
 }
 
@@ -141,16 +212,19 @@ pub fn merge(parts: &[Checkpoint]) -> Result<(Checkpoint, u32), String> {
     let mut out = Checkpoint { film: Film::new(first.film.width, first.film.height), ..first.clone() };
     let mut end = first.first_sample;
     for c in order {
-        if (c.key, c.target_spp, c.film.width, c.film.height)
-            != (first.key, first.target_spp, first.film.width, first.film.height)
-        {
-            return Err(format!(
-                "samples {}..{} are of another render (scene, settings, size or sample count) than samples {}..{}",
-                c.first_sample,
-                c.first_sample + c.film.spp,
-                first.first_sample,
-                first.first_sample + first.film.spp
-            ));
+        let range = |c: &Checkpoint| format!("samples {}..{}", c.first_sample, c.first_sample + c.film.spp);
+        let why = if c.key != first.key {
+            Some(mismatch(&range(c), &c.settings, &range(first), &first.settings))
+        } else if c.target_spp != first.target_spp {
+            Some(format!("started for {} and {} samples per pixel", c.target_spp, first.target_spp))
+        } else if (c.film.width, c.film.height) != (first.film.width, first.film.height) {
+            let (a, b) = (&c.film, &first.film);
+            Some(format!("images of {}x{} and {}x{}", a.width, a.height, b.width, b.height))
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            return Err(format!("{} are of another render than {}: {why}", range(c), range(first)));
         }
         if c.first_sample < end {
             return Err(format!(
@@ -178,7 +252,8 @@ mod tests {
             p.add(Vec3::new(i as f32, 0.5, 1e-9));
             p.add(Vec3::splat(f32::NAN));
         }
-        let c = Checkpoint { key: key(b"scene", "settings"), target_spp: 64, first_sample: 3, film };
+        let settings = settings_text(&[("seed", "0".into()), ("max_depth", "64".into())]);
+        let c = Checkpoint { key: key(b"scene", &settings), settings, target_spp: 64, first_sample: 3, film };
         let path = std::env::temp_dir().join(format!("pathwave-ckpt-{}.ckpt", std::process::id()));
         c.save(&path).unwrap();
         assert_eq!(Checkpoint::load(&path).unwrap(), c);
@@ -193,15 +268,35 @@ mod tests {
             b.extend_from_slice(&sum.to_le_bytes());
             Checkpoint::from_bytes(&b, &path).unwrap_err()
         };
-        let wide = resealed(&|b| b[16..20].copy_from_slice(&4u32.to_le_bytes()));
+        // The fields after the settings' text.
+        let at = 20 + c.settings.len();
+        let set = |b: &mut Vec<u8>, i: usize, v: u32| b[at + i..at + i + 4].copy_from_slice(&v.to_le_bytes());
+        let wide = resealed(&|b| set(b, 0, 4));
         assert!(wide.contains("do not hold a 4x2 image"), "{wide}");
         let wrapped = resealed(&|b| {
-            b[16..20].copy_from_slice(&0x1_0000u32.to_le_bytes());
-            b[20..24].copy_from_slice(&0x1_0000u32.to_le_bytes());
+            set(b, 0, 0x1_0000);
+            set(b, 4, 0x1_0000);
         });
         assert!(wrapped.contains("do not hold a 65536x65536 image"), "{wrapped}");
-        let many = resealed(&|b| b[32..36].copy_from_slice(&62u32.to_le_bytes()));
+        let many = resealed(&|b| set(b, 16, 62));
         assert!(many.contains("do not fit the 64 per pixel"), "{many}");
+        let long = resealed(&|b| b[16..20].copy_from_slice(&u32::MAX.to_le_bytes()));
+        assert!(long.contains("settings' text of 4294967295 bytes does not fit"), "{long}");
+        let beyond = resealed(&|b| {
+            let n = b.len() as u32;
+            b[16..20].copy_from_slice(&n.to_le_bytes())
+        });
+        assert!(beyond.contains("does not fit"), "{beyond}");
+        let binary = resealed(&|b| b[20] = 0xff);
+        assert!(binary.contains("not UTF-8"), "{binary}");
+        // Format 2 (no settings' text) is still read, with empty settings.
+        let mut v2 = b"PWCKPT02".to_vec();
+        v2.extend_from_slice(&bytes[8..16]);
+        v2.extend_from_slice(&bytes[at..bytes.len() - CHECKSUM_BYTES]);
+        let sum = xxhash_rust::xxh3::xxh3_64(&v2);
+        v2.extend_from_slice(&sum.to_le_bytes());
+        let old = Checkpoint::from_bytes(&v2, &path).unwrap();
+        assert_eq!(old, Checkpoint { settings: String::new(), ..c.clone() });
         let png = Checkpoint::from_bytes(b"PNG....", &path).unwrap_err();
         assert!(png.contains("not a usable pathwave checkpoint"), "{png}");
         let v1 = Checkpoint::from_bytes(b"PWCKPT01 and the rest of an old file", &path).unwrap_err();
@@ -209,5 +304,23 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         assert_ne!(key(b"scene", "settings"), key(b"scene", "settingz"));
         assert_ne!(key(b"scene", "settings"), key(b"scen", "esettings"));
+    }
+
+    #[test]
+    fn a_mismatch_names_the_settings_that_differ() {
+        let a = settings_text(&[("size", "96x96".into()), ("seed", "0".into()), ("defines", "[]".into())]);
+        let b = settings_text(&[("size", "96x96".into()), ("seed", "7".into()), ("sampler", "Sobol".into())]);
+        assert_eq!(
+            differences(&a, &b),
+            [("seed", "0", "7"), ("defines", "[]", "(none)"), ("sampler", "(none)", "Sobol")]
+        );
+        assert!(differences(&a, &a).is_empty());
+        let why = mismatch("the checkpoint", &a, "this render", &b);
+        assert!(why.starts_with("seed 0 in the checkpoint, 7 in this render; defines"), "{why}");
+        assert_eq!(mismatch("x", &a, "y", &a), "same settings: the scene file has changed");
+        assert!(mismatch("x", "", "y", &a).contains("older pathwave"));
+        // A value holding ": " keeps the rest of its line.
+        let t = settings_text(&[("defines", "[(\"A\", \"b: c\")]".into())]);
+        assert_eq!(differences(&t, ""), [("defines", "[(\"A\", \"b: c\")]", "(none)")]);
     }
 }

@@ -736,14 +736,21 @@ fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs)
         }
         let r = match &info.path {
             Some(out) => {
-                let key = settings_key(path, scene, &how, info.open)?;
-                let r = render_image(scene, key, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
-                let metadata = metadata(key, scene, &r);
+                let id = render_id(path, scene, &how, info.open)?;
+                let r = render_image(scene, &id, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
+                let metadata = metadata(id.key, scene, &r);
                 (r, metadata)
             }
             // A GIF's frames: no checkpoints, no files beside them (refused above).
             None => {
-                (render_image(scene, 0, Path::new(output), &how, None, None, &pool, false, nv)?, Vec::new())
+                {
+                    // No checkpoint, so nothing identifies it.
+                    let id = RenderId { key: 0, settings: String::new() };
+                    (
+                        render_image(scene, &id, Path::new(output), &how, None, None, &pool, false, nv)?,
+                        Vec::new(),
+                    )
+                }
             }
         };
         let (r, metadata) = r;
@@ -833,17 +840,17 @@ fn render(
     let scene = world.update();
     log_scene(&scene);
     let s = scene.settings;
-    let key = settings_key(path, &scene, how, time)?;
+    let id = render_id(path, &scene, how, time)?;
     let mut viewers = Viewers::open(view, &output.display().to_string(), &s);
     let r =
-        render_image(&scene, key, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
+        render_image(&scene, &id, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
     if how.stats {
         match &r.stats {
             Some(st) => print_stats(st, r.secs, r.non_finite),
             None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
         }
     }
-    let metadata = metadata(key, &scene, &r);
+    let metadata = metadata(id.key, &scene, &r);
     let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
     eprintln!(
         "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
@@ -868,32 +875,45 @@ fn render(
     Ok(())
 }
 
-/// The checkpoint key of a render: the scene file's bytes and every setting that changes a
-/// sample (a checkpoint of other settings is refused).
-fn settings_key(
+/// What identifies a render's samples: the checkpoint key (a hash of the scene file's bytes and
+/// of every setting that changes a sample) and those settings as text, so that a checkpoint of
+/// other settings is refused with the ones that differ.
+struct RenderId {
+    key: u64,
+    settings: String,
+}
+
+/// The [`RenderId`] of a render of the scene file `path` at `time`.
+fn render_id(
     path: &Path,
     scene: &pathwave::engine::render_scene::RenderScene,
     how: &How,
     time: f32,
-) -> Result<u64, String> {
+) -> Result<RenderId, String> {
     let s = scene.settings;
     use pathwave::engine::scene::files;
-    Ok(checkpoint::key(
-        &files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?,
-        &format!(
-            "{}x{} {:?} seed {} max_depth {} rr_depth {} clamp {:?} time {time} {:?} sampler {:?} defines {:?}",
-            s.width,
-            s.height,
-            s.window,
-            s.seed,
-            s.max_depth,
-            s.rr_depth,
-            s.clamp,
-            how.integrator,
-            s.sampler,
-            how.defines
-        ),
-    ))
+    let w = &s.window;
+    let settings = checkpoint::settings_text(&[
+        ("size", format!("{}x{}", s.width, s.height)),
+        ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
+        ("seed", s.seed.to_string()),
+        ("max_depth", s.max_depth.to_string()),
+        ("rr_depth", s.rr_depth.to_string()),
+        ("clamp", format!("{:?}", s.clamp)),
+        ("time", time.to_string()),
+        ("integrator", format!("{:?}", how.integrator)),
+        ("sampler", format!("{:?}", s.sampler)),
+        ("defines", format!("{:?}", how.defines)),
+    ]);
+    if settings.len() > checkpoint::MAX_SETTINGS_BYTES {
+        return Err(format!(
+            "the -D values take {} bytes; at most {} fit in a checkpoint",
+            settings.len(),
+            checkpoint::MAX_SETTINGS_BYTES
+        ));
+    }
+    let scene_file = files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?;
+    Ok(RenderId { key: checkpoint::key(&scene_file, &settings), settings })
 }
 
 /// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a
@@ -937,7 +957,7 @@ struct Rendered {
 #[allow(clippy::too_many_arguments)]
 fn render_image(
     scene: &pathwave::engine::render_scene::RenderScene,
-    key: u64,
+    id: &RenderId,
     output: &Path,
     how: &How,
     checkpointing: Option<&Checkpointing>,
@@ -960,11 +980,12 @@ fn render_image(
     if checkpointing.is_some_and(|c| c.resume) {
         if ckpt_path.exists() {
             let ckpt = Checkpoint::load(&ckpt_path)?;
-            if ckpt.key != key {
+            if ckpt.key != id.key {
                 return Err(format!(
-                    "{}: the checkpoint is of another scene or other settings (size, seed, depth, \
-                     clamp, time, integrator or sampler); remove it or render without --resume",
-                    ckpt_path.display()
+                    "{}: the checkpoint is of another scene or other settings ({}); remove it or \
+                     render without --resume",
+                    ckpt_path.display(),
+                    checkpoint::mismatch("the checkpoint", &ckpt.settings, "this render", &id.settings)
                 ));
             }
             if (ckpt.film.width, ckpt.film.height) != (s.window.w, s.window.h) {
@@ -1075,7 +1096,8 @@ fn render_image(
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
                     )?;
                 }
-                Checkpoint { key, target_spp: s.spp, first_sample: lo, film: film.clone() }
+                let settings = id.settings.clone();
+                Checkpoint { key: id.key, settings, target_spp: s.spp, first_sample: lo, film: film.clone() }
                     .save(&ckpt_path)?;
                 last_save = Instant::now();
             }

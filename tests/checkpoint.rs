@@ -56,10 +56,10 @@ fn a_killed_render_resumes_to_the_same_bits() {
     let before = std::fs::read(&out).unwrap();
     let other = pathwave(&out, 384, &["--resume", "--seed", "7"]).output().unwrap();
     assert!(!other.status.success());
-    assert!(
-        String::from_utf8_lossy(&other.stderr)
-            .contains("the checkpoint is of another scene or other settings")
-    );
+    let log = String::from_utf8_lossy(&other.stderr);
+    assert!(log.contains("the checkpoint is of another scene or other settings"), "{log}");
+    // It names the setting that differs, and only that one.
+    assert!(log.contains("(seed 0 in the checkpoint, 7 in this render)"), "{log}");
     assert_eq!(std::fs::read(&out).unwrap(), before);
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -125,7 +125,14 @@ fn parts_rendered_apart_merge_into_the_whole_render() {
     assert!(!twice.status.success() && String::from_utf8_lossy(&twice.stderr).contains("overlap"));
     render("s.exr", &["--samples", "3..7", "--seed", "9"]);
     let other = merge(&["a.exr.ckpt", "b.exr.ckpt", "s.exr.ckpt"], "x.exr");
-    assert!(!other.status.success() && String::from_utf8_lossy(&other.stderr).contains("another render"));
+    let log = String::from_utf8_lossy(&other.stderr);
+    assert!(!other.status.success(), "{log}");
+    assert!(
+        log.contains(
+            "samples 3..7 are of another render than samples 0..2: seed 9 in samples 3..7, 0 in samples 0..2"
+        ),
+        "{log}"
+    );
     assert!(!out("x.exr").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

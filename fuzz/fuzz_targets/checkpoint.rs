@@ -1,6 +1,6 @@
 //! Arbitrary bytes, and mutations of checkpoints written by `render --samples` (the seed
 //! corpus), into the checkpoint reader and `merge`. The input after its first byte is cut into
-//! parts before each `PWCKPT02` magic; when the first byte is odd each part's checksum is
+//! parts before each `PWCKPT0` magic (formats 2 and 3); when the first byte is odd each part's checksum is
 //! recomputed first, so that mutations reach the checks behind it. Whatever loads is merged
 //! and read out as `merge` and `--resume` do: nothing may panic, a merged checkpoint must read
 //! back as written, and its mean must be finite.
@@ -10,7 +10,7 @@ use libfuzzer_sys::fuzz_target;
 use pathwave::checkpoint::{self, Checkpoint};
 use std::path::Path;
 
-const MAGIC: &[u8] = b"PWCKPT02";
+const MAGIC: &[u8] = b"PWCKPT0";
 
 fuzz_target!(|data: &[u8]| {
     let Some((&flags, rest)) = data.split_first() else { return };
