@@ -40,7 +40,7 @@ pub trait Target: Sync {
 
 impl Target for MeshBlas {
     fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, Vec3A)> {
-        self.intersect(o, d, tmax).map(|h| (h.t, h.ng.normalize()))
+        self.intersect(o, d, tmax).map(|h| (h.t, h.ng().normalize()))
     }
     fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
         MeshBlas::occluded(self, o, d, tmax)

@@ -5,7 +5,7 @@
 use crate::bvh8::Bvh8;
 use crate::geometry::Hit;
 use crate::math::{Ray, gamma, transform_box};
-use crate::mesh::MeshBlas;
+use crate::mesh::{MeshBlas, MeshHit};
 use crate::shape::{SurfacePoint, adapt_shading_normal};
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -250,20 +250,20 @@ impl Instances {
     /// Closest hit with `t` in `(0, tmax)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
-        let (mut inst_hit, mut tri) = (u32::MAX, 0);
+        let (mut inst_hit, mut tri) = (u32::MAX, None);
         let t = self.tlas.closest(ray.origin, ray.dir, tmax, |first, count, mut best| {
             for &i in &self.order[first as usize..(first + count) as usize] {
                 let inst = &self.list[i as usize];
                 let (o, d) = self.object_ray(inst, ray);
                 if let Some(h) = self.blas[inst.blas as usize].intersect(o, d, best) {
-                    (best, inst_hit, tri) = (h.t, i, h.id);
+                    (best, inst_hit, tri) = (h.t, i, Some(h));
                 }
             }
             best
         });
-        (inst_hit != u32::MAX).then(|| {
+        tri.map(|tri| {
             let inst = &self.list[inst_hit as usize];
-            Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, tri, ray, t) }
+            Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, &tri, ray, t) }
         })
     }
 
@@ -292,7 +292,7 @@ impl Instances {
     /// surface, and a ray on the other side exactly where it would have. This is done in world
     /// space, where the offset is applied (a transform that is not a similarity would break
     /// the cancellation in object space).
-    fn surface(&self, inst: &Instance, tri: u32, ray: &Ray, t: f32) -> SurfacePoint {
+    fn surface(&self, inst: &Instance, tri: &MeshHit, ray: &Ray, t: f32) -> SurfacePoint {
         let (o, d) = self.object_ray(inst, ray);
         let (local, lift) = self.blas[inst.blas as usize].surface(tri, o + t * d);
         let (m, normal_to_world, off) = match &inst.motion {

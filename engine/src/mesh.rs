@@ -257,9 +257,18 @@ pub struct MeshHit {
     pub t: f32,
     /// Triangle index.
     pub id: u32,
-    /// Geometric normal (not normalised) `(p1 - p0) x (p2 - p0)`, from the triangle block the
-    /// traversal just read (no second look at the mesh).
-    pub ng: Vec3A,
+    /// The triangle's corners, from the block the traversal just read: the surface point is
+    /// made without a second look at the mesh (its index and position buffers are cache misses
+    /// on a large mesh), unless the mesh has vertex normals or texture coordinates.
+    pub p: [Vec3A; 3],
+}
+
+impl MeshHit {
+    /// Geometric normal (not normalised) `(p1 - p0) x (p2 - p0)`.
+    pub fn ng(&self) -> Vec3A {
+        let [p0, p1, p2] = self.p;
+        (p1 - p0).cross(p2 - p0)
+    }
 }
 
 /// A mesh's bottom-level BVH.
@@ -343,9 +352,8 @@ impl MeshBlas {
         });
         (block != u32::MAX).then(|| {
             let b = &self.blocks[block as usize];
-            let [p0, p1, p2] =
-                [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
-            MeshHit { t, id: b.id[lane], ng: (p1 - p0).cross(p2 - p0) }
+            let p = [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
+            MeshHit { t, id: b.id[lane], p }
         })
     }
 
@@ -372,18 +380,21 @@ impl MeshBlas {
         });
     }
 
-    /// Surface data on triangle `id` at the object-space point `p`, and the height over the
+    /// Surface data on the triangle of `hit` at the object-space point `p`, and the height over the
     /// triangle (along `sp.n`) of the smooth surface that its vertex normals describe
     /// ([`terminator_lift`]; 0 without them). With vertex normals the shading normal
     /// interpolates them (and the geometric normal turns to its side); with vertex uvs, uv
     /// interpolates them.
     #[inline]
-    pub fn surface(&self, id: u32, p: Vec3A) -> (SurfacePoint, f32) {
-        let [a, b, c] = self.mesh.triangle(id);
+    pub fn surface(&self, hit: &MeshHit, p: Vec3A) -> (SurfacePoint, f32) {
+        let [a, b, c] = hit.p;
         let mut sp = Triangle { p: [a, b, c] }.surface(p);
+        if self.mesh.normals.is_none() && self.mesh.uvs.is_none() {
+            return (sp, 0.0);
+        }
         let (b1, b2) = (sp.uv.x, sp.uv.y);
         let b0 = 1.0 - b1 - b2;
-        let [i, j, k] = self.mesh.triangles[id as usize].map(|v| v as usize);
+        let [i, j, k] = self.mesh.triangles[hit.id as usize].map(|v| v as usize);
         let mut lift = 0.0;
         if let Some(n) = &self.mesh.normals {
             let ns = b0 * n[i] + b1 * n[j] + b2 * n[k];
@@ -464,10 +475,11 @@ mod tests {
             let got = blas.intersect(o, d, f32::INFINITY);
             assert_eq!(got.map(|h| h.t), scan.1.ne(&u32::MAX).then_some(scan.0), "ray {o} {d}");
             assert_eq!(blas.occluded(o, d, f32::INFINITY), got.is_some());
-            if let Some(MeshHit { t, id, ng }) = got {
+            if let Some(h @ MeshHit { t, id, p }) = got {
                 hits += 1;
                 let [a, b, c] = mesh.triangle(id);
-                assert_eq!(ng, (b - a).cross(c - a));
+                assert_eq!(p, [a, b, c], "the block's corners are the mesh's");
+                assert_eq!(h.ng(), (b - a).cross(c - a));
                 assert_eq!(t, scan.0);
                 assert!(!blas.occluded(o, d, t * 0.999) || t < 1e-3, "nothing lies before the closest hit");
                 assert!(blas.occluded(o, d, t * 1.001), "the closest hit occludes");
