@@ -142,7 +142,7 @@ pub fn run(
             }
             // Rendered again, recording the guides on the way.
             let start = Instant::now();
-            let opts = wavefront::Options { batch, guides: true };
+            let opts = wavefront::Options { batch, guides: true, ..Default::default() };
             let (film, _) = wavefront::render(&scene, opts, &|_, _| {});
             let (noisy, variance) = (film.mean(), film.variance_of_mean());
             let render_secs = start.elapsed().as_secs_f64();

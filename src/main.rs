@@ -1059,7 +1059,7 @@ fn render_image(
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
-                let opts = wavefront::Options { batch: how.batch, guides: how.guides() };
+                let opts = wavefront::Options { batch: how.batch, guides: how.guides(), timing: how.stats };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }

@@ -171,7 +171,7 @@ fn passes(
         let start = Instant::now();
         let range = film.spp..(film.spp + pass).min(target);
         let k = range.len();
-        let opts = wavefront::Options { batch: 256, guides: false };
+        let opts = wavefront::Options::default();
         let (part, _) = pool.install(|| wavefront::render_samples(scene, opts, range, &|_, _| {}));
         film.merge(&part);
         number += 1;
