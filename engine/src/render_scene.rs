@@ -282,6 +282,17 @@ impl RenderScene {
         self.textured_material(id, sp)
     }
 
+    /// `f` of material `id` with its textured colours evaluated at `sp`: without textures `f`
+    /// reads the material in place, where [`Self::material_at`] copies it out (the copy goes
+    /// through the stack; see [`Self::albedo_at`]).
+    #[inline(always)]
+    pub fn with_material<R>(&self, id: u32, sp: &SurfacePoint, f: impl FnOnce(&Material) -> R) -> R {
+        match self.features.textures {
+            false => f(&self.materials[id as usize]),
+            true => f(&self.textured_material(id as usize, sp)),
+        }
+    }
+
     /// The reflectance ([`Material::albedo`]) of material `id` at `sp`. Without textures it is
     /// read in place: copying the material out first cost the Lambertian stage 3% (the copy
     /// went through the stack, and its read-back stalled store forwarding).

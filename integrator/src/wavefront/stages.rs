@@ -266,9 +266,10 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let mut st = p.state(s);
-            let hit = p.hit[s];
-            let mat = &scene.material_at(hit.material, &hit.surface);
-            let next = path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
+            let hit = &p.hit[s];
+            let next = scene.with_material(hit.material, &hit.surface, |mat| {
+                path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l])
+            });
             route(p, q, i, None, next);
             p.set_state(s, &st);
         }
