@@ -1,6 +1,6 @@
 //! A write that fails (here: a full disk) keeps the previous file and exits non-zero with a
-//! message naming the user's path. Needs root to mount a 64 KiB tmpfs; skipped (with a message)
-//! otherwise.
+//! message naming the user's path, and a read-only folder is refused before any work. Needs
+//! root to mount small tmpfs; skipped (with a message) otherwise.
 
 mod common;
 
@@ -12,11 +12,12 @@ use std::process::Command;
 struct Tmpfs(PathBuf);
 
 impl Tmpfs {
-    fn mount(size: &str) -> Option<Tmpfs> {
-        let dir = std::env::temp_dir().join(format!("pathwave-full-{}", std::process::id()));
+    /// A tmpfs with mount options `options` (e.g. `size=1m`) at a folder named after `name`.
+    fn mount(name: &str, options: &str) -> Option<Tmpfs> {
+        let dir = std::env::temp_dir().join(format!("pathwave-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&dir).ok()?;
         let ok = Command::new("mount")
-            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .args(["-t", "tmpfs", "-o", options, "tmpfs"])
             .arg(&dir)
             .status()
             .is_ok_and(|s| s.success());
@@ -50,7 +51,7 @@ fn render(out: &Path, extra: &[&str]) -> std::process::Output {
 
 #[test]
 fn a_full_disk_keeps_the_previous_image_trace_and_checkpoint() {
-    let Some(fs) = Tmpfs::mount("1m") else {
+    let Some(fs) = Tmpfs::mount("full", "size=1m") else {
         eprintln!("skipped: mounting a tmpfs needs root");
         return;
     };
@@ -78,8 +79,33 @@ fn a_full_disk_keeps_the_previous_image_trace_and_checkpoint() {
     assert!(leftovers.is_empty(), "temporary files left behind: {leftovers:?}");
 }
 
-/// Outputs are checked before any rendering: an unknown format, a missing or read-only
-/// folder, and the scene itself are refused at once, and the scene is left intact.
+/// A read-only folder (a read-only mount: root may write to any folder whatever its mode) is
+/// refused before any rendering, for the image, the trace and the checkpoint alike.
+#[test]
+fn a_read_only_folder_is_refused_before_the_work() {
+    let Some(fs) = Tmpfs::mount("ro", "size=64k,ro") else {
+        eprintln!("skipped: mounting a tmpfs needs root");
+        return;
+    };
+    let here = std::env::temp_dir().join(format!("pathwave-ro-ok-{}", std::process::id()));
+    std::fs::create_dir_all(&here).unwrap();
+    for (out, trace) in [(fs.0.join("c.png"), here.join("t.json")), (here.join("c.png"), fs.0.join("t.json"))]
+    {
+        let o =
+            render(&out, &["--spp", "1", "--checkpoint-every", "1000", "--trace", trace.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{err}");
+        // The check made before rendering ("cannot write there", "cannot write the trace"),
+        // not a failed write after it.
+        assert!(err.contains("cannot write") && err.to_lowercase().contains("read-only"), "{err}");
+        assert!(err.contains(fs.0.to_str().unwrap()), "the error names the folder's path: {err}");
+        assert!(!here.join("c.png").exists(), "nothing is written beside a refused output");
+    }
+    let _ = std::fs::remove_dir_all(&here);
+}
+
+/// Outputs are checked before any rendering: an unknown format, a missing folder, and the
+/// scene itself are refused at once, and the scene is left intact.
 #[test]
 fn outputs_are_checked_before_the_work() {
     let dir = std::env::temp_dir().join(format!("pathwave-outputs-{}", std::process::id()));
