@@ -4,12 +4,14 @@
 //! The file is binary, little-endian: the magic `PWCKPT03` (the format's version), a 64-bit key
 //! (a hash of the scene file and of every setting that changes what a sample is), those
 //! settings as text (a `u32` byte count, then UTF-8 lines `name: value`, so that a refusal can
-//! say which setting differs), the image width and height, the samples per pixel the render was started for, the index of its first
-//! sample and the count done (the samples `first..first + count` of every pixel), then per
+//! say which setting differs), the image width and height, the samples per pixel the render was
+//! started for, the index of its first sample and the count done (the samples `first..first + count` of every pixel), then per
 //! pixel the three sums and three sums of squares as fixed-point `i128` and the count of
 //! discarded samples (`u64`), and last the XXH3-64 checksum of everything before it. A file
 //! that fails any check (version, checksum, sizes, counts) is refused with what is wrong.
-//! Checkpoints of format 2 (`PWCKPT02`: the same without the settings' text) are still read.
+//! Checkpoints of format 2 (`PWCKPT02`: the same without the settings' text) are still read and
+//! merge with one another; their key was made from another description of the settings, so
+//! `--resume` refuses them, saying that their settings are not recorded.
 
 use crate::integrator::film::{Film, PixelAccumulator};
 use std::path::{Path, PathBuf};
@@ -23,8 +25,11 @@ const MAGIC_V1: &[u8; 8] = b"PWCKPT01";
 const CHECKSUM_BYTES: usize = 8;
 /// Bytes per pixel: six `i128` and one `u64`.
 const PIXEL_BYTES: usize = 6 * 16 + 8;
+/// Bytes of the fields after the key (and the settings' text): width, height, target spp,
+/// first sample, sample count.
+const FIELDS_BYTES: usize = 5 * 4;
 /// Bytes before the pixels, but for the settings' text (and its count, in format 3).
-const HEADER_BYTES: usize = 8 + 8 + 5 * 4;
+const HEADER_BYTES: usize = 8 + 8 + FIELDS_BYTES;
 /// The longest settings' text: its `-D` values are the only long part.
 pub const MAX_SETTINGS_BYTES: usize = 1 << 20;
 /// The largest checkpoint read: that of the largest image `render` makes (65536 x 65536).
@@ -164,7 +169,7 @@ impl Checkpoint {
             true => (String::new(), 16),
             false => {
                 let n = u32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
-                if n > MAX_SETTINGS_BYTES || 20 + n + HEADER_BYTES - 16 > body.len() {
+                if n > MAX_SETTINGS_BYTES || 20 + n + FIELDS_BYTES > body.len() {
                     return Err(bad(&format!("a settings' text of {n} bytes does not fit")));
                 }
                 let text = std::str::from_utf8(&bytes[20..20 + n])
@@ -175,7 +180,7 @@ impl Checkpoint {
         let u32_at = |i: usize| u32::from_le_bytes(bytes[at + i..at + i + 4].try_into().unwrap());
         let (width, height, target_spp) = (u32_at(0), u32_at(4), u32_at(8));
         let (first_sample, spp) = (u32_at(12), u32_at(16));
-        let pixels_at = at + 5 * 4;
+        let pixels_at = at + FIELDS_BYTES;
         let expected = (width as u64 * height as u64)
             .checked_mul(PIXEL_BYTES as u64)
             .and_then(|n| n.checked_add((pixels_at + CHECKSUM_BYTES) as u64));
