@@ -250,19 +250,19 @@ impl Instances {
     /// Closest hit with `t` in `(0, tmax)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
-        let (mut inst_hit, mut tri) = (u32::MAX, None);
+        let mut found: Option<(u32, MeshHit)> = None;
         let t = self.tlas.closest(ray.origin, ray.dir, tmax, |first, count, mut best| {
             for &i in &self.order[first as usize..(first + count) as usize] {
                 let inst = &self.list[i as usize];
                 let (o, d) = self.object_ray(inst, ray);
                 if let Some(h) = self.blas[inst.blas as usize].intersect(o, d, best) {
-                    (best, inst_hit, tri) = (h.t, i, Some(h));
+                    (best, found) = (h.t, Some((i, h)));
                 }
             }
             best
         });
-        tri.map(|tri| {
-            let inst = &self.list[inst_hit as usize];
+        found.map(|(i, tri)| {
+            let inst = &self.list[i as usize];
             Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, &tri, ray, t) }
         })
     }
