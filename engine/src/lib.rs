@@ -18,7 +18,7 @@ pub mod material;
 pub mod math;
 pub mod media;
 pub mod mesh;
-pub mod reload;
+pub mod placement;
 pub mod render_scene;
 pub mod scene;
 pub mod shape;

@@ -8,7 +8,8 @@ use glam::{Affine3A, Quat, Vec3, Vec3A};
 use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
 use pathwave_engine::mesh::MeshData;
-use pathwave_engine::scene::{MeshFile, ShapeDesc, parse};
+use pathwave_engine::placement::Form;
+use pathwave_engine::scene::{ShapeDesc, parse};
 use pathwave_engine::world::{
     Instanced, MaterialId, MeshLibrary, SceneInstances, SceneWorld, Shape, Transform,
 };
@@ -28,8 +29,8 @@ fn empty_world() -> SceneWorld {
     SceneWorld::new(&desc)
 }
 
-fn mesh(rings: u32) -> ShapeDesc {
-    ShapeDesc::Mesh(MeshFile { path: "knot".into(), mesh: Arc::new(MeshData::knot(rings, 12)) })
+fn mesh(rings: u32) -> Form {
+    Form::Mesh(Arc::new(MeshData::knot(rings, 12)))
 }
 
 /// A rotation, a non-uniform scale, a translation and, for odd `i`, a mirror.

@@ -7,8 +7,8 @@
 use glam::{Affine3A, Vec3A};
 use libfuzzer_sys::fuzz_target;
 use pathwave_engine::mesh::MeshBlas;
-use pathwave_engine::scene::{MeshFile, ShapeDesc, open_edge, parse_obj};
-use pathwave_engine::world::world_primitives;
+use pathwave_engine::placement::{Form, primitives};
+use pathwave_engine::scene::{open_edge, parse_obj};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -17,8 +17,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(mesh) = parse_obj(data, path) else { return };
     let mesh = Arc::new(mesh);
     let _ = open_edge(&mesh);
-    let shape = ShapeDesc::Mesh(MeshFile { path: path.into(), mesh: mesh.clone() });
-    if world_primitives(&shape, &Affine3A::IDENTITY, &mut Vec::new()).is_err() {
+    if primitives(&Form::Mesh(mesh.clone()), &Affine3A::IDENTITY, &mut Vec::new()).is_err() {
         return;
     }
     let blas = MeshBlas::build(mesh);
@@ -33,7 +32,7 @@ fuzz_target!(|data: &[u8]| {
         let _ = blas.occluded(o, d, hit.t);
         let mut hits = Vec::new();
         blas.all_hits(o, d, &mut hits);
-        let (sp, lift) = blas.surface(hit.id, o + d * hit.t);
+        let (sp, lift) = blas.surface(&hit, o + d * hit.t);
         assert!(sp.p.is_finite() && sp.err.is_finite() && lift.is_finite(), "{sp:?} lift {lift}");
         for n in [sp.n, sp.ns] {
             assert!((n.length() - 1.0).abs() < 1e-3, "normal {n} at {sp:?}");

@@ -3,9 +3,9 @@
 
 use super::values::*;
 pub use crate::material::MaterialDesc;
+use crate::placement::{Form, MAX_COORDINATE, primitives};
 use crate::render_scene::SamplerKind;
 use crate::texture::{TextureImage, Wrap};
-use crate::world::{MAX_COORDINATE, world_primitives};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::cell::{Cell, RefCell};
@@ -965,7 +965,7 @@ impl TryFrom<RawObject> for ObjectDesc {
         if r.animate.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `animate` is for surfaces".into());
         }
-        world_primitives(&r.shape, &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
+        primitives(&r.shape.form(), &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
         Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion, animate: r.animate })
     }
 }
@@ -1010,6 +1010,19 @@ pub enum ShapeDesc {
         /// Maximum corner.
         max: Vec3,
     },
+}
+
+impl ShapeDesc {
+    /// The shape as the world holds it (the mesh shared, not copied).
+    pub fn form(&self) -> Form {
+        match *self {
+            ShapeDesc::Sphere { center, radius } => Form::Sphere { center: center.into(), radius },
+            ShapeDesc::Quad { q, u, v } => Form::Quad { q: q.into(), u: u.into(), v: v.into() },
+            ShapeDesc::Triangle { a, b, c } => Form::Triangle { a: a.into(), b: b.into(), c: c.into() },
+            ShapeDesc::Mesh(ref file) => Form::Mesh(file.mesh.clone()),
+            ShapeDesc::Box { min, max } => Form::Box { min: min.into(), max: max.into() },
+        }
+    }
 }
 
 #[derive(Deserialize)]

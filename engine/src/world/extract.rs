@@ -1,0 +1,60 @@
+//! Extraction: the flat, read-only [`RenderScene`] the integrators read, made from the world's
+//! resources when any of them changed.
+
+use super::components::*;
+use crate::camera::Camera;
+use crate::render_scene::{Features, RenderScene};
+use crate::scene::CameraDesc;
+use bevy_ecs::prelude::*;
+use std::sync::Arc;
+
+/// Builds a new [`RenderScene`] when anything it holds changed.
+#[allow(clippy::too_many_arguments)]
+pub fn extract_render_scene(
+    geometry: Res<SceneGeometry>,
+    instances: Res<SceneInstances>,
+    lights: Res<SceneLights>,
+    media: Res<SceneMedia>,
+    textures: Res<SceneTextures>,
+    materials: Res<Materials>,
+    camera: Res<CameraParams>,
+    settings: Res<Settings>,
+    background: Res<BackgroundLight>,
+    mut out: ResMut<Extracted>,
+) {
+    let any = geometry.is_changed()
+        || instances.is_changed()
+        || lights.is_changed()
+        || media.is_changed()
+        || textures.is_changed()
+        || materials.is_changed()
+        || camera.is_changed()
+        || settings.is_changed()
+        || background.is_changed();
+    if !any && out.0.is_some() {
+        return;
+    }
+    let s = settings.0;
+    let make = |c: &CameraDesc| {
+        let (from, at, up) = (c.look_from, c.look_at, c.vup);
+        Camera::new(from, at, up, c.vfov, c.aperture_radius, c.focus_dist, c.shutter, s.width, s.height)
+    };
+    let camera = match &camera.1 {
+        Some(close) => make(&camera.0).moving_to(&make(close)),
+        None => make(&camera.0),
+    };
+    out.0 = Some(Arc::new(RenderScene {
+        features: Features::detect(&geometry.geometry, &instances.instances, &media.media, &camera)
+            .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
+        camera,
+        settings: s,
+        background: background.0.clone(),
+        materials: materials.0.clone(),
+        geometry: geometry.geometry.clone(),
+        instances: instances.instances.clone(),
+        lights: lights.lights.clone(),
+        media: media.media.clone(),
+        textures: textures.textures.clone(),
+        material_textures: textures.per_material.clone(),
+    }));
+}

@@ -1,0 +1,410 @@
+//! The rebuild systems: primitives and BVH, instances and TLAS, media and the light table,
+//! each rebuilt (or refitted) only when what it is made from changed.
+
+use super::components::*;
+use crate::geometry::Geometry;
+use crate::instances::{Instance, Instances, ShutterMotion};
+use crate::lights::{LightInputs, LightTable};
+use crate::media::{Boundary, Media, Volume};
+use crate::mesh::MeshBlas;
+use crate::placement::{Form, primitives};
+use bevy_ecs::prelude::*;
+use glam::{Affine3A, Vec3A};
+use std::sync::Arc;
+
+/// Rebuilds primitives and BVH when a shape, transform, material id or motion changed, an
+/// object or its motion was removed, or, in scenes with motion, the camera (its shutter bounds
+/// the sweeps).
+#[allow(clippy::type_complexity)]
+#[allow(clippy::too_many_arguments)]
+pub fn rebuild_geometry(
+    mut out: ResMut<SceneGeometry>,
+    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), Without<Instanced>>,
+    changed: Query<
+        (),
+        (
+            With<MaterialId>,
+            Without<Instanced>,
+            Or<(Changed<Transform>, Changed<Shape>, Changed<MaterialId>, Changed<Motion>)>,
+        ),
+    >,
+    now_instanced: Query<Entity, Added<Instanced>>,
+    mut removed_shape: RemovedComponents<Shape>,
+    mut removed_material: RemovedComponents<MaterialId>,
+    mut stopped: RemovedComponents<Motion>,
+    mut not_instanced: RemovedComponents<Instanced>,
+    camera: Res<CameraParams>,
+) {
+    // Only removals from entities the geometry was built from matter (not from volumes or
+    // instances); an entity that stops being an instance joins.
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let removed = removed_shape
+        .read()
+        .chain(removed_material.read())
+        .chain(stopped.read())
+        .chain(now_instanced.iter())
+        .any(was_built_from)
+        | not_instanced.read().any(|e| objects.contains(e));
+    // The shutter bounds the sweep of moving objects.
+    let moving = out.geometry.velocity.is_some();
+    if !(removed || !changed.is_empty() || (moving && camera.is_changed()) || out.rebuilds == 0) {
+        return;
+    }
+    let _span = tracing::info_span!("rebuild_geometry").entered();
+    let start = std::time::Instant::now();
+    let mut objs: Vec<_> = objects.iter().collect();
+    objs.sort_by_key(|(e, ..)| *e);
+    out.entities = objs.iter().map(|(e, ..)| *e).collect();
+    let (mut prims, mut mats, mut velocity) = (Vec::new(), Vec::new(), Vec::new());
+    for (_, transform, shape, material, motion) in objs {
+        // Scene files are validated at load; objects spawned by code may still be bad.
+        if let Err(e) = primitives(&shape.0, &transform.0, &mut prims) {
+            tracing::error!("object skipped: {e}");
+        }
+        mats.resize(prims.len(), material.0);
+        velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
+    }
+    let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
+    tracing::info!(
+        primitives = geometry.prims.len(),
+        moving = geometry.velocity.is_some(),
+        "primitives' BVH built in {:.2} ms",
+        start.elapsed().as_secs_f64() * 1e3
+    );
+    out.geometry = Arc::new(geometry);
+    out.rebuilds += 1;
+}
+
+/// Keeps the instances: the TLAS is rebuilt when instances come or go or change mesh or
+/// material (building the BLAS of a mesh no instance used before), refitted when they only
+/// move (or rebuilt when refitting made it much worse), and left alone otherwise. A BLAS is
+/// built once per mesh, whatever happens to the instances.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+pub fn update_instances(
+    mut out: ResMut<SceneInstances>,
+    mut library: ResMut<MeshLibrary>,
+    objects: Query<
+        (Entity, &Transform, &Shape, &MaterialId, Option<&Motion>, Option<&Animated>),
+        With<Instanced>,
+    >,
+    reshaped: Query<(), (With<Instanced>, Or<(Added<Instanced>, Changed<Shape>, Changed<MaterialId>)>)>,
+    moved: Query<Entity, (With<Instanced>, Or<(Changed<Transform>, Changed<Motion>)>)>,
+    mut removed_shape: RemovedComponents<Shape>,
+    mut removed_material: RemovedComponents<MaterialId>,
+    mut removed: RemovedComponents<Instanced>,
+    mut stopped: RemovedComponents<Motion>,
+    camera: Res<CameraParams>,
+    time: Res<FrameTime>,
+) {
+    // Keyframed instances that turn or scale while the shutter is open are placed per ray
+    // time; translation alone is the exact linear motion of `Motion`.
+    let shutter_motion = |anim: Option<&Animated>| -> Option<ShutterMotion> {
+        let a = anim?;
+        let (t0, t1) = (time.open, time.close);
+        let (a0, a1) = (a.keys.at(t0), a.keys.at(t1));
+        if !(t1 > t0) || a0.matrix3 == a1.matrix3 {
+            return None;
+        }
+        let v = Vec3A::from(a.velocity);
+        let a0 = Affine3A { translation: a0.translation + v * t0, ..a0 };
+        let a1 = Affine3A { translation: a1.translation + v * t1, ..a1 };
+        ShutterMotion::new(a.base, a0, a1, (t0, t1))
+    };
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let gone = removed_shape.read().chain(removed_material.read()).chain(removed.read()).any(was_built_from);
+    let stopped: Vec<Entity> = stopped.read().filter(|e| was_built_from(*e)).collect();
+    let moving = out.instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some());
+    let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
+    if gone || !reshaped.is_empty() || out.builds == 0 {
+        let _span = tracing::info_span!("rebuild_instances").entered();
+        let start = std::time::Instant::now();
+        let mut objs: Vec<_> = objects.iter().collect();
+        objs.sort_by_key(|(e, ..)| *e);
+        let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
+        for (e, transform, shape, material, motion, anim) in objs {
+            let Form::Mesh(mesh) = &shape.0 else {
+                tracing::error!("instance skipped: only meshes are instanced");
+                continue;
+            };
+            let b = library.get(mesh);
+            let index = match blas.iter().position(|x| Arc::ptr_eq(x, &b)) {
+                Some(i) => i,
+                None => {
+                    blas.push(b);
+                    blas.len() - 1
+                }
+            };
+            match Instance::new(index as u32, transform.0, material.0, velocity(motion)) {
+                Some(inst) => {
+                    list.push(inst.with_motion(shutter_motion(anim)));
+                    entities.push(e);
+                }
+                None => tracing::error!("instance skipped: its transform is singular"),
+            }
+        }
+        // Meshes no instance uses any more are dropped.
+        library.blas.retain(|_, b| blas.iter().any(|x| Arc::ptr_eq(x, b)));
+        out.instances = Arc::new(Instances::build(blas, list, camera.0.shutter));
+        if !out.instances.list.is_empty() {
+            tracing::info!(
+                instances = out.instances.list.len(),
+                meshes = out.instances.blas.len(),
+                "instances' TLAS built in {:.2} ms (BLAS of new meshes included)",
+                start.elapsed().as_secs_f64() * 1e3
+            );
+        }
+        out.entities = entities;
+        out.builds += 1;
+        return;
+    }
+    // A new shutter changes the sweep of whatever moves: a refit covers it.
+    let new_shutter = moving && camera.is_changed();
+    if moved.is_empty() && stopped.is_empty() && !new_shutter {
+        return;
+    }
+    let _span = tracing::info_span!("move_instances").entered();
+    let start = std::time::Instant::now();
+    let out = &mut *out;
+    let instances = Arc::make_mut(&mut out.instances);
+    instances.shutter = camera.0.shutter;
+    for e in moved.iter().chain(stopped) {
+        let Ok(i) = out.entities.binary_search(&e) else { continue };
+        let Ok((_, transform, _, _, motion, anim)) = objects.get(e) else { continue };
+        if !instances.place(i, transform.0, velocity(motion), shutter_motion(anim)) {
+            tracing::error!("instance not moved: its new transform is singular");
+        }
+    }
+    let how = if instances.refit() {
+        out.refits += 1;
+        "refitted"
+    } else {
+        *instances = Instances::build(instances.blas.clone(), instances.list.clone(), camera.0.shutter);
+        out.builds += 1;
+        "rebuilt (a refit would have loosened it too much)"
+    };
+    tracing::info!(
+        instances = instances.list.len(),
+        "instances' TLAS {how} in {:.2} ms",
+        start.elapsed().as_secs_f64() * 1e3
+    );
+}
+
+/// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,
+/// changed or was removed.
+#[allow(clippy::type_complexity)]
+pub fn rebuild_media(
+    mut out: ResMut<SceneMedia>,
+    volumes: Query<(Entity, &Transform, &Shape, &Filling)>,
+    changed: Query<(), (With<Filling>, Or<(Changed<Transform>, Changed<Shape>, Changed<Filling>)>)>,
+    mut removed_shape: RemovedComponents<Shape>,
+    mut removed: RemovedComponents<Filling>,
+) {
+    let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
+    let removed = removed_shape.read().chain(removed.read()).any(was_built_from);
+    if !(removed || !changed.is_empty() || out.rebuilds == 0) {
+        return;
+    }
+    let _span = tracing::info_span!("rebuild_media").entered();
+    let mut vols: Vec<_> = volumes.iter().collect();
+    vols.sort_by_key(|(e, ..)| *e);
+    out.entities = vols.iter().map(|(e, ..)| *e).collect();
+    let volumes = vols
+        .into_iter()
+        .filter_map(|(_, transform, shape, filling)| {
+            let boundary = match &shape.0 {
+                Form::Mesh(mesh) => {
+                    if let Some((a, b, _)) = crate::scene::open_edge(mesh) {
+                        tracing::error!("medium skipped: its mesh is open at the edge {a} - {b}");
+                        return None;
+                    }
+                    Boundary::Mesh(Arc::new(MeshBlas::build(mesh.clone())))
+                }
+                &Form::Sphere { center, radius } => Boundary::Sphere { center, radius },
+                &Form::Box { min, max } => Boundary::Box { min, max },
+                Form::Quad { .. } | Form::Triangle { .. } => {
+                    tracing::error!("medium skipped: a quad or triangle bounds no volume");
+                    return None;
+                }
+            };
+            Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0 })
+        })
+        .collect();
+    out.media = Arc::new(Media { volumes });
+    out.rebuilds += 1;
+}
+
+/// Rebuilds the light table when the primitives, the instances (they bound the scene), the
+/// materials (which emit), the punctual lights or the background changed.
+pub fn rebuild_lights(
+    mut out: ResMut<SceneLights>,
+    geometry: Res<SceneGeometry>,
+    instances: Res<SceneInstances>,
+    materials: Res<Materials>,
+    punctual: Res<PunctualLights>,
+    background: Res<BackgroundLight>,
+) {
+    let any = geometry.is_changed()
+        || instances.is_changed()
+        || materials.is_changed()
+        || punctual.is_changed()
+        || background.is_changed();
+    if !any && out.rebuilds > 0 {
+        return;
+    }
+    let geo = &geometry.geometry;
+    let inst = &instances.instances;
+    let boxes =
+        (geo.prims.iter().map(|p| p.aabb())).chain((0..inst.list.len()).map(|i| inst.world_bounds(i)));
+    let bounds = boxes.fold(None, |acc: Option<(Vec3A, Vec3A)>, b| {
+        let (lo, hi) = (b.min, b.max);
+        Some(acc.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))))
+    });
+    let inputs = LightInputs { punctual: &punctual.0, environment: background.0.is_sampled(), bounds };
+    out.lights = Arc::new(LightTable::build(geo, &materials.0, inputs));
+    out.rebuilds += 1;
+    tracing::info!(lights = out.lights.len(), "light table built");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Ray;
+    use crate::media::Medium;
+    use crate::render_scene::RenderScene;
+    use crate::scene::parse;
+    use crate::world::SceneWorld;
+    use glam::Vec3;
+    use std::path::Path;
+
+    fn world() -> SceneWorld {
+        let desc = parse(
+            r#"Scene(
+                camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+                materials: { "a": Lambertian(albedo: (0.5, 0.5, 0.5)), "l": DiffuseLight(emit: (1, 1, 1)) },
+                objects: [
+                    (shape: Sphere(center: (0, 0, 0), radius: 1), material: "a"),
+                    (shape: Quad(q: (0, 2, 0), u: (1, 0, 0), v: (0, 0, 1)), material: "l"),
+                ],
+            )"#,
+            Path::new("<test>"),
+        )
+        .unwrap();
+        SceneWorld::new(&desc)
+    }
+
+    fn rebuilds(w: &SceneWorld) -> u64 {
+        w.world.resource::<SceneGeometry>().rebuilds
+    }
+
+    #[test]
+    fn geometry_is_rebuilt_only_when_its_inputs_change() {
+        let mut w = world();
+        let first = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert_eq!(first.geometry.prims.len(), 2);
+        assert_eq!(first.lights.prims.len(), 1);
+
+        // Nothing changed: no rebuild, and the same extracted scene.
+        let again = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(Arc::ptr_eq(&first, &again));
+
+        // A camera edit re-extracts without touching the geometry.
+        w.world.resource_mut::<CameraParams>().0.vfov = 30.0;
+        let cam = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(!Arc::ptr_eq(&first, &cam) && Arc::ptr_eq(&first.geometry, &cam.geometry));
+
+        // Moving an object rebuilds.
+        let e = w.world.query_filtered::<Entity, With<Shape>>().iter(&w.world).next().unwrap();
+        w.world.entity_mut(e).insert(Transform(Affine3A::from_translation(Vec3::X)));
+        let moved = w.update();
+        assert_eq!(rebuilds(&w), 2);
+
+        // A material edit rebuilds the light table, not the geometry: the light goes dark.
+        let tables = w.world.resource::<SceneLights>().rebuilds;
+        w.world.resource_mut::<Materials>().0[1] =
+            crate::material::lambertian::Lambertian { albedo: Vec3::ONE }.into();
+        let dark = w.update();
+        assert_eq!(rebuilds(&w), 2);
+        assert_eq!(w.world.resource::<SceneLights>().rebuilds, tables + 1);
+        assert!(dark.lights.is_empty());
+        assert!(Arc::ptr_eq(&dark.geometry, &moved.geometry));
+
+        // Spawning and despawning rebuild; the removal is seen after clear_trackers.
+        let s = w
+            .world
+            .spawn((
+                Transform(Affine3A::IDENTITY),
+                Shape(Form::Sphere { center: Vec3A::Y, radius: 0.5 }),
+                MaterialId(0),
+            ))
+            .id();
+        assert_eq!(w.update().geometry.prims.len(), 3);
+        assert_eq!(rebuilds(&w), 3);
+        w.world.despawn(s);
+        assert_eq!(w.update().geometry.prims.len(), 2);
+        assert_eq!(rebuilds(&w), 4);
+        w.update();
+        assert_eq!(rebuilds(&w), 4);
+    }
+
+    #[test]
+    fn motion_rebuilds_with_swept_bounds_and_follows_the_shutter() {
+        let mut w = world();
+        w.update();
+        // A still scene ignores the shutter.
+        w.world.resource_mut::<CameraParams>().0.shutter = (0.0, 1.0);
+        let still = w.update();
+        assert_eq!(rebuilds(&w), 1);
+        assert!(!still.features.motion);
+
+        // Setting the sphere moving rebuilds; the BVH covers its sweep, time is sampled.
+        let e = w
+            .world
+            .query::<(Entity, &Shape)>()
+            .iter(&w.world)
+            .find_map(|(e, s)| matches!(s.0, Form::Sphere { .. }).then_some(e))
+            .unwrap();
+        w.world.entity_mut(e).insert(Motion { velocity: Vec3::new(3.0, 0.0, 0.0) });
+        let moving = w.update();
+        assert_eq!(rebuilds(&w), 2);
+        assert!(moving.features.motion);
+        let at = |s: &RenderScene, t: f32| {
+            s.geometry
+                .intersect(&Ray { origin: Vec3A::new(3.0, 0.0, 5.0), dir: -Vec3A::Z, time: t }, f32::INFINITY)
+        };
+        assert!(at(&moving, 0.0).is_none() && at(&moving, 1.0).is_some());
+
+        // Now the shutter bounds the sweep: changing it rebuilds.
+        w.world.resource_mut::<CameraParams>().0.shutter = (0.0, 2.0);
+        w.update();
+        assert_eq!(rebuilds(&w), 3);
+
+        // Stopping (removing the motion) rebuilds, seen after clear_trackers.
+        w.world.entity_mut(e).remove::<Motion>();
+        let stopped = w.update();
+        assert_eq!(rebuilds(&w), 4);
+        assert!(!stopped.features.motion && at(&stopped, 1.0).is_none());
+    }
+
+    #[test]
+    fn media_rebuild_only_when_a_volume_changes() {
+        let mut w = world();
+        w.update();
+        assert!(w.update().media.is_empty());
+        let v = w
+            .world
+            .spawn((
+                Transform(Affine3A::IDENTITY),
+                Shape(Form::Box { min: Vec3A::ZERO, max: Vec3A::ONE }),
+                Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
+            ))
+            .id();
+        let with = w.update();
+        assert_eq!((with.media.volumes.len(), rebuilds(&w)), (1, 1), "a volume is not geometry");
+        assert!(with.features.media);
+        w.world.despawn(v);
+        assert!(!w.update().features.media);
+    }
+}

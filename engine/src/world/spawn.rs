@@ -1,0 +1,202 @@
+//! Spawning: the entities and resources of a scene description.
+
+use super::components::*;
+use crate::environment::EnvironmentMap;
+use crate::geometry::Primitive;
+use crate::material::Material;
+use crate::media::Medium;
+use crate::mesh::MeshData;
+use crate::placement::{Form, primitives};
+use crate::render_scene::{Background, PixelWindow, RenderSettings};
+use crate::scene::{
+    BackgroundDesc, Body, Color, MaterialDesc, Positive, Rgb, SceneDesc, TextureDesc, compose,
+};
+use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
+use bevy_ecs::prelude::*;
+use glam::{Affine3A, Vec3};
+use std::sync::Arc;
+
+/// Spawns the entities and inserts the resources of `desc` into an empty world.
+pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
+    let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
+    let textures = build_textures(desc);
+    let (mats, per_material): (Vec<Material>, _) =
+        desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
+    let emits = |id: usize| mats[id].is_emissive();
+    // Boxes and quads whose keyframes turn or scale them become meshes, so that they blur
+    // by their motion over the shutter as instances do (not at their mid-shutter pose).
+    let shapes: Vec<Form> = desc
+        .objects
+        .iter()
+        .map(|o| {
+            let turns = o.animate.as_ref().is_some_and(|a| a.rotate.is_some() || a.scale.is_some());
+            let surface = matches!(&o.body, Body::Surface(name)
+                if !emits(names.iter().position(|n| *n == name.0).expect("validated")));
+            match (turns && surface).then(|| flat_mesh(&o.shape.form())).flatten() {
+                Some(mesh) => Form::Mesh(Arc::new(mesh)),
+                None => o.shape.form(),
+            }
+        })
+        .collect();
+    let instanced: Vec<bool> = desc
+        .objects
+        .iter()
+        .zip(&shapes)
+        .map(|(o, shape)| match (shape, &o.body) {
+            (Form::Mesh(_), Body::Surface(name)) => {
+                !emits(names.iter().position(|n| *n == name.0).expect("validated"))
+            }
+            _ => false,
+        })
+        .collect();
+    world.insert_resource(Materials(mats));
+    world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
+    for (i, ((obj, instanced), shape)) in desc.objects.iter().zip(instanced).zip(shapes).enumerate() {
+        let placed = (Transform(compose(&obj.transform)), Shape(shape), ObjectIndex(i as u32));
+        match &obj.body {
+            Body::Surface(name) => {
+                let id =
+                    names.iter().position(|n| *n == name.0).expect("material names are validated at load");
+                let mut e = world.spawn((placed, MaterialId(id as u32)));
+                let velocity = obj.motion.map_or(Vec3::ZERO, |m| m.velocity.0);
+                if obj.motion.is_some() || obj.animate.is_some() {
+                    e.insert(Motion { velocity });
+                }
+                if let Some(keys) = &obj.animate {
+                    e.insert(Animated { base: compose(&obj.transform), keys: keys.clone(), velocity });
+                }
+                if instanced {
+                    e.insert(Instanced);
+                }
+            }
+            Body::Volume(m) => {
+                world.spawn((placed, Filling(Medium { sigma_t: m.density.0, albedo: m.albedo.0 })));
+            }
+        }
+    }
+    let r = desc.render;
+    let (width, height) = (r.width.get(), r.height.get());
+    let whole = PixelWindow { x0: 0, y0: 0, w: width, h: height };
+    // A window too small to hold a pixel at this size (the CLI refuses it first) falls
+    // back to the whole image.
+    let window = r.crop.and_then(|c| PixelWindow::crop(width, height, c.0)).unwrap_or(whole);
+    world.insert_resource(Settings(RenderSettings {
+        width,
+        height,
+        window,
+        spp: r.spp.get(),
+        max_depth: r.max_depth,
+        rr_depth: r.rr_depth,
+        seed: r.seed,
+        clamp: r.clamp.map(|c| c.0),
+        sampler: r.sampler,
+    }));
+    world.insert_resource(CameraParams(desc.camera, None));
+    world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });
+    world.insert_resource(CameraKeys { base: desc.camera, keys: desc.animation.camera.clone() });
+    let emit_keys = desc
+        .animation
+        .emit
+        .iter()
+        .map(|(name, track)| {
+            let id = names.iter().position(|n| *n == name.0).expect("material names are validated at load");
+            (id as u32, track.0.clone())
+        })
+        .collect();
+    world.insert_resource(EmitKeys(emit_keys));
+    world.insert_resource(BackgroundLight(match &desc.background {
+        BackgroundDesc::Black => Background::Constant(Vec3::ZERO),
+        BackgroundDesc::Constant(c) => Background::Constant(c.0),
+        BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
+        BackgroundDesc::Environment { file, scale, rotate } => {
+            let img = &file.image;
+            let texels = img.texels.clone();
+            Background::Environment(Arc::new(EnvironmentMap::new(
+                img.width, img.height, texels, scale.0, rotate.0,
+            )))
+        }
+    }));
+    world.insert_resource(PunctualLights(desc.lights.iter().map(|l| l.to_light()).collect()));
+    world.init_resource::<SceneLights>();
+    world.init_resource::<SceneGeometry>();
+    world.init_resource::<SceneInstances>();
+    world.init_resource::<MeshLibrary>();
+    world.init_resource::<SceneMedia>();
+    world.init_resource::<Extracted>();
+}
+
+/// A box or a quad as a triangle mesh in its own space (two triangles per face, uvs as the
+/// quads'); `None` for other shapes.
+fn flat_mesh(shape: &Form) -> Option<MeshData> {
+    if !matches!(shape, Form::Box { .. } | Form::Quad { .. }) {
+        return None;
+    }
+    let mut quads = Vec::new();
+    primitives(shape, &Affine3A::IDENTITY, &mut quads).ok()?;
+    let mut mesh = MeshData { uvs: Some(Vec::new()), ..Default::default() };
+    for p in quads {
+        let Primitive::Quad(q) = p else { return None };
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([q.q, q.q + q.u, q.q + q.u + q.v, q.q + q.v]);
+        mesh.uvs.as_mut()?.extend([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::ONE, glam::Vec2::Y]);
+        mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+    }
+    Some(mesh)
+}
+
+/// Builds the runtime textures: the named ones keep their indices in file order; colours
+/// written inline inside them (checker squares) become solid textures after them.
+fn build_textures(desc: &SceneDesc) -> Textures {
+    let n = desc.textures.0.len() as TextureId;
+    let mut inline = Vec::new();
+    let mut sub = |c: &Color<Rgb>| match c {
+        Color::Texture(name) => texture_id(desc, name),
+        Color::Value(v) => {
+            inline.push(Texture::Solid(v.0));
+            n + inline.len() as TextureId - 1
+        }
+    };
+    let noise = |kind, scale: &Positive, depth, color: &Rgb| Texture::Noise {
+        kind,
+        scale: scale.0,
+        depth,
+        color: color.0,
+    };
+    let mut list: Vec<Texture> = desc
+        .textures
+        .0
+        .iter()
+        .map(|(_, t)| match t {
+            TextureDesc::Solid(c) => Texture::Solid(c.0),
+            TextureDesc::Checker { scale, even, odd } => {
+                Texture::Checker { scale: scale.0, even: sub(even), odd: sub(odd) }
+            }
+            TextureDesc::UvChecker { u, v, even, odd } => {
+                Texture::UvChecker { u: u.0, v: v.0, even: sub(even), odd: sub(odd) }
+            }
+            TextureDesc::Image { file, wrap } => Texture::Image { image: file.image.clone(), wrap: *wrap },
+            TextureDesc::Noise { scale, color } => noise(NoiseKind::Smooth, scale, 0, color),
+            TextureDesc::BlockyNoise { scale, color } => noise(NoiseKind::Blocky, scale, 0, color),
+            TextureDesc::Turbulence { scale, depth, color } => {
+                noise(NoiseKind::Turbulence, scale, *depth, color)
+            }
+            TextureDesc::Marble { scale, depth, color } => noise(NoiseKind::Marble, scale, *depth, color),
+        })
+        .collect();
+    list.extend(inline);
+    Textures { list }
+}
+
+/// The index of a named texture.
+fn texture_id(desc: &SceneDesc, name: &str) -> TextureId {
+    desc.textures.0.iter().position(|(n, _)| n == name).expect("texture names are validated at load")
+        as TextureId
+}
+
+/// A material's parameters (textured colours hold the texture's mean) and its textures.
+fn material(desc: &SceneDesc, m: &MaterialDesc, textures: &Textures) -> (Material, MaterialTextures) {
+    Material::build(m, &mut |name| {
+        let id = texture_id(desc, name);
+        (id, textures.mean(id))
+    })
+}
