@@ -1,0 +1,135 @@
+//! `pathwave animate`: a sequence of frames, each rendered as `render` renders one image.
+
+use super::args::{Checkpointing, How, RenderArgs};
+use super::load::{load, log_scene};
+use super::pool;
+use super::render::{RenderId, metadata, render_id, render_image};
+use super::stats::{print_stats, stage_shares};
+use pathwave::denoiser;
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::wavefront;
+use pathwave::io;
+use pathwave::view::Viewers;
+use pathwave::{animate, shard};
+use std::path::{Path, PathBuf};
+
+/// `animate`'s options about which frames to render.
+pub struct SequenceArgs {
+    pub frames: Option<String>,
+    pub fps: Option<f32>,
+    pub shutter: Option<f32>,
+    pub overwrite: bool,
+    pub shard: Option<String>,
+    pub shard_count: Option<u32>,
+}
+
+pub fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
+    // Frame folders are created as frames come; the format and the scene are checked now.
+    let first = match Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif")) {
+        true => PathBuf::from(output),
+        false => animate::frame_path(output, 0)?,
+    };
+    if io::same_file(path, &first) {
+        return Err(format!("{output}: the output would replace the scene {}", path.display()));
+    }
+    let ext = first.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if !["png", "exr", "gif"].contains(&ext.as_str()) {
+        return Err(format!("{output}: unknown output format (use .png, .exr or .gif)"));
+    }
+    let desc = load(path, &args.overrides())?;
+    let a = &desc.animation;
+    let frames = match &seq_args.frames {
+        Some(f) => animate::parse_range(f, "--frames")?,
+        None => (0, a.frames.get()),
+    };
+    let fps = seq_args.fps.unwrap_or(a.fps.0);
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(format!("--fps takes a number > 0, not {fps}"));
+    }
+    // The times of the frames stay where --time may go.
+    if frames.1 as f32 / fps > 1e7 {
+        return Err(format!("frames up to {} at {fps} fps reach beyond 1e7 seconds", frames.1));
+    }
+    let shutter = seq_args.shutter.unwrap_or(a.shutter.0);
+    if !(0.0..=1.0).contains(&shutter) {
+        return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
+    }
+    let shard = match seq_args.shard.as_deref() {
+        Some(s) => shard::parse_shard(s, seq_args.shard_count).map(|t| (t.index, t.count))?,
+        None => (0, 1),
+    };
+    let every = args.checkpoint_every()?;
+    args.how().check_aovs(&first)?;
+    let gif = Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    if gif && (args.denoise.is_some() || args.aov.is_some() || every.is_some()) {
+        return Err(format!(
+            "{output}: --denoise, --aov and --checkpoint-every write files beside each frame; \
+             render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
+        ));
+    }
+    // A frame killed half way resumes from its checkpoint.
+    let checkpointing = every.map(|every| Checkpointing { every, resume: true });
+    let pool = pool(args.threads)?;
+    if let Some(d) = args.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
+    let mut world = SceneWorld::new(&desc);
+    let quiet = args.log.quiet;
+    let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: seq_args.overwrite, quiet };
+    // Frames report one line each (from `animate::run`), not a bar or a line per pass.
+    let how = How { quiet: true, ..args.how() };
+    let mut total: Option<(wavefront::Stats, f64, u64)> = None;
+    let mut logged = false;
+    // Frames are not shown while they render.
+    let nv = &mut Viewers::default();
+    animate::run(&mut world, &seq, |scene, info| {
+        if !logged {
+            log_scene(scene);
+            logged = true;
+        }
+        let r = match &info.path {
+            Some(out) => {
+                let id = render_id(path, scene, &how, info.open)?;
+                let r = render_image(scene, &id, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
+                let metadata = metadata(id.key, scene, &r);
+                (r, metadata)
+            }
+            // A GIF's frames: no checkpoints, no files beside them (refused above).
+            None => {
+                {
+                    // No checkpoint, so nothing identifies it.
+                    let id = RenderId { key: 0, settings: String::new() };
+                    (
+                        render_image(scene, &id, Path::new(output), &how, None, None, &pool, false, nv)?,
+                        Vec::new(),
+                    )
+                }
+            }
+        };
+        let (r, metadata) = r;
+        if args.profile.stats {
+            match &r.stats {
+                Some(st) => eprintln!(
+                    "frame {}: scene update {:.2} ms, render {:.2} s, {}",
+                    info.frame,
+                    info.update.as_secs_f64() * 1e3,
+                    r.secs,
+                    stage_shares(st)
+                ),
+                None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+            }
+            if let Some(st) = r.stats.clone() {
+                total = Some(match total.take() {
+                    Some((t, s, n)) => (t.merge(st), s + r.secs, n + r.non_finite),
+                    None => (st, r.secs, r.non_finite),
+                });
+            }
+        }
+        Ok(io::Output { img: r.img, layers: r.layers, metadata })
+    })?;
+    if let Some((st, secs, non_finite)) = &total {
+        eprintln!("the sequence's frames together:");
+        print_stats(st, *secs, *non_finite);
+    }
+    Ok(())
+}

@@ -1,0 +1,45 @@
+//! `pathwave merge`: checkpoints of sample shares added into one image.
+
+use pathwave::checkpoint::{self, Checkpoint};
+use pathwave::io::{self, LinearImage};
+use std::path::{Path, PathBuf};
+
+/// Merges the checkpoints `parts` (shares of one render's samples) into `output` and, when
+/// they make one run of samples, its checkpoint.
+pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+    let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
+    io::check_output(output, &inputs, false)?;
+    let ckpt = checkpoint::path_for(output);
+    if let Some(p) = parts.iter().find(|p| io::same_file(p, &ckpt)) {
+        return Err(format!(
+            "{}: the merged checkpoint would replace the part {}",
+            ckpt.display(),
+            p.display()
+        ));
+    }
+    let loaded = parts.iter().map(|p| Checkpoint::load(p)).collect::<Result<Vec<_>, _>>()?;
+    let (merged, hi) = checkpoint::merge(&loaded)?;
+    let f = &merged.film;
+    io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() })?;
+    let lo = merged.first_sample;
+    if lo + f.spp == hi {
+        merged.save(&ckpt)?;
+        eprintln!(
+            "{}: samples {lo}..{hi} of {} from {} parts{}; checkpoint {}",
+            output.display(),
+            merged.target_spp,
+            parts.len(),
+            if (lo, hi) == (0, merged.target_spp) { " (all of them)" } else { "" },
+            ckpt.display()
+        );
+    } else {
+        eprintln!(
+            "{}: {} samples between {lo} and {hi} of {}, with gaps (no checkpoint written: \
+             a checkpoint holds one run of samples)",
+            output.display(),
+            f.spp,
+            merged.target_spp
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,383 @@
+//! One image from samples to file: `pathwave render`, and the per-frame work of `animate`
+//! (checkpoints and resuming, passes, previews, progress).
+
+use super::args::{Checkpointing, How, Integrator, Overrides};
+use super::load::{load, log_scene};
+use super::pool;
+use super::post_process::post_process;
+use super::stats::print_stats;
+use pathwave::checkpoint::{self, Checkpoint};
+use pathwave::denoiser;
+use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::{film::Film, oracle, wavefront};
+use pathwave::io::{self, LinearImage};
+use pathwave::shard;
+use pathwave::view::{self, ViewArgs, Viewers};
+use std::path::Path;
+use std::time::Instant;
+
+#[allow(clippy::too_many_arguments)]
+pub fn render(
+    path: &Path,
+    output: &Path,
+    o: Overrides,
+    how: &How,
+    time: f32,
+    checkpointing: Option<Checkpointing>,
+    samples: Option<shard::Samples>,
+    view: &ViewArgs,
+) -> Result<(), String> {
+    io::check_output(output, &[path], false)?;
+    how.check_aovs(output)?;
+    if !(time.is_finite() && time.abs() <= 1e7) {
+        return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
+    }
+    let desc = load(path, &o)?;
+    let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
+    let pool = pool(how.threads)?;
+    if let Some(d) = how.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
+    let mut world = SceneWorld::new(&desc);
+    let shutter = desc.camera.shutter;
+    world.set_time(time + shutter.0, time + shutter.1);
+    let scene = world.update();
+    log_scene(&scene);
+    let s = scene.settings;
+    let id = render_id(path, &scene, how, time)?;
+    let mut viewers = Viewers::open(view, &output.display().to_string(), &s);
+    let r =
+        render_image(&scene, &id, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
+    if how.stats {
+        match &r.stats {
+            Some(st) => print_stats(st, r.secs, r.non_finite),
+            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        }
+    }
+    let metadata = metadata(id.key, &scene, &r);
+    let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
+    eprintln!(
+        "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
+        output.display(),
+        s.window.w,
+        s.window.h,
+        match s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height }) {
+            true => String::new(),
+            false => format!(" (crop at {},{} of {}x{})", s.window.x0, s.window.y0, s.width, s.height),
+        },
+        r.spp,
+        r.secs,
+        r.new_samples / r.secs.max(1e-9) / 1e6,
+        pool.current_num_threads(),
+        r.non_finite,
+        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
+        match checkpointing {
+            Some(_) => format!("; checkpoint {}", checkpoint::path_for(output).display()),
+            None => String::new(),
+        },
+    );
+    Ok(())
+}
+
+/// What identifies a render's samples: the checkpoint key (a hash of the scene file's bytes and
+/// of every setting that changes a sample) and those settings as text, so that a checkpoint of
+/// other settings is refused with the ones that differ.
+pub struct RenderId {
+    pub key: u64,
+    pub settings: String,
+}
+
+/// The [`RenderId`] of a render of the scene file `path` at `time`.
+pub fn render_id(
+    path: &Path,
+    scene: &pathwave::engine::render_scene::RenderScene,
+    how: &How,
+    time: f32,
+) -> Result<RenderId, String> {
+    let s = scene.settings;
+    use pathwave::engine::scene::files;
+    let w = &s.window;
+    let settings = checkpoint::settings_text(&[
+        ("size", format!("{}x{}", s.width, s.height)),
+        ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
+        ("seed", s.seed.to_string()),
+        ("max_depth", s.max_depth.to_string()),
+        ("rr_depth", s.rr_depth.to_string()),
+        ("clamp", format!("{:?}", s.clamp)),
+        ("time", time.to_string()),
+        ("integrator", format!("{:?}", how.integrator)),
+        ("sampler", format!("{:?}", s.sampler)),
+        ("defines", format!("{:?}", how.defines)),
+    ]);
+    if settings.len() > checkpoint::MAX_SETTINGS_BYTES {
+        return Err(format!(
+            "the -D values take {} bytes; at most {} fit in a checkpoint",
+            settings.len(),
+            checkpoint::MAX_SETTINGS_BYTES
+        ));
+    }
+    let scene_file = files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?;
+    Ok(RenderId { key: checkpoint::key(&scene_file, &settings), settings })
+}
+
+/// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a
+/// hash of the scene file and the settings that change the image), samples per pixel and seed.
+/// Not the render time: the same render gives the same bytes.
+pub fn metadata(
+    key: u64,
+    scene: &pathwave::engine::render_scene::RenderScene,
+    r: &Rendered,
+) -> Vec<(&'static str, String)> {
+    vec![
+        ("pathwave:version", env!("CARGO_PKG_VERSION").to_string()),
+        ("pathwave:scene_key", format!("{key:016x}")),
+        ("pathwave:spp", r.spp.to_string()),
+        ("pathwave:seed", scene.settings.seed.to_string()),
+    ]
+}
+
+/// One rendered image, before it is written.
+pub struct Rendered {
+    /// The image (denoised when asked for).
+    pub img: LinearImage,
+    /// The AOVs an EXR output holds as layers.
+    pub layers: Vec<io::ExrLayer<'static>>,
+    /// Samples per pixel in it.
+    pub spp: u32,
+    /// Samples rendered by this run (not those resumed).
+    pub new_samples: f64,
+    /// Per-stage statistics (wavefront).
+    pub stats: Option<wavefront::Stats>,
+    /// Seconds, from the start of rendering to the image.
+    pub secs: f64,
+    /// NaN/Inf samples discarded.
+    pub non_finite: u64,
+}
+
+/// Renders `scene` into the image meant for `output`, as `render` and each frame of `animate`
+/// do: from its checkpoint when resuming, in passes that save checkpoints (and, with
+/// `partial`, the image so far) when asked, or show the image to `viewers` (passes of 1, 2, 4,
+/// ... spp, until a viewer stops the render), then denoised or with guides when asked.
+#[allow(clippy::too_many_arguments)]
+pub fn render_image(
+    scene: &pathwave::engine::render_scene::RenderScene,
+    id: &RenderId,
+    output: &Path,
+    how: &How,
+    checkpointing: Option<&Checkpointing>,
+    samples: Option<(u32, u32)>,
+    pool: &rayon::ThreadPool,
+    partial: bool,
+    viewers: &mut Viewers,
+) -> Result<Rendered, String> {
+    let start = Instant::now();
+    let s = scene.settings;
+    let ckpt_path = checkpoint::path_for(output);
+    // The sample indices this run owns: all of them, or a range with --samples (one machine's
+    // share of a frame, added to the others by `pathwave merge`).
+    let (lo, hi) = samples.unwrap_or((0, s.spp));
+    if hi > s.spp {
+        return Err(format!("--samples {lo}..{hi} goes beyond the {} samples per pixel", s.spp));
+    }
+    let part = (lo, hi) != (0, s.spp);
+    let mut film = Film::new(s.window.w, s.window.h);
+    if checkpointing.is_some_and(|c| c.resume) {
+        if ckpt_path.exists() {
+            let ckpt = Checkpoint::load(&ckpt_path)?;
+            if ckpt.key != id.key {
+                return Err(format!(
+                    "{}: the checkpoint is of another scene or other settings ({}); remove it or \
+                     render without --resume",
+                    ckpt_path.display(),
+                    checkpoint::mismatch("the checkpoint", &ckpt.settings, "this render", &id.settings)
+                ));
+            }
+            if (ckpt.film.width, ckpt.film.height) != (s.window.w, s.window.h) {
+                return Err(format!(
+                    "{}: the checkpoint holds a {}x{} image, this render makes {}x{}",
+                    ckpt_path.display(),
+                    ckpt.film.width,
+                    ckpt.film.height,
+                    s.window.w,
+                    s.window.h
+                ));
+            }
+            if ckpt.first_sample != lo {
+                return Err(format!(
+                    "{}: the checkpoint holds samples from {}, this run renders {lo}..{hi}",
+                    ckpt_path.display(),
+                    ckpt.first_sample
+                ));
+            }
+            // Sobol and independent samples do not depend on the count: a render extended to
+            // more samples is the bits of a fresh one. Stratified patterns do.
+            if ckpt.target_spp != s.spp && lo + ckpt.film.spp < hi && s.sampler == SamplerKind::Stratified {
+                eprintln!(
+                    "note: the checkpoint was started for {} spp: samples {}..{hi} are stratified for {} \
+                     (unbiased, but not the bits of a fresh {}-spp render)",
+                    ckpt.target_spp,
+                    lo + ckpt.film.spp,
+                    s.spp,
+                    s.spp
+                );
+            }
+            let (have, want) = (ckpt.film.spp, hi - lo);
+            if have > want {
+                return Err(format!(
+                    "{}: the checkpoint holds {have} samples per pixel, more than the {want} asked for; \
+                     ask for at least {have} with --spp (or render without --resume)",
+                    ckpt_path.display()
+                ));
+            }
+            if have == want {
+                eprintln!("{}: complete ({have} spp); writing its image", ckpt_path.display());
+            } else if part {
+                eprintln!("{}: resuming samples {lo}..{hi} at {}", ckpt_path.display(), lo + have);
+            } else {
+                eprintln!("{}: resuming at {have} of {} spp", ckpt_path.display(), s.spp);
+            }
+            film = ckpt.film;
+        } else if !how.quiet {
+            eprintln!("{}: no checkpoint yet, starting at sample {lo}", ckpt_path.display());
+        }
+    }
+    let first_spp = film.spp;
+    let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid_of(&s.window);
+    let tiles = (tiles_x * tiles_y) as usize;
+    let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
+    let mut stats: Option<wavefront::Stats> = None;
+    let mut last_save = Instant::now();
+    // Without checkpoints or viewers, one pass; with checkpoints, passes sized to take about
+    // half the interval (measured on the pass before), starting with one sample per pixel; with
+    // viewers, no longer than doubling the samples (and at most `view::MAX_PASS`).
+    let mut pass = if checkpointing.is_some() || viewers.progressive() { 1 } else { hi - lo };
+    let mut passes = 0;
+    while lo + film.spp < hi {
+        let next = lo + film.spp;
+        let range = next..(next + pass).min(hi);
+        let k = range.len();
+        let before = (film.spp - first_spp) as usize * tiles;
+        let progress = |done: usize, _| bar.update(before + done * k);
+        let pass_start = Instant::now();
+        let span = tracing::info_span!("pass", first = range.start, samples = k).entered();
+        let (part, st) = pool.install(|| match how.integrator {
+            Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
+            Integrator::Wavefront => {
+                let opts = wavefront::Options { batch: how.batch, guides: how.guides(), timing: how.stats };
+                let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
+                (film, Some(stats))
+            }
+        });
+        drop(span);
+        let secs = pass_start.elapsed().as_secs_f64();
+        let msps = s.window.len() as f64 * k as f64 / secs.max(1e-9) / 1e6;
+        tracing::info!(
+            "pass: samples {}..{} of {} in {secs:.2} s, {msps:.3} M samples/s",
+            range.start,
+            range.end,
+            s.spp
+        );
+        bar.pass_done(range.start, range.end, s.spp, secs, msps);
+        film.merge(&part);
+        stats = match (stats, st) {
+            (Some(a), Some(b)) => Some(a.merge(b)),
+            (a, b) => a.or(b),
+        };
+        passes += 1;
+        let per_sample = pass_start.elapsed().as_secs_f64() / k as f64;
+        let left = hi - lo - film.spp;
+        let go_on = !viewers.progressive() || {
+            let eta = std::time::Duration::from_secs_f64(per_sample * left as f64);
+            viewers.show(&film, &view::Pass { number: passes, spp: film.spp, target: hi - lo, eta })
+        };
+        if let Some(c) = checkpointing {
+            let finished = lo + film.spp == hi;
+            if last_save.elapsed().as_secs_f64() >= c.every || finished || !go_on {
+                // The image so far first: once a checkpoint exists, so does an image.
+                if !finished && partial && go_on {
+                    io::write(
+                        output,
+                        &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
+                    )?;
+                }
+                let settings = id.settings.clone();
+                Checkpoint { key: id.key, settings, target_spp: s.spp, first_sample: lo, film: film.clone() }
+                    .save(&ckpt_path)?;
+                last_save = Instant::now();
+            }
+            pass = ((c.every / 2.0 / per_sample.max(1e-9)) as u32).clamp(1, s.spp);
+        }
+        if viewers.progressive() {
+            let doubling = view::next_pass(film.spp, left, per_sample, view::MAX_PASS);
+            pass = if checkpointing.is_some() { pass.min(doubling) } else { doubling };
+        }
+        if !go_on {
+            eprintln!("stopped at {} of {} spp: the preview window was closed", film.spp, hi - lo);
+            break;
+        }
+    }
+    let secs = start.elapsed().as_secs_f64();
+    bar.finish();
+    if how.verbose {
+        for &(i, n) in &film.non_finite_pixels() {
+            eprintln!("NaN/Inf: {n} samples discarded at pixel {},{}", i % film.width, i / film.width);
+        }
+    }
+    let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
+    let (img, layers) = match how.guides() || !how.aov.is_empty() {
+        true => post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?,
+        false => (img, Vec::new()),
+    };
+    Ok(Rendered {
+        img,
+        layers,
+        spp: film.spp,
+        new_samples: s.window.len() as f64 * (film.spp - first_spp) as f64,
+        stats,
+        secs,
+        non_finite: film.non_finite(),
+    })
+}
+
+/// Render progress: an `indicatif` bar with ETA on a terminal. When stderr is not a terminal
+/// the bar hides itself and each pass prints one line instead (`pass_done`), so that
+/// `2> log.txt` stays readable.
+pub struct Progress {
+    pub bar: indicatif::ProgressBar,
+    pub lines: bool,
+}
+
+impl Progress {
+    pub fn new(quiet: bool, total: usize) -> Self {
+        use std::io::IsTerminal;
+        let bar = match quiet {
+            true => indicatif::ProgressBar::hidden(),
+            false => indicatif::ProgressBar::new(total as u64),
+        };
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "Rendering [{bar:40}] {percent:>3}% {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("a valid template")
+            .progress_chars("=> "),
+        );
+        Self { bar, lines: !quiet && !std::io::stderr().is_terminal() }
+    }
+
+    /// `done` of the whole render's tile passes are done.
+    pub fn update(&self, done: usize) {
+        self.bar.set_position(done as u64);
+    }
+
+    /// One pass finished (a line when there is no bar, unless the info log just said it).
+    pub fn pass_done(&self, first: u32, end: u32, spp: u32, secs: f64, msps: f64) {
+        if self.lines && !tracing::enabled!(tracing::Level::INFO) {
+            eprintln!("pass: samples {first}..{end} of {spp} in {secs:.2} s, {msps:.3} M samples/s");
+        }
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
