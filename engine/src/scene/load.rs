@@ -1,9 +1,7 @@
 //! Reading and parsing scene files.
 
-use super::{
-    SceneDesc, SceneError,
-    desc::{MaterialNameScope, take_current_object},
-};
+use super::context::{Names, ParseScope, take_current_object};
+use super::{SceneDesc, SceneError};
 use ron::extensions::Extensions;
 use std::path::Path;
 
@@ -61,16 +59,16 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
     };
     let names: SceneDesc = options.from_str(text).map_err(error)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let _scope = MaterialNameScope::enter(
-        names.materials.iter().map(|(n, _)| n.clone()).collect(),
-        names
+    let _scope = ParseScope::enter(Names {
+        materials: names.materials.iter().map(|(n, _)| n.clone()).collect(),
+        lights: names
             .materials
             .iter()
             .filter(|(_, m)| m.kind().shading() == crate::material::Shading::Emitter)
             .map(|(n, _)| n.clone())
             .collect(),
-        names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
+        textures: names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
         dir,
-    );
+    });
     options.from_str(text).map_err(error)
 }

@@ -1,14 +1,29 @@
 //! The RON scene format: serde types with validation, and the loader that reports
 //! `file:line:col: message` for every error.
 
+mod assets;
+mod camera;
+mod context;
 mod desc;
 mod error;
 pub mod files;
+mod light;
 mod load;
+mod material;
+mod object;
 mod params;
+mod texture;
+mod transform;
 mod values;
 
+pub use assets::*;
+pub use camera::*;
 pub use desc::*;
 pub use error::SceneError;
+pub use light::*;
 pub use load::{load, load_with, parse, parse_defines, parse_with};
+pub use material::*;
+pub use object::*;
+pub use texture::*;
+pub use transform::*;
 pub use values::*;

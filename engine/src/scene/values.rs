@@ -146,3 +146,7 @@ impl<'de> Deserialize<'de> for UnitInterval {
         }
     }
 }
+
+pub(crate) fn white() -> Rgb {
+    Rgb(Vec3::ONE)
+}

@@ -1,0 +1,163 @@
+//! Files a scene names: images (textures, environment maps) and OBJ meshes, read in the second
+//! parsing pass relative to the scene file.
+
+use super::context;
+use crate::texture::TextureImage;
+use serde::{Deserialize, Deserializer, de::Error};
+
+/// An image file, read when the scene is loaded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageFile {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// The decoded image.
+    pub image: std::sync::Arc<TextureImage>,
+}
+
+impl<'de> Deserialize<'de> for ImageFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let path = std::path::PathBuf::from(String::deserialize(d)?);
+        let image = match context::scene_dir() {
+            Some(dir) => TextureImage::load(&dir.join(&path)).map_err(D::Error::custom)?,
+            None => TextureImage::default(),
+        };
+        Ok(ImageFile { path, image: std::sync::Arc::new(image) })
+    }
+}
+
+/// The triangles of an OBJ file, read when the scene is loaded. Objects naming the same file
+/// share one mesh (and, as instances, one BLAS).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshFile {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// Positions and triangles.
+    pub mesh: std::sync::Arc<crate::mesh::MeshData>,
+}
+
+impl<'de> Deserialize<'de> for MeshFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let path = std::path::PathBuf::from(String::deserialize(d)?);
+        let Some(dir) = context::scene_dir() else {
+            return Ok(MeshFile { path, mesh: Default::default() });
+        };
+        let full = dir.join(&path);
+        if let Some(mesh) = context::mesh(&full) {
+            return Ok(MeshFile { path, mesh });
+        }
+        let mesh = std::sync::Arc::new(read_obj(&full).map_err(D::Error::custom)?);
+        context::keep_mesh(full, mesh.clone());
+        Ok(MeshFile { path, mesh })
+    }
+}
+
+/// An edge (by vertex position) that borders an odd number of triangles, and that number: a
+/// mesh without one is closed, so a ray's hits alternate between entering and leaving it.
+pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec3A, u32)> {
+    use std::collections::HashMap;
+    let key = |p: glam::Vec3A| p.to_array().map(f32::to_bits);
+    let mut count: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (key(mesh.positions[t[k] as usize]), key(mesh.positions[t[(k + 1) % 3] as usize]));
+            *count.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+        }
+    }
+    let pos = |k: [u32; 3]| glam::Vec3A::from_array(k.map(f32::from_bits));
+    let mut odd: Vec<_> = count.into_iter().filter(|(_, n)| n % 2 == 1).collect();
+    odd.sort_unstable();
+    odd.first().map(|&((a, b), n)| (pos(a), pos(b), n))
+}
+
+/// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
+fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    parse_obj(&super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?, path)
+}
+
+/// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
+/// fans); `path` names the file in errors.
+pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+    check_obj_indices(bytes, path)?;
+    let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
+    // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
+    // (a device, a folder elsewhere) is never opened.
+    let no_materials = |_: &std::path::Path| Ok((Vec::new(), Default::default()));
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, no_materials)
+        .map_err(|e| format!("cannot read the mesh {}: {e}", path.display()))?;
+    let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+    // Vertex normals and uvs count only if every model has them.
+    let (mut normals, mut uvs) = (Some(Vec::new()), Some(Vec::new()));
+    for m in models {
+        let m = m.mesh;
+        let base = positions.len() as u32;
+        let n = m.positions.len() / 3;
+        positions.extend(m.positions.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])));
+        triangles.extend(m.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        match (&mut normals, m.normals.len() == 3 * n) {
+            (Some(v), true) => {
+                v.extend(m.normals.chunks_exact(3).map(|p| glam::Vec3A::new(p[0], p[1], p[2])))
+            }
+            _ => normals = None,
+        }
+        match (&mut uvs, m.texcoords.len() == 2 * n) {
+            (Some(v), true) => v.extend(m.texcoords.chunks_exact(2).map(|t| glam::Vec2::new(t[0], t[1]))),
+            _ => uvs = None,
+        }
+    }
+    // Vertex normals of unit length, as written when they are (within 1e-4), else normalised
+    // (scaled down first: the square of a component of 1e38 overflowed when they were
+    // interpolated, found by the obj fuzzer), or zero.
+    let unit = |n: glam::Vec3A| match (n.length_squared() - 1.0).abs() < 1e-4 {
+        true => n,
+        false => (n / n.abs().max_element()).normalize_or_zero(),
+    };
+    let normals =
+        normals.filter(|n| n.iter().all(|v| v.is_finite())).map(|n| n.into_iter().map(unit).collect());
+    let uvs = uvs.filter(|u| u.iter().all(|v| v.is_finite()));
+    if !positions.iter().all(|p| p.is_finite()) {
+        return Err(format!("the mesh {} has a vertex that is not a finite number", path.display()));
+    }
+    if triangles.is_empty() {
+        return Err(format!("the mesh {} has no faces", path.display()));
+    }
+    if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
+        return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
+    }
+    Ok(crate::mesh::MeshData { positions, triangles, normals, uvs })
+}
+
+/// Refuses face indices that refer to no vertex, texture coordinate or normal: a relative
+/// (negative) one before the first, or one beyond the file's last. tobj (4.0.5) multiplies
+/// texture and normal indices unchecked, so such an index overflowed inside it (found by the
+/// `obj` fuzzer).
+fn check_obj_indices(bytes: &[u8], path: &std::path::Path) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["v", "vt", "vn"];
+    // Lines as tobj reads them (one that is not UTF-8 is its error).
+    let lines = || bytes.split(|&b| b == b'\n').filter_map(|l| std::str::from_utf8(l).ok());
+    let kind = |l: &str| l.split_whitespace().next().and_then(|w| KINDS.iter().position(|k| *k == w));
+    let mut total = [0u64; 3];
+    lines().filter_map(kind).for_each(|k| total[k] += 1);
+    let mut seen = [0u64; 3];
+    for (n, line) in lines().enumerate() {
+        if let Some(k) = kind(line) {
+            seen[k] += 1;
+        }
+        let mut words = line.split_whitespace();
+        if !matches!(words.next(), Some("f" | "l")) {
+            continue;
+        }
+        for (k, index) in words.flat_map(|w| w.split('/').take(3).enumerate()) {
+            let Ok(i) = index.parse::<i64>() else { continue };
+            let refers = if i < 0 { i.unsigned_abs() <= seen[k] } else { i as u64 <= total[k] };
+            if !refers {
+                let what = ["vertex", "texture coordinate", "normal"][k];
+                return Err(format!(
+                    "the mesh {}: line {}: index {i} refers to no {what}",
+                    path.display(),
+                    n + 1
+                ));
+            }
+        }
+    }
+    Ok(())
+}

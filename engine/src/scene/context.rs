@@ -1,0 +1,106 @@
+//! The parse context: what the scene format's `Deserialize` impls need to know beyond the text
+//! they read. serde gives a `Deserialize` impl no argument of its own, so the loader keeps one
+//! [`Context`] per thread and sets it for the parse ([`ParseScope`]); the impls read it through
+//! the functions here, and nothing else in the crate touches it.
+//!
+//! A scene is parsed twice (`load::parse_with`): the first pass collects the names a scene
+//! defines, which may come after their uses in the file; the second, inside a [`ParseScope`],
+//! checks every name against them while the parser still knows where that name stands, and
+//! reads the image and mesh files.
+
+use crate::mesh::MeshData;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// What the second pass knows of the scene from the first.
+pub(crate) struct Names {
+    /// All material names.
+    pub materials: Vec<String>,
+    /// The names of the emitting materials.
+    pub lights: Vec<String>,
+    /// All texture names, in file order.
+    pub textures: Vec<String>,
+    /// The directory image and mesh paths are relative to.
+    pub dir: PathBuf,
+}
+
+/// The state of a parse on this thread.
+#[derive(Default)]
+struct Context {
+    /// `Some` in the second pass only.
+    names: Option<Names>,
+    /// While a texture is parsed: how many textures precede it (only they may be named in it).
+    textures_before: Option<usize>,
+    /// The index of the object being parsed, while inside `objects` (errors name it).
+    object: Option<usize>,
+    /// Meshes read so far in this parse, by path: each file is read once and shared.
+    meshes: HashMap<PathBuf, Arc<MeshData>>,
+}
+
+thread_local! {
+    static CONTEXT: RefCell<Context> = RefCell::new(Context::default());
+}
+
+fn with<R>(f: impl FnOnce(&mut Context) -> R) -> R {
+    CONTEXT.with(|c| f(&mut c.borrow_mut()))
+}
+
+/// While alive, the second pass: names are checked against `names` and files are read.
+pub(crate) struct ParseScope;
+
+impl ParseScope {
+    /// Starts the second pass on this thread.
+    pub(crate) fn enter(names: Names) -> Self {
+        with(|c| c.names = Some(names));
+        ParseScope
+    }
+}
+
+impl Drop for ParseScope {
+    fn drop(&mut self) {
+        with(|c| *c = Context::default());
+    }
+}
+
+/// Runs `f` with the second pass's names, `None` in the first pass.
+pub(crate) fn names<R>(f: impl FnOnce(Option<&Names>) -> R) -> R {
+    with(|c| f(c.names.as_ref()))
+}
+
+/// The directory files are read from, in the second pass.
+pub(crate) fn scene_dir() -> Option<PathBuf> {
+    names(|n| n.map(|n| n.dir.clone()))
+}
+
+/// How many textures precede the one being parsed (`None` outside the texture list).
+pub(crate) fn textures_before() -> Option<usize> {
+    with(|c| c.textures_before)
+}
+
+/// Sets [`textures_before`].
+pub(crate) fn set_textures_before(n: Option<usize>) {
+    with(|c| c.textures_before = n);
+}
+
+/// Notes the index of the object being parsed (`None` when leaving the list).
+pub(crate) fn set_current_object(i: Option<usize>) {
+    with(|c| c.object = i);
+}
+
+/// The index in `objects` of the object the parser stopped in, if it stopped in one: errors
+/// name it. Taking it resets it for the next parse.
+pub(crate) fn take_current_object() -> Option<usize> {
+    with(|c| c.object.take())
+}
+
+/// The mesh of the file at `path` read earlier in this parse.
+pub(crate) fn mesh(path: &Path) -> Option<Arc<MeshData>> {
+    with(|c| c.meshes.get(path).cloned())
+}
+
+/// Keeps the mesh read from `path` for later objects naming it.
+pub(crate) fn keep_mesh(path: PathBuf, mesh: Arc<MeshData>) {
+    with(|c| c.meshes.insert(path, mesh));
+}

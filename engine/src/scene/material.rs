@@ -1,0 +1,77 @@
+//! `materials: { .. }` and the references to them: each name checked against the scene's
+//! materials (and, for `emit` keys, its emitters) where it is written.
+
+use super::context;
+pub use crate::material::MaterialDesc;
+use serde::{Deserialize, Deserializer, de::Error};
+
+/// The `materials: { "name": Material(..), .. }` map, in file order; names are unique.
+#[derive(Debug, Clone, Default)]
+pub struct NamedMaterials(pub Vec<(String, MaterialDesc)>);
+
+impl NamedMaterials {
+    /// (name, material) pairs in file order.
+    pub fn iter(&self) -> impl Iterator<Item = &(String, MaterialDesc)> {
+        self.0.iter()
+    }
+}
+
+impl<'de> Deserialize<'de> for NamedMaterials {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = NamedMaterials;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a map from material names to materials")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, MaterialDesc)> = Vec::new();
+                while let Some(name) = map.next_key::<String>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(A::Error::custom(format!("material \"{name}\" is defined twice")));
+                    }
+                    let m = map.next_value()?;
+                    out.push((name, m));
+                }
+                Ok(NamedMaterials(out))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// The name of a material defined in `materials`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MaterialRef(pub String);
+
+impl<'de> Deserialize<'de> for MaterialRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        context::names(|n| match n.map(|n| &n.materials) {
+            Some(names) if names.is_empty() => {
+                Err(D::Error::custom(format!("unknown material \"{name}\"; no materials are defined")))
+            }
+            Some(names) if !names.contains(&name) => {
+                let list: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+                Err(D::Error::custom(format!("unknown material \"{name}\"; defined: {}", list.join(", "))))
+            }
+            _ => Ok(MaterialRef(name.clone())),
+        })
+    }
+}
+
+/// The name of a `DiffuseLight` material.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LightRef(pub String);
+
+impl<'de> Deserialize<'de> for LightRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let MaterialRef(name) = MaterialRef::deserialize(d)?;
+        context::names(|n| match n.map(|n| &n.lights) {
+            Some(lights) if !lights.contains(&name) => Err(D::Error::custom(format!(
+                "material \"{name}\" is not a DiffuseLight: only emitters have `emit` keys"
+            ))),
+            _ => Ok(LightRef(name.clone())),
+        })
+    }
+}
