@@ -3,8 +3,9 @@
 //! 1M-triangle knot and on cornell-diffuse), so that our figures sit beside Embree's measured
 //! the same way.
 
-use crate::engine::geometry::{Geometry, Primitive};
+use crate::engine::geometry::Geometry;
 use crate::engine::mesh::{MeshBlas, MeshData};
+use crate::engine::shape::Primitive;
 use crate::engine::shape::Triangle;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;

@@ -4,8 +4,7 @@
 //! Both scan quads, then spheres, in order, keeping the first of equal distances: the stream
 //! finds exactly the hits of the single-ray scan.
 
-use crate::geometry::Primitive;
-use crate::shape::{quad::quad_t, sphere::sphere_t};
+use crate::shape::{Primitive, quad::quad_t, sphere::sphere_t};
 
 /// Rays as parallel arrays of coordinates.
 #[derive(Default, Debug, Clone)]

@@ -6,9 +6,9 @@
 //! takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power estimate for them
 //! depends on a scene radius and would starve the finite lights of a large scene.
 
-use crate::geometry::{Geometry, Primitive};
+use crate::geometry::Geometry;
 use crate::material::{Emission, Material};
-use crate::shape::LightSample;
+use crate::shape::{LightSample, Primitive, QuadLight};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Marks a primitive that is not in the light table.
@@ -133,36 +133,6 @@ pub struct LightTable {
     /// Each light as a [`QuadLight`] (indexed like the lights) where it is a quad, in scenes
     /// where nothing moves: the integrator samples those across lanes.
     pub quads: Vec<Option<QuadLight>>,
-}
-
-/// A quad light as plain numbers, for sampling many points at once: what
-/// [`crate::shape::quad::Quad::sample_solid_angle`] reads when it samples by area, and the
-/// light's emission (without textures). Computed with the same operations as the quad's own
-/// methods, so that a lane-wise sampler reproduces their bits.
-#[derive(Clone, Copy, Debug)]
-pub struct QuadLight {
-    /// Corner.
-    pub q: [f32; 3],
-    /// Edges.
-    pub u: [f32; 3],
-    /// Second edge.
-    pub v: [f32; 3],
-    /// Unit normal.
-    pub n: [f32; 3],
-    /// `q + 0.5 (u + v)`, where the spherical-rectangle bound measures from.
-    pub center: [f32; 3],
-    /// Area.
-    pub area: f32,
-    /// `1 / area`.
-    pub inv_area: f32,
-    /// Error bound of its points.
-    pub err: f32,
-    /// The edges are perpendicular: points close to the light take the spherical rectangle.
-    pub rect: bool,
-    /// Emitted radiance.
-    pub emit: [f32; 3],
-    /// Emits on both sides.
-    pub two_sided: bool,
 }
 
 /// What [`LightTable::build`] reads besides the geometry.

@@ -3,9 +3,8 @@
 //! error that says why the placed shape cannot be rendered. The scene format checks its objects
 //! with [`primitives`] at load; the world builds its BVH with it.
 
-use crate::geometry::Primitive;
 use crate::mesh::MeshData;
-use crate::shape::{Quad, Sphere, TransformedSphere, Triangle};
+use crate::shape::{Primitive, Quad, Sphere, TransformedSphere, Triangle};
 use glam::{Affine3A, Vec3, Vec3A};
 use std::sync::Arc;
 

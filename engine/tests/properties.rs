@@ -4,8 +4,9 @@
 //! the axes.
 
 use glam::Vec3A;
-use pathwave_engine::geometry::{Geometry, Primitive};
+use pathwave_engine::geometry::Geometry;
 use pathwave_engine::math::{Ray, offset_ray_origin};
+use pathwave_engine::shape::Primitive;
 use pathwave_engine::shape::{Quad, Sphere, Triangle};
 use proptest::prelude::*;
 

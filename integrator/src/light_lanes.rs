@@ -9,8 +9,8 @@
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
-use pathwave_engine::lights::QuadLight;
 use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::shape::QuadLight;
 use pathwave_engine::shape::SPHERICAL_MIN_ESTIMATE;
 
 /// Samples the lights for groups of [`LANES`] shading points; one per shading loop.
@@ -96,7 +96,7 @@ impl<'a> LightSampler<'a> {
 }
 
 /// What [`quad_by_area`] reads: the lane's light (see
-/// [`QuadLight`](pathwave_engine::lights::QuadLight)), its pick probability, the shading point
+/// [`QuadLight`](pathwave_engine::shape::QuadLight)), its pick probability, the shading point
 /// and the two numbers.
 #[derive(Clone, Copy, Debug, Default)]
 struct QuadIn {

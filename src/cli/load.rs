@@ -52,7 +52,7 @@ pub fn load(path: &Path, o: &Overrides) -> Result<scene::SceneDesc, String> {
 
 /// Logs what the integrators will see of a scene (info).
 pub fn log_scene(scene: &pathwave::engine::render_scene::RenderScene) {
-    use pathwave::engine::geometry::Primitive;
+    use pathwave::engine::shape::Primitive;
     let prims = &scene.geometry.prims;
     let triangles = prims.iter().filter(|p| matches!(p, Primitive::Triangle(_))).count();
     let instanced: usize =

@@ -1,12 +1,14 @@
 //! Geometric primitives in world space: each file holds one shape with its intersection,
 //! surface data, sampling and tests.
 
+mod primitive;
 pub(crate) mod quad;
 pub(crate) mod sphere;
 mod transformed_sphere;
 mod triangle;
 
-pub use quad::{Quad, SPHERICAL_MIN_ESTIMATE};
+pub use primitive::Primitive;
+pub use quad::{Quad, QuadLight, SPHERICAL_MIN_ESTIMATE};
 pub use sphere::Sphere;
 pub use transformed_sphere::TransformedSphere;
 pub use triangle::Triangle;

@@ -1,7 +1,6 @@
 //! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
 
 use super::{LightSample, SurfacePoint, area_to_solid_angle};
-use crate::lights::QuadLight;
 use crate::math::gamma;
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -28,6 +27,36 @@ pub struct Quad {
     err: f32,
     /// The edges are perpendicular: lights are sampled by solid angle.
     rect: bool,
+}
+
+/// A quad light as plain numbers, for sampling many points at once: what
+/// [`Quad::sample_solid_angle`] reads when it samples by area, and the
+/// light's emission (without textures). Computed with the same operations as the quad's own
+/// methods, so that a lane-wise sampler reproduces their bits.
+#[derive(Clone, Copy, Debug)]
+pub struct QuadLight {
+    /// Corner.
+    pub q: [f32; 3],
+    /// Edges.
+    pub u: [f32; 3],
+    /// Second edge.
+    pub v: [f32; 3],
+    /// Unit normal.
+    pub n: [f32; 3],
+    /// `q + 0.5 (u + v)`, where the spherical-rectangle bound measures from.
+    pub center: [f32; 3],
+    /// Area.
+    pub area: f32,
+    /// `1 / area`.
+    pub inv_area: f32,
+    /// Error bound of its points.
+    pub err: f32,
+    /// The edges are perpendicular: points close to the light take the spherical rectangle.
+    pub rect: bool,
+    /// Emitted radiance.
+    pub emit: [f32; 3],
+    /// Emits on both sides.
+    pub two_sided: bool,
 }
 
 /// Solid angles outside this range are sampled by area: below it the two densities agree

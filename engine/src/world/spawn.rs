@@ -2,7 +2,6 @@
 
 use super::components::*;
 use crate::environment::EnvironmentMap;
-use crate::geometry::Primitive;
 use crate::material::Material;
 use crate::media::Medium;
 use crate::mesh::MeshData;
@@ -11,6 +10,7 @@ use crate::render_scene::{Background, PixelWindow, RenderSettings};
 use crate::scene::{
     BackgroundDesc, Body, Color, MaterialDesc, Positive, Rgb, SceneDesc, TextureDesc, compose,
 };
+use crate::shape::Primitive;
 use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3};
