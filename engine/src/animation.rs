@@ -3,7 +3,7 @@
 //! as written (see [`RotationTrack`]), so 0 to 720 degrees is two turns. Before the first key a
 //! track holds the first value, after the last the last.
 
-use crate::scene::{Direction, Finite, Rgb, V3};
+use crate::format::{Direction, Finite, Rgb, V3};
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
 

@@ -11,6 +11,7 @@ pub mod bvh8;
 pub mod camera;
 pub mod environment;
 pub mod flat;
+pub mod format;
 pub mod geometry;
 pub mod instances;
 pub mod lights;

@@ -41,7 +41,7 @@ pub struct TextureImage {
 #[derive(Debug, thiserror::Error)]
 pub enum TextureError {
     /// Reading or decoding failed (or the file or the image is beyond the bounds of
-    /// [`crate::scene::files`]).
+    /// [`crate::format::files`]).
     #[error("{0}")]
     Read(String),
     /// No pixels.
@@ -53,7 +53,7 @@ impl TextureImage {
     /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
     /// once, here, through a 256-entry table; float images are already linear.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
-        Self::from_image(crate::scene::files::decode_image(path).map_err(TextureError::Read)?, path)
+        Self::from_image(crate::format::files::decode_image(path).map_err(TextureError::Read)?, path)
     }
 
     /// A decoded image's texels (as [`Self::load`] reads them); `path` names it in errors.

@@ -3,10 +3,10 @@
 //! [`Context`] per thread and sets it for the parse ([`ParseScope`]); the impls read it through
 //! the functions here, and nothing else in the crate touches it.
 //!
-//! A scene is parsed twice (`load::parse_with`): the first pass collects the names a scene
-//! defines, which may come after their uses in the file; the second, inside a [`ParseScope`],
-//! checks every name against them while the parser still knows where that name stands, and
-//! reads the image and mesh files.
+//! A scene is parsed twice ([`crate::scene::parse_with`]): the first pass collects the names
+//! a scene defines, which may come after their uses in the file; the second, inside a
+//! [`ParseScope`], checks every name against them while the parser still knows where that
+//! name stands, and reads the image and mesh files.
 
 use crate::mesh::MeshData;
 use std::cell::RefCell;

@@ -3,8 +3,8 @@
 //! reflection (SEED.md 2.4.2). Radiance is scaled by 1/eta^2 on refraction.
 
 use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
+use crate::format::Positive;
 use crate::math::reflect;
-use crate::scene::Positive;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// How a dielectric computes its reflectance.

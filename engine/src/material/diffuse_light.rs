@@ -2,7 +2,7 @@
 //! black BSDF. Light sampling picks emitters by power (see [`crate::lights`]).
 
 use super::{Colors, Emission, MaterialModel, Shading};
-use crate::scene::{Color, Rgb};
+use crate::format::{Color, Rgb};
 use glam::Vec3;
 
 /// `DiffuseLight(emit: (r, g, b), two_sided: false)`.

@@ -3,8 +3,8 @@
 //! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 
 use super::{BsdfSample, Colors, MaterialModel, Shading};
+use crate::format::{Albedo, Color};
 use crate::math::{Frame, concentric_disk};
-use crate::scene::{Albedo, Color};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 

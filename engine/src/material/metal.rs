@@ -3,8 +3,8 @@
 //! surface are absorbed. The lobe is only sampled, never evaluated.
 
 use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
+use crate::format::{Albedo, Color, UnitInterval};
 use crate::math::reflect;
-use crate::scene::{Albedo, Color, UnitInterval};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// `Metal(albedo: (r, g, b), fuzz: 0.1)`.

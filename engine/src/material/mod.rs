@@ -180,13 +180,13 @@ impl<'a> Colors<'a> {
     }
 
     /// The next colour slot's value: the colour written out, or the texture's mean.
-    pub fn get<T: Copy + Into<Vec3>>(&mut self, c: &crate::scene::Color<T>) -> Vec3 {
+    pub fn get<T: Copy + Into<Vec3>>(&mut self, c: &crate::format::Color<T>) -> Vec3 {
         let slot = self.next;
         assert!(slot < MAX_TEXTURED_COLORS, "a material has at most {MAX_TEXTURED_COLORS} colours");
         self.next += 1;
         match c {
-            crate::scene::Color::Value(v) => (*v).into(),
-            crate::scene::Color::Texture(name) => {
+            crate::format::Color::Value(v) => (*v).into(),
+            crate::format::Color::Texture(name) => {
                 let (id, mean) = (self.texture)(name);
                 self.slots.0[slot] = Some(id);
                 mean

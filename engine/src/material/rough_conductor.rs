@@ -10,8 +10,8 @@
 
 use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
+use crate::format::{Albedo, Color, Rgb};
 use crate::math::{Frame, reflect};
-use crate::scene::{Albedo, Color, Rgb};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// `RoughConductor(tint: (r, g, b), alpha: 0.15, eta: (r, g, b), k: (r, g, b))`.

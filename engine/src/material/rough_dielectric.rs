@@ -19,8 +19,8 @@
 use super::dielectric::{Fresnel, fresnel_exact, refract};
 use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
+use crate::format::Positive;
 use crate::math::{Frame, reflect};
-use crate::scene::Positive;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// `RoughDielectric(ior: 1.5, alpha: 0.1)`.

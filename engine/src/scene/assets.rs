@@ -1,7 +1,7 @@
 //! Files a scene names: images (textures, environment maps) and OBJ meshes, read in the second
 //! parsing pass relative to the scene file.
 
-use super::context;
+use crate::format::context;
 use crate::texture::TextureImage;
 use serde::{Deserialize, Deserializer, de::Error};
 

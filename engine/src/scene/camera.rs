@@ -1,6 +1,6 @@
 //! `camera: (..)` and `render: (..)`: the camera as placed and the image and sampling settings.
 
-use super::values::*;
+use crate::format::{Direction, Finite, Fov, NonNegative, Positive, UnitInterval, V3};
 use crate::placement::MAX_COORDINATE;
 use crate::render_scene::SamplerKind;
 use glam::Vec3;

@@ -5,12 +5,11 @@
 //! `transform` and `assets` (image and OBJ files).
 
 use super::camera::{CameraDesc, RenderDesc};
-use super::context;
 use super::light::{BackgroundDesc, LightDesc};
 use super::material::{LightRef, NamedMaterials};
 use super::object::ObjectDesc;
 use super::texture::NamedTextures;
-use super::values::*;
+use crate::format::{Positive, UnitInterval, context};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::num::NonZeroU32;
 

@@ -1,7 +1,7 @@
 //! `background: ..` and `lights: [..]`: light from outside the scene and punctual lights.
 
 use super::assets::ImageFile;
-use super::values::*;
+use crate::format::{Direction, Finite, NonNegative, Rgb, V3, white};
 use crate::placement::MAX_COORDINATE;
 use glam::Vec3;
 use serde::{Deserialize, Deserializer, de::Error};

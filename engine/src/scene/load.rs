@@ -24,7 +24,8 @@ pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, String
 /// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
 pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
-    let bytes = super::files::read_bounded(path, super::files::MAX_SCENE_BYTES, "scene").map_err(fail)?;
+    let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
+        .map_err(fail)?;
     let text = String::from_utf8(bytes).map_err(|e| fail(format!("the scene is not UTF-8 text: {e}")))?;
     parse_with(&text, path, overrides)
 }

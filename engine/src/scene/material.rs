@@ -1,7 +1,7 @@
 //! `materials: { .. }` and the references to them: each name checked against the scene's
 //! materials (and, for `emit` keys, its emitters) where it is written.
 
-use super::context;
+use crate::format::context;
 pub use crate::material::MaterialDesc;
 use serde::{Deserialize, Deserializer, de::Error};
 

@@ -3,10 +3,8 @@
 
 mod assets;
 mod camera;
-mod context;
 mod desc;
 mod error;
-pub mod files;
 mod light;
 mod load;
 mod material;
@@ -14,8 +12,8 @@ mod object;
 mod params;
 mod texture;
 mod transform;
-mod values;
 
+pub use crate::format::*;
 pub use assets::*;
 pub use camera::*;
 pub use desc::*;
@@ -26,4 +24,3 @@ pub use material::*;
 pub use object::*;
 pub use texture::*;
 pub use transform::*;
-pub use values::*;

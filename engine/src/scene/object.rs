@@ -4,7 +4,7 @@
 use super::assets::{MeshFile, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
-use super::values::*;
+use crate::format::{Albedo, Positive, V3};
 use crate::placement::{Form, primitives};
 use glam::Vec3;
 use serde::Deserialize;

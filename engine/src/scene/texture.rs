@@ -1,39 +1,9 @@
-//! `textures: { .. }` and colours that are either a value or the name of a texture.
+//! `textures: { .. }`: named textures, each naming only the textures before it.
 
 use super::assets::ImageFile;
-use super::context;
-use super::values::*;
+use crate::format::{Color, Positive, Rgb, context, white};
 use crate::texture::Wrap;
 use serde::{Deserialize, Deserializer, de::Error};
-
-/// A colour written out, or the name of a texture from `textures`.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Color<T> {
-    /// `(r, g, b)`.
-    Value(T),
-    /// `"name"`.
-    Texture(String),
-}
-
-impl<'de, T: Deserialize<'de>> Deserialize<'de> for Color<T> {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V<T>(std::marker::PhantomData<T>);
-        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for V<T> {
-            type Value = Color<T>;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a colour (r, g, b) or the name of a texture")
-            }
-            fn visit_str<E: Error>(self, name: &str) -> Result<Self::Value, E> {
-                check_texture_name(name).map_err(E::custom)?;
-                Ok(Color::Texture(name.to_owned()))
-            }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
-                T::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(Color::Value)
-            }
-        }
-        d.deserialize_any(V(std::marker::PhantomData))
-    }
-}
 
 /// A texture as written in the scene; colours inside may name textures defined before it.
 #[derive(Deserialize, Debug, Clone, PartialEq)]
@@ -155,25 +125,4 @@ impl<'de> Deserialize<'de> for NamedTextures {
         }
         d.deserialize_map(V)
     }
-}
-
-/// Checks a texture name against the scene's textures (in the second parsing pass).
-fn check_texture_name(name: &str) -> Result<(), String> {
-    let before = context::textures_before();
-    context::names(|n| match n.map(|n| &n.textures) {
-        None => Ok(()),
-        Some(names) => {
-            let visible = &names[..before.unwrap_or(names.len()).min(names.len())];
-            if visible.iter().any(|n| n == name) {
-                Ok(())
-            } else if before.is_some() && names.iter().any(|n| n == name) {
-                Err(format!("texture \"{name}\" must be defined before the texture that uses it"))
-            } else if visible.is_empty() {
-                Err(format!("unknown texture \"{name}\"; no textures are defined before this point"))
-            } else {
-                let list: Vec<String> = visible.iter().map(|n| format!("\"{n}\"")).collect();
-                Err(format!("unknown texture \"{name}\"; defined: {}", list.join(", ")))
-            }
-        }
-    })
 }

@@ -1,6 +1,6 @@
 //! Object transforms: lists of translate, rotate, scale and matrix steps, composed in order.
 
-use super::values::*;
+use crate::format::{Direction, Finite, V3};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
