@@ -1,6 +1,6 @@
 //! Looking at a render while it runs: progressive passes (1, 2, 4, ... samples per pixel) shown
-//! after each pass in a window (`--preview`, [`crate::preview`]) or in the tev image viewer
-//! (`--tev HOST:PORT`, [`crate::tev`]).
+//! after each pass in a window (`--preview`, [`preview`]) or in the tev image viewer
+//! (`--tev HOST:PORT`, [`tev`]).
 //!
 //! The film keeps exact sums, so a render done in passes has the bits of a render done at once:
 //! passes change when the image can be seen, never what it is.
@@ -8,6 +8,9 @@
 use crate::engine::render_scene::RenderSettings;
 use crate::integrator::film::Film;
 use std::time::Duration;
+
+pub mod preview;
+pub mod tev;
 
 /// Where to show a render while it runs.
 #[derive(clap::Args, Clone, Debug, Default)]
@@ -77,13 +80,13 @@ impl Viewers {
     pub fn open(args: &ViewArgs, name: &str, s: &RenderSettings) -> Self {
         let mut list: Vec<Box<dyn Viewer>> = Vec::new();
         if args.preview {
-            match crate::preview::Preview::open(name, s.window.w, s.window.h) {
+            match preview::Preview::open(name, s.window.w, s.window.h) {
                 Ok(p) => list.push(Box::new(p)),
                 Err(e) => eprintln!("--preview: {e}; rendering without a window"),
             }
         }
         if let Some(addr) = &args.tev {
-            list.push(Box::new(crate::tev::Tev::connect(
+            list.push(Box::new(tev::Tev::connect(
                 addr,
                 name,
                 (s.width, s.height),

@@ -5,8 +5,8 @@
 //! The window is `minifb`'s (X11, whose libraries it loads when the window opens), run on a
 //! thread of its own so that it redraws and answers the window system while a pass renders.
 
+use super::{Pass, Viewer, srgb_0rgb};
 use crate::integrator::film::Film;
-use crate::view::{Pass, Viewer, srgb_0rgb};
 use minifb::{Key, ScaleMode, Window, WindowOptions};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};

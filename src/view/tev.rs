@@ -11,8 +11,8 @@
 //! floats) over the rendered rectangle, in bands of rows that keep packets near a mebibyte
 //! (tev's receive buffer).
 
+use super::{Pass, Viewer};
 use crate::integrator::film::Film;
-use crate::view::{Pass, Viewer};
 use std::io::Write;
 use std::net::{TcpStream, ToSocketAddrs};
 use std::time::Duration;
