@@ -1,0 +1,89 @@
+//! Criterion benchmarks of the core: BVH build, closest-hit and any-hit traversal over fixed
+//! rays, and a 16-spp cornell with each integrator. `cargo bench --bench core` runs them (add
+//! `-- traverse` to pick a group); `benches/RESULTS.md` records what they measured, with the
+//! machine and the date. Whole-scene time against error is `pathwave bench`.
+
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use glam::Vec3A;
+use pathwave_engine::mesh::{MeshBlas, MeshData};
+use pathwave_engine::scene;
+use pathwave_engine::world::SceneWorld;
+use pathwave_integrator::{oracle, wavefront};
+use std::hint::black_box;
+use std::num::NonZeroU32;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The knot of `mesh.ron` (100,000 triangles), in its own space.
+fn knot() -> Arc<MeshData> {
+    Arc::new(MeshData::knot(400, 125))
+}
+
+/// `n` rays from a sphere around `blas` towards random points near its centre, as bounce rays
+/// would meet it from outside: the same rays every run (xorshift from a fixed seed).
+fn rays(blas: &MeshBlas, n: usize) -> Vec<(Vec3A, Vec3A)> {
+    let b = blas.bounds();
+    let (centre, reach) = ((b.min + b.max) * 0.5, (b.max - b.min).length());
+    let mut s = 0x9e37_79b9u32;
+    let mut u = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s as f32 / u32::MAX as f32 * 2.0 - 1.0
+    };
+    (0..n)
+        .map(|_| {
+            let o = centre + Vec3A::new(u(), u(), u()).normalize_or(Vec3A::X) * reach;
+            let target = centre + Vec3A::new(u(), u(), u()) * 0.5 * reach;
+            (o, target - o)
+        })
+        .collect()
+}
+
+fn bvh(c: &mut Criterion) {
+    let mesh = knot();
+    let mut g = c.benchmark_group("bvh_build");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(mesh.triangles.len() as u64));
+    g.bench_function("knot_100k", |b| {
+        b.iter_batched(|| mesh.clone(), |m| black_box(MeshBlas::build(m)), BatchSize::SmallInput)
+    });
+    g.finish();
+}
+
+fn traverse(c: &mut Criterion) {
+    let blas = MeshBlas::build(knot());
+    let rays = rays(&blas, 4096);
+    let mut g = c.benchmark_group("traverse");
+    g.throughput(Throughput::Elements(rays.len() as u64));
+    g.bench_function("closest_knot_100k", |b| {
+        b.iter(|| rays.iter().filter(|(o, d)| blas.intersect(*o, *d, f32::INFINITY).is_some()).count())
+    });
+    // Shadow rays end at the target: about half of them are blocked.
+    g.bench_function("any_hit_knot_100k", |b| {
+        b.iter(|| rays.iter().filter(|(o, d)| blas.occluded(*o, *d, 1.0)).count())
+    });
+    g.finish();
+}
+
+fn render(c: &mut Criterion) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.ron");
+    let mut desc = scene::load(&path).expect("scenes/cornell.ron loads");
+    let side = NonZeroU32::new(128).expect("not zero");
+    (desc.render.width, desc.render.height) = (side, side);
+    let scene = SceneWorld::render_scene(&desc);
+    let pixels = (side.get() * side.get()) as u64;
+    let mut g = c.benchmark_group("render_cornell_128px_16spp");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(pixels * 16));
+    let none = |_: usize, _: usize| {};
+    g.bench_function("wavefront", |b| {
+        let opts = wavefront::Options::default();
+        b.iter(|| black_box(wavefront::render_samples(&scene, opts, 0..16, &none)))
+    });
+    g.bench_function("oracle", |b| b.iter(|| black_box(oracle::render_samples(&scene, 0..16, &none))));
+    g.finish();
+}
+
+criterion_group!(benches, bvh, traverse, render);
+criterion_main!(benches);
