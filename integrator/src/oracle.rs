@@ -7,14 +7,12 @@ use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
-use crate::tile::Tile;
+use crate::tile;
 use glam::Vec3;
 use pathwave_engine::material::Shading;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
-use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Renders the whole image. `progress(done, total)` is called after each tile, from any thread.
 pub fn render(scene: &RenderScene, progress: &(dyn Fn(usize, usize) + Sync)) -> Film {
@@ -31,28 +29,22 @@ pub fn render_samples(
     let s = scene.settings;
     let _span =
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = Tile::grid_of(&s.window);
-    let total = (tx * ty) as usize;
-    let done = AtomicUsize::new(0);
-    let tiles: Vec<Vec<PixelAccumulator>> = (0..tx * ty)
-        .into_par_iter()
-        .map(|t| {
-            let tile = Tile::in_window(t, &s.window);
-            let out = (0..tile.len())
+    let tiles = tile::render_tiles(
+        &s.window,
+        progress,
+        || (),
+        |_, tile| {
+            (0..tile.len())
                 .map(|i| tile.pixel(i))
                 .map(|(x, y)| render_pixel(scene, x, y, samples.clone()))
-                .collect();
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-            out
-        })
-        .collect();
+                .collect::<Vec<PixelAccumulator>>()
+        },
+    );
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
-    for (t, accs) in tiles.into_iter().enumerate() {
-        let tile = Tile::in_window(t as u32, &s.window);
-        for (i, acc) in accs.iter().enumerate() {
-            let (x, y) = tile.pixel(i as u32);
-            film.set_pixel(s.window.index(x, y), acc);
+    for (tile, accs) in tiles {
+        for (i, k) in tile.window_indices(&s.window) {
+            film.set_pixel(k, &accs[i]);
         }
     }
     film

@@ -1,6 +1,9 @@
-//! Square image tiles: the unit of work that integrators hand to rayon.
+//! Square image tiles: the unit of work that integrators hand to rayon, and the one fan-out
+//! over them that both integrators use ([`render_tiles`]).
 
 use pathwave_engine::render_scene::PixelWindow;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Tile edge in pixels.
 pub const TILE: u32 = 16;
@@ -51,6 +54,38 @@ impl Tile {
     pub fn len(&self) -> u32 {
         self.w * self.h
     }
+
+    /// Each pixel's index in the tile (row-major) and in `window` (which holds the tile).
+    pub fn window_indices(&self, window: &PixelWindow) -> impl Iterator<Item = (usize, usize)> {
+        (0..self.len()).map(move |i| {
+            let (x, y) = self.pixel(i);
+            (i as usize, window.index(x, y))
+        })
+    }
+}
+
+/// Renders every tile of `window` on rayon's threads: `render(state, tile)` with a `state`
+/// made by `init` once per worker (the wavefront's path slots and queues), `progress(done,
+/// total)` after each tile from any thread. The results come back in tile order, whatever
+/// order the tiles ran in.
+pub fn render_tiles<S, T: Send>(
+    window: &PixelWindow,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    init: impl Fn() -> S + Sync + Send,
+    render: impl Fn(&mut S, &Tile) -> T + Sync + Send,
+) -> Vec<(Tile, T)> {
+    let (tx, ty) = Tile::grid_of(window);
+    let total = (tx * ty) as usize;
+    let done = AtomicUsize::new(0);
+    (0..tx * ty)
+        .into_par_iter()
+        .map_init(init, |state, t| {
+            let tile = Tile::in_window(t, window);
+            let out = render(state, &tile);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            (tile, out)
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -70,5 +105,29 @@ mod tests {
             }
         }
         assert!(seen.iter().all(|&c| c == 1));
+    }
+
+    #[test]
+    fn render_tiles_returns_every_tile_of_a_window_in_order_and_reports_each() {
+        let window = PixelWindow { x0: 5, y0: 3, w: 37, h: 21 };
+        let reports = std::sync::Mutex::new(Vec::new());
+        let tiles = render_tiles(
+            &window,
+            &|done, total| reports.lock().unwrap().push((done, total)),
+            || 0u32,
+            |calls, tile| {
+                *calls += 1;
+                tile.window_indices(&window).map(|(_, k)| k).collect::<Vec<_>>()
+            },
+        );
+        let mut seen = vec![0; window.len()];
+        for (t, (tile, indices)) in tiles.iter().enumerate() {
+            assert_eq!(*tile, Tile::in_window(t as u32, &window));
+            indices.iter().for_each(|&k| seen[k] += 1);
+        }
+        assert!(seen.iter().all(|&c| c == 1), "every pixel of the window once");
+        let mut reports = reports.into_inner().unwrap();
+        reports.sort();
+        assert_eq!(reports, (1..=tiles.len()).map(|d| (d, tiles.len())).collect::<Vec<_>>());
     }
 }

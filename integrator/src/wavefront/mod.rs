@@ -20,14 +20,12 @@ use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
 use crate::sampler::{self, Dims, Sampler};
-use crate::tile::Tile;
+use crate::tile::{self, Tile};
 use glam::Vec3;
 use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::render_scene::RenderScene;
 use queues::{Guide, Paths, Queues};
-use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// Settings of the wavefront integrator.
@@ -202,30 +200,24 @@ pub fn render_samples(
     let s = scene.settings;
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let (tx, ty) = Tile::grid_of(&s.window);
-    let total = (tx * ty) as usize;
-    let done = AtomicUsize::new(0);
     let batch = opts.batch.max(1);
-    let results: Vec<TileResult> = (0..tx * ty)
-        .into_par_iter()
-        .map_init(
-            || (Paths::with_slots(batch), Queues::default()),
-            |(paths, queues), t| {
-                let tile = Tile::in_window(t, &s.window);
-                let span = tracing::trace_span!("tile", index = t, samples = samples.len()).entered();
-                let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
-                let clock = opts.timing || tracing;
-                let out =
-                    render_tile(scene, &tile, samples.clone(), batch, opts.guides, clock, paths, queues);
-                if tracing {
-                    trace_tile(&out.stats, batch);
-                }
-                drop(span);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-                out
-            },
-        )
-        .collect();
+    let results = tile::render_tiles(
+        &s.window,
+        progress,
+        || (Paths::with_slots(batch), Queues::default()),
+        |(paths, queues), tile| {
+            let span =
+                tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
+            let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
+            let clock = opts.timing || tracing;
+            let out = render_tile(scene, tile, samples.clone(), batch, opts.guides, clock, paths, queues);
+            if tracing {
+                trace_tile(&out.stats, batch);
+            }
+            drop(span);
+            out
+        },
+    );
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
     let n = s.window.len();
@@ -238,12 +230,9 @@ pub fn render_samples(
     });
     let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
-    for (t, r) in results.into_iter().enumerate() {
-        let tile = Tile::in_window(t as u32, &s.window);
-        for (i, acc) in r.film.iter().enumerate() {
-            let (x, y) = tile.pixel(i as u32);
-            let k = s.window.index(x, y);
-            film.set_pixel(k, acc);
+    for (tile, r) in results {
+        for (i, k) in tile.window_indices(&s.window) {
+            film.set_pixel(k, &r.film[i]);
             if let (Some(g), Some(sums)) = (&mut guides, &r.guides) {
                 let [a, n, e] = sums[i];
                 (g.albedo[k], g.normal[k], g.emission[k]) = (a * per_sample, n * per_sample, e * per_sample);
