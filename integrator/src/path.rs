@@ -183,16 +183,17 @@ pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -
 }
 
 /// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
-/// else the media's transmittance along it (1 without media).
+/// else [`media_transmittance`].
 #[inline]
 pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
-    if scene.occluded(ray, 1.0) {
-        0.0
-    } else if scene.features.media {
-        scene.media.transmittance(ray.origin, ray.dir, 1.0)
-    } else {
-        1.0
-    }
+    if scene.occluded(ray, 1.0) { 0.0 } else { media_transmittance(scene, ray) }
+}
+
+/// What the media let through along a shadow ray that nothing blocks, from its origin to the
+/// light point at `t = 1` (1 without media).
+#[inline]
+pub fn media_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
+    if scene.features.media { scene.media.transmittance(ray.origin, ray.dir, 1.0) } else { 1.0 }
 }
 
 /// Traces a shadow ray at once (one path at a time) and adds what gets through.

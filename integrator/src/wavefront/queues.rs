@@ -225,6 +225,17 @@ impl ShadowQueue {
     pub fn len(&self) -> usize {
         self.slot.len()
     }
+
+    /// Shadow ray `k`.
+    #[inline]
+    pub fn ray(&self, k: usize) -> Ray {
+        let ([ox, oy, oz], [dx, dy, dz]) = (&self.rays.o, &self.rays.d);
+        Ray {
+            origin: Vec3A::new(ox[k], oy[k], oz[k]),
+            dir: Vec3A::new(dx[k], dy[k], dz[k]),
+            time: self.time[k],
+        }
+    }
 }
 
 /// The active rays gathered into a stream, with the closest-hit results.

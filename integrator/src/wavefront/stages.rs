@@ -375,35 +375,24 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         Some(flat) => {
             flat.occluded_stream(&sq.rays, &mut sq.occluded);
             if scene.features.instances {
-                let [ox, oy, oz] = &sq.rays.o;
-                let [dx, dy, dz] = &sq.rays.d;
                 for k in 0..n {
                     if !sq.occluded[k] {
-                        let origin = Vec3A::new(ox[k], oy[k], oz[k]);
-                        let dir = Vec3A::new(dx[k], dy[k], dz[k]);
-                        sq.occluded[k] =
-                            scene.instances.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
+                        sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
                     }
                 }
             }
         }
         None => {
-            let [ox, oy, oz] = &sq.rays.o;
-            let [dx, dy, dz] = &sq.rays.d;
             for k in 0..n {
-                let origin = Vec3A::new(ox[k], oy[k], oz[k]);
-                let dir = Vec3A::new(dx[k], dy[k], dz[k]);
-                sq.occluded[k] = scene.occluded(&Ray { origin, dir, time: sq.time[k] }, 1.0);
+                sq.occluded[k] = scene.occluded(&sq.ray(k), 1.0);
             }
         }
     }
     if scene.features.media {
-        let [ox, oy, oz] = &sq.rays.o;
-        let [dx, dy, dz] = &sq.rays.d;
         for k in 0..n {
             if !sq.occluded[k] {
-                let (o, d) = (Vec3A::new(ox[k], oy[k], oz[k]), Vec3A::new(dx[k], dy[k], dz[k]));
-                sq.contribution[k] *= scene.media.transmittance(o, d, 1.0);
+                let tr = path::media_transmittance(scene, &sq.ray(k));
+                sq.contribution[k] *= tr;
             }
         }
     }
