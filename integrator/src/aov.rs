@@ -10,8 +10,8 @@
 
 use crate::path;
 use glam::Vec3;
-use pathwave_engine::material::Specular;
 use pathwave_engine::material::dielectric::refract;
+use pathwave_engine::material::{Material, Specular};
 use pathwave_engine::math::{Ray, offset_ray_origin, reflect};
 use pathwave_engine::render_scene::RenderScene;
 use rayon::prelude::*;
@@ -96,6 +96,63 @@ pub fn sky_albedo(radiance: Vec3) -> Vec3 {
     radiance.clamp(Vec3::ZERO, Vec3::ONE)
 }
 
+/// What a camera ray has shown so far, as it follows perfect mirrors and glass: the one rule
+/// for the albedo and normal guides, applied by [`first_surface`] here and by the wavefront's
+/// `record_guides` stage to its paths.
+#[derive(Clone, Copy, Debug)]
+pub struct Guide {
+    /// Still following perfect mirrors and glass from the camera: albedo and normal to come.
+    pub open: bool,
+    /// The last surface followed was glass (its normal, facing the ray that came, is `normal`).
+    pub glass: bool,
+    /// Product of the mirrors' albedos so far.
+    pub tint: Vec3,
+    /// Albedo of the first surface that is not a perfect mirror or glass.
+    pub albedo: Vec3,
+    /// Its camera-facing shading normal (or the last mirror's or glass's).
+    pub normal: Vec3,
+    /// Radiance the camera ray itself met on an emitter or the background.
+    pub emission: Vec3,
+}
+
+impl Guide {
+    /// A fresh camera ray's.
+    pub const NEW: Guide = Guide {
+        open: true,
+        glass: false,
+        tint: Vec3::ONE,
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        emission: Vec3::ZERO,
+    };
+
+    /// Records the surface that ends the chain of mirrors and glass.
+    #[inline]
+    pub fn close(&mut self, albedo: Vec3, normal: Vec3) {
+        (self.open, self.albedo, self.normal) = (false, self.tint * albedo, normal);
+    }
+
+    /// The ray met a surface of material `m` whose shading normal, turned towards the ray, is
+    /// `ns`: a perfect mirror tints what follows, glass hands on to what it shows, anything
+    /// else (emitters included) closes the chain.
+    #[inline]
+    pub fn surface(&mut self, m: &Material, ns: Vec3) {
+        match m.specular() {
+            Specular::Mirror => (self.tint, self.normal, self.glass) = (self.tint * m.albedo(), ns, false),
+            Specular::Glass { .. } => (self.normal, self.glass) = (ns, true),
+            Specular::No => self.close(m.albedo(), ns),
+        }
+    }
+
+    /// The ray left the scene where the background's radiance is `sky`: the sky's albedo, and
+    /// the last mirror's or glass's normal (zero if none, as the sky's own pixels).
+    #[inline]
+    pub fn sky(&mut self, sky: Vec3) {
+        let normal = self.normal;
+        self.close(sky_albedo(sky), normal);
+    }
+}
+
 /// Perfect mirrors and glass hand the guides on to what they show, up to this many times.
 const MAX_SPECULAR: u32 = 4;
 
@@ -115,30 +172,33 @@ fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
         None => scene.background.radiance(camera.dir),
         Some(h) => scene.material_at(h.material, &h.surface).emitted(h.surface.n.dot(-camera.dir)),
     } * transmittance;
-    // The normal of the last mirror or glass surface: a reflection of the sky keeps it, so
-    // that it does not pass for the sky itself (whose pixels hold only emission).
-    let (mut ray, mut hit, mut tint, mut last_n) = (*camera, first, Vec3::ONE, Vec3::ZERO);
+    // The last mirror's or glass's normal: a reflection of the sky keeps it, so that it does
+    // not pass for the sky itself (whose pixels hold only emission).
+    let (mut ray, mut hit, mut g) = (*camera, first, Guide::NEW);
     for bounce in 0..=MAX_SPECULAR {
         let Some(h) = hit else {
-            return [tint * sky_albedo(scene.background.radiance(ray.dir)), last_n, emission];
+            g.sky(scene.background.radiance(ray.dir));
+            return [g.albedo, g.normal, emission];
         };
         let sp = &h.surface;
         let wo = -ray.dir.normalize();
         let ns = if sp.ns.dot(wo) < 0.0 { -sp.ns } else { sp.ns };
-        let last = bounce == MAX_SPECULAR;
         let m = scene.material_at(h.material, sp);
+        match bounce {
+            // The last bounce shows what it meets, mirror and glass alike.
+            MAX_SPECULAR => g.close(m.albedo(), ns.into()),
+            _ => g.surface(&m, ns.into()),
+        }
+        if !g.open {
+            return [g.albedo, g.normal, emission];
+        }
         let dir = match m.specular() {
-            Specular::Mirror if !last => {
-                tint *= m.albedo();
-                reflect(wo, ns)
-            }
-            Specular::Glass { ior } if !last => {
+            Specular::Glass { ior } => {
                 let eta = if sp.ns.dot(wo) >= 0.0 { ior } else { 1.0 / ior };
                 refract(wo, ns, eta).unwrap_or_else(|| reflect(wo, ns))
             }
-            _ => return [tint * m.albedo(), ns.into(), emission],
+            _ => reflect(wo, ns),
         };
-        last_n = ns.into();
         let side = if dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
         ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir, time: ray.time };
         hit = scene.intersect(&ray, f32::INFINITY);

@@ -15,7 +15,7 @@
 mod queues;
 mod stages;
 
-use crate::aov::Aovs;
+use crate::aov::{Aovs, Guide};
 use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
@@ -24,7 +24,7 @@ use crate::tile::{self, Tile};
 use glam::Vec3;
 use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::render_scene::RenderScene;
-use queues::{Guide, Paths, Queues};
+use queues::{Paths, Queues};
 use std::ops::Range;
 use std::time::{Duration, Instant};
 

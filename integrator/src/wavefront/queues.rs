@@ -1,6 +1,7 @@
 //! Structure-of-arrays storage for the paths in flight and the queues between stages. Paths
 //! live in slots; queues hold slot indices (or, for shadow rays, the rays themselves).
 
+use crate::aov::Guide;
 use crate::path::PathState;
 use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
@@ -41,41 +42,6 @@ pub struct Paths {
     pub hit: Vec<Hit>,
     /// Denoiser guides of the path's sample (only with [`super::Options::guides`]).
     pub guide: Vec<Guide>,
-}
-
-/// What a path's camera ray showed, for the denoiser: see [`crate::aov`].
-#[derive(Clone, Copy, Debug)]
-pub struct Guide {
-    /// Still following perfect mirrors and glass from the camera: albedo and normal to come.
-    pub open: bool,
-    /// The last surface followed was glass (its normal, facing the ray that came, is `normal`).
-    pub glass: bool,
-    /// Product of the mirrors' albedos so far.
-    pub tint: Vec3,
-    /// Albedo of the first surface that is not a perfect mirror or glass.
-    pub albedo: Vec3,
-    /// Its camera-facing shading normal (or the last mirror's or glass's).
-    pub normal: Vec3,
-    /// Radiance the camera ray itself met on an emitter or the background.
-    pub emission: Vec3,
-}
-
-impl Guide {
-    /// A fresh camera ray's.
-    pub const NEW: Guide = Guide {
-        open: true,
-        glass: false,
-        tint: Vec3::ONE,
-        albedo: Vec3::ZERO,
-        normal: Vec3::ZERO,
-        emission: Vec3::ZERO,
-    };
-
-    /// Records the surface that ends the chain of mirrors and glass.
-    #[inline]
-    pub fn close(&mut self, albedo: Vec3, normal: Vec3) {
-        (self.open, self.albedo, self.normal) = (false, self.tint * albedo, normal);
-    }
 }
 
 impl Paths {

@@ -2,13 +2,12 @@
 //! comes from [`crate::path`], so every sample equals the reference path tracer's.
 
 use super::queues::{Paths, Queues};
-use crate::aov;
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
-use pathwave_engine::material::{MaterialKind, Shading, Specular};
+use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
@@ -128,8 +127,7 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             if p.depth[s] == 0 {
                 g.emission = p.beta[s] * sky;
             }
-            let normal = g.normal;
-            g.close(aov::sky_albedo(sky), normal);
+            g.sky(sky);
         }
     }
     for &i in &q.emissive {
@@ -140,26 +138,16 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
             if p.depth[s] == 0 {
                 p.guide[s].emission = p.beta[s] * mat.emitted(hit.surface.n.dot(-p.dir[s]));
             }
-            p.guide[s].close(mat.albedo(), facing(hit.surface.ns, p.dir[s]));
+            p.guide[s].surface(&mat, facing(hit.surface.ns, p.dir[s]));
         }
     }
     for queue in &q.shade {
         for &i in queue {
             let s = i as usize;
-            if !p.guide[s].open {
-                continue;
-            }
-            let hit = p.hit[s];
-            let ns = facing(hit.surface.ns, p.dir[s]);
-            let m = scene.material_at(hit.material, &hit.surface);
-            match m.specular() {
-                // The chain goes on: the next hit of the path records.
-                Specular::Mirror => {
-                    let g = &mut p.guide[s];
-                    (g.tint, g.normal, g.glass) = (g.tint * m.albedo(), ns, false);
-                }
-                Specular::Glass { .. } => (p.guide[s].normal, p.guide[s].glass) = (ns, true),
-                Specular::No => p.guide[s].close(m.albedo(), ns),
+            if p.guide[s].open {
+                let hit = p.hit[s];
+                let m = scene.material_at(hit.material, &hit.surface);
+                p.guide[s].surface(&m, facing(hit.surface.ns, p.dir[s]));
             }
         }
     }
@@ -174,7 +162,7 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
                     let m = scene.material_at(hit.material, &hit.surface);
                     p.guide[s].close(m.albedo(), facing(hit.surface.ns, p.dir[s]));
                 }
-                false => p.guide[s].close(aov::sky_albedo(scene.background.radiance(p.dir[s])), Vec3::ZERO),
+                false => p.guide[s].sky(scene.background.radiance(p.dir[s])),
             }
         }
     }
