@@ -18,9 +18,9 @@
 //! # Sampling
 //!
 //! The map is sampled with a piecewise-constant 2D distribution over its texel grid: a
-//! marginal density over rows and one conditional density per row (pbrt-v4's
-//! `PiecewiseConstant1D` and `PiecewiseConstant2D`, appendix A.4 and A.5 of "Physically Based
-//! Rendering", 4th edition). A point (u, v) of the unit square maps to the direction above, with
+//! marginal density over rows and one conditional density per row ([`crate::distribution`]:
+//! pbrt-v4's `PiecewiseConstant1D` and `PiecewiseConstant2D`, appendix A.4 and A.5 of
+//! "Physically Based Rendering", 4th edition). A point (u, v) of the unit square maps to the direction above, with
 //! d omega = 2 pi^2 sin(theta) du dv, so the solid-angle density is
 //! p(omega) = p(u, v) / (2 pi^2 sin theta) (pbrt-v3's `InfiniteAreaLight`, section 14.2.4 of
 //! the 3rd edition); directions with sin theta = 0 (the poles) are never returned and have
@@ -32,13 +32,11 @@
 //! luminance, which is a convex combination of theirs), times sin theta at the cell centre. The
 //! bound is conservative: a small sun's density spreads over the ring of cells around it.
 
+use crate::distribution::{Distribution2D, clean};
 use crate::texture::{TextureError, TextureImage};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::{PI, TAU};
 use std::path::Path;
-
-/// The largest f32 below 1.
-const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Rec. 709 (sRGB primaries) luminance of a linear RGB colour.
 #[inline]
@@ -82,165 +80,6 @@ fn wrap01(x: f32) -> f32 {
 /// documentation); 0 for a non-finite angle.
 fn u_offset(rotate_degrees: f32) -> f32 {
     if rotate_degrees.is_finite() { wrap01(rotate_degrees / 360.0) } else { 0.0 }
-}
-
-/// The cell of [0, 1) split in `n` that holds `x` (x = 1 is in the last one).
-#[inline]
-fn cell_of(x: f32, n: usize) -> usize {
-    ((x * n as f32) as usize).min(n - 1)
-}
-
-/// A weight as the distributions use it: negative, NaN and infinite weights count as 0.
-#[inline]
-fn clean(w: f32) -> f32 {
-    if w.is_finite() && w > 0.0 { w } else { 0.0 }
-}
-
-/// A piecewise-constant density on [0, 1) made of `n` equal cells, each proportional to its
-/// weight (pbrt-v4's `PiecewiseConstant1D`, appendix A.4).
-///
-/// A cell of weight 0 is never sampled and has density 0. Weights are accumulated in f64;
-/// the CDF and the densities are stored in f32.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Distribution1D {
-    /// The normalised CDF: `n + 1` non-decreasing entries from 0 to exactly 1.
-    cdf: Vec<f32>,
-    /// The density of each cell on [0, 1): weight * n / sum of weights.
-    density: Vec<f32>,
-    /// Sum of the weights / n (pbrt's `funcInt`: the integral of the step function).
-    integral: f64,
-}
-
-impl Distribution1D {
-    /// Builds the distribution of non-negative `weights` (negative, NaN and infinite ones count
-    /// as 0). `None` when there is nothing to sample: no weights, or all of them 0.
-    pub fn new(weights: &[f32]) -> Option<Self> {
-        let n = weights.len();
-        let mut sum = vec![0f64; n + 1];
-        for (i, &w) in weights.iter().enumerate() {
-            sum[i + 1] = sum[i] + clean(w) as f64;
-        }
-        let total = sum[n];
-        if total <= 0.0 {
-            return None;
-        }
-        // A cell of weight 0 adds exactly 0, so its two CDF entries are equal and it is never
-        // sampled; the last entry is total / total = 1 exactly.
-        let cdf = sum.iter().map(|&s| (s / total) as f32).collect();
-        let density = weights.iter().map(|&w| (clean(w) as f64 * n as f64 / total) as f32).collect();
-        Some(Self { cdf, density, integral: total / n as f64 })
-    }
-
-    /// The number of cells.
-    pub fn cells(&self) -> usize {
-        self.density.len()
-    }
-
-    /// The integral of the step function of the weights over [0, 1]: their mean.
-    pub fn integral(&self) -> f64 {
-        self.integral
-    }
-
-    /// The normalised CDF at the `cells() + 1` cell boundaries.
-    pub fn cdf(&self) -> &[f32] {
-        &self.cdf
-    }
-
-    /// Inverts the CDF at `u` in [0, 1) (clamped there): returns x in [0, 1) and its density.
-    /// The density is positive (it is the density of a cell of positive weight) unless that
-    /// weight is below about 1e-45 of the sum of the weights.
-    pub fn sample_continuous(&self, u: f32) -> (f32, f32) {
-        let u = if u > 0.0 { u.min(ONE_MINUS_EPSILON) } else { 0.0 }; // NaN becomes 0
-        let n = self.cells();
-        // The last boundary at or below u: cdf[i] <= u < cdf[i + 1], so cdf[i + 1] > cdf[i] and
-        // the cell's weight is positive (pbrt-v4's FindInterval).
-        let i = (self.cdf.partition_point(|&c| c <= u) - 1).min(n - 1);
-        let (c0, c1) = (self.cdf[i], self.cdf[i + 1]);
-        let du = if c1 > c0 { ((u - c0) / (c1 - c0)).clamp(0.0, 1.0) } else { 0.0 };
-        let x = into_cell((i as f32 + du) / n as f32, i, n);
-        (x, self.density[i])
-    }
-
-    /// The density at `x` (0 outside [0, 1]).
-    pub fn pdf(&self, x: f32) -> f32 {
-        if (0.0..=1.0).contains(&x) { self.density[cell_of(x, self.cells())] } else { 0.0 }
-    }
-}
-
-/// `x` moved by at most a few ulps so that [`cell_of`] puts it in cell `i` and it stays below 1:
-/// the density [`Distribution1D::pdf`] then reads at a sampled point is the sampled cell's.
-fn into_cell(x: f32, i: usize, n: usize) -> f32 {
-    let mut x = x.clamp(0.0, ONE_MINUS_EPSILON);
-    while cell_of(x, n) > i && x > 0.0 {
-        x = x.next_down();
-    }
-    while cell_of(x, n) < i && x < ONE_MINUS_EPSILON {
-        x = x.next_up();
-    }
-    x
-}
-
-/// A piecewise-constant density on [0, 1)^2 over a grid of `nu` x `nv` cells, proportional to
-/// the cells' weights: a marginal density in v (one cell per row) times each row's conditional
-/// density in u (pbrt-v4's `PiecewiseConstant2D`, appendix A.5). Rows whose weights are all 0
-/// have no conditional density: the marginal never picks them and their density is 0.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Distribution2D {
-    /// One density in u per row; `None` for a row of zero weight.
-    conditionals: Vec<Option<Distribution1D>>,
-    /// The density in v, from the rows' integrals.
-    marginal: Distribution1D,
-}
-
-impl Distribution2D {
-    /// Builds the distribution of `weights`, `nu` per row, row-major: row j covers
-    /// v in [j / nv, (j + 1) / nv). Negative, NaN and infinite weights count as 0. `None` when
-    /// there is nothing to sample (an empty grid, or every weight 0).
-    ///
-    /// # Panics
-    /// If `weights.len() != nu * nv`.
-    pub fn new(nu: usize, nv: usize, weights: &[f32]) -> Option<Self> {
-        assert_eq!(weights.len(), nu * nv, "Distribution2D: {nu} x {nv} cells need as many weights");
-        if nu == 0 || nv == 0 {
-            return None;
-        }
-        let conditionals: Vec<_> = weights.chunks_exact(nu).map(Distribution1D::new).collect();
-        let rows: Vec<f32> =
-            conditionals.iter().map(|c| c.as_ref().map_or(0.0, |c| c.integral() as f32)).collect();
-        let marginal = Distribution1D::new(&rows)?;
-        Some(Self { conditionals, marginal })
-    }
-
-    /// The integral of the step function of the weights over the unit square: their mean.
-    pub fn integral(&self) -> f64 {
-        self.marginal.integral()
-    }
-
-    /// Maps `u` in [0, 1)^2 to a point of [0, 1)^2 (`u.y` picks the row, `u.x` the point in it)
-    /// and returns it with its density, which equals [`Self::pdf`] there exactly.
-    pub fn sample_continuous(&self, u: Vec2) -> (Vec2, f32) {
-        let (v, pdf_v) = self.marginal.sample_continuous(u.y);
-        // The marginal only picks rows of positive weight, which have a conditional density.
-        match &self.conditionals[cell_of(v, self.marginal.cells())] {
-            Some(row) => {
-                let (x, pdf_u) = row.sample_continuous(u.x);
-                (Vec2::new(x, v), pdf_v * pdf_u)
-            }
-            None => (Vec2::new(u.x.clamp(0.0, ONE_MINUS_EPSILON), v), 0.0),
-        }
-    }
-
-    /// The density at `p` (0 outside the unit square).
-    pub fn pdf(&self, p: Vec2) -> f32 {
-        let pdf_v = self.marginal.pdf(p.y);
-        if pdf_v == 0.0 {
-            return 0.0;
-        }
-        match &self.conditionals[cell_of(p.y, self.marginal.cells())] {
-            Some(row) => pdf_v * row.pdf(p.x),
-            None => 0.0,
-        }
-    }
 }
 
 /// Samples directions over the sphere in proportion to a lat-long grid of weights (with the
@@ -441,8 +280,9 @@ impl EnvironmentMap {
     #[inline]
     fn radiance_at(&self, uv: Vec2) -> Vec3 {
         let (w, h) = (self.width as i64, self.height as i64);
-        // The same product u * W as the sampler's cell lookup (cell_of), so that a lookup in
-        // cell i reads only columns i - 1 ..= i + 1, which that cell's bound covers.
+        // The same product u * W as the sampler's cell lookup (`distribution::cell_of`), so
+        // that a lookup in cell i reads only columns i - 1 ..= i + 1, which that cell's bound
+        // covers.
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
@@ -665,71 +505,6 @@ mod tests {
         let want = (at(2, 1) * 0.75 * 0.75 + at(3, 1) * 0.25 * 0.75)
             + (at(2, 2) * 0.75 * 0.25 + at(3, 2) * 0.25 * 0.25);
         assert!(close(look(u, v), want, 1e-4));
-    }
-
-    #[test]
-    fn distribution_1d_samples_cells_in_proportion_and_never_zero_ones() {
-        let d = Distribution1D::new(&[0.0, 1.0, 0.0, 3.0, f32::NAN, -2.0]).unwrap();
-        assert_eq!(d.cdf(), &[0.0, 0.0, 0.25, 0.25, 1.0, 1.0, 1.0]);
-        assert_eq!(d.cells(), 6);
-        assert!((d.integral() - 4.0 / 6.0).abs() < 1e-12);
-        assert_eq!(d.sample_continuous(0.0), (1.0 / 6.0, 1.5));
-        assert_eq!(d.sample_continuous(0.25), (0.5, 4.5));
-        for u in [1.0, 2.0, f32::NAN, -1.0, ONE_MINUS_EPSILON] {
-            let (x, p) = d.sample_continuous(u);
-            assert!((0.0..1.0).contains(&x) && p > 0.0 && p == d.pdf(x), "{u} {x} {p}");
-        }
-        assert_eq!((d.pdf(0.1), d.pdf(0.2), d.pdf(0.4), d.pdf(0.6), d.pdf(0.9)), (0.0, 1.5, 0.0, 4.5, 0.0));
-        assert_eq!((d.pdf(-0.1), d.pdf(1.1), d.pdf(f32::NAN)), (0.0, 0.0, 0.0));
-        let mut r = uniform(7);
-        let mut count = [0usize; 6];
-        let n = 100_000;
-        for _ in 0..n {
-            let (x, p) = d.sample_continuous(r());
-            assert!((0.0..1.0).contains(&x) && p > 0.0 && p == d.pdf(x));
-            count[cell_of(x, 6)] += 1;
-        }
-        assert_eq!((count[0], count[2], count[4], count[5]), (0, 0, 0, 0));
-        assert!((count[3] as f64 / n as f64 - 0.75).abs() < 0.01, "{count:?}");
-        // Nothing to sample.
-        assert!(Distribution1D::new(&[]).is_none());
-        assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
-        assert!(Distribution1D::new(&[f32::INFINITY, -1.0]).is_none());
-        // Boundaries that f32 cannot place exactly: the sample stays in its cell.
-        let d = Distribution1D::new(&[1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]).unwrap();
-        for k in 0..=1000 {
-            let (x, p) = d.sample_continuous(k as f32 / 1000.0);
-            assert!(p > 0.0 && d.pdf(x) == p, "{k} {x}");
-        }
-    }
-
-    #[test]
-    fn distribution_2d_skips_zero_rows_and_integrates_to_one() {
-        let (nu, nv) = (5, 4);
-        let w = [
-            0.0, 0.0, 0.0, 0.0, 0.0, //
-            1.0, 2.0, 0.0, 0.0, 4.0, //
-            0.0, 0.0, 0.0, 0.0, 0.0, //
-            0.0, 0.0, 3.0, 0.0, 0.0,
-        ];
-        let d = Distribution2D::new(nu, nv, &w).unwrap();
-        assert!((d.integral() - 10.0 / 20.0).abs() < 1e-12);
-        let mut total = 0.0;
-        for j in 0..nv {
-            for i in 0..nu {
-                let p = d.pdf(Vec2::new((i as f32 + 0.5) / nu as f32, (j as f32 + 0.5) / nv as f32));
-                assert!((p - w[j * nu + i] * 20.0 / 10.0).abs() < 1e-6);
-                total += p / (nu * nv) as f32;
-            }
-        }
-        assert!((total - 1.0).abs() < 1e-6);
-        let mut r = uniform(9);
-        for _ in 0..10000 {
-            let (p, pdf) = d.sample_continuous(Vec2::new(r(), r()));
-            assert!(pdf > 0.0 && pdf == d.pdf(p), "{p} {pdf}");
-        }
-        assert!(Distribution2D::new(3, 2, &[0.0; 6]).is_none());
-        assert!(Distribution2D::new(0, 2, &[]).is_none());
     }
 
     #[test]

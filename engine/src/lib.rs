@@ -9,6 +9,7 @@
 pub mod animation;
 pub mod bvh8;
 pub mod camera;
+pub mod distribution;
 pub mod environment;
 pub mod flat;
 pub mod format;
