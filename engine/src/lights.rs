@@ -159,12 +159,7 @@ impl LightTable {
             let Some(Emission { emit, two_sided }) = materials[m as usize].emission() else {
                 continue;
             };
-            let area = match prim {
-                Primitive::Sphere(s) => s.area(),
-                Primitive::Quad(q) => q.area,
-                Primitive::TransformedSphere(s) => s.area(),
-                Primitive::Triangle(t) => t.area(),
-            };
+            let area = prim.area();
             let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
             if p > 0.0 {
                 t.light_of_prim[i] = t.prims.len() as u32;
@@ -268,12 +263,7 @@ impl LightTable {
         // A moving light is sampled at rest, from where `from` is relative to it.
         let off = geometry.offset(prim, time);
         let from = from - off;
-        let mut ls = match &geometry.prims[prim as usize] {
-            Primitive::Sphere(s) => s.sample_solid_angle(from, u),
-            Primitive::Quad(q) => q.sample_solid_angle(from, u),
-            Primitive::TransformedSphere(s) => s.sample_solid_angle(from, u),
-            Primitive::Triangle(t) => t.sample_solid_angle(from, u),
-        };
+        let mut ls = geometry.prims[prim as usize].sample_solid_angle(from, u);
         ls.p += off;
         ls
     }
@@ -290,12 +280,7 @@ impl LightTable {
         }
         let off = geometry.offset(prim, time);
         let (from, p) = (from - off, p - off);
-        let pdf = match &geometry.prims[prim as usize] {
-            Primitive::Sphere(s) => s.pdf_solid_angle(from, p, n),
-            Primitive::Quad(q) => q.pdf_solid_angle(from, p),
-            Primitive::TransformedSphere(s) => s.pdf_solid_angle(from, p, n),
-            Primitive::Triangle(t) => t.pdf_solid_angle(from, p),
-        };
+        let pdf = geometry.prims[prim as usize].pdf_solid_angle(from, p, n);
         pdf * self.pmf[light as usize]
     }
 }

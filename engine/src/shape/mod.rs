@@ -7,7 +7,7 @@ pub(crate) mod sphere;
 mod transformed_sphere;
 mod triangle;
 
-pub use primitive::Primitive;
+pub use primitive::{Primitive, PrimitiveShape};
 pub use quad::{Quad, QuadLight, SPHERICAL_MIN_ESTIMATE};
 pub use sphere::Sphere;
 pub use transformed_sphere::TransformedSphere;

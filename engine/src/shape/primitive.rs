@@ -1,54 +1,103 @@
 //! The scene's primitives: every shape kind the primitive BVH holds, behind one enum whose
-//! methods dispatch to the kind's own file.
+//! methods dispatch to the kind's own file. The [`primitives!`] invocation below is the one
+//! list of kinds; a kind is a type implementing [`PrimitiveShape`].
 
-use super::{Quad, Sphere, SurfacePoint, TransformedSphere, Triangle};
-use glam::Vec3A;
+use super::{LightSample, Quad, Sphere, SurfacePoint, TransformedSphere, Triangle};
+use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
-/// One primitive of the scene, in world space.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Primitive {
-    /// A sphere (translated and uniformly scaled spheres are baked into this form).
+primitives! {
     Sphere(Sphere),
-    /// A parallelogram (quads take any affine transform exactly).
     Quad(Quad),
-    /// A sphere under a general affine transform.
     TransformedSphere(TransformedSphere),
-    /// A triangle (watertight intersection).
     Triangle(Triangle),
 }
 
-impl Primitive {
+/// What the BVH, the integrators and the light table ask of a shape placed in world space.
+pub trait PrimitiveShape: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static {
     /// World-space bounds.
-    pub fn aabb(&self) -> Aabb {
-        match self {
-            Primitive::Sphere(s) => s.aabb(),
-            Primitive::Quad(q) => q.aabb(),
-            Primitive::TransformedSphere(s) => s.aabb(),
-            Primitive::Triangle(t) => t.aabb(),
-        }
-    }
-
-    /// Smallest `t` in `(0, tmax)` or `f32::INFINITY`.
-    #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        match self {
-            Primitive::Sphere(s) => s.intersect(o, d, tmax),
-            Primitive::Quad(q) => q.intersect(o, d, tmax),
-            Primitive::TransformedSphere(s) => s.intersect(o, d, tmax),
-            Primitive::Triangle(t) => t.intersect(o, d, tmax),
-        }
-    }
-
-    /// Surface data at a point found by [`Self::intersect`]; spheres leave their texture
-    /// coordinates at zero unless `uv` (quads and triangles have theirs for free).
-    #[inline(always)]
-    pub fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
-        match self {
-            Primitive::Sphere(s) => s.surface_with(p, uv),
-            Primitive::Quad(q) => q.surface(p),
-            Primitive::TransformedSphere(s) => s.surface_with(p, uv),
-            Primitive::Triangle(t) => t.surface(p),
-        }
-    }
+    fn aabb(&self) -> Aabb;
+    /// Smallest `t` in `(0, tmax)` of the ray `o + t d` (`d` need not be unit length), or
+    /// `f32::INFINITY`.
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32;
+    /// Surface data at a point found by [`Self::intersect`]; texture coordinates that cost
+    /// something may be left at zero unless `uv`.
+    fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint;
+    /// Surface area (an emitter's power is its radiance times its area).
+    fn area(&self) -> f32;
+    /// A point sampled for next-event estimation from `from`, with its solid-angle density.
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample;
+    /// The solid-angle density with which [`Self::sample_solid_angle`] from `from` gives the
+    /// point `p` (unit normal `n`).
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32;
 }
+
+/// Generates [`Primitive`], one variant per kind, and its methods, each a `match` that calls
+/// the kind's [`PrimitiveShape`] method.
+macro_rules! primitives {
+    ($($(#[$attr:meta])* $variant:ident($ty:ty),)+) => {
+        /// One primitive of the scene, in world space.
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum Primitive {
+            $($(#[$attr])* #[doc = concat!("A [`", stringify!($ty), "`].")] $variant($ty),)+
+        }
+
+        impl Primitive {
+            /// World-space bounds.
+            pub fn aabb(&self) -> Aabb {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::aabb(s),)+
+                }
+            }
+
+            /// Smallest `t` in `(0, tmax)` or `f32::INFINITY`.
+            #[inline]
+            pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::intersect(s, o, d, tmax),)+
+                }
+            }
+
+            /// Surface data at a point found by [`Self::intersect`]; spheres leave their
+            /// texture coordinates at zero unless `uv` (quads and triangles have theirs for
+            /// free).
+            #[inline(always)]
+            pub fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::surface(s, p, uv),)+
+                }
+            }
+
+            /// Surface area.
+            pub fn area(&self) -> f32 {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::area(s),)+
+                }
+            }
+
+            /// See [`PrimitiveShape::sample_solid_angle`].
+            #[inline]
+            pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::sample_solid_angle(s, from, u),)+
+                }
+            }
+
+            /// See [`PrimitiveShape::pdf_solid_angle`].
+            #[inline]
+            pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::pdf_solid_angle(s, from, p, n),)+
+                }
+            }
+        }
+
+        $($(#[$attr])*
+        impl From<$ty> for Primitive {
+            fn from(s: $ty) -> Self {
+                Primitive::$variant(s)
+            }
+        })+
+    };
+}
+use primitives;

@@ -1,6 +1,6 @@
 //! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
 
-use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
 use crate::math::gamma;
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -318,6 +318,31 @@ pub fn quad_t(k: [[f32; 3]; 4], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
     let b = dot(eb, ph);
     let hit = denom != 0.0 && t > 0.0 && t < tmax && a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0;
     if hit { t } else { f32::INFINITY }
+}
+
+impl PrimitiveShape for Quad {
+    fn aabb(&self) -> Aabb {
+        Quad::aabb(self)
+    }
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        Quad::intersect(self, o, d, tmax)
+    }
+    #[inline(always)]
+    fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
+        Quad::surface(self, p)
+    }
+    fn area(&self) -> f32 {
+        self.area
+    }
+    #[inline]
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        Quad::sample_solid_angle(self, from, u)
+    }
+    #[inline]
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
+        Quad::pdf_solid_angle(self, from, p)
+    }
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Sphere: the numerically robust quadratic of Ray Tracing Gems ch. 7 and cone sampling
 //! (SEED.md section 12.4) for emitters.
 
-use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
 use crate::math::{Frame, gamma, uniform_sphere};
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -168,6 +168,31 @@ fn nearest_root(a: f32, b: f32, cc: f32, disc: f32, tmax: f32) -> f32 {
         hi
     } else {
         f32::INFINITY
+    }
+}
+
+impl PrimitiveShape for Sphere {
+    fn aabb(&self) -> Aabb {
+        Sphere::aabb(self)
+    }
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        Sphere::intersect(self, o, d, tmax)
+    }
+    #[inline(always)]
+    fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
+        self.surface_with(p, uv)
+    }
+    fn area(&self) -> f32 {
+        Sphere::area(self)
+    }
+    #[inline]
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        Sphere::sample_solid_angle(self, from, u)
+    }
+    #[inline]
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+        Sphere::pdf_solid_angle(self, from, p, n)
     }
 }
 

@@ -1,7 +1,7 @@
 //! A sphere under an arbitrary affine transform (an ellipsoid, possibly sheared): the ray moves
 //! to object space, the hit point back, the normal by the inverse transpose (SEED.md section 9).
 
-use super::{LightSample, Sphere, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
 use crate::math::{gamma, uniform_sphere};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -116,6 +116,31 @@ impl TransformedSphere {
         let n_obj = (self.object_from_world.transform_point3a(p) - self.sphere.center).normalize();
         let pdf_area = 1.0 / (self.sphere.area() * self.area_scale(n_obj));
         area_to_solid_angle(pdf_area, from, p, n)
+    }
+}
+
+impl PrimitiveShape for TransformedSphere {
+    fn aabb(&self) -> Aabb {
+        TransformedSphere::aabb(self)
+    }
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        TransformedSphere::intersect(self, o, d, tmax)
+    }
+    #[inline(always)]
+    fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
+        self.surface_with(p, uv)
+    }
+    fn area(&self) -> f32 {
+        TransformedSphere::area(self)
+    }
+    #[inline]
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        TransformedSphere::sample_solid_angle(self, from, u)
+    }
+    #[inline]
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+        TransformedSphere::pdf_solid_angle(self, from, p, n)
     }
 }
 

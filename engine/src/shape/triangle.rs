@@ -4,7 +4,7 @@
 //! beyond a conservative bound on the error of `t`. Rays through a shared edge or vertex hit at
 //! least one of the triangles sharing it.
 
-use super::{LightSample, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
 use crate::math::gamma;
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -161,6 +161,31 @@ impl Triangle {
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
     pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
         area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize())
+    }
+}
+
+impl PrimitiveShape for Triangle {
+    fn aabb(&self) -> Aabb {
+        Triangle::aabb(self)
+    }
+    #[inline(always)]
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+        Triangle::intersect(self, o, d, tmax)
+    }
+    #[inline(always)]
+    fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
+        Triangle::surface(self, p)
+    }
+    fn area(&self) -> f32 {
+        Triangle::area(self)
+    }
+    #[inline]
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        Triangle::sample_solid_angle(self, from, u)
+    }
+    #[inline]
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
+        Triangle::pdf_solid_angle(self, from, p)
     }
 }
 
