@@ -14,6 +14,7 @@
 //! coefficients add. Cost: every query visits every volume (scenes hold a handful).
 
 use crate::mesh::MeshBlas;
+use crate::shape::Closed;
 use glam::{Affine3A, Vec3, Vec3A};
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -30,20 +31,8 @@ pub struct Medium {
 /// The object-space shape that bounds a volume.
 #[derive(Clone, Debug)]
 pub enum Boundary {
-    /// The axis-aligned box between two corners.
-    Box {
-        /// Minimum corner.
-        min: Vec3A,
-        /// Maximum corner.
-        max: Vec3A,
-    },
-    /// A sphere.
-    Sphere {
-        /// Centre.
-        center: Vec3A,
-        /// Radius.
-        radius: f32,
-    },
+    /// A box or a ball, entered and left once along a ray.
+    Closed(Closed),
     /// A closed triangle mesh (checked closed at load).
     Mesh(Arc<MeshBlas>),
 }
@@ -104,7 +93,7 @@ impl Volume {
         let d = self.object_from_world.transform_vector3a(d);
         let (t0, t1) = match self.boundary {
             Boundary::Mesh(_) => return None,
-            Boundary::Box { min, max } => {
+            Boundary::Closed(Closed::Box { min, max }) => {
                 let inv = d.recip();
                 let (a, b) = ((min - o) * inv, (max - o) * inv);
                 // 0 * inf = NaN: a ray parallel to a slab and in one of its planes, which
@@ -114,7 +103,7 @@ impl Volume {
                 let hi = Vec3A::select(nan, Vec3A::INFINITY, a.max(b));
                 (lo.max_element(), hi.min_element())
             }
-            Boundary::Sphere { center, radius } => {
+            Boundary::Closed(Closed::Sphere { center, radius }) => {
                 // Ray Tracing Gems ch. 7: the discriminant from the closest-approach vector.
                 let len = d.length();
                 let dn = d / len;
@@ -234,7 +223,7 @@ mod tests {
     fn unit_box(sigma_t: f32, m: Affine3A) -> Volume {
         Volume {
             object_from_world: m.inverse(),
-            boundary: Boundary::Box { min: Vec3A::ZERO, max: Vec3A::ONE },
+            boundary: Boundary::Closed(Closed::Box { min: Vec3A::ZERO, max: Vec3A::ONE }),
             medium: Medium { sigma_t, albedo: Vec3::splat(0.5) },
         }
     }
@@ -265,7 +254,7 @@ mod tests {
     fn sphere_interval() {
         let v = Volume {
             object_from_world: Affine3A::IDENTITY,
-            boundary: Boundary::Sphere { center: Vec3A::ZERO, radius: 2.0 },
+            boundary: Boundary::Closed(Closed::Sphere { center: Vec3A::ZERO, radius: 2.0 }),
             medium: Medium { sigma_t: 1.0, albedo: Vec3::ONE },
         };
         let (t0, t1) = v.interval(Vec3A::new(0.0, 0.0, -10.0), Vec3A::new(0.0, 0.0, 4.0), 100.0).unwrap();

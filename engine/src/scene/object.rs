@@ -6,6 +6,7 @@ use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::{Albedo, Positive, V3};
 use crate::placement::{Form, primitives};
+use crate::shape::{BoxShape, QuadShape, SphereShape, TriangleShape};
 use glam::Vec3;
 use serde::Deserialize;
 
@@ -79,10 +80,7 @@ impl TryFrom<RawObject> for ObjectDesc {
         let body = match (r.material, r.medium) {
             (Some(m), None) => Body::Surface(m),
             (None, Some(_))
-                if !matches!(
-                    r.shape,
-                    ShapeDesc::Sphere { .. } | ShapeDesc::Box { .. } | ShapeDesc::Mesh(_)
-                ) =>
+                if !matches!(r.shape, ShapeDesc::Mesh(_)) && r.shape.form().closed().is_none() =>
             {
                 return Err("a medium needs a closed shape: Sphere, Box or a closed Mesh".into());
             }
@@ -151,17 +149,26 @@ pub enum ShapeDesc {
         /// Maximum corner.
         max: Vec3,
     },
+    /// `TestDisk(center: .., normal: .., radius: r)` (feature `test-shape`).
+    #[cfg(feature = "test-shape")]
+    TestDisk(crate::shape::test_disk::TestDiskShape),
 }
 
 impl ShapeDesc {
     /// The shape as the world holds it (the mesh shared, not copied).
     pub fn form(&self) -> Form {
         match *self {
-            ShapeDesc::Sphere { center, radius } => Form::Sphere { center: center.into(), radius },
-            ShapeDesc::Quad { q, u, v } => Form::Quad { q: q.into(), u: u.into(), v: v.into() },
-            ShapeDesc::Triangle { a, b, c } => Form::Triangle { a: a.into(), b: b.into(), c: c.into() },
+            ShapeDesc::Sphere { center, radius } => {
+                Form::Sphere(SphereShape { center: center.into(), radius })
+            }
+            ShapeDesc::Quad { q, u, v } => Form::Quad(QuadShape { q: q.into(), u: u.into(), v: v.into() }),
+            ShapeDesc::Triangle { a, b, c } => {
+                Form::Triangle(TriangleShape { a: a.into(), b: b.into(), c: c.into() })
+            }
             ShapeDesc::Mesh(ref file) => Form::Mesh(file.mesh.clone()),
-            ShapeDesc::Box { min, max } => Form::Box { min: min.into(), max: max.into() },
+            ShapeDesc::Box { min, max } => Form::Box(BoxShape { min: min.into(), max: max.into() }),
+            #[cfg(feature = "test-shape")]
+            ShapeDesc::TestDisk(d) => Form::TestDisk(d),
         }
     }
 }
@@ -169,11 +176,33 @@ impl ShapeDesc {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Shape")]
 enum RawShape {
-    Sphere { center: V3, radius: Positive },
-    Quad { q: V3, u: V3, v: V3 },
-    Triangle { a: V3, b: V3, c: V3 },
-    Mesh { file: MeshFile },
-    Box { a: V3, b: V3 },
+    Sphere {
+        center: V3,
+        radius: Positive,
+    },
+    Quad {
+        q: V3,
+        u: V3,
+        v: V3,
+    },
+    Triangle {
+        a: V3,
+        b: V3,
+        c: V3,
+    },
+    Mesh {
+        file: MeshFile,
+    },
+    Box {
+        a: V3,
+        b: V3,
+    },
+    #[cfg(feature = "test-shape")]
+    TestDisk {
+        center: V3,
+        normal: V3,
+        radius: Positive,
+    },
 }
 
 impl TryFrom<RawShape> for ShapeDesc {
@@ -195,6 +224,14 @@ impl TryFrom<RawShape> for ShapeDesc {
                 ShapeDesc::Triangle { a: a.0, b: b.0, c: c.0 }
             }
             RawShape::Mesh { file } => ShapeDesc::Mesh(file),
+            #[cfg(feature = "test-shape")]
+            RawShape::TestDisk { center, normal, radius } => {
+                ShapeDesc::TestDisk(crate::shape::test_disk::TestDiskShape {
+                    center: center.0.into(),
+                    normal: normal.0.into(),
+                    radius: radius.0,
+                })
+            }
             RawShape::Box { a, b } => {
                 let (min, max) = (a.0.min(b.0), a.0.max(b.0));
                 if (max - min).min_element() <= 0.0 {

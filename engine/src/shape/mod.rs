@@ -1,19 +1,116 @@
-//! Geometric primitives in world space: each file holds one shape with its intersection,
-//! surface data, sampling and tests.
+//! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`; meshes are the
+//! world's business) and the primitives they become in world space. Each file holds one kind:
+//! its shape in its own space ([`ShapeModel`]: the primitives it becomes under a transform,
+//! the volume it closes), its primitive ([`PrimitiveShape`]: bounds, intersection, surface
+//! data, light sampling) where it has one, and their tests.
+//!
+//! Two lists below name the kinds: [`with_shapes!`] (the shapes a scene places, from which
+//! `placement::Form` is generated) and [`primitives!`](primitive) (the primitives the BVH
+//! holds, generating [`Primitive`]). A new kind is its file, its `mod` line and its line in
+//! each list that it belongs to, plus its RON form in `scene/object.rs`.
 
+mod boxes;
 mod primitive;
 pub(crate) mod quad;
 pub(crate) mod sphere;
+#[cfg(feature = "test-shape")]
+pub mod test_disk;
 mod transformed_sphere;
 mod triangle;
 
-pub use primitive::{Primitive, PrimitiveShape};
-pub use quad::{Quad, QuadLight, SPHERICAL_MIN_ESTIMATE};
-pub use sphere::Sphere;
+pub use boxes::BoxShape;
+pub use primitive::PrimitiveShape;
+use primitive::primitives;
+pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
+pub use sphere::{Sphere, SphereShape};
 pub use transformed_sphere::TransformedSphere;
-pub use triangle::Triangle;
+pub use triangle::{Triangle, TriangleShape};
 
-use glam::{Vec2, Vec3A};
+use glam::{Affine3A, Vec2, Vec3A};
+use obvhs::aabb::Aabb;
+
+primitives! {
+    Sphere(Sphere),
+    Quad(Quad),
+    TransformedSphere(TransformedSphere),
+    Triangle(Triangle),
+    #[cfg(feature = "test-shape")]
+    TestDisk(test_disk::TestDisk),
+}
+
+/// Calls the macro `$then!` with the list of shape kinds a scene places, `Variant(Type),`
+/// each (the variant is the name a scene writes). `placement` makes its `Form` of it.
+#[macro_export]
+#[doc(hidden)]
+macro_rules! with_shapes {
+    ($then:ident) => {
+        $then! {
+            Sphere($crate::shape::SphereShape),
+            Quad($crate::shape::QuadShape),
+            Triangle($crate::shape::TriangleShape),
+            Box($crate::shape::BoxShape),
+            #[cfg(feature = "test-shape")]
+            TestDisk($crate::shape::test_disk::TestDiskShape),
+        }
+    };
+}
+pub use with_shapes;
+
+/// One kind of shape in its own space, as a scene places it.
+pub trait ShapeModel: Clone + std::fmt::Debug + PartialEq + Send + Sync + 'static {
+    /// Appends the world-space primitives of the shape placed by `m`, or says why the placed
+    /// shape cannot be rendered (a flattening transform). The caller checks the distance from
+    /// the origin ([`MAX_COORDINATE`]).
+    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError>;
+
+    /// The volume it closes, for a medium to fill; `None` for an open surface.
+    fn closed(&self) -> Option<Closed> {
+        None
+    }
+}
+
+/// A closed volume in a shape's own space, as a medium's boundary.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Closed {
+    /// The axis-aligned box between two corners.
+    Box {
+        /// Minimum corner.
+        min: Vec3A,
+        /// Maximum corner.
+        max: Vec3A,
+    },
+    /// A ball.
+    Sphere {
+        /// Centre.
+        center: Vec3A,
+        /// Radius.
+        radius: f32,
+    },
+}
+
+/// How far from the origin anything may lie, in world units. Beyond it the BVH's surface-area
+/// arithmetic (extent squared times primitive count) overflows `f32`.
+pub const MAX_COORDINATE: f32 = 1e15;
+
+/// Why a placed shape cannot be rendered.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ShapeError {
+    /// A triangle whose corners are collinear.
+    #[error("a triangle {0}, {1}, {2} has no area")]
+    FlatTriangle(Vec3A, Vec3A, Vec3A),
+    /// A quad whose edges are parallel (or tiny).
+    #[error("a quad with edges {0} and {1} has no area (or less than 1e-38)")]
+    FlatQuad(Vec3A, Vec3A),
+    /// A sphere under a singular transform.
+    #[error("the transform flattens the sphere")]
+    FlatSphere,
+    /// Another shape under a singular transform.
+    #[error("the transform flattens the shape")]
+    Flattened,
+    /// Coordinates beyond [`MAX_COORDINATE`].
+    #[error("the object reaches beyond {MAX_COORDINATE:e} units from the origin")]
+    TooFar,
+}
 
 /// What a shape reports about the point a ray hit.
 #[derive(Clone, Copy, Debug)]

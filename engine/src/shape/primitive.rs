@@ -1,17 +1,10 @@
-//! The scene's primitives: every shape kind the primitive BVH holds, behind one enum whose
-//! methods dispatch to the kind's own file. The [`primitives!`] invocation below is the one
-//! list of kinds; a kind is a type implementing [`PrimitiveShape`].
+//! The scene's primitives: every kind the primitive BVH holds, behind one enum whose methods
+//! dispatch to the kind's own file. The `primitives!` invocation in the module above is the
+//! one list of kinds; a kind is a type implementing [`PrimitiveShape`].
 
-use super::{LightSample, Quad, Sphere, SurfacePoint, TransformedSphere, Triangle};
+use super::{LightSample, SurfacePoint};
 use glam::{Vec2, Vec3A};
 use obvhs::aabb::Aabb;
-
-primitives! {
-    Sphere(Sphere),
-    Quad(Quad),
-    TransformedSphere(TransformedSphere),
-    Triangle(Triangle),
-}
 
 /// What the BVH, the integrators and the light table ask of a shape placed in world space.
 pub trait PrimitiveShape: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static {
@@ -100,4 +93,4 @@ macro_rules! primitives {
         })+
     };
 }
-use primitives;
+pub(super) use primitives;

@@ -1,8 +1,10 @@
 //! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
 
-use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
+use super::{
+    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+};
 use crate::math::gamma;
-use glam::{Vec2, Vec3A};
+use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
 /// A parallelogram. Its normal is `normalize(u x v)`; `uv` = (a, b).
@@ -318,6 +320,42 @@ pub fn quad_t(k: [[f32; 3]; 4], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
     let b = dot(eb, ph);
     let hit = denom != 0.0 && t > 0.0 && t < tmax && a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0;
     if hit { t } else { f32::INFINITY }
+}
+
+/// A parallelogram in its own space, as a scene places it: the points q + a u + b v, a, b in
+/// [0, 1]; normal u x v.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuadShape {
+    /// Corner.
+    pub q: Vec3A,
+    /// First edge.
+    pub u: Vec3A,
+    /// Second edge.
+    pub v: Vec3A,
+}
+
+impl ShapeModel for QuadShape {
+    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
+        place_quad(m, self.q, self.u, self.v, out)
+    }
+}
+
+/// Appends the quad `q`, `u`, `v` placed by `m` (also the faces of a box).
+pub(crate) fn place_quad(
+    m: &Affine3A,
+    q: Vec3A,
+    u: Vec3A,
+    v: Vec3A,
+    out: &mut Vec<Primitive>,
+) -> Result<(), ShapeError> {
+    let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
+    // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
+    if m.matrix3.determinant() < 0.0 {
+        std::mem::swap(&mut u, &mut v);
+    }
+    let quad = Quad::new(q, u, v).ok_or(ShapeError::FlatQuad(u, v))?;
+    out.push(Primitive::Quad(quad));
+    Ok(())
 }
 
 impl PrimitiveShape for Quad {

@@ -1,9 +1,12 @@
 //! Sphere: the numerically robust quadratic of Ray Tracing Gems ch. 7 and cone sampling
 //! (SEED.md section 12.4) for emitters.
 
-use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
+use super::{
+    Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
+    area_to_solid_angle,
+};
 use crate::math::{Frame, gamma, uniform_sphere};
-use glam::{Vec2, Vec3A};
+use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::f32::consts::PI;
 
@@ -168,6 +171,38 @@ fn nearest_root(a: f32, b: f32, cc: f32, disc: f32, tmax: f32) -> f32 {
         hi
     } else {
         f32::INFINITY
+    }
+}
+
+/// A sphere in its own space, as a scene places it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereShape {
+    /// Centre.
+    pub center: Vec3A,
+    /// Radius (> 0).
+    pub radius: f32,
+}
+
+impl ShapeModel for SphereShape {
+    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
+        let sphere = Sphere { center: self.center, radius: self.radius };
+        // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything
+        // else is intersected in object space.
+        let lin = m.matrix3;
+        let s = lin.x_axis.x;
+        let diagonal_uniform = s > 0.0 && lin == Mat3A::from_diagonal(Vec3::splat(s));
+        if diagonal_uniform {
+            let center = m.transform_point3a(sphere.center);
+            out.push(Primitive::Sphere(Sphere { center, radius: self.radius * s }));
+        } else {
+            let ts = TransformedSphere::new(sphere, *m).ok_or(ShapeError::FlatSphere)?;
+            out.push(Primitive::TransformedSphere(ts));
+        }
+        Ok(())
+    }
+
+    fn closed(&self) -> Option<Closed> {
+        Some(Closed::Sphere { center: self.center, radius: self.radius })
     }
 }
 

@@ -4,9 +4,11 @@
 //! beyond a conservative bound on the error of `t`. Rays through a shared edge or vertex hit at
 //! least one of the triangles sharing it.
 
-use super::{LightSample, PrimitiveShape, SurfacePoint, area_to_solid_angle};
+use super::{
+    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+};
 use crate::math::gamma;
-use glam::{Vec2, Vec3A};
+use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
 /// A triangle. Its normal is `normalize((p1 - p0) x (p2 - p0))`; `uv` = (b1, b2), the
@@ -161,6 +163,28 @@ impl Triangle {
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
     pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
         area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize())
+    }
+}
+
+/// A triangle in its own space, as a scene places it: normal (b - a) x (c - a).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleShape {
+    /// First vertex.
+    pub a: Vec3A,
+    /// Second vertex.
+    pub b: Vec3A,
+    /// Third vertex.
+    pub c: Vec3A,
+}
+
+impl ShapeModel for TriangleShape {
+    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
+        let [a, b, c] = [self.a, self.b, self.c].map(|p| m.transform_point3a(p));
+        // A mirroring transform flips the winding; keep the normal facing the same side.
+        let (b, c) = if m.matrix3.determinant() < 0.0 { (c, b) } else { (b, c) };
+        let t = Triangle::new(a, b, c).ok_or(ShapeError::FlatTriangle(a, b, c))?;
+        out.push(Primitive::Triangle(t));
+        Ok(())
     }
 }
 

@@ -219,12 +219,13 @@ pub fn rebuild_media(
                     }
                     Boundary::Mesh(Arc::new(MeshBlas::build(mesh.clone())))
                 }
-                &Form::Sphere { center, radius } => Boundary::Sphere { center, radius },
-                &Form::Box { min, max } => Boundary::Box { min, max },
-                Form::Quad { .. } | Form::Triangle { .. } => {
-                    tracing::error!("medium skipped: a quad or triangle bounds no volume");
-                    return None;
-                }
+                form => match form.closed() {
+                    Some(closed) => Boundary::Closed(closed),
+                    None => {
+                        tracing::error!("medium skipped: its shape bounds no volume");
+                        return None;
+                    }
+                },
             };
             Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0 })
         })
@@ -272,6 +273,7 @@ mod tests {
     use crate::media::Medium;
     use crate::render_scene::RenderScene;
     use crate::scene::parse;
+    use crate::shape::{BoxShape, SphereShape};
     use crate::world::SceneWorld;
     use glam::Vec3;
     use std::path::Path;
@@ -336,7 +338,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Sphere { center: Vec3A::Y, radius: 0.5 }),
+                Shape(Form::Sphere(SphereShape { center: Vec3A::Y, radius: 0.5 })),
                 MaterialId(0),
             ))
             .id();
@@ -364,7 +366,7 @@ mod tests {
             .world
             .query::<(Entity, &Shape)>()
             .iter(&w.world)
-            .find_map(|(e, s)| matches!(s.0, Form::Sphere { .. }).then_some(e))
+            .find_map(|(e, s)| matches!(s.0, Form::Sphere(_)).then_some(e))
             .unwrap();
         w.world.entity_mut(e).insert(Motion { velocity: Vec3::new(3.0, 0.0, 0.0) });
         let moving = w.update();
@@ -397,7 +399,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Box { min: Vec3A::ZERO, max: Vec3A::ONE }),
+                Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE })),
                 Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
             ))
             .id();

@@ -125,10 +125,10 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     world.init_resource::<Extracted>();
 }
 
-/// A box or a quad as a triangle mesh in its own space (two triangles per face, uvs as the
-/// quads'); `None` for other shapes.
+/// A shape made of quads (a box, a quad) as a triangle mesh in its own space (two triangles
+/// per quad, uvs as the quads'); `None` for meshes and shapes with other primitives.
 fn flat_mesh(shape: &Form) -> Option<MeshData> {
-    if !matches!(shape, Form::Box { .. } | Form::Quad { .. }) {
+    if let Form::Mesh(_) = shape {
         return None;
     }
     let mut quads = Vec::new();
