@@ -259,3 +259,42 @@ fn clamping_bounds_samples_and_is_off_by_default() {
     desc.render.clamp = Some(pathwave::engine::scene::Positive(1.0));
     assert!(brightest(&desc) <= 1.0);
 }
+
+/// The stage inputs that `benches/core.rs` times: captured in pipeline order before each stage
+/// of one iteration, and each stage run on its copy hands the next stages what they met in
+/// the render (every active ray binned once; shading fills the shadow queue the shadow stage
+/// took).
+#[test]
+fn captured_stage_inputs_feed_the_next_stages_as_in_the_render() {
+    use pathwave::integrator::wavefront::{Stage, capture_stages};
+    let scene = SceneWorld::render_scene(&small("cornell.ron", 16));
+    let inputs = capture_stages(&scene, Options::default(), 0, 5);
+    let stages: Vec<Stage> = inputs.iter().map(|i| i.stage).collect();
+    let order = |s: Stage| Stage::ALL.iter().position(|&a| a == s).unwrap();
+    assert!(stages.windows(2).all(|w| order(w[0]) < order(w[1])), "{stages:?}");
+    for s in [Stage::IntersectClosest, Stage::TraceShadowRays, Stage::AccumulateFilm] {
+        assert!(stages.contains(&s), "{s:?} has work in iteration 5: {stages:?}");
+    }
+    let input = |s: Stage| inputs.iter().find(|i| i.stage == s);
+    let after = |s: Stage| {
+        let mut i = input(s).unwrap().clone();
+        i.run();
+        i
+    };
+    let items = |s: Stage| input(s).map_or(0, |i| i.items);
+    let traced = after(Stage::IntersectClosest);
+    let binned: usize =
+        Stage::ALL.iter().filter(|s| matches!(s, Stage::Shade(_))).map(|&s| traced.items_of(s)).sum();
+    let active = items(Stage::IntersectClosest);
+    assert_eq!(
+        traced.items_of(Stage::HandleEscaped) + traced.items_of(Stage::HandleEmissive) + binned,
+        active
+    );
+    for s in [Stage::HandleEscaped, Stage::HandleEmissive] {
+        assert_eq!(traced.items_of(s), items(s), "{s:?}");
+    }
+    // The last shading stage leaves the shadow queue the shadow stage took.
+    let last_shade = *stages.iter().rfind(|s| matches!(s, Stage::Shade(_))).unwrap();
+    assert_eq!(after(last_shade).items_of(Stage::TraceShadowRays), items(Stage::TraceShadowRays));
+    assert!(capture_stages(&scene, Options::default(), 0, 1 << 40).is_empty(), "no such iteration");
+}

@@ -12,7 +12,7 @@ use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::SamplerKind;
 
 /// Paths in flight, one slot each, every field its own array.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Paths {
     /// Next ray to trace (for paths in the medium queue, `origin` is the scattering point).
     pub origin: Vec<Vec3A>,
@@ -131,7 +131,7 @@ impl Paths {
 }
 
 /// Shadow rays waiting for an occlusion test, as parallel arrays.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct ShadowQueue {
     /// The rays (t = 1 at the light point).
     pub rays: RayStream,
@@ -205,7 +205,7 @@ impl ShadowQueue {
 }
 
 /// The active rays gathered into a stream, with the closest-hit results.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct HitStream {
     /// Rays in the order of the active queue.
     pub rays: RayStream,
@@ -216,7 +216,7 @@ pub struct HitStream {
 }
 
 /// The slot-index queues between stages.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct Queues {
     /// Paths with a ray to trace this iteration.
     pub active: Vec<u32>,
@@ -240,4 +240,28 @@ pub struct Queues {
     pub scratch: Vec<u32>,
     /// Stream storage for closest-hit queries on flat geometry.
     pub stream: HitStream,
+}
+
+impl Queues {
+    /// Room for `slots` entries in every queue, as the queues of a running tile have after
+    /// their first iterations (a clone holds only what it copied: pushing to it would grow
+    /// its storage).
+    pub fn reserve(&mut self, slots: usize) {
+        let room = |v: &mut Vec<u32>| v.reserve(slots.saturating_sub(v.len()));
+        [&mut self.active, &mut self.next, &mut self.escaped, &mut self.emissive, &mut self.medium]
+            .into_iter()
+            .chain([&mut self.finished, &mut self.free, &mut self.scratch])
+            .chain(self.shade.iter_mut())
+            .chain([&mut self.shadow.slot, &mut self.stream.prim])
+            .for_each(room);
+        let sh = &mut self.shadow;
+        let floats =
+            sh.rays.o.iter_mut().chain(sh.rays.d.iter_mut()).chain([&mut sh.time, &mut self.stream.t]);
+        floats
+            .chain(self.stream.rays.o.iter_mut())
+            .chain(self.stream.rays.d.iter_mut())
+            .for_each(|v| v.reserve(slots.saturating_sub(v.len())));
+        sh.contribution.reserve(slots.saturating_sub(sh.contribution.len()));
+        sh.occluded.reserve(slots.saturating_sub(sh.occluded.len()));
+    }
 }
