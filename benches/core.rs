@@ -1,7 +1,8 @@
 //! Criterion benchmarks of the core: BVH build, closest-hit and any-hit traversal over fixed
-//! rays, and a 16-spp cornell with each integrator. `cargo bench --bench core` runs them (add
-//! `-- traverse` to pick a group); `benches/RESULTS.md` records what they measured, with the
-//! machine and the date. Whole-scene time against error is `pathwave bench`.
+//! rays, each wavefront stage on the queues it met in one iteration of a render, and a 16-spp
+//! cornell with each integrator. `cargo bench --bench core` runs them (add `-- traverse` to
+//! pick a group); `benches/RESULTS.md` records what they measured, with the machine and the
+//! date. Whole-scene time against error is `pathwave bench`.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;
@@ -66,13 +67,38 @@ fn traverse(c: &mut Criterion) {
     g.finish();
 }
 
-fn render(c: &mut Criterion) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.ron");
-    let mut desc = scene::load(&path).expect("scenes/cornell.ron loads");
-    let side = NonZeroU32::new(128).expect("not zero");
+/// A scene of `scenes/` rendered at `side` x `side` pixels.
+fn scene_at(name: &str, side: u32) -> Arc<pathwave_engine::render_scene::RenderScene> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let mut desc = scene::load(&path).expect("the scenes of scenes/ load");
+    let side = NonZeroU32::new(side).expect("not zero");
     (desc.render.width, desc.render.height) = (side, side);
-    let scene = SceneWorld::render_scene(&desc);
-    let pixels = (side.get() * side.get()) as u64;
+    SceneWorld::render_scene(&desc)
+}
+
+/// Each stage of the wavefront on the paths and queues it met in the 20th iteration of a tile
+/// near the image's centre (256 path slots, one thread): the time per item of each stage on
+/// its own, without the rest of the render around it.
+fn stages(c: &mut Criterion) {
+    for name in ["cornell-diffuse", "cornell", "mesh", "spheres-sky"] {
+        let scene = scene_at(&format!("{name}.ron"), 128);
+        // Tile 36 of the 8 x 8 tiles: row 4, column 4.
+        let inputs = wavefront::capture_stages(&scene, wavefront::Options::default(), 36, 20);
+        let mut g = c.benchmark_group(format!("stage_{name}"));
+        for input in inputs {
+            g.throughput(Throughput::Elements(input.items as u64));
+            g.bench_function(input.stage.name(), |b| {
+                b.iter_batched_ref(|| input.clone(), |i| i.run(), BatchSize::SmallInput)
+            });
+        }
+        g.finish();
+    }
+}
+
+fn render(c: &mut Criterion) {
+    let scene = scene_at("cornell.ron", 128);
+    let side = 128;
+    let pixels = side * side;
     let mut g = c.benchmark_group("render_cornell_128px_16spp");
     g.sample_size(10);
     g.throughput(Throughput::Elements(pixels * 16));
@@ -85,5 +111,5 @@ fn render(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bvh, traverse, render);
+criterion_group!(benches, bvh, traverse, stages, render);
 criterion_main!(benches);
