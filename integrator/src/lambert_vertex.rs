@@ -460,6 +460,81 @@ mod tests {
         }
     }
 
+    /// The kernel against the textbook Lambertian vertex, written plainly with the engine's
+    /// own functions (concentric disk, `sin`/`cos`, the orthonormal frame, the error-bounded
+    /// offset): the light sample's contribution `beta f |cos| Le w / p` with `f = albedo / pi`
+    /// and the power heuristic `w = p^2 / (p^2 + (|cos| / pi)^2)`, the cosine-distributed
+    /// direction about the normal on `wo`'s side and its density, the throughput and Russian
+    /// roulette. Random vertices (normals, albedos, light samples, roulette on and off): the
+    /// same decisions, and numbers equal to float rounding.
+    #[test]
+    fn the_kernel_is_the_textbook_lambertian_vertex() {
+        use pathwave_engine::math::{Frame, concentric_disk, offset_ray_origin};
+        let mut s = crate::sampler::TestRng::new(21);
+        let mut unit = || {
+            let v = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5);
+            if v.length() > 1e-3 { v.normalize() } else { Vec3::Y }
+        };
+        let close =
+            |a: Vec3, b: Vec3, tol: f32| (a - b).abs().max_element() <= tol * (1.0 + b.abs().max_element());
+        let mut s = crate::sampler::TestRng::new(22);
+        let (mut shadows, mut alive) = (0, 0);
+        for k in 0..20_000 {
+            let n = unit();
+            let i = LambertIn {
+                p: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0,
+                n,
+                ng: n,
+                err: 1e-5,
+                wo: unit(),
+                albedo: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()),
+                beta: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) + 0.05,
+                eta_scale: 1.0,
+                depth_after: 1 + (k % 8),
+                wi: unit(),
+                le: Vec3::splat(1.0 + 10.0 * s.next_1d()),
+                pdf_light: 0.1 + 5.0 * s.next_1d(),
+                target: Vec3::ONE,
+                u_dir: [s.next_1d(), s.next_1d()],
+                u_rr: s.next_1d(),
+                rr_on: k % 2 == 0,
+                ..Default::default()
+            };
+            let o = lambert(&i);
+            // Next-event estimation.
+            let (co, ci) = (i.wo.dot(n), i.wi.dot(n));
+            let f_cos = i.albedo / std::f32::consts::PI * ci.abs();
+            let pdf_bsdf = ci.abs() / std::f32::consts::PI;
+            let w = i.pdf_light * i.pdf_light / (i.pdf_light * i.pdf_light + pdf_bsdf * pdf_bsdf);
+            assert_eq!(o.shadow, co * ci > 0.0, "{k}: a light on wo's side only");
+            if o.shadow {
+                shadows += 1;
+                assert!(close(o.contribution, i.beta * f_cos * i.le * w / i.pdf_light, 1e-5), "{k}");
+                let side = if ci > 0.0 { n } else { -n };
+                assert_eq!(o.so, Vec3::from(offset_ray_origin(i.p.into(), i.err, side.into())), "{k}");
+            }
+            // The next direction: the concentric disk lifted to the hemisphere on wo's side.
+            let nf = if co < 0.0 { -n } else { n };
+            let d = concentric_disk(glam::Vec2::from(i.u_dir));
+            let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+            let want = Frame::from_normal(nf.into()).to_world(Vec3A::new(d.x, d.y, z));
+            assert!(close(o.d, want.into(), 2e-5), "{k}: {} vs {want}", o.d);
+            // cos = sqrt(1 - r^2) amplifies the disk's rounding near the rim: compare its square.
+            let cos = o.pdf * std::f32::consts::PI;
+            assert!((cos * cos - z * z).abs() <= 1e-6, "{k}: pdf {} vs {}", o.pdf, z / std::f32::consts::PI);
+            // Throughput and roulette: survive with the largest channel of the new throughput.
+            let beta = i.beta * i.albedo;
+            let q = if i.rr_on { (1.0 - beta.max_element()).max(0.0) } else { 0.0 };
+            let survives = !(i.u_rr < q);
+            assert_eq!(o.alive, survives && o.pdf > 0.0, "{k}");
+            if survives {
+                alive += 1;
+                assert!(close(o.beta, beta / (1.0 - q), 1e-6), "{k}: {} vs {}", o.beta, beta / (1.0 - q));
+            }
+        }
+        assert!(shadows > 5_000 && alive > 5_000 && alive < 19_000, "{shadows} {alive}");
+    }
+
     #[test]
     fn sampled_directions_follow_the_cosine_density_chi2() {
         let n = Vec3::new(0.2, -0.9, 0.3).normalize();
