@@ -97,8 +97,8 @@ pub fn sky_albedo(radiance: Vec3) -> Vec3 {
 }
 
 /// What a camera ray has shown so far, as it follows perfect mirrors and glass: the one rule
-/// for the albedo and normal guides, applied by [`first_surface`] here and by the wavefront's
-/// `record_guides` stage to its paths.
+/// for the albedo and normal guides, applied by the separate pass ([`render`]) and by the
+/// wavefront's `record_guides` stage to its paths.
 #[derive(Clone, Copy, Debug)]
 pub struct Guide {
     /// Still following perfect mirrors and glass from the camera: albedo and normal to come.

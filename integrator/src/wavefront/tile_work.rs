@@ -1,0 +1,230 @@
+//! One tile's samples in progress ([`TileWork`]): the wavefront's iteration over the stages,
+//! each stage's dispatch and item count, and the two stages that live here (camera rays and
+//! film accumulation) rather than in `stages`.
+
+use super::queues::{Paths, Queues};
+use super::{Stage, Stats, material_kinds, stages};
+use crate::aov::Guide;
+use crate::film::{PixelAccumulator, clamp_sample};
+use crate::lambert_vertex::LANES;
+use crate::path;
+use crate::sampler::{self, Dims, Sampler};
+use crate::tile::Tile;
+use glam::Vec3;
+use pathwave_engine::render_scene::RenderScene;
+use std::ops::Range;
+use std::time::Instant;
+
+/// What [`TileWork::run`] calls before each stage: `(iteration, work, stage, paths, queues)`.
+pub(super) type Observer<'o, 'a> = dyn FnMut(u64, &TileWork<'a>, Stage, &Paths, &Queues) + 'o;
+
+/// One tile's samples in progress: which sample comes next, the pixels' and guides' sums,
+/// the statistics, and the stages each iteration runs.
+#[derive(Clone)]
+pub(super) struct TileWork<'a> {
+    scene: &'a RenderScene,
+    tile: Tile,
+    samples: Range<u32>,
+    /// Samples of the tile (pixels times samples per pixel) and how many have started.
+    work: u64,
+    next_sample: u64,
+    pub(super) film: Vec<PixelAccumulator>,
+    pub(super) guide_sums: Option<Vec<[Vec3; 3]>>,
+    pub(super) stats: Stats,
+    /// The stages after the camera rays, in order: the scene's shading kinds only, guides
+    /// only when asked for.
+    pipeline: Vec<Stage>,
+}
+
+impl<'a> TileWork<'a> {
+    pub(super) fn new(scene: &'a RenderScene, tile: &Tile, samples: Range<u32>, guides: bool) -> Self {
+        let pixels = (tile.w * tile.h) as usize;
+        let mut pipeline = vec![Stage::IntersectClosest];
+        if guides {
+            pipeline.push(Stage::RecordGuides);
+        }
+        pipeline.extend([Stage::HandleEscaped, Stage::HandleEmissive, Stage::ShadeMedium]);
+        pipeline.extend(material_kinds(scene).into_iter().map(Stage::Shade));
+        pipeline.extend([Stage::TraceShadowRays, Stage::AccumulateFilm]);
+        Self {
+            scene,
+            tile: *tile,
+            work: pixels as u64 * samples.len() as u64,
+            samples,
+            next_sample: 0,
+            film: vec![PixelAccumulator::default(); pixels],
+            guide_sums: guides.then(|| vec![[Vec3::ZERO; 3]; pixels]),
+            stats: Stats::default(),
+            pipeline,
+        }
+    }
+
+    /// Runs the tile to its last sample with `batch` path slots, calling `observe(iteration,
+    /// self, stage, paths, queues)` before each stage that has work.
+    pub(super) fn run(
+        &mut self,
+        batch: usize,
+        clock: bool,
+        p: &mut Paths,
+        q: &mut Queues,
+        observe: &mut Observer<'_, 'a>,
+    ) {
+        q.free.clear();
+        q.free.extend((0..batch as u32).rev());
+        q.active.clear();
+        let pipeline = std::mem::take(&mut self.pipeline);
+        loop {
+            let iteration = self.stats.iterations;
+            let observe =
+                &mut |w: &TileWork<'a>, stage, p: &Paths, q: &Queues| observe(iteration, w, stage, p, q);
+            self.timed(clock, Stage::GenerateCameraRays, p, q, observe);
+            if q.active.is_empty() {
+                break;
+            }
+            self.stats.iterations += 1;
+            self.stats.occupancy_sum += q.active.len() as f64 / batch as f64;
+            for &stage in &pipeline {
+                self.timed(clock, stage, p, q, observe);
+            }
+            self.stats.paths += q.finished.len() as u64;
+            q.escaped.clear();
+            q.emissive.clear();
+            q.finished.clear();
+            q.shadow.clear();
+            std::mem::swap(&mut q.active, &mut q.next);
+            q.next.clear();
+        }
+        self.pipeline = pipeline;
+    }
+
+    /// How many items (rays or paths) `stage` would take from the queues now.
+    pub(super) fn items(&self, stage: Stage, q: &Queues) -> usize {
+        match stage {
+            Stage::GenerateCameraRays => q.free.len().min((self.work - self.next_sample) as usize),
+            Stage::IntersectClosest | Stage::RecordGuides => q.active.len(),
+            Stage::HandleEscaped => q.escaped.len(),
+            Stage::HandleEmissive => q.emissive.len(),
+            Stage::ShadeMedium => q.medium.len(),
+            Stage::Shade(kind) => q.shade[kind as usize].len(),
+            Stage::TraceShadowRays => q.shadow.len(),
+            Stage::AccumulateFilm => q.finished.len(),
+        }
+    }
+
+    /// Runs `stage` if it has work (after `observe` has seen its input), recording its item
+    /// count and, if `clock`, its time (traces get them once per tile, from [`trace_tile`]).
+    #[inline]
+    fn timed(
+        &mut self,
+        clock: bool,
+        stage: Stage,
+        p: &mut Paths,
+        q: &mut Queues,
+        observe: &mut dyn FnMut(&TileWork<'a>, Stage, &Paths, &Queues),
+    ) {
+        let items = self.items(stage, q);
+        if items == 0 {
+            return;
+        }
+        observe(self, stage, p, q);
+        let k = stage.index();
+        if clock {
+            let start = Instant::now();
+            self.stage(stage, p, q);
+            self.stats.time[k] += start.elapsed();
+        } else {
+            self.stage(stage, p, q);
+        }
+        self.stats.items[k] += items as u64;
+        self.stats.calls[k] += 1;
+    }
+
+    /// Runs one stage.
+    pub(super) fn stage(&mut self, stage: Stage, p: &mut Paths, q: &mut Queues) {
+        let scene = self.scene;
+        match stage {
+            Stage::GenerateCameraRays => self.generate_camera_rays(p, q),
+            Stage::IntersectClosest => stages::intersect_closest(scene, p, q),
+            Stage::RecordGuides => stages::record_guides(scene, p, q),
+            Stage::HandleEscaped => stages::handle_escaped(scene, p, q),
+            Stage::HandleEmissive => stages::handle_emissive(scene, p, q),
+            Stage::ShadeMedium => stages::shade_medium(scene, p, q),
+            Stage::Shade(kind) => stages::shade(scene, p, q, kind),
+            Stage::TraceShadowRays => stages::trace_shadow_rays(scene, p, q),
+            Stage::AccumulateFilm => self.accumulate_film(p, q),
+        }
+    }
+
+    /// `generate_camera_rays`: fills free slots with the tile's next samples, their numbers
+    /// drawn across lanes a group at a time.
+    fn generate_camera_rays(&mut self, p: &mut Paths, q: &mut Queues) {
+        let (scene, tile) = (self.scene, &self.tile);
+        let spp = self.samples.len() as u64;
+        let fresh = q.free.len().min((self.work - self.next_sample) as usize);
+        for group in (0..fresh).step_by(LANES) {
+            let m = LANES.min(fresh - group);
+            // Lanes past `m` repeat the last: drawn, not used.
+            let which: [(u32, u32); LANES] = std::array::from_fn(|l| {
+                let k = self.next_sample + l.min(m - 1) as u64;
+                ((k / spp) as u32, self.samples.start + (k % spp) as u32)
+            });
+            let samplers: [Sampler; LANES] = std::array::from_fn(|l| {
+                let (x, y) = tile.pixel(which[l].0);
+                path::camera_sampler(scene, x, y, which[l].1)
+            });
+            let u = camera_samples(scene, &samplers);
+            for l in 0..m {
+                let slot = q.free.pop().expect("a free slot for every new path");
+                let (x, y) = tile.pixel(which[l].0);
+                let ray = path::camera_ray_with(scene, x, y, &u[l]);
+                let s = slot as usize;
+                p.set_ray(s, ray);
+                p.set_state(s, &path::PathState::new(ray.origin));
+                p.sampler[s] = samplers[l];
+                p.pixel[s] = which[l].0;
+                p.guide[s] = Guide::NEW;
+                q.active.push(slot);
+            }
+            self.next_sample += m as u64;
+        }
+    }
+
+    /// `accumulate_film`: finished paths add their radiance (and guides) to their pixels and
+    /// free their slots.
+    fn accumulate_film(&mut self, p: &Paths, q: &mut Queues) {
+        let clamp = self.scene.settings.clamp;
+        for &i in &q.finished {
+            self.film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], clamp));
+        }
+        if let Some(sums) = &mut self.guide_sums {
+            for &i in &q.finished {
+                // A path that ended among mirrors and glass shows their tint.
+                let g = &p.guide[i as usize];
+                let albedo = if g.open { g.tint } else { g.albedo };
+                let sum = &mut sums[p.pixel[i as usize] as usize];
+                (sum[0], sum[1], sum[2]) = (sum[0] + albedo, sum[1] + g.normal, sum[2] + g.emission);
+            }
+        }
+        q.free.extend_from_slice(&q.finished);
+    }
+}
+
+/// [`path::camera_ray`]'s numbers for `LANES` samples at once (the same bits).
+#[inline]
+fn camera_samples(scene: &RenderScene, s: &[Sampler; LANES]) -> [path::CameraSamples; LANES] {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            let pixel = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
+            let lens = match scene.camera.has_aperture() {
+                true => sampler::get_2d_lanes(s, &[Dims::LENS; LANES]),
+                false => [glam::Vec2::ZERO; LANES],
+            };
+            let time = match scene.features.motion {
+                true => sampler::get_1d_lanes(s, &[Dims::TIME; LANES]),
+                false => [0.0; LANES],
+            };
+            std::array::from_fn(|l| path::CameraSamples { pixel: pixel[l], lens: lens[l], time: time[l] })
+        },
+    )
+}
