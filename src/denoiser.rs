@@ -1,5 +1,5 @@
 //! The denoisers behind `--denoise`: Intel Open Image Denoise's `RT` filter in a build with
-//! `--features oidn` ([`oidn`]), and pathwave's own edge-avoiding à-trous filter
+//! `--features oidn` (module `oidn`), and pathwave's own edge-avoiding à-trous filter
 //! ([`crate::integrator::denoise`]) in every build. Both take the render's per-pixel means and
 //! the guides of [`crate::integrator::aov`] (the à-trous filter also the variance of each mean).
 

@@ -188,7 +188,7 @@ impl Output {
 }
 
 /// Writes `out` to `path`: with layers, an EXR with the beauty as `R`, `G`, `B`, `A` (1), every
-/// layer as named channels (float) and the metadata; else as [`write`] does (a PNG of the
+/// layer as named channels (float) and the metadata; else as [`write()`] does (a PNG of the
 /// beauty, or an EXR of it alone, as `merge` and resumed renders write it, to the same bytes);
 /// returns how many pixels a PNG clamped.
 pub fn write_output(path: &Path, out: &Output) -> Result<usize, String> {
@@ -221,7 +221,7 @@ pub struct ExrLayer<'a> {
 /// Writes one EXR file holding `layers` of a `width` x `height` image as channels of one part
 /// (pbrt-v4's and Blender's convention: `R`, `G`, `B`, `albedo.R`, `normal.X`, `depth.Z`, ...),
 /// as 16-bit halves when `half` (else 32-bit floats), with `metadata` as string attributes of
-/// the header; atomically, as [`write`] does.
+/// the header; atomically, as [`write()`] does.
 pub fn write_exr_layers(
     path: &Path,
     (width, height): (u32, u32),

@@ -1,10 +1,10 @@
 //! Next-event estimation's light samples for [`LANES`] shading points at once: what
-//! [`path::pick_light`] computes for each, with the same operations in the same order (so the
+//! `path::pick_light` computes for each, with the same operations in the same order (so the
 //! same bits), run as one branch-free kernel across lanes for the lanes whose picked light is
 //! a quad ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads): scenes without
 //! motion) in a scene without textures. Points close enough to a rectangle for its
 //! spherical-rectangle sampling, lanes that picked another kind of light, and every point of
-//! other scenes take [`path::pick_light`] itself.
+//! other scenes take `path::pick_light` itself.
 
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;

@@ -1,7 +1,7 @@
 //! Materials: what each kind is made of, how a scene writes it, and how it scatters light.
 //!
 //! Each kind lives in its own file as a type implementing [`MaterialModel`] (its parameters,
-//! its RON description, its BSDF and its tests). The [`registry!`] invocation below is the one
+//! its RON description, its BSDF and its tests). The `registry!` invocation below is the one
 //! list of kinds: it generates the [`Material`] enum the integrators read, the
 //! [`MaterialDesc`] enum the scene parser fills (`Kind(field: value, ...)`), and
 //! [`MaterialKind`], which names the shading queues, stages and statistics. Adding a material

@@ -5,7 +5,7 @@
 //! data, light sampling) where it has one, and their tests.
 //!
 //! Two lists below name the kinds: [`with_shapes!`] (the shapes a scene places, from which
-//! `placement::Form` is generated) and [`primitives!`](primitive) (the primitives the BVH
+//! `placement::Form` is generated) and `primitives!` (the primitives the BVH
 //! holds, generating [`Primitive`]). A new kind is its file, its `mod` line and its line in
 //! each list that it belongs to, plus its RON form in `scene/object.rs`.
 

@@ -1,6 +1,6 @@
 //! The ECS scene: entities with `Transform`, `Shape` and `MaterialId`; systems that rebuild the
 //! geometry (BVH and emitter table) only when what it depends on changed, and extract the
-//! [`RenderScene`](crate::render_scene::RenderScene).
+//! [`RenderScene`].
 //!
 //! Data flows one way through the submodules: `spawn` turns a scene description into entities
 //! and resources (`components`); each frame the schedule runs the animation systems (`animate`),

@@ -12,7 +12,7 @@
 //!   construction of Burley, "Practical Hash-based Owen Scrambling" (JCGT 9(4), 2020), with the
 //!   hash of pbrt-v4's `FastOwenScrambler`. A pixel's first 2^k samples form a (0,k,2)-net in
 //!   every such dimension. The BSDF's direction is the exception: a randomly shifted rank-1
-//!   lattice ([`lattice_2d`]), which integrates the smooth indirect light over the hemisphere
+//!   lattice (`lattice_2d`), which integrates the smooth indirect light over the hemisphere
 //!   with less error than the net. Every sample is uniform on its own (unbiased for any
 //!   count), and the sequence is extensible: the first N samples are those of an N-spp render.
 //! - **Stratified**: correlated multi-jittered samples (Kensler, "Correlated Multi-Jittered
@@ -200,8 +200,8 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 /// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
 /// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
 /// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
-/// table look-ups per coordinate in [`owen_sobol_hi`]. Lanes may mix dimensions paired with
-/// their [`partner`] and dimensions that are not (paths at different depths under a lens).
+/// table look-ups per coordinate in `sobol::owen_sobol_hi`. Lanes may mix dimensions paired with
+/// their `partner` and dimensions that are not (paths at different depths under a lens).
 #[inline(always)]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
