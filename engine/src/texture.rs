@@ -123,7 +123,7 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
-/// The noise functions of SEED.md section 8 (Ray Tracing: The Next Week, ch. 5).
+/// The noise functions of Shirley's "Ray Tracing: The Next Week" (Perlin noise, turbulence).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
 pub enum NoiseKind {
     /// Random values at lattice points, no interpolation: blocky, in [0, 1].

@@ -1,6 +1,7 @@
 //! Smooth dielectric (glass): reflection with probability F and refraction otherwise, with the
 //! exact Fresnel equations for unpolarised light or Schlick's approximation, and total internal
-//! reflection (SEED.md 2.4.2). Radiance is scaled by 1/eta^2 on refraction.
+//! reflection (Shirley, "Ray Tracing in One Weekend", dielectrics). Radiance is scaled by
+//! 1/eta^2 on refraction.
 
 use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::Positive;
@@ -13,7 +14,7 @@ pub enum Fresnel {
     /// The exact Fresnel equations for unpolarised light (default).
     #[default]
     Exact,
-    /// Schlick's approximation (what SEED.md's original renderer used).
+    /// Schlick's approximation (what "Ray Tracing in One Weekend" uses).
     Schlick,
 }
 

@@ -1,4 +1,5 @@
-//! Lambertian diffuse reflection, two-sided, sampled with the cosine density (SEED.md 12.3).
+//! Lambertian diffuse reflection, two-sided, sampled with the cosine density (Shirley, "Ray
+//! Tracing: The Rest of Your Life").
 //! The integrators shade it with their Lambertian lane kernel (light sampling and MIS);
 //! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 

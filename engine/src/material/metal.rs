@@ -1,6 +1,7 @@
 //! Metal: mirror reflection scaled by the albedo, optionally fuzzed by adding a point uniform in
-//! a ball of radius `fuzz` to the mirror direction (SEED.md 2.4.1). Directions that end below the
-//! surface are absorbed. The lobe is only sampled, never evaluated.
+//! a ball of radius `fuzz` to the mirror direction (Shirley, "Ray Tracing in One Weekend",
+//! fuzzy reflection). Directions that end below the surface are absorbed. The lobe is only
+//! sampled, never evaluated.
 
 use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::{Albedo, Color, UnitInterval};

@@ -1,4 +1,5 @@
-//! Parallelogram `Q + a u + b v`, a, b in [0, 1] (SEED.md section 2.3.2).
+//! Parallelogram `Q + a u + b v`, a, b in [0, 1] (Shirley, "Ray Tracing: The Next Week",
+//! "Quadrilaterals").
 
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,

@@ -1,5 +1,6 @@
-//! Sphere: the numerically robust quadratic of Ray Tracing Gems ch. 7 and cone sampling
-//! (SEED.md section 12.4) for emitters.
+//! Sphere: the numerically robust quadratic of Ray Tracing Gems ch. 7, and for emitters
+//! sampling of the cone of directions it subtends (Shirley, "Ray Tracing: The Rest of Your
+//! Life"; pbrt-v4's `Sphere::Sample` from a reference point).
 
 use super::{
     Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,

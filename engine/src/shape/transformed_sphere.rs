@@ -1,5 +1,6 @@
 //! A sphere under an arbitrary affine transform (an ellipsoid, possibly sheared): the ray moves
-//! to object space, the hit point back, the normal by the inverse transpose (SEED.md section 9).
+//! to object space, the hit point back, the normal by the inverse transpose (Pharr, Jakob and
+//! Humphreys, "Physically Based Rendering", 4th edition, section 3.10).
 
 use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
 use crate::math::{gamma, uniform_sphere};
