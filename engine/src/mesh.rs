@@ -4,7 +4,7 @@
 
 use crate::bvh8::Bvh8;
 use crate::math::gamma;
-use crate::shape::{SurfacePoint, Triangle};
+use crate::shape::{PrimitiveShape, SurfacePoint, Triangle};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use std::sync::Arc;

@@ -7,7 +7,7 @@ use glam::Vec3A;
 use pathwave_engine::geometry::Geometry;
 use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::shape::Primitive;
-use pathwave_engine::shape::{Quad, Sphere, Triangle};
+use pathwave_engine::shape::{PrimitiveShape, Quad, Sphere, Triangle};
 use proptest::prelude::*;
 
 fn vec3(range: f32) -> impl Strategy<Value = Vec3A> {
@@ -75,7 +75,7 @@ proptest! {
         let o = s.center + from * s.radius * 3.0;
         let t = s.intersect(o, -from, f32::INFINITY);
         prop_assume!(t.is_finite());
-        let sp = s.surface(o - t * from);
+        let sp = s.surface(o - t * from, true);
         let Some(d) = leaving(sp.n, dir) else { return Ok(()) };
         let start = offset_ray_origin(sp.p, sp.err, sp.n);
         prop_assert_eq!(s.intersect(start, d, f32::INFINITY), f32::INFINITY);
@@ -98,7 +98,7 @@ proptest! {
         let dir = (s.center + aim * s.radius - o).normalize_or(d);
         let t = s.intersect(o, dir, f32::INFINITY);
         if t.is_finite() {
-            let sp = s.surface(o + t * dir);
+            let sp = s.surface(o + t * dir, true);
             let off = ((sp.p - s.center).length() - s.radius).abs();
             prop_assert!(off <= 2.0 * sp.err, "sphere: {} off, bound {}", off, sp.err);
         }
@@ -180,7 +180,7 @@ proptest! {
         let d = m.transform_point3a(Vec3A::ZERO) - o;
         let t = ts.intersect(o, d, f32::INFINITY);
         prop_assert!(t.is_finite());
-        let sp = ts.surface(o + t * d);
+        let sp = ts.surface(o + t * d, true);
         let n_obj = m.inverse().transform_point3a(sp.p).normalize();
         let tangent = t1.cross(n_obj);
         prop_assume!(tangent.length() > 1e-2);

@@ -128,21 +128,6 @@ impl Quad {
         self.err
     }
 
-    /// Bounding box.
-    pub fn aabb(&self) -> Aabb {
-        let mut b = Aabb::empty();
-        for p in [self.q, self.q + self.u, self.q + self.v, self.q + self.u + self.v] {
-            b.extend(p);
-        }
-        b
-    }
-
-    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the quad, or `f32::INFINITY`.
-    #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        quad_t(self.kernel(), o.to_array(), d.to_array(), tmax)
-    }
-
     /// The data of the intersection kernel: q, n, ea, eb.
     #[inline]
     pub fn kernel(&self) -> [[f32; 3]; 4] {
@@ -164,22 +149,6 @@ impl Quad {
         }
     }
 
-    /// Samples a point of the quad as seen from `from`: uniformly in the solid angle of a
-    /// rectangle (unless it subtends very little or almost everything), else uniformly by area;
-    /// the density is returned in solid angle.
-    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        let (a, b, pdf) = match self.spherical(from) {
-            Some(r) => {
-                let (a, b) = r.sample(u);
-                (a, b, (1.0 / r.s) as f32)
-            }
-            None => (u.x, u.y, 0.0),
-        };
-        let p = self.q + a * self.u + b * self.v;
-        let pdf = if pdf > 0.0 { pdf } else { area_to_solid_angle(1.0 / self.area, from, p, self.n) };
-        LightSample { p, n: self.n, pdf, err: self.point_error() }
-    }
-
     /// The quad as a light for lanes of points, emitting `emit` (on both sides if
     /// `two_sided`): see [`QuadLight`].
     pub fn light(&self, emit: [f32; 3], two_sided: bool) -> QuadLight {
@@ -196,14 +165,6 @@ impl Quad {
             rect: self.rect,
             emit,
             two_sided,
-        }
-    }
-
-    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
-    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
-        match self.spherical(from) {
-            Some(r) => (1.0 / r.s) as f32,
-            None => area_to_solid_angle(1.0 / self.area, from, p, self.n),
         }
     }
 
@@ -360,27 +321,52 @@ pub(crate) fn place_quad(
 }
 
 impl PrimitiveShape for Quad {
+    /// Bounding box.
     fn aabb(&self) -> Aabb {
-        Quad::aabb(self)
+        let mut b = Aabb::empty();
+        for p in [self.q, self.q + self.u, self.q + self.v, self.q + self.u + self.v] {
+            b.extend(p);
+        }
+        b
     }
-    #[inline(always)]
+
+    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the quad, or `f32::INFINITY`.
+    #[inline]
     fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        Quad::intersect(self, o, d, tmax)
+        quad_t(self.kernel(), o.to_array(), d.to_array(), tmax)
     }
+
     #[inline(always)]
     fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
         Quad::surface(self, p)
     }
+
     fn area(&self) -> f32 {
         self.area
     }
-    #[inline]
+
+    /// Samples a point of the quad as seen from `from`: uniformly in the solid angle of a
+    /// rectangle (unless it subtends very little or almost everything), else uniformly by area;
+    /// the density is returned in solid angle.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        Quad::sample_solid_angle(self, from, u)
+        let (a, b, pdf) = match self.spherical(from) {
+            Some(r) => {
+                let (a, b) = r.sample(u);
+                (a, b, (1.0 / r.s) as f32)
+            }
+            None => (u.x, u.y, 0.0),
+        };
+        let p = self.q + a * self.u + b * self.v;
+        let pdf = if pdf > 0.0 { pdf } else { area_to_solid_angle(1.0 / self.area, from, p, self.n) };
+        LightSample { p, n: self.n, pdf, err: self.point_error() }
     }
-    #[inline]
+
+    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
-        Quad::pdf_solid_angle(self, from, p)
+        match self.spherical(from) {
+            Some(r) => (1.0 / r.s) as f32,
+            None => area_to_solid_angle(1.0 / self.area, from, p, self.n),
+        }
     }
 }
 
@@ -439,7 +425,7 @@ mod tests {
         let ls = q.sample_solid_angle(Vec3A::ZERO, Vec2::splat(0.5));
         assert!((ls.p - Vec3A::new(0.0, 0.0, 2.0)).length() < 1e-6);
         assert!((ls.pdf - 4.0 / 4.0).abs() < 1e-6, "dist^2 / (A cos) = 4 / 4");
-        assert_eq!(q.pdf_solid_angle(Vec3A::ZERO, ls.p), ls.pdf);
+        assert_eq!(q.pdf_solid_angle(Vec3A::ZERO, ls.p, ls.n), ls.pdf);
     }
 
     /// Solid angle of `q` seen from `o` by brute force: a fine grid of area elements.
@@ -500,7 +486,7 @@ mod tests {
             );
             assert!(ls.pdf >= 0.0 && !ls.pdf.is_nan(), "{o}: pdf {}", ls.pdf);
             if ls.pdf.is_finite() && ls.pdf > 0.0 {
-                assert_eq!(q.pdf_solid_angle(o, ls.p), ls.pdf, "{o}");
+                assert_eq!(q.pdf_solid_angle(o, ls.p, ls.n), ls.pdf, "{o}");
             }
         }
     }

@@ -21,105 +21,11 @@ pub struct Sphere {
 }
 
 impl Sphere {
-    /// Bounding box.
-    pub fn aabb(&self) -> Aabb {
-        Aabb::new(self.center - Vec3A::splat(self.radius), self.center + Vec3A::splat(self.radius))
-    }
-
     /// Error bound of points computed as `center + r n`: it scales with |center| + r (the huge
     /// ground sphere of spheres-sky has an error of ~ulp(1000) at points near y = 0).
     #[inline]
     pub fn point_error(&self) -> f32 {
         gamma(6) * (self.center.abs().max_element() + self.radius)
-    }
-
-    /// Surface area.
-    pub fn area(&self) -> f32 {
-        4.0 * PI * self.radius * self.radius
-    }
-
-    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the sphere, or `f32::INFINITY`.
-    ///
-    /// The discriminant is computed as `r^2 - |f - (f.d / d.d) d|^2` and the roots as `c / q`,
-    /// `q / a`, which avoids the cancellation of the textbook formula for huge, tiny or distant
-    /// spheres (the radius-1000 ground of spheres-sky).
-    #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        sphere_t_single(self.center.to_array(), self.radius, o.to_array(), d.to_array(), tmax)
-    }
-
-    /// Surface data at the point `p` (re-projected onto the sphere).
-    #[inline]
-    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
-        self.surface_with(p, true)
-    }
-
-    /// [`Self::surface`], with the texture coordinates (an `atan2` and an `acos`) only if `uv`
-    /// (else zero): scenes without textures never read them.
-    #[inline]
-    pub fn surface_with(&self, p: Vec3A, uv: bool) -> SurfacePoint {
-        let d = p - self.center;
-        let n = d / d.length();
-        let p = self.center + self.radius * n;
-        let uv = match uv {
-            true => Vec2::new(((-n.z).atan2(n.x) + PI) / (2.0 * PI), (-n.y).clamp(-1.0, 1.0).acos() / PI),
-            false => Vec2::ZERO,
-        };
-        SurfacePoint { p, n, ns: n, uv, err: self.point_error() }
-    }
-
-    /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
-    /// `from` is outside, uniformly by area when inside.
-    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        let dc2 = (self.center - from).length_squared();
-        let r2 = self.radius * self.radius;
-        if dc2 <= r2 {
-            let n = uniform_sphere(u);
-            let p = self.center + self.radius * n;
-            return LightSample {
-                p,
-                n,
-                pdf: area_to_solid_angle(1.0 / self.area(), from, p, n),
-                err: self.point_error(),
-            };
-        }
-        let sin2_max = r2 / dc2;
-        let sin_max = sin2_max.sqrt();
-        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-        let mut one_minus_cos_max = 1.0 - cos_max;
-        let mut cos_t = (cos_max - 1.0) * u.x + 1.0;
-        let mut sin2_t = (1.0 - cos_t * cos_t).max(0.0);
-        if sin2_max < 0.000_685_23 {
-            // Small cones: Taylor expansion keeps 1 - cos precise.
-            sin2_t = sin2_max * u.x;
-            cos_t = (1.0 - sin2_t).sqrt();
-            one_minus_cos_max = sin2_max / 2.0;
-        }
-        let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
-        let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
-        let phi = u.y * 2.0 * PI;
-        let w = Vec3A::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha);
-        let frame = Frame::from_normal((self.center - from) / dc2.sqrt());
-        let n = frame.to_world(-w);
-        LightSample {
-            p: self.center + self.radius * n,
-            n,
-            pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-            err: self.point_error(),
-        }
-    }
-
-    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen from `from`.
-    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
-        let dc2 = (self.center - from).length_squared();
-        let r2 = self.radius * self.radius;
-        if dc2 <= r2 {
-            return area_to_solid_angle(1.0 / self.area(), from, p, n);
-        }
-        let sin2_max = r2 / dc2;
-        let one_minus_cos_max =
-            if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - (1.0 - sin2_max).sqrt() };
-        1.0 / (2.0 * PI * one_minus_cos_max)
     }
 }
 
@@ -208,27 +114,93 @@ impl ShapeModel for SphereShape {
 }
 
 impl PrimitiveShape for Sphere {
+    /// Bounding box.
     fn aabb(&self) -> Aabb {
-        Sphere::aabb(self)
+        Aabb::new(self.center - Vec3A::splat(self.radius), self.center + Vec3A::splat(self.radius))
     }
-    #[inline(always)]
+
+    /// Smallest `t` in `(0, tmax)` where `o + t d` meets the sphere, or `f32::INFINITY`.
+    ///
+    /// The discriminant is computed as `r^2 - |f - (f.d / d.d) d|^2` and the roots as `c / q`,
+    /// `q / a`, which avoids the cancellation of the textbook formula for huge, tiny or distant
+    /// spheres (the radius-1000 ground of spheres-sky).
+    #[inline]
     fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        Sphere::intersect(self, o, d, tmax)
+        sphere_t_single(self.center.to_array(), self.radius, o.to_array(), d.to_array(), tmax)
     }
-    #[inline(always)]
+
+    /// Surface data at the point `p` (re-projected onto the sphere), with the texture
+    /// coordinates (an `atan2` and an `acos`) only if `uv` (else zero): scenes without textures
+    /// never read them.
+    #[inline]
     fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
-        self.surface_with(p, uv)
+        let d = p - self.center;
+        let n = d / d.length();
+        let p = self.center + self.radius * n;
+        let uv = match uv {
+            true => Vec2::new(((-n.z).atan2(n.x) + PI) / (2.0 * PI), (-n.y).clamp(-1.0, 1.0).acos() / PI),
+            false => Vec2::ZERO,
+        };
+        SurfacePoint { p, n, ns: n, uv, err: self.point_error() }
     }
+
+    /// Surface area.
     fn area(&self) -> f32 {
-        Sphere::area(self)
+        4.0 * PI * self.radius * self.radius
     }
-    #[inline]
+
+    /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
+    /// `from` is outside, uniformly by area when inside.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        Sphere::sample_solid_angle(self, from, u)
+        let dc2 = (self.center - from).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 {
+            let n = uniform_sphere(u);
+            let p = self.center + self.radius * n;
+            return LightSample {
+                p,
+                n,
+                pdf: area_to_solid_angle(1.0 / self.area(), from, p, n),
+                err: self.point_error(),
+            };
+        }
+        let sin2_max = r2 / dc2;
+        let sin_max = sin2_max.sqrt();
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        let mut one_minus_cos_max = 1.0 - cos_max;
+        let mut cos_t = (cos_max - 1.0) * u.x + 1.0;
+        let mut sin2_t = (1.0 - cos_t * cos_t).max(0.0);
+        if sin2_max < 0.000_685_23 {
+            // Small cones: Taylor expansion keeps 1 - cos precise.
+            sin2_t = sin2_max * u.x;
+            cos_t = (1.0 - sin2_t).sqrt();
+            one_minus_cos_max = sin2_max / 2.0;
+        }
+        let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+        let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+        let phi = u.y * 2.0 * PI;
+        let w = Vec3A::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha);
+        let frame = Frame::from_normal((self.center - from) / dc2.sqrt());
+        let n = frame.to_world(-w);
+        LightSample {
+            p: self.center + self.radius * n,
+            n,
+            pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+            err: self.point_error(),
+        }
     }
-    #[inline]
+
+    /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen from `from`.
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
-        Sphere::pdf_solid_angle(self, from, p, n)
+        let dc2 = (self.center - from).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 {
+            return area_to_solid_angle(1.0 / self.area(), from, p, n);
+        }
+        let sin2_max = r2 / dc2;
+        let one_minus_cos_max =
+            if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - (1.0 - sin2_max).sqrt() };
+        1.0 / (2.0 * PI * one_minus_cos_max)
     }
 }
 
@@ -308,9 +280,9 @@ mod tests {
     #[test]
     fn surface_uv_conventions() {
         let s = unit();
-        let sp = s.surface(Vec3A::new(0.0, -1.0, 0.0));
+        let sp = s.surface(Vec3A::new(0.0, -1.0, 0.0), true);
         assert!(sp.uv.y.abs() < 1e-6, "v = 0 at the bottom pole");
-        let sp = s.surface(Vec3A::new(1.0, 0.0, 0.0));
+        let sp = s.surface(Vec3A::new(1.0, 0.0, 0.0), true);
         assert!((sp.uv - Vec2::new(0.5, 0.5)).length() < 1e-6, "{:?}", sp.uv);
     }
 

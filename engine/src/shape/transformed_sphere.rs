@@ -35,31 +35,36 @@ impl TransformedSphere {
             normal_to_world: object_from_world.matrix3.transpose(),
         })
     }
+}
 
+impl TransformedSphere {
+    /// `dA_world / dA_object` at the object-space unit normal `n`: `|det M| |M^-T n|`.
+    #[inline]
+    fn area_scale(&self, n_obj: Vec3A) -> f32 {
+        self.world_from_object.matrix3.determinant().abs() * (self.normal_to_world * n_obj).length()
+    }
+}
+
+impl PrimitiveShape for TransformedSphere {
     /// World bounding box (the transformed object box: conservative).
-    pub fn aabb(&self) -> Aabb {
+    fn aabb(&self) -> Aabb {
         crate::math::transform_box(&self.sphere.aabb(), &self.world_from_object)
     }
 
     /// Smallest `t` in `(0, tmax)`; the object-space direction is not renormalised, so `t` is the
     /// same in both spaces.
     #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
         let lo = self.object_from_world.transform_point3a(o);
         let ld = self.object_from_world.transform_vector3a(d);
         self.sphere.intersect(lo, ld, tmax)
     }
 
-    /// Surface data at the world point `p`.
+    /// Surface data at the world point `p`, with texture coordinates only if `uv` (as a
+    /// [`Sphere`]'s).
     #[inline]
-    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
-        self.surface_with(p, true)
-    }
-
-    /// [`Self::surface`], with texture coordinates only if `uv` (see [`Sphere::surface_with`]).
-    #[inline]
-    pub fn surface_with(&self, p: Vec3A, uv: bool) -> SurfacePoint {
-        let local = self.sphere.surface_with(self.object_from_world.transform_point3a(p), uv);
+    fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
+        let local = self.sphere.surface(self.object_from_world.transform_point3a(p), uv);
         let m = self.world_from_object;
         // |M| times the object-space error, plus the rounding of M p + t.
         let norm = m.matrix3.x_axis.abs() + m.matrix3.y_axis.abs() + m.matrix3.z_axis.abs();
@@ -74,18 +79,10 @@ impl TransformedSphere {
             err: scale * local.err + gamma(4) * magnitude,
         }
     }
-}
-
-impl TransformedSphere {
-    /// `dA_world / dA_object` at the object-space unit normal `n`: `|det M| |M^-T n|`.
-    #[inline]
-    fn area_scale(&self, n_obj: Vec3A) -> f32 {
-        self.world_from_object.matrix3.determinant().abs() * (self.normal_to_world * n_obj).length()
-    }
 
     /// Surface area of the ellipsoid, estimated from the area scale at 256 Fibonacci-sphere
     /// points (within 0.5% for axis ratios up to 10; only the light-choice probabilities use it).
-    pub fn area(&self) -> f32 {
+    fn area(&self) -> f32 {
         const N: usize = 256;
         let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
         let mean = (0..N)
@@ -102,10 +99,11 @@ impl TransformedSphere {
 
     /// Samples a point uniformly over the object-space sphere's area, mapped to world space:
     /// the world area density is `1 / (4 pi r^2 area_scale)`.
-    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
         let n_obj = uniform_sphere(u);
         let sp = self.surface(
             self.world_from_object.transform_point3a(self.sphere.center + self.sphere.radius * n_obj),
+            true,
         );
         let pdf_area = 1.0 / (self.sphere.area() * self.area_scale(n_obj));
         LightSample { p: sp.p, n: sp.n, pdf: area_to_solid_angle(pdf_area, from, sp.p, sp.n), err: sp.err }
@@ -113,35 +111,10 @@ impl TransformedSphere {
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen
     /// from `from`.
-    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
+    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
         let n_obj = (self.object_from_world.transform_point3a(p) - self.sphere.center).normalize();
         let pdf_area = 1.0 / (self.sphere.area() * self.area_scale(n_obj));
         area_to_solid_angle(pdf_area, from, p, n)
-    }
-}
-
-impl PrimitiveShape for TransformedSphere {
-    fn aabb(&self) -> Aabb {
-        TransformedSphere::aabb(self)
-    }
-    #[inline(always)]
-    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        TransformedSphere::intersect(self, o, d, tmax)
-    }
-    #[inline(always)]
-    fn surface(&self, p: Vec3A, uv: bool) -> SurfacePoint {
-        self.surface_with(p, uv)
-    }
-    fn area(&self) -> f32 {
-        TransformedSphere::area(self)
-    }
-    #[inline]
-    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        TransformedSphere::sample_solid_angle(self, from, u)
-    }
-    #[inline]
-    fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
-        TransformedSphere::pdf_solid_angle(self, from, p, n)
     }
 }
 
@@ -160,7 +133,7 @@ mod tests {
         // A hit at a general point: the normal is the gradient (x/4, y, z/9).
         let o = Vec3A::new(0.5, 0.3, -20.0);
         let t = ts.intersect(o, Vec3A::Z, f32::INFINITY);
-        let sp = ts.surface(o + t * Vec3A::Z);
+        let sp = ts.surface(o + t * Vec3A::Z, true);
         let p = sp.p;
         assert!((p.x * p.x / 4.0 + p.y * p.y + p.z * p.z / 9.0 - 1.0).abs() < 1e-5);
         let g = Vec3A::new(p.x / 4.0, p.y, p.z / 9.0).normalize();

@@ -33,13 +33,62 @@ impl Triangle {
         (a > 0.0 && a.is_finite()).then_some(t)
     }
 
-    /// Area.
-    pub fn area(&self) -> f32 {
-        0.5 * self.cross().length()
+    /// Barycentric weights of `p1` and `p2` at a point in the triangle's plane.
+    #[inline]
+    fn barycentric(&self, p: Vec3A) -> (f32, f32) {
+        // v = b1 e1 + b2 e2, so v x e2 = b1 n and e1 x v = b2 n: one cross product each, which
+        // stays accurate for thin triangles (the normal equations square their conditioning).
+        let (e1, e2, v) = (self.p[1] - self.p[0], self.p[2] - self.p[0], p - self.p[0]);
+        let n = e1.cross(e2);
+        let inv = 1.0 / n.length_squared();
+        let b1 = (v.cross(e2).dot(n) * inv).clamp(0.0, 1.0);
+        let b2 = (e1.cross(v).dot(n) * inv).clamp(0.0, 1.0 - b1);
+        (b1, b2)
     }
 
+    /// Surface data at a point found by [`Self::intersect`]: the point is rebuilt from its
+    /// barycentric weights, with pbrt's error bound gamma(7) sum |b_i p_i|.
+    #[inline]
+    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
+        let (b1, b2) = self.barycentric(p);
+        self.surface_at(b1, b2)
+    }
+
+    fn surface_at(&self, b1: f32, b2: f32) -> SurfacePoint {
+        let b0 = 1.0 - b1 - b2;
+        let [p0, p1, p2] = self.p;
+        let p = b0 * p0 + b1 * p1 + b2 * p2;
+        let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
+        let n = self.cross().normalize();
+        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
+    }
+}
+
+/// A triangle in its own space, as a scene places it: normal (b - a) x (c - a).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleShape {
+    /// First vertex.
+    pub a: Vec3A,
+    /// Second vertex.
+    pub b: Vec3A,
+    /// Third vertex.
+    pub c: Vec3A,
+}
+
+impl ShapeModel for TriangleShape {
+    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
+        let [a, b, c] = [self.a, self.b, self.c].map(|p| m.transform_point3a(p));
+        // A mirroring transform flips the winding; keep the normal facing the same side.
+        let (b, c) = if m.matrix3.determinant() < 0.0 { (c, b) } else { (b, c) };
+        let t = Triangle::new(a, b, c).ok_or(ShapeError::FlatTriangle(a, b, c))?;
+        out.push(Primitive::Triangle(t));
+        Ok(())
+    }
+}
+
+impl PrimitiveShape for Triangle {
     /// Bounding box.
-    pub fn aabb(&self) -> Aabb {
+    fn aabb(&self) -> Aabb {
         let mut b = Aabb::empty();
         for p in self.p {
             b.extend(p);
@@ -49,7 +98,7 @@ impl Triangle {
 
     /// Smallest `t` in `(0, tmax)` where `o + t d` meets the triangle, or `f32::INFINITY`.
     #[inline]
-    pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
+    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
         const MISS: f32 = f32::INFINITY;
         // Translate to the ray origin, permute so that z is d's largest axis, shear d to +z.
         let kz = d.abs().max_position();
@@ -118,38 +167,18 @@ impl Triangle {
         if t <= delta_t || t >= tmax { MISS } else { t }
     }
 
-    /// Barycentric weights of `p1` and `p2` at a point in the triangle's plane.
-    #[inline]
-    fn barycentric(&self, p: Vec3A) -> (f32, f32) {
-        // v = b1 e1 + b2 e2, so v x e2 = b1 n and e1 x v = b2 n: one cross product each, which
-        // stays accurate for thin triangles (the normal equations square their conditioning).
-        let (e1, e2, v) = (self.p[1] - self.p[0], self.p[2] - self.p[0], p - self.p[0]);
-        let n = e1.cross(e2);
-        let inv = 1.0 / n.length_squared();
-        let b1 = (v.cross(e2).dot(n) * inv).clamp(0.0, 1.0);
-        let b2 = (e1.cross(v).dot(n) * inv).clamp(0.0, 1.0 - b1);
-        (b1, b2)
+    #[inline(always)]
+    fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
+        Triangle::surface(self, p)
     }
 
-    /// Surface data at a point found by [`Self::intersect`]: the point is rebuilt from its
-    /// barycentric weights, with pbrt's error bound gamma(7) sum |b_i p_i|.
-    #[inline]
-    pub fn surface(&self, p: Vec3A) -> SurfacePoint {
-        let (b1, b2) = self.barycentric(p);
-        self.surface_at(b1, b2)
-    }
-
-    fn surface_at(&self, b1: f32, b2: f32) -> SurfacePoint {
-        let b0 = 1.0 - b1 - b2;
-        let [p0, p1, p2] = self.p;
-        let p = b0 * p0 + b1 * p1 + b2 * p2;
-        let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
-        let n = self.cross().normalize();
-        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
+    /// Area.
+    fn area(&self) -> f32 {
+        0.5 * self.cross().length()
     }
 
     /// Samples a point uniformly by area (the square-root parameterisation).
-    pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
         let su = u.x.sqrt();
         let sp = self.surface_at(su * (1.0 - u.y), su * u.y);
         LightSample {
@@ -161,55 +190,8 @@ impl Triangle {
     }
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
-    pub fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A) -> f32 {
-        area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize())
-    }
-}
-
-/// A triangle in its own space, as a scene places it: normal (b - a) x (c - a).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleShape {
-    /// First vertex.
-    pub a: Vec3A,
-    /// Second vertex.
-    pub b: Vec3A,
-    /// Third vertex.
-    pub c: Vec3A,
-}
-
-impl ShapeModel for TriangleShape {
-    fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
-        let [a, b, c] = [self.a, self.b, self.c].map(|p| m.transform_point3a(p));
-        // A mirroring transform flips the winding; keep the normal facing the same side.
-        let (b, c) = if m.matrix3.determinant() < 0.0 { (c, b) } else { (b, c) };
-        let t = Triangle::new(a, b, c).ok_or(ShapeError::FlatTriangle(a, b, c))?;
-        out.push(Primitive::Triangle(t));
-        Ok(())
-    }
-}
-
-impl PrimitiveShape for Triangle {
-    fn aabb(&self) -> Aabb {
-        Triangle::aabb(self)
-    }
-    #[inline(always)]
-    fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
-        Triangle::intersect(self, o, d, tmax)
-    }
-    #[inline(always)]
-    fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
-        Triangle::surface(self, p)
-    }
-    fn area(&self) -> f32 {
-        Triangle::area(self)
-    }
-    #[inline]
-    fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        Triangle::sample_solid_angle(self, from, u)
-    }
-    #[inline]
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
-        Triangle::pdf_solid_angle(self, from, p)
+        area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize())
     }
 }
 
@@ -289,7 +271,7 @@ mod tests {
             let (b1, b2) = t.barycentric(ls.p);
             let boundary = b1 == 0.0 || b2 == 0.0 || b1 + b2 >= 1.0;
             assert!(t.intersect(from, ls.p - from, 2.0).is_finite() || boundary);
-            assert!((ls.pdf / t.pdf_solid_angle(from, ls.p) - 1.0).abs() < 1e-5);
+            assert!((ls.pdf / t.pdf_solid_angle(from, ls.p, ls.n) - 1.0).abs() < 1e-5);
         }
     }
 }
