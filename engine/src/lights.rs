@@ -135,13 +135,29 @@ pub struct LightTable {
     pub quads: Vec<Option<QuadLight>>,
 }
 
+/// When next-event estimation samples the background as a light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackgroundSampling {
+    /// Never: it is black, or a map without a distribution.
+    #[default]
+    Never,
+    /// Always: an environment map, whose light can be concentrated (a sun).
+    Always,
+    /// When nothing else lights the scene: a constant or sky background. Alone, it takes
+    /// every light sample (spheres-sky: relMSE 19% lower for 15% more time). Beside other
+    /// lights it is left to BSDF sampling and takes no share of their light samples: the
+    /// choice among lights does not weigh a background against lamps (a share of one half,
+    /// as a map gets, would halve a lamp's samples for a dim ambient).
+    Alone,
+}
+
 /// What [`LightTable::build`] reads besides the geometry.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct LightInputs<'a> {
     /// The point, spot and directional lights.
     pub punctual: &'a [PunctualLight],
-    /// The background is sampled as a light.
-    pub environment: bool,
+    /// Whether the background is sampled as a light.
+    pub environment: BackgroundSampling,
     /// A box that holds the scene (primitives and instances).
     pub bounds: Option<(Vec3A, Vec3A)>,
 }
@@ -176,7 +192,13 @@ impl LightTable {
                 power.push(p);
             }
         }
-        if inputs.environment {
+        let alone = t.prims.is_empty() && t.others.is_empty();
+        let environment = match inputs.environment {
+            BackgroundSampling::Never => false,
+            BackgroundSampling::Always => true,
+            BackgroundSampling::Alone => alone,
+        };
+        if environment {
             t.environment = Some((t.prims.len() + t.others.len()) as u32);
             t.others.push(OtherLight::Environment);
             infinite.push(true);
@@ -306,19 +328,24 @@ mod tests {
         let table = |punctual: &[PunctualLight], environment| {
             LightTable::build(&geo, &[], LightInputs { punctual, environment, bounds: None })
         };
-        let one = table(&[point(0.0, 5.0)], false);
+        use BackgroundSampling::{Alone, Always, Never};
+        let one = table(&[point(0.0, 5.0)], Never);
         assert_eq!(one.pmf, [1.0]);
-        let two = table(&[point(0.0, 1.0), point(1.0, 3.0)], false);
+        let two = table(&[point(0.0, 1.0), point(1.0, 3.0)], Never);
         assert_eq!(two.pmf, [0.375, 0.625]);
         let sun = PunctualLight::Directional { to_light: Vec3A::Y, irradiance: Vec3::ONE };
-        let three = table(&[point(0.0, 1.0), point(1.0, 3.0), sun], true);
+        let three = table(&[point(0.0, 1.0), point(1.0, 3.0), sun], Always);
         assert_eq!(three.pmf, [0.375 / 3.0, 0.625 / 3.0, 1.0 / 3.0, 1.0 / 3.0]);
         assert_eq!(three.environment, Some(3));
         assert_eq!(three.pick(0.99), (3, 1.0 / 3.0));
         assert!(matches!(three.other(2), Some(OtherLight::Punctual(PunctualLight::Directional { .. }))));
         assert!(three.other(0).is_some() && LightTable::default().other(0).is_none());
         // A light that sends nothing is not in the table.
-        assert!(table(&[point(0.0, 0.0)], false).is_empty());
+        assert!(table(&[point(0.0, 0.0)], Never).is_empty());
+        // A smooth background is a light only where nothing else is.
+        assert_eq!(table(&[point(0.0, 5.0)], Alone).environment, None);
+        let sky = table(&[point(0.0, 0.0)], Alone);
+        assert_eq!((sky.environment, sky.pmf.as_slice()), (Some(0), [1.0].as_slice()));
     }
 
     /// A spot light is full inside its falloff angle, dark beyond its cone, smooth between.

@@ -107,6 +107,28 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     r * Vec2::new(theta.cos(), theta.sin())
 }
 
+/// sin and cos on [-pi/4, pi/4] (Taylor to degree 7 and 8: errors below 3.2e-7 and 2.5e-8).
+#[inline(always)]
+fn sin_cos_quarter(x: f32) -> (f32, f32) {
+    let x2 = x * x;
+    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+    let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+    (s, c)
+}
+
+/// [`concentric_disk`] with a polynomial sine and cosine, branch-free: it vectorises across
+/// lanes (the Lambertian kernel's directions and the sky's light samples).
+#[inline(always)]
+pub fn disk_branch_free(u: [f32; 2]) -> (f32, f32) {
+    let (ox, oy) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
+    let wide = ox.abs() > oy.abs();
+    let (r, ratio) = if wide { (ox, oy / ox) } else { (oy, ox / oy) };
+    let (s, c) = sin_cos_quarter(std::f32::consts::FRAC_PI_4 * ratio);
+    let (x, y) = if wide { (r * c, r * s) } else { (r * s, r * c) };
+    let zero = ox == 0.0 && oy == 0.0;
+    (if zero { 0.0 } else { x }, if zero { 0.0 } else { y })
+}
+
 /// Uniform direction on the unit sphere.
 #[inline]
 pub fn uniform_sphere(u: Vec2) -> Vec3A {
@@ -133,6 +155,26 @@ pub fn transform_box(b: &obvhs::aabb::Aabb, m: &glam::Affine3A) -> obvhs::aabb::
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn polynomial_sine_and_cosine_are_accurate_on_the_quarter() {
+        for k in 0..=2000 {
+            let x = -std::f32::consts::FRAC_PI_4 + std::f32::consts::FRAC_PI_4 * 2.0 * k as f32 / 2000.0;
+            let (s, c) = sin_cos_quarter(x);
+            assert!((s - x.sin()).abs() < 4e-7 && (c - x.cos()).abs() < 2e-7, "{x}");
+        }
+    }
+
+    #[test]
+    fn disk_matches_the_concentric_map() {
+        for k in 0..10_000 {
+            let u = [(k % 100) as f32 / 100.0 + 0.003, (k / 100) as f32 / 100.0 + 0.007];
+            let (x, y) = disk_branch_free(u);
+            let r = concentric_disk(Vec2::new(u[0], u[1]));
+            assert!((x - r.x).abs() < 1e-6 && (y - r.y).abs() < 1e-6, "{u:?}");
+        }
+        assert_eq!(disk_branch_free([0.5, 0.5]), (0.0, 0.0));
+    }
 
     #[test]
     fn frame_is_orthonormal() {

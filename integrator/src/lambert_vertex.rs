@@ -9,9 +9,10 @@ use crate::path::{self, PathState, ShadowRay, power_heuristic};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::Ray;
+use pathwave_engine::math::disk_branch_free;
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
-use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
+use std::f32::consts::FRAC_1_PI;
 
 /// Everything the kernel reads for one path.
 #[derive(Clone, Copy, Debug, Default)]
@@ -118,27 +119,6 @@ pub(crate) fn offset(p: Vec3, err: f32, n: Vec3) -> Vec3 {
     Vec3::new(away(po.x, o.x), away(po.y, o.y), away(po.z, o.z))
 }
 
-/// sin and cos on [-pi/4, pi/4] (Taylor to degree 7 and 8: errors below 3.2e-7 and 2.5e-8).
-#[inline(always)]
-fn sin_cos_quarter(x: f32) -> (f32, f32) {
-    let x2 = x * x;
-    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
-    let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
-    (s, c)
-}
-
-/// Concentric map of [0,1)^2 to the unit disk, branch-free.
-#[inline(always)]
-fn disk(u: [f32; 2]) -> (f32, f32) {
-    let (ox, oy) = (2.0 * u[0] - 1.0, 2.0 * u[1] - 1.0);
-    let wide = ox.abs() > oy.abs();
-    let (r, ratio) = if wide { (ox, oy / ox) } else { (oy, ox / oy) };
-    let (s, c) = sin_cos_quarter(FRAC_PI_4 * ratio);
-    let (x, y) = if wide { (r * c, r * s) } else { (r * s, r * c) };
-    let zero = ox == 0.0 && oy == 0.0;
-    (if zero { 0.0 } else { x }, if zero { 0.0 } else { y })
-}
-
 /// The kernel.
 #[inline(always)]
 pub fn lambert(i: &LambertIn) -> LambertOut {
@@ -158,7 +138,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let so = offset(p, i.err, sel3(ci > 0.0, ng, -ng));
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
-    let (dx, dy) = disk(i.u_dir);
+    let (dx, dy) = disk_branch_free(i.u_dir);
     let z = (1.0 - (dx * dx + dy * dy)).max(0.0).sqrt();
     let pdf = z * FRAC_1_PI;
     let sign = 1f32.copysign(nf.z);
@@ -382,6 +362,7 @@ macro_rules! lanes {
             $vis fn get(&self, l: usize) -> $t { $t { $($f: lanes!(@get self.$f, l, $kind),)* } }
             /// Sets lane `l`.
             #[inline(always)]
+            #[allow(dead_code)]
             $vis fn set(&mut self, l: usize, v: &$t) { $(lanes!(@set self.$f, l, v.$f, $kind);)* }
         }
     };
@@ -425,26 +406,6 @@ mod tests {
     use super::*;
     use glam::Vec2;
     use pathwave_engine::material::chi2::{chi2, chi2_critical};
-
-    #[test]
-    fn polynomial_sine_and_cosine_are_accurate_on_the_quarter() {
-        for k in 0..=2000 {
-            let x = -FRAC_PI_4 + FRAC_PI_4 * 2.0 * k as f32 / 2000.0;
-            let (s, c) = sin_cos_quarter(x);
-            assert!((s - x.sin()).abs() < 4e-7 && (c - x.cos()).abs() < 2e-7, "{x}");
-        }
-    }
-
-    #[test]
-    fn disk_matches_the_concentric_map() {
-        for k in 0..10_000 {
-            let u = [(k % 100) as f32 / 100.0 + 0.003, (k / 100) as f32 / 100.0 + 0.007];
-            let (x, y) = disk(u);
-            let r = pathwave_engine::math::concentric_disk(Vec2::new(u[0], u[1]));
-            assert!((x - r.x).abs() < 1e-6 && (y - r.y).abs() < 1e-6, "{u:?}");
-        }
-        assert_eq!(disk([0.5, 0.5]), (0.0, 0.0));
-    }
 
     #[test]
     fn offset_equals_the_engine_offset() {

@@ -9,7 +9,7 @@
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
-use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::render_scene::{Background, RenderScene};
 use pathwave_engine::shape::QuadLight;
 use pathwave_engine::shape::SPHERICAL_MIN_ESTIMATE;
 
@@ -18,6 +18,9 @@ pub struct LightSampler<'a> {
     scene: &'a RenderScene,
     /// The lights as quads where they are, when the lanes can sample some.
     quads: Option<&'a [Option<QuadLight>]>,
+    /// The background's bottom and top radiance when it is a constant or sky sampled as a
+    /// light (then the only light).
+    sky: Option<(Vec3, Vec3)>,
     /// The kernel's inputs; with one light, its fields stay filled in from one group to the next.
     ins: QuadInLanes,
     outs: QuadOutLanes,
@@ -29,7 +32,13 @@ impl<'a> LightSampler<'a> {
         let quads = &scene.lights.quads;
         let quads =
             (!scene.features.textures && quads.iter().any(Option::is_some)).then_some(quads.as_slice());
-        let mut me = Self { scene, quads, ins: QuadInLanes::default(), outs: QuadOutLanes::default() };
+        let sky = match scene.background {
+            _ if scene.lights.environment.is_none() => None,
+            Background::Constant(c) => Some((c, c)),
+            Background::Sky { bottom, top } => Some((bottom, top)),
+            Background::Environment(_) => None,
+        };
+        let mut me = Self { scene, quads, sky, ins: QuadInLanes::default(), outs: QuadOutLanes::default() };
         if let Some([Some(one)]) = quads {
             let pmf = scene.lights.pick(0.0).1;
             (0..LANES).for_each(|l| me.ins.set(l, &QuadIn::new(one, pmf)));
@@ -63,6 +72,18 @@ impl<'a> LightSampler<'a> {
             (out.wi, out.le, out.pdf_light, out.delta_light, out.target) = Default::default();
             return;
         }
+        if let Some((bottom, top)) = self.sky {
+            let lights = &scene.lights;
+            let pmf = lights.pick(0.0).1;
+            let (center, radius) = (Vec3::from(lights.center), lights.radius);
+            let light = |l: usize| [u[l].light.x, u[l].light.y];
+            let ins = SkyInLanes {
+                from: std::array::from_fn(|a| std::array::from_fn(|l| p[l][a])),
+                uv: [std::array::from_fn(|l| light(l)[0]), std::array::from_fn(|l| light(l)[1])],
+            };
+            sky_lanes(&ins, bottom, top, pmf, center, radius, out);
+            return;
+        }
         let Some(quads) = self.quads else {
             (0..LANES).for_each(|l| scalar(out, l));
             return;
@@ -93,6 +114,52 @@ impl<'a> LightSampler<'a> {
             scalar(out, l);
         }
     }
+}
+
+/// What [`sky_lanes`] reads per lane: the shading point and the two numbers.
+#[derive(Clone, Copy, Debug, Default)]
+struct SkyIn {
+    from: Vec3,
+    uv: [f32; 2],
+}
+
+lanes!(SkyInLanes for SkyIn { from: v3, uv: f2 });
+
+/// The light samples of a constant or sky background alone in the light table, as
+/// `path::pick_light` takes them (`Background::smooth_sample`, the choice's `pmf`, a target
+/// beyond the sphere of `center` and `radius` that holds the scene), branch-free.
+#[inline(never)]
+fn sky_lanes(
+    i: &SkyInLanes,
+    bottom: Vec3,
+    top: Vec3,
+    pmf: f32,
+    center: Vec3,
+    radius: f32,
+    out: &mut LambertInLanes,
+) {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            for l in 0..LANES {
+                let SkyIn { from, uv } = i.get(l);
+                let (wi, le, pdf) = Background::smooth_sample_lane(bottom, top, uv);
+                let pdf = pdf * pmf;
+                let ok = (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
+                // `LightTable::beyond`.
+                let c = Vec3::new(from.x - center.x, from.y - center.y, from.z - center.z);
+                let s = 2.0 * (dot(c, c).sqrt() + radius) + 1.0;
+                let target = Vec3::new(from.x + wi.x * s, from.y + wi.y * s, from.z + wi.z * s);
+                for a in 0..3 {
+                    out.wi[a][l] = if ok { wi[a] } else { 0.0 };
+                    out.le[a][l] = if ok { le[a] } else { 0.0 };
+                    out.target[a][l] = if ok { target[a] } else { 0.0 };
+                }
+                out.pdf_light[l] = if ok { pdf } else { 0.0 };
+                out.delta_light[l] = false;
+            }
+        },
+    )
 }
 
 /// What [`quad_by_area`] reads: the lane's light (see
@@ -250,6 +317,26 @@ mod tests {
         check_against_pick_light(&sphere, 2);
     }
 
+    /// A sky alone is sampled as a light, across lanes, with the bits of `pick_light`.
+    #[test]
+    fn sky_lanes_give_the_bits_of_pick_light() {
+        let sky = LIGHTS
+            .replace(
+                r#""a": DiffuseLight(emit: (10, 10, 10))"#,
+                r#""a": Lambertian(albedo: (0.5, 0.5, 0.5))"#,
+            )
+            .replace(
+                r#""b": DiffuseLight(emit: (2, 3, 4), two_sided: true)"#,
+                r#""b": Lambertian(albedo: (0.5, 0.5, 0.5))"#,
+            )
+            .replace(r#""c": DiffuseLight(emit: (1, 0, 0))"#, r#""c": Lambertian(albedo: (0.5, 0.5, 0.5))"#)
+            .replace(
+                "render: (width: 8, height: 8),",
+                "render: (width: 8, height: 8),\n background: Sky(bottom: (1, 1, 1), top: (0.5, 0.7, 1)),",
+            );
+        check_against_pick_light(&sky, 0);
+    }
+
     fn check_against_pick_light(text: &str, lights: usize) {
         let desc = parse(text, std::path::Path::new("<test>")).unwrap();
         let scene = SceneWorld::render_scene(&desc);
@@ -299,6 +386,6 @@ mod tests {
                 }
             }
         }
-        assert!(lit > 5_000 && spherical > 500, "lit {lit}, spherical {spherical}");
+        assert!(lit > 5_000 && (lights == 0 || spherical > 500), "lit {lit}, spherical {spherical}");
     }
 }

@@ -260,7 +260,7 @@ pub fn rebuild_lights(
         let (lo, hi) = (b.min, b.max);
         Some(acc.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))))
     });
-    let inputs = LightInputs { punctual: &punctual.0, environment: background.0.is_sampled(), bounds };
+    let inputs = LightInputs { punctual: &punctual.0, environment: background.0.sampling(), bounds };
     out.lights = Arc::new(LightTable::build(geo, &materials.0, inputs));
     out.rebuilds += 1;
     tracing::info!(lights = out.lights.len(), "light table built");
