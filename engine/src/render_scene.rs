@@ -157,7 +157,7 @@ impl Background {
         }
     }
 
-    /// A direction sampled from `u` (see [`Self::is_sampled`]), its radiance and density.
+    /// A direction sampled from `u` (see [`Self::sampling`]), its radiance and density.
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<EnvSample> {
         match self {
