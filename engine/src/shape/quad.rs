@@ -65,7 +65,7 @@ pub struct QuadLight {
 /// Solid angles outside this range are sampled by area: below it the two densities agree
 /// closely and the spherical mapping loses precision, above it the point is almost on the
 /// plane inside the rectangle (the bounds of pbrt-v4's `DiffuseAreaLight`).
-const SPHERICAL_SOLID_ANGLE: std::ops::Range<f64> = 3e-4..6.22;
+pub(super) const SPHERICAL_SOLID_ANGLE: std::ops::Range<f64> = 3e-4..6.22;
 
 /// Rectangles estimated to subtend less than this (steradians) are sampled by area. Spherical
 /// sampling costs about 400 cycles (f64 square roots and divisions, `atan2`, `sincos`) against

@@ -2,13 +2,16 @@
 //! as pbrt-v4 writes it: the ray is made the +z axis by a permutation and a shear, the edge
 //! functions are evaluated in that frame (in f64 when one is exactly zero), and a hit must lie
 //! beyond a conservative bound on the error of `t`. Rays through a shared edge or vertex hit at
-//! least one of the triangles sharing it.
+//! least one of the triangles sharing it. As a light, a triangle seen from close by is sampled
+//! uniformly in its solid angle (Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH
+//! 1995, in the form of pbrt-v4's `SampleSphericalTriangle`), from afar by area.
 
+use super::quad::SPHERICAL_SOLID_ANGLE;
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
 };
 use crate::math::gamma;
-use glam::{Affine3A, Vec2, Vec3A};
+use glam::{Affine3A, DVec3, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
 /// A triangle. Its normal is `normalize((p1 - p0) x (p2 - p0))`; `uv` = (b1, b2), the
@@ -18,6 +21,16 @@ pub struct Triangle {
     /// Vertices.
     pub p: [Vec3A; 3],
 }
+
+/// Triangles estimated to subtend less than this (steradians) are sampled by area. Measured at
+/// 64 spp (mean relMSE of seeds 1-3 against 4096 spp, 2 threads, 2026-12-03) on a Cornell box
+/// lit by a 300 x 300 square of two emitting triangles 120 units above the tall box: area
+/// sampling relMSE 0.004641 in 1.32 s; spherical above 1 sr 0.004407 in 1.37 s, above 0.3
+/// 0.003699 in 1.54 s, above 0.1 0.003357 in 1.94 s, above 0.03 0.003269 in 2.11 s. Time x
+/// error is least at 0.3 (7% below area sampling); with cornell-smoke's light split into two
+/// triangles 0.3 and area sampling are equal (0.00552 both). Quads keep their own bound,
+/// measured on their scenes.
+const SPHERICAL_MIN_ESTIMATE: f32 = 0.3;
 
 impl Triangle {
     /// The cross product of the edges (twice the area, along the normal).
@@ -54,6 +67,43 @@ impl Triangle {
         self.surface_at(b1, b2)
     }
 
+    /// The spherical triangle seen from `o`, when the triangle is estimated to subtend at least
+    /// [`SPHERICAL_MIN_ESTIMATE`] (A cos / d^2 at the centroid, as quads estimate) and its exact
+    /// solid angle is in [`SPHERICAL_SOLID_ANGLE`]; else the triangle is sampled by area.
+    fn spherical(&self, o: Vec3A) -> Option<SphericalTriangle> {
+        let c = (self.p[0] + self.p[1] + self.p[2]) * (1.0 / 3.0) - o;
+        let d2 = c.length_squared();
+        if 0.5 * self.cross().dot(c).abs() < SPHERICAL_MIN_ESTIMATE * d2 * d2.sqrt() {
+            return None;
+        }
+        self.spherical_triangle(o)
+    }
+
+    /// The spherical triangle seen from `o` whatever its estimated solid angle, when the exact
+    /// one is in [`SPHERICAL_SOLID_ANGLE`]. In f64: the vertices' directions, the angle at the
+    /// first through its cosine and sine, and the solid angle by the formula of Van Oosterom and
+    /// Strackee ("The Solid Angle of a Plane Triangle", IEEE Trans. Biomed. Eng. 1983), one
+    /// `atan2` without the cancellation of the angle sum minus pi.
+    fn spherical_triangle(&self, o: Vec3A) -> Option<SphericalTriangle> {
+        let o = v64(o);
+        let [a, b, c] = self.p.map(|p| (v64(p) - o).normalize_or_zero());
+        let (n_ab, n_ca) = (a.cross(b).normalize_or_zero(), c.cross(a).normalize_or_zero());
+        if n_ab == DVec3::ZERO || n_ca == DVec3::ZERO {
+            return None;
+        }
+        // The angle at a is the one between the planes (o, a, b) and (o, a, c).
+        let (cos_alpha, sin_alpha) = (-n_ab.dot(n_ca), n_ab.cross(n_ca).length());
+        let triple = a.dot(b.cross(c)).abs();
+        let s = 2.0 * libm::atan2(triple, 1.0 + a.dot(b) + b.dot(c) + c.dot(a));
+        (SPHERICAL_SOLID_ANGLE.contains(&s) && sin_alpha > 0.0).then_some(SphericalTriangle {
+            a,
+            b,
+            c,
+            alpha: (cos_alpha, sin_alpha),
+            s,
+        })
+    }
+
     fn surface_at(&self, b1: f32, b2: f32) -> SurfacePoint {
         let b0 = 1.0 - b1 - b2;
         let [p0, p1, p2] = self.p;
@@ -61,6 +111,50 @@ impl Triangle {
         let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
         let n = self.cross().normalize();
         SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
+    }
+}
+
+fn v64(v: Vec3A) -> DVec3 {
+    DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// `v` less its component along the unit vector `w`, normalised (zero if nothing is left).
+fn orthogonal(v: DVec3, w: DVec3) -> DVec3 {
+    (v - v.dot(w) * w).normalize_or_zero()
+}
+
+/// A triangle as seen from a point: unit directions to its vertices, the cosine and sine of
+/// the angle at `a`, and the solid angle `s`.
+struct SphericalTriangle {
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+    alpha: (f64, f64),
+    s: f64,
+}
+
+impl SphericalTriangle {
+    /// A direction uniform in the spherical triangle for the uniform numbers `u` (Arvo 1995):
+    /// `u.x` chooses the sub-triangle (a, b, c') of area `u.x s`, `u.y` the point along the arc
+    /// from b to c'.
+    fn sample(&self, u: Vec2) -> DVec3 {
+        let (a, b, c) = (self.a, self.b, self.c);
+        let (cos_alpha, sin_alpha) = self.alpha;
+        // The angle phi = A' - alpha, A' = u.x s + pi (the sub-triangle's angle sum).
+        let (sin_p, cos_p) = libm::sincos(u.x as f64 * self.s + std::f64::consts::PI);
+        let sin_phi = sin_p * cos_alpha - cos_p * sin_alpha;
+        let cos_phi = cos_p * cos_alpha + sin_p * sin_alpha;
+        let k1 = cos_phi + cos_alpha;
+        let k2 = sin_phi - sin_alpha * a.dot(b);
+        let cos_bp =
+            (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha) / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+        // NaN (a triangle that fills nearly the hemisphere) goes to an end of the arc.
+        let cos_bp = if cos_bp.is_nan() { 1.0 } else { cos_bp.clamp(-1.0, 1.0) };
+        let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+        let cp = cos_bp * a + sin_bp * orthogonal(c, a);
+        let cos_t = 1.0 - u.y as f64 * (1.0 - cp.dot(b));
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        cos_t * b + sin_t * orthogonal(cp, b)
     }
 }
 
@@ -177,8 +271,28 @@ impl PrimitiveShape for Triangle {
         0.5 * self.cross().length()
     }
 
-    /// Samples a point uniformly by area (the square-root parameterisation).
+    /// Samples a point of the triangle as seen from `from`: uniformly in its solid angle where
+    /// [`Triangle::spherical`] says so, else uniformly by area (the square-root
+    /// parameterisation); the density is returned in solid angle.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
+        if let Some(t) = self.spherical(from) {
+            // The sampled direction meets the plane at barycentrics found as Moller and
+            // Trumbore do, in f64 (clamped: the direction may graze an edge; one parallel to
+            // the plane, which rounding alone could give, takes the centroid).
+            let w = t.sample(u);
+            let [p0, p1, p2] = self.p.map(v64);
+            let (e1, e2, o) = (p1 - p0, p2 - p0, v64(from) - p0);
+            let s1 = w.cross(e2);
+            let inv = 1.0 / s1.dot(e1);
+            let (b1, b2) = if inv.is_finite() {
+                ((o.dot(s1) * inv).clamp(0.0, 1.0), (w.dot(o.cross(e1)) * inv).clamp(0.0, 1.0))
+            } else {
+                (1.0 / 3.0, 1.0 / 3.0)
+            };
+            let sum = (b1 + b2).max(1.0);
+            let sp = self.surface_at((b1 / sum) as f32, (b2 / sum) as f32);
+            return LightSample { p: sp.p, n: sp.n, pdf: (1.0 / t.s) as f32, err: sp.err };
+        }
         let su = u.x.sqrt();
         let sp = self.surface_at(su * (1.0 - u.y), su * u.y);
         LightSample {
@@ -191,7 +305,10 @@ impl PrimitiveShape for Triangle {
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` seen from `from`.
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
-        area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize())
+        match self.spherical(from) {
+            Some(t) => (1.0 / t.s) as f32,
+            None => area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize()),
+        }
     }
 }
 
@@ -273,5 +390,153 @@ mod tests {
             assert!(t.intersect(from, ls.p - from, 2.0).is_finite() || boundary);
             assert!((ls.pdf / t.pdf_solid_angle(from, ls.p, ls.n) - 1.0).abs() < 1e-5);
         }
+    }
+
+    /// A triangle that points near it see as a large solid angle, and such points on its two
+    /// sides (the estimate A cos / d^2 at the centroid is 5 to 9 sr).
+    fn big() -> (Triangle, [Vec3A; 2]) {
+        let t = Triangle::new(
+            Vec3A::new(-1.0, -1.0, 1.0),
+            Vec3A::new(1.5, -1.0, 1.0),
+            Vec3A::new(-1.0, 1.5, 1.2),
+        )
+        .unwrap();
+        (t, [Vec3A::new(0.1, -0.2, 0.4), Vec3A::new(-0.3, 0.2, 1.6)])
+    }
+
+    /// The point of barycentrics (b1, b2), in f32.
+    fn at(t: &Triangle, b1: f32, b2: f32) -> Vec3A {
+        t.p[0] + b1 * (t.p[1] - t.p[0]) + b2 * (t.p[2] - t.p[0])
+    }
+
+    /// Solid angle of `t` seen from `o` by brute force: the sum of A cos / d^2 over a fine
+    /// subdivision into similar triangles.
+    fn solid_angle_by_area(t: &Triangle, o: Vec3A) -> f64 {
+        let g = 300;
+        let n = t.cross().normalize();
+        let mut sum = 0.0f64;
+        let mut add = |p: Vec3A| {
+            let d = p - o;
+            let r2 = d.length_squared() as f64;
+            sum += (n.dot(d).abs() as f64 / r2.sqrt()) / r2;
+        };
+        let gf = g as f32;
+        for i in 0..g {
+            for j in 0..g - i {
+                let (x, y) = (i as f32, j as f32);
+                add(at(t, (x + 1.0 / 3.0) / gf, (y + 1.0 / 3.0) / gf));
+                if i + j < g - 1 {
+                    add(at(t, (x + 2.0 / 3.0) / gf, (y + 2.0 / 3.0) / gf));
+                }
+            }
+        }
+        sum * t.area() as f64 / (g * g) as f64
+    }
+
+    #[test]
+    fn spherical_triangles_have_the_solid_angle_of_the_triangle() {
+        let (t, near) = big();
+        for o in near.into_iter().chain([Vec3A::new(2.0, 2.0, 0.5), Vec3A::new(0.0, 0.0, -3.0)]) {
+            let exact = solid_angle_by_area(&t, o);
+            let s = t.spherical_triangle(o).expect("in range").s;
+            assert!((s / exact - 1.0).abs() < 1e-4, "{o}: {s} vs {exact}");
+        }
+        // Points near the triangle take the spherical triangle, far ones area sampling.
+        for o in near {
+            assert!(t.spherical(o).is_some(), "{o}");
+        }
+        let far = Vec3A::new(0.0, 0.0, -30.0);
+        assert!(t.spherical(far).is_none());
+        let ls = t.sample_solid_angle(far, Vec2::new(0.3, 0.6));
+        assert_eq!(ls.pdf, area_to_solid_angle(1.0 / t.area(), far, ls.p, ls.n));
+    }
+
+    #[test]
+    fn spherical_samples_are_uniform_in_solid_angle() {
+        // Chi-square test of the sampled points against uniform density in solid angle, from
+        // both sides: the bins are the g^2 similar triangles of a subdivision, each expecting
+        // its own solid angle over the whole.
+        let (t, near) = big();
+        let g = 8;
+        let cell = |i: usize, j: usize, upper: bool| {
+            let (x, y, gf) = (i as f32, j as f32, g as f32);
+            let c = |dx: f32, dy: f32| at(&t, (x + dx) / gf, (y + dy) / gf);
+            let v = if upper {
+                [c(1.0, 0.0), c(1.0, 1.0), c(0.0, 1.0)]
+            } else {
+                [c(0.0, 0.0), c(1.0, 0.0), c(0.0, 1.0)]
+            };
+            Triangle::new(v[0], v[1], v[2]).unwrap()
+        };
+        for o in near {
+            let total = t.spherical(o).unwrap().s;
+            let n = 200_000;
+            let mut observed = vec![0usize; 2 * g * g];
+            let mut rng = crate::testing::uniform(17);
+            for _ in 0..n {
+                let ls = t.sample_solid_angle(o, Vec2::new(rng(), rng()));
+                assert!((ls.pdf as f64 * total - 1.0).abs() < 1e-6);
+                assert_eq!(t.pdf_solid_angle(o, ls.p, ls.n), ls.pdf);
+                let (b1, b2) = t.barycentric(ls.p);
+                let (x, y) = (b1 * g as f32, b2 * g as f32);
+                let i = (x as usize).min(g - 1);
+                let j = (y as usize).min(g - 1 - i);
+                let upper = x - i as f32 + y - j as f32 > 1.0 && i + j < g - 1;
+                observed[i * g + j + if upper { g * g } else { 0 }] += 1;
+            }
+            let mut chi2 = 0.0;
+            for i in 0..g {
+                for j in 0..g - i {
+                    for upper in [false, true] {
+                        if upper && i + j == g - 1 {
+                            continue;
+                        }
+                        let expected = cell(i, j, upper).spherical_triangle(o).unwrap().s / total * n as f64;
+                        let seen = observed[i * g + j + if upper { g * g } else { 0 }] as f64;
+                        chi2 += (seen - expected).powi(2) / expected;
+                    }
+                }
+            }
+            let critical = crate::material::chi2::chi2_critical(g * g - 1);
+            assert!(chi2 < critical, "{o}: chi2 {chi2} >= {critical}");
+        }
+    }
+
+    #[test]
+    fn light_samples_are_finite_points_of_the_triangle_from_anywhere() {
+        // Points near the plane, on it, at the vertices, far and very close: every sample lies
+        // on the triangle with a finite positive density (or none, exactly on the plane) and
+        // the density evaluated at it agrees with the one sampled.
+        let t = Triangle::new(
+            Vec3A::new(-1.0, -1.0, 0.0),
+            Vec3A::new(2.0, -1.0, 0.0),
+            Vec3A::new(-1.0, 3.0, 0.0),
+        )
+        .unwrap();
+        let mut rng = crate::testing::signed(5);
+        let mut u = crate::testing::uniform(9);
+        let mut spherical = 0;
+        for k in 0..20_000 {
+            let scale = 10f32.powi(k % 9 - 5);
+            let z = match k % 4 {
+                0 => 0.0,
+                1 => rng() * 1e-6,
+                _ => rng() * scale,
+            };
+            let o = match k % 7 {
+                0 => t.p[k as usize % 3] + Vec3A::new(0.0, 0.0, z),
+                _ => Vec3A::new(rng() * 2.0 * scale, rng() * 2.0 * scale, z),
+            };
+            spherical += t.spherical(o).is_some() as usize;
+            let ls = t.sample_solid_angle(o, Vec2::new(u().min(0.999_999), u().min(0.999_999)));
+            assert!(ls.p.is_finite(), "{o}: {}", ls.p);
+            let (b1, b2) = t.barycentric(ls.p);
+            assert!((at(&t, b1, b2) - ls.p).length() < 1e-5, "{o}: {} off the triangle", ls.p);
+            assert!(ls.pdf >= 0.0 && !ls.pdf.is_nan(), "{o}: pdf {}", ls.pdf);
+            if ls.pdf.is_finite() && ls.pdf > 0.0 {
+                assert_eq!(t.pdf_solid_angle(o, ls.p, ls.n), ls.pdf, "{o}");
+            }
+        }
+        assert!(spherical > 1000, "only {spherical} points sampled the spherical triangle");
     }
 }
