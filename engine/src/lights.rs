@@ -8,7 +8,7 @@
 
 use crate::geometry::Geometry;
 use crate::material::{Emission, Material};
-use crate::shape::{LightSample, Primitive, QuadLight};
+use crate::shape::{LightSample, Primitive, QuadLight, SphereLight};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Marks a primitive that is not in the light table.
@@ -133,6 +133,8 @@ pub struct LightTable {
     /// Each light as a [`QuadLight`] (indexed like the lights) where it is a quad, in scenes
     /// where nothing moves: the integrator samples those across lanes.
     pub quads: Vec<Option<QuadLight>>,
+    /// Each light as a [`SphereLight`] where it is a sphere, likewise.
+    pub spheres: Vec<Option<SphereLight>>,
 }
 
 /// When next-event estimation samples the background as a light.
@@ -225,20 +227,37 @@ impl LightTable {
         if let Some(last) = t.cdf.last_mut() {
             *last = 1.0;
         }
-        let still = geometry.velocity.is_none();
-        t.quads = (t.prims.iter())
-            .map(|&prim| {
-                let emission = materials[geometry.material[prim as usize] as usize].emission();
-                match (&geometry.prims[prim as usize], emission) {
-                    (Primitive::Quad(q), Some(Emission { emit, two_sided })) if still => {
-                        Some(q.light(emit.to_array(), two_sided))
-                    }
-                    _ => None,
-                }
-            })
-            .chain(t.others.iter().map(|_| None))
-            .collect();
+        // The lights of the kinds the integrator samples across lanes, as plain numbers.
+        let quads = t.plain(geometry, materials, |p, emit, two_sided| match p {
+            Primitive::Quad(q) => Some(q.light(emit, two_sided)),
+            _ => None,
+        });
+        let spheres = t.plain(geometry, materials, |p, emit, two_sided| match p {
+            Primitive::Sphere(s) => Some(s.light(emit, two_sided)),
+            _ => None,
+        });
+        (t.quads, t.spheres) = (quads, spheres);
         t
+    }
+
+    /// Per light, `light(primitive, emit, two_sided)` for the emitting primitives in scenes
+    /// where nothing moves, `None` for the others.
+    fn plain<T>(
+        &self,
+        geometry: &Geometry,
+        materials: &[Material],
+        light: impl Fn(&Primitive, [f32; 3], bool) -> Option<T>,
+    ) -> Vec<Option<T>> {
+        let still = geometry.velocity.is_none();
+        (self.prims.iter())
+            .map(|&prim| match materials[geometry.material[prim as usize] as usize].emission() {
+                Some(Emission { emit, two_sided }) if still => {
+                    light(&geometry.prims[prim as usize], emit.to_array(), two_sided)
+                }
+                _ => None,
+            })
+            .chain(self.others.iter().map(|_| None))
+            .collect()
     }
 
     /// True when there is nothing to sample.

@@ -116,6 +116,37 @@ fn sin_cos_quarter(x: f32) -> (f32, f32) {
     (s, c)
 }
 
+/// `(cos, sin)` of the angle `2 pi u` (`u` in [0, 1]) from the polynomial of the nearest
+/// quarter turn, branch-free: the same bits in a scalar call and across lanes (sphere lights'
+/// cone samples), which the C library's `sinf` and `cosf` do not promise.
+#[inline(always)]
+pub fn cos_sin_turn(u: f32) -> (f32, f32) {
+    let t = 4.0 * u;
+    let k = (t + 0.5).floor();
+    let (s, c) = sin_cos_quarter((t - k) * std::f32::consts::FRAC_PI_2);
+    // Rotate (c, s) by k quarter turns (k = 4 is none).
+    let (k1, k2, k3) = (k == 1.0, k == 2.0, k == 3.0);
+    let cos = if k1 {
+        -s
+    } else if k2 {
+        -c
+    } else if k3 {
+        s
+    } else {
+        c
+    };
+    let sin = if k1 {
+        c
+    } else if k2 {
+        -s
+    } else if k3 {
+        -c
+    } else {
+        s
+    };
+    (cos, sin)
+}
+
 /// [`concentric_disk`] with a polynomial sine and cosine, branch-free: it vectorises across
 /// lanes (the Lambertian kernel's directions and the sky's light samples).
 #[inline(always)]
@@ -162,6 +193,16 @@ mod tests {
             let x = -std::f32::consts::FRAC_PI_4 + std::f32::consts::FRAC_PI_4 * 2.0 * k as f32 / 2000.0;
             let (s, c) = sin_cos_quarter(x);
             assert!((s - x.sin()).abs() < 4e-7 && (c - x.cos()).abs() < 2e-7, "{x}");
+        }
+    }
+
+    #[test]
+    fn turns_give_the_cosine_and_sine_of_the_whole_circle() {
+        for k in 0..=40_000 {
+            let u = k as f32 / 40_000.0;
+            let (c, s) = cos_sin_turn(u);
+            let a = std::f64::consts::TAU * u as f64;
+            assert!((c as f64 - a.cos()).abs() < 1e-6 && (s as f64 - a.sin()).abs() < 1e-6, "{u}: {c} {s}");
         }
     }
 

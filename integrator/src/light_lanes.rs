@@ -1,29 +1,33 @@
 //! Next-event estimation's light samples for [`LANES`] shading points at once: what
 //! `path::pick_light` computes for each, with the same operations in the same order (so the
-//! same bits), run as one branch-free kernel across lanes for the lanes whose picked light is
-//! a quad ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads): scenes without
-//! motion) in a scene without textures. Points close enough to a rectangle for its
-//! spherical-rectangle sampling, lanes that picked another kind of light, and every point of
-//! other scenes take `path::pick_light` itself.
+//! same bits), run as branch-free kernels across lanes for the lanes whose picked light is a
+//! quad or a sphere ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads) and
+//! `spheres`: scenes without motion) in a scene without textures. Points close enough to a
+//! rectangle for its spherical-rectangle sampling, points inside a sphere light, lanes that
+//! picked another kind of light, and every point of other scenes take `path::pick_light`
+//! itself.
 
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
 use pathwave_engine::render_scene::{Background, RenderScene};
-use pathwave_engine::shape::QuadLight;
-use pathwave_engine::shape::SPHERICAL_MIN_ESTIMATE;
+use pathwave_engine::shape::{QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample};
 
 /// Samples the lights for groups of [`LANES`] shading points; one per shading loop.
 pub struct LightSampler<'a> {
     scene: &'a RenderScene,
     /// The lights as quads where they are, when the lanes can sample some.
     quads: Option<&'a [Option<QuadLight>]>,
+    /// The lights as spheres where they are, likewise.
+    spheres: Option<&'a [Option<SphereLight>]>,
     /// The background's bottom and top radiance when it is a constant or sky sampled as a
     /// light (then the only light).
     sky: Option<(Vec3, Vec3)>,
     /// The kernel's inputs; with one light, its fields stay filled in from one group to the next.
     ins: QuadInLanes,
-    outs: QuadOutLanes,
+    outs: LightOutLanes,
+    sphere_ins: SphereInLanes,
+    sphere_outs: LightOutLanes,
 }
 
 impl<'a> LightSampler<'a> {
@@ -32,13 +36,25 @@ impl<'a> LightSampler<'a> {
         let quads = &scene.lights.quads;
         let quads =
             (!scene.features.textures && quads.iter().any(Option::is_some)).then_some(quads.as_slice());
+        let spheres = &scene.lights.spheres;
+        let spheres =
+            (!scene.features.textures && spheres.iter().any(Option::is_some)).then_some(spheres.as_slice());
         let sky = match scene.background {
             _ if scene.lights.environment.is_none() => None,
             Background::Constant(c) => Some((c, c)),
             Background::Sky { bottom, top } => Some((bottom, top)),
             Background::Environment(_) => None,
         };
-        let mut me = Self { scene, quads, sky, ins: QuadInLanes::default(), outs: QuadOutLanes::default() };
+        let mut me = Self {
+            scene,
+            quads,
+            spheres,
+            sky,
+            ins: QuadInLanes::default(),
+            outs: LightOutLanes::default(),
+            sphere_ins: SphereInLanes::default(),
+            sphere_outs: LightOutLanes::default(),
+        };
         if let Some([Some(one)]) = quads {
             let pmf = scene.lights.pick(0.0).1;
             (0..LANES).for_each(|l| me.ins.set(l, &QuadIn::new(one, pmf)));
@@ -84,34 +100,67 @@ impl<'a> LightSampler<'a> {
             sky_lanes(&ins, bottom, top, pmf, center, radius, out);
             return;
         }
-        let Some(quads) = self.quads else {
+        if self.quads.is_none() && self.spheres.is_none() {
             (0..LANES).for_each(|l| scalar(out, l));
             return;
-        };
-        let ins = &mut self.ins;
-        // Lanes whose light is not a quad (their inputs left as they were) go to `pick_light`.
-        let mut other = [false; LANES];
-        if quads.len() > 1 {
+        }
+        // Which kernel each lane takes; lanes whose light is neither a quad nor a sphere go to
+        // `pick_light`. With one quad light its data stay in the quad kernel's inputs.
+        let (mut quad, mut sphere) = ([false; LANES], [false; LANES]);
+        if let (Some([Some(_)]), None) = (self.quads, self.spheres) {
+            quad = [true; LANES];
+        } else {
             for l in 0..LANES {
                 let (light, pmf) = scene.lights.pick(u[l].light_pick);
-                match &quads[light] {
-                    Some(q) => ins.set(l, &QuadIn::new(q, pmf)),
-                    None => other[l] = true,
+                if let Some(Some(q)) = self.quads.map(|q| &q[light]) {
+                    self.ins.set(l, &QuadIn::new(q, pmf));
+                    quad[l] = true;
+                } else if let Some(Some(s)) = self.spheres.map(|s| &s[light]) {
+                    self.sphere_ins.set(l, &SphereIn::new(s, pmf));
+                    sphere[l] = true;
                 }
             }
         }
-        for l in 0..LANES {
-            for a in 0..3 {
-                ins.from[a][l] = p[l][a];
+        let uv = |l: usize| [u[l].light.x, u[l].light.y];
+        if quad.iter().any(|&q| q) {
+            let ins = &mut self.ins;
+            for l in 0..LANES {
+                for a in 0..3 {
+                    ins.from[a][l] = p[l][a];
+                }
+                [ins.uv[0][l], ins.uv[1][l]] = uv(l);
             }
-            (ins.uv[0][l], ins.uv[1][l]) = (u[l].light.x, u[l].light.y);
+            quads_by_area_lanes(ins, &mut self.outs);
+            let o = &self.outs;
+            (out.wi, out.le, out.pdf_light, out.target) = (o.wi, o.le, o.pdf, o.target);
         }
-        quads_by_area_lanes(ins, &mut self.outs);
-        let o = &self.outs;
-        (out.wi, out.le, out.pdf_light, out.target) = (o.wi, o.le, o.pdf, o.target);
+        if sphere.iter().any(|&s| s) {
+            let ins = &mut self.sphere_ins;
+            for l in 0..LANES {
+                for a in 0..3 {
+                    ins.from[a][l] = p[l][a];
+                }
+                [ins.uv[0][l], ins.uv[1][l]] = uv(l);
+            }
+            spheres_by_cone_lanes(ins, &mut self.sphere_outs);
+            let o = &self.sphere_outs;
+            for l in (0..LANES).filter(|&l| sphere[l]) {
+                for a in 0..3 {
+                    (out.wi[a][l], out.le[a][l], out.target[a][l]) = (o.wi[a][l], o.le[a][l], o.target[a][l]);
+                }
+                out.pdf_light[l] = o.pdf[l];
+            }
+        }
         out.delta_light = [false; LANES];
-        for l in (0..LANES).filter(|&l| o.spherical[l] || other[l]) {
-            scalar(out, l);
+        for l in 0..LANES {
+            let fallback = match (quad[l], sphere[l]) {
+                (true, _) => self.outs.scalar[l],
+                (_, true) => self.sphere_outs.scalar[l],
+                _ => true,
+            };
+            if fallback {
+                scalar(out, l);
+            }
         }
     }
 }
@@ -183,15 +232,16 @@ struct QuadIn {
     uv: [f32; 2],
 }
 
-/// What [`quad_by_area`] writes: the light sample (zero when the light sends nothing), or
-/// `spherical` when the quad samples this point by spherical rectangle instead.
+/// What the kernels write: the light sample (zero when the light sends nothing), or `scalar`
+/// when the lane takes `path::pick_light` instead (a point the quad samples by spherical
+/// rectangle, or one inside a sphere).
 #[derive(Clone, Copy, Debug, Default)]
-struct QuadOut {
+struct LightOut {
     wi: Vec3,
     le: Vec3,
     pdf: f32,
     target: Vec3,
-    spherical: bool,
+    scalar: bool,
 }
 
 impl QuadIn {
@@ -220,11 +270,11 @@ lanes!(QuadInLanes for QuadIn {
     emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
 });
 
-lanes!(QuadOutLanes for QuadOut { wi: v3, le: v3, pdf: f32, target: v3, spherical: bool });
+lanes!(LightOutLanes for LightOut { wi: v3, le: v3, pdf: f32, target: v3, scalar: bool });
 
 /// [`quad_by_area`] on all lanes.
 #[inline(never)]
-fn quads_by_area_lanes(i: &QuadInLanes, o: &mut QuadOutLanes) {
+fn quads_by_area_lanes(i: &QuadInLanes, o: &mut LightOutLanes) {
     pathwave_engine::simd::lanes(
         #[inline(always)]
         || {
@@ -238,7 +288,7 @@ fn quads_by_area_lanes(i: &QuadInLanes, o: &mut QuadOutLanes) {
 /// A point of the quad sampled by area as `Quad::sample_solid_angle` and `LightTable::sample`
 /// do, and what `path::pick_light` derives from it, branch-free.
 #[inline(always)]
-fn quad_by_area(i: &QuadIn) -> QuadOut {
+fn quad_by_area(i: &QuadIn) -> LightOut {
     let from = i.from;
     // `Quad::spherical`'s bound, from the quad's centre.
     let c = Vec3::new(i.center.x - from.x, i.center.y - from.y, i.center.z - from.z);
@@ -265,12 +315,91 @@ fn quad_by_area(i: &QuadIn) -> QuadOut {
     let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
     let side = sel3(dot(i.n, wi) < 0.0, i.n, Vec3::new(-i.n.x, -i.n.y, -i.n.z));
     let target = offset(lp, i.err, side);
-    QuadOut {
+    LightOut {
         wi: sel3(ok, wi, Vec3::ZERO),
         le: sel3(ok, le, Vec3::ZERO),
         pdf: if ok { pdf } else { 0.0 },
         target: sel3(ok, target, Vec3::ZERO),
-        spherical,
+        scalar: spherical,
+    }
+}
+
+/// What [`sphere_by_cone`] reads: the lane's light (see
+/// [`SphereLight`](pathwave_engine::shape::SphereLight)), its pick probability, the shading
+/// point and the two numbers.
+#[derive(Clone, Copy, Debug, Default)]
+struct SphereIn {
+    center: Vec3,
+    radius: f32,
+    err: f32,
+    emit: Vec3,
+    two_sided: bool,
+    pmf: f32,
+    from: Vec3,
+    uv: [f32; 2],
+}
+
+impl SphereIn {
+    /// Light `s`, picked with probability `pmf`; the point and numbers left at zero.
+    fn new(s: &SphereLight, pmf: f32) -> Self {
+        Self {
+            center: s.center.into(),
+            radius: s.radius,
+            err: s.err,
+            emit: s.emit.into(),
+            two_sided: s.two_sided,
+            pmf,
+            ..Default::default()
+        }
+    }
+}
+
+lanes!(SphereInLanes for SphereIn {
+    center: v3, radius: f32, err: f32, emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
+});
+
+/// [`sphere_by_cone`] on all lanes.
+#[inline(never)]
+fn spheres_by_cone_lanes(i: &SphereInLanes, o: &mut LightOutLanes) {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            for l in 0..LANES {
+                o.set(l, &sphere_by_cone(&i.get(l)));
+            }
+        },
+    )
+}
+
+/// A point of the sphere sampled in the cone it subtends as `Sphere::sample_solid_angle` and
+/// `LightTable::sample` do, and what `path::pick_light` derives from it, branch-free.
+#[inline(always)]
+fn sphere_by_cone(i: &SphereIn) -> LightOut {
+    let from = i.from;
+    let (n, pdf_cone, inside) = cone_sample(i.center.to_array(), i.radius, from.to_array(), i.uv);
+    let n = Vec3::from(n);
+    // The point (`+ 0.0`: the light's zero motion offset that `LightTable::sample` adds).
+    let lp = Vec3::new(
+        i.center.x + i.radius * n.x + 0.0,
+        i.center.y + i.radius * n.y + 0.0,
+        i.center.z + i.radius * n.z + 0.0,
+    );
+    let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
+    let dist = dot(d, d).sqrt();
+    // Direction, emission, density and the target off the light.
+    let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
+    let cos_out = dot(n, Vec3::new(-wi.x, -wi.y, -wi.z));
+    let le = sel3(i.two_sided || cos_out > 0.0, i.emit, Vec3::ZERO);
+    let pdf = pdf_cone * i.pmf;
+    let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
+    let side = sel3(dot(n, wi) < 0.0, n, Vec3::new(-n.x, -n.y, -n.z));
+    let target = offset(lp, i.err, side);
+    LightOut {
+        wi: sel3(ok, wi, Vec3::ZERO),
+        le: sel3(ok, le, Vec3::ZERO),
+        pdf: if ok { pdf } else { 0.0 },
+        target: sel3(ok, target, Vec3::ZERO),
+        scalar: inside,
     }
 }
 
@@ -309,12 +438,25 @@ mod tests {
             .replace(r#"material: "b""#, r#"material: "white""#)
             .replace(r#"material: "c""#, r#"material: "white""#);
         check_against_pick_light(&one, 1);
-        // A sphere light among quads: its lanes take `pick_light`.
+        // A sphere light among quads: its lanes take the sphere kernel (points inside it
+        // `pick_light`).
         let sphere = LIGHTS.replace(
             r#"Quad(q: (-1.5, -1.9, 0), u: (1, 0, 0.2), v: (0.3, 0, 1))"#,
             r#"Sphere(center: (-1, -1.5, 0.5), radius: 0.3)"#,
         );
         check_against_pick_light(&sphere, 2);
+        // Sphere lights alone, one two-sided, one large enough to hold many of the points,
+        // and one so small that its cones take the Taylor expansion.
+        let spheres = sphere
+            .replace(
+                r#"Quad(q: (-0.5, 1.9, -0.5), u: (1, 0, 0), v: (0, 0, 1))"#,
+                r#"Sphere(center: (0.5, 1.2, 0), radius: 0.8)"#,
+            )
+            .replace(
+                r#"Quad(q: (1, -1, 0), u: (0, 1, 0), v: (0, 0, 0.5))"#,
+                r#"Sphere(center: (1.5, -1, 1), radius: 0.01)"#,
+            );
+        check_against_pick_light(&spheres, 0);
     }
 
     /// A sky alone is sampled as a light, across lanes, with the bits of `pick_light`.
@@ -387,5 +529,6 @@ mod tests {
             }
         }
         assert!(lit > 5_000 && (lights == 0 || spherical > 500), "lit {lit}, spherical {spherical}");
+        assert!(sampler.spheres.is_some() == scene.lights.spheres.iter().any(Option::is_some));
     }
 }

@@ -22,7 +22,7 @@ pub use boxes::BoxShape;
 pub use primitive::PrimitiveShape;
 use primitive::primitives;
 pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
-pub use sphere::{Sphere, SphereShape};
+pub use sphere::{Sphere, SphereLight, SphereShape, cone_sample};
 pub use transformed_sphere::TransformedSphere;
 pub use triangle::{Triangle, TriangleShape};
 

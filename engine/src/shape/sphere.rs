@@ -6,10 +6,73 @@ use super::{
     Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
     area_to_solid_angle,
 };
-use crate::math::{Frame, gamma, uniform_sphere};
+use crate::math::{cos_sin_turn, gamma, uniform_sphere};
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::f32::consts::PI;
+
+/// A sphere light as plain numbers, for sampling many points at once (see
+/// [`cone_sample`]): centre, radius, the error bound of its points and its emission.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereLight {
+    /// Centre.
+    pub center: [f32; 3],
+    /// Radius.
+    pub radius: f32,
+    /// [`Sphere::point_error`].
+    pub err: f32,
+    /// Emitted radiance.
+    pub emit: [f32; 3],
+    /// Emits on both sides (inwards too).
+    pub two_sided: bool,
+}
+
+#[inline(always)]
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The squared distance from `from` to the centre `c`.
+#[inline(always)]
+fn center_distance2(c: [f32; 3], from: [f32; 3]) -> f32 {
+    let d = [c[0] - from[0], c[1] - from[1], c[2] - from[2]];
+    dot(d, d)
+}
+
+/// A point of the sphere (`center`, `radius`) seen from `from`, uniform in the cone of
+/// directions it subtends, for the numbers `u`: its unit normal and the density in solid angle,
+/// and whether `from` is inside (then neither means anything). pbrt-v4's `Sphere::Sample`
+/// (with its Taylor expansion of `1 - cos` for small cones) on plain numbers, branch-free, so
+/// that [`Sphere`]'s light samples and the integrator's lanes compute the same bits.
+#[inline(always)]
+pub fn cone_sample(center: [f32; 3], radius: f32, from: [f32; 3], u: [f32; 2]) -> ([f32; 3], f32, bool) {
+    let dc2 = center_distance2(center, from);
+    let r2 = radius * radius;
+    let sin2_max = r2 / dc2;
+    let sin_max = sin2_max.sqrt();
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    // Small cones: the Taylor expansion keeps 1 - cos precise.
+    let small = sin2_max < 0.000_685_23;
+    let cos_big = (cos_max - 1.0) * u[0] + 1.0;
+    let sin2_small = sin2_max * u[0];
+    let sin2_t = if small { sin2_small } else { (1.0 - cos_big * cos_big).max(0.0) };
+    let cos_t = if small { (1.0 - sin2_small).sqrt() } else { cos_big };
+    let one_minus_cos_max = if small { sin2_max / 2.0 } else { 1.0 - cos_max };
+    let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+    let (cos_phi, sin_phi) = cos_sin_turn(u[1]);
+    // The direction -w in the frame about the axis to the centre (`Frame::from_normal`).
+    let w = [-(sin_alpha * cos_phi), -(sin_alpha * sin_phi), -cos_alpha];
+    let dc = dc2.sqrt();
+    let a = [(center[0] - from[0]) / dc, (center[1] - from[1]) / dc, (center[2] - from[2]) / dc];
+    let sign = 1f32.copysign(a[2]);
+    let k = -1.0 / (sign + a[2]);
+    let b = a[0] * a[1] * k;
+    let t = [1.0 + sign * a[0] * a[0] * k, sign * b, -sign * a[0]];
+    let bt = [b, sign + a[1] * a[1] * k, -a[1]];
+    let n = std::array::from_fn(|i| t[i] * w[0] + bt[i] * w[1] + a[i] * w[2]);
+    (n, 1.0 / (2.0 * PI * one_minus_cos_max), dc2 <= r2)
+}
 
 /// A sphere. `uv`: u = (atan2(-z, x) + pi) / 2pi around +y, v = acos(-y) / pi from the bottom pole.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,6 +84,18 @@ pub struct Sphere {
 }
 
 impl Sphere {
+    /// The sphere as a light for lanes of points, emitting `emit` (inwards too if
+    /// `two_sided`): see [`SphereLight`].
+    pub fn light(&self, emit: [f32; 3], two_sided: bool) -> SphereLight {
+        SphereLight {
+            center: self.center.to_array(),
+            radius: self.radius,
+            err: self.point_error(),
+            emit,
+            two_sided,
+        }
+    }
+
     /// Error bound of points computed as `center + r n`: it scales with |center| + r (the huge
     /// ground sphere of spheres-sky has an error of ~ulp(1000) at points near y = 0).
     #[inline]
@@ -152,9 +227,9 @@ impl PrimitiveShape for Sphere {
     /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
     /// `from` is outside, uniformly by area when inside.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        let dc2 = (self.center - from).length_squared();
-        let r2 = self.radius * self.radius;
-        if dc2 <= r2 {
+        let (n, pdf, inside) =
+            cone_sample(self.center.to_array(), self.radius, from.to_array(), u.to_array());
+        if inside {
             let n = uniform_sphere(u);
             let p = self.center + self.radius * n;
             return LightSample {
@@ -164,35 +239,13 @@ impl PrimitiveShape for Sphere {
                 err: self.point_error(),
             };
         }
-        let sin2_max = r2 / dc2;
-        let sin_max = sin2_max.sqrt();
-        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-        let mut one_minus_cos_max = 1.0 - cos_max;
-        let mut cos_t = (cos_max - 1.0) * u.x + 1.0;
-        let mut sin2_t = (1.0 - cos_t * cos_t).max(0.0);
-        if sin2_max < 0.000_685_23 {
-            // Small cones: Taylor expansion keeps 1 - cos precise.
-            sin2_t = sin2_max * u.x;
-            cos_t = (1.0 - sin2_t).sqrt();
-            one_minus_cos_max = sin2_max / 2.0;
-        }
-        let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
-        let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
-        let phi = u.y * 2.0 * PI;
-        let w = Vec3A::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha);
-        let frame = Frame::from_normal((self.center - from) / dc2.sqrt());
-        let n = frame.to_world(-w);
-        LightSample {
-            p: self.center + self.radius * n,
-            n,
-            pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-            err: self.point_error(),
-        }
+        let n = Vec3A::from(n);
+        LightSample { p: self.center + self.radius * n, n, pdf, err: self.point_error() }
     }
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen from `from`.
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32 {
-        let dc2 = (self.center - from).length_squared();
+        let dc2 = center_distance2(self.center.to_array(), from.to_array());
         let r2 = self.radius * self.radius;
         if dc2 <= r2 {
             return area_to_solid_angle(1.0 / self.area(), from, p, n);
