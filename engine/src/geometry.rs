@@ -26,11 +26,11 @@ pub struct Hit {
 /// with leaves of 1 or 2, 1.39 s with 4, 1.68 s with 8 (obvhs's CWBVH: 1.60 s).
 const LEAF: u32 = 2;
 
-/// Scenes with at most this many primitives (quads and spheres only) also keep flat primitive
-/// lists: a stream of rays tests them primitive by primitive, SIMD across rays, which beats
-/// traversing the BVH once per ray. Single rays still traverse the BVH (a scalar scan of even
-/// 13 quads was slower than obvhs's CWBVH, which our BVH8 has since replaced: cornell rendered
-/// in 2.53 s against 1.72 s).
+/// Scenes with at most this many primitives and no triangles also keep flat primitive lists
+/// (quads and spheres as arrays, ellipsoids ray by ray): a stream of rays tests them primitive
+/// by primitive, SIMD across rays, which beats traversing the BVH once per ray. Single rays
+/// still traverse the BVH (a scalar scan of even 13 quads was slower than obvhs's CWBVH, which
+/// our BVH8 has since replaced: cornell rendered in 2.53 s against 1.72 s).
 pub const FLAT_MAX: usize = 32;
 
 /// Primitives with per-primitive material ids and the structures that find ray hits among them.
@@ -253,7 +253,8 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shape::{Quad, Sphere};
+    use crate::shape::{Quad, Sphere, TransformedSphere, Triangle};
+    use glam::Affine3A;
 
     use crate::testing::signed as xorshift;
 
@@ -304,7 +305,24 @@ mod tests {
     #[test]
     fn flat_scan_and_stream_equal_the_bvh() {
         use crate::flat::RayStream;
-        let prims: Vec<Primitive> = scene().into_iter().take(FLAT_MAX).collect();
+        // Quads and spheres, and ellipsoids (tested ray by ray); a triangle sends the scene to
+        // the BVH.
+        let triangle = Triangle::new(Vec3A::ZERO, Vec3A::X, Vec3A::Y).unwrap();
+        let with_triangle: Vec<Primitive> =
+            scene().into_iter().take(3).chain([Primitive::Triangle(triangle)]).collect();
+        assert!(Geometry::build(with_triangle, (0..4).collect()).flat().is_none());
+        let mut prims: Vec<Primitive> = scene().into_iter().take(FLAT_MAX - 2).collect();
+        let centers = [Vec3A::new(2.0, 3.0, 4.0), Vec3A::new(-5.0, 6.0, 1.0)];
+        for (i, c) in centers.into_iter().enumerate() {
+            let m = Affine3A::from_scale_rotation_translation(
+                glam::Vec3::new(1.0, 2.5, 0.5 + i as f32),
+                glam::Quat::from_rotation_y(0.7),
+                c.into(),
+            );
+            prims.push(Primitive::TransformedSphere(
+                TransformedSphere::new(Sphere { center: Vec3A::ZERO, radius: 1.5 }, m).unwrap(),
+            ));
+        }
         let n = prims.len() as u32;
         let geo = Geometry::build(prims.clone(), (0..n).collect());
         let f = geo.flat().expect("small scenes have flat lists");
@@ -312,8 +330,14 @@ mod tests {
         let mut rnd = xorshift(7);
         let mut stream = RayStream::default();
         let mut rays = Vec::new();
-        for _ in 0..3000 {
-            let ray = Ray::new(Vec3A::new(rnd(), rnd(), rnd()) * 15.0, Vec3A::new(rnd(), rnd(), rnd()));
+        for k in 0..3000 {
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 15.0;
+            let mut d = Vec3A::new(rnd(), rnd(), rnd());
+            if k % 3 == 0 {
+                // Aimed at an ellipsoid.
+                d = centers[k % 2] + Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - o;
+            }
+            let ray = Ray::new(o, d);
             stream.push(ray.origin.to_array(), ray.dir.to_array());
             rays.push(ray);
         }
@@ -321,7 +345,7 @@ mod tests {
         f.intersect_stream(&stream, &mut t, &mut id);
         let mut occ = vec![false; rays.len()];
         f.occluded_stream(&stream, &mut occ);
-        let mut hits = 0;
+        let (mut hits, mut others) = (0, 0);
         for (i, ray) in rays.iter().enumerate() {
             let (o, d) = (ray.origin.to_array(), ray.dir.to_array());
             let a = f.intersect(o, d, f32::INFINITY);
@@ -331,8 +355,12 @@ mod tests {
             assert_eq!(occ[i], f.occluded(o, d, 1.0));
             assert_eq!(occ[i], geo.occluded(ray, 1.0));
             hits += a.is_some() as u32;
+            let other = |p: u32| {
+                matches!(geo.prims[p as usize], Primitive::TransformedSphere(_) | Primitive::Triangle(_))
+            };
+            others += a.is_some_and(|(_, p)| other(p)) as u32;
         }
-        assert!(hits > 300, "{hits}");
+        assert!(hits > 300 && others > 20, "{hits} hits, {others} on ellipsoids");
     }
 
     #[test]

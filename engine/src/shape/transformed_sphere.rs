@@ -101,9 +101,10 @@ impl PrimitiveShape for TransformedSphere {
     /// the world area density is `1 / (4 pi r^2 area_scale)`.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
         let n_obj = uniform_sphere(u);
+        // No texture coordinates: a light sample has none (an `atan2` and an `acos` saved).
         let sp = self.surface(
             self.world_from_object.transform_point3a(self.sphere.center + self.sphere.radius * n_obj),
-            true,
+            false,
         );
         let pdf_area = 1.0 / (self.sphere.area() * self.area_scale(n_obj));
         LightSample { p: sp.p, n: sp.n, pdf: area_to_solid_angle(pdf_area, from, sp.p, sp.n), err: sp.err }
