@@ -8,7 +8,7 @@
 
 use crate::geometry::Geometry;
 use crate::material::{Emission, Material};
-use crate::shape::{LightSample, Primitive, QuadLight, SphereLight};
+use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Marks a primitive that is not in the light table.
@@ -135,6 +135,8 @@ pub struct LightTable {
     pub quads: Vec<Option<QuadLight>>,
     /// Each light as a [`SphereLight`] where it is a sphere, likewise.
     pub spheres: Vec<Option<SphereLight>>,
+    /// Each light as an [`EllipsoidLight`] where it is an ellipsoid, likewise.
+    pub ellipsoids: Vec<Option<EllipsoidLight>>,
 }
 
 /// When next-event estimation samples the background as a light.
@@ -236,7 +238,11 @@ impl LightTable {
             Primitive::Sphere(s) => Some(s.light(emit, two_sided)),
             _ => None,
         });
-        (t.quads, t.spheres) = (quads, spheres);
+        let ellipsoids = t.plain(geometry, materials, |p, emit, two_sided| match p {
+            Primitive::TransformedSphere(e) => Some(e.light(emit, two_sided)),
+            _ => None,
+        });
+        (t.quads, t.spheres, t.ellipsoids) = (quads, spheres, ellipsoids);
         t
     }
 

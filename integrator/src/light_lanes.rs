@@ -11,7 +11,9 @@ use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, of
 use crate::path;
 use glam::Vec3;
 use pathwave_engine::render_scene::{Background, RenderScene};
-use pathwave_engine::shape::{QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample};
+use pathwave_engine::shape::{
+    EllipsoidLight, QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample, ellipsoid_sample,
+};
 
 /// Samples the lights for groups of [`LANES`] shading points; one per shading loop.
 pub struct LightSampler<'a> {
@@ -20,6 +22,8 @@ pub struct LightSampler<'a> {
     quads: Option<&'a [Option<QuadLight>]>,
     /// The lights as spheres where they are, likewise.
     spheres: Option<&'a [Option<SphereLight>]>,
+    /// The lights as ellipsoids where they are, likewise.
+    ellipsoids: Option<&'a [Option<EllipsoidLight>]>,
     /// The background's bottom and top radiance when it is a constant or sky sampled as a
     /// light (then the only light).
     sky: Option<(Vec3, Vec3)>,
@@ -27,18 +31,18 @@ pub struct LightSampler<'a> {
     ins: QuadInLanes,
     outs: LightOutLanes,
     sphere_ins: SphereInLanes,
-    sphere_outs: LightOutLanes,
+    ellipsoid_ins: EllipsoidInLanes,
 }
 
 impl<'a> LightSampler<'a> {
     /// A sampler for `scene`'s lights.
     pub fn new(scene: &'a RenderScene) -> Self {
-        let quads = &scene.lights.quads;
-        let quads =
-            (!scene.features.textures && quads.iter().any(Option::is_some)).then_some(quads.as_slice());
-        let spheres = &scene.lights.spheres;
-        let spheres =
-            (!scene.features.textures && spheres.iter().any(Option::is_some)).then_some(spheres.as_slice());
+        fn some<'l, T>(scene: &RenderScene, lights: &'l [Option<T>]) -> Option<&'l [Option<T>]> {
+            (!scene.features.textures && lights.iter().any(Option::is_some)).then_some(lights)
+        }
+        let quads = some(scene, &scene.lights.quads);
+        let spheres = some(scene, &scene.lights.spheres);
+        let ellipsoids = some(scene, &scene.lights.ellipsoids);
         let sky = match scene.background {
             _ if scene.lights.environment.is_none() => None,
             Background::Constant(c) => Some((c, c)),
@@ -49,11 +53,12 @@ impl<'a> LightSampler<'a> {
             scene,
             quads,
             spheres,
+            ellipsoids,
             sky,
             ins: QuadInLanes::default(),
             outs: LightOutLanes::default(),
             sphere_ins: SphereInLanes::default(),
-            sphere_outs: LightOutLanes::default(),
+            ellipsoid_ins: EllipsoidInLanes::default(),
         };
         if let Some([Some(one)]) = quads {
             let pmf = scene.lights.pick(0.0).1;
@@ -100,67 +105,78 @@ impl<'a> LightSampler<'a> {
             sky_lanes(&ins, bottom, top, pmf, center, radius, out);
             return;
         }
-        if self.quads.is_none() && self.spheres.is_none() {
+        if self.quads.is_none() && self.spheres.is_none() && self.ellipsoids.is_none() {
             (0..LANES).for_each(|l| scalar(out, l));
             return;
         }
-        // Which kernel each lane takes; lanes whose light is neither a quad nor a sphere go to
+        // Which kernel each lane takes; lanes whose light is of none of their kinds go to
         // `pick_light`. With one quad light its data stay in the quad kernel's inputs.
-        let (mut quad, mut sphere) = ([false; LANES], [false; LANES]);
-        if let (Some([Some(_)]), None) = (self.quads, self.spheres) {
-            quad = [true; LANES];
+        let mut kind = [Kind::Other; LANES];
+        if let (Some([Some(_)]), None, None) = (self.quads, self.spheres, self.ellipsoids) {
+            kind = [Kind::Quad; LANES];
         } else {
             for l in 0..LANES {
                 let (light, pmf) = scene.lights.pick(u[l].light_pick);
                 if let Some(Some(q)) = self.quads.map(|q| &q[light]) {
                     self.ins.set(l, &QuadIn::new(q, pmf));
-                    quad[l] = true;
+                    kind[l] = Kind::Quad;
                 } else if let Some(Some(s)) = self.spheres.map(|s| &s[light]) {
                     self.sphere_ins.set(l, &SphereIn::new(s, pmf));
-                    sphere[l] = true;
+                    kind[l] = Kind::Sphere;
+                } else if let Some(Some(e)) = self.ellipsoids.map(|e| &e[light]) {
+                    self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
+                    kind[l] = Kind::Ellipsoid;
                 }
             }
         }
-        let uv = |l: usize| [u[l].light.x, u[l].light.y];
-        if quad.iter().any(|&q| q) {
-            let ins = &mut self.ins;
-            for l in 0..LANES {
-                for a in 0..3 {
-                    ins.from[a][l] = p[l][a];
-                }
-                [ins.uv[0][l], ins.uv[1][l]] = uv(l);
-            }
-            quads_by_area_lanes(ins, &mut self.outs);
-            let o = &self.outs;
-            (out.wi, out.le, out.pdf_light, out.target) = (o.wi, o.le, o.pdf, o.target);
+        let from: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| p[l][a]));
+        let uv: [[f32; LANES]; 2] =
+            [std::array::from_fn(|l| u[l].light.x), std::array::from_fn(|l| u[l].light.y)];
+        let mut done = [false; LANES];
+        if kind.contains(&Kind::Quad) {
+            (self.ins.from, self.ins.uv) = (from, uv);
+            quads_by_area_lanes(&self.ins, &mut self.outs);
+            self.outs.write(Kind::Quad, &kind, out, &mut done);
         }
-        if sphere.iter().any(|&s| s) {
-            let ins = &mut self.sphere_ins;
-            for l in 0..LANES {
-                for a in 0..3 {
-                    ins.from[a][l] = p[l][a];
-                }
-                [ins.uv[0][l], ins.uv[1][l]] = uv(l);
-            }
-            spheres_by_cone_lanes(ins, &mut self.sphere_outs);
-            let o = &self.sphere_outs;
-            for l in (0..LANES).filter(|&l| sphere[l]) {
-                for a in 0..3 {
-                    (out.wi[a][l], out.le[a][l], out.target[a][l]) = (o.wi[a][l], o.le[a][l], o.target[a][l]);
-                }
-                out.pdf_light[l] = o.pdf[l];
-            }
+        if kind.contains(&Kind::Sphere) {
+            (self.sphere_ins.from, self.sphere_ins.uv) = (from, uv);
+            spheres_by_cone_lanes(&self.sphere_ins, &mut self.outs);
+            self.outs.write(Kind::Sphere, &kind, out, &mut done);
+        }
+        if kind.contains(&Kind::Ellipsoid) {
+            (self.ellipsoid_ins.from, self.ellipsoid_ins.uv) = (from, uv);
+            ellipsoids_by_area_lanes(&self.ellipsoid_ins, &mut self.outs);
+            self.outs.write(Kind::Ellipsoid, &kind, out, &mut done);
         }
         out.delta_light = [false; LANES];
-        for l in 0..LANES {
-            let fallback = match (quad[l], sphere[l]) {
-                (true, _) => self.outs.scalar[l],
-                (_, true) => self.sphere_outs.scalar[l],
-                _ => true,
-            };
-            if fallback {
-                scalar(out, l);
+        for l in (0..LANES).filter(|&l| !done[l]) {
+            scalar(out, l);
+        }
+    }
+}
+
+/// The kind of light a lane picked, and so the kernel that samples it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Quad,
+    Sphere,
+    Ellipsoid,
+    /// Another kind: `path::pick_light`.
+    Other,
+}
+
+impl LightOutLanes {
+    /// Copies the samples of the lanes of kind `k` to `out` and marks them `done`, except
+    /// those the kernel left to `pick_light`.
+    #[inline]
+    fn write(&self, k: Kind, kind: &[Kind; LANES], out: &mut LambertInLanes, done: &mut [bool; LANES]) {
+        for l in (0..LANES).filter(|&l| kind[l] == k && !self.scalar[l]) {
+            for a in 0..3 {
+                (out.wi[a][l], out.le[a][l], out.target[a][l]) =
+                    (self.wi[a][l], self.le[a][l], self.target[a][l]);
             }
+            out.pdf_light[l] = self.pdf[l];
+            done[l] = true;
         }
     }
 }
@@ -307,21 +323,7 @@ fn quad_by_area(i: &QuadIn) -> LightOut {
     let dist = dist2.sqrt();
     let cos = (dot(i.n, d) / dist).abs();
     let pdf_area = if cos <= 0.0 { 0.0 } else { i.inv_area * dist2 / cos };
-    // Direction, emission, density and the target off the light.
-    let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
-    let cos_out = dot(i.n, Vec3::new(-wi.x, -wi.y, -wi.z));
-    let le = sel3(i.two_sided || cos_out > 0.0, i.emit, Vec3::ZERO);
-    let pdf = pdf_area * i.pmf;
-    let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
-    let side = sel3(dot(i.n, wi) < 0.0, i.n, Vec3::new(-i.n.x, -i.n.y, -i.n.z));
-    let target = offset(lp, i.err, side);
-    LightOut {
-        wi: sel3(ok, wi, Vec3::ZERO),
-        le: sel3(ok, le, Vec3::ZERO),
-        pdf: if ok { pdf } else { 0.0 },
-        target: sel3(ok, target, Vec3::ZERO),
-        scalar: spherical,
-    }
+    light_out(lp, i.n, pdf_area, i.err, i.emit, i.two_sided, i.pmf, from, spherical)
 }
 
 /// What [`sphere_by_cone`] reads: the lane's light (see
@@ -384,23 +386,135 @@ fn sphere_by_cone(i: &SphereIn) -> LightOut {
         i.center.y + i.radius * n.y + 0.0,
         i.center.z + i.radius * n.z + 0.0,
     );
+    light_out(lp, n, pdf_cone, i.err, i.emit, i.two_sided, i.pmf, from, inside)
+}
+
+/// What `path::pick_light` derives from a light sample (`lp`, unit normal `n`, density
+/// `pdf_solid` in solid angle, error bound `err`) of a light emitting `emit` picked with
+/// probability `pmf`, seen from `from`: the direction, emission, density with the choice, and
+/// the target off the light, zero when the light sends nothing; `scalar` passes through.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn light_out(
+    lp: Vec3,
+    n: Vec3,
+    pdf_solid: f32,
+    err: f32,
+    emit: Vec3,
+    two_sided: bool,
+    pmf: f32,
+    from: Vec3,
+    scalar: bool,
+) -> LightOut {
     let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
     let dist = dot(d, d).sqrt();
-    // Direction, emission, density and the target off the light.
     let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
     let cos_out = dot(n, Vec3::new(-wi.x, -wi.y, -wi.z));
-    let le = sel3(i.two_sided || cos_out > 0.0, i.emit, Vec3::ZERO);
-    let pdf = pdf_cone * i.pmf;
+    let le = sel3(two_sided || cos_out > 0.0, emit, Vec3::ZERO);
+    let pdf = pdf_solid * pmf;
     let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
     let side = sel3(dot(n, wi) < 0.0, n, Vec3::new(-n.x, -n.y, -n.z));
-    let target = offset(lp, i.err, side);
+    let target = offset(lp, err, side);
     LightOut {
         wi: sel3(ok, wi, Vec3::ZERO),
         le: sel3(ok, le, Vec3::ZERO),
         pdf: if ok { pdf } else { 0.0 },
         target: sel3(ok, target, Vec3::ZERO),
-        scalar: inside,
+        scalar,
     }
+}
+
+/// What [`ellipsoid_by_area`] reads: the lane's light (see
+/// [`EllipsoidLight`](pathwave_engine::shape::EllipsoidLight)), its pick probability, the
+/// shading point and the two numbers.
+#[derive(Clone, Copy, Debug, Default)]
+struct EllipsoidIn {
+    center: Vec3,
+    radius: f32,
+    w0: Vec3,
+    w1: Vec3,
+    w2: Vec3,
+    w3: Vec3,
+    n0: Vec3,
+    n1: Vec3,
+    n2: Vec3,
+    det: f32,
+    scale: f32,
+    shift: f32,
+    sphere_err: f32,
+    emit: Vec3,
+    two_sided: bool,
+    pmf: f32,
+    from: Vec3,
+    uv: [f32; 2],
+}
+
+impl EllipsoidIn {
+    /// Light `e`, picked with probability `pmf`; the point and numbers left at zero.
+    fn new(e: &EllipsoidLight, pmf: f32) -> Self {
+        let [w0, w1, w2, w3] = e.world.map(Vec3::from);
+        let [n0, n1, n2] = e.normal.map(Vec3::from);
+        Self {
+            center: e.center.into(),
+            radius: e.radius,
+            w0,
+            w1,
+            w2,
+            w3,
+            n0,
+            n1,
+            n2,
+            det: e.det,
+            scale: e.scale,
+            shift: e.shift,
+            sphere_err: e.sphere_err,
+            emit: e.emit.into(),
+            two_sided: e.two_sided,
+            pmf,
+            ..Default::default()
+        }
+    }
+}
+
+lanes!(EllipsoidInLanes for EllipsoidIn {
+    center: v3, radius: f32, w0: v3, w1: v3, w2: v3, w3: v3, n0: v3, n1: v3, n2: v3, det: f32,
+    scale: f32, shift: f32, sphere_err: f32, emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
+});
+
+/// [`ellipsoid_by_area`] on all lanes.
+#[inline(never)]
+fn ellipsoids_by_area_lanes(i: &EllipsoidInLanes, o: &mut LightOutLanes) {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            for l in 0..LANES {
+                o.set(l, &ellipsoid_by_area(&i.get(l)));
+            }
+        },
+    )
+}
+
+/// A point of the ellipsoid sampled by the area of its sphere as
+/// `TransformedSphere::sample_solid_angle` and `LightTable::sample` do, and what
+/// `path::pick_light` derives from it, branch-free.
+#[inline(always)]
+fn ellipsoid_by_area(i: &EllipsoidIn) -> LightOut {
+    let light = EllipsoidLight {
+        center: i.center.to_array(),
+        radius: i.radius,
+        world: [i.w0, i.w1, i.w2, i.w3].map(|c| c.to_array()),
+        normal: [i.n0, i.n1, i.n2].map(|c| c.to_array()),
+        det: i.det,
+        scale: i.scale,
+        shift: i.shift,
+        sphere_err: i.sphere_err,
+        emit: [0.0; 3],
+        two_sided: false,
+    };
+    let (p, n, pdf, err) = ellipsoid_sample(&light, i.from.to_array(), i.uv);
+    // `+ 0.0`: the light's zero motion offset that `LightTable::sample` adds.
+    let lp = Vec3::new(p[0] + 0.0, p[1] + 0.0, p[2] + 0.0);
+    light_out(lp, n.into(), pdf, err, i.emit, i.two_sided, i.pmf, i.from, false)
 }
 
 #[cfg(test)]
@@ -457,6 +571,20 @@ mod tests {
                 r#"Sphere(center: (1.5, -1, 1), radius: 0.01)"#,
             );
         check_against_pick_light(&spheres, 0);
+        // Ellipsoid lights (a sheared one and a squashed one) beside a quad.
+        let ellipsoids = sphere
+            .replace(
+                r#"(shape: Quad(q: (1, -1, 0), u: (0, 1, 0), v: (0, 0, 0.5)), material: "b"),"#,
+                r#"(shape: Sphere(center: (0, 0, 0), radius: 0.3), material: "b",
+                    transform: [Scale((1, 2, 0.5)), Shear(xy: 0.4), RotateY(30), Translate((1, -1, 0.5))]),"#,
+            )
+            .replace(
+                r#"(shape: Sphere(center: (-1, -1.5, 0.5), radius: 0.3), material: "c"),"#,
+                r#"(shape: Sphere(center: (0, 0, 0), radius: 0.4), material: "c",
+                    transform: [Scale((2, 0.3, 1)), Translate((-1, -1.5, 0.5))]),"#,
+            );
+        assert_eq!(ellipsoids.matches("transform").count(), 2);
+        check_against_pick_light(&ellipsoids, 1);
     }
 
     /// A sky alone is sampled as a light, across lanes, with the bits of `pick_light`.
@@ -530,5 +658,6 @@ mod tests {
         }
         assert!(lit > 5_000 && (lights == 0 || spherical > 500), "lit {lit}, spherical {spherical}");
         assert!(sampler.spheres.is_some() == scene.lights.spheres.iter().any(Option::is_some));
+        assert!(sampler.ellipsoids.is_some() == scene.lights.ellipsoids.iter().any(Option::is_some));
     }
 }

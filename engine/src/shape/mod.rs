@@ -23,7 +23,7 @@ pub use primitive::PrimitiveShape;
 use primitive::primitives;
 pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
 pub use sphere::{Sphere, SphereLight, SphereShape, cone_sample};
-pub use transformed_sphere::TransformedSphere;
+pub use transformed_sphere::{EllipsoidLight, TransformedSphere, ellipsoid_sample};
 pub use triangle::{Triangle, TriangleShape};
 
 use glam::{Affine3A, Vec2, Vec3A};

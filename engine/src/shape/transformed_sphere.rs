@@ -3,7 +3,7 @@
 //! Humphreys, "Physically Based Rendering", 4th edition, section 3.10).
 
 use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
-use crate::math::{gamma, uniform_sphere};
+use crate::math::{cos_sin_turn, gamma};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
@@ -37,7 +37,92 @@ impl TransformedSphere {
     }
 }
 
+/// An ellipsoid light as plain numbers, for sampling many points at once (see
+/// [`ellipsoid_sample`]): the object-space sphere, its placement, and the light's emission.
+#[derive(Clone, Copy, Debug)]
+pub struct EllipsoidLight {
+    /// Centre of the object-space sphere.
+    pub center: [f32; 3],
+    /// Its radius.
+    pub radius: f32,
+    /// Columns of the linear part of world from object, then the translation.
+    pub world: [[f32; 3]; 4],
+    /// Columns of the inverse transpose of the linear part (object normals to world).
+    pub normal: [[f32; 3]; 3],
+    /// `|det|` of the linear part.
+    pub det: f32,
+    /// Largest column sum of `|M|` (how much the map scales errors).
+    pub scale: f32,
+    /// Largest `|translation|` component.
+    pub shift: f32,
+    /// The object-space sphere's [`Sphere::point_error`].
+    pub sphere_err: f32,
+    /// Emitted radiance.
+    pub emit: [f32; 3],
+    /// Emits on both sides.
+    pub two_sided: bool,
+}
+
+#[inline(always)]
+fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `m v` for the columns `m`, summed as glam sums them.
+#[inline(always)]
+fn mat_vec(m: &[[f32; 3]], v: [f32; 3]) -> [f32; 3] {
+    std::array::from_fn(|i| m[0][i] * v[0] + m[1][i] * v[1] + m[2][i] * v[2])
+}
+
+/// A point of the ellipsoid `l` sampled uniformly over the object-space sphere's area for the
+/// numbers `u`, seen from `from`: the world point, its unit normal, the density in solid angle
+/// (zero seen edge-on) and the point's error bound. On plain numbers and branch-free, so that
+/// [`TransformedSphere`]'s light samples and the integrator's lanes compute the same bits.
+#[inline(always)]
+pub fn ellipsoid_sample(l: &EllipsoidLight, from: [f32; 3], u: [f32; 2]) -> ([f32; 3], [f32; 3], f32, f32) {
+    // A uniform direction on the unit sphere.
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (cos_phi, sin_phi) = cos_sin_turn(u[1]);
+    let n_obj = [r * cos_phi, r * sin_phi, z];
+    let po: [f32; 3] = std::array::from_fn(|i| l.center[i] + l.radius * n_obj[i]);
+    let m = mat_vec(&l.world[..3], po);
+    let p: [f32; 3] = std::array::from_fn(|i| m[i] + l.world[3][i]);
+    // The object point's error, scaled by the map, plus the rounding of M p + t.
+    let magnitude = l.scale * po[0].abs().max(po[1].abs()).max(po[2].abs()) + l.shift;
+    let err = l.scale * l.sphere_err + gamma(4) * magnitude;
+    let nw = mat_vec(&l.normal, n_obj);
+    let len = dot(nw, nw).sqrt();
+    let n = nw.map(|x| x / len);
+    // Area density 1 / (4 pi r^2 area_scale), area_scale = |det| |M^-T n_obj|, to solid angle.
+    let pdf_area = 1.0 / (4.0 * std::f32::consts::PI * l.radius * l.radius * (l.det * len));
+    let d: [f32; 3] = std::array::from_fn(|i| p[i] - from[i]);
+    let dist2 = dot(d, d);
+    let cos = (dot(n, d) / dist2.sqrt()).abs();
+    (p, n, if cos <= 0.0 { 0.0 } else { pdf_area * dist2 / cos }, err)
+}
+
 impl TransformedSphere {
+    /// The ellipsoid as a light for lanes of points, emitting `emit` (on both sides if
+    /// `two_sided`): see [`EllipsoidLight`].
+    pub fn light(&self, emit: [f32; 3], two_sided: bool) -> EllipsoidLight {
+        let m = self.world_from_object;
+        let cols = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+        let n = self.normal_to_world;
+        EllipsoidLight {
+            center: self.sphere.center.to_array(),
+            radius: self.sphere.radius,
+            world: [cols[0].to_array(), cols[1].to_array(), cols[2].to_array(), m.translation.to_array()],
+            normal: [n.x_axis.to_array(), n.y_axis.to_array(), n.z_axis.to_array()],
+            det: m.matrix3.determinant().abs(),
+            scale: (cols[0].abs() + cols[1].abs() + cols[2].abs()).max_element(),
+            shift: m.translation.abs().max_element(),
+            sphere_err: self.sphere.point_error(),
+            emit,
+            two_sided,
+        }
+    }
+
     /// `dA_world / dA_object` at the object-space unit normal `n`: `|det M| |M^-T n|`.
     #[inline]
     fn area_scale(&self, n_obj: Vec3A) -> f32 {
@@ -98,16 +183,10 @@ impl PrimitiveShape for TransformedSphere {
     }
 
     /// Samples a point uniformly over the object-space sphere's area, mapped to world space:
-    /// the world area density is `1 / (4 pi r^2 area_scale)`.
+    /// the world area density is `1 / (4 pi r^2 area_scale)` ([`ellipsoid_sample`]).
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
-        let n_obj = uniform_sphere(u);
-        // No texture coordinates: a light sample has none (an `atan2` and an `acos` saved).
-        let sp = self.surface(
-            self.world_from_object.transform_point3a(self.sphere.center + self.sphere.radius * n_obj),
-            false,
-        );
-        let pdf_area = 1.0 / (self.sphere.area() * self.area_scale(n_obj));
-        LightSample { p: sp.p, n: sp.n, pdf: area_to_solid_angle(pdf_area, from, sp.p, sp.n), err: sp.err }
+        let (p, n, pdf, err) = ellipsoid_sample(&self.light([0.0; 3], false), from.to_array(), u.to_array());
+        LightSample { p: p.into(), n: n.into(), pdf, err }
     }
 
     /// Solid-angle density of [`Self::sample_solid_angle`] for the point `p` (normal `n`) seen
@@ -122,6 +201,7 @@ impl PrimitiveShape for TransformedSphere {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::uniform_sphere;
     use glam::Vec3;
 
     #[test]
