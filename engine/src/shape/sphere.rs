@@ -356,4 +356,24 @@ mod tests {
         let omega = 2.0 * PI * (1.0 - cos_max);
         assert!((s.pdf_solid_angle(from, s.center, Vec3A::Z) * omega - 1.0).abs() < 1e-3);
     }
+
+    #[test]
+    fn cone_samples_are_uniform_in_the_cone() {
+        use crate::material::chi2::{chi2, chi2_critical};
+        // A wide cone, and one narrow enough for the Taylor expansion of 1 - cos.
+        for radius in [4.0f32, 0.2] {
+            let s = Sphere { center: Vec3A::new(0.0, 0.0, 10.0), radius };
+            let sin2_max = (radius as f64 / 10.0).powi(2);
+            let cos_max = (1.0 - sin2_max).sqrt();
+            let density = 1.0 / (2.0 * std::f64::consts::PI * (1.0 - cos_max));
+            let (stat, dof) = chi2(
+                |u, _| Some(s.sample_solid_angle(Vec3A::ZERO, u).p.normalize()),
+                |w| if w.z as f64 >= cos_max { density as f32 } else { 0.0 },
+                Vec3A::Z,
+                cos_max - 1e-3 * (1.0 - cos_max),
+                200_000,
+            );
+            assert!(stat < chi2_critical(dof), "radius {radius}: chi2 {stat} with {dof} dof");
+        }
+    }
 }
