@@ -272,7 +272,7 @@ impl PrimitiveShape for Triangle {
     }
 
     /// Samples a point of the triangle as seen from `from`: uniformly in its solid angle where
-    /// [`Triangle::spherical`] says so, else uniformly by area (the square-root
+    /// it is estimated to subtend at least 0.3 sr, else uniformly by area (the square-root
     /// parameterisation); the density is returned in solid angle.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
         if let Some(t) = self.spherical(from) {
