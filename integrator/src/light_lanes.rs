@@ -27,11 +27,14 @@ pub struct LightSampler<'a> {
     /// The background's bottom and top radiance when it is a constant or sky sampled as a
     /// light (then the only light).
     sky: Option<(Vec3, Vec3)>,
-    /// The kernel's inputs; with one light, its fields stay filled in from one group to the next.
+    /// The quad kernel's inputs; with one quad light, its fields stay filled in from one group
+    /// to the next.
     ins: QuadInLanes,
-    outs: LightOutLanes,
+    /// The sphere and ellipsoid kernels' inputs.
     sphere_ins: SphereInLanes,
     ellipsoid_ins: EllipsoidInLanes,
+    /// What the kernel that ran last wrote.
+    outs: LightOutLanes,
 }
 
 impl<'a> LightSampler<'a> {
