@@ -116,6 +116,13 @@ fn sin_cos_quarter(x: f32) -> (f32, f32) {
     (s, c)
 }
 
+/// The dot product of plain coordinates, summed as glam sums a `Vec3A`'s ((x + y) + z): the
+/// lane kernels that must reproduce glam's bits use it.
+#[inline(always)]
+pub fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
 /// `(cos, sin)` of the angle `2 pi u` (`u` in [0, 1]) from the polynomial of the nearest
 /// quarter turn, branch-free: the same bits in a scalar call and across lanes (sphere lights'
 /// cone samples), which the C library's `sinf` and `cosf` do not promise.

@@ -4,7 +4,7 @@
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
 };
-use crate::math::gamma;
+use crate::math::{dot3 as dot, gamma};
 use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
@@ -260,11 +260,6 @@ impl SphericalRect {
         let b = ((yv.clamp(y0, y1) - y0) / (y1 - y0)).clamp(0.0, 1.0);
         (a as f32, b as f32)
     }
-}
-
-#[inline(always)]
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The quad test on plain numbers (`k` = q, n, ea, eb), branch-free so that a loop over many

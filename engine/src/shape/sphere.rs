@@ -6,7 +6,7 @@ use super::{
     Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
     area_to_solid_angle,
 };
-use crate::math::{cos_sin_turn, gamma, uniform_sphere};
+use crate::math::{cos_sin_turn, dot3 as dot, gamma, uniform_sphere};
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::f32::consts::PI;
@@ -25,11 +25,6 @@ pub struct SphereLight {
     pub emit: [f32; 3],
     /// Emits on both sides (inwards too).
     pub two_sided: bool,
-}
-
-#[inline(always)]
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// The squared distance from `from` to the centre `c`.

@@ -3,7 +3,7 @@
 //! Humphreys, "Physically Based Rendering", 4th edition, section 3.10).
 
 use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
-use crate::math::{cos_sin_turn, gamma};
+use crate::math::{cos_sin_turn, dot3 as dot, gamma};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
@@ -61,11 +61,6 @@ pub struct EllipsoidLight {
     pub emit: [f32; 3],
     /// Emits on both sides.
     pub two_sided: bool,
-}
-
-#[inline(always)]
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `m v` for the columns `m`, summed as glam sums them.
