@@ -46,4 +46,17 @@ mod testing {
         let mut u = uniform(s);
         move || u() * 2.0 - 1.0
     }
+
+    /// Points about the plane z = 0 for light samplers of shapes in it, the `k`-th of a series:
+    /// from 1e-5 to 1e3 across and away, a quarter exactly on the plane and a quarter within
+    /// 1e-6 of it; the height is also returned (to place points above a vertex).
+    pub fn near_plane(k: i32, rng: &mut impl FnMut() -> f32) -> (glam::Vec3A, f32) {
+        let scale = 10f32.powi(k % 9 - 5);
+        let z = match k % 4 {
+            0 => 0.0,
+            1 => rng() * 1e-6,
+            _ => rng() * scale,
+        };
+        (glam::Vec3A::new(rng() * 2.0 * scale, rng() * 2.0 * scale, z), z)
+    }
 }

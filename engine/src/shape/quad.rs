@@ -464,13 +464,7 @@ mod tests {
         let mut rng = crate::testing::signed(5);
         let mut u = crate::testing::uniform(9);
         for k in 0..20_000 {
-            let scale = 10f32.powi(k % 9 - 5);
-            let z = match k % 4 {
-                0 => 0.0,
-                1 => rng() * 1e-6,
-                _ => rng() * scale,
-            };
-            let o = Vec3A::new(rng() * 2.0 * scale, rng() * 2.0 * scale, z);
+            let (o, _) = crate::testing::near_plane(k, &mut rng);
             let ls = q.sample_solid_angle(o, Vec2::new(u().min(0.999_999), u().min(0.999_999)));
             assert!(ls.p.is_finite(), "{o}: {}", ls.p);
             let ph = ls.p - q.q;

@@ -517,16 +517,9 @@ mod tests {
         let mut u = crate::testing::uniform(9);
         let mut spherical = 0;
         for k in 0..20_000 {
-            let scale = 10f32.powi(k % 9 - 5);
-            let z = match k % 4 {
-                0 => 0.0,
-                1 => rng() * 1e-6,
-                _ => rng() * scale,
-            };
-            let o = match k % 7 {
-                0 => t.p[k as usize % 3] + Vec3A::new(0.0, 0.0, z),
-                _ => Vec3A::new(rng() * 2.0 * scale, rng() * 2.0 * scale, z),
-            };
+            let (o, z) = crate::testing::near_plane(k, &mut rng);
+            // Every seventh point above a vertex.
+            let o = if k % 7 == 0 { t.p[k as usize % 3] + Vec3A::new(0.0, 0.0, z) } else { o };
             spherical += t.spherical(o).is_some() as usize;
             let ls = t.sample_solid_angle(o, Vec2::new(u().min(0.999_999), u().min(0.999_999)));
             assert!(ls.p.is_finite(), "{o}: {}", ls.p);
