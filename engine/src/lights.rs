@@ -130,13 +130,23 @@ pub struct LightTable {
     cdf: Vec<f32>,
     /// For each primitive, its light index or [`NO_LIGHT`].
     pub light_of_prim: Vec<u32>,
-    /// Each light as a [`QuadLight`] (indexed like the lights) where it is a quad, in scenes
-    /// where nothing moves: the integrator samples those across lanes.
-    pub quads: Vec<Option<QuadLight>>,
-    /// Each light as a [`SphereLight`] where it is a sphere, likewise.
-    pub spheres: Vec<Option<SphereLight>>,
-    /// Each light as an [`EllipsoidLight`] where it is an ellipsoid, likewise.
-    pub ellipsoids: Vec<Option<EllipsoidLight>>,
+    /// Each light (indexed like the lights) as plain numbers where it is of a kind the
+    /// integrator samples across lanes, in scenes where nothing moves.
+    pub plain: Vec<PlainLight>,
+}
+
+/// A light as plain numbers for the integrator's lane kernels.
+#[derive(Clone, Copy, Debug)]
+pub enum PlainLight {
+    /// An emitting quad.
+    Quad(QuadLight),
+    /// An emitting sphere.
+    Sphere(SphereLight),
+    /// An emitting ellipsoid.
+    Ellipsoid(EllipsoidLight),
+    /// Another kind (a triangle, a punctual light, the background), or anything in a scene
+    /// with motion: sampled one point at a time.
+    Other,
 }
 
 /// When next-event estimation samples the background as a light.
@@ -230,40 +240,23 @@ impl LightTable {
             *last = 1.0;
         }
         // The lights of the kinds the integrator samples across lanes, as plain numbers.
-        let quads = t.plain(geometry, materials, |p, emit, two_sided| match p {
-            Primitive::Quad(q) => Some(q.light(emit, two_sided)),
-            _ => None,
-        });
-        let spheres = t.plain(geometry, materials, |p, emit, two_sided| match p {
-            Primitive::Sphere(s) => Some(s.light(emit, two_sided)),
-            _ => None,
-        });
-        let ellipsoids = t.plain(geometry, materials, |p, emit, two_sided| match p {
-            Primitive::TransformedSphere(e) => Some(e.light(emit, two_sided)),
-            _ => None,
-        });
-        (t.quads, t.spheres, t.ellipsoids) = (quads, spheres, ellipsoids);
-        t
-    }
-
-    /// Per light, `light(primitive, emit, two_sided)` for the emitting primitives in scenes
-    /// where nothing moves, `None` for the others.
-    fn plain<T>(
-        &self,
-        geometry: &Geometry,
-        materials: &[Material],
-        light: impl Fn(&Primitive, [f32; 3], bool) -> Option<T>,
-    ) -> Vec<Option<T>> {
         let still = geometry.velocity.is_none();
-        (self.prims.iter())
+        t.plain = (t.prims.iter())
             .map(|&prim| match materials[geometry.material[prim as usize] as usize].emission() {
                 Some(Emission { emit, two_sided }) if still => {
-                    light(&geometry.prims[prim as usize], emit.to_array(), two_sided)
+                    let emit = emit.to_array();
+                    match &geometry.prims[prim as usize] {
+                        Primitive::Quad(q) => PlainLight::Quad(q.light(emit, two_sided)),
+                        Primitive::Sphere(s) => PlainLight::Sphere(s.light(emit, two_sided)),
+                        Primitive::TransformedSphere(e) => PlainLight::Ellipsoid(e.light(emit, two_sided)),
+                        _ => PlainLight::Other,
+                    }
                 }
-                _ => None,
+                _ => PlainLight::Other,
             })
-            .chain(self.others.iter().map(|_| None))
-            .collect()
+            .chain(t.others.iter().map(|_| PlainLight::Other))
+            .collect();
+        t
     }
 
     /// True when there is nothing to sample.

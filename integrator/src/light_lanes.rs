@@ -10,6 +10,7 @@
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
+use pathwave_engine::lights::PlainLight;
 use pathwave_engine::render_scene::{Background, RenderScene};
 use pathwave_engine::shape::{
     EllipsoidLight, QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample, ellipsoid_sample,
@@ -18,12 +19,8 @@ use pathwave_engine::shape::{
 /// Samples the lights for groups of [`LANES`] shading points; one per shading loop.
 pub struct LightSampler<'a> {
     scene: &'a RenderScene,
-    /// The lights as quads where they are, when the lanes can sample some.
-    quads: Option<&'a [Option<QuadLight>]>,
-    /// The lights as spheres where they are, likewise.
-    spheres: Option<&'a [Option<SphereLight>]>,
-    /// The lights as ellipsoids where they are, likewise.
-    ellipsoids: Option<&'a [Option<EllipsoidLight>]>,
+    /// The lights as plain numbers, when the lanes can sample some of them.
+    plain: Option<&'a [PlainLight]>,
     /// The background's bottom and top radiance when it is a constant or sky sampled as a
     /// light (then the only light).
     sky: Option<(Vec3, Vec3)>,
@@ -40,12 +37,9 @@ pub struct LightSampler<'a> {
 impl<'a> LightSampler<'a> {
     /// A sampler for `scene`'s lights.
     pub fn new(scene: &'a RenderScene) -> Self {
-        fn some<'l, T>(scene: &RenderScene, lights: &'l [Option<T>]) -> Option<&'l [Option<T>]> {
-            (!scene.features.textures && lights.iter().any(Option::is_some)).then_some(lights)
-        }
-        let quads = some(scene, &scene.lights.quads);
-        let spheres = some(scene, &scene.lights.spheres);
-        let ellipsoids = some(scene, &scene.lights.ellipsoids);
+        let plain = &scene.lights.plain;
+        let lanes = !scene.features.textures && plain.iter().any(|l| !matches!(l, PlainLight::Other));
+        let plain = lanes.then_some(plain.as_slice());
         let sky = match scene.background {
             _ if scene.lights.environment.is_none() => None,
             Background::Constant(c) => Some((c, c)),
@@ -54,16 +48,14 @@ impl<'a> LightSampler<'a> {
         };
         let mut me = Self {
             scene,
-            quads,
-            spheres,
-            ellipsoids,
+            plain,
             sky,
             ins: QuadInLanes::default(),
             outs: LightOutLanes::default(),
             sphere_ins: SphereInLanes::default(),
             ellipsoid_ins: EllipsoidInLanes::default(),
         };
-        if let Some([Some(one)]) = quads {
+        if let Some([PlainLight::Quad(one)]) = plain {
             let pmf = scene.lights.pick(0.0).1;
             (0..LANES).for_each(|l| me.ins.set(l, &QuadIn::new(one, pmf)));
         }
@@ -108,28 +100,33 @@ impl<'a> LightSampler<'a> {
             sky_lanes(&ins, bottom, top, pmf, center, radius, out);
             return;
         }
-        if self.quads.is_none() && self.spheres.is_none() && self.ellipsoids.is_none() {
+        let Some(plain) = self.plain else {
             (0..LANES).for_each(|l| scalar(out, l));
             return;
-        }
+        };
         // Which kernel each lane takes; lanes whose light is of none of their kinds go to
         // `pick_light`. With one quad light its data stay in the quad kernel's inputs.
         let mut kind = [Kind::Other; LANES];
-        if let (Some([Some(_)]), None, None) = (self.quads, self.spheres, self.ellipsoids) {
+        if let [PlainLight::Quad(_)] = plain {
             kind = [Kind::Quad; LANES];
         } else {
             for l in 0..LANES {
                 let (light, pmf) = scene.lights.pick(u[l].light_pick);
-                if let Some(Some(q)) = self.quads.map(|q| &q[light]) {
-                    self.ins.set(l, &QuadIn::new(q, pmf));
-                    kind[l] = Kind::Quad;
-                } else if let Some(Some(s)) = self.spheres.map(|s| &s[light]) {
-                    self.sphere_ins.set(l, &SphereIn::new(s, pmf));
-                    kind[l] = Kind::Sphere;
-                } else if let Some(Some(e)) = self.ellipsoids.map(|e| &e[light]) {
-                    self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
-                    kind[l] = Kind::Ellipsoid;
-                }
+                kind[l] = match &plain[light] {
+                    PlainLight::Quad(q) => {
+                        self.ins.set(l, &QuadIn::new(q, pmf));
+                        Kind::Quad
+                    }
+                    PlainLight::Sphere(s) => {
+                        self.sphere_ins.set(l, &SphereIn::new(s, pmf));
+                        Kind::Sphere
+                    }
+                    PlainLight::Ellipsoid(e) => {
+                        self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
+                        Kind::Ellipsoid
+                    }
+                    PlainLight::Other => Kind::Other,
+                };
             }
         }
         let from: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| p[l][a]));
@@ -549,19 +546,19 @@ mod tests {
 
     #[test]
     fn lanes_give_the_bits_of_pick_light() {
-        check_against_pick_light(LIGHTS, 3);
+        check_against_pick_light(LIGHTS, (3, 0, 0));
         // One light: its data stay in the lanes from one group to the next.
         let one = LIGHTS
             .replace(r#"material: "b""#, r#"material: "white""#)
             .replace(r#"material: "c""#, r#"material: "white""#);
-        check_against_pick_light(&one, 1);
+        check_against_pick_light(&one, (1, 0, 0));
         // A sphere light among quads: its lanes take the sphere kernel (points inside it
         // `pick_light`).
         let sphere = LIGHTS.replace(
             r#"Quad(q: (-1.5, -1.9, 0), u: (1, 0, 0.2), v: (0.3, 0, 1))"#,
             r#"Sphere(center: (-1, -1.5, 0.5), radius: 0.3)"#,
         );
-        check_against_pick_light(&sphere, 2);
+        check_against_pick_light(&sphere, (2, 1, 0));
         // Sphere lights alone, one two-sided, one large enough to hold many of the points,
         // and one so small that its cones take the Taylor expansion.
         let spheres = sphere
@@ -573,7 +570,7 @@ mod tests {
                 r#"Quad(q: (1, -1, 0), u: (0, 1, 0), v: (0, 0, 0.5))"#,
                 r#"Sphere(center: (1.5, -1, 1), radius: 0.01)"#,
             );
-        check_against_pick_light(&spheres, 0);
+        check_against_pick_light(&spheres, (0, 3, 0));
         // Ellipsoid lights (a sheared one and a squashed one) beside a quad.
         let ellipsoids = sphere
             .replace(
@@ -586,8 +583,7 @@ mod tests {
                 r#"(shape: Sphere(center: (0, 0, 0), radius: 0.4), material: "c",
                     transform: [Scale((2, 0.3, 1)), Translate((-1, -1.5, 0.5))]),"#,
             );
-        assert_eq!(ellipsoids.matches("transform").count(), 2);
-        check_against_pick_light(&ellipsoids, 1);
+        check_against_pick_light(&ellipsoids, (1, 0, 2));
     }
 
     /// A sky alone is sampled as a light, across lanes, with the bits of `pick_light`.
@@ -607,13 +603,17 @@ mod tests {
                 "render: (width: 8, height: 8),",
                 "render: (width: 8, height: 8),\n background: Sky(bottom: (1, 1, 1), top: (0.5, 0.7, 1)),",
             );
-        check_against_pick_light(&sky, 0);
+        check_against_pick_light(&sky, (0, 0, 0));
     }
 
-    fn check_against_pick_light(text: &str, lights: usize) {
+    /// Compares the lanes with `pick_light` in the scene `text`, which has `kinds` (quad,
+    /// sphere, ellipsoid) lights.
+    fn check_against_pick_light(text: &str, kinds: (usize, usize, usize)) {
+        let (lights, spheres_wanted, ellipsoids_wanted) = kinds;
         let desc = parse(text, std::path::Path::new("<test>")).unwrap();
         let scene = SceneWorld::render_scene(&desc);
-        assert_eq!(scene.lights.quads.iter().flatten().count(), lights, "the quad lights");
+        let quads = scene.lights.plain.iter().filter(|l| matches!(l, PlainLight::Quad(_))).count();
+        assert_eq!(quads, lights, "the quad lights");
         let mut rng = TestRng::new(11);
         let mut sampler = LightSampler::new(&scene);
         let (mut lit, mut spherical) = (0, 0);
@@ -651,7 +651,7 @@ mod tests {
                     None => assert_eq!(got.pdf_light[l], 0.0, "no sample at {}", p[l]),
                 }
                 // Which lanes the spherical rectangle took, as the kernel decided.
-                if let Some(q) = &scene.lights.quads[scene.lights.pick(u[l].light_pick).0] {
+                if let PlainLight::Quad(q) = &scene.lights.plain[scene.lights.pick(u[l].light_pick).0] {
                     let c = Vec3::from(q.center) - p[l];
                     spherical += (q.rect
                         && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())
@@ -660,7 +660,9 @@ mod tests {
             }
         }
         assert!(lit > 5_000 && (lights == 0 || spherical > 500), "lit {lit}, spherical {spherical}");
-        assert!(sampler.spheres.is_some() == scene.lights.spheres.iter().any(Option::is_some));
-        assert!(sampler.ellipsoids.is_some() == scene.lights.ellipsoids.iter().any(Option::is_some));
+        let kinds = |k: fn(&PlainLight) -> bool| scene.lights.plain.iter().filter(|l| k(l)).count();
+        let (spheres, ellipsoids) =
+            (kinds(|l| matches!(l, PlainLight::Sphere(_))), kinds(|l| matches!(l, PlainLight::Ellipsoid(_))));
+        assert_eq!((spheres, ellipsoids), (spheres_wanted, ellipsoids_wanted), "sphere and ellipsoid lights");
     }
 }
