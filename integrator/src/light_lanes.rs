@@ -1,8 +1,8 @@
 //! Next-event estimation's light samples for [`LANES`] shading points at once: what
 //! `path::pick_light` computes for each, with the same operations in the same order (so the
 //! same bits), run as branch-free kernels across lanes for the lanes whose picked light is a
-//! quad or a sphere ([`LightTable::quads`](pathwave_engine::lights::LightTable::quads) and
-//! `spheres`: scenes without motion) in a scene without textures. Points close enough to a
+//! quad, a sphere or an ellipsoid ([`LightTable::plain`](pathwave_engine::lights::LightTable::plain):
+//! scenes without motion) in a scene without textures. Points close enough to a
 //! rectangle for its spherical-rectangle sampling, points inside a sphere light, lanes that
 //! picked another kind of light, and every point of other scenes take `path::pick_light`
 //! itself.
