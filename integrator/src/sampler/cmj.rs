@@ -35,7 +35,8 @@ pub(super) fn stratified_1d(s: u32, n: u32, h: u64) -> f32 {
     x.min(1.0 - f32::EPSILON / 2.0)
 }
 
-/// Kensler's hashed permutation of [0, l).
+/// Kensler's hashed permutation of [0, l): rounds of [`hash_round`] until the value falls in
+/// [0, l) (cycle walking).
 fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     if l == 1 {
         return 0;
@@ -47,29 +48,42 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     w |= w >> 8;
     w |= w >> 16;
     loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | (p >> 27));
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
+        i = hash_round(i, w, p);
         if i < l {
             break;
         }
     }
     (i.wrapping_add(p)) % l
+}
+
+/// [`permute`] for a power of two `mask + 1`: the first round already falls in range, so it is
+/// branch-free (the Sobol sampler's index shuffle runs it across lanes).
+#[inline(always)]
+pub(super) fn permute_pow2(i: u32, mask: u32, p: u32) -> u32 {
+    hash_round(i, mask, p).wrapping_add(p) & mask
+}
+
+/// One round of Kensler's invertible hash on the bits of `w` (a power of two less one).
+#[inline(always)]
+fn hash_round(mut i: u32, w: u32, p: u32) -> u32 {
+    i ^= p;
+    i = i.wrapping_mul(0xe170_893d);
+    i ^= p >> 16;
+    i ^= (i & w) >> 4;
+    i ^= p >> 8;
+    i = i.wrapping_mul(0x0929_eb3f);
+    i ^= p >> 23;
+    i ^= (i & w) >> 1;
+    i = i.wrapping_mul(1 | (p >> 27));
+    i = i.wrapping_mul(0x6935_fa69);
+    i ^= (i & w) >> 11;
+    i = i.wrapping_mul(0x74dc_b303);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0x9e50_1cc3);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0xc860_a3df);
+    i &= w;
+    i ^ (i >> 5)
 }
 
 /// Kensler's hashed jitter in [0, 1).

@@ -10,7 +10,8 @@
 //!   first two dimensions of Sobol's sequence, with its own scramble per pixel and dimension and
 //!   its own shuffle of the sample indices, so that dimensions are not correlated: the "padded"
 //!   construction of Burley, "Practical Hash-based Owen Scrambling" (JCGT 9(4), 2020), with the
-//!   hash of pbrt-v4's `FastOwenScrambler`. A pixel's first 2^k samples form a (0,k,2)-net in
+//!   hash of pbrt-v4's `FastOwenScrambler`, and the indices put in a random order within each
+//!   octave so that dimensions pair at random (`sobol::shuffle`). A pixel's first 2^k samples form a (0,k,2)-net in
 //!   every such dimension. The BSDF's direction is the exception: a randomly shifted rank-1
 //!   lattice (`lattice_2d`), which integrates the smooth indirect light over the hemisphere
 //!   with less error than the net. Every sample is uniform on its own (unbiased for any
@@ -578,5 +579,27 @@ mod tests {
             let cov = sxy / n - sx / n * sy / n;
             assert!((cov * 12.0).abs() < 0.02, "{kind:?}: correlation {}", cov * 12.0);
         }
+    }
+
+    #[test]
+    fn dimensions_are_paired_at_random_within_octaves() {
+        // The product of the halves two dimensions fall in (+-1 each) integrates to zero; over
+        // a pixel's 256 samples its mean should err no more than with independent pairs
+        // (variance 1/256). A nested scramble of the index alone keeps sibling samples siblings
+        // in every dimension, their products equal, and doubles that variance.
+        let (n, pixels) = (256u32, 3000u32);
+        let (a, b) = (Dims::vertex(0, Dims::ROULETTE), Dims::vertex(1, Dims::LIGHT_PICK));
+        let half = |x: f32| if x < 0.5 { -1.0 } else { 1.0 };
+        let mut var = 0.0f64;
+        for px in 0..pixels {
+            let sum: f64 = (0..n)
+                .map(|i| {
+                    let s = Sampler::new(SamplerKind::Sobol, 4, px, i, n);
+                    half(s.get_1d(a)) * half(s.get_1d(b))
+                })
+                .sum();
+            var += (sum / n as f64).powi(2) / pixels as f64;
+        }
+        assert!(var * (n as f64) < 1.25, "variance {} x 1/256", var * n as f64);
     }
 }
