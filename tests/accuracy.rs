@@ -40,7 +40,11 @@ const WHITE_ALBEDO: Error = ("white albedo +5%", |d| scale_albedo(d, "white", 1.
 
 #[test]
 fn cornell_matches_reference() {
-    check("cornell.ron", "cornell.exr", 4096, 128, &[WHITE_ALBEDO]);
+    // 256 spp, not fewer: the caustics of the mirror box and the glass sphere on the walls are
+    // skewed (most renders miss some of their rare bright paths, and the pixels' variance does
+    // not count what they missed). At 128 spp three of seeds 0-5 failed, with the sampler of
+    // 2026-12-03 morning and with today's alike; at 256 all six pass with both.
+    check("cornell.ron", "cornell.exr", 4096, 256, &[WHITE_ALBEDO]);
 }
 
 #[test]
