@@ -217,8 +217,10 @@ fn terminator_lambertian_mesh_shades_like_the_sphere() {
 fn terminator_metal_mesh_shades_like_the_sphere() {
     // The black rim is Metal's defect (the lamp's highlight, narrower on the mesh, makes the
     // rest): before, 27 and 131 dark pixels (relMSE 0.00085, 0.0028); after, 2 and 9 (0.00072,
-    // 0.0021).
-    check_terminator("Metal(albedo: (0.9, 0.9, 0.9), fuzz: 0.2)", (0.0012, 6), (0.0025, 20));
+    // 0.0021). The icosphere's relMSE is mostly the two renders' noise: 0.0024-0.0026 over
+    // seeds 0-5 with the sampler of 2026-12-03 (dimensions paired at random), so there the
+    // dark pixels, not relMSE, tell the defect.
+    check_terminator("Metal(albedo: (0.9, 0.9, 0.9), fuzz: 0.2)", (0.0012, 6), (0.0029, 20));
 }
 
 #[test]
