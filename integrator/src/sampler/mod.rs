@@ -11,11 +11,14 @@
 //!   its own shuffle of the sample indices, so that dimensions are not correlated: the "padded"
 //!   construction of Burley, "Practical Hash-based Owen Scrambling" (JCGT 9(4), 2020), with the
 //!   hash of pbrt-v4's `FastOwenScrambler`, and the indices put in a random order within each
-//!   octave so that dimensions pair at random (`sobol::shuffle`). A pixel's first 2^k samples form a (0,k,2)-net in
-//!   every such dimension. The BSDF's direction is the exception: a randomly shifted rank-1
-//!   lattice (`lattice_2d`), which integrates the smooth indirect light over the hemisphere
-//!   with less error than the net. Every sample is uniform on its own (unbiased for any
-//!   count), and the sequence is extensible: the first N samples are those of an N-spp render.
+//!   octave so that dimensions pair at random (`sobol::shuffle`). A pixel's first 2^k samples
+//!   form a (0,k,2)-net in every such dimension. The exceptions (`layout`): the BSDF's
+//!   direction is a randomly shifted rank-1 lattice (`lattice_2d`), which integrates the
+//!   smooth indirect light over the hemisphere with less error than the net; the first light
+//!   point shares the pixel's index as Sobol's dimensions 2 and 3; every later light point
+//!   shares its direction's index as one 4D lattice with it. Every sample is uniform on its
+//!   own (unbiased for any count), and the sequence is extensible: the first N samples are
+//!   those of an N-spp render.
 //! - **Stratified**: correlated multi-jittered samples (Kensler, "Correlated Multi-Jittered
 //!   Sampling", Pixar TM 13-01, 2013) in every 2D dimension and jittered permuted strata in every
 //!   1D one, as Mitsuba's `multijitter`; the pattern depends on the sample count.
@@ -256,7 +259,7 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 /// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
 /// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
 /// table look-ups per coordinate in `sobol::owen_sobol_hi`. Lanes may mix the kinds of
-/// [`layout`] (paths at different depths).
+/// points a dimension takes (`layout`: paths at different depths).
 #[inline(always)]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
@@ -392,11 +395,9 @@ mod tests {
         // points are lattices (below).
         for k in [4u32, 6, 8] {
             let n = 1u32 << k;
-            for (pixel, dim, t) in [
-                (0, Dims::PIXEL, 0),
-                (17, Dims::vertex(0, Dims::LIGHT), 1),
-                (999, Dims::LENS, 0),
-            ] {
+            for (pixel, dim, t) in
+                [(0, Dims::PIXEL, 0), (17, Dims::vertex(0, Dims::LIGHT), 1), (999, Dims::LENS, 0)]
+            {
                 let pts: Vec<(f32, f32)> =
                     points(SamplerKind::Sobol, pixel, dim, n).iter().map(|p| (p.x, p.y)).collect();
                 assert!(
@@ -502,7 +503,8 @@ mod tests {
         let fixed = |v: f32| (v * (1u32 << 24) as f32) as u32;
         let mut seen = vec![false; 1 << k];
         for p in pts {
-            let d: Vec<u32> = p.iter().zip(&pts[0]).map(|(&a, &b)| fixed(a).wrapping_sub(fixed(b)) & 0xff_ffff).collect();
+            let d: Vec<u32> =
+                p.iter().zip(&pts[0]).map(|(&a, &b)| fixed(a).wrapping_sub(fixed(b)) & 0xff_ffff).collect();
             // d[0] = j * gens[0] * 2^(24 - k) mod 2^24 with gens[0] odd: solve for j.
             assert_eq!(d[0] % (1 << (24 - k)), 0, "k {k}: {p:?}");
             let inv = (0..1u32 << k).find(|&x| x.wrapping_mul(gens[0]) & ((1 << k) - 1) == 1).unwrap();
@@ -520,7 +522,8 @@ mod tests {
         let n = 1u32 << k;
         let shortest = (1..n)
             .map(|j| {
-                let (x, y) = ((j.wrapping_mul(a) % n) as f64 / n as f64, (j.wrapping_mul(b) % n) as f64 / n as f64);
+                let (x, y) =
+                    ((j.wrapping_mul(a) % n) as f64 / n as f64, (j.wrapping_mul(b) % n) as f64 / n as f64);
                 x.min(1.0 - x).hypot(y.min(1.0 - y))
             })
             .fold(f64::MAX, f64::min);
@@ -552,7 +555,8 @@ mod tests {
                     .map(|i| {
                         let s = Sampler::new(SamplerKind::Sobol, 6, 1234, i, 1 << k);
                         let s = if lens { s.with_lens() } else { s };
-                        let (d, l) = (s.get_2d(Dims::vertex(1, Dims::BSDF)), s.get_2d(Dims::vertex(2, Dims::LIGHT)));
+                        let (d, l) =
+                            (s.get_2d(Dims::vertex(1, Dims::BSDF)), s.get_2d(Dims::vertex(2, Dims::LIGHT)));
                         vec![d.x, d.y, l.x, l.y]
                     })
                     .collect();
