@@ -1,6 +1,6 @@
 //! Thin-lens perspective camera with a shutter interval.
 
-use crate::math::{Ray, concentric_disk};
+use crate::math::{Ray, disk_branch_free};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Where the camera is and where its image lies: origin, image right / up / backward unit axes,
@@ -97,15 +97,65 @@ impl Camera {
             Some(close) => self.pose.lerp(close, time_u),
             None => self.pose,
         };
-        let target = pose.corner + pixel.x * pose.du + pixel.y * pose.dv;
-        let origin = if self.lens_radius > 0.0 {
-            let d = concentric_disk(lens) * self.lens_radius;
-            pose.origin + d.x * pose.u + d.y * pose.v
-        } else {
-            pose.origin
-        };
+        let (o, d, time) = self.ray_from(&pose, pixel.to_array(), lens.to_array(), time_u);
+        Ray { origin: o.into(), dir: d.into(), time }
+    }
+
+    /// [`Self::generate_ray`] for `N` samples at once (`pixel`, `lens` and `time_u` per lane),
+    /// with the same bits: a camera at rest computes every lane with the same operations on
+    /// plain numbers, which vectorise inside [`crate::simd::lanes`]; a moving camera takes
+    /// [`Self::generate_ray`] lane by lane.
+    #[inline(always)]
+    pub fn generate_rays<const N: usize>(
+        &self,
+        pixel: &[[f32; 2]; N],
+        lens: &[[f32; 2]; N],
+        time_u: &[f32; N],
+    ) -> [Ray; N] {
+        let mut out = [Ray { origin: Vec3A::ZERO, dir: Vec3A::Z, time: 0.0 }; N];
+        if self.close.is_some() {
+            for l in 0..N {
+                out[l] = self.generate_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
+            }
+            return out;
+        }
+        let (mut o, mut d, mut t) = ([[0.0; 3]; N], [[0.0; 3]; N], [0.0; N]);
+        for l in 0..N {
+            (o[l], d[l], t[l]) = self.ray_from(&self.pose, pixel[l], lens[l], time_u[l]);
+        }
+        for l in 0..N {
+            out[l] = Ray { origin: o[l].into(), dir: d[l].into(), time: t[l] };
+        }
+        out
+    }
+
+    /// The ray of [`Self::generate_ray`] from `pose` on plain numbers (origin, unit direction,
+    /// time), the operations in glam's order (`Vec3A::normalize` sums `(x^2 + y^2) + z^2` and
+    /// divides by the length), so scalar and lane calls agree bit for bit.
+    /// The lens point comes from [`disk_branch_free`] (a polynomial sine and cosine).
+    #[inline(always)]
+    fn ray_from(
+        &self,
+        pose: &Pose,
+        pixel: [f32; 2],
+        lens: [f32; 2],
+        time_u: f32,
+    ) -> ([f32; 3], [f32; 3], f32) {
+        let (c, du, dv) = (pose.corner.to_array(), pose.du.to_array(), pose.dv.to_array());
+        let at = |a: usize| c[a] + pixel[0] * du[a] + pixel[1] * dv[a];
+        let target = [at(0), at(1), at(2)];
+        let (x, y) = disk_branch_free(lens);
+        let (x, y) = (x * self.lens_radius, y * self.lens_radius);
+        let (po, u, v) = (pose.origin.to_array(), pose.u.to_array(), pose.v.to_array());
+        // Without an aperture the point on the lens is the centre (`x`, `y` are zero, but
+        // `po + 0 * u` could differ from `po` in the sign of a zero).
+        let lensed = self.lens_radius > 0.0;
+        let from = |a: usize| if lensed { po[a] + x * u[a] + y * v[a] } else { po[a] };
+        let origin = [from(0), from(1), from(2)];
+        let e = [target[0] - origin[0], target[1] - origin[1], target[2] - origin[2]];
+        let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let (t0, t1) = self.shutter;
-        Ray { origin, dir: (target - origin).normalize(), time: t0 + (t1 - t0) * time_u }
+        (origin, [e[0] / len, e[1] / len, e[2] / len], t0 + (t1 - t0) * time_u)
     }
 
     /// The direction the camera looks along (at shutter open).

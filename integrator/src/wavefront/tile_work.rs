@@ -11,6 +11,7 @@ use crate::path;
 use crate::sampler::{self, Dims, Sampler};
 use crate::tile::Tile;
 use glam::Vec3;
+use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use std::ops::Range;
 use std::time::Instant;
@@ -168,15 +169,13 @@ impl<'a> TileWork<'a> {
                 let k = self.next_sample + l.min(m - 1) as u64;
                 ((k / spp) as u32, self.samples.start + (k % spp) as u32)
             });
-            let samplers: [Sampler; LANES] = std::array::from_fn(|l| {
-                let (x, y) = tile.pixel(which[l].0);
-                path::camera_sampler(scene, x, y, which[l].1)
-            });
-            let u = camera_samples(scene, &samplers);
+            let pixel: [(u32, u32); LANES] = std::array::from_fn(|l| tile.pixel(which[l].0));
+            let samplers: [Sampler; LANES] =
+                std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
+            let rays = camera_rays(scene, &samplers, &pixel);
             for l in 0..m {
                 let slot = q.free.pop().expect("a free slot for every new path");
-                let (x, y) = tile.pixel(which[l].0);
-                let ray = path::camera_ray_with(scene, x, y, &u[l]);
+                let ray = rays[l];
                 let s = slot as usize;
                 p.set_ray(s, ray);
                 p.set_state(s, &path::PathState::new(ray.origin));
@@ -209,13 +208,14 @@ impl<'a> TileWork<'a> {
     }
 }
 
-/// [`path::camera_ray`]'s numbers for `LANES` samples at once (the same bits).
+/// [`path::camera_ray`] for `LANES` samples at once, their numbers and rays computed across
+/// lanes (the same bits).
 #[inline]
-fn camera_samples(scene: &RenderScene, s: &[Sampler; LANES]) -> [path::CameraSamples; LANES] {
+fn camera_rays(scene: &RenderScene, s: &[Sampler; LANES], pixel: &[(u32, u32); LANES]) -> [Ray; LANES] {
     pathwave_engine::simd::lanes(
         #[inline(always)]
         || {
-            let pixel = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
+            let u = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
             let lens = match scene.camera.has_aperture() {
                 true => sampler::get_2d_lanes(s, &[Dims::LENS; LANES]),
                 false => [glam::Vec2::ZERO; LANES],
@@ -224,7 +224,12 @@ fn camera_samples(scene: &RenderScene, s: &[Sampler; LANES]) -> [path::CameraSam
                 true => sampler::get_1d_lanes(s, &[Dims::TIME; LANES]),
                 false => [0.0; LANES],
             };
-            std::array::from_fn(|l| path::CameraSamples { pixel: pixel[l], lens: lens[l], time: time[l] })
+            let (mut at, mut on_lens) = ([[0.0; 2]; LANES], [[0.0; 2]; LANES]);
+            for l in 0..LANES {
+                at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
+                on_lens[l] = [lens[l].x, lens[l].y];
+            }
+            scene.camera.generate_rays(&at, &on_lens, &time)
         },
     )
 }
