@@ -7,7 +7,7 @@ use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::lights::OtherLight;
-use pathwave_engine::material::{Material, Shading};
+use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -301,17 +301,25 @@ impl ScatterSamples {
         }
     }
 
-    /// The same numbers for `N` paths at once (the same bits, computed across lanes; roulette's
-    /// where some lane plays it).
+    /// The same numbers for `N` paths at once (the same bits, computed across lanes): the
+    /// direction's and the lobe's only where some lane's material `reads` them (the others
+    /// stay zero, as no lane reads them), roulette's where some lane plays it.
     #[inline(always)]
     pub fn draw_lanes<const N: usize>(
         scene: &RenderScene,
         samplers: &[Sampler; N],
         depths: &[u32; N],
+        reads: Reads,
     ) -> [Self; N] {
         let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
-        let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
-        let lobe = crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE));
+        let dir = match reads.dir {
+            true => crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF)),
+            false => [Vec2::ZERO; N],
+        };
+        let lobe = match reads.lobe {
+            true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE)),
+            false => [0.0; N],
+        };
         let rr_depth = scene.settings.rr_depth;
         let roulette = match depths.iter().any(|&d| d + 1 >= rr_depth) {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE)),

@@ -3,7 +3,7 @@
 //! reflection (Shirley, "Ray Tracing in One Weekend", dielectrics). Radiance is scaled by
 //! 1/eta^2 on refraction.
 
-use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
+use super::{BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::Positive;
 use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
@@ -54,6 +54,11 @@ impl MaterialModel for Dielectric {
     /// Glass shows as white in the albedo guide.
     fn albedo(&self) -> Vec3 {
         Vec3::ONE
+    }
+
+    /// Only the choice between reflection and refraction.
+    fn reads(&self) -> Reads {
+        Reads { dir: false, lobe: true }
     }
 
     fn specular(&self) -> Specular {

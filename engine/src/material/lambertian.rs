@@ -3,7 +3,7 @@
 //! The integrators shade it with their Lambertian lane kernel (light sampling and MIS);
 //! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 
-use super::{BsdfSample, Colors, MaterialModel, Shading};
+use super::{BsdfSample, Colors, MaterialModel, Reads, Shading};
 use crate::format::{Albedo, Color};
 use crate::math::{Frame, concentric_disk};
 use glam::{Vec2, Vec3, Vec3A};
@@ -45,6 +45,11 @@ impl MaterialModel for Lambertian {
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo
+    }
+
+    /// The cosine lobe's two numbers, no lobe choice.
+    fn reads(&self) -> Reads {
+        Reads { dir: true, lobe: false }
     }
 }
 

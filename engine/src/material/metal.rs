@@ -3,7 +3,7 @@
 //! fuzzy reflection). Directions that end below the surface are absorbed. The lobe is only
 //! sampled, never evaluated.
 
-use super::{BsdfSample, Colors, MaterialModel, Shading, Specular};
+use super::{BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::{Albedo, Color, UnitInterval};
 use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
@@ -53,6 +53,11 @@ impl MaterialModel for Metal {
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo
+    }
+
+    /// A perfect mirror reads no number; a fuzzy one the ball's three.
+    fn reads(&self) -> Reads {
+        Reads { dir: self.fuzz > 0.0, lobe: self.fuzz > 0.0 }
     }
 
     fn specular(&self) -> Specular {

@@ -98,6 +98,16 @@ pub struct BsdfSample {
     pub delta: bool,
 }
 
+/// Which numbers [`MaterialModel::sample`] reads: `u` (the direction's two) and `uc` (the
+/// lobe's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reads {
+    /// `u`.
+    pub dir: bool,
+    /// `uc`.
+    pub lobe: bool,
+}
+
 /// A BSDF evaluated for a pair of directions (see [`MaterialModel::eval`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BsdfEval {
@@ -135,6 +145,12 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
         let _ = (wo, n, u, uc);
         None
+    }
+
+    /// Which of [`Self::sample`]'s numbers it reads, so that the integrators draw only those
+    /// (both by default).
+    fn reads(&self) -> Reads {
+        Reads { dir: true, lobe: true }
     }
 
     /// The BSDF's non-delta part for directions `wo` and `wi` about the unit shading normal `n`:
@@ -348,6 +364,14 @@ macro_rules! registry {
                 }
             }
 
+            /// See [`MaterialModel::reads`].
+            #[inline]
+            pub fn reads(&self) -> Reads {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.reads(),)+
+                }
+            }
+
             /// See [`MaterialModel::specular`].
             #[inline]
             pub fn specular(&self) -> Specular {
@@ -483,5 +507,40 @@ mod tests {
         assert_eq!(MaterialKind::ALL[0].stage_name(), "shade_lambertian");
         assert_eq!(MaterialKind::DiffuseLight.stage_name(), "shade_diffuse_light");
         assert_eq!(MaterialKind::DiffuseLight.shading(), Shading::Emitter);
+    }
+
+    /// A material that says it does not read a number samples the same whatever that number
+    /// is (the wavefront leaves such numbers at zero), and one that reads it depends on it.
+    #[test]
+    fn materials_read_the_numbers_they_say() {
+        let mats = [
+            Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.0 }),
+            Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.3 }),
+            Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
+            Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5) }),
+        ];
+        let n = Vec3A::Z;
+        for m in mats {
+            let reads = m.reads();
+            let (mut dir_matters, mut lobe_matters) = (false, false);
+            for k in 0..64 {
+                let t = k as f32 / 64.0;
+                let wo = Vec3A::new(0.6 * t - 0.3, 0.2, 1.0).normalize();
+                let u = Vec2::new(t, (7.0 * t).fract());
+                let uc = (13.0 * t).fract();
+                let wi = |u: Vec2, uc: f32| m.sample(wo, n, u, uc).map(|s| (s.wi, s.pdf));
+                let base = wi(u, uc);
+                let (other_dir, other_lobe) = (wi(Vec2::new(0.93, 0.11), uc), wi(u, 0.97));
+                dir_matters |= other_dir != base;
+                lobe_matters |= other_lobe != base;
+                if !reads.dir {
+                    assert_eq!(other_dir, base, "{m:?} reads the direction's numbers");
+                }
+                if !reads.lobe {
+                    assert_eq!(other_lobe, base, "{m:?} reads the lobe's number");
+                }
+            }
+            assert_eq!((dir_matters, lobe_matters), (reads.dir, reads.lobe), "{m:?} says {reads:?}");
+        }
     }
 }

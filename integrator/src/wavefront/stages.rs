@@ -7,7 +7,7 @@ use crate::light_lanes;
 use crate::path;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
-use pathwave_engine::material::{MaterialKind, Shading};
+use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
@@ -245,11 +245,15 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
         }
     }
     for chunk in live.chunks(LANES) {
-        // The numbers of all lanes at once.
+        // The numbers of all lanes at once, those some lane's material reads.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let reads = chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
+            let m = scene.materials[p.hit[i as usize].material as usize].reads();
+            Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
+        });
         let u = pathwave_engine::simd::lanes(
             #[inline(always)]
-            || path::ScatterSamples::draw_lanes(scene, &samplers, &depths),
+            || path::ScatterSamples::draw_lanes(scene, &samplers, &depths, reads),
         );
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
