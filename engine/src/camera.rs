@@ -97,7 +97,8 @@ impl Camera {
             Some(close) => self.pose.lerp(close, time_u),
             None => self.pose,
         };
-        let (o, d, time) = self.ray_from(&pose, pixel.to_array(), lens.to_array(), time_u);
+        let (o, d, time) =
+            self.ray_from(&pose, self.has_aperture(), pixel.to_array(), lens.to_array(), time_u);
         Ray { origin: o.into(), dir: d.into(), time }
     }
 
@@ -120,8 +121,15 @@ impl Camera {
             return out;
         }
         let (mut o, mut d, mut t) = ([[0.0; 3]; N], [[0.0; 3]; N], [0.0; N]);
-        for l in 0..N {
-            (o[l], d[l], t[l]) = self.ray_from(&self.pose, pixel[l], lens[l], time_u[l]);
+        // One loop per case, so that a pinhole camera's lanes compute no lens point.
+        if self.has_aperture() {
+            for l in 0..N {
+                (o[l], d[l], t[l]) = self.ray_from(&self.pose, true, pixel[l], lens[l], time_u[l]);
+            }
+        } else {
+            for l in 0..N {
+                (o[l], d[l], t[l]) = self.ray_from(&self.pose, false, pixel[l], lens[l], time_u[l]);
+            }
         }
         for l in 0..N {
             out[l] = Ray { origin: o[l].into(), dir: d[l].into(), time: t[l] };
@@ -132,11 +140,13 @@ impl Camera {
     /// The ray of [`Self::generate_ray`] from `pose` on plain numbers (origin, unit direction,
     /// time), the operations in glam's order (`Vec3A::normalize` sums `(x^2 + y^2) + z^2` and
     /// divides by the length), so scalar and lane calls agree bit for bit.
-    /// The lens point comes from [`disk_branch_free`] (a polynomial sine and cosine).
+    /// The lens point comes from [`disk_branch_free`] (a polynomial sine and cosine); `lensed`
+    /// is [`Self::has_aperture`] (a parameter, so that callers can specialise on it).
     #[inline(always)]
     fn ray_from(
         &self,
         pose: &Pose,
+        lensed: bool,
         pixel: [f32; 2],
         lens: [f32; 2],
         time_u: f32,
@@ -147,9 +157,8 @@ impl Camera {
         let (x, y) = disk_branch_free(lens);
         let (x, y) = (x * self.lens_radius, y * self.lens_radius);
         let (po, u, v) = (pose.origin.to_array(), pose.u.to_array(), pose.v.to_array());
-        // Without an aperture the point on the lens is the centre (`x`, `y` are zero, but
-        // `po + 0 * u` could differ from `po` in the sign of a zero).
-        let lensed = self.lens_radius > 0.0;
+        // Without an aperture the point on the lens is the centre (`po + 0 * u` could differ
+        // from `po` in the sign of a zero).
         let from = |a: usize| if lensed { po[a] + x * u[a] + y * v[a] } else { po[a] };
         let origin = [from(0), from(1), from(2)];
         let e = [target[0] - origin[0], target[1] - origin[1], target[2] - origin[2]];
