@@ -210,4 +210,30 @@ mod tests {
         let pb = b.at((10.0 - (b.origin - Vec3A::from(from)).dot(fwd)) / b.dir.dot(fwd));
         assert!((pa - pb).length() < 1e-4, "{pa} {pb}");
     }
+
+    /// The lane version gives the bits of the scalar one, with and without AVX-512, for a
+    /// pinhole, a thin lens and a moving camera.
+    #[test]
+    fn lanes_give_the_scalar_bits() {
+        let from = Vec3::new(13.0, 2.0, 3.0);
+        let lens = Camera::new(from, Vec3::ZERO, Vec3::Y, 20.0, 0.05, 10.0, (0.0, 1.0), 384, 216);
+        let close = Camera::new(from + Vec3::X, Vec3::ZERO, Vec3::Y, 20.0, 0.05, 10.0, (0.0, 1.0), 384, 216);
+        for cam in [cornell(), lens, lens.moving_to(&close)] {
+            let u = |k: usize, m: u32| ((k as u32 * m) % 1009) as f32 / 1009.0;
+            let pixel: [[f32; 2]; 16] = std::array::from_fn(|k| [383.0 * u(k, 7), 215.0 * u(k, 13)]);
+            let on_lens: [[f32; 2]; 16] = std::array::from_fn(|k| [u(k, 31), u(k, 101)]);
+            let time: [f32; 16] = std::array::from_fn(|k| u(k, 211));
+            let wide = crate::simd::lanes(|| cam.generate_rays(&pixel, &on_lens, &time));
+            let base = cam.generate_rays(&pixel, &on_lens, &time);
+            for k in 0..16 {
+                let r = cam.generate_ray(Vec2::from(pixel[k]), Vec2::from(on_lens[k]), time[k]);
+                for got in [wide[k], base[k]] {
+                    let bits =
+                        |r: &Ray| (r.origin.to_array().map(f32::to_bits), r.dir.to_array().map(f32::to_bits));
+                    assert_eq!(bits(&got), bits(&r), "lane {k}");
+                    assert_eq!(got.time.to_bits(), r.time.to_bits());
+                }
+            }
+        }
+    }
 }
