@@ -223,7 +223,10 @@ mod tests {
             let pixel: [[f32; 2]; 16] = std::array::from_fn(|k| [383.0 * u(k, 7), 215.0 * u(k, 13)]);
             let on_lens: [[f32; 2]; 16] = std::array::from_fn(|k| [u(k, 31), u(k, 101)]);
             let time: [f32; 16] = std::array::from_fn(|k| u(k, 211));
-            let wide = crate::simd::lanes(|| cam.generate_rays(&pixel, &on_lens, &time));
+            let wide = crate::simd::lanes(
+                #[inline(always)]
+                || cam.generate_rays(&pixel, &on_lens, &time),
+            );
             let base = cam.generate_rays(&pixel, &on_lens, &time);
             for k in 0..16 {
                 let r = cam.generate_ray(Vec2::from(pixel[k]), Vec2::from(on_lens[k]), time[k]);
