@@ -154,13 +154,18 @@ impl Camera {
         let (c, du, dv) = (pose.corner.to_array(), pose.du.to_array(), pose.dv.to_array());
         let at = |a: usize| c[a] + pixel[0] * du[a] + pixel[1] * dv[a];
         let target = [at(0), at(1), at(2)];
-        let (x, y) = disk_branch_free(lens);
-        let (x, y) = (x * self.lens_radius, y * self.lens_radius);
         let (po, u, v) = (pose.origin.to_array(), pose.u.to_array(), pose.v.to_array());
         // Without an aperture the point on the lens is the centre (`po + 0 * u` could differ
         // from `po` in the sign of a zero).
-        let from = |a: usize| if lensed { po[a] + x * u[a] + y * v[a] } else { po[a] };
-        let origin = [from(0), from(1), from(2)];
+        let origin = match lensed {
+            true => {
+                let (x, y) = disk_branch_free(lens);
+                let (x, y) = (x * self.lens_radius, y * self.lens_radius);
+                let from = |a: usize| po[a] + x * u[a] + y * v[a];
+                [from(0), from(1), from(2)]
+            }
+            false => po,
+        };
         let e = [target[0] - origin[0], target[1] - origin[1], target[2] - origin[2]];
         let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let (t0, t1) = self.shutter;
