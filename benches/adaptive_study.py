@@ -19,6 +19,9 @@ sequence's stratification across units (its relMSE is above that of one render o
 the gains are ratios within the simulation. The allocation uses each pixel's own pilot, so the
 estimate it simulates is biased where the pilot's variance estimate correlates with its mean
 (an allocation from the neighbours' pilots would not be).
+Its gains did not survive being built: a real adaptive renderer gained 0-10% at equal time at 64
+spp and nothing at 256 (benches/RESULTS.md, "Adaptive sampling built and measured"), because this
+simulation counts samples rather than time and gives the uniform baseline no stratification.
 """
 import argparse, os, subprocess, sys
 
