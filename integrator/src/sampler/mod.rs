@@ -250,9 +250,19 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_1d(dim[l]));
     }
-    let h: [u64; N] = std::array::from_fn(|l| s[l].hash(dim[l]));
-    let i: [u32; N] = std::array::from_fn(|l| shuffle(s[l].index, h[l] as u32));
-    std::array::from_fn(|l| to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32)))
+    // Plain loops, not `std::array::from_fn`: LLVM leaves its closures out of line, and so
+    // outside the instruction set of the caller's `simd::lanes` region.
+    let (mut h, mut i, mut out) = ([0u64; N], [0u32; N], [0.0f32; N]);
+    for l in 0..N {
+        h[l] = s[l].hash(dim[l]);
+    }
+    for l in 0..N {
+        i[l] = shuffle(s[l].index, h[l] as u32);
+    }
+    for l in 0..N {
+        out[l] = to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32));
+    }
+    out
 }
 
 /// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
@@ -293,7 +303,11 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     };
     // BSDF directions and later light points, the common calls: no net to compute.
     if (0..N).all(|l| lattice(l).is_some()) {
-        return std::array::from_fn(|l| lattice_2d(i[l], h[l], lattice(l).unwrap_or_default()));
+        let mut out = [Vec2::ZERO; N];
+        for l in 0..N {
+            out[l] = lattice_2d(i[l], h[l], lattice(l).unwrap_or_default());
+        }
+        return out;
     }
     // The unscrambled coordinates, digits least significant first: Sobol's dimensions 0 and 1,
     // or 2 and 3 for `NetHi` lanes.
