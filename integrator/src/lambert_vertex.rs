@@ -222,7 +222,7 @@ impl VertexSamples {
         samplers: &[Sampler; LANES],
         depths: &[u32; LANES],
     ) -> [Self; LANES] {
-        let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
+        let dims = |slot| Dims::vertex_lanes(depths, slot);
         let pick = if scene.lights.len() > 1 {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
         } else {
@@ -241,12 +241,16 @@ impl VertexSamples {
         } else {
             [0.0; LANES]
         };
-        std::array::from_fn(|l| Self {
-            light_pick: pick[l],
-            light: light[l],
-            dir: dir[l],
-            roulette: if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 },
-        })
+        let mut out = [Self::default(); LANES];
+        for l in 0..LANES {
+            out[l] = Self {
+                light_pick: pick[l],
+                light: light[l],
+                dir: dir[l],
+                roulette: if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 },
+            };
+        }
+        out
     }
 }
 

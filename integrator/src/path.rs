@@ -311,7 +311,7 @@ impl ScatterSamples {
         depths: &[u32; N],
         reads: Reads,
     ) -> [Self; N] {
-        let dims = |slot| std::array::from_fn(|l| Dims::vertex(depths[l], slot));
+        let dims = |slot| Dims::vertex_lanes(depths, slot);
         let dir = match reads.dir {
             true => crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF)),
             false => [Vec2::ZERO; N],
@@ -325,7 +325,11 @@ impl ScatterSamples {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE)),
             false => [0.0; N],
         };
-        std::array::from_fn(|l| Self { dir: dir[l], lobe: lobe[l], roulette: roulette[l] })
+        let mut out = [Self::default(); N];
+        for l in 0..N {
+            out[l] = Self { dir: dir[l], lobe: lobe[l], roulette: roulette[l] };
+        }
+        out
     }
 }
 

@@ -75,6 +75,17 @@ impl Dims {
     pub const fn vertex(depth: u32, slot: u32) -> u32 {
         Self::CAMERA + depth * Self::PER_VERTEX + slot
     }
+
+    /// [`Self::vertex`] for `N` paths at once (a plain loop, which stays inline in a
+    /// `simd::lanes` region where `std::array::from_fn`'s closure would not).
+    #[inline(always)]
+    pub fn vertex_lanes<const N: usize>(depths: &[u32; N], slot: u32) -> [u32; N] {
+        let mut d = [0; N];
+        for l in 0..N {
+            d[l] = Self::vertex(depths[l], slot);
+        }
+        d
+    }
 }
 
 /// The samples of one pixel sample: a key and an index, immutable along the path.
@@ -275,7 +286,10 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     if s[0].kind != SamplerKind::Sobol {
         return std::array::from_fn(|l| s[l].get_2d(dim[l]));
     }
-    let lay: [(u32, Points); N] = std::array::from_fn(|l| layout(dim[l], s[l].lens));
+    let mut lay = [(0u32, Points::Net); N];
+    for l in 0..N {
+        lay[l] = layout(dim[l], s[l].lens);
+    }
     let shared = (0..N).any(|l| lay[l].0 != dim[l]);
     let (mut key, mut index, mut group) = ([0u64; N], [0u32; N], [0u32; N]);
     for l in 0..N {
