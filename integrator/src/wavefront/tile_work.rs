@@ -164,12 +164,25 @@ impl<'a> TileWork<'a> {
         let fresh = q.free.len().min((self.work - self.next_sample) as usize);
         for group in (0..fresh).step_by(LANES) {
             let m = LANES.min(fresh - group);
-            // Lanes past `m` repeat the last: drawn, not used.
-            let which: [(u32, u32); LANES] = std::array::from_fn(|l| {
-                let k = self.next_sample + l.min(m - 1) as u64;
-                ((k / spp) as u32, self.samples.start + (k % spp) as u32)
-            });
-            let pixel: [(u32, u32); LANES] = std::array::from_fn(|l| tile.pixel(which[l].0));
+            // Sample k of the tile is sample k % spp of pixel k / spp: one division per group,
+            // then the lanes step through samples and pixels. Lanes past `m` repeat the last:
+            // drawn, not used.
+            let k = self.next_sample;
+            let (mut i, mut j) = ((k / spp) as u32, (k % spp) as u32);
+            let (mut x, mut y) = tile.pixel(i);
+            let (mut which, mut pixel) = ([(0, 0); LANES], [(0, 0); LANES]);
+            for l in 0..LANES {
+                (which[l], pixel[l]) = ((i, self.samples.start + j), (x, y));
+                if l + 1 < m {
+                    j += 1;
+                    if j as u64 == spp {
+                        (i, j, x) = (i + 1, 0, x + 1);
+                        if x == tile.x0 + tile.w {
+                            (x, y) = (tile.x0, y + 1);
+                        }
+                    }
+                }
+            }
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
             let rays = camera_rays(scene, &samplers, &pixel);
