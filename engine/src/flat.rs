@@ -306,7 +306,7 @@ mod tests {
     use super::*;
     use crate::shape::{PrimitiveShape, Sphere};
     use crate::testing::signed;
-    use glam::{Affine3A, Quat, Vec3, Vec3A};
+    use glam::{Affine3A, Mat3, Quat, Vec3, Vec3A};
 
     #[test]
     fn ellipsoid_tests_give_the_bits_of_the_transformed_sphere() {
@@ -317,20 +317,11 @@ mod tests {
                 Vec3::new(1.0 + rnd().abs() * 80.0, 1.0 + rnd().abs() * 80.0, 1.0 + rnd().abs() * 80.0),
                 Quat::from_euler(glam::EulerRot::XYZ, rnd() * 3.0, rnd() * 3.0, rnd() * 3.0),
                 Vec3::new(rnd(), rnd(), rnd()) * 300.0,
-            ) * Affine3A::from_cols_array(&[
-                1.0,
-                rnd() * 0.5,
-                0.0,
-                0.0,
-                1.0,
-                rnd() * 0.5,
-                0.0,
-                0.0,
-                1.0,
-                0.0,
-                0.0,
-                0.0,
-            ]);
+            ) * Affine3A::from_mat3(Mat3::from_cols(
+                Vec3::new(1.0, rnd() * 0.5, 0.0),
+                Vec3::new(0.0, 1.0, rnd() * 0.5),
+                Vec3::Z,
+            ));
             let sphere = Sphere { center: Vec3A::new(rnd(), rnd(), rnd()), radius: 0.5 + rnd().abs() };
             let e = TransformedSphere::new(sphere, m).expect("invertible");
             let flat = Ellipsoid::new(&e);
