@@ -32,6 +32,9 @@ pub struct LightSampler<'a> {
     ellipsoid_ins: EllipsoidInLanes,
     /// What the kernel that ran last wrote.
     outs: LightOutLanes,
+    /// Per kernel (quad, sphere, ellipsoid) and lane, the light whose data its inputs hold
+    /// (`u32::MAX`: none yet): a lane that picks the same light again keeps them.
+    held: [[u32; LANES]; 3],
 }
 
 impl<'a> LightSampler<'a> {
@@ -54,6 +57,7 @@ impl<'a> LightSampler<'a> {
             outs: LightOutLanes::default(),
             sphere_ins: SphereInLanes::default(),
             ellipsoid_ins: EllipsoidInLanes::default(),
+            held: [[u32::MAX; LANES]; 3],
         };
         if let Some([PlainLight::Quad(one)]) = plain {
             let pmf = scene.lights.pick(0.0).1;
@@ -112,26 +116,35 @@ impl<'a> LightSampler<'a> {
         } else {
             for l in 0..LANES {
                 let (light, pmf) = scene.lights.pick(u[l].light_pick);
+                let id = light as u32;
                 kind[l] = match &plain[light] {
                     PlainLight::Quad(q) => {
-                        self.ins.set(l, &QuadIn::new(q, pmf));
+                        if std::mem::replace(&mut self.held[0][l], id) != id {
+                            self.ins.set(l, &QuadIn::new(q, pmf));
+                        }
                         Kind::Quad
                     }
                     PlainLight::Sphere(s) => {
-                        self.sphere_ins.set(l, &SphereIn::new(s, pmf));
+                        if std::mem::replace(&mut self.held[1][l], id) != id {
+                            self.sphere_ins.set(l, &SphereIn::new(s, pmf));
+                        }
                         Kind::Sphere
                     }
                     PlainLight::Ellipsoid(e) => {
-                        self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
+                        if std::mem::replace(&mut self.held[2][l], id) != id {
+                            self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
+                        }
                         Kind::Ellipsoid
                     }
                     PlainLight::Other => Kind::Other,
                 };
             }
         }
-        let from: [[f32; LANES]; 3] = std::array::from_fn(|a| std::array::from_fn(|l| p[l][a]));
-        let uv: [[f32; LANES]; 2] =
-            [std::array::from_fn(|l| u[l].light.x), std::array::from_fn(|l| u[l].light.y)];
+        let (mut from, mut uv) = ([[0.0; LANES]; 3], [[0.0; LANES]; 2]);
+        for l in 0..LANES {
+            (from[0][l], from[1][l], from[2][l]) = (p[l].x, p[l].y, p[l].z);
+            (uv[0][l], uv[1][l]) = (u[l].light.x, u[l].light.y);
+        }
         let mut done = [false; LANES];
         if kind.contains(&Kind::Quad) {
             (self.ins.from, self.ins.uv) = (from, uv);
