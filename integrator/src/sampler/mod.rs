@@ -31,7 +31,7 @@ mod cmj;
 mod sobol;
 
 use cmj::{cmj_2d, stratified_1d};
-use sobol::{SOBOL_2_3_REVERSED, owen_reversed, owen_sobol, owen_sobol_hi, pascal, shuffle};
+use sobol::{owen_reversed, owen_sobol, owen_sobol_hi, pascal, shuffle, sobol_2_3_reversed};
 
 /// MurmurHash3's 64-bit finaliser: a bijective mixer with full avalanche.
 #[inline]
@@ -278,9 +278,9 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 
 /// [`Sampler::get_2d`] for `N` samplers of one kind at once (see [`get_1d_lanes`]). Each step
 /// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
-/// hashes included); Sobol's dimensions 2 and 3 are a branch-free matrix product here, four
-/// table look-ups per coordinate in `sobol::owen_sobol_hi`. Lanes may mix the kinds of
-/// points a dimension takes (`layout`: paths at different depths).
+/// hashes included; Sobol's dimensions 2 and 3 as four table look-ups per coordinate,
+/// gathers). Lanes may mix the kinds of points a dimension takes (`layout`: paths at different
+/// depths).
 #[inline(always)]
 pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
     if s[0].kind != SamplerKind::Sobol {
@@ -331,13 +331,8 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     }
     if lay.iter().any(|p| p.1 == Points::NetHi) {
         let (mut bx, mut by) = ([0u32; N], [0u32; N]);
-        for k in 0..32 {
-            let (cx, cy) = (SOBOL_2_3_REVERSED[0][k], SOBOL_2_3_REVERSED[1][k]);
-            for l in 0..N {
-                let bit = ((i[l] << (31 - k)) as i32 >> 31) as u32;
-                bx[l] ^= cx & bit;
-                by[l] ^= cy & bit;
-            }
+        for l in 0..N {
+            (bx[l], by[l]) = (sobol_2_3_reversed(i[l], false), sobol_2_3_reversed(i[l], true));
         }
         for l in 0..N {
             let hi = lay[l].1 == Points::NetHi;

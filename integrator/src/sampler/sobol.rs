@@ -124,21 +124,10 @@ const SOBOL_2_3: [[u32; 32]; 2] = [
     ],
 ];
 
-/// [`SOBOL_2_3`] with each column's bits reversed (the first digit in the lowest bit).
-pub(super) const SOBOL_2_3_REVERSED: [[u32; 32]; 2] = {
-    let mut t = [[0u32; 32]; 2];
-    let mut k = 0;
-    while k < 32 {
-        t[0][k] = SOBOL_2_3[0][k].reverse_bits();
-        t[1][k] = SOBOL_2_3[1][k].reverse_bits();
-        k += 1;
-    }
-    t
-};
-
-/// [`SOBOL_2_3`] as byte tables: entry (b, v) is the xor of the columns of the set bits of byte
-/// value v at byte b of the index, so that a point takes four look-ups.
-static SOBOL_2_3_BYTES: [[[u32; 256]; 4]; 2] = {
+/// [`SOBOL_2_3`] as byte tables, each entry's bits reversed (the first digit in the lowest
+/// bit): entry (d, b, v) is the xor of dimension 2 + d's columns for the set bits of byte value
+/// v at byte b of the index, so that a point takes four look-ups per coordinate.
+static SOBOL_2_3_REVERSED_BYTES: [[[u32; 256]; 4]; 2] = {
     let mut t = [[[0u32; 256]; 4]; 2];
     let mut d = 0;
     while d < 2 {
@@ -154,7 +143,7 @@ static SOBOL_2_3_BYTES: [[[u32; 256]; 4]; 2] = {
                     }
                     k += 1;
                 }
-                t[d][b][v] = x;
+                t[d][b][v] = x.reverse_bits();
                 v += 1;
             }
             b += 1;
@@ -164,15 +153,22 @@ static SOBOL_2_3_BYTES: [[[u32; 256]; 4]; 2] = {
     t
 };
 
+/// Sobol's dimension 2 (`second` false) or 3 of index `i` before scrambling, its digits least
+/// significant first (the order [`owen_reversed`] takes): four look-ups, which vectorise as
+/// gathers across lanes.
+#[inline(always)]
+pub(super) fn sobol_2_3_reversed(i: u32, second: bool) -> u32 {
+    let t = &SOBOL_2_3_REVERSED_BYTES[second as usize];
+    t[0][(i & 0xff) as usize]
+        ^ t[1][(i >> 8 & 0xff) as usize]
+        ^ t[2][(i >> 16 & 0xff) as usize]
+        ^ t[3][(i >> 24) as usize]
+}
+
 /// Owen-scrambled Sobol dimension 2 (`second` false) or 3 of sample `i`, as 32 fixed-point bits.
 #[inline]
 pub(super) fn owen_sobol_hi(i: u32, second: bool, seed: u32) -> u32 {
-    let t = &SOBOL_2_3_BYTES[second as usize];
-    let x = t[0][(i & 0xff) as usize]
-        ^ t[1][(i >> 8 & 0xff) as usize]
-        ^ t[2][(i >> 16 & 0xff) as usize]
-        ^ t[3][(i >> 24) as usize];
-    owen_reversed(x.reverse_bits(), seed).reverse_bits()
+    owen_reversed(sobol_2_3_reversed(i, second), seed).reverse_bits()
 }
 
 /// Sobol's dimension 1 before bit reversal: bit j of the result is the parity of the bits k of
