@@ -95,6 +95,34 @@ fn stages(c: &mut Criterion) {
     }
 }
 
+/// The numbers of a Lambertian vertex (light choice, light point, direction, roulette) for
+/// groups of 16 paths at depths 0 to 7 (cornell-diffuse's settings: one light, roulette from
+/// depth 5), as `shade_lambertian` draws them: the sampler's cost per path and vertex alone.
+fn vertex_numbers(c: &mut Criterion) {
+    use pathwave_integrator::lambert_vertex::{LANES, VertexSamples};
+    use pathwave_integrator::sampler::SamplerLanes;
+    let scene = scene_at("cornell-diffuse.ron", 128);
+    let groups: Vec<(SamplerLanes<LANES>, [u32; LANES])> = (0..256u32)
+        .map(|g| {
+            let samplers: [_; LANES] = std::array::from_fn(|l| {
+                let i = g * LANES as u32 + l as u32;
+                pathwave_integrator::path::camera_sampler(&scene, i % 128, i / 128 % 128, i / 64 % 64)
+            });
+            (SamplerLanes::from(&samplers), std::array::from_fn(|l| (g + l as u32 / 4) % 8))
+        })
+        .collect();
+    let mut g = c.benchmark_group("vertex_numbers");
+    g.throughput(Throughput::Elements((groups.len() * LANES) as u64));
+    g.bench_function("cornell_diffuse", |b| {
+        b.iter(|| {
+            for (s, d) in &groups {
+                black_box(VertexSamples::draw_lanes(&scene, s, d));
+            }
+        })
+    });
+    g.finish();
+}
+
 fn render(c: &mut Criterion) {
     let scene = scene_at("cornell.ron", 128);
     let side = 128;
@@ -111,5 +139,5 @@ fn render(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bvh, traverse, stages, render);
+criterion_group!(benches, bvh, traverse, stages, vertex_numbers, render);
 criterion_main!(benches);

@@ -6,7 +6,7 @@
 //! paths. Inputs are gathered and outputs applied by shared code, so both compute the same bits.
 
 use crate::path::{self, PathState, ShadowRay, power_heuristic};
-use crate::sampler::{Dims, Sampler};
+use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::Ray;
 use pathwave_engine::math::disk_branch_free;
@@ -207,7 +207,7 @@ impl VertexSamples {
     #[inline]
     pub fn draw_lanes(
         scene: &RenderScene,
-        samplers: &[Sampler; LANES],
+        samplers: &SamplerLanes<LANES>,
         depths: &[u32; LANES],
     ) -> [Self; LANES] {
         pathwave_engine::simd::lanes(
@@ -219,7 +219,7 @@ impl VertexSamples {
     #[inline(always)]
     fn draw_lanes_with(
         scene: &RenderScene,
-        samplers: &[Sampler; LANES],
+        samplers: &SamplerLanes<LANES>,
         depths: &[u32; LANES],
     ) -> [Self; LANES] {
         let dims = |slot| Dims::vertex_lanes(depths, slot);
@@ -408,7 +408,6 @@ pub fn lambert_lanes(i: &LambertInLanes, o: &mut LambertOutLanes) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec2;
     use pathwave_engine::material::chi2::{chi2, chi2_critical};
 
     #[test]

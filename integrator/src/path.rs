@@ -3,7 +3,7 @@
 //! what an emitter hit adds (MIS-weighted), the light sample that becomes a shadow ray, and
 //! BSDF sampling with Russian roulette.
 
-use crate::sampler::{Dims, Sampler};
+use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::geometry::Hit;
 use pathwave_engine::lights::OtherLight;
@@ -307,7 +307,7 @@ impl ScatterSamples {
     #[inline(always)]
     pub fn draw_lanes<const N: usize>(
         scene: &RenderScene,
-        samplers: &[Sampler; N],
+        samplers: &SamplerLanes<N>,
         depths: &[u32; N],
         reads: Reads,
     ) -> [Self; N] {

@@ -134,13 +134,12 @@ impl Sampler {
         let h = self.hash(dim);
         match self.kind {
             SamplerKind::Sobol => {
-                let (group, points) = layout(dim, self.lens);
-                let hs = if group == dim { h } else { self.hash(group) };
+                let lay = layout(dim, self.lens);
+                let hs = if lay.group == dim { h } else { self.hash(lay.group) };
                 let i = shuffle(self.index, hs as u32);
-                match points {
-                    Points::Lattice(g) => lattice_2d(i, h, g),
-                    Points::Net => net_2d(i, false, h),
-                    Points::NetHi => net_2d(i, true, h),
+                match lay.lattice {
+                    true => lattice_2d(i, h, lay.g),
+                    false => net_2d(i, lay.hi, h),
                 }
             }
             SamplerKind::Stratified => cmj_2d(self.index, self.spp, h),
@@ -158,6 +157,46 @@ impl Sampler {
     }
 }
 
+/// `N` samplers of one kind, one array per field: what [`get_1d_lanes`] and [`get_2d_lanes`]
+/// read. Not `[Sampler; N]`: LLVM vectorises a loop that reads a field of an array of structs
+/// as an interleaved access with a gap, which needs a scalar remainder as long as one vector,
+/// and so ran half of the 16 lanes of every step one at a time.
+#[derive(Clone, Copy, Debug)]
+pub struct SamplerLanes<const N: usize> {
+    key: [u64; N],
+    index: [u32; N],
+    spp: [u32; N],
+    lens: [bool; N],
+    kind: SamplerKind,
+}
+
+impl<const N: usize> SamplerLanes<N> {
+    /// Sampler `l`.
+    #[inline(always)]
+    fn get(&self, l: usize) -> Sampler {
+        Sampler {
+            key: self.key[l],
+            index: self.index[l],
+            spp: self.spp[l],
+            kind: self.kind,
+            lens: self.lens[l],
+        }
+    }
+}
+
+impl<const N: usize> From<&[Sampler; N]> for SamplerLanes<N> {
+    /// The samplers' fields side by side (they must be of one kind).
+    #[inline]
+    fn from(s: &[Sampler; N]) -> Self {
+        let mut out = Self { key: [0; N], index: [0; N], spp: [0; N], lens: [false; N], kind: s[0].kind };
+        for l in 0..N {
+            debug_assert_eq!(s[l].kind, out.kind);
+            (out.key[l], out.index[l], out.spp[l], out.lens[l]) = (s[l].key, s[l].index, s[l].spp, s[l].lens);
+        }
+        out
+    }
+}
+
 #[inline]
 fn dim_hash(key: u64, dim: u32) -> u64 {
     mix64(key ^ (dim as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15))
@@ -166,7 +205,7 @@ fn dim_hash(key: u64, dim: u32) -> u64 {
 /// Whether `dim` is a vertex's BSDF direction ([`Dims::BSDF`]), which [`lattice_2d`] fills.
 #[inline]
 fn is_direction(dim: u32) -> bool {
-    dim >= Dims::CAMERA && (dim - Dims::CAMERA) % Dims::PER_VERTEX == Dims::BSDF
+    (dim >= Dims::CAMERA) & (dim.wrapping_sub(Dims::CAMERA) % Dims::PER_VERTEX == Dims::BSDF)
 }
 
 /// The generators of the BSDF direction's lattice: point i of 2^k is (i / 2^k, i * 1051 / 2^k)
@@ -182,16 +221,20 @@ const DIRECTION_LATTICE: [u32; 2] = [1, 1051];
 /// all be apart); checked in the tests.
 const LIGHT_LATTICE: [u32; 2] = [35699, 19783];
 
-/// Which points fill a 2D dimension.
+/// How a 2D dimension is filled ([`layout`]): plain numbers, so that lanes at different
+/// dimensions compute it and act on it without branches.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Points {
-    /// Sobol's dimensions 0 and 1, Owen-scrambled: a (0,2)-sequence.
-    Net,
-    /// Sobol's dimensions 2 and 3 of the index the dimension shares with a `Net` partner, which
-    /// takes 0 and 1: one 4D Sobol point.
-    NetHi,
-    /// A shifted rank-1 lattice with these generators ([`lattice_2d`]).
-    Lattice([u32; 2]),
+struct Layout {
+    /// The dimension whose shuffled index it shares (itself when alone).
+    group: u32,
+    /// A net of Sobol's dimensions 2 and 3 of that index, whose partner (the dimension that
+    /// shares it) takes 0 and 1: one 4D Sobol point. Otherwise a net of 0 and 1, Owen-scrambled:
+    /// a (0,2)-sequence.
+    hi: bool,
+    /// Not a net but a shifted rank-1 lattice with the generators `g` ([`lattice_2d`]).
+    lattice: bool,
+    /// The lattice's generators.
+    g: [u32; 2],
 }
 
 /// The dimension whose shuffled index `dim` shares (itself when alone) and the points that
@@ -209,18 +252,25 @@ enum Points {
 ///   beside the direction's lattice (no 4D structure) they lost 0.5-0.9% at 256 spp
 ///   (benches/RESULTS.md);
 /// - anything else: a net, alone.
-#[inline]
-fn layout(dim: u32, lens: bool) -> (u32, Points) {
+///
+/// The three cases are disjoint, and each is a comparison: the function is selects only.
+#[inline(always)]
+fn layout(dim: u32, lens: bool) -> Layout {
     let light0 = Dims::vertex(0, Dims::LIGHT);
-    if is_direction(dim) {
-        (dim, Points::Lattice(DIRECTION_LATTICE))
-    } else if (dim == Dims::LENS && lens) || (dim == light0 && !lens) {
-        (Dims::PIXEL, Points::NetHi)
-    } else if dim > light0 && (dim - light0) % Dims::PER_VERTEX == 0 {
-        (dim - Dims::PER_VERTEX + Dims::BSDF - Dims::LIGHT, Points::Lattice(LIGHT_LATTICE))
+    let direction = is_direction(dim);
+    // `&` and `|`, not `&&` and `||`: no branches.
+    let hi = (dim == Dims::LENS) & lens | (dim == light0) & !lens;
+    let later_light = (dim > light0) & (dim.wrapping_sub(light0) % Dims::PER_VERTEX == 0);
+    let later_group = dim.wrapping_sub(Dims::PER_VERTEX + Dims::LIGHT - Dims::BSDF);
+    let group = if hi {
+        Dims::PIXEL
+    } else if later_light {
+        later_group
     } else {
-        (dim, Points::Net)
-    }
+        dim
+    };
+    let g = if direction { DIRECTION_LATTICE } else { LIGHT_LATTICE };
+    Layout { group, hi, lattice: direction || later_light, g }
 }
 
 /// Sample `i` (an already shuffled index) of an extensible rank-1 lattice sequence in base 2
@@ -257,18 +307,18 @@ fn net_2d(i: u32, hi: bool, h: u64) -> Vec2 {
 /// [`Sampler::get_1d`] for `N` samplers of one kind at once, each at its own dimension: the
 /// same integer operations lane by lane (so the same bits), in loops that LLVM vectorises.
 #[inline(always)]
-pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N] {
-    if s[0].kind != SamplerKind::Sobol {
-        return std::array::from_fn(|l| s[l].get_1d(dim[l]));
+pub fn get_1d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [f32; N] {
+    if s.kind != SamplerKind::Sobol {
+        return std::array::from_fn(|l| s.get(l).get_1d(dim[l]));
     }
     // Plain loops, not `std::array::from_fn`: LLVM leaves its closures out of line, and so
     // outside the instruction set of the caller's `simd::lanes` region.
     let (mut h, mut i, mut out) = ([0u64; N], [0u32; N], [0.0f32; N]);
     for l in 0..N {
-        h[l] = s[l].hash(dim[l]);
+        h[l] = dim_hash(s.key[l], dim[l]);
     }
     for l in 0..N {
-        i[l] = shuffle(s[l].index, h[l] as u32);
+        i[l] = shuffle(s.index[l], h[l] as u32);
     }
     for l in 0..N {
         out[l] = to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32));
@@ -280,20 +330,19 @@ pub fn get_1d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [f32; N
 /// runs over all lanes before the next, as plain integer loops that LLVM vectorises (the 64-bit
 /// hashes included; Sobol's dimensions 2 and 3 as four table look-ups per coordinate,
 /// gathers). Lanes may mix the kinds of points a dimension takes (`layout`: paths at different
-/// depths).
+/// depths): where they do, every lane computes both the net and the lattice, and keeps its own
+/// by a select, not a branch per lane.
 #[inline(always)]
-pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; N] {
-    if s[0].kind != SamplerKind::Sobol {
-        return std::array::from_fn(|l| s[l].get_2d(dim[l]));
+pub fn get_2d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [Vec2; N] {
+    if s.kind != SamplerKind::Sobol {
+        return std::array::from_fn(|l| s.get(l).get_2d(dim[l]));
     }
-    let mut lay = [(0u32, Points::Net); N];
+    let (key, index) = (&s.key, &s.index);
+    let (mut group, mut hi, mut lattice) = ([0u32; N], [false; N], [false; N]);
+    let (mut g0, mut g1) = ([0u32; N], [0u32; N]);
     for l in 0..N {
-        lay[l] = layout(dim[l], s[l].lens);
-    }
-    let shared = (0..N).any(|l| lay[l].0 != dim[l]);
-    let (mut key, mut index, mut group) = ([0u64; N], [0u32; N], [0u32; N]);
-    for l in 0..N {
-        (key[l], index[l], group[l]) = (s[l].key, s[l].index, lay[l].0);
+        let lay = layout(dim[l], s.lens[l]);
+        (group[l], hi[l], lattice[l], g0[l], g1[l]) = (lay.group, lay.hi, lay.lattice, lay.g[0], lay.g[1]);
     }
     let mut h = [0u64; N];
     for l in 0..N {
@@ -302,7 +351,7 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     // The hash that shuffles the index: that of the dimension whose index it shares (its own
     // when alone).
     let mut hs = h;
-    if shared {
+    if (0..N).any(|l| group[l] != dim[l]) {
         for l in 0..N {
             hs[l] = dim_hash(key[l], group[l]);
         }
@@ -311,45 +360,34 @@ pub fn get_2d_lanes<const N: usize>(s: &[Sampler; N], dim: &[u32; N]) -> [Vec2; 
     for l in 0..N {
         i[l] = shuffle(index[l], hs[l] as u32);
     }
-    let lattice = |l: usize| match lay[l].1 {
-        Points::Lattice(g) => Some(g),
-        _ => None,
-    };
+    let mut out = [Vec2::ZERO; N];
+    for l in 0..N {
+        out[l] = lattice_2d(i[l], h[l], [g0[l], g1[l]]);
+    }
     // BSDF directions and later light points, the common calls: no net to compute.
-    if (0..N).all(|l| lattice(l).is_some()) {
-        let mut out = [Vec2::ZERO; N];
-        for l in 0..N {
-            out[l] = lattice_2d(i[l], h[l], lattice(l).unwrap_or_default());
-        }
+    if lattice.iter().all(|&x| x) {
         return out;
     }
     // The unscrambled coordinates, digits least significant first: Sobol's dimensions 0 and 1,
-    // or 2 and 3 for `NetHi` lanes.
+    // or 2 and 3 for `hi` lanes.
     let (mut ax, mut ay) = ([0u32; N], [0u32; N]);
     for l in 0..N {
         (ax[l], ay[l]) = (i[l], pascal(i[l]));
     }
-    if lay.iter().any(|p| p.1 == Points::NetHi) {
+    if hi.iter().any(|&x| x) {
         let (mut bx, mut by) = ([0u32; N], [0u32; N]);
         for l in 0..N {
             (bx[l], by[l]) = (sobol_2_3_reversed(i[l], false), sobol_2_3_reversed(i[l], true));
         }
         for l in 0..N {
-            let hi = lay[l].1 == Points::NetHi;
-            (ax[l], ay[l]) = (if hi { bx[l] } else { ax[l] }, if hi { by[l] } else { ay[l] });
+            (ax[l], ay[l]) = (if hi[l] { bx[l] } else { ax[l] }, if hi[l] { by[l] } else { ay[l] });
         }
     }
-    let mut out = [Vec2::ZERO; N];
     for l in 0..N {
         let x = owen_reversed(ax[l], (h[l] >> 32) as u32).reverse_bits();
         let y = owen_reversed(ay[l], mix64(h[l]) as u32).reverse_bits();
-        out[l] = Vec2::new(to_unit(x), to_unit(y));
-    }
-    // Lattice lanes among nets.
-    for l in 0..N {
-        if let Some(g) = lattice(l) {
-            out[l] = lattice_2d(i[l], h[l], g);
-        }
+        let net = Vec2::new(to_unit(x), to_unit(y));
+        out[l] = if lattice[l] { out[l] } else { net };
     }
     out
 }
@@ -500,9 +538,18 @@ mod tests {
     fn lanes_give_the_bits_of_one_sampler_at_a_time() {
         // Light points (the first of Sobol's dimensions 2 and 3, paired; the later ones 0 and
         // 1), BSDF directions (lattices), and with a lens the lens paired instead.
-        // Slot u32::MAX: lanes that alternate light points and directions.
+        // Slot u32::MAX: lanes that alternate light points and directions; CAMERA_AND_LIGHT:
+        // the camera's pixel and lens dimensions and the first light point, in turn.
+        const CAMERA_AND_LIGHT: u32 = u32::MAX - 1;
         for (kind, lens, slot) in KINDS.into_iter().flat_map(|k| {
-            [(k, false, Dims::LIGHT), (k, true, Dims::LIGHT), (k, false, Dims::BSDF), (k, true, u32::MAX)]
+            [
+                (k, false, Dims::LIGHT),
+                (k, true, Dims::LIGHT),
+                (k, false, Dims::BSDF),
+                (k, true, u32::MAX),
+                (k, false, CAMERA_AND_LIGHT),
+                (k, true, CAMERA_AND_LIGHT),
+            ]
         }) {
             let s: [Sampler; 8] = std::array::from_fn(|l| {
                 let s = Sampler::new(kind, 4, 100 + l as u32, 3 * l as u32, 64);
@@ -510,9 +557,11 @@ mod tests {
             });
             let dim: [u32; 8] = std::array::from_fn(|l| match slot {
                 u32::MAX => Dims::vertex(l as u32, [Dims::LIGHT, Dims::BSDF][l % 2]),
+                CAMERA_AND_LIGHT => [Dims::PIXEL, Dims::LENS, Dims::vertex(0, Dims::LIGHT)][l % 3],
                 _ => Dims::vertex(l as u32, slot),
             });
-            let (one, two) = (get_1d_lanes(&s, &dim), get_2d_lanes(&s, &dim));
+            let lanes = SamplerLanes::from(&s);
+            let (one, two) = (get_1d_lanes(&lanes, &dim), get_2d_lanes(&lanes, &dim));
             for l in 0..8 {
                 assert_eq!(one[l].to_bits(), s[l].get_1d(dim[l]).to_bits());
                 assert_eq!(two[l], s[l].get_2d(dim[l]), "{kind:?} lens {lens} slot {slot} lane {l}");

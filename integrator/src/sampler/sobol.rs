@@ -29,9 +29,18 @@ pub(super) fn owen_reversed(mut v: u32, seed: u32) -> u32 {
 /// spheres-sky (benches/RESULTS.md).
 #[inline]
 pub(super) fn shuffle(index: u32, seed: u32) -> u32 {
-    let half = (1u32 << 31) >> index.leading_zeros().min(31);
+    // The highest set bit of an index above 1, by smearing the bits down: a leading-zero
+    // count has no instruction across lanes in AVX2 (nor in AVX-512 without its CD part).
+    let mut m = index;
+    for s in [1, 2, 4, 8, 16] {
+        m |= m >> s;
+    }
+    let half = m ^ (m >> 1);
     let p = seed.wrapping_mul(0x9e37_79b9) ^ half.wrapping_mul(0x85eb_ca6b);
-    let i = if index > 1 { half + permute_pow2(index - half, half - 1, p) } else { index };
+    // Computed for every index and then selected: a branch would keep LLVM from vectorising
+    // the shuffle across lanes.
+    let permuted = half.wrapping_add(permute_pow2(index.wrapping_sub(half), half.wrapping_sub(1), p));
+    let i = if index > 1 { permuted } else { index };
     owen_reversed(i.reverse_bits(), seed).reverse_bits()
 }
 

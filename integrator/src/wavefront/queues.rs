@@ -3,7 +3,7 @@
 
 use crate::aov::Guide;
 use crate::path::PathState;
-use crate::sampler::Sampler;
+use crate::sampler::{Sampler, SamplerLanes};
 use glam::{Vec3, Vec3A};
 use pathwave_engine::flat::RayStream;
 use pathwave_engine::geometry::Hit;
@@ -94,13 +94,13 @@ impl Paths {
     /// The samplers and depths of the paths in `slots` (at most `N`), lane by lane; a short
     /// group repeats its last path in the remaining lanes.
     #[inline]
-    pub fn sampler_lanes<const N: usize>(&self, slots: &[u32]) -> ([Sampler; N], [u32; N]) {
+    pub fn sampler_lanes<const N: usize>(&self, slots: &[u32]) -> (SamplerLanes<N>, [u32; N]) {
         let last = slots[slots.len() - 1] as usize;
         let (mut samplers, mut depths) = ([self.sampler[last]; N], [self.depth[last]; N]);
         for (l, &i) in slots.iter().enumerate().take(N) {
             (samplers[l], depths[l]) = (self.sampler[i as usize], self.depth[i as usize]);
         }
-        (samplers, depths)
+        (SamplerLanes::from(&samplers), depths)
     }
 
     /// Gathers the path state of slot `i`.

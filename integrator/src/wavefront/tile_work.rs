@@ -8,7 +8,7 @@ use crate::aov::Guide;
 use crate::film::{PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
-use crate::sampler::{self, Dims, Sampler};
+use crate::sampler::{self, Dims, Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::math::Ray;
@@ -185,7 +185,7 @@ impl<'a> TileWork<'a> {
             }
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
-            let rays = camera_rays(scene, &samplers, &pixel);
+            let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
             for l in 0..m {
                 let slot = q.free.pop().expect("a free slot for every new path");
                 let ray = rays[l];
@@ -224,7 +224,7 @@ impl<'a> TileWork<'a> {
 /// [`path::camera_ray`] for `LANES` samples at once, their numbers and rays computed across
 /// lanes (the same bits).
 #[inline]
-fn camera_rays(scene: &RenderScene, s: &[Sampler; LANES], pixel: &[(u32, u32); LANES]) -> [Ray; LANES] {
+fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> [Ray; LANES] {
     pathwave_engine::simd::lanes(
         #[inline(always)]
         || {
