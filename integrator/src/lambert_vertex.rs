@@ -209,7 +209,7 @@ impl VertexSamples {
         scene: &RenderScene,
         samplers: &SamplerLanes<LANES>,
         depths: &[u32; LANES],
-    ) -> [Self; LANES] {
+    ) -> VertexSamplesLanes {
         pathwave_engine::simd::lanes(
             #[inline(always)]
             || Self::draw_lanes_with(scene, samplers, depths),
@@ -221,7 +221,7 @@ impl VertexSamples {
         scene: &RenderScene,
         samplers: &SamplerLanes<LANES>,
         depths: &[u32; LANES],
-    ) -> [Self; LANES] {
+    ) -> VertexSamplesLanes {
         let dims = |slot| Dims::vertex_lanes(depths, slot);
         let pick = if scene.lights.len() > 1 {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
@@ -241,16 +241,40 @@ impl VertexSamples {
         } else {
             [0.0; LANES]
         };
-        let mut out = [Self::default(); LANES];
+        let mut out = VertexSamplesLanes { light_pick: pick, ..Default::default() };
         for l in 0..LANES {
-            out[l] = Self {
-                light_pick: pick[l],
-                light: light[l],
-                dir: dir[l],
-                roulette: if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 },
-            };
+            (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
+            (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
+            out.roulette[l] = if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 };
         }
         out
+    }
+}
+
+/// [`VertexSamples`] for [`LANES`] paths, one array per number: the light sampler reads its
+/// numbers as whole vectors.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexSamplesLanes {
+    /// Which light, per lane.
+    pub light_pick: [f32; LANES],
+    /// Where on it: the two coordinates, per lane.
+    pub light: [[f32; LANES]; 2],
+    /// The next direction: the two coordinates, per lane.
+    pub dir: [[f32; LANES]; 2],
+    /// Russian roulette, per lane.
+    pub roulette: [f32; LANES],
+}
+
+impl VertexSamplesLanes {
+    /// Lane `l`.
+    #[inline(always)]
+    pub fn get(&self, l: usize) -> VertexSamples {
+        VertexSamples {
+            light_pick: self.light_pick[l],
+            light: Vec2::new(self.light[0][l], self.light[1][l]),
+            dir: Vec2::new(self.dir[0][l], self.dir[1][l]),
+            roulette: self.roulette[l],
+        }
     }
 }
 

@@ -7,7 +7,7 @@
 //! picked another kind of light, and every point of other scenes take `path::pick_light`
 //! itself.
 
-use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamples, dot, lanes, offset, sel3};
+use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
 use pathwave_engine::lights::PlainLight;
@@ -67,20 +67,17 @@ impl<'a> LightSampler<'a> {
     }
 
     /// Sets the light sample fields (`wi`, `le`, `pdf_light`, `delta_light`, `target`) of every
-    /// lane of `out`
-    /// for the shading points `p`, at the paths' `time`, with their numbers `u`: zero where
-    /// there is none (no lights, or a light that sends nothing towards the point).
+    /// lane of `out` for its shading points (`out.p`), at the paths' `time`, with their numbers
+    /// `u`: zero where there is none (no lights, or a light that sends nothing towards the
+    /// point).
     #[inline]
-    pub fn sample(
-        &mut self,
-        p: &[Vec3; LANES],
-        time: &[f32; LANES],
-        u: &[VertexSamples; LANES],
-        out: &mut LambertInLanes,
-    ) {
+    pub fn sample(&mut self, time: &[f32; LANES], u: &VertexSamplesLanes, out: &mut LambertInLanes) {
         let scene = self.scene;
+        let from = out.p;
         let scalar = |out: &mut LambertInLanes, l: usize| {
-            let lp = path::pick_light(scene, p[l].into(), time[l], u[l].light_pick, u[l].light);
+            let p = Vec3::new(from[0][l], from[1][l], from[2][l]);
+            let u = u.get(l);
+            let lp = path::pick_light(scene, p.into(), time[l], u.light_pick, u.light);
             let (wi, le, pdf, target, delta): (Vec3, Vec3, f32, Vec3, bool) =
                 lp.map_or(Default::default(), |lp| (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta));
             for a in 0..3 {
@@ -96,11 +93,7 @@ impl<'a> LightSampler<'a> {
             let lights = &scene.lights;
             let pmf = lights.pick(0.0).1;
             let (center, radius) = (Vec3::from(lights.center), lights.radius);
-            let light = |l: usize| [u[l].light.x, u[l].light.y];
-            let ins = SkyInLanes {
-                from: std::array::from_fn(|a| std::array::from_fn(|l| p[l][a])),
-                uv: [std::array::from_fn(|l| light(l)[0]), std::array::from_fn(|l| light(l)[1])],
-            };
+            let ins = SkyInLanes { from, uv: u.light };
             sky_lanes(&ins, bottom, top, pmf, center, radius, out);
             return;
         }
@@ -115,7 +108,7 @@ impl<'a> LightSampler<'a> {
             kind = [Kind::Quad; LANES];
         } else {
             for l in 0..LANES {
-                let (light, pmf) = scene.lights.pick(u[l].light_pick);
+                let (light, pmf) = scene.lights.pick(u.light_pick[l]);
                 let id = light as u32;
                 kind[l] = match &plain[light] {
                     PlainLight::Quad(q) => {
@@ -140,11 +133,7 @@ impl<'a> LightSampler<'a> {
                 };
             }
         }
-        let (mut from, mut uv) = ([[0.0; LANES]; 3], [[0.0; LANES]; 2]);
-        for l in 0..LANES {
-            (from[0][l], from[1][l], from[2][l]) = (p[l].x, p[l].y, p[l].z);
-            (uv[0][l], uv[1][l]) = (u[l].light.x, u[l].light.y);
-        }
+        let uv = u.light;
         let mut done = [false; LANES];
         if kind.contains(&Kind::Quad) {
             (self.ins.from, self.ins.uv) = (from, uv);
@@ -183,13 +172,21 @@ impl LightOutLanes {
     /// those the kernel left to `pick_light`.
     #[inline]
     fn write(&self, k: Kind, kind: &[Kind; LANES], out: &mut LambertInLanes, done: &mut [bool; LANES]) {
-        for l in (0..LANES).filter(|&l| kind[l] == k && !self.scalar[l]) {
-            for a in 0..3 {
-                (out.wi[a][l], out.le[a][l], out.target[a][l]) =
-                    (self.wi[a][l], self.le[a][l], self.target[a][l]);
+        // Selects over all lanes, not a loop over the chosen ones: it vectorises.
+        let mut take = [false; LANES];
+        for l in 0..LANES {
+            take[l] = (kind[l] == k) & !self.scalar[l];
+        }
+        for a in 0..3 {
+            for l in 0..LANES {
+                out.wi[a][l] = if take[l] { self.wi[a][l] } else { out.wi[a][l] };
+                out.le[a][l] = if take[l] { self.le[a][l] } else { out.le[a][l] };
+                out.target[a][l] = if take[l] { self.target[a][l] } else { out.target[a][l] };
             }
-            out.pdf_light[l] = self.pdf[l];
-            done[l] = true;
+        }
+        for l in 0..LANES {
+            out.pdf_light[l] = if take[l] { self.pdf[l] } else { out.pdf_light[l] };
+            done[l] |= take[l];
         }
     }
 }
@@ -534,7 +531,6 @@ fn ellipsoid_by_area(i: &EllipsoidIn) -> LightOut {
 mod tests {
     use super::*;
     use crate::sampler::TestRng;
-    use glam::Vec2;
     use pathwave_engine::scene::parse;
     use pathwave_engine::world::SceneWorld;
 
@@ -642,15 +638,19 @@ mod tests {
                     rng.next_1d() * 2.0 - 1.0,
                 )
             });
-            let u: [VertexSamples; LANES] = std::array::from_fn(|_| VertexSamples {
-                light_pick: rng.next_1d(),
-                light: Vec2::new(rng.next_1d(), rng.next_1d()),
-                ..Default::default()
-            });
-            let mut got = LambertInLanes::default();
-            sampler.sample(&p, &[0.0; LANES], &u, &mut got);
+            let mut u = VertexSamplesLanes::default();
             for l in 0..LANES {
-                let want = path::pick_light(&scene, p[l].into(), 0.0, u[l].light_pick, u[l].light);
+                u.light_pick[l] = rng.next_1d();
+                (u.light[0][l], u.light[1][l]) = (rng.next_1d(), rng.next_1d());
+            }
+            let mut got = LambertInLanes::default();
+            for l in 0..LANES {
+                (got.p[0][l], got.p[1][l], got.p[2][l]) = (p[l].x, p[l].y, p[l].z);
+            }
+            sampler.sample(&[0.0; LANES], &u, &mut got);
+            for l in 0..LANES {
+                let u = u.get(l);
+                let want = path::pick_light(&scene, p[l].into(), 0.0, u.light_pick, u.light);
                 let bits = |v: [f32; 3]| v.map(f32::to_bits);
                 let lane = |a: &[[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
                 match want {
@@ -664,7 +664,7 @@ mod tests {
                     None => assert_eq!(got.pdf_light[l], 0.0, "no sample at {}", p[l]),
                 }
                 // Which lanes the spherical rectangle took, as the kernel decided.
-                if let PlainLight::Quad(q) = &scene.lights.plain[scene.lights.pick(u[l].light_pick).0] {
+                if let PlainLight::Quad(q) = &scene.lights.plain[scene.lights.pick(u.light_pick).0] {
                     let c = Vec3::from(q.center) - p[l];
                     spherical += (q.rect
                         && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())

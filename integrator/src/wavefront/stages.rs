@@ -310,7 +310,6 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         // The vertex's numbers for all lanes at once.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
-        let mut at = [glam::Vec3::ZERO; LANES];
         let mut times = [0.0; LANES];
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
@@ -318,12 +317,13 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             let albedo = scene.albedo_at(hit.material, &hit.surface);
             let path =
                 lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
-            let input = lambert_vertex::gather_surface(scene, path, &hit.surface, -p.dir[s], albedo, &u[l]);
+            let input =
+                lambert_vertex::gather_surface(scene, path, &hit.surface, -p.dir[s], albedo, &u.get(l));
             ins.set(l, &input);
-            (at[l], times[l]) = (hit.surface.p.into(), p.time[s]);
+            times[l] = p.time[s];
         }
-        // A short last chunk leaves its last lanes at the origin: their samples go unread.
-        lights.sample(&at, &times, &u, &mut ins);
+        // A short last chunk leaves its last lanes as the chunk before: their samples go unread.
+        lights.sample(&times, &u, &mut ins);
         lambert_vertex::lambert_lanes(&ins, &mut outs);
         // The shadow rays, lanes that made one first.
         let (mut pick, mut n) = ([0; LANES], 0);
