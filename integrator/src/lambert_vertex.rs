@@ -316,8 +316,7 @@ pub fn gather(
     i
 }
 
-/// [`gather`] without the light sample (left at zero), for callers that sample lights across
-/// lanes ([`crate::light_lanes::LightSampler`]).
+/// [`gather`] without the light sample (left at zero).
 #[inline]
 pub fn gather_surface(
     scene: &RenderScene,
@@ -327,7 +326,18 @@ pub fn gather_surface(
     albedo: Vec3,
     u: &VertexSamples,
 ) -> LambertIn {
-    let mut i = LambertIn {
+    let mut i = surface_inputs(st, sp, wo, albedo);
+    i.u_dir = [u.dir.x, u.dir.y];
+    i.rr_on = rr_on(scene, i.depth_after);
+    i.u_rr = u.roulette;
+    i
+}
+
+/// The kernel's inputs that come from the surface and the path (the light sample and the
+/// numbers left at zero).
+#[inline(always)]
+fn surface_inputs(st: PathIn, sp: &SurfacePoint, wo: Vec3A, albedo: Vec3) -> LambertIn {
+    LambertIn {
         p: sp.p.into(),
         n: sp.ns.into(),
         ng: sp.n.into(),
@@ -338,11 +348,38 @@ pub fn gather_surface(
         eta_scale: st.eta_scale,
         depth_after: st.depth + 1,
         ..Default::default()
-    };
-    i.u_dir = [u.dir.x, u.dir.y];
-    i.rr_on = i.depth_after >= scene.settings.rr_depth;
-    i.u_rr = u.roulette;
-    i
+    }
+}
+
+/// Whether Russian roulette applies after a vertex that leaves `depth_after` bounces.
+#[inline(always)]
+fn rr_on(scene: &RenderScene, depth_after: u32) -> bool {
+    depth_after >= scene.settings.rr_depth
+}
+
+impl LambertInLanes {
+    /// Sets lane `l`'s inputs from the surface and the path, as [`gather_surface`] does; the
+    /// numbers are set for all lanes at once ([`Self::set_numbers`]), the light sample by
+    /// [`crate::light_lanes::LightSampler`].
+    #[inline(always)]
+    pub fn set_surface(&mut self, l: usize, st: PathIn, sp: &SurfacePoint, wo: Vec3A, albedo: Vec3) {
+        let i = surface_inputs(st, sp, wo, albedo);
+        for a in 0..3 {
+            (self.p[a][l], self.n[a][l], self.ng[a][l]) = (i.p[a], i.n[a], i.ng[a]);
+            (self.wo[a][l], self.albedo[a][l], self.beta[a][l]) = (i.wo[a], i.albedo[a], i.beta[a]);
+        }
+        (self.err[l], self.eta_scale[l], self.depth_after[l]) = (i.err, i.eta_scale, i.depth_after);
+    }
+
+    /// Sets every lane's numbers from `u`, as [`gather_surface`] does (after
+    /// [`Self::set_surface`], which sets the depths that decide roulette).
+    #[inline(always)]
+    pub fn set_numbers(&mut self, scene: &RenderScene, u: &VertexSamplesLanes) {
+        (self.u_dir, self.u_rr) = (u.dir, u.roulette);
+        for l in 0..LANES {
+            self.rr_on[l] = rr_on(scene, self.depth_after[l]);
+        }
+    }
 }
 
 /// Applies the kernel's outputs to the path: returns the shadow ray (if any) and the next ray

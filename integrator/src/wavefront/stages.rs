@@ -317,11 +317,10 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             let albedo = scene.albedo_at(hit.material, &hit.surface);
             let path =
                 lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
-            let input =
-                lambert_vertex::gather_surface(scene, path, &hit.surface, -p.dir[s], albedo, &u.get(l));
-            ins.set(l, &input);
+            ins.set_surface(l, path, &hit.surface, -p.dir[s], albedo);
             times[l] = p.time[s];
         }
+        ins.set_numbers(scene, &u);
         // A short last chunk leaves its last lanes as the chunk before: their samples go unread.
         lights.sample(&times, &u, &mut ins);
         lambert_vertex::lambert_lanes(&ins, &mut outs);
