@@ -137,9 +137,10 @@ impl Sampler {
                 let lay = layout(dim, self.lens);
                 let hs = if lay.group == dim { h } else { self.hash(lay.group) };
                 let i = shuffle(self.index, hs as u32);
+                let (sx, sy) = coordinate_seeds(h);
                 match lay.lattice {
-                    true => lattice_2d(i, h, lay.g),
-                    false => net_2d(i, lay.hi, h),
+                    true => lattice_2d(i, sx, sy, lay.g),
+                    false => net_2d(i, lay.hi, sx, sy),
                 }
             }
             SamplerKind::Stratified => cmj_2d(self.index, self.spp, h),
@@ -284,19 +285,26 @@ fn layout(dim: u32, lens: bool) -> Layout {
 /// Used for the BSDF's direction, where it beats the Owen-scrambled (0,2)-net: relMSE at 64 spp
 /// -8.6% on cornell-diffuse, -4.5% on cornell, -2.7% on mesh and -2.8% on spheres-sky (see
 /// benches/RESULTS.md), and for later light points beside it ([`layout`]).
+/// The shift is `(sx, sy)`, the dimension's [`coordinate_seeds`].
 #[inline]
-fn lattice_2d(i: u32, h: u64, g: [u32; 2]) -> Vec2 {
+fn lattice_2d(i: u32, sx: u32, sy: u32, g: [u32; 2]) -> Vec2 {
     let r = i.reverse_bits();
-    let x = r.wrapping_mul(g[0]).wrapping_add((h >> 32) as u32);
-    let y = r.wrapping_mul(g[1]).wrapping_add(mix64(h) as u32);
+    let x = r.wrapping_mul(g[0]).wrapping_add(sx);
+    let y = r.wrapping_mul(g[1]).wrapping_add(sy);
     Vec2::new(to_unit(x), to_unit(y))
 }
 
+/// The two 32-bit seeds of a 2D dimension's coordinates (a lattice's shift or a net's
+/// scrambles), from its hash `h`.
+#[inline(always)]
+fn coordinate_seeds(h: u64) -> (u32, u32) {
+    ((h >> 32) as u32, mix64(h) as u32)
+}
+
 /// Owen-scrambled Sobol dimensions 0 and 1 (or 2 and 3, `hi`) of the shuffled index `i`, the
-/// two coordinates scrambled by their own seeds from `h`.
+/// two coordinates scrambled by their own seeds `sx` and `sy` ([`coordinate_seeds`]).
 #[inline]
-fn net_2d(i: u32, hi: bool, h: u64) -> Vec2 {
-    let (sx, sy) = ((h >> 32) as u32, mix64(h) as u32);
+fn net_2d(i: u32, hi: bool, sx: u32, sy: u32) -> Vec2 {
     if hi {
         Vec2::new(to_unit(owen_sobol_hi(i, false, sx)), to_unit(owen_sobol_hi(i, true, sy)))
     } else {
@@ -317,11 +325,18 @@ pub fn get_1d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [f32
     for l in 0..N {
         h[l] = dim_hash(s.key[l], dim[l]);
     }
+    // The 32-bit seeds apart from the 64-bit hashes: a loop that mixes the two widths runs as
+    // many lanes per vector as 64-bit numbers fit (8 in AVX-512), one on 32-bit numbers alone
+    // twice as many.
+    let (mut seed, mut scramble) = ([0u32; N], [0u32; N]);
     for l in 0..N {
-        i[l] = shuffle(s.index[l], h[l] as u32);
+        (seed[l], scramble[l]) = (h[l] as u32, (h[l] >> 32) as u32);
     }
     for l in 0..N {
-        out[l] = to_unit(owen_sobol(i[l], false, (h[l] >> 32) as u32));
+        i[l] = shuffle(s.index[l], seed[l]);
+    }
+    for l in 0..N {
+        out[l] = to_unit(owen_sobol(i[l], false, scramble[l]));
     }
     out
 }
@@ -356,13 +371,19 @@ pub fn get_2d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [Vec
             hs[l] = dim_hash(key[l], group[l]);
         }
     }
+    // The 32-bit seeds apart from the 64-bit hashes (see `get_1d_lanes`).
+    let (mut seed, mut sx, mut sy) = ([0u32; N], [0u32; N], [0u32; N]);
+    for l in 0..N {
+        seed[l] = hs[l] as u32;
+        (sx[l], sy[l]) = coordinate_seeds(h[l]);
+    }
     let mut i = [0u32; N];
     for l in 0..N {
-        i[l] = shuffle(index[l], hs[l] as u32);
+        i[l] = shuffle(index[l], seed[l]);
     }
     let mut out = [Vec2::ZERO; N];
     for l in 0..N {
-        out[l] = lattice_2d(i[l], h[l], [g0[l], g1[l]]);
+        out[l] = lattice_2d(i[l], sx[l], sy[l], [g0[l], g1[l]]);
     }
     // BSDF directions and later light points, the common calls: no net to compute.
     if lattice.iter().all(|&x| x) {
@@ -384,8 +405,8 @@ pub fn get_2d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [Vec
         }
     }
     for l in 0..N {
-        let x = owen_reversed(ax[l], (h[l] >> 32) as u32).reverse_bits();
-        let y = owen_reversed(ay[l], mix64(h[l]) as u32).reverse_bits();
+        let x = owen_reversed(ax[l], sx[l]).reverse_bits();
+        let y = owen_reversed(ay[l], sy[l]).reverse_bits();
         let net = Vec2::new(to_unit(x), to_unit(y));
         out[l] = if lattice[l] { out[l] } else { net };
     }
