@@ -157,13 +157,16 @@ fn test_node(node: &Node, r: &BoxRay, tmax: f32) -> (u32, [f32; WIDTH]) {
 /// Asks for the four cache lines of the inner children in `mask` while the traversal sorts
 /// them and finishes the current branch: on the 1M-triangle knot, where nodes come from L3,
 /// bounce rays trace 7% faster to the closest hit and 12% faster to any hit (two of the four
-/// lines: no gain).
+/// lines: no gain). Leaf children go to `leaf(first, count)`, for the caller's own prefetch.
 #[inline(always)]
-fn prefetch_children(nodes: &[Node], node: &Node, mut mask: u32) {
+fn prefetch_children(nodes: &[Node], node: &Node, mut mask: u32, leaf: &impl Fn(u32, u32)) {
     while mask != 0 {
         let c = node.child[mask.trailing_zeros() as usize & 7];
         mask &= mask - 1;
-        if c & LEAF == 0 {
+        if c & LEAF != 0 {
+            let (first, count) = leaf_range(c);
+            leaf(first, count);
+        } else {
             let p = nodes.as_ptr().wrapping_add(c as usize).cast::<i8>();
             #[cfg(target_arch = "x86_64")]
             for line in 0..4 {
@@ -344,7 +347,21 @@ impl Bvh8 {
     /// best)` tests a leaf against the closest distance so far and returns the new closest
     /// (or `best` unchanged); the traversal returns the final closest.
     #[inline(always)]
-    pub fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+    pub fn closest(&self, o: Vec3A, d: Vec3A, tmax: f32, leaf: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+        self.closest_prefetching(o, d, tmax, leaf, |_, _| {})
+    }
+
+    /// [`Self::closest`], calling `prefetch_leaf(first, count)` for each leaf the ray enters as
+    /// soon as its parent is tested, so that the caller can ask for the leaf's data early.
+    #[inline(always)]
+    pub fn closest_prefetching(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+        mut leaf: impl FnMut(u32, u32, f32) -> f32,
+        prefetch_leaf: impl Fn(u32, u32),
+    ) -> f32 {
         if self.nodes.is_empty() {
             return tmax;
         }
@@ -359,7 +376,7 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, tnear) = test_node(node, &r, best);
-                prefetch_children(&self.nodes, node, mask);
+                prefetch_children(&self.nodes, node, mask, &prefetch_leaf);
                 if mask != 0 {
                     let a = mask.trailing_zeros() as usize & 7;
                     mask &= mask - 1;
@@ -416,7 +433,20 @@ impl Bvh8 {
     /// Any-hit traversal: true when `leaf(first, count)` reports a hit for some leaf the ray
     /// `o + t d`, `t` in `(0, tmax)`, enters.
     #[inline(always)]
-    pub fn any(&self, o: Vec3A, d: Vec3A, tmax: f32, mut leaf: impl FnMut(u32, u32) -> bool) -> bool {
+    pub fn any(&self, o: Vec3A, d: Vec3A, tmax: f32, leaf: impl FnMut(u32, u32) -> bool) -> bool {
+        self.any_prefetching(o, d, tmax, leaf, |_, _| {})
+    }
+
+    /// [`Self::any`] with `prefetch_leaf` as in [`Self::closest_prefetching`].
+    #[inline(always)]
+    pub fn any_prefetching(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+        mut leaf: impl FnMut(u32, u32) -> bool,
+        prefetch_leaf: impl Fn(u32, u32),
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -432,7 +462,7 @@ impl Bvh8 {
             } else {
                 let node = &self.nodes[cur as usize];
                 let (mut mask, _) = test_node(node, &r, tmax);
-                prefetch_children(&self.nodes, node, mask);
+                prefetch_children(&self.nodes, node, mask, &prefetch_leaf);
                 while mask != 0 {
                     let s = mask.trailing_zeros() as usize;
                     mask &= mask - 1;

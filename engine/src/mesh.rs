@@ -336,20 +336,26 @@ impl MeshBlas {
     pub fn intersect(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<MeshHit> {
         let r = TriRay::new(o, d);
         let (mut block, mut lane) = (u32::MAX, 0);
-        let t = self.bvh.closest(o, d, tmax, |first, count, best| {
-            let mut best = best;
-            for bi in first..first + count {
-                let (ts, mut hit) = self.blocks[bi as usize].intersect(&r, o, d, best);
-                while hit != 0 {
-                    let l = hit.trailing_zeros() as usize;
-                    hit &= hit - 1;
-                    if ts[l] < best {
-                        (best, block, lane) = (ts[l], bi, l);
+        let t = self.bvh.closest_prefetching(
+            o,
+            d,
+            tmax,
+            |first, count, best| {
+                let mut best = best;
+                for bi in first..first + count {
+                    let (ts, mut hit) = self.blocks[bi as usize].intersect(&r, o, d, best);
+                    while hit != 0 {
+                        let l = hit.trailing_zeros() as usize;
+                        hit &= hit - 1;
+                        if ts[l] < best {
+                            (best, block, lane) = (ts[l], bi, l);
+                        }
                     }
                 }
-            }
-            best
-        });
+                best
+            },
+            |first, count| self.prefetch(first, count),
+        );
         (block != u32::MAX).then(|| {
             let b = &self.blocks[block as usize];
             let p = [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
@@ -361,11 +367,34 @@ impl MeshBlas {
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
         let r = TriRay::new(o, d);
-        self.bvh.any(o, d, tmax, |first, count| {
-            self.blocks[first as usize..(first + count) as usize]
-                .iter()
-                .any(|b| b.intersect(&r, o, d, tmax).1 != 0)
-        })
+        self.bvh.any_prefetching(
+            o,
+            d,
+            tmax,
+            |first, count| {
+                self.blocks[first as usize..(first + count) as usize]
+                    .iter()
+                    .any(|b| b.intersect(&r, o, d, tmax).1 != 0)
+            },
+            |first, count| self.prefetch(first, count),
+        )
+    }
+
+    /// Asks for the cache lines of the first of the blocks `first..first + count`, as soon as
+    /// the traversal finds that a ray enters their leaf: mesh.ron's closest hits 9% and shadow
+    /// rays 7% faster; all of a leaf's blocks (up to 15 lines) gained less (benches/RESULTS.md).
+    #[inline(always)]
+    fn prefetch(&self, first: u32, _count: u32) {
+        let p = self.blocks.as_ptr().wrapping_add(first as usize).cast::<i8>();
+        #[cfg(target_arch = "x86_64")]
+        for line in 0..5 {
+            // SAFETY: a prefetch is only a hint; it does not fault on any address.
+            unsafe {
+                std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                    p.wrapping_add(64 * line),
+                )
+            };
+        }
     }
 
     /// Appends the `t` of every hit of the ray `o + t d`, `t > 0` (unsorted).
