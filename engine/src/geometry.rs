@@ -1,10 +1,10 @@
 //! The primitive list and its BVH (our 8-wide [`Bvh8`], built from obvhs's binary BVH):
 //! closest-hit and occlusion queries.
 
-use crate::bvh8::Bvh8;
+use crate::bvh8::{Bvh8, PACKET};
 use crate::flat::FlatPrims;
 use crate::math::Ray;
-use crate::shape::sphere::sphere_t_single;
+use crate::shape::sphere::{sphere_t, sphere_t_single};
 use crate::shape::{Primitive, SurfacePoint};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
@@ -155,7 +155,14 @@ impl Geometry {
     /// at rest.
     #[inline(always)]
     fn intersect_with(&self, ray: &Ray, tmax: f32, uv: bool, origin: impl Fn(usize) -> Vec3A) -> Option<Hit> {
-        let bvh = self.bvh.as_ref()?;
+        let (best, prim) = self.closest_with(ray, tmax, origin);
+        (prim != u32::MAX).then(|| self.hit(ray, best, prim, uv))
+    }
+
+    /// The closest hit's distance and primitive (`u32::MAX` and `tmax` for none).
+    #[inline(always)]
+    fn closest_with(&self, ray: &Ray, tmax: f32, origin: impl Fn(usize) -> Vec3A) -> (f32, u32) {
+        let Some(bvh) = self.bvh.as_ref() else { return (tmax, u32::MAX) };
         let mut prim = u32::MAX;
         let best = bvh.closest(ray.origin, ray.dir, tmax, |first, count, mut best| {
             for slot in first as usize..(first + count) as usize {
@@ -166,7 +173,67 @@ impl Geometry {
             }
             best
         });
-        (prim != u32::MAX).then(|| self.hit(ray, best, prim, uv))
+        (best, prim)
+    }
+
+    /// True for geometry without motion in a BVH: what [`Self::closest_static`] and
+    /// [`Self::closest_packet`] take.
+    pub fn is_static_bvh(&self) -> bool {
+        self.bvh.is_some() && self.velocity.is_none()
+    }
+
+    /// The closest hit's distance and primitive (`u32::MAX` and `tmax` for none) in geometry
+    /// without motion ([`Self::static_hit`] makes the hit record).
+    #[inline]
+    pub fn closest_static(&self, ray: &Ray, tmax: f32) -> (f32, u32) {
+        debug_assert!(self.velocity.is_none());
+        self.closest_with(ray, tmax, |_| ray.origin)
+    }
+
+    /// [`Self::closest_static`] for [`PACKET`] rays traced together ([`Bvh8::closest_packet`]):
+    /// `t[l]` holds ray `l`'s `tmax` on entry and its closest distance on return, and the
+    /// primitives are returned (`u32::MAX` for none). Spheres are tested across the packet's
+    /// lanes by [`sphere_t`] (the bits of [`sphere_t_single`]); other kinds ray by ray. Call it
+    /// in a [`crate::simd::lanes`] region.
+    #[inline(always)]
+    pub fn closest_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        t: &mut [f32; PACKET],
+    ) -> [u32; PACKET] {
+        debug_assert!(self.velocity.is_none());
+        let mut prim = [u32::MAX; PACKET];
+        let Some(bvh) = self.bvh.as_ref() else { return prim };
+        bvh.closest_packet(o, d, t, |first, count, active, best| {
+            for slot in first as usize..(first + count) as usize {
+                let [x, y, z, r] = self.spheres[slot];
+                if r.is_nan() {
+                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                        let (ol, dl) =
+                            (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+                        let h = self.prims[slot].intersect(ol, dl, best[l]);
+                        if h < best[l] {
+                            (best[l], prim[l]) = (h, slot as u32);
+                        }
+                    }
+                    continue;
+                }
+                for l in 0..PACKET {
+                    let h = sphere_t(
+                        [x, y, z],
+                        r,
+                        [o[0][l], o[1][l], o[2][l]],
+                        [d[0][l], d[1][l], d[2][l]],
+                        best[l],
+                    );
+                    let take = (active >> l & 1 != 0) & (h < best[l]);
+                    best[l] = if take { h } else { best[l] };
+                    prim[l] = if take { slot as u32 } else { prim[l] };
+                }
+            }
+        });
+        prim
     }
 
     /// [`Primitive::intersect`] of the primitive in `slot` (of the BVH's leaves), a sphere
