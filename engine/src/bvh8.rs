@@ -475,8 +475,59 @@ impl Bvh8 {
     }
 }
 
-/// Rays traced together by [`Bvh8::closest_packet`].
+/// Rays traced together by [`Bvh8::closest_packet`] and [`Bvh8::any_packet`].
 pub const PACKET: usize = 16;
+
+/// A packet's rays prepared for box tests, lane by lane as [`BoxRay::new`] prepares one.
+struct PacketRays<'a> {
+    o: &'a [[f32; PACKET]; 3],
+    inv: [[f32; PACKET]; 3],
+    neg: [[bool; PACKET]; 3],
+}
+
+impl<'a> PacketRays<'a> {
+    #[inline(always)]
+    fn new(o: &'a [[f32; PACKET]; 3], d: &[[f32; PACKET]; 3]) -> Self {
+        let (mut inv, mut neg) = ([[0.0f32; PACKET]; 3], [[false; PACKET]; 3]);
+        for a in 0..3 {
+            for l in 0..PACKET {
+                let x = d[a][l] + 0.0;
+                let x = if x.abs() < 1e-20 { 1e-20f32.copysign(x) } else { x };
+                inv[a][l] = 1.0 / x;
+                neg[a][l] = inv[a][l] < 0.0;
+            }
+        }
+        Self { o, inv, neg }
+    }
+
+    /// Child `c` of `node` against every ray, with the numbers of `test_node`: the entry
+    /// distances and the bit mask of the rays that enter the box before their `tmax`.
+    #[inline(always)]
+    fn enter(&self, node: &Node, c: usize, tmax: &[f32; PACKET]) -> ([f32; PACKET], u32) {
+        let (o, inv, neg) = (self.o, &self.inv, &self.neg);
+        let mut tnear = [0.0f32; PACKET];
+        let mut hit = [false; PACKET];
+        for l in 0..PACKET {
+            let mut near = [0.0f32; 3];
+            let mut far = [0.0f32; 3];
+            for a in 0..3 {
+                let (lo, hi) = (node.planes[2 * a][c], node.planes[2 * a + 1][c]);
+                let (pn, pf) = if neg[a][l] { (hi, lo) } else { (lo, hi) };
+                near[a] = (pn - o[a][l]) * inv[a][l];
+                far[a] = (pf - o[a][l]) * inv[a][l];
+            }
+            // The operations and order of `test_node`.
+            tnear[l] = near[0].max(near[1]).max(near[2].max(0.0));
+            let exit = far[0].min(far[1]).min(far[2]);
+            hit[l] = tnear[l] <= (exit * EXIT_SCALE).min(tmax[l]);
+        }
+        let mut m = 0u32;
+        for l in 0..PACKET {
+            m |= (hit[l] as u32) << l;
+        }
+        (tnear, m)
+    }
+}
 
 impl Bvh8 {
     /// Closest hits of [`PACKET`] rays `o + t d` traced together: for rays that start close
@@ -502,16 +553,7 @@ impl Bvh8 {
         if self.nodes.is_empty() {
             return;
         }
-        // `BoxRay::new` lane by lane.
-        let (mut inv, mut neg) = ([[0.0f32; PACKET]; 3], [[false; PACKET]; 3]);
-        for a in 0..3 {
-            for l in 0..PACKET {
-                let x = d[a][l] + 0.0;
-                let x = if x.abs() < 1e-20 { 1e-20f32.copysign(x) } else { x };
-                inv[a][l] = 1.0 / x;
-                neg[a][l] = inv[a][l] < 0.0;
-            }
-        }
+        let r = PacketRays::new(o, d);
         let all = (1u32 << PACKET) - 1;
         // Entries: a node, the rays that enter it and their entry distances (a ray whose
         // closest hit has come nearer by the time the entry is taken leaves it).
@@ -532,26 +574,7 @@ impl Bvh8 {
                     if node.child[c] == EMPTY {
                         continue;
                     }
-                    let mut tnear = [0.0f32; PACKET];
-                    let mut hit = [false; PACKET];
-                    for l in 0..PACKET {
-                        let mut near = [0.0f32; 3];
-                        let mut far = [0.0f32; 3];
-                        for a in 0..3 {
-                            let (lo, hi) = (node.planes[2 * a][c], node.planes[2 * a + 1][c]);
-                            let (pn, pf) = if neg[a][l] { (hi, lo) } else { (lo, hi) };
-                            near[a] = (pn - o[a][l]) * inv[a][l];
-                            far[a] = (pf - o[a][l]) * inv[a][l];
-                        }
-                        // The operations and order of `test_node`.
-                        tnear[l] = near[0].max(near[1]).max(near[2].max(0.0));
-                        let exit = far[0].min(far[1]).min(far[2]);
-                        hit[l] = tnear[l] <= (exit * EXIT_SCALE).min(best[l]);
-                    }
-                    let mut m = 0u32;
-                    for l in 0..PACKET {
-                        m |= (hit[l] as u32) << l;
-                    }
+                    let (tnear, m) = r.enter(node, c, best);
                     let m = m & active;
                     if m != 0 {
                         let t = if m >> lead & 1 != 0 { tnear[lead] } else { f32::INFINITY };
@@ -589,6 +612,51 @@ impl Bvh8 {
                 }
                 if m & still != 0 {
                     (cur, active) = (c, m & still);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Any hits of [`PACKET`] rays `o + t d`, `t` in `(0, tmax[l])`, traced together (see
+    /// [`Self::closest_packet`]): returns the bit mask of the rays for which `leaf(first, count,
+    /// active)` reported a hit (its result: a mask among `active`) in some leaf they enter. Each
+    /// ray gets the answer of [`Self::any`]; a ray that has one leaves the packet.
+    #[inline(always)]
+    pub fn any_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        tmax: &[f32; PACKET],
+        mut leaf: impl FnMut(u32, u32, u32) -> u32,
+    ) -> u32 {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let r = PacketRays::new(o, d);
+        let mut done = 0u32;
+        let mut stack = Stack::<(u32, u32)>::new();
+        let (mut cur, mut active) = (0u32, (1u32 << PACKET) - 1);
+        loop {
+            if cur & LEAF != 0 {
+                let (first, count) = leaf_range(cur);
+                done |= leaf(first, count, active) & active;
+            } else {
+                let node = &self.nodes[cur as usize];
+                for c in 0..WIDTH {
+                    if node.child[c] == EMPTY {
+                        continue;
+                    }
+                    let m = r.enter(node, c, tmax).1 & active;
+                    if m != 0 {
+                        stack.push((node.child[c], m));
+                    }
+                }
+            }
+            loop {
+                let Some((c, m)) = stack.pop() else { return done };
+                if m & !done != 0 {
+                    (cur, active) = (c, m & !done);
                     break;
                 }
             }
@@ -703,6 +771,28 @@ mod tests {
                     items.iter().filter_map(|&i| enters(&aabbs[i as usize], o, d, best)).fold(best, f32::min)
                 })
             });
+            // Any hit, each ray up to its closest box (some rays then hit nothing before it).
+            let tmax: [f32; PACKET] = std::array::from_fn(|l| want[l] * [0.5, 1.0, 2.0][l % 3]);
+            let occluded = bvh.any_packet(&o, &d, &tmax, |first, count, active| {
+                let mut hit = 0;
+                for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                    let (o, d) = ray(l);
+                    let items = &order[first as usize..(first + count) as usize];
+                    hit |= (items.iter().any(|&i| enters(&aabbs[i as usize], o, d, tmax[l]).is_some())
+                        as u32)
+                        << l;
+                }
+                hit
+            });
+            for l in 0..PACKET {
+                let (o, d) = ray(l);
+                let alone = bvh.any(o, d, tmax[l], |first, count| {
+                    order[first as usize..(first + count) as usize]
+                        .iter()
+                        .any(|&i| enters(&aabbs[i as usize], o, d, tmax[l]).is_some())
+                });
+                assert_eq!(occluded >> l & 1 != 0, alone, "round {round}, lane {l}: any hit");
+            }
             bvh.closest_packet(&o, &d, &mut best, |first, count, active, best| {
                 for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
                     let (o, d) = ray(l);

@@ -190,6 +190,46 @@ impl Geometry {
         self.closest_with(ray, tmax, |_| ray.origin)
     }
 
+    /// Which of [`PACKET`] rays traced together meet something with `t` in `(0, tmax[l])` in
+    /// geometry without motion ([`Bvh8::any_packet`]): a bit mask, each ray's bit the answer of
+    /// [`Self::occluded`]. Spheres are tested across the packet's lanes; call it in a
+    /// [`crate::simd::lanes`] region.
+    #[inline(always)]
+    pub fn occluded_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        tmax: &[f32; PACKET],
+    ) -> u32 {
+        debug_assert!(self.velocity.is_none());
+        let Some(bvh) = self.bvh.as_ref() else { return 0 };
+        bvh.any_packet(o, d, tmax, |first, count, active| {
+            let mut hit = 0u32;
+            for slot in first as usize..(first + count) as usize {
+                let [x, y, z, r] = self.spheres[slot];
+                if r.is_nan() {
+                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                        let (ol, dl) =
+                            (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+                        hit |= ((self.prims[slot].intersect(ol, dl, tmax[l]) < tmax[l]) as u32) << l;
+                    }
+                    continue;
+                }
+                for l in 0..PACKET {
+                    let h = sphere_t(
+                        [x, y, z],
+                        r,
+                        [o[0][l], o[1][l], o[2][l]],
+                        [d[0][l], d[1][l], d[2][l]],
+                        tmax[l],
+                    );
+                    hit |= ((h < tmax[l]) as u32) << l;
+                }
+            }
+            hit & active
+        })
+    }
+
     /// [`Self::closest_static`] for [`PACKET`] rays traced together ([`Bvh8::closest_packet`]):
     /// `t[l]` holds ray `l`'s `tmax` on entry and its closest distance on return, and the
     /// primitives are returned (`u32::MAX` for none). Spheres are tested across the packet's

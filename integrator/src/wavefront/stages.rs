@@ -83,6 +83,38 @@ fn closest_in_packets(geo: &Geometry, p: &Paths, active: &[u32], t: &mut [f32], 
     }
 }
 
+/// Occlusion of the shadow rays (tmax 1) in still geometry with a BVH, in packets of [`PACKET`]
+/// consecutive rays traced together (the last few one by one), then instances ray by ray: the
+/// answers of [`RenderScene::occluded`].
+fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue) {
+    let n = sq.len();
+    let groups = n / PACKET;
+    for g in 0..groups {
+        let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
+        for a in 0..3 {
+            o[a].copy_from_slice(&sq.rays.o[a][g * PACKET..(g + 1) * PACKET]);
+            d[a].copy_from_slice(&sq.rays.d[a][g * PACKET..(g + 1) * PACKET]);
+        }
+        let hit = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || scene.geometry.occluded_packet(&o, &d, &[1.0; PACKET]),
+        );
+        for l in 0..PACKET {
+            sq.occluded[g * PACKET + l] = hit >> l & 1 != 0;
+        }
+    }
+    for k in groups * PACKET..n {
+        sq.occluded[k] = scene.geometry.occluded(&sq.ray(k), 1.0);
+    }
+    if scene.features.instances {
+        for k in 0..n {
+            if !sq.occluded[k] {
+                sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
+            }
+        }
+    }
+}
+
 /// Sends path `i` to the medium queue if it scatters before the surface (scenes with media),
 /// else to the escaped queue or to its material's queue. Always inlined: as a call it took the
 /// 80-byte hit through the stack, read back in wider pieces than it was written (no store
@@ -409,6 +441,7 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
                 }
             }
         }
+        None if scene.geometry.is_static_bvh() => occluded_in_packets(scene, sq),
         None => {
             for k in 0..n {
                 sq.occluded[k] = scene.occluded(&sq.ray(k), 1.0);
