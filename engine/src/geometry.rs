@@ -192,8 +192,8 @@ impl Geometry {
 
     /// Which of [`PACKET`] rays traced together meet something with `t` in `(0, tmax[l])` in
     /// geometry without motion ([`Bvh8::any_packet`]): a bit mask, each ray's bit the answer of
-    /// [`Self::occluded`]. Spheres are tested across the packet's lanes; call it in a
-    /// [`crate::simd::lanes`] region.
+    /// [`Self::occluded`]. Spheres are tested across the packet's lanes
+    /// ([`Self::packet_test`]); call it in a [`crate::simd::lanes`] region.
     #[inline(always)]
     pub fn occluded_packet(
         &self,
@@ -206,35 +206,47 @@ impl Geometry {
         bvh.any_packet(o, d, tmax, |first, count, active| {
             let mut hit = 0u32;
             for slot in first as usize..(first + count) as usize {
-                let [x, y, z, r] = self.spheres[slot];
-                if r.is_nan() {
-                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
-                        let (ol, dl) =
-                            (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
-                        hit |= ((self.prims[slot].intersect(ol, dl, tmax[l]) < tmax[l]) as u32) << l;
-                    }
-                    continue;
-                }
+                let t = self.packet_test(slot, o, d, tmax, active);
                 for l in 0..PACKET {
-                    let h = sphere_t(
-                        [x, y, z],
-                        r,
-                        [o[0][l], o[1][l], o[2][l]],
-                        [d[0][l], d[1][l], d[2][l]],
-                        tmax[l],
-                    );
-                    hit |= ((h < tmax[l]) as u32) << l;
+                    hit |= ((t[l] < tmax[l]) as u32) << l;
                 }
             }
             hit & active
         })
     }
 
+    /// The distances at which the packet's rays meet primitive `slot` (of the BVH's leaves)
+    /// before their `tmax`: a sphere across the lanes by [`sphere_t`] (the bits of
+    /// [`sphere_t_single`], every lane computed), other kinds lane by lane for the `active`
+    /// rays (infinity for the others).
+    #[inline(always)]
+    fn packet_test(
+        &self,
+        slot: usize,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        tmax: &[f32; PACKET],
+        active: u32,
+    ) -> [f32; PACKET] {
+        let mut t = [f32::INFINITY; PACKET];
+        let [x, y, z, r] = self.spheres[slot];
+        if r.is_nan() {
+            for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                let (ol, dl) = (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+                t[l] = self.prims[slot].intersect(ol, dl, tmax[l]);
+            }
+            return t;
+        }
+        for l in 0..PACKET {
+            t[l] = sphere_t([x, y, z], r, [o[0][l], o[1][l], o[2][l]], [d[0][l], d[1][l], d[2][l]], tmax[l]);
+        }
+        t
+    }
+
     /// [`Self::closest_static`] for [`PACKET`] rays traced together ([`Bvh8::closest_packet`]):
     /// `t[l]` holds ray `l`'s `tmax` on entry and its closest distance on return, and the
     /// primitives are returned (`u32::MAX` for none). Spheres are tested across the packet's
-    /// lanes by [`sphere_t`] (the bits of [`sphere_t_single`]); other kinds ray by ray. Call it
-    /// in a [`crate::simd::lanes`] region.
+    /// lanes ([`Self::packet_test`]). Call it in a [`crate::simd::lanes`] region.
     #[inline(always)]
     pub fn closest_packet(
         &self,
@@ -247,28 +259,10 @@ impl Geometry {
         let Some(bvh) = self.bvh.as_ref() else { return prim };
         bvh.closest_packet(o, d, t, |first, count, active, best| {
             for slot in first as usize..(first + count) as usize {
-                let [x, y, z, r] = self.spheres[slot];
-                if r.is_nan() {
-                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
-                        let (ol, dl) =
-                            (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
-                        let h = self.prims[slot].intersect(ol, dl, best[l]);
-                        if h < best[l] {
-                            (best[l], prim[l]) = (h, slot as u32);
-                        }
-                    }
-                    continue;
-                }
+                let h = self.packet_test(slot, o, d, best, active);
                 for l in 0..PACKET {
-                    let h = sphere_t(
-                        [x, y, z],
-                        r,
-                        [o[0][l], o[1][l], o[2][l]],
-                        [d[0][l], d[1][l], d[2][l]],
-                        best[l],
-                    );
-                    let take = (active >> l & 1 != 0) & (h < best[l]);
-                    best[l] = if take { h } else { best[l] };
+                    let take = (active >> l & 1 != 0) & (h[l] < best[l]);
+                    best[l] = if take { h[l] } else { best[l] };
                     prim[l] = if take { slot as u32 } else { prim[l] };
                 }
             }
