@@ -1,5 +1,7 @@
 //! An 8-wide BVH with uncompressed child boxes, collapsed from an obvhs binary BVH (PLOC build,
-//! reinsertion, SAH leaf collapse), and its single-ray traversal.
+//! reinsertion, SAH leaf collapse), and its traversals: one ray at a time, or a packet of
+//! [`PACKET`] rays at a time (each node read once for the packet; every ray gets the hit it
+//! gets alone).
 //!
 //! obvhs's CWBVH quantises child boxes and decodes them per node; here a node holds its eight
 //! child boxes as plain `f32` lanes, so one node test is six subtractions, six multiplications
