@@ -192,8 +192,8 @@ impl Geometry {
 
     /// Which of [`PACKET`] rays traced together meet something with `t` in `(0, tmax[l])` in
     /// geometry without motion ([`Bvh8::any_packet`]): a bit mask, each ray's bit the answer of
-    /// [`Self::occluded`]. Spheres are tested across the packet's lanes
-    /// ([`Self::packet_test`]); call it in a [`crate::simd::lanes`] region.
+    /// [`Self::occluded`]. Spheres are tested across the packet's lanes by `sphere_t` (the bits
+    /// of `sphere_t_single`), other kinds ray by ray; call it in a [`crate::simd::lanes`] region.
     #[inline(always)]
     pub fn occluded_packet(
         &self,
@@ -246,7 +246,7 @@ impl Geometry {
     /// [`Self::closest_static`] for [`PACKET`] rays traced together ([`Bvh8::closest_packet`]):
     /// `t[l]` holds ray `l`'s `tmax` on entry and its closest distance on return, and the
     /// primitives are returned (`u32::MAX` for none). Spheres are tested across the packet's
-    /// lanes ([`Self::packet_test`]). Call it in a [`crate::simd::lanes`] region.
+    /// lanes by `sphere_t`, other kinds ray by ray. Call it in a [`crate::simd::lanes`] region.
     #[inline(always)]
     pub fn closest_packet(
         &self,
