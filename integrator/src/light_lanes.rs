@@ -172,21 +172,26 @@ impl LightOutLanes {
     /// those the kernel left to `pick_light`.
     #[inline]
     fn write(&self, k: Kind, kind: &[Kind; LANES], out: &mut LambertInLanes, done: &mut [bool; LANES]) {
-        // Selects over all lanes, not a loop over the chosen ones: it vectorises.
-        let mut take = [false; LANES];
+        // Selects over all lanes as bit masks, not a loop over the chosen ones: it vectorises.
+        // (`if take { a } else { b }` on array elements became a select of the two addresses
+        // and a scalar load per lane.)
+        let mut take = [0u32; LANES];
         for l in 0..LANES {
-            take[l] = (kind[l] == k) & !self.scalar[l];
+            take[l] = 0u32.wrapping_sub(((kind[l] == k) & !self.scalar[l]) as u32);
         }
-        for a in 0..3 {
+        let pick = |new: &[f32; LANES], old: &mut [f32; LANES]| {
             for l in 0..LANES {
-                out.wi[a][l] = if take[l] { self.wi[a][l] } else { out.wi[a][l] };
-                out.le[a][l] = if take[l] { self.le[a][l] } else { out.le[a][l] };
-                out.target[a][l] = if take[l] { self.target[a][l] } else { out.target[a][l] };
+                old[l] = f32::from_bits(new[l].to_bits() & take[l] | old[l].to_bits() & !take[l]);
             }
+        };
+        for a in 0..3 {
+            pick(&self.wi[a], &mut out.wi[a]);
+            pick(&self.le[a], &mut out.le[a]);
+            pick(&self.target[a], &mut out.target[a]);
         }
+        pick(&self.pdf, &mut out.pdf_light);
         for l in 0..LANES {
-            out.pdf_light[l] = if take[l] { self.pdf[l] } else { out.pdf_light[l] };
-            done[l] |= take[l];
+            done[l] |= take[l] != 0;
         }
     }
 }
