@@ -136,12 +136,22 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
         q.escaped.push(i);
         return;
     };
-    p.hit[i as usize] = hit;
+    store_hit(&mut p.hit[i as usize], &hit);
     let kind = scene.materials[hit.material as usize].kind();
     match kind.shading() {
         Shading::Emitter => q.emissive.push(i),
         Shading::Diffuse | Shading::Sampled | Shading::Glossy => q.shade[kind as usize].push(i),
     }
+}
+
+/// `*dst = *h` field by field: the hit is made on the stack piece by piece (a quad's `uv`
+/// and `err` as an 8- and a 4-byte store), and a whole-struct copy read it back in 16- and
+/// 32-byte pieces that no store forwards to.
+#[inline(always)]
+fn store_hit(dst: &mut Hit, h: &Hit) {
+    (dst.t, dst.prim, dst.material) = (h.t, h.prim, h.material);
+    let (d, s) = (&mut dst.surface, &h.surface);
+    (d.p, d.n, d.ns, d.uv, d.err) = (s.p, s.n, s.ns, s.uv, s.err);
 }
 
 /// Free-flight sampling for path `i` up to the surface at `tmax`: true (and the path queued for
