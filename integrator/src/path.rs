@@ -375,8 +375,10 @@ pub fn scatter(
     scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(scene, sampler, st.depth))
 }
 
-/// [`scatter`] with the vertex's numbers `u` drawn already.
-#[inline]
+/// [`scatter`] with the vertex's numbers `u` drawn already. Always inlined: as a call, `st`
+/// went through memory, written field by field and read back two fields per load (beta's z with
+/// the IOR scale), which no store forwards to (spheres-sky: a quarter of the function's time).
+#[inline(always)]
 pub fn scatter_with(
     scene: &RenderScene,
     st: &mut PathState,

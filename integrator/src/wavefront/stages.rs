@@ -339,9 +339,12 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
             let s = i as usize;
             let mut st = p.state(s);
             let hit = &p.hit[s];
-            let next = scene.with_material(hit.material, &hit.surface, |mat| {
-                path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l])
-            });
+            let next = scene.with_material(
+                hit.material,
+                &hit.surface,
+                #[inline(always)]
+                |mat| path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]),
+            );
             route(p, q, i, None, next);
             p.set_state(s, &st);
         }
