@@ -32,6 +32,30 @@ impl Pose {
     }
 }
 
+/// `N` rays, one array per coordinate ([`Camera::generate_rays`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RayLanes<const N: usize> {
+    /// Origins.
+    pub o: [[f32; N]; 3],
+    /// Unit directions.
+    pub d: [[f32; N]; 3],
+    /// Times.
+    pub time: [f32; N],
+}
+
+impl<const N: usize> RayLanes<N> {
+    /// Ray `l`.
+    #[inline(always)]
+    pub fn ray(&self, l: usize) -> Ray {
+        let (o, d) = (&self.o, &self.d);
+        Ray {
+            origin: Vec3A::new(o[0][l], o[1][l], o[2][l]),
+            dir: Vec3A::new(d[0][l], d[1][l], d[2][l]),
+            time: self.time[l],
+        }
+    }
+}
+
 /// A camera ready to generate rays for an image of a given size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
@@ -105,34 +129,37 @@ impl Camera {
     /// [`Self::generate_ray`] for `N` samples at once (`pixel`, `lens` and `time_u` per lane),
     /// with the same bits: a camera at rest computes every lane with the same operations on
     /// plain numbers, which vectorise inside [`crate::simd::lanes`]; a moving camera takes
-    /// [`Self::generate_ray`] lane by lane.
+    /// [`Self::generate_ray`] lane by lane. The rays come as one array per coordinate: written
+    /// as `Ray` values, each lane's coordinates were stored one by one and read back as 16 bytes,
+    /// which no store forwards to.
     #[inline(always)]
     pub fn generate_rays<const N: usize>(
         &self,
         pixel: &[[f32; 2]; N],
         lens: &[[f32; 2]; N],
         time_u: &[f32; N],
-    ) -> [Ray; N] {
-        let mut out = [Ray { origin: Vec3A::ZERO, dir: Vec3A::Z, time: 0.0 }; N];
+    ) -> RayLanes<N> {
+        let mut out = RayLanes { o: [[0.0; N]; 3], d: [[0.0; N]; 3], time: [0.0; N] };
+        let mut set = |l: usize, (o, d, t): ([f32; 3], [f32; 3], f32)| {
+            for a in 0..3 {
+                (out.o[a][l], out.d[a][l]) = (o[a], d[a]);
+            }
+            out.time[l] = t;
+        };
         if self.close.is_some() {
             for l in 0..N {
-                out[l] = self.generate_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
+                let r = self.generate_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
+                set(l, (r.origin.to_array(), r.dir.to_array(), r.time));
             }
-            return out;
-        }
-        let (mut o, mut d, mut t) = ([[0.0; 3]; N], [[0.0; 3]; N], [0.0; N]);
-        // One loop per case, so that a pinhole camera's lanes compute no lens point.
-        if self.has_aperture() {
+        } else if self.has_aperture() {
+            // One loop per case, so that a pinhole camera's lanes compute no lens point.
             for l in 0..N {
-                (o[l], d[l], t[l]) = self.ray_from(&self.pose, true, pixel[l], lens[l], time_u[l]);
+                set(l, self.ray_from(&self.pose, true, pixel[l], lens[l], time_u[l]));
             }
         } else {
             for l in 0..N {
-                (o[l], d[l], t[l]) = self.ray_from(&self.pose, false, pixel[l], lens[l], time_u[l]);
+                set(l, self.ray_from(&self.pose, false, pixel[l], lens[l], time_u[l]));
             }
-        }
-        for l in 0..N {
-            out[l] = Ray { origin: o[l].into(), dir: d[l].into(), time: t[l] };
         }
         out
     }
@@ -235,7 +262,7 @@ mod tests {
             let base = cam.generate_rays(&pixel, &on_lens, &time);
             for k in 0..16 {
                 let r = cam.generate_ray(Vec2::from(pixel[k]), Vec2::from(on_lens[k]), time[k]);
-                for got in [wide[k], base[k]] {
+                for got in [wide.ray(k), base.ray(k)] {
                     let bits =
                         |r: &Ray| (r.origin.to_array().map(f32::to_bits), r.dir.to_array().map(f32::to_bits));
                     assert_eq!(bits(&got), bits(&r), "lane {k}");

@@ -11,7 +11,7 @@ use crate::path;
 use crate::sampler::{self, Dims, Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
-use pathwave_engine::math::Ray;
+use pathwave_engine::camera::RayLanes;
 use pathwave_engine::render_scene::RenderScene;
 use std::ops::Range;
 use std::time::Instant;
@@ -188,7 +188,7 @@ impl<'a> TileWork<'a> {
             let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
             for l in 0..m {
                 let slot = q.free.pop().expect("a free slot for every new path");
-                let ray = rays[l];
+                let ray = rays.ray(l);
                 let s = slot as usize;
                 p.set_ray(s, ray);
                 p.set_state(s, &path::PathState::new(ray.origin));
@@ -224,7 +224,7 @@ impl<'a> TileWork<'a> {
 /// [`path::camera_ray`] for `LANES` samples at once, their numbers and rays computed across
 /// lanes (the same bits).
 #[inline]
-fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> [Ray; LANES] {
+fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> RayLanes<LANES> {
     pathwave_engine::simd::lanes(
         #[inline(always)]
         || {
