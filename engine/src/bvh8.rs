@@ -568,7 +568,7 @@ impl Bvh8 {
     /// active, best)` tests a leaf against the rays in the bit mask `active` and lowers their
     /// `best`.
     ///
-    /// A subtree that at most [`SOLO`] of the packet's rays enter is traced ray by ray (a node's
+    /// A subtree that at most four of the packet's rays enter is traced ray by ray (a node's
     /// eight children tested at once, as [`Self::closest`] does), after Benthin et al.,
     /// "Combining Single and Packet-Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
     /// Architecture" (IEEE TVCG 2012): bounce rays part ways after a few levels, and spheres-sky's
