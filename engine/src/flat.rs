@@ -113,11 +113,67 @@ impl Ellipsoid {
     }
 }
 
+/// A quad whose normal is a coordinate axis `k` and whose edge vectors `ea`, `eb` (see
+/// [`quad_t`]) each have one non-zero coordinate, `i` and `j`: the walls, floors and lights of
+/// box-like rooms. Its test reads three coordinates where [`quad_t`] forms three dot products,
+/// with the same bits: the terms dropped are products with exact zeros, which leave a finite
+/// sum unchanged, and where they would not (a zero sum, whose sign they may flip, or an
+/// infinite `t`) `quad_t` misses either way. cornell-diffuse (6 of its 18 quads): closest hits
+/// 3.5% and shadow rays 10% faster.
+#[derive(Clone, Copy, Debug)]
+struct AxisQuad {
+    /// The normal's axis and the axes `ea` and `eb` read.
+    k: usize,
+    i: usize,
+    j: usize,
+    /// The corner's coordinates along `k`, `i` and `j`.
+    q: [f32; 3],
+    /// The normal's, `ea`'s and `eb`'s non-zero coordinates.
+    n: f32,
+    ea: f32,
+    eb: f32,
+}
+
+impl AxisQuad {
+    /// The axis form of the quad kernel `[q, n, ea, eb]` of [`quad_t`], if it has one.
+    fn new([q, n, ea, eb]: [[f32; 3]; 4]) -> Option<Self> {
+        let only = |v: [f32; 3]| match v.map(|x| x != 0.0) {
+            [true, false, false] => Some(0),
+            [false, true, false] => Some(1),
+            [false, false, true] => Some(2),
+            _ => None,
+        };
+        let (k, i, j) = (only(n)?, only(ea)?, only(eb)?);
+        let q = [q[k], q[i], q[j]];
+        (k != i && k != j && i != j).then_some(Self { k, i, j, q, n: n[k], ea: ea[i], eb: eb[j] })
+    }
+
+    /// The first `n` entries of the coordinate arrays `c` along `k`, `i` and `j`.
+    #[inline(always)]
+    fn pick<'a>(&self, c: &'a [Vec<f32>; 3], n: usize) -> [&'a [f32]; 3] {
+        [&c[self.k][..n], &c[self.i][..n], &c[self.j][..n]]
+    }
+
+    /// [`quad_t`] of the quad, from the ray's coordinates along `k`, `i` and `j`.
+    #[inline(always)]
+    fn t(&self, [ok, oi, oj]: [f32; 3], [dk, di, dj]: [f32; 3], tmax: f32) -> f32 {
+        let oq = [ok - self.q[0], oi - self.q[1], oj - self.q[2]];
+        let denom = self.n * dk;
+        let t = -(self.n * oq[0]) / denom;
+        let a = self.ea * (oq[1] + t * di);
+        let b = self.eb * (oq[2] + t * dj);
+        let hit = denom != 0.0 && t > 0.0 && t < tmax && a >= 0.0 && a <= 1.0 && b >= 0.0 && b <= 1.0;
+        if hit { t } else { f32::INFINITY }
+    }
+}
+
 /// Quads, spheres and ellipsoids as flat arrays, other kinds without a stream test as they
 /// are, with their primitive indices.
 #[derive(Default, Debug)]
 pub struct FlatPrims {
     quads: Vec<[[f32; 3]; 4]>,
+    /// Per quad, its [`AxisQuad`] form when it has one.
+    axis: Vec<Option<AxisQuad>>,
     quad_id: Vec<u32>,
     spheres: Vec<([f32; 3], f32)>,
     sphere_id: Vec<u32>,
@@ -137,6 +193,7 @@ impl FlatPrims {
             match p {
                 Primitive::Quad(q) => {
                     f.quads.push(q.kernel());
+                    f.axis.push(AxisQuad::new(q.kernel()));
                     f.quad_id.push(i as u32);
                 }
                 Primitive::Sphere(s) => {
@@ -223,6 +280,16 @@ impl FlatPrims {
         let (ox, oy, oz, dx, dy, dz) = (&ox[..n], &oy[..n], &oz[..n], &dx[..n], &dy[..n], &dz[..n]);
         for (k, q) in self.quads.iter().enumerate() {
             let pid = self.quad_id[k];
+            if let Some(a) = self.axis[k] {
+                let ([ok, oi, oj], [dk, di, dj]) = (a.pick(&rays.o, n), a.pick(&rays.d, n));
+                for i in 0..n {
+                    let h = a.t([ok[i], oi[i], oj[i]], [dk[i], di[i], dj[i]], t[i]);
+                    let better = h < t[i];
+                    t[i] = if better { h } else { t[i] };
+                    id[i] = if better { pid } else { id[i] };
+                }
+                continue;
+            }
             for i in 0..n {
                 let h = quad_t(*q, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], t[i]);
                 let better = h < t[i];
@@ -275,7 +342,14 @@ impl FlatPrims {
         let [ox, oy, oz] = &rays.o;
         let [dx, dy, dz] = &rays.d;
         let (ox, oy, oz, dx, dy, dz) = (&ox[..n], &oy[..n], &oz[..n], &dx[..n], &dy[..n], &dz[..n]);
-        for q in &self.quads {
+        for (k, q) in self.quads.iter().enumerate() {
+            if let Some(a) = self.axis[k] {
+                let ([ok, oi, oj], [dk, di, dj]) = (a.pick(&rays.o, n), a.pick(&rays.d, n));
+                for i in 0..n {
+                    hit[i] |= a.t([ok[i], oi[i], oj[i]], [dk[i], di[i], dj[i]], 1.0) < 1.0;
+                }
+                continue;
+            }
             for i in 0..n {
                 hit[i] |= quad_t(*q, [ox[i], oy[i], oz[i]], [dx[i], dy[i], dz[i]], 1.0) < 1.0;
             }
@@ -340,5 +414,45 @@ mod tests {
             }
         }
         assert!(hits > rays / 4, "{hits} hits of {rays}");
+    }
+
+    /// Quads along the axes take the axis test, with the bits of `quad_t`, also for rays
+    /// parallel to the plane or starting on it; a tilted quad keeps the general test.
+    #[test]
+    fn axis_quads_give_the_bits_of_the_quad_test() {
+        use crate::shape::quad::Quad;
+        let mut rnd = signed(5);
+        let (mut hits, mut rays) = (0, 0);
+        for case in 0..300 {
+            let k = case % 3;
+            let (i, j) = ((k + 1 + case / 3 % 2) % 3, (k + 2 - case / 3 % 2) % 3);
+            let axis =
+                |a: usize, len: f32| Vec3A::from(std::array::from_fn(|c| if c == a { len } else { 0.0 }));
+            let (u, v) = (axis(i, rnd() * 600.0), axis(j, rnd() * 600.0));
+            let corner = Vec3A::new(rnd(), rnd(), rnd()) * 300.0;
+            let Some(quad) = Quad::new(corner, u, v) else { continue };
+            let kernel = quad.kernel();
+            let a = AxisQuad::new(kernel).expect("an axis quad");
+            for r in 0..100 {
+                let mut o = Vec3A::new(rnd(), rnd(), rnd()) * 600.0;
+                let aim = corner + u * (0.5 + rnd() * 0.7) + v * (0.5 + rnd() * 0.7);
+                let mut d = aim - o;
+                match r % 10 {
+                    0 => d[k] = 0.0,
+                    1 => o[k] = corner[k],
+                    2 => d = -d,
+                    _ => {}
+                }
+                let tmax = if r % 3 == 0 { rnd().abs() * 2.0 } else { f32::INFINITY };
+                let want = quad_t(kernel, o.to_array(), d.to_array(), tmax);
+                let pick = |x: Vec3A| [x[a.k], x[a.i], x[a.j]];
+                assert_eq!(a.t(pick(o), pick(d), tmax).to_bits(), want.to_bits(), "{o} {d} {tmax}");
+                hits += want.is_finite() as u32;
+                rays += 1;
+            }
+        }
+        assert!(hits > rays / 4, "{hits} hits of {rays}");
+        let tilted = Quad::new(Vec3A::ZERO, Vec3A::new(1.0, 0.0, 0.1), Vec3A::Y).expect("a quad");
+        assert!(AxisQuad::new(tilted.kernel()).is_none());
     }
 }
