@@ -74,16 +74,25 @@ pub fn offset_ray_origin(p: Vec3A, err: f32, n: Vec3A) -> Vec3A {
     let d = err * n.abs().element_sum();
     let offset = d * n;
     let po = p + offset;
-    let away = |x: f32, o: f32| {
-        if o > 0.0 {
-            x.next_up()
-        } else if o < 0.0 {
-            x.next_down()
-        } else {
-            x
-        }
-    };
-    Vec3A::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
+    Vec3A::new(step_away(po.x, offset.x), step_away(po.y, offset.y), step_away(po.z, offset.z))
+}
+
+/// `x.next_up()` where `o > 0`, `x.next_down()` where `o < 0`, else `x`: the same bits, by
+/// selects on the bit pattern instead of branches on the signs (the signs of the offsets of
+/// [`offset_ray_origin`] are as unpredictable as the normals, and the branches were 1.5% of
+/// cornell's time).
+#[inline(always)]
+pub fn step_away(x: f32, o: f32) -> f32 {
+    let (up, down) = (o > 0.0, o < 0.0);
+    let bits = x.to_bits();
+    let negative = bits >> 31 != 0;
+    // Away from zero adds one to the magnitude's bits, towards zero subtracts one.
+    let moved = if up != negative { bits.wrapping_add(1) } else { bits.wrapping_sub(1) };
+    // From either zero the step lands on the smallest subnormal of the step's sign.
+    let moved = if bits << 1 == 0 { if up { 1 } else { 0x8000_0001 } } else { moved };
+    // NaN, and infinity stepped away from zero, stay as they are (as `next_up` keeps them).
+    let stays = !(up || down) || x.is_nan() || (x.is_infinite() && up != negative);
+    if stays { x } else { f32::from_bits(moved) }
 }
 
 /// Mirror reflection of `wo` (pointing away from the surface) about `n`.
@@ -232,6 +241,25 @@ mod tests {
             assert!((f.b.length() - 1.0).abs() < 1e-6);
             assert!(f.t.dot(f.b).abs() < 1e-6 && f.t.dot(n).abs() < 1e-6 && f.b.dot(n).abs() < 1e-6);
             assert!((f.t.cross(f.b) - n).length() < 1e-5, "right handed");
+        }
+    }
+
+    #[test]
+    fn step_away_is_next_up_and_next_down() {
+        let mut xs = vec![0.0f32, -0.0, 1.0, -1.0, f32::MAX, f32::MIN, f32::INFINITY, f32::NEG_INFINITY];
+        xs.extend([f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::from_bits(1), -f32::from_bits(1), f32::NAN]);
+        xs.extend((0..2000).map(|k| f32::from_bits((k as u32).wrapping_mul(2_654_435_761))));
+        for x in xs {
+            for o in [1.0f32, -1.0, 0.0, -0.0, f32::NAN, 1e-30] {
+                let want = if o > 0.0 {
+                    x.next_up()
+                } else if o < 0.0 {
+                    x.next_down()
+                } else {
+                    x
+                };
+                assert_eq!(step_away(x, o).to_bits(), want.to_bits(), "{x:e} ({:#x}) {o}", x.to_bits());
+            }
         }
     }
 
