@@ -183,6 +183,7 @@ impl<'a> TileWork<'a> {
                     }
                 }
             }
+            let guides = self.guide_sums.is_some();
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
             let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
@@ -194,7 +195,10 @@ impl<'a> TileWork<'a> {
                 p.set_state(s, &path::PathState::new(ray.origin));
                 p.sampler[s] = samplers[l];
                 p.pixel[s] = which[l].0;
-                p.guide[s] = Guide::NEW;
+                // Only what the denoiser reads is written (52 bytes per path otherwise).
+                if guides {
+                    p.guide[s] = Guide::NEW;
+                }
                 q.active.push(slot);
             }
             self.next_sample += m as u64;
