@@ -551,11 +551,7 @@ impl<'a> PacketRays<'a> {
             let exit = far[0].min(far[1]).min(far[2]);
             hit[l] = tnear[l] <= (exit * EXIT_SCALE).min(tmax[l]);
         }
-        let mut m = 0u32;
-        for l in 0..PACKET {
-            m |= (hit[l] as u32) << l;
-        }
-        (tnear, m)
+        (tnear, crate::simd::mask16(&hit))
     }
 }
 
@@ -658,10 +654,11 @@ impl Bvh8 {
             // Take the next entry that some ray still enters before its closest hit.
             loop {
                 let Some((c, m, tnear)) = stack.pop() else { return };
-                let mut still = 0u32;
+                let mut still = [false; PACKET];
                 for l in 0..PACKET {
-                    still |= ((tnear[l] <= best[l]) as u32) << l;
+                    still[l] = tnear[l] <= best[l];
                 }
+                let still = crate::simd::mask16(&still);
                 if m & still != 0 {
                     (cur, active) = (c, m & still);
                     break;

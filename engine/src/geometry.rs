@@ -204,14 +204,14 @@ impl Geometry {
         debug_assert!(self.velocity.is_none());
         let Some(bvh) = self.bvh.as_ref() else { return 0 };
         bvh.any_packet(o, d, tmax, |first, count, active| {
-            let mut hit = 0u32;
+            let mut hit = [false; PACKET];
             for slot in first as usize..(first + count) as usize {
                 let t = self.packet_test(slot, o, d, tmax, active);
                 for l in 0..PACKET {
-                    hit |= ((t[l] < tmax[l]) as u32) << l;
+                    hit[l] |= t[l] < tmax[l];
                 }
             }
-            hit & active
+            crate::simd::mask16(&hit) & active
         })
     }
 

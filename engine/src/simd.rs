@@ -83,3 +83,26 @@ pub fn lanes<R>(f: impl FnOnce() -> R) -> R {
 unsafe fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
+
+/// The bit mask of 16 flags, flag `l` at bit `l`: one shift and a byte `movemask` on x86-64.
+/// The loop `m |= (b[l] as u32) << l` vectorises as a tree of variable shifts and ORs (nine
+/// instructions where one does), 4-5% of spheres-sky's time in its BVH packets.
+#[inline(always)]
+pub fn mask16(b: &[bool; 16]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86-64; the load reads the 16 bytes of `b` (a bool is the byte 0
+    // or 1, so shifting each byte's low bit to its top gives `movemask` the flags).
+    unsafe {
+        use std::arch::x86_64::*;
+        let v = _mm_loadu_si128(b.as_ptr().cast());
+        _mm_movemask_epi8(_mm_slli_epi16::<7>(v)) as u32
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let mut m = 0u32;
+        for (l, &x) in b.iter().enumerate() {
+            m |= (x as u32) << l;
+        }
+        m
+    }
+}
