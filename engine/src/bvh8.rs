@@ -508,6 +508,12 @@ pub const PACKET: usize = 16;
 /// gave the same rates on spheres-sky).
 const SOLO: u32 = 4;
 
+/// Ray `l` of a packet, prepared alone.
+#[inline(always)]
+fn lane_ray(o: &[[f32; PACKET]; 3], d: &[[f32; PACKET]; 3], l: usize) -> BoxRay {
+    BoxRay::new(Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]))
+}
+
 /// A packet's rays prepared for box tests, lane by lane as [`BoxRay::new`] prepares one.
 struct PacketRays<'a> {
     o: &'a [[f32; PACKET]; 3],
@@ -602,14 +608,12 @@ impl Bvh8 {
                 while m != 0 {
                     let l = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let (ol, dl) =
-                        (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
                     let start = best[l];
                     let one = |first, count, _| {
                         leaf(first, count, 1 << l, best);
                         best[l]
                     };
-                    self.closest_from(cur, &BoxRay::new(ol, dl), start, one, |_, _| {});
+                    self.closest_from(cur, &lane_ray(o, d, l), start, one, |_, _| {});
                 }
             } else {
                 let node = &self.nodes[cur as usize];
@@ -696,10 +700,8 @@ impl Bvh8 {
                 while m != 0 {
                     let l = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let (ol, dl) =
-                        (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
                     let one = |first, count| leaf(first, count, 1 << l) & 1 << l != 0;
-                    if self.any_from(cur, &BoxRay::new(ol, dl), tmax[l], one, |_, _| {}) {
+                    if self.any_from(cur, &lane_ray(o, d, l), tmax[l], one, |_, _| {}) {
                         done |= 1 << l;
                     }
                 }
