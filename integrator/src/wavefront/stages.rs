@@ -11,6 +11,7 @@ use pathwave_engine::geometry::{Geometry, Hit};
 use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::shape::SurfacePoint;
 
 /// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
 /// their material kind. Scenes without a BVH are traced as one stream, primitive by primitive;
@@ -127,7 +128,7 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
     {
         // The surface behind the medium (infinitely far when none), for `record_guides`.
         match hit {
-            Some(h) => p.hit[i as usize] = h,
+            Some(h) => store_hit(&mut p.hit[i as usize], &h),
             None => p.hit[i as usize].t = f32::INFINITY,
         }
         return;
@@ -146,12 +147,15 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<H
 
 /// `*dst = *h` field by field: the hit is made on the stack piece by piece (a quad's `uv`
 /// and `err` as an 8- and a 4-byte store), and a whole-struct copy read it back in 16- and
-/// 32-byte pieces that no store forwards to.
+/// 32-byte pieces that no store forwards to. The patterns name every field, so that a field
+/// added to either struct stops the build here.
 #[inline(always)]
 fn store_hit(dst: &mut Hit, h: &Hit) {
-    (dst.t, dst.prim, dst.material) = (h.t, h.prim, h.material);
-    let (d, s) = (&mut dst.surface, &h.surface);
-    (d.p, d.n, d.ns, d.uv, d.err) = (s.p, s.n, s.ns, s.uv, s.err);
+    let Hit { t, prim, material, surface } = h;
+    let SurfacePoint { p, n, ns, uv, err } = surface;
+    (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
+    let d = &mut dst.surface;
+    (d.p, d.n, d.ns, d.uv, d.err) = (*p, *n, *ns, *uv, *err);
 }
 
 /// Free-flight sampling for path `i` up to the surface at `tmax`: true (and the path queued for
