@@ -86,7 +86,9 @@ impl Camera {
         let w = Vec3A::from(look_from - look_at).normalize();
         let u = Vec3A::from(vup).cross(w).normalize();
         let v = w.cross(u);
-        let h = 2.0 * (vfov.to_radians() / 2.0).tan() * focus_dist;
+        // The tangent in f64, rounded: a C library's last bits reach the f32 only at a rounding
+        // tie (about one value in 2^29).
+        let h = 2.0 * ((vfov as f64).to_radians() / 2.0).tan() as f32 * focus_dist;
         let wd = h * width as f32 / height as f32;
         let origin = Vec3A::from(look_from);
         let du = u * (wd / width as f32);

@@ -55,8 +55,8 @@ pub fn direction_to_uv(dir: Vec3A) -> Option<(Vec2, f32)> {
     }
     // atan2 of the two components is accurate near the poles, unlike acos(d.y).
     let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
-    let u = wrap01(d.x.atan2(-d.z) / TAU);
-    let v = (sin_theta.atan2(d.y) / PI).clamp(0.0, 1.0);
+    let u = wrap01(crate::math::atan2(d.x, -d.z) / TAU);
+    let v = (crate::math::atan2(sin_theta, d.y) / PI).clamp(0.0, 1.0);
     Some((Vec2::new(u, v), sin_theta.min(1.0)))
 }
 
@@ -64,8 +64,9 @@ pub fn direction_to_uv(dir: Vec3A) -> Option<(Vec2, f32)> {
 /// 2 pi u measured from -z towards +x. The inverse of [`direction_to_uv`].
 #[inline]
 pub fn uv_to_direction(uv: Vec2) -> Vec3A {
-    let (sin_theta, cos_theta) = (PI * uv.y).sin_cos();
-    let (sin_phi, cos_phi) = (TAU * uv.x).sin_cos();
+    // Half a turn for theta, a turn (wrapped) for phi: polynomials, not the C library's.
+    let (cos_theta, sin_theta) = crate::math::cos_sin_turn(wrap01(0.5 * uv.y));
+    let (cos_phi, sin_phi) = crate::math::cos_sin_turn(wrap01(uv.x));
     Vec3A::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
 }
 
@@ -110,7 +111,8 @@ impl LatLongSampler {
         assert_eq!(weights.len(), w * h, "LatLongSampler: {width} x {height} cells need as many weights");
         let mut area_weighted = Vec::with_capacity(weights.len());
         for (j, row) in weights.chunks_exact(w.max(1)).enumerate() {
-            let sin_theta = (PI * (j as f32 + 0.5) / h as f32).sin();
+            // In f64, rounded: a C library's last bits reach the f32 only at a rounding tie.
+            let sin_theta = (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin() as f32;
             area_weighted.extend(row.iter().map(|&x| clean(x) * sin_theta));
         }
         let dist = Distribution2D::new(w, h, &area_weighted)?;

@@ -101,19 +101,12 @@ pub fn reflect(wo: Vec3A, n: Vec3A) -> Vec3A {
     2.0 * wo.dot(n) * n - wo
 }
 
-/// Shirley-Chiu concentric map from the unit square to the unit disk.
+/// Shirley-Chiu concentric map from the unit square to the unit disk ([`disk_branch_free`]'s
+/// numbers).
 #[inline]
 pub fn concentric_disk(u: Vec2) -> Vec2 {
-    let o = 2.0 * u - Vec2::ONE;
-    if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (o.y, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+    let (x, y) = disk_branch_free([u.x, u.y]);
+    Vec2::new(x, y)
 }
 
 /// sin and cos on [-pi/4, pi/4] (Taylor to degree 7 and 8: errors below 3.2e-7 and 2.5e-8).
@@ -181,8 +174,65 @@ pub fn disk_branch_free(u: [f32; 2]) -> (f32, f32) {
 pub fn uniform_sphere(u: Vec2) -> Vec3A {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u.y;
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+    let (cos_phi, sin_phi) = cos_sin_turn(u.y);
+    Vec3A::new(r * cos_phi, r * sin_phi, z)
+}
+
+/// `sin(x)`: the angle reduced to a turn in `f64`, then [`cos_sin_turn`]'s polynomial (absolute
+/// error below 6e-7). The same bits on every machine, which the C library's
+/// `sinf` does not promise.
+#[inline]
+pub fn sin(x: f32) -> f32 {
+    let t = x as f64 / std::f64::consts::TAU;
+    cos_sin_turn((t - t.floor()) as f32).1
+}
+
+/// `atan2(y, x)` from IEEE operations alone: the ratio of the smaller magnitude to the larger,
+/// reduced to [-tan(pi/8), tan(pi/8)], and the polynomial of Cephes' `atanf` (S. L. Moshier,
+/// Cephes Mathematical Library); absolute error below 3e-7. The same bits on every machine,
+/// which the C library's `atan2f` does not promise. Unlike it, `atan2(+-0, -0)` is `+-0` and
+/// two infinities give NaN; NaN in, NaN out.
+#[inline]
+pub fn atan2(y: f32, x: f32) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    let (ax, ay) = (x.abs(), y.abs());
+    // Comparisons with NaN are false: a NaN reaches the ratio and the result.
+    let steep = ay > ax;
+    let (lo, hi) = if steep { (ax, ay) } else { (ay, ax) };
+    let a = if hi == 0.0 { 0.0 } else { lo / hi };
+    let far = a > 0.414_213_57;
+    let t = if far { (a - 1.0) / (a + 1.0) } else { a };
+    let z = t * t;
+    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t + t;
+    let r = if far { FRAC_PI_4 + p } else { p };
+    let r = if steep { FRAC_PI_2 - r } else { r };
+    let r = if x < 0.0 { PI - r } else { r };
+    r.copysign(y)
+}
+
+/// `acos(x)` for x in [-1, 1] as [`atan2`] of `sqrt((1 - x)(1 + x))` and `x` (absolute error
+/// below 3e-7); NaN outside.
+#[inline]
+pub fn acos(x: f32) -> f32 {
+    atan2(((1.0 - x) * (1.0 + x)).sqrt(), x)
+}
+
+/// The cube root of a finite `x`: an estimate from the exponent bits, two steps of Halley's
+/// iteration in `f64` (each cubes the relative error, 3% -> 3e-5 -> 3e-14), rounded to `f32`.
+/// The same bits on every machine, which the C library's `cbrtf` does not promise.
+#[inline]
+pub fn cbrt(x: f32) -> f32 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let a = x.abs() as f64;
+    // Dividing the biased exponent (and mantissa bits) by three (Kahan's estimate).
+    let mut y = f64::from_bits(a.to_bits() / 3 + 0x2a9f_7893_0000_0000);
+    for _ in 0..2 {
+        let y3 = y * y * y;
+        y *= (y3 + 2.0 * a) / (2.0 * y3 + a);
+    }
+    (y as f32).copysign(x)
 }
 
 /// World bounds of an object box under an affine map (its eight corners mapped).
@@ -227,10 +277,45 @@ mod tests {
         for k in 0..10_000 {
             let u = [(k % 100) as f32 / 100.0 + 0.003, (k / 100) as f32 / 100.0 + 0.007];
             let (x, y) = disk_branch_free(u);
-            let r = concentric_disk(Vec2::new(u[0], u[1]));
-            assert!((x - r.x).abs() < 1e-6 && (y - r.y).abs() < 1e-6, "{u:?}");
+            // Shirley and Chiu's map in f64 with the C library's sine and cosine.
+            let (ox, oy) = (2.0 * u[0] as f64 - 1.0, 2.0 * u[1] as f64 - 1.0);
+            let (r, theta) = match ox.abs() > oy.abs() {
+                true => (ox, std::f64::consts::FRAC_PI_4 * (oy / ox)),
+                false => (oy, std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (ox / oy)),
+            };
+            let (rx, ry) = (r * theta.cos(), r * theta.sin());
+            assert!((x as f64 - rx).abs() < 1e-6 && (y as f64 - ry).abs() < 1e-6, "{u:?}");
         }
         assert_eq!(disk_branch_free([0.5, 0.5]), (0.0, 0.0));
+    }
+
+    #[test]
+    fn sine_arctangent_arccosine_and_cube_root_are_accurate() {
+        let mut worst = [0f64; 4];
+        for k in 0..=200_000 {
+            // Angles around the circle at radii from 1e-30 to 1e30.
+            let a = std::f64::consts::TAU * k as f64 / 200_000.0 - std::f64::consts::PI;
+            let r = 10f64.powi(k % 61 - 30);
+            let (y, x) = ((r * a.sin()) as f32, (r * a.cos()) as f32);
+            worst[0] = worst[0].max((atan2(y, x) as f64 - (y as f64).atan2(x as f64)).abs());
+            let c = (k as f32 / 100_000.0 - 1.0).clamp(-1.0, 1.0);
+            worst[1] = worst[1].max((acos(c) as f64 - (c as f64).acos()).abs());
+            let s = (k as f32 - 100_000.0) * 0.031;
+            worst[2] = worst[2].max((sin(s) as f64 - (s as f64).sin()).abs());
+            let v = (k as f32 + 0.5) * 10f32.powi(k % 41 - 25);
+            let exact = (v as f64).cbrt();
+            worst[3] = worst[3].max((cbrt(v) as f64 - exact).abs() / exact);
+            assert_eq!(cbrt(-v), -cbrt(v));
+        }
+        assert!(worst[0] < 3e-7 && worst[1] < 3e-7 && worst[2] < 6e-7 && worst[3] < 6e-8, "{worst:?}");
+        for (y, x, want) in
+            [(0.0, 1.0, 0.0), (1.0, 0.0, 1.5707964), (0.0, -1.0, 3.1415927), (-1.0, 0.0, -1.5707964)]
+        {
+            assert_eq!(atan2(y, x), want, "atan2({y}, {x})");
+        }
+        assert_eq!((atan2(0.0, 0.0), atan2(-0.0, 1.0).to_bits()), (0.0, (-0.0f32).to_bits()));
+        assert!(atan2(f32::NAN, 1.0).is_nan() && atan2(1.0, f32::NAN).is_nan() && acos(1.5).is_nan());
+        assert_eq!((cbrt(0.0), cbrt(8.0), cbrt(-27.0), cbrt(1.0)), (0.0, 2.0, -3.0, 1.0));
     }
 
     #[test]

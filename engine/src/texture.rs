@@ -118,9 +118,10 @@ fn wrap_index(i: i64, n: i64, wrap: Wrap) -> i64 {
     }
 }
 
-/// The sRGB transfer function, inverted.
+/// The sRGB transfer function, inverted; the power in `f64`, rounded: a C library's last bits
+/// reach the texture only at a rounding tie (about one value in 2^29).
 pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.04045 { c / 12.92 } else { ((c as f64 + 0.055) / 1.055).powf(2.4) as f32 }
 }
 
 /// The noise functions of Shirley's "Ray Tracing: The Next Week" (Perlin noise, turbulence).
@@ -214,7 +215,7 @@ impl Textures {
                     NoiseKind::Turbulence => perlin.turbulence(q, *depth),
                     // RTNW's marble: the turbulence of the unscaled point distorts the phase.
                     NoiseKind::Marble => {
-                        0.5 * (1.0 + (q.z + 10.0 * perlin.turbulence(p.into(), *depth)).sin())
+                        0.5 * (1.0 + crate::math::sin(q.z + 10.0 * perlin.turbulence(p.into(), *depth)))
                     }
                 };
                 *color * grey

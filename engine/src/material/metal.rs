@@ -70,8 +70,8 @@ impl MaterialModel for Metal {
 pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3A {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = std::f32::consts::TAU * u.y;
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z) * uc.cbrt()
+    let (cos_phi, sin_phi) = crate::math::cos_sin_turn(u.y);
+    Vec3A::new(r * cos_phi, r * sin_phi, z) * crate::math::cbrt(uc)
 }
 
 /// Samples the reflected direction.

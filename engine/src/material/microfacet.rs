@@ -16,7 +16,7 @@
 
 use crate::math::Frame;
 use glam::{Vec2, Vec3A};
-use std::f32::consts::{PI, TAU};
+use std::f32::consts::PI;
 
 /// Below this alpha a rough material is treated as smooth (a delta mirror or smooth glass): the
 /// lobe is then under a milliradian wide, a mirror in any image, while its density (up to
@@ -155,9 +155,9 @@ impl Ggx {
         let t2 = vh.cross(t1);
         // Section 4.2: a point of the projected area, a disk warped towards the visible half.
         let r = u.x.clamp(0.0, 1.0).sqrt();
-        let phi = TAU * u.y;
-        let p1 = r * phi.cos();
-        let p2 = r * phi.sin();
+        let (cos_phi, sin_phi) = crate::math::cos_sin_turn(u.y);
+        let p1 = r * cos_phi;
+        let p2 = r * sin_phi;
         let s = 0.5 * (1.0 + vh.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
         // Section 4.3: reprojection onto the hemisphere.

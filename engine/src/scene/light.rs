@@ -142,8 +142,9 @@ impl LightDesc {
                     position: position.0.into(),
                     axis: (look_at.0 - position.0).normalize().into(),
                     intensity: intensity.0,
-                    cos_falloff: falloff_start.0.to_radians().cos(),
-                    cos_total: cone_angle.0.to_radians().cos(),
+                    // In f64, rounded: a C library's last bits reach the f32 only at a rounding tie.
+                    cos_falloff: (falloff_start.0 as f64).to_radians().cos() as f32,
+                    cos_total: (cone_angle.0 as f64).to_radians().cos() as f32,
                 }
             }
             LightDesc::Directional { direction, irradiance } => PunctualLight::Directional {

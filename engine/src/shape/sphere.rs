@@ -208,7 +208,10 @@ impl PrimitiveShape for Sphere {
         let n = d / d.length();
         let p = self.center + self.radius * n;
         let uv = match uv {
-            true => Vec2::new(((-n.z).atan2(n.x) + PI) / (2.0 * PI), (-n.y).clamp(-1.0, 1.0).acos() / PI),
+            true => Vec2::new(
+                (crate::math::atan2(-n.z, n.x) + PI) / (2.0 * PI),
+                crate::math::acos((-n.y).clamp(-1.0, 1.0)) / PI,
+            ),
             false => Vec2::ZERO,
         };
         SurfacePoint { p, n, ns: n, uv, err: self.point_error() }

@@ -169,8 +169,9 @@ impl PrimitiveShape for TransformedSphere {
             .map(|i| {
                 let z = 1.0 - (2 * i + 1) as f32 / N as f32;
                 let r = (1.0 - z * z).sqrt();
-                let phi = golden * i as f32;
-                self.area_scale(Vec3A::new(r * phi.cos(), r * phi.sin(), z))
+                // In f64, rounded: a C library's last bits reach the f32 only at a rounding tie.
+                let phi = golden as f64 * i as f64;
+                self.area_scale(Vec3A::new(r * phi.cos() as f32, r * phi.sin() as f32, z))
             })
             .sum::<f32>()
             / N as f32;
