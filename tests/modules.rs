@@ -131,10 +131,10 @@ fn find_cycle(arrows: &BTreeMap<(String, String), PathBuf>) -> Option<Vec<String
     }
     let mut state = BTreeMap::new();
     for &v in next.keys() {
-        if !state.contains_key(v) {
-            if let Some(c) = visit(v, &next, &mut state, &mut Vec::new()) {
-                return Some(c);
-            }
+        if !state.contains_key(v)
+            && let Some(c) = visit(v, &next, &mut state, &mut Vec::new())
+        {
+            return Some(c);
         }
     }
     None

@@ -308,8 +308,8 @@ mod tests {
             assert_eq!(cbrt(-v), -cbrt(v));
         }
         assert!(worst[0] < 3e-7 && worst[1] < 3e-7 && worst[2] < 6e-7 && worst[3] < 6e-8, "{worst:?}");
-        for (y, x, want) in
-            [(0.0, 1.0, 0.0), (1.0, 0.0, 1.5707964), (0.0, -1.0, 3.1415927), (-1.0, 0.0, -1.5707964)]
+        use std::f32::consts::{FRAC_PI_2, PI};
+        for (y, x, want) in [(0.0, 1.0, 0.0), (1.0, 0.0, FRAC_PI_2), (0.0, -1.0, PI), (-1.0, 0.0, -FRAC_PI_2)]
         {
             assert_eq!(atan2(y, x), want, "atan2({y}, {x})");
         }

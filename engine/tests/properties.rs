@@ -162,7 +162,7 @@ proptest! {
 fn affine() -> impl Strategy<Value = glam::Affine3A> {
     (vec3(2.0), vec3(2.0), vec3(2.0), vec3(5.0)).prop_filter_map("not singular", |(x, y, z, t)| {
         let m = glam::Mat3A::from_cols(x, y, z);
-        (m.determinant().abs() > 0.05).then(|| glam::Affine3A { matrix3: m, translation: t })
+        (m.determinant().abs() > 0.05).then_some(glam::Affine3A { matrix3: m, translation: t })
     })
 }
 

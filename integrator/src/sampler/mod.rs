@@ -261,7 +261,7 @@ fn layout(dim: u32, lens: bool) -> Layout {
     let direction = is_direction(dim);
     // `&` and `|`, not `&&` and `||`: no branches.
     let hi = (dim == Dims::LENS) & lens | (dim == light0) & !lens;
-    let later_light = (dim > light0) & (dim.wrapping_sub(light0) % Dims::PER_VERTEX == 0);
+    let later_light = (dim > light0) & dim.wrapping_sub(light0).is_multiple_of(Dims::PER_VERTEX);
     let later_group = dim.wrapping_sub(Dims::PER_VERTEX + Dims::LIGHT - Dims::BSDF);
     let group = if hi {
         Dims::PIXEL
