@@ -173,7 +173,7 @@ fn passes(
         let k = range.len();
         let opts = wavefront::Options::default();
         let (part, _) = pool.install(|| wavefront::render_samples(scene, opts, range, &|_, _| {}));
-        film.merge(&part);
+        film.absorb(part);
         number += 1;
         let per_sample = start.elapsed().as_secs_f64() / k as f64;
         let left = target - film.spp;

@@ -29,24 +29,20 @@ pub fn render_samples(
     let s = scene.settings;
     let _span =
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
-    let tiles = tile::render_tiles(
-        &s.window,
-        progress,
-        || (),
-        |_, tile| {
-            (0..tile.len())
-                .map(|i| tile.pixel(i))
-                .map(|(x, y)| render_pixel(scene, x, y, samples.clone()))
-                .collect::<Vec<PixelAccumulator>>()
-        },
-    );
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
-    for (tile, accs) in tiles {
-        for (i, k) in tile.window_indices(&s.window) {
-            film.set_pixel(k, &accs[i]);
-        }
-    }
+    tile::render_tiles(
+        &s.window,
+        &mut film.pixels,
+        progress,
+        || (),
+        |_, tile, mut rows| {
+            for i in 0..tile.len() {
+                let (x, y) = tile.pixel(i);
+                rows.set(i as usize, render_pixel(scene, x, y, samples.clone()));
+            }
+        },
+    );
     film
 }
 

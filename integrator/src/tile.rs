@@ -65,24 +65,61 @@ impl Tile {
     }
 }
 
-/// Renders every tile of `window` on rayon's threads: `render(state, tile)` with a `state`
-/// made by `init` once per worker (the wavefront's path slots and queues), `progress(done,
-/// total)` after each tile from any thread. The results come back in tile order, whatever
-/// order the tiles ran in.
-pub fn render_tiles<S, T: Send>(
+/// One tile's pixels in an image-sized buffer of the window (row-major): a slice per row of
+/// the tile, disjoint from every other tile's.
+pub struct TileRows<'f, P> {
+    rows: Vec<&'f mut [P]>,
+}
+
+impl<P> TileRows<'_, P> {
+    /// Sets pixel `i` (row-major within the tile).
+    pub fn set(&mut self, i: usize, value: P) {
+        let w = self.rows[0].len();
+        self.rows[i / w][i % w] = value;
+    }
+
+    /// Sets every pixel from `src` (row-major within the tile).
+    pub fn copy_from(&mut self, src: &[P])
+    where
+        P: Copy,
+    {
+        let w = self.rows[0].len();
+        for (row, src) in self.rows.iter_mut().zip(src.chunks_exact(w)) {
+            row.copy_from_slice(src);
+        }
+    }
+}
+
+/// Renders every tile of `window` on rayon's threads: `render(state, tile, rows)` with a
+/// `state` made by `init` once per worker (the wavefront's path slots and queues) and the
+/// tile's `rows` of `pixels` (the window's, row-major) to write, `progress(done, total)` after
+/// each tile from any thread. Tiles write straight into the image: no tile holds pixels of its
+/// own that would be copied, and no memory is faulted in twice (with tiles' own buffers and a
+/// copy, the fixed cost of a 256x256 render was twice as large). What each tile returns comes
+/// back in tile order, whatever order the tiles ran in.
+pub fn render_tiles<S, P: Send, T: Send>(
     window: &PixelWindow,
+    pixels: &mut [P],
     progress: &(dyn Fn(usize, usize) + Sync),
     init: impl Fn() -> S + Sync + Send,
-    render: impl Fn(&mut S, &Tile) -> T + Sync + Send,
+    render: impl Fn(&mut S, &Tile, TileRows<'_, P>) -> T + Sync + Send,
 ) -> Vec<(Tile, T)> {
+    assert_eq!(pixels.len(), window.len(), "a buffer of the window's pixels");
     let (tx, ty) = Tile::grid_of(window);
     let total = (tx * ty) as usize;
+    let mut rows: Vec<TileRows<P>> =
+        (0..total).map(|_| TileRows { rows: Vec::with_capacity(TILE as usize) }).collect();
+    for (y, row) in pixels.chunks_mut(window.w as usize).enumerate() {
+        for (x, part) in row.chunks_mut(TILE as usize).enumerate() {
+            rows[y / TILE as usize * tx as usize + x].rows.push(part);
+        }
+    }
     let done = AtomicUsize::new(0);
-    (0..tx * ty)
-        .into_par_iter()
-        .map_init(init, |state, t| {
-            let tile = Tile::in_window(t, window);
-            let out = render(state, &tile);
+    rows.into_par_iter()
+        .enumerate()
+        .map_init(init, |state, (t, rows)| {
+            let tile = Tile::in_window(t as u32, window);
+            let out = render(state, &tile, rows);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             (tile, out)
         })
@@ -109,26 +146,48 @@ mod tests {
     }
 
     #[test]
-    fn render_tiles_returns_every_tile_of_a_window_in_order_and_reports_each() {
+    fn render_tiles_gives_every_tile_its_own_pixels_in_order_and_reports_each() {
         let window = PixelWindow { x0: 5, y0: 3, w: 37, h: 21 };
         let reports = std::sync::Mutex::new(Vec::new());
+        let mut pixels = vec![(u32::MAX, 0); window.len()];
         let tiles = render_tiles(
             &window,
+            &mut pixels,
             &|done, total| reports.lock().unwrap().push((done, total)),
             || 0u32,
-            |calls, tile| {
+            |calls, tile, mut rows| {
                 *calls += 1;
-                tile.window_indices(&window).map(|(_, k)| k).collect::<Vec<_>>()
+                (0..tile.len()).for_each(|i| rows.set(i as usize, tile.pixel(i)));
+                tile.len()
             },
         );
-        let mut seen = vec![0; window.len()];
-        for (t, (tile, indices)) in tiles.iter().enumerate() {
-            assert_eq!(*tile, Tile::in_window(t as u32, &window));
-            indices.iter().for_each(|&k| seen[k] += 1);
+        for (t, (tile, n)) in tiles.iter().enumerate() {
+            assert_eq!((*tile, *n), (Tile::in_window(t as u32, &window), tile.len()));
         }
-        assert!(seen.iter().all(|&c| c == 1), "every pixel of the window once");
+        // Each pixel was written by the tile that holds it, with its own coordinates.
+        for (k, &(x, y)) in pixels.iter().enumerate() {
+            assert_eq!(window.index(x, y), k);
+        }
         let mut reports = reports.into_inner().unwrap();
         reports.sort();
         assert_eq!(reports, (1..=tiles.len()).map(|d| (d, tiles.len())).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn tile_rows_copy_a_tiles_pixels_into_place() {
+        let window = PixelWindow { x0: 0, y0: 0, w: 20, h: 3 };
+        let mut pixels = vec![0u32; window.len()];
+        render_tiles(
+            &window,
+            &mut pixels,
+            &|_, _| {},
+            || (),
+            |_, tile, mut rows| {
+                let own: Vec<u32> =
+                    (0..tile.len()).map(|i| tile.pixel(i)).map(|(x, y)| 100 * y + x).collect();
+                rows.copy_from(&own);
+            },
+        );
+        assert!(pixels.iter().enumerate().all(|(k, &v)| v == 100 * (k as u32 / 20) + k as u32 % 20));
     }
 }

@@ -279,7 +279,7 @@ pub fn render_image(
             s.spp
         );
         bar.pass_done(range.start, range.end, s.spp, secs, msps);
-        film.merge(&part);
+        film.absorb(part);
         stats = match (stats, st) {
             (Some(a), Some(b)) => Some(a.merge(b)),
             (a, b) => a.or(b),

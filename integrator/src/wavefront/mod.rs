@@ -200,11 +200,14 @@ pub fn render_samples(
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
     let batch = opts.batch.max(1);
+    let mut film = Film::new(s.window.w, s.window.h);
+    film.spp = samples.len() as u32;
     let results = tile::render_tiles(
         &s.window,
+        &mut film.pixels,
         progress,
         || (Paths::with_slots(batch), Queues::default()),
-        |(paths, queues), tile| {
+        |(paths, queues), tile, mut rows| {
             let span =
                 tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
             let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
@@ -214,11 +217,10 @@ pub fn render_samples(
                 trace_tile(&out.stats, batch);
             }
             drop(span);
-            out
+            rows.copy_from(&out.film);
+            (out.guides, out.stats)
         },
     );
-    let mut film = Film::new(s.window.w, s.window.h);
-    film.spp = samples.len() as u32;
     let n = s.window.len();
     let mut guides = opts.guides.then(|| Aovs {
         width: s.window.w,
@@ -229,15 +231,14 @@ pub fn render_samples(
     });
     let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
-    for (tile, r) in results {
-        for (i, k) in tile.window_indices(&s.window) {
-            film.set_pixel(k, &r.film[i]);
-            if let (Some(g), Some(sums)) = (&mut guides, &r.guides) {
+    for (tile, (tile_guides, tile_stats)) in results {
+        if let (Some(g), Some(sums)) = (&mut guides, &tile_guides) {
+            for (i, k) in tile.window_indices(&s.window) {
                 let [a, n, e] = sums[i];
                 (g.albedo[k], g.normal[k], g.emission[k]) = (a * per_sample, n * per_sample, e * per_sample);
             }
         }
-        stats = stats.merge(r.stats);
+        stats = stats.merge(tile_stats);
     }
     film.guides = guides;
     (film, stats)
