@@ -2,7 +2,7 @@
 //! with an affine transform, a material and a velocity; rays move into the instance's object
 //! space, so a thousand instances of a mesh cost a thousand instance records and one BLAS.
 
-use crate::bvh8::Bvh8;
+use crate::bvh8::{Bvh8, PACKET};
 use crate::geometry::Hit;
 use crate::math::{Ray, gamma, transform_box};
 use crate::mesh::{MeshBlas, MeshHit};
@@ -123,6 +123,11 @@ impl ShutterMotion {
 }
 
 impl Instance {
+    /// True when the instance does not move while the shutter is open.
+    fn is_still(&self) -> bool {
+        self.motion.is_none() && self.velocity == Vec3A::ZERO
+    }
+
     /// An instance, or `None` when the transform is singular or not finite.
     pub fn new(blas: u32, world_from_object: Affine3A, material: u32, velocity: Vec3A) -> Option<Self> {
         let det = world_from_object.matrix3.determinant();
@@ -163,6 +168,8 @@ pub struct Instances {
     order: Vec<u32>,
     /// Sum of child-box areas when the TLAS was built (see [`Bvh8::sah_cost`]).
     built_cost: f32,
+    /// No instance moves while the shutter is open: rays of any time share object space.
+    still: bool,
 }
 
 impl Instances {
@@ -179,7 +186,13 @@ impl Instances {
         });
         me.order = order;
         me.built_cost = me.tlas.sah_cost();
+        me.still = me.list.iter().all(Instance::is_still);
         me
+    }
+
+    /// True when no instance moves while the shutter is open.
+    pub fn still(&self) -> bool {
+        self.still
     }
 
     /// True when there are no instances.
@@ -210,6 +223,7 @@ impl Instances {
         match Instance::new(old.blas, world_from_object, old.material, velocity) {
             Some(new) => {
                 self.list[i] = new.with_motion(motion);
+                self.still = self.list.iter().all(Instance::is_still);
                 true
             }
             None => false,
@@ -267,6 +281,102 @@ impl Instances {
             let inst = &self.list[i as usize];
             Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, &tri, ray, t) }
         })
+    }
+
+    /// Closest hits of [`PACKET`] rays `o + t d` (world space, instances [`Self::still`]) with
+    /// `t` in `(0, best[l])`, traced together through the TLAS and each BLAS
+    /// ([`MeshBlas::intersect_packet`]): for coherent rays such as one pixel's camera rays.
+    /// `best[l]` becomes ray `l`'s distance where it hit. Each ray gets [`Self::intersect`]'s
+    /// hit but for exact ties; `time` only places the surface's motion offset (zero here).
+    #[inline(always)]
+    pub fn intersect_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        time: &[f32; PACKET],
+        best: &mut [f32; PACKET],
+    ) -> [Option<Hit>; PACKET] {
+        debug_assert!(self.still);
+        let mut found: [Option<(u32, MeshHit)>; PACKET] = [None; PACKET];
+        self.tlas.closest_packet(o, d, best, |first, count, active, best| {
+            for &i in &self.order[first as usize..(first + count) as usize] {
+                let inst = &self.list[i as usize];
+                let (oo, od) = self.object_packet(inst, o, d);
+                // Rays outside `active` stay out (a negative tmax enters no box).
+                let mut b: [f32; PACKET] =
+                    std::array::from_fn(|l| if active >> l & 1 != 0 { best[l] } else { -1.0 });
+                let hits = self.blas[inst.blas as usize].intersect_packet(&oo, &od, &mut b);
+                for (l, h) in hits.into_iter().enumerate() {
+                    if let Some(h) = h {
+                        (best[l], found[l]) = (h.t, Some((i, h)));
+                    }
+                }
+            }
+        });
+        std::array::from_fn(|l| {
+            found[l].map(|(i, tri)| {
+                let inst = &self.list[i as usize];
+                let ray = Ray {
+                    origin: Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                    dir: Vec3A::new(d[0][l], d[1][l], d[2][l]),
+                    time: time[l],
+                };
+                Hit {
+                    t: best[l],
+                    prim: INSTANCE_PRIM,
+                    material: inst.material,
+                    surface: self.surface(inst, &tri, &ray, best[l]),
+                }
+            })
+        })
+    }
+
+    /// Which of [`PACKET`] rays (world space, instances [`Self::still`]) meet an instance with
+    /// `t` in `(0, tmax[l])`, traced together, as a bit mask: [`Self::occluded`]'s answers. A
+    /// negative `tmax` leaves the ray out.
+    #[inline(always)]
+    pub fn occluded_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        tmax: &[f32; PACKET],
+    ) -> u32 {
+        debug_assert!(self.still);
+        self.tlas.any_packet(o, d, tmax, |first, count, active| {
+            let mut hits = 0;
+            for &i in &self.order[first as usize..(first + count) as usize] {
+                let inst = &self.list[i as usize];
+                let (oo, od) = self.object_packet(inst, o, d);
+                let t: [f32; PACKET] =
+                    std::array::from_fn(|l| if (active & !hits) >> l & 1 != 0 { tmax[l] } else { -1.0 });
+                hits |= self.blas[inst.blas as usize].occluded_packet(&oo, &od, &t);
+            }
+            hits
+        })
+    }
+
+    /// The rays of a packet in a still instance's object space, lane by lane as
+    /// [`Self::object_ray`] moves one ray.
+    #[inline(always)]
+    fn object_packet(
+        &self,
+        inst: &Instance,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+    ) -> ([[f32; PACKET]; 3], [[f32; PACKET]; 3]) {
+        let (mut oo, mut od) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
+        for l in 0..PACKET {
+            let ray = Ray {
+                origin: Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                dir: Vec3A::new(d[0][l], d[1][l], d[2][l]),
+                time: 0.0,
+            };
+            let (a, b) = self.object_ray(inst, &ray);
+            for k in 0..3 {
+                (oo[k][l], od[k][l]) = (a[k], b[k]);
+            }
+        }
+        (oo, od)
     }
 
     /// True when some instance lies on the ray with `t` in `(0, tmax)`.
@@ -331,5 +441,56 @@ impl Instances {
             }
         }
         SurfacePoint { p, n, ns, uv: local.uv, err }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::MeshData;
+
+    #[test]
+    fn packets_find_what_each_ray_finds_alone_among_still_instances() {
+        let blas = Arc::new(MeshBlas::build(Arc::new(MeshData::knot(60, 24))));
+        let place = |angle: f32, at: Vec3| {
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(1.0, 1.5, 0.8),
+                Quat::from_rotation_y(angle),
+                at,
+            )
+        };
+        let list = vec![
+            Instance::new(0, place(0.3, Vec3::new(2.0, 0.0, 0.0)), 4, Vec3A::ZERO).unwrap(),
+            Instance::new(0, place(-1.1, Vec3::new(-2.0, 1.0, 0.5)), 7, Vec3A::ZERO).unwrap(),
+        ];
+        let mut inst = Instances::build(vec![blas], list, (0.0, 1.0));
+        assert!(inst.still());
+        let mut rnd = crate::testing::signed(21);
+        let (mut hits, mut occluded) = (0, 0);
+        for i in 0..300 {
+            let (o, d, tmax) = crate::mesh::tests::packet(&mut rnd, if i % 2 == 0 { 0.02 } else { 2.0 }, 2.0);
+            let time: [f32; PACKET] = std::array::from_fn(|_| rnd().abs());
+            let mut best = tmax;
+            let got = crate::simd::lanes(|| inst.intersect_packet(&o, &d, &time, &mut best));
+            let occ = crate::simd::lanes(|| inst.occluded_packet(&o, &d, &tmax));
+            for l in 0..PACKET {
+                let ray = Ray {
+                    origin: Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                    dir: Vec3A::new(d[0][l], d[1][l], d[2][l]),
+                    time: time[l],
+                };
+                let want = (tmax[l] >= 0.0).then(|| inst.intersect(&ray, tmax[l])).flatten();
+                let key = |h: &Hit| (h.t, h.material, h.surface.p, h.surface.n, h.surface.err);
+                assert_eq!(got[l].as_ref().map(key), want.as_ref().map(key), "lane {l} of packet {i}");
+                assert_eq!(best[l], want.as_ref().map_or(tmax[l], |h| h.t));
+                let alone = tmax[l] >= 0.0 && inst.occluded(&ray, tmax[l]);
+                assert_eq!(occ >> l & 1 != 0, alone, "lane {l} of packet {i}");
+                (hits, occluded) = (hits + want.is_some() as u32, occluded + alone as u32);
+            }
+        }
+        assert!(hits > 500 && occluded > 500, "{hits} hits, {occluded} occluded");
+        // A moving instance makes the instances unfit for packets.
+        assert!(inst.place(1, place(0.0, Vec3::ZERO), Vec3A::X, None));
+        assert!(!inst.still());
     }
 }

@@ -2,7 +2,7 @@
 //! blocks of up to eight triangles stored lane by lane, tested eight at a time with the
 //! watertight test of [`Triangle::intersect`] (same operations, same bits).
 
-use crate::bvh8::Bvh8;
+use crate::bvh8::{Bvh8, PACKET};
 use crate::math::gamma;
 use crate::shape::{PrimitiveShape, SurfacePoint, Triangle};
 use glam::Vec3A;
@@ -363,6 +363,79 @@ impl MeshBlas {
         })
     }
 
+    /// Closest hits of [`PACKET`] rays in object space traced together
+    /// ([`Bvh8::closest_packet`]: each node read once for the rays that enter it, a leaf's
+    /// blocks tested ray by ray as [`Self::intersect`] tests them). `best[l]` holds ray `l`'s
+    /// `tmax` on entry (a negative one leaves the ray out) and its distance on return. Each
+    /// ray gets [`Self::intersect`]'s hit but for exact ties, whose order may differ.
+    #[inline(always)]
+    pub fn intersect_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        best: &mut [f32; PACKET],
+    ) -> [Option<MeshHit>; PACKET] {
+        let ray = |l: usize| (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+        let rs: [TriRay; PACKET] = std::array::from_fn(|l| {
+            let (o, d) = ray(l);
+            TriRay::new(o, d)
+        });
+        let mut found = [(u32::MAX, 0usize); PACKET];
+        self.bvh.closest_packet(o, d, best, |first, count, active, best| {
+            let mut m = active;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (ol, dl) = ray(l);
+                for bi in first..first + count {
+                    let (ts, mut hit) = self.blocks[bi as usize].intersect(&rs[l], ol, dl, best[l]);
+                    while hit != 0 {
+                        let k = hit.trailing_zeros() as usize;
+                        hit &= hit - 1;
+                        if ts[k] < best[l] {
+                            (best[l], found[l]) = (ts[k], (bi, k));
+                        }
+                    }
+                }
+            }
+        });
+        std::array::from_fn(|l| {
+            let (block, lane) = found[l];
+            (block != u32::MAX).then(|| {
+                let b = &self.blocks[block as usize];
+                let p = [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
+                MeshHit { t: best[l], id: b.id[lane], p }
+            })
+        })
+    }
+
+    /// Which of [`PACKET`] rays in object space meet a triangle with `t` in `(0, tmax[l])`,
+    /// traced together ([`Bvh8::any_packet`]), as a bit mask: [`Self::occluded`]'s answers. A
+    /// negative `tmax` leaves the ray out.
+    #[inline(always)]
+    pub fn occluded_packet(
+        &self,
+        o: &[[f32; PACKET]; 3],
+        d: &[[f32; PACKET]; 3],
+        tmax: &[f32; PACKET],
+    ) -> u32 {
+        let ray = |l: usize| (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+        self.bvh.any_packet(o, d, tmax, |first, count, active| {
+            let (mut m, mut hits) = (active, 0);
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let (ol, dl) = ray(l);
+                let r = TriRay::new(ol, dl);
+                let blocks = &self.blocks[first as usize..(first + count) as usize];
+                if blocks.iter().any(|b| b.intersect(&r, ol, dl, tmax[l]).1 != 0) {
+                    hits |= 1 << l;
+                }
+            }
+            hits
+        })
+    }
+
     /// True when some triangle lies on the ray with `t` in `(0, tmax)`.
     #[inline]
     pub fn occluded(&self, o: Vec3A, d: Vec3A, tmax: f32) -> bool {
@@ -473,7 +546,7 @@ pub fn terminator_lift(x: Vec3A, n: Vec3A, p: [Vec3A; 3], vn: [Vec3A; 3], b: [f3
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -515,6 +588,60 @@ mod tests {
             }
         }
         assert!(hits > 1000, "{hits}");
+    }
+
+    /// Rays of a packet: one origin and directions within `spread` of one another (a pixel's
+    /// samples when small, bounce rays when large); `tmax` negative (left out), finite or not.
+    pub(crate) fn packet(
+        rnd: &mut impl FnMut() -> f32,
+        spread: f32,
+        scale: f32,
+    ) -> ([[f32; PACKET]; 3], [[f32; PACKET]; 3], [f32; PACKET]) {
+        let (o0, d0) = (Vec3A::new(rnd(), rnd(), rnd()) * 5.0 * scale, Vec3A::new(rnd(), rnd(), rnd()));
+        let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
+        let mut tmax = [f32::INFINITY; PACKET];
+        for l in 0..PACKET {
+            let (ol, dl) = (
+                o0 + Vec3A::new(rnd(), rnd(), rnd()) * 0.01 * scale,
+                -o0 / scale + (d0 + Vec3A::new(rnd(), rnd(), rnd()) * spread),
+            );
+            for a in 0..3 {
+                (o[a][l], d[a][l]) = (ol[a], dl[a]);
+            }
+            tmax[l] = match l % 5 {
+                0 => -1.0,
+                1 => rnd().abs() * 1.5,
+                _ => f32::INFINITY,
+            };
+        }
+        (o, d, tmax)
+    }
+
+    #[test]
+    fn packets_find_what_each_ray_finds_alone() {
+        let blas = MeshBlas::build(Arc::new(MeshData::knot(60, 24)));
+        let mut rnd = crate::testing::signed(8);
+        let (mut hits, mut occluded) = (0, 0);
+        for i in 0..400 {
+            let (o, d, tmax) = packet(&mut rnd, if i % 2 == 0 { 0.02 } else { 2.0 }, 1.0);
+            let mut best = tmax;
+            let got = crate::simd::lanes(|| blas.intersect_packet(&o, &d, &mut best));
+            let occ = crate::simd::lanes(|| blas.occluded_packet(&o, &d, &tmax));
+            for l in 0..PACKET {
+                let (ol, dl) = (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+                let want = (tmax[l] >= 0.0).then(|| blas.intersect(ol, dl, tmax[l])).flatten();
+                assert_eq!(
+                    got[l].map(|h| (h.t, h.id, h.p)),
+                    want.map(|h| (h.t, h.id, h.p)),
+                    "lane {l} of packet {i}"
+                );
+                assert_eq!(best[l], want.map_or(tmax[l], |h| h.t), "lane {l} of packet {i}");
+                let alone = tmax[l] >= 0.0 && blas.occluded(ol, dl, tmax[l]);
+                assert_eq!(occ >> l & 1 != 0, alone, "lane {l} of packet {i}");
+                (hits, occluded) = (hits + want.is_some() as u32, occluded + alone as u32);
+            }
+        }
+        assert!(hits > 1000 && occluded > 1000, "{hits} hits, {occluded} occluded");
     }
 
     #[test]
