@@ -66,7 +66,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 /// The [`PACKET`] camera rays `active[k..k + PACKET]` (their flat primitives' hits already in
 /// the stream) through still instances together: one pixel's samples (or two neighbours')
 /// start at one point and part by less than a pixel, so the TLAS and BLAS nodes are read once
-/// for all of them. The hits are those of [`Instances::intersect`] ray by ray (but for exact
+/// for all of them. The hits are those of [`Instances::intersect`](pathwave_engine::instances::Instances::intersect) ray by ray (but for exact
 /// ties).
 fn camera_packet_in_instances(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize) {
     let geo = &*scene.geometry;
@@ -123,9 +123,9 @@ fn closest_in_packets(geo: &Geometry, p: &Paths, active: &[u32], t: &mut [f32], 
     }
 }
 
-/// Occlusion of the shadow rays (tmax 1) in still geometry with a BVH, in packets of [`PACKET`]
-/// consecutive rays traced together (the last few one by one), then instances ray by ray: the
-/// answers of [`RenderScene::occluded`].
+/// Occlusion of the shadow rays (tmax 1) by still primitives with a BVH, in packets of
+/// [`PACKET`] consecutive rays traced together (the last few one by one): with
+/// [`occluded_by_instances`] after it, the answers of [`RenderScene::occluded`].
 fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue) {
     let n = sq.len();
     let groups = n / PACKET;
@@ -146,17 +146,33 @@ fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue)
     for k in groups * PACKET..n {
         sq.occluded[k] = scene.geometry.occluded(&sq.ray(k), 1.0);
     }
-    if scene.features.instances {
-        for k in 0..n {
-            if !sq.occluded[k] {
-                sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
-            }
+}
+
+/// The instances' part of the occlusion tests (scenes with instances, still primitives): for
+/// each shadow ray not yet occluded, [`Instances::occluded`](pathwave_engine::instances::Instances::occluded); the shadow rays of first
+/// vertices (made from one pixel's camera rays, so they leave one spot for one light) in
+/// packets of [`PACKET`] where the instances are still.
+fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues::ShadowQueue) {
+    if !scene.features.instances {
+        return;
+    }
+    let (n, packets) = (sq.len(), scene.instances.still());
+    let mut k = 0;
+    while k < n {
+        if packets && k + PACKET <= n && sq.slot[k..k + PACKET].iter().all(|&i| p.depth[i as usize] <= 1) {
+            shadow_packet_in_instances(scene, sq, k);
+            k += PACKET;
+            continue;
         }
+        if !sq.occluded[k] {
+            sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
+        }
+        k += 1;
     }
 }
 
 /// The shadow rays `k..k + PACKET` not yet occluded, through still instances together (see
-/// [`camera_packet_in_instances`]): [`Instances::occluded`]'s answers.
+/// [`camera_packet_in_instances`]): [`Instances::occluded`](pathwave_engine::instances::Instances::occluded)'s answers.
 fn shadow_packet_in_instances(scene: &RenderScene, sq: &mut super::queues::ShadowQueue, k: usize) {
     let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
     for a in 0..3 {
@@ -507,27 +523,12 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     match scene.geometry.flat() {
         Some(flat) => {
             flat.occluded_stream(&sq.rays, &mut sq.occluded);
-            if scene.features.instances {
-                let packets = scene.instances.still();
-                let mut k = 0;
-                while k < n {
-                    // The shadow rays of first vertices (from one pixel's camera rays) in packets.
-                    if packets
-                        && k + PACKET <= n
-                        && sq.slot[k..k + PACKET].iter().all(|&i| p.depth[i as usize] <= 1)
-                    {
-                        shadow_packet_in_instances(scene, sq, k);
-                        k += PACKET;
-                        continue;
-                    }
-                    if !sq.occluded[k] {
-                        sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
-                    }
-                    k += 1;
-                }
-            }
+            occluded_by_instances(scene, p, sq);
         }
-        None if scene.geometry.is_static_bvh() => occluded_in_packets(scene, sq),
+        None if scene.geometry.is_static_bvh() => {
+            occluded_in_packets(scene, sq);
+            occluded_by_instances(scene, p, sq);
+        }
         None => {
             for k in 0..n {
                 sq.occluded[k] = scene.occluded(&sq.ray(k), 1.0);
