@@ -7,7 +7,7 @@
 //! single-ray scan, and both the BVH's (the same operations in the same order).
 
 use crate::shape::{
-    Primitive, Quad, TransformedSphere,
+    Primitive, TransformedSphere,
     quad::quad_t,
     sphere::{sphere_t, sphere_t_single},
 };
@@ -181,8 +181,6 @@ pub struct FlatPrims {
     ellipsoid_id: Vec<u32>,
     others: Vec<Primitive>,
     other_id: Vec<u32>,
-    /// Every primitive, by index, when all are quads.
-    all_quads: Option<Vec<Quad>>,
 }
 
 impl FlatPrims {
@@ -216,16 +214,7 @@ impl FlatPrims {
                 }
             }
         }
-        f.all_quads =
-            prims.iter().map(|p| if let Primitive::Quad(q) = p { Some(*q) } else { None }).collect();
         Some(f)
-    }
-
-    /// Every primitive, by index, when all are quads (their surfaces then need no dispatch
-    /// over the kinds).
-    #[inline]
-    pub fn all_quads(&self) -> Option<&[Quad]> {
-        self.all_quads.as_deref()
     }
 
     /// Closest hit `(t, primitive)` with t in (0, tmax), or `None`.
@@ -425,23 +414,6 @@ mod tests {
             }
         }
         assert!(hits > rays / 4, "{hits} hits of {rays}");
-    }
-
-    #[test]
-    fn all_quads_are_listed_by_primitive_only_when_every_primitive_is_one() {
-        use crate::shape::quad::Quad;
-        let quad =
-            |x: f32| Primitive::Quad(Quad::new(Vec3A::new(x, 0.0, 0.0), Vec3A::Y, Vec3A::Z).expect("a quad"));
-        let quads = [quad(1.0), quad(2.0), quad(3.0)];
-        let f = FlatPrims::new(&quads).expect("flat");
-        let listed = f.all_quads().expect("all quads");
-        let p = Vec3A::new(2.0, 0.25, 0.5);
-        for (k, prim) in quads.iter().enumerate() {
-            assert_eq!(Primitive::Quad(listed[k]), *prim);
-            assert_eq!(format!("{:?}", listed[k].surface(p)), format!("{:?}", prim.surface(p, true)));
-        }
-        let sphere = Primitive::Sphere(Sphere { center: Vec3A::ZERO, radius: 1.0 });
-        assert!(FlatPrims::new(&[quad(1.0), sphere]).expect("flat").all_quads().is_none());
     }
 
     /// Quads along the axes take the axis test, with the bits of `quad_t`, also for rays

@@ -11,7 +11,6 @@ use pathwave_engine::geometry::{Geometry, Hit};
 use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
-use pathwave_engine::shape::Quad;
 use pathwave_engine::shape::SurfacePoint;
 
 /// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
@@ -42,7 +41,6 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         return;
     }
     let packets = scene.features.instances && scene.instances.still();
-    let quads = geo.flat().and_then(|f| f.all_quads());
     let mut k = 0;
     while k < n {
         if packets && k + PACKET <= n && q.active[k..k + PACKET].iter().all(|&i| p.depth[i as usize] == 0) {
@@ -54,7 +52,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
         // Flat lists and packets are only for geometry without motion.
         let ray = p.ray(i as usize);
-        let hit = (prim != u32::MAX).then(|| still_hit(scene, quads, &ray, t, prim));
+        let hit = (prim != u32::MAX).then(|| geo.static_hit(&ray, t, prim, scene.features.textures));
         // Instances behind the primitives' hit are not looked at.
         let hit = match scene.features.instances {
             true => scene.instances.intersect(&ray, t).or(hit),
@@ -71,6 +69,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
 /// for all of them. The hits are those of [`Instances::intersect`](pathwave_engine::instances::Instances::intersect) ray by ray (but for exact
 /// ties).
 fn camera_packet_in_instances(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize) {
+    let geo = &*scene.geometry;
     let group: [u32; PACKET] = std::array::from_fn(|l| q.active[k + l]);
     let (mut o, mut d, mut time) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3], [0.0; PACKET]);
     for (l, &i) in group.iter().enumerate() {
@@ -84,31 +83,12 @@ fn camera_packet_in_instances(scene: &RenderScene, p: &mut Paths, q: &mut Queues
         #[inline(always)]
         || scene.instances.intersect_packet(&o, &d, &time, &mut best),
     );
-    let quads = scene.geometry.flat().and_then(|f| f.all_quads());
     for (l, (&i, inst)) in group.iter().zip(hits).enumerate() {
         let (t, prim) = (q.stream.t[k + l], q.stream.prim[k + l]);
-        let hit =
-            inst.or_else(|| (prim != u32::MAX).then(|| still_hit(scene, quads, &p.ray(i as usize), t, prim)));
+        let hit = inst.or_else(|| {
+            (prim != u32::MAX).then(|| geo.static_hit(&p.ray(i as usize), t, prim, scene.features.textures))
+        });
         bin(scene, p, q, i, hit);
-    }
-}
-
-/// The hit record of primitive `prim` at `t` on `ray` in still geometry
-/// ([`Geometry::static_hit`](pathwave_engine::geometry::Geometry::static_hit)); with `quads`,
-/// the flat lists' quads when every primitive is one, a quad's surface is made without the
-/// dispatch over the kinds of 224-byte [`Primitive`](pathwave_engine::shape::Primitive)s
-/// (same bits; cornell-diffuse's closest hits 4-7% faster).
-#[inline(always)]
-fn still_hit(scene: &RenderScene, quads: Option<&[Quad]>, ray: &Ray, t: f32, prim: u32) -> Hit {
-    let geo = &*scene.geometry;
-    match quads {
-        Some(quads) => Hit {
-            t,
-            prim,
-            material: geo.material[prim as usize],
-            surface: quads[prim as usize].surface(ray.at(t)),
-        },
-        None => geo.static_hit(ray, t, prim, scene.features.textures),
     }
 }
 
