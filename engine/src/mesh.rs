@@ -363,52 +363,6 @@ impl MeshBlas {
         })
     }
 
-    /// Closest hits of [`PACKET`] rays in object space traced together
-    /// ([`Bvh8::closest_packet`]: each node read once for the rays that enter it, a leaf's
-    /// blocks tested ray by ray as [`Self::intersect`] tests them). `best[l]` holds ray `l`'s
-    /// `tmax` on entry (a negative one leaves the ray out) and its distance on return. Each
-    /// ray gets [`Self::intersect`]'s hit but for exact ties, whose order may differ.
-    #[inline(always)]
-    pub fn intersect_packet(
-        &self,
-        o: &[[f32; PACKET]; 3],
-        d: &[[f32; PACKET]; 3],
-        best: &mut [f32; PACKET],
-    ) -> [Option<MeshHit>; PACKET] {
-        let ray = |l: usize| (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
-        let rs: [TriRay; PACKET] = std::array::from_fn(|l| {
-            let (o, d) = ray(l);
-            TriRay::new(o, d)
-        });
-        let mut found = [(u32::MAX, 0usize); PACKET];
-        self.bvh.closest_packet(o, d, best, |first, count, active, best| {
-            let mut m = active;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let (ol, dl) = ray(l);
-                for bi in first..first + count {
-                    let (ts, mut hit) = self.blocks[bi as usize].intersect(&rs[l], ol, dl, best[l]);
-                    while hit != 0 {
-                        let k = hit.trailing_zeros() as usize;
-                        hit &= hit - 1;
-                        if ts[k] < best[l] {
-                            (best[l], found[l]) = (ts[k], (bi, k));
-                        }
-                    }
-                }
-            }
-        });
-        std::array::from_fn(|l| {
-            let (block, lane) = found[l];
-            (block != u32::MAX).then(|| {
-                let b = &self.blocks[block as usize];
-                let p = [0, 1, 2].map(|j| Vec3A::new(b.v[j][0][lane], b.v[j][1][lane], b.v[j][2][lane]));
-                MeshHit { t: best[l], id: b.id[lane], p }
-            })
-        })
-    }
-
     /// Which of [`PACKET`] rays in object space meet a triangle with `t` in `(0, tmax[l])`,
     /// traced together ([`Bvh8::any_packet`]), as a bit mask: [`Self::occluded`]'s answers. A
     /// negative `tmax` leaves the ray out.
@@ -621,27 +575,18 @@ pub(crate) mod tests {
     fn packets_find_what_each_ray_finds_alone() {
         let blas = MeshBlas::build(Arc::new(MeshData::knot(60, 24)));
         let mut rnd = crate::testing::signed(8);
-        let (mut hits, mut occluded) = (0, 0);
+        let (mut occluded, mut rays) = (0, 0);
         for i in 0..400 {
             let (o, d, tmax) = packet(&mut rnd, if i % 2 == 0 { 0.02 } else { 2.0 }, 1.0);
-            let mut best = tmax;
-            let got = crate::simd::lanes(|| blas.intersect_packet(&o, &d, &mut best));
             let occ = crate::simd::lanes(|| blas.occluded_packet(&o, &d, &tmax));
             for l in 0..PACKET {
                 let (ol, dl) = (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
-                let want = (tmax[l] >= 0.0).then(|| blas.intersect(ol, dl, tmax[l])).flatten();
-                assert_eq!(
-                    got[l].map(|h| (h.t, h.id, h.p)),
-                    want.map(|h| (h.t, h.id, h.p)),
-                    "lane {l} of packet {i}"
-                );
-                assert_eq!(best[l], want.map_or(tmax[l], |h| h.t), "lane {l} of packet {i}");
                 let alone = tmax[l] >= 0.0 && blas.occluded(ol, dl, tmax[l]);
                 assert_eq!(occ >> l & 1 != 0, alone, "lane {l} of packet {i}");
-                (hits, occluded) = (hits + want.is_some() as u32, occluded + alone as u32);
+                (occluded, rays) = (occluded + alone as u32, rays + (tmax[l] >= 0.0) as u32);
             }
         }
-        assert!(hits > 1000 && occluded > 1000, "{hits} hits, {occluded} occluded");
+        assert!(occluded > 1000 && rays - occluded > 500, "{occluded} of {rays} occluded");
     }
 
     #[test]

@@ -40,14 +40,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         }
         return;
     }
-    let packets = scene.features.instances && scene.instances.still();
-    let mut k = 0;
-    while k < n {
-        if packets && k + PACKET <= n && q.active[k..k + PACKET].iter().all(|&i| p.depth[i as usize] == 0) {
-            camera_packet_in_instances(scene, p, q, k);
-            k += PACKET;
-            continue;
-        }
+    for k in 0..n {
         let i = q.active[k];
         let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
         // Flat lists and packets are only for geometry without motion.
@@ -58,36 +51,6 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             true => scene.instances.intersect(&ray, t).or(hit),
             false => hit,
         };
-        bin(scene, p, q, i, hit);
-        k += 1;
-    }
-}
-
-/// The [`PACKET`] camera rays `active[k..k + PACKET]` (their flat primitives' hits already in
-/// the stream) through still instances together: one pixel's samples (or two neighbours')
-/// start at one point and part by less than a pixel, so the TLAS and BLAS nodes are read once
-/// for all of them. The hits are those of [`Instances::intersect`](pathwave_engine::instances::Instances::intersect) ray by ray (but for exact
-/// ties).
-fn camera_packet_in_instances(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize) {
-    let geo = &*scene.geometry;
-    let group: [u32; PACKET] = std::array::from_fn(|l| q.active[k + l]);
-    let (mut o, mut d, mut time) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3], [0.0; PACKET]);
-    for (l, &i) in group.iter().enumerate() {
-        for a in 0..3 {
-            (o[a][l], d[a][l]) = (p.origin[i as usize][a], p.dir[i as usize][a]);
-        }
-        time[l] = p.time[i as usize];
-    }
-    let mut best: [f32; PACKET] = std::array::from_fn(|l| q.stream.t[k + l]);
-    let hits = pathwave_engine::simd::lanes(
-        #[inline(always)]
-        || scene.instances.intersect_packet(&o, &d, &time, &mut best),
-    );
-    for (l, (&i, inst)) in group.iter().zip(hits).enumerate() {
-        let (t, prim) = (q.stream.t[k + l], q.stream.prim[k + l]);
-        let hit = inst.or_else(|| {
-            (prim != u32::MAX).then(|| geo.static_hit(&p.ray(i as usize), t, prim, scene.features.textures))
-        });
         bin(scene, p, q, i, hit);
     }
 }
@@ -171,8 +134,11 @@ fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues:
     }
 }
 
-/// The shadow rays `k..k + PACKET` not yet occluded, through still instances together (see
-/// [`camera_packet_in_instances`]): [`Instances::occluded`](pathwave_engine::instances::Instances::occluded)'s answers.
+/// The shadow rays `k..k + PACKET` not yet occluded, through still instances together: rays
+/// that leave one spot for one light, so the TLAS and BLAS nodes are read once for all of them
+/// ([`Instances::occluded_packet`](pathwave_engine::instances::Instances::occluded_packet)),
+/// with the answers of
+/// [`Instances::occluded`](pathwave_engine::instances::Instances::occluded).
 fn shadow_packet_in_instances(scene: &RenderScene, sq: &mut super::queues::ShadowQueue, k: usize) {
     let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
     for a in 0..3 {
