@@ -235,6 +235,139 @@ pub fn cbrt(x: f32) -> f32 {
     (y as f32).copysign(x)
 }
 
+/// Subintervals of [`ln`]'s table: `|r| < 0.008`, so that four terms of `log1p(r)` leave a
+/// relative error below 1e-9.
+const LN_BITS: u32 = 6;
+
+/// `ln(2)` in `f64`.
+const LN2: f64 = std::f64::consts::LN_2;
+
+/// `ln(c)` for `c` in [0.5, 2] in `f64`, at compile time: `2 atanh(s)` with `s = (c-1)/(c+1)`
+/// (|s| <= 1/3) summed until the terms vanish.
+const fn ln_series(c: f64) -> f64 {
+    let s = (c - 1.0) / (c + 1.0);
+    let (s2, mut term, mut sum, mut k) = (s * s, s, 0.0, 0);
+    while k < 40 {
+        sum += term / (2 * k + 1) as f64;
+        term *= s2;
+        k += 1;
+    }
+    2.0 * sum
+}
+
+/// Per subinterval `i` of [`ln`]'s reduced argument, `(1/c, ln c)` for `c` its middle.
+const LN_TABLE: [(f64, f64); 1 << LN_BITS] = {
+    let mut t = [(0.0, 0.0); 1 << LN_BITS];
+    let mut i = 0;
+    while i < t.len() {
+        let c = f32::from_bits(LN_OFF + ((i as u32) << (23 - LN_BITS)) + (1 << (22 - LN_BITS))) as f64;
+        t[i] = (1.0 / c, ln_series(c));
+        i += 1;
+    }
+    t
+};
+
+/// The bits of the reduced argument's lower end, 0.6992...: `z` lies in [0.699, 1.398).
+const LN_OFF: u32 = 0x3f33_0000;
+
+/// `ln(x)` from IEEE operations alone, the method of ARM's optimized-routines `logf`
+/// (Szabolcs Nagy): `x = 2^k z` with `z` in [0.699, 1.398), `ln x = k ln 2 + ln c + log1p(z/c -
+/// 1)` for the `c` of `z`'s subinterval (64, from a table computed at compile time), `log1p` by
+/// four terms, all in `f64` and rounded once. The same bits on every machine, which the C
+/// library's `logf` does not promise; as fast (no call, a short dependency chain). `ln(0)` is
+/// `-inf`, negative numbers give NaN, `ln(inf)` is `inf`.
+#[inline]
+pub fn ln(x: f32) -> f32 {
+    let mut ix = x.to_bits();
+    let mut k0 = 0i32;
+    if !(ix.wrapping_sub(0x0080_0000) < 0x7f80_0000 - 0x0080_0000) {
+        // Zero, subnormal, negative, infinite or NaN.
+        if ix << 1 == 0 {
+            return f32::NEG_INFINITY;
+        }
+        if ix == 0x7f80_0000 || x.is_nan() {
+            return x;
+        }
+        if ix >> 31 != 0 {
+            return f32::NAN;
+        }
+        // Subnormal: normalised by 2^23.
+        ix = (x * 8_388_608.0).to_bits();
+        k0 = -23;
+    }
+    let tmp = ix.wrapping_sub(LN_OFF);
+    let i = (tmp >> (23 - LN_BITS)) as usize % (1 << LN_BITS);
+    let k = (tmp as i32 >> 23) + k0;
+    let z = f32::from_bits(ix.wrapping_sub(tmp & 0xff80_0000)) as f64;
+    let (invc, logc) = LN_TABLE[i];
+    let r = z * invc - 1.0;
+    let r2 = r * r;
+    // log1p(r) = r - r^2/2 + r^3/3 - r^4/4 (Estrin's scheme).
+    let p = (r - 0.5 * r2) + r2 * (r * (1.0 / 3.0) - 0.25 * r2);
+    (k as f64 * LN2 + logc + p) as f32
+}
+
+/// Subintervals of a unit of [`exp`]'s exponent of two.
+const EXP_BITS: u32 = 5;
+
+/// `2^(i/32)` for `i` in 0..32, at compile time (the series of `exp(i ln 2 / 32)`).
+const EXP_TABLE: [f64; 1 << EXP_BITS] = {
+    let mut t = [0.0; 1 << EXP_BITS];
+    let mut i = 0;
+    while i < t.len() {
+        let y = i as f64 * LN2 / (1 << EXP_BITS) as f64;
+        let (mut term, mut sum, mut k) = (1.0, 0.0, 1);
+        while k < 30 {
+            sum += term;
+            term *= y / k as f64;
+            k += 1;
+        }
+        t[i] = sum;
+        i += 1;
+    }
+    t
+};
+
+/// `exp(x)` from IEEE operations alone, the method of ARM's optimized-routines `expf`
+/// (Szabolcs Nagy): `x = (k + r/1) ln 2 / 32` with integer `k` and |r| <= 1/2, `exp x = 2^(k/32)
+/// 2^(r/32)`, the first factor from a table computed at compile time and the exponent's bits,
+/// the second by five terms of its series, all in `f64` and rounded once. The same bits on
+/// every machine, which the C library's `expf` does not promise. Overflows to `inf` above
+/// 88.73, underflows to `0` below -104; NaN in, NaN out.
+#[inline]
+pub fn exp(x: f32) -> f32 {
+    if !(x.abs() < 88.0) {
+        if x > 88.0 {
+            // Past 88.72 even the rounding to f32 overflows; below, f64 holds it.
+            return if x > 88.8 { f32::INFINITY } else { exp_core(x) };
+        }
+        if x < -104.0 {
+            return 0.0;
+        }
+        if x.is_nan() {
+            return x;
+        }
+    }
+    exp_core(x)
+}
+
+/// [`exp`] for `x` in [-104, 88.8].
+#[inline(always)]
+fn exp_core(x: f32) -> f32 {
+    const N: f64 = (1 << EXP_BITS) as f64;
+    let z = x as f64 * (N / LN2);
+    let kd = z.round_ties_even();
+    let r = (z - kd) * (LN2 / N);
+    let ki = kd as i64;
+    let t = EXP_TABLE[(ki & ((1 << EXP_BITS) - 1)) as usize];
+    // 2^(ki / N) = 2^(ki mod N / N) 2^floor(ki / N): the second factor added to the exponent.
+    let s = f64::from_bits(t.to_bits().wrapping_add(((ki >> EXP_BITS) as u64) << 52));
+    let r2 = r * r;
+    // exp(r) = 1 + r + r^2/2 + r^3/6 + r^4/24 (Estrin's scheme).
+    let p = (1.0 + r) + r2 * ((0.5 + r * (1.0 / 6.0)) + r2 * (1.0 / 24.0));
+    (s * p) as f32
+}
+
 /// World bounds of an object box under an affine map (its eight corners mapped).
 pub fn transform_box(b: &obvhs::aabb::Aabb, m: &glam::Affine3A) -> obvhs::aabb::Aabb {
     let mut out = obvhs::aabb::Aabb::empty();
@@ -362,5 +495,53 @@ mod tests {
                 "scale {scale}: offset too large"
             );
         }
+    }
+
+    /// Distance in units of the last place of f32 between `got` and the exact `want`.
+    fn ulps(got: f32, want: f64) -> f64 {
+        let w = want as f32;
+        let ulp = (w.abs().next_up() - w.abs()) as f64;
+        (got as f64 - want).abs() / ulp.max(f32::from_bits(1) as f64)
+    }
+
+    #[test]
+    fn ln_is_within_an_ulp_everywhere_and_exact_where_it_must_be() {
+        // Every 97th float from the smallest subnormal to the largest finite one.
+        let mut worst: f64 = 0.0;
+        for bits in (1..0x7f80_0000u32).step_by(97) {
+            let x = f32::from_bits(bits);
+            worst = worst.max(ulps(ln(x), (x as f64).ln()));
+        }
+        assert!(worst < 0.51, "worst {worst} ulp");
+        // Near 1, where ln x ~ x - 1 is small.
+        for k in 1..2000 {
+            for x in [1.0 + k as f32 * f32::EPSILON, 1.0 - k as f32 * f32::EPSILON / 2.0] {
+                worst = worst.max(ulps(ln(x), (x as f64).ln()));
+            }
+        }
+        assert!(worst < 0.51, "worst {worst} ulp near 1");
+        assert_eq!(ln(1.0), 0.0);
+        let specials = (ln(0.0), ln(-0.0), ln(f32::INFINITY));
+        assert_eq!(specials, (f32::NEG_INFINITY, f32::NEG_INFINITY, f32::INFINITY));
+        assert!(ln(-1.0).is_nan() && ln(f32::NAN).is_nan() && ln(f32::NEG_INFINITY).is_nan());
+    }
+
+    #[test]
+    fn exp_is_within_an_ulp_everywhere_and_exact_where_it_must_be() {
+        let mut worst: f64 = 0.0;
+        // From -103.5 (subnormal results) to 88.65.
+        for i in -2_300_000..=1_970_000 {
+            let x = i as f32 * 4.5e-5;
+            worst = worst.max(ulps(exp(x), (x as f64).exp()));
+        }
+        for x in [88.7f32, 88.72, -87.3, -100.0, -103.9, 1e-7, -1e-7, 1e-30] {
+            worst = worst.max(ulps(exp(x), (x as f64).exp()));
+        }
+        assert!(worst < 0.51, "worst {worst} ulp");
+        assert_eq!(exp(0.0), 1.0);
+        let specials = (exp(89.0), exp(f32::INFINITY), exp(-105.0), exp(f32::NEG_INFINITY));
+        assert_eq!(specials, (f32::INFINITY, f32::INFINITY, 0.0, 0.0));
+        assert!(exp(f32::NAN).is_nan());
+        assert_eq!(exp(88.73), f32::INFINITY, "past f32::MAX");
     }
 }

@@ -159,7 +159,7 @@ impl Media {
         for v in &self.volumes {
             v.intervals(o, d, tmax, |t0, t1| depth += v.medium.sigma_t * (t1 - t0));
         }
-        (-depth * d.length()).exp()
+        crate::math::exp(-depth * d.length())
     }
 
     /// Free-flight sampling along `o + t d` up to `tmax` (the closest surface, or infinity):
@@ -170,7 +170,7 @@ impl Media {
     pub fn sample(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32) -> Option<MediumEvent> {
         let len = d.length();
         // Optical depth to travel, in units of t.
-        let mut left = -(1.0 - u).ln() / len;
+        let mut left = -crate::math::ln(1.0 - u) / len;
         let mut t = 0.0f32;
         SEGMENTS.with_borrow_mut(|segs| {
             segs.clear();
