@@ -65,7 +65,13 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
         let (shadow, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                if let Some(p) = path::sample_medium(scene, &mut st.beta, &ray, tmax, st.depth, sampler) {
+                if let Some(p) = path::sample_medium(
+                    scene,
+                    &mut st.beta,
+                    &ray,
+                    tmax,
+                    sampler.get_1d(path::medium_dim(st.depth)),
+                ) {
                     if st.depth == scene.settings.max_depth {
                         break 'path;
                     }

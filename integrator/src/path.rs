@@ -206,22 +206,21 @@ pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
 }
 
 /// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
-/// miss), on the segment that leads to the vertex after `depth` bounces. When the ray scatters
+/// miss) with the number `u`, the path's [`medium_dim`] of its depth. When the ray scatters
 /// first, the throughput takes the medium's albedo and the scattering point is returned;
 /// otherwise nothing changes. Call only for scenes with media.
 #[inline]
-pub fn sample_medium(
-    scene: &RenderScene,
-    beta: &mut Vec3,
-    ray: &Ray,
-    tmax: f32,
-    depth: u32,
-    sampler: &Sampler,
-) -> Option<Vec3A> {
-    let e =
-        scene.media.sample(ray.origin, ray.dir, tmax, sampler.get_1d(Dims::vertex(depth, Dims::MEDIUM)))?;
+pub fn sample_medium(scene: &RenderScene, beta: &mut Vec3, ray: &Ray, tmax: f32, u: f32) -> Option<Vec3A> {
+    let e = scene.media.sample(ray.origin, ray.dir, tmax, u)?;
     *beta *= e.albedo;
     Some(ray.at(e.t))
+}
+
+/// The dimension of the free-flight number on the segment that leads to the vertex after
+/// `depth` bounces.
+#[inline]
+pub fn medium_dim(depth: u32) -> u32 {
+    Dims::vertex(depth, Dims::MEDIUM)
 }
 
 /// Density (and value) of the isotropic phase function.

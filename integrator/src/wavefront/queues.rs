@@ -231,6 +231,8 @@ pub struct HitStream {
     pub t: Vec<f32>,
     /// Primitive hit, or `u32::MAX`.
     pub prim: Vec<u32>,
+    /// The paths' free-flight numbers (scenes with media).
+    pub u_medium: Vec<f32>,
 }
 
 /// The slot-index queues between stages.

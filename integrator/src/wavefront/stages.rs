@@ -23,6 +23,10 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     st.t.clear();
     st.t.resize(n, f32::INFINITY);
     st.prim.resize(n, 0);
+    if scene.features.media {
+        free_flight_numbers(p, &q.active, &mut q.stream.u_medium);
+    }
+    let st = &mut q.stream;
     if let Some(flat) = geo.flat() {
         let active = &q.active;
         st.rays.fill_with(n, |k| {
@@ -36,7 +40,7 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         for k in 0..n {
             let i = q.active[k];
             let hit = scene.intersect(&p.ray(i as usize), f32::INFINITY);
-            bin(scene, p, q, i, hit);
+            bin(scene, p, q, k, hit);
         }
         return;
     }
@@ -51,7 +55,24 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             true => scene.instances.intersect(&ray, t).or(hit),
             false => hit,
         };
-        bin(scene, p, q, i, hit);
+        bin(scene, p, q, k, hit);
+    }
+}
+
+/// The free-flight numbers of the paths `active` ([`path::medium_dim`] of each one's depth),
+/// drawn [`LANES`](lambert_vertex::LANES) at a time across lanes: one by one they took a fifth
+/// of cornell-smoke's time (`Sampler::get_1d`).
+fn free_flight_numbers(p: &Paths, active: &[u32], u: &mut Vec<f32>) {
+    use lambert_vertex::LANES;
+    u.clear();
+    for chunk in active.chunks(LANES) {
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let dims = depths.map(path::medium_dim);
+        let numbers = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || crate::sampler::get_1d_lanes(&samplers, &dims),
+        );
+        u.extend_from_slice(&numbers[..chunk.len()]);
     }
 }
 
@@ -155,13 +176,22 @@ fn shadow_packet_in_instances(scene: &RenderScene, sq: &mut super::queues::Shado
     }
 }
 
-/// Sends path `i` to the medium queue if it scatters before the surface (scenes with media),
-/// else to the escaped queue or to its material's queue. Always inlined: as a call it took the
-/// 80-byte hit through the stack, read back in wider pieces than it was written (no store
-/// forwarding), and cornell-diffuse's closest hits ran 9% slower (benches/RESULTS.md).
+/// Sends the path of `active[k]` to the medium queue if it scatters before the surface (scenes
+/// with media), else to the escaped queue or to its material's queue. Always inlined: as a call
+/// it took the 80-byte hit through the stack, read back in wider pieces than it was written (no
+/// store forwarding), and cornell-diffuse's closest hits ran 9% slower (benches/RESULTS.md).
 #[inline(always)]
-fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: Option<Hit>) {
-    if scene.features.media && scatters_in_medium(scene, p, q, i, hit.as_ref().map_or(f32::INFINITY, |h| h.t))
+fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize, hit: Option<Hit>) {
+    let i = q.active[k];
+    if scene.features.media
+        && scatters_in_medium(
+            scene,
+            p,
+            q,
+            i,
+            hit.as_ref().map_or(f32::INFINITY, |h| h.t),
+            q.stream.u_medium[k],
+        )
     {
         // The surface behind the medium (infinitely far when none), for `record_guides`.
         match hit {
@@ -195,13 +225,14 @@ fn store_hit(dst: &mut Hit, h: &Hit) {
     (d.p, d.n, d.ns, d.uv, d.err) = (*p, *n, *ns, *uv, *err);
 }
 
-/// Free-flight sampling for path `i` up to the surface at `tmax`: true (and the path queued for
-/// `shade_medium`) when it scatters first. Kept out of line: scenes without media never call it.
+/// Free-flight sampling for path `i` up to the surface at `tmax` with the number `u`: true (and
+/// the path queued for `shade_medium`) when it scatters first. Kept out of line: scenes without
+/// media never call it.
 #[inline(never)]
-fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32) -> bool {
+fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32, u: f32) -> bool {
     let s = i as usize;
     let ray = p.ray(s);
-    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, p.depth[s], &p.sampler[s]) else {
+    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, u) else {
         return false;
     };
     // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
