@@ -19,14 +19,13 @@ use pathwave_engine::shape::SurfacePoint;
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let geo = &*scene.geometry;
     let n = q.active.len();
-    let st = &mut q.stream;
-    st.t.clear();
-    st.t.resize(n, f32::INFINITY);
-    st.prim.resize(n, 0);
     if scene.features.media {
         free_flight_numbers(p, &q.active, &mut q.stream.u_medium);
     }
     let st = &mut q.stream;
+    st.t.clear();
+    st.t.resize(n, f32::INFINITY);
+    st.prim.resize(n, 0);
     if let Some(flat) = geo.flat() {
         let active = &q.active;
         st.rays.fill_with(n, |k| {
@@ -133,8 +132,9 @@ fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue)
 }
 
 /// The instances' part of the occlusion tests (scenes with instances, still primitives): for
-/// each shadow ray not yet occluded, [`Instances::occluded`](pathwave_engine::instances::Instances::occluded); the shadow rays of first
-/// vertices (made from one pixel's camera rays, so they leave one spot for one light) in
+/// each shadow ray not yet occluded,
+/// [`Instances::occluded`](pathwave_engine::instances::Instances::occluded); the shadow rays of
+/// first vertices (made from one pixel's camera rays, so they leave one spot for one light) in
 /// packets of [`PACKET`] where the instances are still.
 fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues::ShadowQueue) {
     if !scene.features.instances {
