@@ -168,8 +168,9 @@ pub struct Instances {
     order: Vec<u32>,
     /// Sum of child-box areas when the TLAS was built (see [`Bvh8::sah_cost`]).
     built_cost: f32,
-    /// No instance moves while the shutter is open: rays of any time share object space.
-    still: bool,
+    /// Some instance moves while the shutter is open (at the last build or refit); false for
+    /// none, so that a default (empty) set is still.
+    moving: bool,
 }
 
 impl Instances {
@@ -186,13 +187,14 @@ impl Instances {
         });
         me.order = order;
         me.built_cost = me.tlas.sah_cost();
-        me.still = me.list.iter().all(Instance::is_still);
+        me.moving = !me.list.iter().all(Instance::is_still);
         me
     }
 
-    /// True when no instance moves while the shutter is open.
+    /// True when no instance moves while the shutter is open (as placed at the last build or
+    /// [`Self::refit`]).
     pub fn still(&self) -> bool {
-        self.still
+        !self.moving
     }
 
     /// True when there are no instances.
@@ -223,7 +225,6 @@ impl Instances {
         match Instance::new(old.blas, world_from_object, old.material, velocity) {
             Some(new) => {
                 self.list[i] = new.with_motion(motion);
-                self.still = self.list.iter().all(Instance::is_still);
                 true
             }
             None => false,
@@ -235,6 +236,7 @@ impl Instances {
     /// be (its node areas doubled): then the caller rebuilds.
     pub fn refit(&mut self) -> bool {
         let _span = tracing::info_span!("refit_tlas", instances = self.list.len()).entered();
+        self.moving = !self.list.iter().all(Instance::is_still);
         let aabbs: Vec<Aabb> = (0..self.list.len()).map(|i| self.world_bounds(i)).collect();
         let order = &self.order;
         self.tlas.refit(|first, count| {
@@ -293,7 +295,7 @@ impl Instances {
         d: &[[f32; PACKET]; 3],
         tmax: &[f32; PACKET],
     ) -> u32 {
-        debug_assert!(self.still);
+        debug_assert!(self.still());
         self.tlas.any_packet(o, d, tmax, |first, count, active| {
             let mut hits = 0;
             for &i in &self.order[first as usize..(first + count) as usize] {
@@ -436,6 +438,7 @@ mod tests {
         assert!(occluded > 500 && rays - occluded > 500, "{occluded} of {rays} occluded");
         // A moving instance makes the instances unfit for packets.
         assert!(inst.place(1, place(0.0, Vec3::ZERO), Vec3A::X, None));
+        inst.refit();
         assert!(!inst.still());
     }
 }

@@ -240,9 +240,7 @@ impl Features {
     pub fn detect(geometry: &Geometry, instances: &Instances, media: &Media, camera: &Camera) -> Self {
         Self {
             media: !media.is_empty(),
-            motion: (geometry.velocity.is_some()
-                || instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some())
-                || camera.moves())
+            motion: (geometry.velocity.is_some() || !instances.still() || camera.moves())
                 && camera.shutter.0 != camera.shutter.1,
             textures: false,
             instances: !instances.is_empty(),

@@ -113,7 +113,7 @@ pub fn update_instances(
     let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
     let gone = removed_shape.read().chain(removed_material.read()).chain(removed.read()).any(was_built_from);
     let stopped: Vec<Entity> = stopped.read().filter(|e| was_built_from(*e)).collect();
-    let moving = out.instances.list.iter().any(|i| i.velocity != Vec3A::ZERO || i.motion.is_some());
+    let moving = !out.instances.still();
     let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
     if gone || !reshaped.is_empty() || out.builds == 0 {
         let _span = tracing::info_span!("rebuild_instances").entered();
