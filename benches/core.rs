@@ -6,7 +6,7 @@
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;
-use pathwave_engine::mesh::{MeshBlas, MeshData};
+use pathwave_engine::accel::mesh::{MeshBlas, MeshData};
 use pathwave_engine::scene;
 use pathwave_engine::world::SceneWorld;
 use pathwave_integrator::{oracle, wavefront};

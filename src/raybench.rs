@@ -3,8 +3,8 @@
 //! 1M-triangle knot and on cornell-diffuse), so that our figures sit beside Embree's measured
 //! the same way.
 
-use crate::engine::geometry::Geometry;
-use crate::engine::mesh::{MeshBlas, MeshData};
+use crate::engine::accel::geometry::Geometry;
+use crate::engine::accel::mesh::{MeshBlas, MeshData};
 use crate::engine::shape::Primitive;
 use crate::engine::shape::Triangle;
 use glam::{Vec2, Vec3A};
@@ -270,7 +270,7 @@ pub fn instance_update(path: &std::path::Path, frames: usize) -> Result<(), Stri
     let inst = w.world.resource::<SceneInstances>().instances.clone();
     for _ in 0..frames.min(20) {
         let start = Instant::now();
-        let rebuilt = crate::engine::instances::Instances::build(
+        let rebuilt = crate::engine::accel::instances::Instances::build(
             inst.blas.clone(),
             inst.list.clone(),
             desc.camera.shutter,

@@ -6,20 +6,14 @@
 //! [`render_scene::RenderScene`] that integrators read without touching the ECS.
 #![warn(missing_docs)]
 
+pub mod accel;
 pub mod animation;
-pub mod bvh8;
 pub mod camera;
-pub mod distribution;
-pub mod environment;
-pub mod flat;
 pub mod format;
-pub mod geometry;
-pub mod instances;
-pub mod lights;
+pub mod lighting;
 pub mod material;
 pub mod math;
 pub mod media;
-pub mod mesh;
 pub mod placement;
 pub mod render_scene;
 pub mod scene;

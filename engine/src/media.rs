@@ -13,7 +13,7 @@
 //! `sigma_s = albedo * density` and the phase function is isotropic. Where volumes overlap their
 //! coefficients add. Cost: every query visits every volume (scenes hold a handful).
 
-use crate::mesh::MeshBlas;
+use crate::accel::mesh::MeshBlas;
 use crate::shape::Closed;
 use glam::{Affine3A, Vec3, Vec3A};
 use std::cell::RefCell;
@@ -310,7 +310,7 @@ mod tests {
     }
 
     /// The 12 triangles of the box [lo, hi], wound outwards.
-    fn cube(lo: Vec3A, hi: Vec3A, mesh: &mut crate::mesh::MeshData) {
+    fn cube(lo: Vec3A, hi: Vec3A, mesh: &mut crate::accel::mesh::MeshData) {
         let base = mesh.positions.len() as u32;
         for i in 0..8 {
             let pick = |bit: u32, a: f32, b: f32| if i & bit == 0 { a } else { b };
@@ -322,7 +322,7 @@ mod tests {
         }
     }
 
-    fn mesh_volume(mesh: crate::mesh::MeshData, m: Affine3A) -> Volume {
+    fn mesh_volume(mesh: crate::accel::mesh::MeshData, m: Affine3A) -> Volume {
         assert_eq!(crate::scene::open_edge(&mesh), None, "the test mesh is closed");
         Volume {
             object_from_world: m.inverse(),
@@ -334,7 +334,7 @@ mod tests {
     #[test]
     fn a_cube_mesh_covers_what_the_box_covers() {
         let m = Affine3A::from_rotation_y(0.4) * Affine3A::from_scale(Vec3::new(2.0, 1.0, 1.0));
-        let mut mesh = crate::mesh::MeshData::default();
+        let mut mesh = crate::accel::mesh::MeshData::default();
         cube(Vec3A::ZERO, Vec3A::ONE, &mut mesh);
         let (mv, bv) = (mesh_volume(mesh, m), unit_box(1.0, m));
         let mut rnd = crate::testing::uniform(5);
@@ -359,7 +359,7 @@ mod tests {
     #[test]
     fn a_non_convex_mesh_covers_each_of_its_parts() {
         // Two unit cubes 1 apart along x, in one mesh: a ray along x crosses both.
-        let mut mesh = crate::mesh::MeshData::default();
+        let mut mesh = crate::accel::mesh::MeshData::default();
         cube(Vec3A::ZERO, Vec3A::ONE, &mut mesh);
         cube(Vec3A::new(2.0, 0.0, 0.0), Vec3A::new(3.0, 1.0, 1.0), &mut mesh);
         let media = Media { volumes: vec![mesh_volume(mesh, Affine3A::IDENTITY)] };

@@ -6,7 +6,7 @@
 //! [`Form`] has one variant per kind of the shape list ([`crate::shape::with_shapes`]), each a
 //! [`ShapeModel`], and one for triangle meshes, which the world instances.
 
-use crate::mesh::MeshData;
+use crate::accel::mesh::MeshData;
 use crate::shape::{Closed, Primitive, ShapeModel, Triangle, with_shapes};
 use glam::Affine3A;
 use std::sync::Arc;

@@ -1,11 +1,11 @@
 //! The flat, read-only scene that integrators render: extracted from the ECS world after the
 //! systems have run, never queried in a hot loop.
 
+use crate::accel::geometry::{Geometry, Hit};
+use crate::accel::instances::Instances;
 use crate::camera::Camera;
-use crate::environment::{EnvSample, EnvironmentMap};
-use crate::geometry::{Geometry, Hit};
-use crate::instances::Instances;
-use crate::lights::{BackgroundSampling, LightTable};
+use crate::lighting::environment::{EnvSample, EnvironmentMap};
+use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
 use crate::math::Ray;
 use crate::media::Media;

@@ -5,9 +5,9 @@
 
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Quat, Vec3, Vec3A};
+use pathwave_engine::accel::mesh::MeshData;
 use pathwave_engine::material::Material;
 use pathwave_engine::math::Ray;
-use pathwave_engine::mesh::MeshData;
 use pathwave_engine::placement::Form;
 use pathwave_engine::scene::{ShapeDesc, parse};
 use pathwave_engine::world::{
@@ -61,6 +61,8 @@ fn blas_and_tlas_are_rebuilt_only_when_their_inputs_change() {
         .collect();
     let first = w.update();
     assert_eq!(counts(&w), (1, 1, 0), "one BLAS for twenty instances of one mesh");
+    first.instances.validate().unwrap();
+    first.instances.blas[0].validate().unwrap();
     assert_eq!(first.instances.list.len(), 20);
     assert_eq!(first.instances.blas.len(), 1);
     assert!(first.features.instances);
@@ -74,6 +76,7 @@ fn blas_and_tlas_are_rebuilt_only_when_their_inputs_change() {
     w.world.entity_mut(entities[3]).insert(Transform(placement(3) * Affine3A::from_translation(Vec3::Z)));
     let moved = w.update();
     assert_eq!(counts(&w), (1, 1, 1));
+    moved.instances.validate().unwrap();
     assert!(!Arc::ptr_eq(&moved.instances, &first.instances), "the old frame keeps its TLAS");
     let k = w.world.resource::<SceneInstances>().entities.iter().position(|e| *e == entities[3]).unwrap();
     assert_eq!(first.instances.list[k].world_from_object, placement(3));

@@ -4,7 +4,7 @@
 //! the axes.
 
 use glam::Vec3A;
-use pathwave_engine::geometry::Geometry;
+use pathwave_engine::accel::geometry::Geometry;
 use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::shape::Primitive;
 use pathwave_engine::shape::{PrimitiveShape, Quad, Sphere, Triangle};

@@ -7,7 +7,7 @@
 
 use glam::{Vec2, Vec3A};
 use libfuzzer_sys::fuzz_target;
-use pathwave_engine::environment::EnvironmentMap;
+use pathwave_engine::lighting::environment::EnvironmentMap;
 use pathwave_engine::scene::files::decode_image_bytes;
 use pathwave_engine::texture::{TextureImage, Wrap};
 use std::path::Path;

@@ -6,7 +6,7 @@
 
 use glam::{Affine3A, Vec3A};
 use libfuzzer_sys::fuzz_target;
-use pathwave_engine::mesh::MeshBlas;
+use pathwave_engine::accel::mesh::MeshBlas;
 use pathwave_engine::placement::{Form, primitives};
 use pathwave_engine::scene::{open_edge, parse_obj};
 use std::path::Path;

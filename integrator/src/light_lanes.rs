@@ -1,7 +1,7 @@
 //! Next-event estimation's light samples for [`LANES`] shading points at once: what
 //! `path::pick_light` computes for each, with the same operations in the same order (so the
 //! same bits), run as branch-free kernels across lanes for the lanes whose picked light is a
-//! quad, a sphere or an ellipsoid ([`LightTable::plain`](pathwave_engine::lights::LightTable::plain):
+//! quad, a sphere or an ellipsoid ([`LightTable::plain`](pathwave_engine::lighting::lights::LightTable::plain):
 //! scenes without motion) in a scene without textures. Points close enough to a
 //! rectangle for its spherical-rectangle sampling, points inside a sphere light, lanes that
 //! picked another kind of light, and every point of other scenes take `path::pick_light`
@@ -10,7 +10,7 @@
 use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, dot, lanes, offset, sel3};
 use crate::path;
 use glam::Vec3;
-use pathwave_engine::lights::PlainLight;
+use pathwave_engine::lighting::lights::PlainLight;
 use pathwave_engine::render_scene::{Background, RenderScene};
 use pathwave_engine::shape::{
     EllipsoidLight, QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample, ellipsoid_sample,

@@ -5,8 +5,8 @@
 
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
-use pathwave_engine::geometry::Hit;
-use pathwave_engine::lights::OtherLight;
+use pathwave_engine::accel::geometry::Hit;
+use pathwave_engine::lighting::lights::OtherLight;
 use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::render_scene::RenderScene;
@@ -340,7 +340,7 @@ impl ScatterSamples {
 /// stands for. A direction on `sp.n`'s side of the shading normal, scattered from a `wo` also
 /// there (a reflection on the outside the vertex normals point to), leaves whatever the flat
 /// triangle says: it starts at the smooth surface (the hit point is lifted for it, after
-/// Hanika 2021: [`pathwave_engine::mesh::terminator_lift`]) and the mesh itself decides what it
+/// Hanika 2021: [`pathwave_engine::accel::mesh::terminator_lift`]) and the mesh itself decides what it
 /// meets, so the terminator follows the smooth surface instead of the facets. Every other direction the two
 /// normals disagree about ends the path as before: a transmission through the shading normal
 /// that stays on `wo`'s side of the facet, and a reflection on the inner side, where the point

@@ -8,7 +8,7 @@
 //! [`ParseScope`], checks every name against them while the parser still knows where that
 //! name stands, and reads the image and mesh files.
 
-use crate::mesh::MeshData;
+use crate::accel::mesh::MeshData;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

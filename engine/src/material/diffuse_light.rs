@@ -1,5 +1,5 @@
 //! Diffuse area emitter: constant radiance over the hemisphere of its normal (or both), with a
-//! black BSDF. Light sampling picks emitters by power (see [`crate::lights`]).
+//! black BSDF. Light sampling picks emitters by power (see [`crate::lighting::lights`]).
 
 use super::{Colors, Emission, MaterialModel, Shading};
 use crate::format::{Color, Rgb};

@@ -32,7 +32,7 @@ pub struct MeshFile {
     /// The path as written.
     pub path: std::path::PathBuf,
     /// Positions and triangles.
-    pub mesh: std::sync::Arc<crate::mesh::MeshData>,
+    pub mesh: std::sync::Arc<crate::accel::mesh::MeshData>,
 }
 
 impl<'de> Deserialize<'de> for MeshFile {
@@ -53,7 +53,7 @@ impl<'de> Deserialize<'de> for MeshFile {
 
 /// An edge (by vertex position) that borders an odd number of triangles, and that number: a
 /// mesh without one is closed, so a ray's hits alternate between entering and leaving it.
-pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec3A, u32)> {
+pub fn open_edge(mesh: &crate::accel::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec3A, u32)> {
     use std::collections::HashMap;
     let key = |p: glam::Vec3A| p.to_array().map(f32::to_bits);
     let mut count: HashMap<([u32; 3], [u32; 3]), u32> = HashMap::new();
@@ -70,13 +70,13 @@ pub fn open_edge(mesh: &crate::mesh::MeshData) -> Option<(glam::Vec3A, glam::Vec
 }
 
 /// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
-fn read_obj(path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+fn read_obj(path: &std::path::Path) -> Result<crate::accel::mesh::MeshData, String> {
     parse_obj(&super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?, path)
 }
 
 /// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
 /// fans); `path` names the file in errors.
-pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::MeshData, String> {
+pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::accel::mesh::MeshData, String> {
     check_obj_indices(bytes, path)?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
@@ -123,7 +123,7 @@ pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::mesh::Me
     if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
-    Ok(crate::mesh::MeshData { positions, triangles, normals, uvs })
+    Ok(crate::accel::mesh::MeshData { positions, triangles, normals, uvs })
 }
 
 /// Refuses face indices that refer to no vertex, texture coordinate or normal: a relative

@@ -131,8 +131,8 @@ impl LightDesc {
     }
 
     /// The light in world space.
-    pub fn to_light(&self) -> crate::lights::PunctualLight {
-        use crate::lights::PunctualLight;
+    pub fn to_light(&self) -> crate::lighting::lights::PunctualLight {
+        use crate::lighting::lights::PunctualLight;
         match *self {
             LightDesc::Point { position, intensity } => {
                 PunctualLight::Point { position: position.0.into(), intensity: intensity.0 }

@@ -118,7 +118,7 @@ pub struct SurfacePoint {
     /// The hit point, re-projected onto the surface where that is cheap. On a mesh with vertex
     /// normals it is moved along `n` halfway to the smooth surface they describe and `err` grows
     /// to match, so that rays leaving on `n`'s side start at that surface and the others where
-    /// they would have (see [`crate::mesh::terminator_lift`]).
+    /// they would have (see [`crate::accel::mesh::terminator_lift`]).
     pub p: Vec3A,
     /// Unit geometric normal on the shape's outside (for a quad: along `u x v`): rays leave
     /// the surface along it.

@@ -1,11 +1,11 @@
 //! The components of scene entities and the resources of the scene world.
 
-use crate::geometry::Geometry;
-use crate::instances::Instances;
-use crate::lights::{LightTable, PunctualLight};
+use crate::accel::geometry::Geometry;
+use crate::accel::instances::Instances;
+use crate::accel::mesh::{MeshBlas, MeshData};
+use crate::lighting::lights::{LightTable, PunctualLight};
 use crate::material::Material;
 use crate::media::{Media, Medium};
-use crate::mesh::{MeshBlas, MeshData};
 use crate::placement::Form;
 use crate::render_scene::{Background, RenderScene, RenderSettings};
 use crate::scene::CameraDesc;

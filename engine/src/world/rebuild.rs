@@ -2,11 +2,11 @@
 //! each rebuilt (or refitted) only when what it is made from changed.
 
 use super::components::*;
-use crate::geometry::Geometry;
-use crate::instances::{Instance, Instances, ShutterMotion};
-use crate::lights::{LightInputs, LightTable};
+use crate::accel::geometry::Geometry;
+use crate::accel::instances::{Instance, Instances, ShutterMotion};
+use crate::accel::mesh::MeshBlas;
+use crate::lighting::lights::{LightInputs, LightTable};
 use crate::media::{Boundary, Media, Volume};
-use crate::mesh::MeshBlas;
 use crate::placement::{Form, primitives};
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3A};

@@ -1,10 +1,10 @@
 //! Spawning: the entities and resources of a scene description.
 
 use super::components::*;
-use crate::environment::EnvironmentMap;
+use crate::accel::mesh::MeshData;
+use crate::lighting::environment::EnvironmentMap;
 use crate::material::Material;
 use crate::media::Medium;
-use crate::mesh::MeshData;
 use crate::placement::{Form, primitives};
 use crate::render_scene::{Background, PixelWindow, RenderSettings};
 use crate::scene::{

@@ -6,8 +6,8 @@ use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
 use glam::{Vec3, Vec3A};
-use pathwave_engine::bvh8::PACKET;
-use pathwave_engine::geometry::{Geometry, Hit};
+use pathwave_engine::accel::bvh8::PACKET;
+use pathwave_engine::accel::geometry::{Geometry, Hit};
 use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
@@ -133,7 +133,7 @@ fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue)
 
 /// The instances' part of the occlusion tests (scenes with instances, still primitives): for
 /// each shadow ray not yet occluded,
-/// [`Instances::occluded`](pathwave_engine::instances::Instances::occluded); the shadow rays of
+/// [`Instances::occluded`](pathwave_engine::accel::instances::Instances::occluded); the shadow rays of
 /// first vertices (made from one pixel's camera rays, so they leave one spot for one light) in
 /// packets of [`PACKET`] where the instances are still.
 fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues::ShadowQueue) {
@@ -157,9 +157,9 @@ fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues:
 
 /// The shadow rays `k..k + PACKET` not yet occluded, through still instances together: rays
 /// that leave one spot for one light, so the TLAS and BLAS nodes are read once for all of them
-/// ([`Instances::occluded_packet`](pathwave_engine::instances::Instances::occluded_packet)),
+/// ([`Instances::occluded_packet`](pathwave_engine::accel::instances::Instances::occluded_packet)),
 /// with the answers of
-/// [`Instances::occluded`](pathwave_engine::instances::Instances::occluded).
+/// [`Instances::occluded`](pathwave_engine::accel::instances::Instances::occluded).
 fn shadow_packet_in_instances(scene: &RenderScene, sq: &mut super::queues::ShadowQueue, k: usize) {
     let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
     for a in 0..3 {

@@ -6,7 +6,7 @@
 //! takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power estimate for them
 //! depends on a scene radius and would starve the finite lights of a large scene.
 
-use crate::geometry::Geometry;
+use crate::accel::geometry::Geometry;
 use crate::material::{Emission, Material};
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 use glam::{Vec2, Vec3, Vec3A};

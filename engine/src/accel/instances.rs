@@ -2,10 +2,10 @@
 //! with an affine transform, a material and a velocity; rays move into the instance's object
 //! space, so a thousand instances of a mesh cost a thousand instance records and one BLAS.
 
-use crate::bvh8::{Bvh8, PACKET};
-use crate::geometry::Hit;
+use crate::accel::bvh8::{Bvh8, PACKET};
+use crate::accel::geometry::Hit;
+use crate::accel::mesh::{MeshBlas, MeshHit};
 use crate::math::{Ray, gamma, transform_box};
-use crate::mesh::{MeshBlas, MeshHit};
 use crate::shape::{SurfacePoint, adapt_shading_normal};
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -247,6 +247,16 @@ impl Instances {
         self.tlas.sah_cost() <= 2.0 * self.built_cost.max(1.0)
     }
 
+    /// Checks the TLAS's invariants ([`Bvh8::validate`], each leaf's box around its instances'
+    /// bounds over the shutter).
+    pub fn validate(&self) -> Result<(), String> {
+        self.tlas.validate(|first, count| {
+            self.order[first as usize..(first + count) as usize]
+                .iter()
+                .fold(Aabb::empty(), |b, &i| b.union(&self.world_bounds(i as usize)))
+        })
+    }
+
     /// Bytes held by the instance records and the TLAS (not the BLAS).
     pub fn bytes(&self) -> usize {
         self.list.len() * size_of::<Instance>() + self.tlas.node_bytes() + self.order.len() * 4
@@ -352,7 +362,7 @@ impl Instances {
     ///
     /// With vertex normals the shading normal is adapted to the ray ([`adapt_shading_normal`]),
     /// and the point moves along `n` by half the height `h` of the smooth surface over the
-    /// triangle ([`crate::mesh::terminator_lift`], Hanika 2021) while `err` grows by
+    /// triangle ([`crate::accel::mesh::terminator_lift`], Hanika 2021) while `err` grows by
     /// `h / (2 |n|_1)`: [`crate::math::offset_ray_origin`] then puts a ray that leaves on `n`'s
     /// side (the side the normals point to) `h` higher than it would have, at the smooth
     /// surface, and a ray on the other side exactly where it would have. This is done in world
@@ -401,7 +411,7 @@ impl Instances {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::MeshData;
+    use crate::accel::mesh::MeshData;
 
     #[test]
     fn packets_find_what_each_ray_finds_alone_among_still_instances() {
@@ -418,11 +428,13 @@ mod tests {
             Instance::new(0, place(-1.1, Vec3::new(-2.0, 1.0, 0.5)), 7, Vec3A::ZERO).unwrap(),
         ];
         let mut inst = Instances::build(vec![blas], list, (0.0, 1.0));
+        inst.validate().unwrap();
         assert!(inst.still());
         let mut rnd = crate::testing::signed(21);
         let (mut occluded, mut rays) = (0, 0);
         for i in 0..300 {
-            let (o, d, tmax) = crate::mesh::tests::packet(&mut rnd, if i % 2 == 0 { 0.02 } else { 2.0 }, 2.0);
+            let (o, d, tmax) =
+                crate::accel::mesh::tests::packet(&mut rnd, if i % 2 == 0 { 0.02 } else { 2.0 }, 2.0);
             let occ = crate::simd::lanes(|| inst.occluded_packet(&o, &d, &tmax));
             for l in 0..PACKET {
                 let ray = Ray {
@@ -439,6 +451,7 @@ mod tests {
         // A moving instance makes the instances unfit for packets.
         assert!(inst.place(1, place(0.0, Vec3::ZERO), Vec3A::X, None));
         inst.refit();
+        inst.validate().unwrap();
         assert!(!inst.still());
     }
 }

@@ -18,7 +18,7 @@
 //! # Sampling
 //!
 //! The map is sampled with a piecewise-constant 2D distribution over its texel grid: a
-//! marginal density over rows and one conditional density per row ([`crate::distribution`]:
+//! marginal density over rows and one conditional density per row ([`crate::lighting::distribution`]:
 //! pbrt-v4's `PiecewiseConstant1D` and `PiecewiseConstant2D`, appendix A.4 and A.5 of
 //! "Physically Based Rendering", 4th edition). A point (u, v) of the unit square maps to the direction above, with
 //! d omega = 2 pi^2 sin(theta) du dv, so the solid-angle density is
@@ -32,7 +32,7 @@
 //! luminance, which is a convex combination of theirs), times sin theta at the cell centre. The
 //! bound is conservative: a small sun's density spreads over the ring of cells around it.
 
-use crate::distribution::{Distribution2D, clean};
+use crate::lighting::distribution::{Distribution2D, clean};
 use crate::texture::{TextureError, TextureImage};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::{PI, TAU};

@@ -2,7 +2,7 @@
 //! blocks of up to eight triangles stored lane by lane, tested eight at a time with the
 //! watertight test of [`Triangle::intersect`] (same operations, same bits).
 
-use crate::bvh8::{Bvh8, PACKET};
+use crate::accel::bvh8::{Bvh8, PACKET};
 use crate::math::gamma;
 use crate::shape::{PrimitiveShape, SurfacePoint, Triangle};
 use glam::Vec3A;
@@ -119,6 +119,13 @@ impl TriBlock {
         (out, hit)
     }
 
+    /// The eight tests without AVX2.
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    #[inline(always)]
+    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
+        self.lanes_scalar(r, tmax)
+    }
+
     /// The eight tests: distances, the lanes hit and the lanes with an edge function exactly
     /// zero (left to the caller).
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
@@ -197,10 +204,11 @@ impl TriBlock {
         }
     }
 
-    /// [`Self::lanes`] without AVX2, lane by lane.
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    /// [`Self::lanes`] without AVX2, lane by lane, with the same operations in the same order
+    /// (so the same bits where a lane is hit). Built for the tests too, which compare the two.
+    #[cfg(any(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
     #[inline(always)]
-    fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
+    fn lanes_scalar(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
         let [kx, ky, kz] = r.k;
         let mut x = [[0.0f32; 8]; 3];
         let mut y = [[0.0f32; 8]; 3];
@@ -324,6 +332,20 @@ impl MeshBlas {
     /// Bounds in object space.
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds
+    }
+
+    /// Checks the BLAS's invariants ([`Bvh8::validate`], each leaf's box around its blocks'
+    /// triangles).
+    pub fn validate(&self) -> Result<(), String> {
+        self.bvh.validate(|first, count| {
+            let blocks = &self.blocks[first as usize..(first + count) as usize];
+            let corners = blocks.iter().flat_map(|b| {
+                (0..8).filter(move |&l| b.id[l] != u32::MAX).flat_map(move |l| {
+                    (0..3).map(move |j| Vec3A::new(b.v[j][0][l], b.v[j][1][l], b.v[j][2][l]))
+                })
+            });
+            corners.fold(Aabb::empty(), |a, p| Aabb { min: a.min.min(p), max: a.max.max(p) })
+        })
     }
 
     /// Bytes held by the BVH and the triangle blocks (not the mesh itself).
@@ -503,10 +525,40 @@ pub fn terminator_lift(x: Vec3A, n: Vec3A, p: [Vec3A; 3], vn: [Vec3A; 3], b: [f3
 pub(crate) mod tests {
     use super::*;
 
+    /// The AVX2 block test and its scalar fallback agree: the same lanes hit, the same lanes
+    /// left to the exact test, the same distances where hit (rays through the knot's blocks,
+    /// some from its vertices).
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    #[test]
+    fn the_scalar_block_test_gives_the_avx2_bits() {
+        let mesh = Arc::new(MeshData::knot(40, 16));
+        let blas = MeshBlas::build(mesh.clone());
+        let mut rnd = crate::testing::signed(7);
+        let mut hits = 0;
+        for i in 0..3000 {
+            let o = Vec3A::new(rnd(), rnd(), rnd()) * 5.0;
+            let o = if i % 4 == 0 { mesh.positions[i % mesh.positions.len()] } else { o };
+            let d = Vec3A::new(rnd(), rnd(), rnd()) * 2.0 - o * 0.5 * (i % 2) as f32;
+            let r = TriRay::new(o, d);
+            let tmax = if i % 3 == 0 { 2.0 } else { f32::INFINITY };
+            for b in &blas.blocks {
+                let (t, hit, zero) = b.lanes(&r, tmax);
+                let (t_s, hit_s, zero_s) = b.lanes_scalar(&r, tmax);
+                assert_eq!((hit, zero), (hit_s, zero_s), "ray {o} {d}");
+                for l in (0..8).filter(|l| hit >> l & 1 != 0) {
+                    assert_eq!(t[l].to_bits(), t_s[l].to_bits(), "ray {o} {d} lane {l}");
+                }
+                hits += hit.count_ones();
+            }
+        }
+        assert!(hits > 1000, "the rays hit triangles ({hits})");
+    }
+
     #[test]
     fn blas_hits_equal_a_scan_of_the_scalar_test() {
         let mesh = Arc::new(MeshData::knot(60, 24));
         let blas = MeshBlas::build(mesh.clone());
+        blas.validate().unwrap();
         let mut rnd = crate::testing::signed(3);
         let mut hits = 0;
         for i in 0..4000 {

@@ -1,8 +1,8 @@
 //! The primitive list and its BVH (our 8-wide [`Bvh8`], built from obvhs's binary BVH):
 //! closest-hit and occlusion queries.
 
-use crate::bvh8::{Bvh8, PACKET};
-use crate::flat::FlatPrims;
+use crate::accel::bvh8::{Bvh8, PACKET};
+use crate::accel::flat::FlatPrims;
 use crate::math::Ray;
 use crate::shape::sphere::{sphere_t, sphere_t_single};
 use crate::shape::{Primitive, SurfacePoint};
@@ -14,7 +14,7 @@ use obvhs::aabb::Aabb;
 pub struct Hit {
     /// Ray parameter.
     pub t: f32,
-    /// Index into [`Geometry::prims`], or [`crate::instances::INSTANCE_PRIM`].
+    /// Index into [`Geometry::prims`], or [`crate::accel::instances::INSTANCE_PRIM`].
     pub prim: u32,
     /// Material id.
     pub material: u32,
@@ -122,6 +122,19 @@ impl Geometry {
             })
             .collect();
         Self { prims, material, velocity, bvh: Some(bvh), flat: None, spheres }
+    }
+
+    /// Checks the BVH's invariants ([`Bvh8::validate`]); for still primitives also that each
+    /// leaf's box holds its primitives (moving ones are checked for the tree's shape only).
+    pub fn validate(&self) -> Result<(), String> {
+        let Some(bvh) = &self.bvh else { return Ok(()) };
+        bvh.validate(|first, count| match self.velocity {
+            Some(_) => Aabb::empty(),
+            None => {
+                let prims = &self.prims[first as usize..(first + count) as usize];
+                prims.iter().fold(Aabb::empty(), |b, p| b.union(&p.aabb()))
+            }
+        })
     }
 
     /// How far primitive `prim` has moved at `time` (zero for static scenes).
@@ -385,6 +398,7 @@ mod tests {
         let prims = scene();
         let n = prims.len();
         let geo = Geometry::build_bvh(prims.clone(), (0..n as u32).collect());
+        geo.validate().unwrap();
         let mut rnd = xorshift(99);
         let (mut hits, mut sum_t) = (0, 0.0f64);
         for _ in 0..5000 {
@@ -405,7 +419,7 @@ mod tests {
 
     #[test]
     fn flat_scan_and_stream_equal_the_bvh() {
-        use crate::flat::RayStream;
+        use crate::accel::flat::RayStream;
         // Quads and spheres, and ellipsoids (tested ray by ray); a triangle sends the scene to
         // the BVH.
         let triangle = Triangle::new(Vec3A::ZERO, Vec3A::X, Vec3A::Y).unwrap();
