@@ -285,7 +285,10 @@ struct TileResult {
 
 /// Runs the wavefront over samples `samples` of every pixel of one tile (timing the stages if
 /// `clock`).
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the tile's scene, samples, slots and per-worker state, each borrowed separately"
+)]
 fn render_tile(
     scene: &RenderScene,
     tile: &Tile,
