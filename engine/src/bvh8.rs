@@ -11,6 +11,11 @@
 //! nearest first. What a leaf holds is the caller's business: a leaf is a range
 //! `(first, count)` that the caller assigned when building, and the caller tests it.
 
+#![expect(
+    unsafe_code,
+    reason = "AVX2 intrinsics for the node tests, prefetches, and uninitialised traversal stacks"
+)]
+
 use crate::math::gamma;
 use glam::Vec3A;
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
