@@ -52,7 +52,7 @@ impl Quality {
 }
 
 /// Filter settings. The defaults, measured at 16 spp on cornell-diffuse, cornell, spheres-sky,
-/// mesh and cornell-smoke (benches/RESULTS.md): prefiltered guides cut relMSE against the
+/// mesh and cornell-smoke (benches/results/denoiser.md): prefiltered guides cut relMSE against the
 /// guides as rendered by 20-25% on spheres-sky and cornell-smoke (and 7% on cornell, whose mean
 /// moves -0.3% instead of -0.7%), and cost 4-8% on cornell-diffuse and mesh; prefilters of
 /// balanced quality (OIDN's standard networks, where high quality runs its large ones) give the
