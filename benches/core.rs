@@ -1,8 +1,8 @@
 //! Criterion benchmarks of the core: BVH build, closest-hit and any-hit traversal over fixed
 //! rays, each wavefront stage on the queues it met in one iteration of a render, and a 16-spp
 //! cornell with each integrator. `cargo bench --bench core` runs them (add `-- traverse` to
-//! pick a group); `benches/RESULTS.md` records what they measured, with the machine and the
-//! date. Whole-scene time against error is `pathwave bench`.
+//! pick a group); `benches/results/wavefront-and-oracle.md` and `lanes-and-simd.md` record
+//! what they measured, with the machine and the date. Whole-scene time against error is `pathwave bench`.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3A;

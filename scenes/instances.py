@@ -1,7 +1,7 @@
 """Writes scenes/instances.ron (10,000 instances of one mesh) and its mesh,
-scenes/assets/knot-2k.obj (the torus knot of ANCHORS.md at 40 rings of 25 vertices: 2,000
-triangles). The instances stand on a 100 x 100 grid, each with its own rotation about y, scale
-and one of four materials: 20 million triangles drawn from one 2,000-triangle BLAS.
+scenes/assets/knot-2k.obj (the torus knot of `pathwave bench-rays` and the Embree anchor,
+benches/RESULTS.md, at 40 rings of 25 vertices: 2,000 triangles). The instances stand on a
+100 x 100 grid, each with its own rotation about y, scale and one of four materials: 20 million triangles drawn from one 2,000-triangle BLAS.
 Deterministic. Run: python3 scenes/instances.py
 """
 import math

@@ -54,7 +54,7 @@ fn cornell_diffuse_matches_reference() {
 
 #[test]
 fn cornell_smoke_matches_reference() {
-    // The reference was rendered at 2048 spp (ANCHORS.md); fitted from our renders at 64 to
+    // The reference was rendered at 2048 spp (tests/references/README.md); fitted from our renders at 64 to
     // 4096 spp its own relMSE (0.00027) is what we reach at about 1900, close enough.
     let white_smoke_density: Error = ("white smoke density +5%", |d| {
         for o in &mut d.objects {

@@ -163,7 +163,7 @@ fn mad(a: &[Vec3], b: &[Vec3]) -> f64 {
     a.iter().zip(b).map(|(a, b)| (*a - *b).abs().element_sum() as f64).sum::<f64>() / (3 * a.len()) as f64
 }
 
-/// Frame-to-frame flicker of a static camera (benches/RESULTS.md): `animate` gives every frame
+/// Frame-to-frame flicker of a static camera (benches/results/denoiser.md): `animate` gives every frame
 /// the same seed, so a still shot renders the same noise, and the same denoised image, in every
 /// frame (checked here: OIDN's output is a function of its input). With a seed per frame
 /// (`render --seed K`, the frames of a still shot differing only in their noise), the mean

@@ -43,7 +43,12 @@ fn progressive_passes_without_a_display_give_the_bits_of_one_render() {
 /// An X server of a test's own, with the lock that keeps the tests' servers one at a time: two
 /// started at once were seen to hand out a display on which one client connected (xwd) and
 /// the next did not (XOpenDisplay failed).
-struct Xvfb(Child, String, #[allow(dead_code)] std::sync::MutexGuard<'static, ()>);
+struct Xvfb(
+    Child,
+    String,
+    #[expect(dead_code, reason = "held, not read: it keeps the lock until the server is dropped")]
+    std::sync::MutexGuard<'static, ()>,
+);
 
 static ONE_SERVER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 

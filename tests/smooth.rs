@@ -120,7 +120,7 @@ fn terminator_scene(shape: &str, material: &str) -> String {
 
 /// What [`terminator`] measures of a mesh's image against the analytic sphere's.
 #[derive(Debug)]
-#[allow(dead_code)] // read through Debug
+#[expect(dead_code, reason = "the fields are read through Debug")]
 struct Terminator {
     /// relMSE over the pixels whose 5 x 5 neighbourhood sees the mesh (the band of 2 pixels at
     /// the silhouette, where the polygon and the circle differ, is left out).

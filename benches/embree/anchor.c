@@ -1,4 +1,4 @@
-/* The Embree anchor of ../shared/refs/ANCHORS.md, re-measured on this machine beside
+/* The Embree anchor (benches/RESULTS.md, "The anchors"), re-measured on this machine beside
  * `pathwave bench-rays`: the same 1M-triangle torus knot, 1024x1024 primary rays through pixel
  * centres in 8x8 tiles, one cosine-distributed bounce per hit (offset 1e-4 along the geometric
  * normal turned to face the camera), single-ray rtcIntersect1 on 1 and 2 threads, median of 3.

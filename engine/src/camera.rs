@@ -71,7 +71,7 @@ pub struct Camera {
 impl Camera {
     /// `vfov` is the vertical field of view in degrees; the image is `width` x `height` pixels,
     /// row 0 at the top, right = normalize((look_at - look_from) x vup).
-    #[allow(clippy::too_many_arguments)]
+    #[expect(clippy::too_many_arguments, reason = "the camera's fields as the scene file gives them")]
     pub fn new(
         look_from: Vec3,
         look_at: Vec3,

@@ -194,7 +194,7 @@ impl Background {
     /// a horizontal surface receives from the upper half: skies light the ground, which hides
     /// the lower half. Directions below the horizon are left to BSDF sampling (MIS weight 1
     /// there). On spheres-sky at 64 spp it cut relMSE by 19%, where a uniform density over the
-    /// sphere cut it by 11% and a mixture of the two by 13-15% (benches/RESULTS.md).
+    /// sphere cut it by 11% and a mixture of the two by 13-15% (benches/results/sampling.md).
     /// `None` at the disk's rim (density 0).
     #[inline(always)]
     pub fn smooth_sample(bottom: Vec3, top: Vec3, u: [f32; 2]) -> Option<EnvSample> {

@@ -13,6 +13,14 @@
 //! CPU that has the wider set, which the equal-bits test and the override need; the mechanism
 //! is the one below, a `#[target_feature]` function into which the closure is inlined.
 
+#![cfg_attr(
+    target_arch = "x86_64",
+    expect(
+        unsafe_code,
+        reason = "a `#[target_feature]` function called after the run-time check, and a movemask"
+    )
+)]
+
 use std::sync::OnceLock;
 
 /// The environment variable that chooses the lane loops' instruction set: `avx2` (the

@@ -23,7 +23,7 @@ use rayon::prelude::*;
 /// against their references) 4 passes and 2 keep 8x8-block means closer to the reference
 /// (the wider, looser filter carries light across illumination gradients: up to 9% off in a
 /// dark corner at 16 spp, where the noisy render is 7% off) for a relMSE within 10-30% of
-/// the loosest (benches/RESULTS.md).
+/// the loosest (benches/results/denoiser.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
     /// Passes; the kernel reaches `2^(passes + 1)` pixels.

@@ -423,11 +423,11 @@ macro_rules! lanes {
         impl $lanes {
             /// Lane `l`.
             #[inline(always)]
-            #[allow(dead_code)]
+            #[allow(dead_code, reason = "per invocation: some lane structs are only written, some only read")]
             $vis fn get(&self, l: usize) -> $t { $t { $($f: lanes!(@get self.$f, l, $kind),)* } }
             /// Sets lane `l`.
             #[inline(always)]
-            #[allow(dead_code)]
+            #[allow(dead_code, reason = "per invocation: some lane structs are only written, some only read")]
             $vis fn set(&mut self, l: usize, v: &$t) { $(lanes!(@set self.$f, l, v.$f, $kind);)* }
         }
     };

@@ -408,7 +408,10 @@ fn sphere_by_cone(i: &SphereIn) -> LightOut {
 /// `pdf_solid` in solid angle, error bound `err`) of a light emitting `emit` picked with
 /// probability `pmf`, seen from `from`: the direction, emission, density with the choice, and
 /// the target off the light, zero when the light sends nothing; `scalar` passes through.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a light sample's parts, each a value the lane loop holds in registers"
+)]
 #[inline(always)]
 fn light_out(
     lp: Vec3,

@@ -1,7 +1,9 @@
 //! The reference path tracer: one path at a time, recursion unrolled into a loop. It defines
 //! the estimator every other integrator must match in expectation: next-event estimation on
-//! quad and sphere emitters combined with BSDF sampling by MIS (power heuristic), Russian
-//! roulette, box-filtered stratified pixel samples, rayon over tiles.
+//! every kind of light combined with BSDF sampling by MIS (power heuristic), free-flight
+//! sampling in media, Russian roulette, box-filtered pixel samples from the scene's sampler
+//! (Owen-scrambled Sobol by default, stratified or independent: `crate::sampler`), rayon over
+//! tiles.
 
 use crate::film::{Film, PixelAccumulator, clamp_sample};
 use crate::lambert_vertex;

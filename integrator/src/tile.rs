@@ -51,7 +51,7 @@ impl Tile {
     }
 
     /// Number of pixels (a tile is never empty).
-    #[allow(clippy::len_without_is_empty)]
+    #[expect(clippy::len_without_is_empty, reason = "a tile is never empty")]
     pub fn len(&self) -> u32 {
         self.w * self.h
     }

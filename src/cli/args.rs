@@ -131,8 +131,8 @@ pub enum Command {
         #[arg(long, value_name = "FILE.jsonl")]
         anchor: Option<PathBuf>,
     },
-    /// BVH build time and traversal rates (Mrays/s) on the knot of ANCHORS.md and on a scene's
-    /// geometry: primary, diffuse-bounce and shadow rays on 1 and 2 threads.
+    /// BVH build time and traversal rates (Mrays/s) on the Embree anchor's torus knot and on a
+    /// scene's geometry: primary, diffuse-bounce and shadow rays on 1 and 2 threads.
     BenchRays {
         /// Knot rings (2 x rings x segments triangles).
         #[arg(long, default_value_t = 2000)]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 /// Renders each scene at each of `spps` (and denoised with each of `denoise`), measures time
 /// and error against its reference, and prints the table (and writes the plot to `svg`).
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "the bench subcommand's flags, passed through as they are")]
 pub fn bench(
     spps: &[u32],
     refs: &std::path::Path,

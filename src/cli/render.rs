@@ -17,7 +17,7 @@ use pathwave::view::{self, ViewArgs, Viewers};
 use std::path::Path;
 use std::time::Instant;
 
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "the render flags, each passed through from the command line")]
 pub fn render(
     path: &Path,
     output: &Path,
@@ -159,7 +159,10 @@ pub struct Rendered {
 /// do: from its checkpoint when resuming, in passes that save checkpoints (and, with
 /// `partial`, the image so far) when asked, or show the image to `viewers` (passes of 1, 2, 4,
 /// ... spp, until a viewer stops the render), then denoised or with guides when asked.
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "one image's scene, identity, output, settings and viewers, as `render` and `animate` give them"
+)]
 pub fn render_image(
     scene: &pathwave::engine::render_scene::RenderScene,
     id: &RenderId,

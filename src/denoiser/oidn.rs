@@ -10,6 +10,8 @@
 //! express, and the wrapper's `clean_aux` sets a parameter named `clean_aux` where OIDN reads
 //! `cleanAux` (OIDN 2.5.1 warns "unknown filter parameter" and keeps the default).
 
+#![expect(unsafe_code, reason = "calls into Open Image Denoise's C API")]
+
 use crate::integrator::aov::Aovs;
 use glam::Vec3;
 use oidn::sys;
@@ -50,7 +52,7 @@ impl Quality {
 }
 
 /// Filter settings. The defaults, measured at 16 spp on cornell-diffuse, cornell, spheres-sky,
-/// mesh and cornell-smoke (benches/RESULTS.md): prefiltered guides cut relMSE against the
+/// mesh and cornell-smoke (benches/results/denoiser.md): prefiltered guides cut relMSE against the
 /// guides as rendered by 20-25% on spheres-sky and cornell-smoke (and 7% on cornell, whose mean
 /// moves -0.3% instead of -0.7%), and cost 4-8% on cornell-diffuse and mesh; prefilters of
 /// balanced quality (OIDN's standard networks, where high quality runs its large ones) give the
@@ -97,11 +99,12 @@ struct Device {
     threads: usize,
 }
 
-// OIDN's API calls are thread-safe; the device is used under the lock of `DEVICE` only.
+// SAFETY: OIDN's API calls are thread-safe; the device is used under the lock of `DEVICE` only.
 unsafe impl Send for Device {}
 
 impl Drop for Device {
     fn drop(&mut self) {
+        // SAFETY: `raw` is a device `oidnNewDevice` returned (not null), released once, here.
         unsafe { sys::oidnReleaseDevice(self.raw) };
     }
 }
@@ -113,15 +116,20 @@ static DEVICE: Mutex<Option<Device>> = Mutex::new(None);
 /// The error OIDN recorded on `device` (null: errors of device creation), if any.
 fn error(device: sys::OIDNDevice) -> Option<String> {
     let mut msg: *const c_char = std::ptr::null();
+    // SAFETY: `device` is a live device or null (which OIDN documents as the errors of device
+    // creation); `msg` is a valid place for the message's pointer.
     let code = unsafe { sys::oidnGetDeviceError(device, &mut msg) };
     (code != sys::OIDNError_OIDN_ERROR_NONE).then(|| match msg.is_null() {
         true => format!("error code {code}"),
+        // SAFETY: OIDN set `msg` to a NUL-terminated string that stays valid until the next
+        // call on the device; it is copied before any.
         false => unsafe { CStr::from_ptr(msg) }.to_string_lossy().into_owned(),
     })
 }
 
 impl Device {
     fn new(threads: usize) -> Result<Self, String> {
+        // SAFETY: a plain call with a valid device type; a null result is checked below.
         let raw = unsafe { sys::oidnNewDevice(sys::OIDNDeviceType_OIDN_DEVICE_TYPE_CPU) };
         if raw.is_null() {
             return Err(format!(
@@ -131,6 +139,8 @@ impl Device {
             ));
         }
         let device = Self { raw, threads };
+        // SAFETY: `raw` is the live device just made; the parameter name is a NUL-terminated
+        // literal.
         unsafe {
             if threads > 0 {
                 sys::oidnSetDeviceInt(raw, c"numThreads".as_ptr(), threads.min(i32::MAX as usize) as i32);
@@ -149,12 +159,15 @@ struct Filter(sys::OIDNFilter);
 
 impl Drop for Filter {
     fn drop(&mut self) {
+        // SAFETY: `self.0` is a filter `oidnNewFilter` returned (not null), released once, here.
         unsafe { sys::oidnReleaseFilter(self.0) };
     }
 }
 
 impl Filter {
     fn new(device: &Device) -> Result<Self, String> {
+        // SAFETY: `device.raw` is a live, committed device; the type is a NUL-terminated literal.
+        // A null result is checked below.
         let raw = unsafe { sys::oidnNewFilter(device.raw, c"RT".as_ptr()) };
         match raw.is_null() {
             true => {
@@ -169,6 +182,9 @@ impl Filter {
         assert_eq!(pixels.len(), width * height);
         // Vec3 is three f32s in a row (repr(C), 12 bytes): OIDN's FLOAT3 at its default strides.
         const { assert!(std::mem::size_of::<Vec3>() == 12) };
+        // SAFETY: `pixels` holds `width * height` FLOAT3 pixels (checked above) and OIDN reads or
+        // writes them only in `run`, which `denoise` calls while every shared buffer is still
+        // borrowed there; the filter is dropped before the buffers.
         unsafe {
             sys::oidnSetSharedFilterImage(
                 self.0,
@@ -185,14 +201,17 @@ impl Filter {
     }
 
     fn flag(&self, name: &CStr, value: bool) {
+        // SAFETY: `self.0` is a live filter; `name` is NUL-terminated.
         unsafe { sys::oidnSetFilterBool(self.0, name.as_ptr(), value) };
     }
 
     fn quality(&self, q: Quality) {
+        // SAFETY: `self.0` is a live filter; the name is a NUL-terminated literal.
         unsafe { sys::oidnSetFilterInt(self.0, c"quality".as_ptr(), q.raw()) };
     }
 
     fn run(&self, device: &Device, what: &str) -> Result<(), String> {
+        // SAFETY: `self.0` is a live filter whose shared images are still alive (see `image`).
         unsafe {
             sys::oidnCommitFilter(self.0);
             sys::oidnExecuteFilter(self.0);

@@ -1,5 +1,5 @@
 //! Helpers shared by the integration tests.
-#![allow(dead_code)]
+#![allow(dead_code, reason = "each test binary uses a part of the shared helpers")]
 
 use glam::Vec3;
 use pathwave::engine::scene::{SceneDesc, load, parse};

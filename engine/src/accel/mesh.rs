@@ -2,6 +2,11 @@
 //! blocks of up to eight triangles stored lane by lane, tested eight at a time with the
 //! watertight test of [`Triangle::intersect`] (same operations, same bits).
 
+#![cfg_attr(
+    target_arch = "x86_64",
+    expect(unsafe_code, reason = "AVX2 intrinsics for the triangle blocks' tests, and prefetches")
+)]
+
 use crate::accel::bvh8::{Bvh8, PACKET};
 use crate::math::gamma;
 use crate::shape::{PrimitiveShape, SurfacePoint, Triangle};

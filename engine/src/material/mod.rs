@@ -243,7 +243,6 @@ macro_rules! registry {
         }
 
         /// Counts the kinds (a variant per kind, then the count).
-        #[allow(dead_code)]
         enum KindCount {
             $($(#[$attr])* $variant,)+
             Count,

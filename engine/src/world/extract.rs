@@ -9,7 +9,7 @@ use bevy_ecs::prelude::*;
 use std::sync::Arc;
 
 /// Builds a new [`RenderScene`] when anything it holds changed.
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::too_many_arguments, reason = "an ECS system takes each resource it reads as a parameter")]
 pub fn extract_render_scene(
     geometry: Res<SceneGeometry>,
     instances: Res<SceneInstances>,

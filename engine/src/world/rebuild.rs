@@ -15,8 +15,8 @@ use std::sync::Arc;
 /// Rebuilds primitives and BVH when a shape, transform, material id or motion changed, an
 /// object or its motion was removed, or, in scenes with motion, the camera (its shutter bounds
 /// the sweeps).
-#[allow(clippy::type_complexity)]
-#[allow(clippy::too_many_arguments)]
+#[expect(clippy::type_complexity, reason = "ECS queries name their components and filters in their types")]
+#[expect(clippy::too_many_arguments, reason = "an ECS system takes each query and resource as a parameter")]
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
     objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), Without<Instanced>>,
@@ -79,7 +79,8 @@ pub fn rebuild_geometry(
 /// material (building the BLAS of a mesh no instance used before), refitted when they only
 /// move (or rebuilt when refitting made it much worse), and left alone otherwise. A BLAS is
 /// built once per mesh, whatever happens to the instances.
-#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+#[expect(clippy::type_complexity, reason = "ECS queries name their components and filters in their types")]
+#[expect(clippy::too_many_arguments, reason = "an ECS system takes each query and resource as a parameter")]
 pub fn update_instances(
     mut out: ResMut<SceneInstances>,
     mut library: ResMut<MeshLibrary>,
@@ -191,7 +192,7 @@ pub fn update_instances(
 
 /// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,
 /// changed or was removed.
-#[allow(clippy::type_complexity)]
+#[expect(clippy::type_complexity, reason = "ECS queries name their components and filters in their types")]
 pub fn rebuild_media(
     mut out: ResMut<SceneMedia>,
     volumes: Query<(Entity, &Transform, &Shape, &Filling)>,

@@ -251,7 +251,7 @@ struct Layout {
 ///   bounce is stratified in 4D. relvar over seeds -1.8% at 64 spp and -0.4% at 256 on
 ///   cornell-diffuse against these light points as nets alone; as Sobol's dimensions 2 and 3
 ///   beside the direction's lattice (no 4D structure) they lost 0.5-0.9% at 256 spp
-///   (benches/RESULTS.md);
+///   (benches/results/sampling.md);
 /// - anything else: a net, alone.
 ///
 /// The three cases are disjoint, and each is a comparison: the function is selects only.
@@ -284,7 +284,7 @@ fn layout(dim: u32, lens: bool) -> Layout {
 ///
 /// Used for the BSDF's direction, where it beats the Owen-scrambled (0,2)-net: relMSE at 64 spp
 /// -8.6% on cornell-diffuse, -4.5% on cornell, -2.7% on mesh and -2.8% on spheres-sky (see
-/// benches/RESULTS.md), and for later light points beside it ([`layout`]).
+/// benches/results/sampling.md), and for later light points beside it ([`layout`]).
 /// The shift is `(sx, sy)`, the dimension's [`coordinate_seeds`].
 #[inline]
 fn lattice_2d(i: u32, sx: u32, sy: u32, g: [u32; 2]) -> Vec2 {

@@ -26,7 +26,7 @@ pub(super) fn owen_reversed(mut v: u32, seed: u32) -> u32 {
 /// to it, add their errors instead of averaging them. A random order within each octave [2^(k-1),
 /// 2^k) of indices first ([`permute_pow2`]) keeps the prefixes' blocks and pairs the rest at
 /// random: relvar across seeds at 256 spp -1.0% on cornell-diffuse, -1.7% on mesh and
-/// spheres-sky (benches/RESULTS.md).
+/// spheres-sky (benches/results/sampling.md).
 #[inline]
 pub(super) fn shuffle(index: u32, seed: u32) -> u32 {
     // The highest set bit of an index above 1, by smearing the bits down: a leading-zero

@@ -5,12 +5,15 @@
 //! `intersect_closest` (which also samples free-flight distances in scenes with media),
 //! `handle_escaped`, `handle_emissive`, `shade_medium`, one shading loop per material kind
 //! present (`shade_lambertian`, `shade_metal`, ...: one per kind in the engine's material
-//! registry that is not an emitter; they write continuation rays and shadow rays), `trace_shadow_rays` and `accumulate_film` (finished paths free their slot).
-//! Paths that end are replaced by new camera samples until the tile's samples are done.
+//! registry that is not an emitter; each writes continuation rays, and those of kinds that
+//! sample lights, Lambertian and glossy, also shadow rays), `trace_shadow_rays` and
+//! `accumulate_film` (finished paths free their slot). Paths that end are replaced by new
+//! camera samples until the tile's samples are done.
 //!
 //! Every sample is computed by the same per-vertex code as the reference path tracer and pixel
-//! sums are exact, so the image is bit-identical to the reference for any batch size and
-//! thread count.
+//! sums are exact, so the image does not depend on the batch size or the thread count, and
+//! equals the reference's up to exact ties (two primitives at a hit's distance, on a shared
+//! edge), which the two may break differently: `tests/wavefront.rs` allows 2 differing pixels.
 
 mod queues;
 mod stages;
@@ -285,7 +288,10 @@ struct TileResult {
 
 /// Runs the wavefront over samples `samples` of every pixel of one tile (timing the stages if
 /// `clock`).
-#[allow(clippy::too_many_arguments)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the tile's scene, samples, slots and per-worker state, each borrowed separately"
+)]
 fn render_tile(
     scene: &RenderScene,
     tile: &Tile,

@@ -1,6 +1,11 @@
 //! Structure-of-arrays storage for the paths in flight and the queues between stages. Paths
 //! live in slots; queues hold slot indices (or, for shadow rays, the rays themselves).
 
+#![cfg_attr(
+    target_arch = "x86_64",
+    expect(unsafe_code, reason = "AVX-512 compress-stores that append picked lanes to the queues")
+)]
+
 use crate::aov::Guide;
 use crate::lambert_vertex::LANES;
 use crate::path::PathState;

@@ -1,5 +1,10 @@
 //! One ray at a time through a [`Bvh8`]: closest and any hit.
 
+#![expect(
+    unsafe_code,
+    reason = "AVX2 intrinsics for the node tests, prefetches, and uninitialised traversal stacks"
+)]
+
 use super::{Bvh8, LEAF, Node, WIDTH, leaf_range};
 use crate::math::gamma;
 use glam::Vec3A;
