@@ -3,6 +3,7 @@
 
 use crate::accel::geometry::{Geometry, Hit};
 use crate::accel::instances::Instances;
+use crate::accel::queue::Aggregate;
 use crate::camera::Camera;
 use crate::lighting::environment::{EnvSample, EnvironmentMap};
 use crate::lighting::lights::{BackgroundSampling, LightTable};
@@ -290,20 +291,26 @@ pub struct RenderScene {
 }
 
 impl RenderScene {
+    /// The surfaces as ray queries see them: one ray at a time, or a queue of them.
+    #[inline(always)]
+    pub fn aggregate(&self) -> Aggregate<'_> {
+        Aggregate {
+            geometry: &self.geometry,
+            instances: self.features.instances.then_some(&*self.instances),
+            uv: self.features.textures,
+        }
+    }
+
     /// Closest hit with `t` in `(0, tmax)` among primitives and instances.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmax: f32) -> Option<Hit> {
-        let hit = self.geometry.intersect_uv(ray, tmax, self.features.textures);
-        if !self.features.instances {
-            return hit;
-        }
-        self.instances.intersect(ray, hit.map_or(tmax, |h| h.t)).or(hit)
+        self.aggregate().intersect(ray, tmax)
     }
 
     /// True when a primitive or an instance lies on the ray with `t` in `(0, tmax)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
-        self.geometry.occluded(ray, tmax) || (self.features.instances && self.instances.occluded(ray, tmax))
+        self.aggregate().occluded(ray, tmax)
     }
 
     /// Material `id` with its textured colours evaluated at `sp`.

@@ -13,6 +13,7 @@ use crate::sampler::{Sampler, SamplerLanes};
 use glam::{Vec3, Vec3A};
 use pathwave_engine::accel::flat::RayStream;
 use pathwave_engine::accel::geometry::Hit;
+use pathwave_engine::accel::queue::ClosestQuery;
 use pathwave_engine::material::MaterialKind;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::SamplerKind;
@@ -227,15 +228,12 @@ impl ShadowQueue {
     }
 }
 
-/// The active rays gathered into a stream, with the closest-hit results.
+/// What the closest-hit stage keeps between iterations: the engine's query over the active
+/// rays and the paths' free-flight numbers.
 #[derive(Clone, Default)]
 pub struct HitStream {
-    /// Rays in the order of the active queue.
-    pub rays: RayStream,
-    /// Closest distance (tmax on entry).
-    pub t: Vec<f32>,
-    /// Primitive hit, or `u32::MAX`.
-    pub prim: Vec<u32>,
+    /// The closest-hit query of the active queue's rays.
+    pub query: ClosestQuery,
     /// The paths' free-flight numbers (scenes with media).
     pub u_medium: Vec<f32>,
 }
@@ -277,15 +275,12 @@ impl Queues {
             .into_iter()
             .chain([&mut self.finished, &mut self.free, &mut self.scratch])
             .chain(self.shade.iter_mut())
-            .chain([&mut self.shadow.slot, &mut self.stream.prim])
+            .chain([&mut self.shadow.slot])
             .for_each(room);
         let sh = &mut self.shadow;
-        let floats =
-            sh.rays.o.iter_mut().chain(sh.rays.d.iter_mut()).chain([&mut sh.time, &mut self.stream.t]);
-        floats
-            .chain(self.stream.rays.o.iter_mut())
-            .chain(self.stream.rays.d.iter_mut())
-            .for_each(|v| v.reserve(slots.saturating_sub(v.len())));
+        let floats = sh.rays.o.iter_mut().chain(sh.rays.d.iter_mut()).chain([&mut sh.time]);
+        floats.for_each(|v| v.reserve(slots.saturating_sub(v.len())));
+        self.stream.query.reserve(slots);
         sh.contribution.reserve(slots.saturating_sub(sh.contribution.len()));
         sh.occluded.reserve(slots.saturating_sub(sh.occluded.len()));
     }

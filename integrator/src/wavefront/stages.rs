@@ -6,54 +6,28 @@ use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
 use glam::{Vec3, Vec3A};
-use pathwave_engine::accel::bvh8::PACKET;
-use pathwave_engine::accel::geometry::{Geometry, Hit};
+use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
 
 /// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
-/// their material kind. Scenes without a BVH are traced as one stream, primitive by primitive;
-/// still geometry in a BVH in packets of [`PACKET`] rays; moving geometry ray by ray.
+/// their material kind (the engine chooses how the rays are traced:
+/// [`Aggregate::trace_closest`](pathwave_engine::accel::queue::Aggregate::trace_closest)).
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
-    let geo = &*scene.geometry;
-    let n = q.active.len();
     if scene.features.media {
         free_flight_numbers(p, &q.active, &mut q.stream.u_medium);
     }
-    let st = &mut q.stream;
-    st.t.clear();
-    st.t.resize(n, f32::INFINITY);
-    st.prim.resize(n, 0);
-    if let Some(flat) = geo.flat() {
-        let active = &q.active;
-        st.rays.fill_with(n, |k| {
-            let i = active[k] as usize;
-            (p.origin[i].to_array(), p.dir[i].to_array())
-        });
-        flat.intersect_stream(&st.rays, &mut st.t, &mut st.prim);
-    } else if geo.is_static_bvh() {
-        closest_in_packets(geo, p, &q.active, &mut st.t, &mut st.prim);
-    } else {
-        for k in 0..n {
-            let i = q.active[k];
-            let hit = scene.intersect(&p.ray(i as usize), f32::INFINITY);
-            bin(scene, p, q, k, hit);
-        }
-        return;
-    }
-    for k in 0..n {
-        let i = q.active[k];
-        let (t, prim) = (q.stream.t[k], q.stream.prim[k]);
-        // Flat lists and packets are only for geometry without motion.
-        let ray = p.ray(i as usize);
-        let hit = (prim != u32::MAX).then(|| geo.static_hit(&ray, t, prim, scene.features.textures));
-        // Instances behind the primitives' hit are not looked at.
-        let hit = match scene.features.instances {
-            true => scene.instances.intersect(&ray, t).or(hit),
-            false => hit,
-        };
+    let surfaces = scene.aggregate();
+    let active = &q.active;
+    surfaces.trace_closest(&mut q.stream.query, active.len(), |k| {
+        let i = active[k] as usize;
+        (p.origin[i], p.dir[i])
+    });
+    for k in 0..q.active.len() {
+        let i = q.active[k] as usize;
+        let hit = surfaces.closest_hit(&q.stream.query, k, &p.ray(i));
         bin(scene, p, q, k, hit);
     }
 }
@@ -72,107 +46,6 @@ fn free_flight_numbers(p: &Paths, active: &[u32], u: &mut Vec<f32>) {
             || crate::sampler::get_1d_lanes(&samplers, &dims),
         );
         u.extend_from_slice(&numbers[..chunk.len()]);
-    }
-}
-
-/// Closest hits `(t, prim)` of the paths `active` in still geometry with a BVH, in packets of
-/// [`PACKET`] consecutive paths traced together (the last few one by one): the same hits as
-/// one at a time. Camera rays come in runs of one pixel's samples, whose packets stay
-/// together; bounce rays gain less but still gain: spheres-sky's closest hits ran 11.8 M rays/s
-/// per thread without packets and 14.4 with every ray in one (benches/RESULTS.md). A mesh's
-/// rays stay single: in its deep tree they part ways at once, and packets were slower.
-fn closest_in_packets(geo: &Geometry, p: &Paths, active: &[u32], t: &mut [f32], prim: &mut [u32]) {
-    let groups = active.chunks_exact(PACKET);
-    let rest = groups.remainder().len();
-    for (g, group) in groups.enumerate() {
-        let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
-        for (l, &i) in group.iter().enumerate() {
-            for a in 0..3 {
-                (o[a][l], d[a][l]) = (p.origin[i as usize][a], p.dir[i as usize][a]);
-            }
-        }
-        let ts = &mut t[g * PACKET..(g + 1) * PACKET];
-        let mut best = [0.0; PACKET];
-        best.copy_from_slice(ts);
-        let hit = pathwave_engine::simd::lanes(
-            #[inline(always)]
-            || geo.closest_packet(&o, &d, &mut best),
-        );
-        ts.copy_from_slice(&best);
-        prim[g * PACKET..(g + 1) * PACKET].copy_from_slice(&hit);
-    }
-    for k in active.len() - rest..active.len() {
-        (t[k], prim[k]) = geo.closest_static(&p.ray(active[k] as usize), t[k]);
-    }
-}
-
-/// Occlusion of the shadow rays (tmax 1) by still primitives with a BVH, in packets of
-/// [`PACKET`] consecutive rays traced together (the last few one by one): with
-/// [`occluded_by_instances`] after it, the answers of [`RenderScene::occluded`].
-fn occluded_in_packets(scene: &RenderScene, sq: &mut super::queues::ShadowQueue) {
-    let n = sq.len();
-    let groups = n / PACKET;
-    for g in 0..groups {
-        let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
-        for a in 0..3 {
-            o[a].copy_from_slice(&sq.rays.o[a][g * PACKET..(g + 1) * PACKET]);
-            d[a].copy_from_slice(&sq.rays.d[a][g * PACKET..(g + 1) * PACKET]);
-        }
-        let hit = pathwave_engine::simd::lanes(
-            #[inline(always)]
-            || scene.geometry.occluded_packet(&o, &d, &[1.0; PACKET]),
-        );
-        for l in 0..PACKET {
-            sq.occluded[g * PACKET + l] = hit >> l & 1 != 0;
-        }
-    }
-    for k in groups * PACKET..n {
-        sq.occluded[k] = scene.geometry.occluded(&sq.ray(k), 1.0);
-    }
-}
-
-/// The instances' part of the occlusion tests (scenes with instances, still primitives): for
-/// each shadow ray not yet occluded,
-/// [`Instances::occluded`](pathwave_engine::accel::instances::Instances::occluded); the shadow rays of
-/// first vertices (made from one pixel's camera rays, so they leave one spot for one light) in
-/// packets of [`PACKET`] where the instances are still.
-fn occluded_by_instances(scene: &RenderScene, p: &Paths, sq: &mut super::queues::ShadowQueue) {
-    if !scene.features.instances {
-        return;
-    }
-    let (n, packets) = (sq.len(), scene.instances.still());
-    let mut k = 0;
-    while k < n {
-        if packets && k + PACKET <= n && sq.slot[k..k + PACKET].iter().all(|&i| p.depth[i as usize] <= 1) {
-            shadow_packet_in_instances(scene, sq, k);
-            k += PACKET;
-            continue;
-        }
-        if !sq.occluded[k] {
-            sq.occluded[k] = scene.instances.occluded(&sq.ray(k), 1.0);
-        }
-        k += 1;
-    }
-}
-
-/// The shadow rays `k..k + PACKET` not yet occluded, through still instances together: rays
-/// that leave one spot for one light, so the TLAS and BLAS nodes are read once for all of them
-/// ([`Instances::occluded_packet`](pathwave_engine::accel::instances::Instances::occluded_packet)),
-/// with the answers of
-/// [`Instances::occluded`](pathwave_engine::accel::instances::Instances::occluded).
-fn shadow_packet_in_instances(scene: &RenderScene, sq: &mut super::queues::ShadowQueue, k: usize) {
-    let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
-    for a in 0..3 {
-        o[a].copy_from_slice(&sq.rays.o[a][k..k + PACKET]);
-        d[a].copy_from_slice(&sq.rays.d[a][k..k + PACKET]);
-    }
-    let tmax: [f32; PACKET] = std::array::from_fn(|l| if sq.occluded[k + l] { -1.0 } else { 1.0 });
-    let hit = pathwave_engine::simd::lanes(
-        #[inline(always)]
-        || scene.instances.occluded_packet(&o, &d, &tmax),
-    );
-    for l in 0..PACKET {
-        sq.occluded[k + l] |= hit >> l & 1 != 0;
     }
 }
 
@@ -516,22 +389,10 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
 pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     let sq = &mut q.shadow;
     let n = sq.len();
-    sq.occluded.resize(n, false);
-    match scene.geometry.flat() {
-        Some(flat) => {
-            flat.occluded_stream(&sq.rays, &mut sq.occluded);
-            occluded_by_instances(scene, p, sq);
-        }
-        None if scene.geometry.is_static_bvh() => {
-            occluded_in_packets(scene, sq);
-            occluded_by_instances(scene, p, sq);
-        }
-        None => {
-            for k in 0..n {
-                sq.occluded[k] = scene.occluded(&sq.ray(k), 1.0);
-            }
-        }
-    }
+    // The first vertices' shadow rays, made from one pixel's camera rays, leave one spot for
+    // one light.
+    let first_vertex = |k: usize| p.depth[sq.slot[k] as usize] <= 1;
+    scene.aggregate().trace_occluded(&sq.rays, &sq.time, first_vertex, &mut sq.occluded);
     if scene.features.media {
         for k in 0..n {
             if !sq.occluded[k] {
