@@ -64,6 +64,7 @@ impl Command {
             Command::Render(RenderCommand { args, .. }) | Command::Animate(AnimateCommand { args, .. }) => {
                 (args.log, args.profile.trace.clone())
             }
+            Command::Watch(w) => (w.log, None),
             _ => (LogArgs { verbose: 0, quiet: false }, None),
         }
     }
