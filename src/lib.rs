@@ -1,16 +1,22 @@
-//! pathwave: a physically based path tracer. This crate is the command-line tool and a facade
-//! over the `engine` (scene model) and `integrator` crates, plus image I/O and error metrics.
+//! pathwave: a physically based path tracer. This crate is the command-line tool, one module
+//! per subcommand (`render`, `animate`, `watch`, `farm`, `merge`, `compare`, `bench`,
+//! `bench_rays`, each with its flags and its work; [`cli`] puts them together), and a facade over
+//! the `engine` (scene model) and `integrator` crates, plus image I/O and error metrics.
 #![warn(missing_docs)]
 
 pub mod animate;
 pub mod bench;
+pub mod bench_rays;
 pub mod checkpoint;
+pub mod cli;
+pub mod compare;
 pub mod denoiser;
 pub mod farm;
 pub mod io;
 pub mod limits;
+pub mod merge;
 pub mod metrics;
-pub mod raybench;
+pub mod render;
 pub mod shard;
 pub mod trace;
 pub mod view;
@@ -18,6 +24,14 @@ pub mod watch;
 
 /// The most worker threads `--threads` takes.
 pub const MAX_THREADS: u64 = 1024;
+
+/// A rayon pool of `threads` workers (all cores when `None`).
+pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| format!("cannot start {threads:?} threads: {e}"))
+}
 
 pub use pathwave_engine as engine;
 pub use pathwave_integrator as integrator;

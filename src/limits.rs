@@ -5,8 +5,11 @@ use crate::engine::scene::RenderDesc;
 
 /// The largest image side.
 pub const MAX_SIDE: u32 = 1 << 16;
+/// The end of frame and sample ranges: 2^24, the last integer an f32 (a frame's time, a
+/// sample count in the film's arithmetic) holds exactly.
+pub const MAX_INDEX: u32 = 1 << 24;
 /// The most samples per pixel: sample indices stop at 2^24 (as `--samples` ranges do).
-pub const MAX_SPP: u32 = crate::animate::MAX_INDEX;
+pub const MAX_SPP: u32 = MAX_INDEX;
 /// The most bounces: with more, a closed box of mirrors makes a render that never ends.
 pub const MAX_DEPTH: u32 = 1024;
 

@@ -1,9 +1,7 @@
 //! The `pathwave` command line: `main` checks the CPU, parses the flags, starts the log (and
 //! the trace) and hands the command to [`cli::run`].
 
-mod cli;
-
-use cli::args::{Cli, Command, LogArgs};
+use pathwave::cli::{self, Cli};
 use std::process::ExitCode;
 
 /// The binary is built for x86-64-v3 (`.cargo/config.toml`: the same instructions, so the same
@@ -48,12 +46,7 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => e.format(&mut <Cli as clap::CommandFactory>::command()).exit(),
     };
-    let (log, trace) = match &cli.command {
-        Command::Render { args, .. } | Command::Animate { args, .. } => {
-            (args.log, args.profile.trace.clone())
-        }
-        _ => (LogArgs { verbose: 0, quiet: false }, None),
-    };
+    let (log, trace) = cli.command.log();
     let trace_file = match cli::logging::init_tracing(log, trace.as_deref()) {
         Ok(f) => f,
         Err(e) => {

@@ -11,6 +11,8 @@
 //! number of indices (the Job's `spec.completions`): that comes from `--shard-count` or
 //! [`COUNT_VAR`].
 
+use crate::limits::MAX_INDEX;
+
 /// The environment variable holding the number of tasks where the scheduler does not say it
 /// (a Kubernetes Indexed Job: set it to the Job's `spec.completions`).
 pub const COUNT_VAR: &str = "PATHWAVE_SHARD_COUNT";
@@ -104,8 +106,37 @@ pub fn parse_shard(arg: &str, count: Option<u32>) -> Result<Task, String> {
     if arg.trim() == "auto" {
         return from_env(process_env, count, "--shard auto");
     }
-    let (index, count) = crate::animate::parse_shard(arg)?;
-    Ok(Task { index, count })
+    let bad = || format!("--shard takes I/N with 0 <= I < N, not {arg}");
+    let (i, n) = arg.split_once('/').ok_or_else(bad)?;
+    let (index, count): (u32, u32) =
+        (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+    match index < count {
+        true => Ok(Task { index, count }),
+        false => Err(bad()),
+    }
+}
+
+/// Parses `A..B` (B excluded) or `A..=B` given to `flag` (`--frames`, `--samples`), B at most
+/// [`MAX_INDEX`].
+pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{flag} takes A..B or A..=B, not {s}");
+    let (a, b, inclusive) = match s.split_once("..=") {
+        Some((a, b)) => (a, b, true),
+        None => {
+            let (a, b) = s.split_once("..").ok_or_else(bad)?;
+            (a, b, false)
+        }
+    };
+    let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+    let b = if inclusive { b.checked_add(1) } else { Some(b) };
+    match b {
+        Some(b) if b > MAX_INDEX => {
+            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24, exact as f32)"))
+        }
+        Some(b) if b > a => Ok((a, b)),
+        Some(_) => Err(format!("{flag} {s} is empty")),
+        None => Err(format!("{flag} {s}: indices stop at {MAX_INDEX}")),
+    }
 }
 
 /// What `render --samples` asks for: a range of sample indices, or this task's share of them.
@@ -122,7 +153,7 @@ impl Samples {
     pub fn parse(arg: &str, count: Option<u32>) -> Result<Self, String> {
         match arg.trim() {
             "auto" => from_env(process_env, count, "--samples auto").map(Samples::Share),
-            _ => crate::animate::parse_range(arg, "--samples").map(|(a, b)| Samples::Range(a, b)),
+            _ => parse_range(arg, "--samples").map(|(a, b)| Samples::Range(a, b)),
         }
     }
 
@@ -159,6 +190,22 @@ mod tests {
     fn env(vars: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
         let vars: Vec<(String, String)> = vars.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
         move |name| vars.iter().find(|(k, _)| k == name).map(|(_, v)| v.clone())
+    }
+
+    #[test]
+    fn ranges_and_shards() {
+        assert_eq!(parse_range("3..7", "--frames").unwrap(), (3, 7));
+        assert_eq!(parse_range("3..=7", "--frames").unwrap(), (3, 8));
+        assert!(parse_range("7..3", "--frames").is_err() && parse_range("x", "--frames").is_err());
+        // Near u32::MAX nothing wraps; beyond 2^24 (exact f32 frame times) is refused.
+        assert!(parse_range("0..=4294967295", "--frames").unwrap_err().contains("indices stop at"));
+        assert!(parse_range("4294967290..=4294967295", "--frames").is_err());
+        assert!(parse_range("0..16777217", "--frames").is_err());
+        assert_eq!(parse_range("0..16777216", "--frames").unwrap(), (0, 1 << 24));
+        assert_eq!(parse_shard("1/3", None).unwrap(), Task { index: 1, count: 3 });
+        for bad in ["3/3", "1", "a/2"] {
+            assert!(parse_shard(bad, None).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 mod common;
 use common::*;
-use pathwave::animate;
+use pathwave::animate::sequence;
 use pathwave::engine::world::{SceneGeometry, SceneInstances, SceneLights, SceneWorld};
 use pathwave::integrator::wavefront;
 use pathwave::io::read_linear;
@@ -85,7 +85,7 @@ fn a_keyframed_instance_blurs_like_the_same_motion_without_instancing() {
             }
         }
         // Frame 1 of 4 per second with a full shutter: the knot sweeps 0.75 units.
-        let scene = animate::scene_at(&mut w, 1, 4.0, shutter);
+        let scene = sequence::scene_at(&mut w, 1, 4.0, shutter);
         assert_eq!(scene.features.instances, instanced);
         assert_eq!(scene.features.motion, shutter > 0.0);
         wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0.mean()
@@ -104,7 +104,7 @@ fn a_static_scene_rebuilds_no_bvh_after_the_first_frame() {
     let desc = scene("mesh.ron");
     let mut w = SceneWorld::new(&desc);
     for frame in 0..8 {
-        animate::scene_at(&mut w, frame, 24.0, 0.5);
+        sequence::scene_at(&mut w, frame, 24.0, 0.5);
     }
     assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 1);
     let i = w.world.resource::<SceneInstances>();
@@ -112,7 +112,7 @@ fn a_static_scene_rebuilds_no_bvh_after_the_first_frame() {
     // Whereas a scene whose ball moves rebuilds its primitives each frame.
     let mut w = SceneWorld::new(&scene("animation-bounce.ron"));
     for frame in 0..8 {
-        animate::scene_at(&mut w, frame, 24.0, 0.5);
+        sequence::scene_at(&mut w, frame, 24.0, 0.5);
     }
     assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 8);
 }
@@ -137,7 +137,7 @@ fn a_killed_sequence_resumes_without_redoing_frames() {
             "64",
         ]);
     };
-    let frame = |i: u32| animate::frame_path(pattern.to_str().unwrap(), i).unwrap();
+    let frame = |i: u32| sequence::frame_path(pattern.to_str().unwrap(), i).unwrap();
     let mut child = {
         let mut c = pathwave();
         args(&mut c);
@@ -351,7 +351,7 @@ fn shards_split_a_sequence_into_the_frames_of_one_run() {
         .collect();
     assert!(logs[0].contains("4 frames rendered") && logs[1].contains("3 frames rendered"), "{logs:?}");
     for f in 0..7 {
-        let path = |p: &PathBuf| animate::frame_path(p.to_str().unwrap(), f).unwrap();
+        let path = |p: &PathBuf| sequence::frame_path(p.to_str().unwrap(), f).unwrap();
         assert_eq!(std::fs::read(path(&split)).unwrap(), std::fs::read(path(&whole)).unwrap(), "frame {f}");
     }
     let gif = pathwave()

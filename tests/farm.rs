@@ -4,8 +4,9 @@
 //! renders; and on a real one-node Slurm, started here (munged, slurmctld and slurmd on the
 //! loopback address, in a temporary folder), `pathwave farm slurm` renders a 4-task sample
 //! split and a 3-task sharded sequence to the bytes of one machine's renders, also when a task
-//! is killed mid-way and requeued. That test is skipped, with a message, where Slurm and munge
-//! are not installed or the tests do not run as root (slurmd starts jobs as their user).
+//! is killed mid-way and requeued. That test needs Slurm, munge and root (slurmd starts jobs as
+//! their user), so it is ignored unless asked for (`cargo test --release --test farm --
+//! --ignored`, as `.ci/run` does); asked for where it cannot run, it fails saying what is missing.
 
 mod common;
 use common::root;
@@ -201,7 +202,7 @@ fn a_dry_run_prints_the_jobs_with_the_render_flags() {
         "#SBATCH --time=5:00".into(),
         format!("#SBATCH --output={}/logs/task-%a.log", job.display()),
         format!("-o '{}' --frames 0..4 --shard auto --shard-count 2", pattern.display()),
-        "--spp=2 --aov=depth '-Dwall=(0.1, 0.2, 0.3)' --verbose --verbose".into(),
+        "--spp=2 '-Dwall=(0.1, 0.2, 0.3)' --aov=depth --verbose --verbose".into(),
         format!("farm merge -o '{}' --tasks 2 --frames 0..4", pattern.display()),
         "RENDER=$(sbatch --parsable --mem=1G ".into(),
         "sbatch --dependency=afterok:$RENDER --kill-on-invalid-dep=yes --mem=1G ".into(),
@@ -335,9 +336,9 @@ struct Slurm {
 }
 
 impl Slurm {
-    /// Starts the daemons and waits for the node to be idle; `None` (with a message) where
+    /// Starts the daemons and waits for the node to be idle; fails saying what is missing where
     /// Slurm or munge is not installed or the tests do not run as root.
-    fn start() -> Option<Slurm> {
+    fn start() -> Slurm {
         use std::os::unix::fs::{MetadataExt, PermissionsExt};
         use std::os::unix::process::CommandExt;
         let find = |name: &str| {
@@ -348,26 +349,23 @@ impl Slurm {
         };
         let tools = ["munged", "slurmctld", "slurmd", "sbatch", "squeue", "scontrol", "sinfo", "scancel"];
         let missing: Vec<&str> = tools.into_iter().filter(|t| find(t).is_none()).collect();
-        if !missing.is_empty() {
-            eprintln!(
-                "skipped: Slurm and munge are not installed (no {}); on Debian: apt-get install \
-                 slurmctld slurmd slurm-client munge",
-                missing.join(", ")
-            );
-            return None;
-        }
-        if std::fs::metadata("/proc/self").map(|m| m.uid()).unwrap_or(1) != 0 {
-            eprintln!("skipped: a Slurm cluster needs root (slurmd starts jobs as their user)");
-            return None;
-        }
+        assert!(
+            missing.is_empty(),
+            "cannot run: Slurm and munge are not installed (no {}); on Debian: apt-get install \
+             slurmctld slurmd slurm-client munge",
+            missing.join(", ")
+        );
+        assert!(
+            std::fs::metadata("/proc/self").is_ok_and(|m| m.uid() == 0),
+            "cannot run: a Slurm cluster needs root (slurmd starts jobs as their user)"
+        );
         let passwd = std::fs::read_to_string("/etc/passwd").unwrap_or_default();
         let munge = passwd.lines().find_map(|l| {
             let f: Vec<&str> = l.split(':').collect();
             (f.len() > 3 && f[0] == "munge").then(|| (f[2].parse::<u32>().ok(), f[3].parse::<u32>().ok()))
         });
         let Some((Some(uid), Some(gid))) = munge else {
-            eprintln!("skipped: there is no munge user (the munge package makes it)");
-            return None;
+            panic!("cannot run: there is no munge user (the munge package makes it)");
         };
         let dir = temp("slurm");
         // munged runs as the munge user: it must reach its folder, whose socket all must reach.
@@ -430,7 +428,7 @@ impl Slurm {
                 .output()
                 .is_ok_and(|o| o.stdout.starts_with(b"idle"))
         });
-        Some(slurm)
+        slurm
     }
 
     fn spawn(&mut self, name: &'static str, c: &mut Command) {
@@ -563,9 +561,10 @@ impl Drop for Slurm {
 }
 
 #[test]
+#[ignore = "needs Slurm, munge and root: cargo test --release --test farm -- --ignored"]
 fn slurm_job_arrays_render_the_bits_of_one_machine() {
     let started = Instant::now();
-    let Some(slurm) = Slurm::start() else { return };
+    let slurm = Slurm::start();
     eprintln!("slurm up in {:.1} s", started.elapsed().as_secs_f64());
     let work = slurm.dir.join("work");
     let path = |p: &str| work.join(p).to_str().unwrap().to_string();

@@ -1,5 +1,8 @@
 //! `--preview`: progressive passes give the bits of one render; without a display the render
-//! goes on; under Xvfb the window shows the passes with the PNG output's tone mapping.
+//! goes on; under Xvfb the window shows the passes with the PNG output's tone mapping. The two
+//! tests under Xvfb need Xvfb, xwd and xdotool, so they are ignored unless asked for (`cargo
+//! test --release --test preview -- --ignored`, as `.ci/run` does); asked for where they cannot
+//! run, they fail saying what is missing.
 
 mod common;
 use std::io::Read;
@@ -131,16 +134,11 @@ fn on_screen(screen: &(usize, usize, Vec<u32>), image: &[u32], w: usize) -> bool
 }
 
 #[test]
+#[ignore = "needs Xvfb and xwd: cargo test --release --test preview -- --ignored"]
 fn the_window_shows_the_passes_under_xvfb() {
-    let xvfb = match Xvfb::start() {
-        Ok(x) => x,
-        Err(e) => {
-            println!(
-                "skipped: no X server to show the window on ({e}); install Xvfb and xwd (xvfb, x11-apps)"
-            );
-            return;
-        }
-    };
+    let xvfb = Xvfb::start().unwrap_or_else(|e| {
+        panic!("cannot run: no X server to show the window on ({e}); install Xvfb and xwd (xvfb, x11-apps)")
+    });
     let dir = temp("xvfb");
     let shown = dir.join("shown.png");
     let (size, spp) = (64, 512);
@@ -189,18 +187,15 @@ fn the_window_shows_the_passes_under_xvfb() {
 }
 
 #[test]
+#[ignore = "needs Xvfb, xwd and xdotool: cargo test --release --test preview -- --ignored"]
 fn esc_stops_the_render_and_keeps_what_it_has() {
-    let xvfb = match Xvfb::start() {
-        Ok(x) => x,
-        Err(e) => {
-            println!("skipped: no X server to show the window on ({e}); install Xvfb (xvfb)");
-            return;
-        }
-    };
-    if Command::new("xdotool").arg("version").output().is_err() {
-        println!("skipped: no xdotool to press Esc with; install it (xdotool)");
-        return;
-    }
+    let xvfb = Xvfb::start().unwrap_or_else(|e| {
+        panic!("cannot run: no X server to show the window on ({e}); install Xvfb (xvfb)")
+    });
+    assert!(
+        Command::new("xdotool").arg("version").output().is_ok(),
+        "cannot run: no xdotool to press Esc with; install it (xdotool)"
+    );
     let dir = temp("esc");
     let shown = dir.join("shown.png");
     let spp = 4096;

@@ -1,6 +1,6 @@
 //! `pathwave watch`: an edited material colour is shown after a reload that rebuilds only the
 //! light table; a syntax error is reported with file:line:col and the last image stays; the
-//! fix brings back the first image, bit for bit.
+//! fix brings back the first image, bit for bit. It takes `render`'s flags and honours them.
 
 mod common;
 use common::root;
@@ -19,9 +19,11 @@ struct Watch {
 }
 
 impl Watch {
-    fn start(scene: &Path, out: &Path, tev: &str) -> Self {
+    fn start(scene: &Path, out: &Path, tev: &str, flags: &[&str]) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_pathwave"))
-            .args(["watch", "--width", "32", "--height", "32", "--spp", "4", "--tev", tev, "-o"])
+            .arg("watch")
+            .args(flags)
+            .args(["--tev", tev, "-o"])
             .arg(out)
             .arg(scene)
             .stderr(Stdio::piped())
@@ -95,7 +97,7 @@ fn watch_shows_edits_keeps_the_last_image_on_an_error_and_rebuilds_only_what_cha
     std::fs::write(&scene, &original).unwrap();
     let out = dir.join("out.exr");
     let (addr, received, _server) = fake_tev(None);
-    let mut watch = Watch::start(&scene, &out, &addr);
+    let mut watch = Watch::start(&scene, &out, &addr, &["--width", "32", "--height", "32", "--spp", "4"]);
 
     watch.wait_for(&["loaded in"]);
     watch.wait_for(&["done, 4 spp"]);
@@ -141,6 +143,61 @@ fn watch_shows_edits_keeps_the_last_image_on_an_error_and_rebuilds_only_what_cha
     std::thread::sleep(Duration::from_millis(400));
     let more: Vec<String> = watch.lines.try_iter().collect();
     assert!(more.is_empty(), "reloads with no edit: {more:?}");
+    drop(watch);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The pixels of an image file, as bits.
+fn image_bits(path: &Path) -> Vec<u32> {
+    let img = pathwave::io::read_linear(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    img.pixels.iter().flat_map(|p| p.to_array()).map(f32::to_bits).collect()
+}
+
+/// `watch` takes the flags of `render` that change an image (through the same argument structs)
+/// and honours them: with `--seed`, `--max-depth`, `--sampler`, `--clamp` and `--crop` its image
+/// has the bits of `render`'s with the same flags, and leaving out any one of them changes
+/// `render`'s image (so a flag that `watch` accepted and ignored would be seen).
+#[test]
+fn watch_takes_and_honours_the_flags_of_render() {
+    let dir: PathBuf = std::env::temp_dir().join(format!("pathwave-watch-flags-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.ron");
+    std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
+    let size: &[&str] = &["--width", "24", "--height", "24", "--spp", "4"];
+    let flags: [&[&str]; 5] = [
+        &["--seed", "7"],
+        &["--max-depth", "2"],
+        &["--sampler", "independent"],
+        &["--clamp", "0.5"],
+        &["--crop", "0.25,0.75,0,0.5"],
+    ];
+    let render = |flags: &[&[&str]], name: &str| {
+        let out = dir.join(format!("{name}.exr"));
+        let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .args(size)
+            .args(flags.concat())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "render {flags:?}: {}", String::from_utf8_lossy(&o.stderr));
+        image_bits(&out)
+    };
+    let want = render(&flags, "all");
+    for (i, f) in flags.iter().enumerate() {
+        let others: Vec<&[&str]> =
+            flags.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, f)| *f).collect();
+        assert_ne!(render(&others, &format!("without-{i}")), want, "{f:?} does not change render's image");
+    }
+
+    let (addr, _received, _server) = fake_tev(None);
+    let out = dir.join("watch.exr");
+    let mut watch = Watch::start(&scene, &out, &addr, &[size, &flags.concat()].concat());
+    watch.wait_for(&["done, 4 spp"]);
+    assert!(image_bits(&out) == want, "watch's image is not render's with the same flags");
     drop(watch);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,7 +1,7 @@
 //! The tracing subscriber: log lines on stderr, and a Chrome trace or Tracy when asked.
 
-use super::args::LogArgs;
-use pathwave::trace;
+use crate::render::args::LogArgs;
+use crate::trace;
 use std::path::Path;
 
 /// One subscriber for every subcommand. Log lines go to stderr at the level `log` asks for

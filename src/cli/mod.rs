@@ -1,76 +1,89 @@
-//! The subcommands. `args` is the command line's schema (clap), `load` reads a scene with the
-//! flags' overrides, `render` runs one image (checkpoints, passes, previews) for `render` and for
-//! each frame of `animate`; the other modules are one subcommand each.
+//! The command line: the subcommands ([`Command`], each one's flags and work in its own module)
+//! and the log they write ([`logging`]).
 
-pub mod animate;
-pub mod args;
-pub mod bench;
-pub mod compare;
-pub mod farm;
-pub mod load;
 pub mod logging;
-pub mod merge;
-pub mod post_process;
-pub mod render;
-pub mod stats;
 
-use args::{Checkpointing, Command, FarmCommand};
-use pathwave::denoiser::Denoiser;
-use pathwave::shard;
-use std::path::Path;
+use crate::animate::AnimateCommand;
+use crate::bench::BenchCommand;
+use crate::bench_rays::BenchRaysCommand;
+use crate::compare::CompareCommand;
+use crate::farm::FarmCommand;
+use crate::merge::MergeCommand;
+use crate::render::RenderCommand;
+use crate::render::args::LogArgs;
+use crate::watch::WatchArgs;
+use crate::{animate, bench, bench_rays, compare, farm, merge, render, watch};
+use std::path::PathBuf;
+
+/// `pathwave`'s command line.
+#[derive(clap::Parser, Debug)]
+#[command(name = "pathwave", version, about = "A physically based path tracer")]
+pub struct Cli {
+    /// The subcommand.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Render a RON scene to PNG (sRGB, clamped) or EXR (linear float).
+    Render(RenderCommand),
+    /// Render a scene in passes into a window (or tev) and render it again whenever it or a
+    /// file it loads changes; a scene with an error shows the error and keeps the last image.
+    Watch(WatchArgs),
+    /// Merge checkpoints holding disjoint sample ranges of one render (from `render
+    /// --samples` on several machines) into its image, and OUT.ckpt when they are contiguous.
+    Merge(MergeCommand),
+    /// Render an animation sequence: one image per frame (`{frame:04}` in the output name), or
+    /// an animated GIF when the output ends in .gif. Existing frames are skipped (empty files are rendered again).
+    Animate(AnimateCommand),
+    /// Render on a cluster: shares of the work as tasks of a Slurm job array, then a job that
+    /// checks and merges them.
+    Farm {
+        /// `farm slurm` or `farm merge`.
+        #[command(subcommand)]
+        farm: FarmCommand,
+    },
+    /// Run time against error: render the scenes that have references at several sample
+    /// counts with both integrators; print a markdown table, optionally write an SVG plot.
+    Bench(BenchCommand),
+    /// BVH build time and traversal rates (Mrays/s) on the Embree anchor's torus knot and on a
+    /// scene's geometry: primary, diffuse-bounce and shadow rays on 1 and 2 threads.
+    BenchRays(BenchRaysCommand),
+    /// Print RMSE and relMSE of image A against reference B (and both means). EXR and HDR
+    /// files are linear (an EXR's beauty: R, G, B); an 8-bit file (PNG, JPEG) is sRGB-encoded,
+    /// so comparing one with a linear file needs `--encoded` to say how to read it.
+    Compare(CompareCommand),
+}
+
+impl Command {
+    /// What the subcommand logs (`-v`, `-q`) and where it writes a Chrome trace (`--trace`).
+    pub fn log(&self) -> (LogArgs, Option<PathBuf>) {
+        match self {
+            Command::Render(RenderCommand { args, .. }) | Command::Animate(AnimateCommand { args, .. }) => {
+                (args.log, args.profile.trace.clone())
+            }
+            Command::Watch(w) => (w.log, None),
+            _ => (LogArgs { verbose: 0, quiet: false }, None),
+        }
+    }
+}
 
 /// Runs a parsed command; `matches` are its flags as clap saw them (a farm passes the render
 /// flags given to it on to its tasks).
 pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<(), String> {
     match command {
-        Command::Render { scene, output, args, time, resume, samples, shard_count, view } => (|| {
-            let every = args.checkpoint_every()?;
-            let samples = samples.as_deref().map(|r| shard::Samples::parse(r, shard_count)).transpose()?;
-            // A part is kept in its checkpoint for `merge`.
-            let checkpoint = (every.is_some() || resume || samples.is_some())
-                .then(|| Checkpointing { every: every.unwrap_or(60.0), resume });
-            render::render(&scene, &output, args.overrides(), &args.how(), time, checkpoint, samples, &view)
-        })(),
-        Command::Merge { parts, output } => merge::merge(&parts, &output),
-        Command::Watch(args) => pathwave::watch::run(args),
-        Command::Animate { scene, output, frames, fps, shutter, overwrite, shard, shard_count, args } => {
-            let seq = animate::SequenceArgs { frames, fps, shutter, overwrite, shard, shard_count };
-            animate::animate(&scene, &output, seq, &args)
-        }
-        Command::Farm { farm: FarmCommand::Slurm { job, args } } => {
-            match matches.subcommand_matches("farm").and_then(|m| m.subcommand_matches("slurm")) {
-                Some(m) => farm::farm_slurm(&job, &args, m),
-                None => Err("farm slurm: its flags are not where clap puts them".into()),
-            }
-        }
-        Command::Farm { farm: FarmCommand::Merge(m) } => match (m.spp, &m.parts, &m.frames) {
-            (Some(spp), Some(parts), _) => pathwave::farm::check_samples(parts, m.tasks, spp)
-                .and_then(|p| merge::merge(&p, Path::new(&m.output))),
-            (_, _, Some(f)) => pathwave::animate::parse_range(f, "--frames")
-                .and_then(|f| pathwave::farm::check_frames(&m.output, f, m.tasks))
-                .map(|()| eprintln!("{}: every frame is there", m.output)),
-            _ => Err("farm merge takes --spp with --parts, or --frames".into()),
+        Command::Render(c) => render::run(&c),
+        Command::Merge(c) => merge::merge(&c.parts, &c.output),
+        Command::Watch(args) => watch::run(args),
+        Command::Animate(c) => animate::run(&c),
+        Command::Farm { farm } => match matches.subcommand_matches("farm") {
+            Some(m) => farm::run(&farm, m),
+            None => Err("farm: its flags are not where clap puts them".into()),
         },
-        Command::Compare { a, b, encoded } => compare::compare(&a, &b, encoded),
-        Command::BenchRays { rings, segments, scene, instances, scaling } => {
-            pathwave::raybench::run((rings, segments), Some(&scene))
-                .and_then(|_| instances.map_or(Ok(()), |p| pathwave::raybench::instance_update(&p, 100)))
-                .and_then(|_| scaling.map_or(Ok(()), pathwave::raybench::scaling))
-        }
-        Command::Bench { spp, refs, only, batch, svg, denoise, threads, anchor } => {
-            let denoise = match denoise {
-                Some(d) if d.is_empty() => Denoiser::AVAILABLE.to_vec(),
-                d => d.unwrap_or_default(),
-            };
-            bench::bench(&spp, &refs, &only, batch, svg, &denoise, threads, anchor.as_deref())
-        }
+        Command::Compare(c) => compare::run(&c),
+        Command::BenchRays(c) => bench_rays::run(&c),
+        Command::Bench(c) => bench::run(&c),
     }
-}
-
-/// A rayon pool of `threads` workers (all cores when `None`).
-pub fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, String> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| format!("cannot start {threads:?} threads: {e}"))
 }

@@ -1,9 +1,9 @@
 //! After the samples: AOVs, the denoiser's guides and the denoised image.
 
 use super::args::{Aov, How};
-use pathwave::denoiser;
-use pathwave::integrator::{aov, film::Film};
-use pathwave::io::{self, LinearImage};
+use crate::denoiser;
+use crate::integrator::{aov, film::Film};
+use crate::io::{self, LinearImage};
 use std::path::Path;
 use std::time::Instant;
 
@@ -11,7 +11,7 @@ use std::time::Instant;
 /// returns the image, denoised with `--denoise` (which also keeps the image as rendered: a
 /// `noisy` layer, or a file beside the output), with the layers of an EXR output.
 pub fn post_process(
-    scene: &pathwave::engine::render_scene::RenderScene,
+    scene: &crate::engine::render_scene::RenderScene,
     film: &Film,
     samples: std::ops::Range<u32>,
     img: LinearImage,

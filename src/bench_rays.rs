@@ -9,8 +9,38 @@ use crate::engine::shape::Primitive;
 use crate::engine::shape::Triangle;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
+
+/// `pathwave bench-rays`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct BenchRaysCommand {
+    /// Knot rings (2 x rings x segments triangles).
+    #[arg(long, default_value_t = 2000)]
+    pub rings: u32,
+    /// Knot ring vertices.
+    #[arg(long, default_value_t = 250)]
+    pub segments: u32,
+    /// A scene whose geometry and first light also get primary, bounce and shadow rays.
+    #[arg(long, default_value = "scenes/cornell-diffuse.ron")]
+    pub scene: PathBuf,
+    /// Also time per-frame updates of this scene of instances (one instance moving).
+    #[arg(long, value_name = "SCENE.ron")]
+    pub instances: Option<PathBuf>,
+    /// Also build and trace knots of 10^3 up to 10^N triangles.
+    #[arg(long, value_name = "N")]
+    pub scaling: Option<u32>,
+}
+
+/// Runs what the flags ask for: the knot and the scene, then the instances and the scaling.
+pub fn run(c: &BenchRaysCommand) -> Result<(), String> {
+    knot_and_scene((c.rings, c.segments), Some(&c.scene))?;
+    if let Some(p) = &c.instances {
+        instance_update(p, 100)?;
+    }
+    c.scaling.map_or(Ok(()), scaling)
+}
 
 /// Rays with their extent.
 #[derive(Default)]
@@ -192,7 +222,7 @@ fn rows(name: &str, target: &dyn Target, primary_rays: &Rays, offset: f32, light
 }
 
 /// Runs the benchmark, printing markdown tables as it goes; `knot` = (rings, segments) of the mesh (2000, 250 for 1M triangles).
-pub fn run(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), String> {
+pub fn knot_and_scene(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Result<(), String> {
     let start = Instant::now();
     let mesh = Arc::new(MeshData::knot(knot.0, knot.1));
     let gen_s = start.elapsed().as_secs_f64();

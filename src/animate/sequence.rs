@@ -1,13 +1,13 @@
-//! `pathwave animate`: renders a sequence. Each frame sets the ECS world's frame time (the
+//! The frames of `pathwave animate`. Each frame sets the ECS world's frame time (the
 //! systems move keyframed objects, camera and emitters, and the BVH systems refit or rebuild
 //! only what moved), renders with ray times spread over the frame's shutter, and writes the
 //! image atomically. Frames whose file exists (and is not empty) are skipped unless
 //! overwriting, so a killed run resumes where it stopped. `--shard I/N` renders every N-th frame from the I-th, so that N
 //! processes (on one machine or several sharing the output directory) split a sequence.
 
+use crate::engine::render_scene::RenderScene;
 use crate::engine::world::SceneWorld;
 use crate::io;
-use pathwave_engine::render_scene::RenderScene;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -31,43 +31,6 @@ pub fn frame_path(pattern: &str, frame: u32) -> Result<PathBuf, String> {
         }
     };
     Ok(PathBuf::from(format!("{}{number}{}", &pattern[..start], &pattern[end + 1..])))
-}
-
-/// The end of frame and sample ranges: 2^24, the last integer an f32 (a frame's time, a
-/// sample count in the film's arithmetic) holds exactly.
-pub const MAX_INDEX: u32 = 1 << 24;
-
-/// Parses `A..B` (B excluded) or `A..=B` given to `flag`, B at most [`MAX_INDEX`].
-pub fn parse_range(s: &str, flag: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("{flag} takes A..B or A..=B, not {s}");
-    let (a, b, inclusive) = match s.split_once("..=") {
-        Some((a, b)) => (a, b, true),
-        None => {
-            let (a, b) = s.split_once("..").ok_or_else(bad)?;
-            (a, b, false)
-        }
-    };
-    let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
-    let b = if inclusive { b.checked_add(1) } else { Some(b) };
-    match b {
-        Some(b) if b > MAX_INDEX => {
-            Err(format!("{flag} {s}: indices stop at {MAX_INDEX} (2^24, exact as f32)"))
-        }
-        Some(b) if b > a => Ok((a, b)),
-        Some(_) => Err(format!("{flag} {s} is empty")),
-        None => Err(format!("{flag} {s}: indices stop at {MAX_INDEX}")),
-    }
-}
-
-/// Parses `I/N` (shard I of N, 0 <= I < N).
-pub fn parse_shard(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--shard takes I/N with 0 <= I < N, not {s}");
-    let (i, n) = s.split_once('/').ok_or_else(bad)?;
-    let (i, n): (u32, u32) = (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
-    if i >= n {
-        return Err(bad());
-    }
-    Ok((i, n))
 }
 
 /// The shutter interval of `frame`: it opens at `frame / fps` and stays open for `shutter`
@@ -208,23 +171,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn frame_paths_and_ranges() {
+    fn frame_paths_and_times() {
         assert_eq!(frame_path("out/f_{frame:04}.png", 7).unwrap(), PathBuf::from("out/f_0007.png"));
         assert_eq!(frame_path("{frame}.exr", 12).unwrap(), PathBuf::from("12.exr"));
         assert!(frame_path("out.png", 1).is_err());
         assert!(frame_path("f{frame:x}.png", 1).unwrap_err().contains("unknown frame format"));
         // A width of 10^11 zeros would ask for 100 GB.
         assert!(frame_path("f{frame:099999999999}.png", 1).unwrap_err().contains("N at most 10"));
-        assert_eq!(parse_range("3..7", "--frames").unwrap(), (3, 7));
-        assert_eq!(parse_range("3..=7", "--frames").unwrap(), (3, 8));
-        assert!(parse_range("7..3", "--frames").is_err() && parse_range("x", "--frames").is_err());
-        // Near u32::MAX nothing wraps; beyond 2^24 (exact f32 frame times) is refused.
-        assert!(parse_range("0..=4294967295", "--frames").unwrap_err().contains("indices stop at"));
-        assert!(parse_range("4294967290..=4294967295", "--frames").is_err());
-        assert!(parse_range("0..16777217", "--frames").is_err());
-        assert_eq!(parse_range("0..16777216", "--frames").unwrap(), (0, 1 << 24));
         assert_eq!(frame_time(12, 24.0, 0.5), (0.5, 0.5 + 0.5 / 24.0));
-        assert_eq!(parse_shard("1/3").unwrap(), (1, 3));
-        assert!(parse_shard("3/3").is_err() && parse_shard("1").is_err() && parse_shard("a/2").is_err());
     }
 }

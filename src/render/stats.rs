@@ -1,6 +1,6 @@
 //! The `--stats` report: per-stage time shares, items and rates.
 
-use pathwave::integrator::wavefront;
+use crate::integrator::wavefront;
 
 /// Each stage's share of the time, `name 12.3%`, largest first.
 pub fn stage_shares(st: &wavefront::Stats) -> String {
@@ -47,6 +47,6 @@ pub fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
         rays as f64 / wall / 1e6,
         st.paths as f64 / wall / 1e6,
         non_finite,
-        pathwave::engine::simd::isa_name()
+        crate::engine::simd::isa_name()
     );
 }

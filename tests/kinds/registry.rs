@@ -1,15 +1,24 @@
 //! The material registry: a kind registered in one line (the engine's `TestDiffuse`, built with
 //! its `test-material` feature) is parsed, gets its own shading queue, stage and statistics row,
-//! and renders through the wavefront's generic stage to the image its Lambertian twin gives.
+//! and renders through the wavefront's generic stage to the image its Lambertian twin gives;
+//! the shape registry likewise with the engine's `TestDisk` (its `test-shape` feature).
+//!
+//! A package of its own (`tests/kinds/Cargo.toml`), outside the workspace, so that the features
+//! that add those kinds never reach the user's binary.
 
-mod common;
-
-use common::inline;
 use glam::DVec3;
-use pathwave::engine::material::{MaterialKind, Shading};
-use pathwave::engine::world::SceneWorld;
-use pathwave::integrator::film::Film;
-use pathwave::integrator::wavefront::{self, Stage, material_kinds};
+use pathwave_engine::material::{MaterialKind, Shading};
+use pathwave_engine::scene::{SceneDesc, parse};
+use pathwave_engine::world::SceneWorld;
+use pathwave_integrator::film::Film;
+use pathwave_integrator::oracle;
+use pathwave_integrator::wavefront::{self, Stage, material_kinds};
+use std::path::Path;
+
+/// A scene given as text.
+fn inline(text: &str) -> SceneDesc {
+    parse(text, Path::new("<test>")).unwrap_or_else(|e| panic!("{e}"))
+}
 
 /// A sphere on a floor under a square light and a dim sky; `kind` is the floor's and the
 /// sphere's material.
@@ -77,9 +86,7 @@ fn a_material_registered_in_one_line_renders_through_the_wavefront() {
 
 #[test]
 fn unknown_kinds_are_refused_with_the_registered_names() {
-    let err = pathwave::engine::scene::parse(&scene("Plastic", 0.5), std::path::Path::new("<test>"))
-        .unwrap_err()
-        .to_string();
+    let err = parse(&scene("Plastic", 0.5), Path::new("<test>")).unwrap_err().to_string();
     for k in MaterialKind::ALL {
         assert!(err.contains(k.variant_name()), "{err}");
     }
@@ -122,7 +129,8 @@ fn a_shape_registered_in_one_line_renders_and_lights_exactly() {
     let (mean, var) = image_mean(&film);
     let z = ((mean - DVec3::splat(want)) / var.map(f64::sqrt)).abs().max_element();
     assert!(z < 5.0 && (mean.x / want - 1.0).abs() < 0.01, "mean {mean}, want {want} (z {z})");
-    assert!(common::render(&inline(&text)) == film, "the oracle's bits");
+    let oracle = oracle::render(&SceneWorld::render_scene(&inline(&text)), &|_, _| {});
+    assert!(oracle == film, "the oracle's bits");
     // A 5% darker floor is told apart.
     let (darker, _) = render(&disk_over_floor(h, r, albedo * 0.95));
     let (m, v) = image_mean(&darker);

@@ -1,23 +1,10 @@
-//! Render farms. `pathwave farm slurm` splits a render among the tasks of a Slurm job array
-//! (sbatch(1), "--array": <https://slurm.schedmd.com/job_array.html>) and submits a job that
-//! depends on all of them (`--dependency=afterok`) to merge their work:
-//!
-//! - a sequence: task `i` of `n` renders every `n`-th frame from the `i`-th (`animate --shard
-//!   auto`), the frame files themselves; the merge job checks that every frame is there.
-//! - one image (`--split-samples`): task `i` renders the `i`-th of `n` contiguous shares of the
-//!   sample indices (`render --samples auto`) into a checkpoint in the job folder's `parts/`;
-//!   the merge job checks that every share is there and whole, and adds them into the image
-//!   (`pathwave merge`: the bits of one render).
-//!
-//! Tasks are idempotent: a frame is written whole or not at all and an existing one is skipped,
-//! and a share's task resumes its checkpoint (a finished share is only written out again), so a
-//! task that Slurm requeues, or the same command submitted again, redoes no finished work. A
-//! missing or unfinished share is named (its task and its samples or frames) and the merge
-//! writes nothing.
+//! The jobs of `pathwave farm slurm` (their scripts and submission) and the checks of `farm
+//! merge`.
 
+use crate::animate::sequence;
 use crate::checkpoint::{self, Checkpoint};
+use crate::io;
 use crate::shard::{self, Task};
-use crate::{animate, io};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -156,7 +143,7 @@ impl Job {
             }
             false => {
                 let (first, end) = match &args.frames {
-                    Some(f) => animate::parse_range(f, "--frames")?,
+                    Some(f) => shard::parse_range(f, "--frames")?,
                     None => scene_frames,
                 };
                 if !output.contains("{frame") {
@@ -167,7 +154,7 @@ impl Job {
                         args.output
                     ));
                 }
-                let path = animate::frame_path(&output, first)?;
+                let path = sequence::frame_path(&output, first)?;
                 let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
                 if !matches!(ext.as_deref(), Some("png" | "exr")) {
                     return Err(format!(
@@ -345,7 +332,7 @@ impl Job {
         match self.work {
             Work::Samples { .. } => folders.push(self.parts()),
             Work::Frames { first, .. } => {
-                let frame = animate::frame_path(&self.output, first)?;
+                let frame = sequence::frame_path(&self.output, first)?;
                 folders.extend(frame.parent().map(Path::to_path_buf));
             }
         }
@@ -479,8 +466,8 @@ pub fn check_frames(pattern: &str, (first, end): (u32, u32), tasks: u32) -> Resu
     }
     let mut missing: Vec<Vec<(u32, PathBuf)>> = vec![Vec::new(); tasks.min(end - first) as usize];
     for frame in first..end {
-        let path = animate::frame_path(pattern, frame)?;
-        if !animate::frame_written(&path) {
+        let path = sequence::frame_path(pattern, frame)?;
+        if !sequence::frame_written(&path) {
             missing[((frame - first) % tasks) as usize].push((frame, path));
         }
     }

@@ -1,8 +1,19 @@
 //! `pathwave merge`: checkpoints of sample shares added into one image.
 
-use pathwave::checkpoint::{self, Checkpoint};
-use pathwave::io::{self, LinearImage};
+use crate::checkpoint::{self, Checkpoint};
+use crate::io::{self, LinearImage};
 use std::path::{Path, PathBuf};
+
+/// `pathwave merge`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct MergeCommand {
+    /// Checkpoints (OUT.ckpt files) to merge.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The image; the extension picks the format.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
 
 /// Merges the checkpoints `parts` (shares of one render's samples) into `output` and, when
 /// they make one run of samples, its checkpoint.

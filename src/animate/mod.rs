@@ -1,33 +1,62 @@
-//! `pathwave animate`: a sequence of frames, each rendered as `render` renders one image.
+//! `pathwave animate`: a sequence of frames, each rendered as `render` renders one image. Its
+//! flags ([`AnimateCommand`]) and the frame loop ([`sequence`]).
 
-use super::args::{Checkpointing, How, RenderArgs};
-use super::load::{load, log_scene};
-use super::pool;
-use super::render::{RenderId, metadata, render_id, render_image};
-use super::stats::{print_stats, stage_shares};
-use pathwave::denoiser;
-use pathwave::engine::world::SceneWorld;
-use pathwave::integrator::wavefront;
-use pathwave::io;
-use pathwave::view::Viewers;
-use pathwave::{animate, shard};
+pub mod sequence;
+
+use crate::denoiser;
+use crate::engine::world::SceneWorld;
+use crate::integrator::wavefront;
+use crate::io;
+use crate::render::args::{Checkpointing, How, RenderArgs};
+use crate::render::image::{RenderId, metadata, render_id, render_image};
+use crate::render::load::{load, log_scene};
+use crate::render::stats::{print_stats, stage_shares};
+use crate::shard;
+use crate::view::Viewers;
 use std::path::{Path, PathBuf};
 
-/// `animate`'s options about which frames to render.
-pub struct SequenceArgs {
+/// `pathwave animate`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct AnimateCommand {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output pattern, e.g. out/frame_{frame:04}.png (or .exr), or anim.gif.
+    #[arg(short, long, visible_alias = "outfile")]
+    pub output: String,
+    /// Frames A..B (B excluded) or A..=B (default: 0..the scene's `animation.frames`).
+    #[arg(long)]
     pub frames: Option<String>,
+    /// Frames per second (default: the scene's, 24 if it has none).
+    #[arg(long)]
     pub fps: Option<f32>,
+    /// Shutter as a fraction of the frame interval, 0 = no motion blur (default: the
+    /// scene's `animation.shutter`).
+    #[arg(long)]
     pub shutter: Option<f32>,
+    /// Render frames whose file already exists.
+    #[arg(long)]
     pub overwrite: bool,
+    /// Render only every N-th frame from the I-th (I/N, 0-based), so that N processes split
+    /// the sequence (frame files only, not a GIF); `auto`: this task's, from a Slurm job
+    /// array's or a Kubernetes Indexed Job's environment.
+    #[arg(long, value_name = "I/N|auto")]
     pub shard: Option<String>,
+    /// With `--shard auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+    /// PATHWAVE_SHARD_COUNT).
+    #[arg(long, value_name = "N")]
     pub shard_count: Option<u32>,
+    /// The flags `render` takes too.
+    #[command(flatten)]
+    pub args: RenderArgs,
 }
 
-pub fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderArgs) -> Result<(), String> {
+/// Renders the frames the flags ask for.
+pub fn run(c: &AnimateCommand) -> Result<(), String> {
+    let (path, output, args) = (c.scene.as_path(), c.output.as_str(), &c.args);
     // Frame folders are created as frames come; the format and the scene are checked now.
     let first = match Path::new(output).extension().is_some_and(|e| e.eq_ignore_ascii_case("gif")) {
         true => PathBuf::from(output),
-        false => animate::frame_path(output, 0)?,
+        false => sequence::frame_path(output, 0)?,
     };
     if io::same_file(path, &first) {
         return Err(format!("{output}: the output would replace the scene {}", path.display()));
@@ -36,13 +65,13 @@ pub fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderA
     if !["png", "exr", "gif"].contains(&ext.as_str()) {
         return Err(format!("{output}: unknown output format (use .png, .exr or .gif)"));
     }
-    let desc = load(path, &args.overrides())?;
+    let desc = load(path, &args.scene)?;
     let a = &desc.animation;
-    let frames = match &seq_args.frames {
-        Some(f) => animate::parse_range(f, "--frames")?,
+    let frames = match &c.frames {
+        Some(f) => shard::parse_range(f, "--frames")?,
         None => (0, a.frames.get()),
     };
-    let fps = seq_args.fps.unwrap_or(a.fps.0);
+    let fps = c.fps.unwrap_or(a.fps.0);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(format!("--fps takes a number > 0, not {fps}"));
     }
@@ -50,12 +79,12 @@ pub fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderA
     if frames.1 as f32 / fps > 1e7 {
         return Err(format!("frames up to {} at {fps} fps reach beyond 1e7 seconds", frames.1));
     }
-    let shutter = seq_args.shutter.unwrap_or(a.shutter.0);
+    let shutter = c.shutter.unwrap_or(a.shutter.0);
     if !(0.0..=1.0).contains(&shutter) {
         return Err(format!("--shutter takes a fraction of the frame interval in [0, 1], not {shutter}"));
     }
-    let shard = match seq_args.shard.as_deref() {
-        Some(s) => shard::parse_shard(s, seq_args.shard_count).map(|t| (t.index, t.count))?,
+    let shard = match c.shard.as_deref() {
+        Some(s) => shard::parse_shard(s, c.shard_count).map(|t| (t.index, t.count))?,
         None => (0, 1),
     };
     let every = args.checkpoint_every()?;
@@ -69,20 +98,20 @@ pub fn animate(path: &Path, output: &str, seq_args: SequenceArgs, args: &RenderA
     }
     // A frame killed half way resumes from its checkpoint.
     let checkpointing = every.map(|every| Checkpointing { every, resume: true });
-    let pool = pool(args.threads)?;
+    let pool = crate::pool(args.engine.threads)?;
     if let Some(d) = args.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
     let mut world = SceneWorld::new(&desc);
     let quiet = args.log.quiet;
-    let seq = animate::Sequence { output, frames, shard, fps, shutter, overwrite: seq_args.overwrite, quiet };
+    let seq = sequence::Sequence { output, frames, shard, fps, shutter, overwrite: c.overwrite, quiet };
     // Frames report one line each (from `animate::run`), not a bar or a line per pass.
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
     let mut logged = false;
     // Frames are not shown while they render.
     let nv = &mut Viewers::default();
-    animate::run(&mut world, &seq, |scene, info| {
+    sequence::run(&mut world, &seq, |scene, info| {
         if !logged {
             log_scene(scene);
             logged = true;

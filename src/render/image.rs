@@ -1,102 +1,30 @@
-//! One image from samples to file: `pathwave render`, and the per-frame work of `animate`
+//! One image from samples to its pixels, for `render` and for each frame of `animate`
 //! (checkpoints and resuming, passes, previews, progress).
 
-use super::args::{Checkpointing, How, Integrator, Overrides};
-use super::load::{load, log_scene};
-use super::pool;
+use super::args::{Checkpointing, How, Integrator};
 use super::post_process::post_process;
-use super::stats::print_stats;
-use pathwave::checkpoint::{self, Checkpoint};
-use pathwave::denoiser;
-use pathwave::engine::render_scene::{PixelWindow, SamplerKind};
-use pathwave::engine::world::SceneWorld;
-use pathwave::integrator::{film::Film, oracle, wavefront};
-use pathwave::io::{self, LinearImage};
-use pathwave::shard;
-use pathwave::view::{self, ViewArgs, Viewers};
+use crate::checkpoint::{self, Checkpoint};
+use crate::engine::render_scene::{RenderScene, SamplerKind};
+use crate::integrator::{film::Film, oracle, wavefront};
+use crate::io::{self, LinearImage};
+use crate::view::{self, Viewers};
 use std::path::Path;
 use std::time::Instant;
-
-#[expect(clippy::too_many_arguments, reason = "the render flags, each passed through from the command line")]
-pub fn render(
-    path: &Path,
-    output: &Path,
-    o: Overrides,
-    how: &How,
-    time: f32,
-    checkpointing: Option<Checkpointing>,
-    samples: Option<shard::Samples>,
-    view: &ViewArgs,
-) -> Result<(), String> {
-    io::check_output(output, &[path], false)?;
-    how.check_aovs(output)?;
-    if !(time.is_finite() && time.abs() <= 1e7) {
-        return Err(format!("--time takes seconds in [-1e7, 1e7], not {time}"));
-    }
-    let desc = load(path, &o)?;
-    let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
-    let pool = pool(how.threads)?;
-    if let Some(d) = how.denoise {
-        denoiser::prepare(d, pool.current_num_threads())?;
-    }
-    let mut world = SceneWorld::new(&desc);
-    let shutter = desc.camera.shutter;
-    world.set_time(time + shutter.0, time + shutter.1);
-    let scene = world.update();
-    log_scene(&scene);
-    let s = scene.settings;
-    let id = render_id(path, &scene, how, time)?;
-    let mut viewers = Viewers::open(view, &output.display().to_string(), &s);
-    let r =
-        render_image(&scene, &id, output, how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
-    if how.stats {
-        match &r.stats {
-            Some(st) => print_stats(st, r.secs, r.non_finite),
-            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
-        }
-    }
-    let metadata = metadata(id.key, &scene, &r);
-    let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
-    eprintln!(
-        "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
-        output.display(),
-        s.window.w,
-        s.window.h,
-        match s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height }) {
-            true => String::new(),
-            false => format!(" (crop at {},{} of {}x{})", s.window.x0, s.window.y0, s.width, s.height),
-        },
-        r.spp,
-        r.secs,
-        r.new_samples / r.secs.max(1e-9) / 1e6,
-        pool.current_num_threads(),
-        r.non_finite,
-        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
-        match checkpointing {
-            Some(_) => format!("; checkpoint {}", checkpoint::path_for(output).display()),
-            None => String::new(),
-        },
-    );
-    Ok(())
-}
 
 /// What identifies a render's samples: the checkpoint key (a hash of the scene file's bytes and
 /// of every setting that changes a sample) and those settings as text, so that a checkpoint of
 /// other settings is refused with the ones that differ.
 pub struct RenderId {
+    /// The checkpoint key.
     pub key: u64,
+    /// The settings as text (`checkpoint::settings_text`).
     pub settings: String,
 }
 
 /// The [`RenderId`] of a render of the scene file `path` at `time`.
-pub fn render_id(
-    path: &Path,
-    scene: &pathwave::engine::render_scene::RenderScene,
-    how: &How,
-    time: f32,
-) -> Result<RenderId, String> {
+pub fn render_id(path: &Path, scene: &RenderScene, how: &How, time: f32) -> Result<RenderId, String> {
     let s = scene.settings;
-    use pathwave::engine::scene::files;
+    use crate::engine::scene::files;
     let w = &s.window;
     let settings = checkpoint::settings_text(&[
         ("size", format!("{}x{}", s.width, s.height)),
@@ -124,11 +52,7 @@ pub fn render_id(
 /// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a
 /// hash of the scene file and the settings that change the image), samples per pixel and seed.
 /// Not the render time: the same render gives the same bytes.
-pub fn metadata(
-    key: u64,
-    scene: &pathwave::engine::render_scene::RenderScene,
-    r: &Rendered,
-) -> Vec<(&'static str, String)> {
+pub fn metadata(key: u64, scene: &RenderScene, r: &Rendered) -> Vec<(&'static str, String)> {
     vec![
         ("pathwave:version", env!("CARGO_PKG_VERSION").to_string()),
         ("pathwave:scene_key", format!("{key:016x}")),
@@ -164,7 +88,7 @@ pub struct Rendered {
     reason = "one image's scene, identity, output, settings and viewers, as `render` and `animate` give them"
 )]
 pub fn render_image(
-    scene: &pathwave::engine::render_scene::RenderScene,
+    scene: &RenderScene,
     id: &RenderId,
     output: &Path,
     how: &How,
@@ -246,7 +170,7 @@ pub fn render_image(
         }
     }
     let first_spp = film.spp;
-    let (tiles_x, tiles_y) = pathwave::integrator::tile::Tile::grid_of(&s.window);
+    let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&s.window);
     let tiles = (tiles_x * tiles_y) as usize;
     let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
     let mut stats: Option<wavefront::Stats> = None;
@@ -346,13 +270,13 @@ pub fn render_image(
 /// Render progress: an `indicatif` bar with ETA on a terminal. When stderr is not a terminal
 /// the bar hides itself and each pass prints one line instead (`pass_done`), so that
 /// `2> log.txt` stays readable.
-pub struct Progress {
-    pub bar: indicatif::ProgressBar,
-    pub lines: bool,
+struct Progress {
+    bar: indicatif::ProgressBar,
+    lines: bool,
 }
 
 impl Progress {
-    pub fn new(quiet: bool, total: usize) -> Self {
+    fn new(quiet: bool, total: usize) -> Self {
         use std::io::IsTerminal;
         let bar = match quiet {
             true => indicatif::ProgressBar::hidden(),
@@ -369,18 +293,18 @@ impl Progress {
     }
 
     /// `done` of the whole render's tile passes are done.
-    pub fn update(&self, done: usize) {
+    fn update(&self, done: usize) {
         self.bar.set_position(done as u64);
     }
 
     /// One pass finished (a line when there is no bar, unless the info log just said it).
-    pub fn pass_done(&self, first: u32, end: u32, spp: u32, secs: f64, msps: f64) {
+    fn pass_done(&self, first: u32, end: u32, spp: u32, secs: f64, msps: f64) {
         if self.lines && !tracing::enabled!(tracing::Level::INFO) {
             eprintln!("pass: samples {first}..{end} of {spp} in {secs:.2} s, {msps:.3} M samples/s");
         }
     }
 
-    pub fn finish(&self) {
+    fn finish(&self) {
         self.bar.finish_and_clear();
     }
 }

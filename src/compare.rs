@@ -1,12 +1,34 @@
 //! `pathwave compare`: relMSE, RMSE and means of two images.
 
-use super::args::Encoded;
-use pathwave::io::{self, LinearImage};
-use pathwave::metrics;
-use std::path::Path;
+use crate::io::{self, LinearImage};
+use crate::metrics;
+use std::path::{Path, PathBuf};
+
+/// `pathwave compare`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct CompareCommand {
+    /// The image to judge.
+    pub a: PathBuf,
+    /// The reference.
+    pub b: PathBuf,
+    /// How to read an 8-bit file compared with a linear one: `decode` its sRGB values to
+    /// linear, or compare them `as-stored` (in [0, 1]).
+    #[arg(long, value_enum)]
+    pub encoded: Option<Encoded>,
+}
+
+/// How `compare` reads an sRGB-encoded file beside a linear one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Encoded {
+    /// Decode sRGB to linear.
+    Decode,
+    /// Compare the stored values.
+    AsStored,
+}
 
 /// Prints how far image `a` is from the reference `b`.
-pub fn compare(a: &Path, b: &Path, encoded: Option<Encoded>) -> Result<(), String> {
+pub fn run(c: &CompareCommand) -> Result<(), String> {
+    let (a, b, encoded) = (c.a.as_path(), c.b.as_path(), c.encoded);
     let linear = |p: &Path| {
         let e = p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
         e == "exr" || e == "hdr"
@@ -14,7 +36,7 @@ pub fn compare(a: &Path, b: &Path, encoded: Option<Encoded>) -> Result<(), Strin
     let read = |p: &Path| -> Result<LinearImage, String> {
         let mut img = io::read_linear(p)?;
         if !linear(p) && encoded == Some(Encoded::Decode) {
-            img.pixels.iter_mut().for_each(|c| *c = c.map(pathwave::engine::texture::srgb_to_linear));
+            img.pixels.iter_mut().for_each(|c| *c = c.map(crate::engine::texture::srgb_to_linear));
         }
         Ok(img)
     };

@@ -1,0 +1,83 @@
+//! Render farms. `pathwave farm slurm` splits a render among the tasks of a Slurm job array
+//! (sbatch(1), "--array": <https://slurm.schedmd.com/job_array.html>) and submits a job that
+//! depends on all of them (`--dependency=afterok`) to merge their work:
+//!
+//! - a sequence: task `i` of `n` renders every `n`-th frame from the `i`-th (`animate --shard
+//!   auto`), the frame files themselves; the merge job checks that every frame is there.
+//! - one image (`--split-samples`): task `i` renders the `i`-th of `n` contiguous shares of the
+//!   sample indices (`render --samples auto`) into a checkpoint in the job folder's `parts/`;
+//!   the merge job checks that every share is there and whole, and adds them into the image
+//!   (`pathwave merge`: the bits of one render).
+//!
+//! Tasks are idempotent: a frame is written whole or not at all and an existing one is skipped,
+//! and a share's task resumes its checkpoint (a finished share is only written out again), so a
+//! task that Slurm requeues, or the same command submitted again, redoes no finished work. A
+//! missing or unfinished share is named (its task and its samples or frames) and the merge
+//! writes nothing.
+
+pub mod job;
+
+use crate::animate::sequence::frame_path;
+use crate::merge::merge;
+use crate::render::args::RenderArgs;
+use crate::render::load::load;
+use crate::shard;
+use job::{MergeArgs, SlurmArgs};
+use std::path::Path;
+
+/// `pathwave farm`'s subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum FarmCommand {
+    /// Write an sbatch job array whose tasks render every N-th frame (`animate --shard auto`)
+    /// or, with --split-samples, a share of one image's samples (`render --samples auto`), and
+    /// a merge job that runs after all of them have succeeded; submit both.
+    Slurm {
+        /// The farm's own flags.
+        #[command(flatten)]
+        job: SlurmArgs,
+        /// The render flags every task is given.
+        #[command(flatten)]
+        args: Box<RenderArgs>,
+    },
+    /// Check that every task's share is there and whole, and merge sample shares into the
+    /// image; name what is missing (task, samples or frames) and write nothing if anything is.
+    Merge(MergeArgs),
+}
+
+/// Runs `farm slurm` or `farm merge`; `matches` are `farm`'s flags as clap saw them (the render
+/// flags given are passed on to the tasks as given).
+pub fn run(command: &FarmCommand, matches: &clap::ArgMatches) -> Result<(), String> {
+    match command {
+        FarmCommand::Slurm { job, args } => match matches.subcommand_matches("slurm") {
+            Some(m) => slurm(job, args, m),
+            None => Err("farm slurm: its flags are not where clap puts them".into()),
+        },
+        FarmCommand::Merge(m) => match (m.spp, &m.parts, &m.frames) {
+            (Some(spp), Some(parts), _) => {
+                job::check_samples(parts, m.tasks, spp).and_then(|p| merge(&p, Path::new(&m.output)))
+            }
+            (_, _, Some(f)) => shard::parse_range(f, "--frames")
+                .and_then(|f| job::check_frames(&m.output, f, m.tasks))
+                .map(|()| eprintln!("{}: every frame is there", m.output)),
+            _ => Err("farm merge takes --spp with --parts, or --frames".into()),
+        },
+    }
+}
+
+/// `pathwave farm slurm`: checks the scene and the options, then writes and submits the jobs.
+fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Result<(), String> {
+    if args.profile.trace.is_some() {
+        return Err("--trace: every task would write the same file; trace one share by hand".into());
+    }
+    if job.split_samples && (args.denoise.is_some() || args.aov.is_some()) {
+        return Err("--split-samples: the merge adds samples; it does not denoise or write AOVs".into());
+    }
+    let desc = load(&job.scene, &args.scene)?;
+    let flags = <RenderArgs as clap::Args>::augment_args(clap::Command::new("render"));
+    let forwarded = job::forwarded(&flags, matches)?;
+    let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
+    if let job::Work::Frames { first, .. } = plan.work {
+        args.how().check_aovs(&frame_path(&plan.output, first)?)?;
+    }
+    plan.submit(job.dry_run)
+}

@@ -1,0 +1,267 @@
+//! The flags the render commands share (clap derive), and the settings derived from them:
+//! [`SceneArgs`] override a scene's `render` settings (`render`, `animate`, `watch`, and `farm
+//! slurm`'s tasks), [`EngineArgs`] choose how samples are computed, [`RenderArgs`] are every flag
+//! of `render` that `animate` and `farm slurm` take too, and [`How`] is what a render reads of
+//! them.
+
+use crate::MAX_THREADS;
+use crate::denoiser::Denoiser;
+use crate::engine::render_scene::SamplerKind;
+use std::num::NonZeroU32;
+use std::path::{Path, PathBuf};
+
+/// Which integrator renders (`--integrator`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Integrator {
+    /// Stages over structure-of-arrays queues (default).
+    Wavefront,
+    /// The reference path tracer, one path at a time.
+    Oracle,
+}
+
+/// What `render`, `animate` and `watch` override of a scene's `render` settings (and its
+/// parameters).
+#[derive(clap::Args, Clone, Debug)]
+pub struct SceneArgs {
+    /// Size, samples and their seed and sampler.
+    #[command(flatten)]
+    pub image: ImageArgs,
+    /// Maximum bounces (overrides the scene).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Scale samples down so that no component exceeds MAX (biased; off by default).
+    #[arg(long, value_name = "MAX")]
+    pub clamp: Option<f32>,
+    /// Render only the window x0..x1, y0..y1 (fractions of the image, as pbrt-v4's crop
+    /// window): the output has the window's size and the bits of those pixels in the whole
+    /// image.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_delimiter = ',')]
+    pub crop: Option<Vec<f32>>,
+    /// Set a parameter the scene declares (`parameters: { "NAME": "default" }`, used as
+    /// `$NAME`) to VALUE, RON text; repeatable.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+}
+
+/// How `render`, `animate` and `watch` compute samples (not what the samples are: every choice
+/// gives the same image, or the oracle's).
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct EngineArgs {
+    /// Which integrator renders.
+    #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
+    pub integrator: Integrator,
+    /// Paths in flight per worker (wavefront), 1 to 65536.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub batch: u32,
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(short, long, visible_alias = "nthreads",
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_THREADS))]
+    pub threads: Option<usize>,
+}
+
+/// What `render` and `animate` share: every setting that changes a sample or an output.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RenderArgs {
+    /// The scene's settings they override.
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// How samples are computed.
+    #[command(flatten)]
+    pub engine: EngineArgs,
+    /// Denoise with `oidn` (Intel Open Image Denoise, guided by albedo and normals; a build with
+    /// `--features oidn`, where a bare --denoise means it) or `atrous` (pathwave's à-trous filter,
+    /// guided by albedo, normals and the per-pixel variance; a bare --denoise in other builds):
+    /// the output gets the denoised image, NAME.noisy.EXT the render as it came.
+    #[arg(long, value_name = "oidn|atrous", num_args = 0..=1,
+          default_missing_value = Denoiser::DEFAULT_NAME, value_parser = Denoiser::parse)]
+    pub denoise: Option<Denoiser>,
+    /// Also write AOVs, a comma-separated list of albedo, normal, depth, variance, noisy (a bare
+    /// `--aov`: albedo,normal). An EXR output holds them as layers of the same file (`albedo.R`,
+    /// `normal.X`, `depth.Z`, `variance.R`, `noisy.R`, ...); beside a PNG, albedo and normal go
+    /// to NAME.albedo.png and NAME.normal.png (normals mapped to 0.5 + 0.5 n), and depth and
+    /// variance need an EXR. `noisy` (the render before denoising) needs --denoise.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        num_args = 0..,
+        default_missing_values = ["albedo", "normal"],
+        value_name = "AOV,.."
+    )]
+    pub aov: Option<Vec<Aov>>,
+    /// Render in passes and, every SECS seconds, save the samples so far to OUT.ckpt (render:
+    /// and the image so far to OUT; animate: a killed frame resumes from its checkpoint). The
+    /// checkpoint is kept at the end, to add samples later.
+    #[arg(long, value_name = "SECS")]
+    pub checkpoint_every: Option<f64>,
+    /// What is logged.
+    #[command(flatten)]
+    pub log: LogArgs,
+    /// Where the time goes.
+    #[command(flatten)]
+    pub profile: ProfileArgs,
+}
+
+impl RenderArgs {
+    /// How to render.
+    pub fn how(&self) -> How {
+        How {
+            defines: self.scene.define.clone(),
+            integrator: self.engine.integrator,
+            batch: self.engine.batch as usize,
+            stats: self.profile.stats,
+            threads: self.engine.threads,
+            quiet: self.log.quiet,
+            verbose: self.log.verbose > 0,
+            denoise: self.denoise,
+            aov: self.aov.clone().unwrap_or_default(),
+        }
+    }
+
+    /// `--checkpoint-every`, a number of seconds >= 0.
+    pub fn checkpoint_every(&self) -> Result<Option<f64>, String> {
+        match self.checkpoint_every {
+            Some(s) if !(s >= 0.0 && s.is_finite()) => {
+                Err(format!("--checkpoint-every takes a number of seconds >= 0, not {s}"))
+            }
+            other => Ok(other),
+        }
+    }
+}
+
+/// `--time`: the moment `render` and `watch` show.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct TimeArgs {
+    /// Evaluate keyframes at this time (seconds); the camera's shutter opens and closes
+    /// relative to it.
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
+}
+
+impl TimeArgs {
+    /// `--time`, seconds in [-1e7, 1e7].
+    pub fn checked(self) -> Result<f32, String> {
+        match self.time.is_finite() && self.time.abs() <= 1e7 {
+            true => Ok(self.time),
+            false => Err(format!("--time takes seconds in [-1e7, 1e7], not {}", self.time)),
+        }
+    }
+}
+
+/// How much `render`, `animate` and `watch` say on stderr.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct LogArgs {
+    /// More on stderr: -v logs the scene, BVH builds, passes and frames (info) and lists the
+    /// pixels that discarded NaN/Inf samples; -vv adds debug logs and every span's duration.
+    /// RUST_LOG, when set, chooses the log levels instead.
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+    /// Less on stderr: no progress or per-frame lines, only warnings, errors and the summary.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+}
+
+/// Where `render` and `animate` say where the time goes.
+#[derive(clap::Args, Clone, Debug)]
+pub struct ProfileArgs {
+    /// Print per-stage statistics (wavefront): time share, items, rate and calls, and queue
+    /// occupancy (`animate`: a line per frame with its scene update and stage shares, then
+    /// the table for the sequence).
+    #[arg(long)]
+    pub stats: bool,
+    /// Write a Chrome trace (open it in ui.perfetto.dev): scene load, ECS systems, frames,
+    /// passes and tiles as spans, each tile's stages with their items, and counter tracks.
+    #[arg(long, value_name = "FILE.json")]
+    pub trace: Option<PathBuf>,
+}
+
+/// The image's size and samples, which `render`, `animate` and `watch` may override of a
+/// scene's `render` settings.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct ImageArgs {
+    /// Samples per pixel (overrides the scene).
+    #[arg(long)]
+    pub spp: Option<NonZeroU32>,
+    /// Image width (overrides the scene).
+    #[arg(long)]
+    pub width: Option<NonZeroU32>,
+    /// Image height (overrides the scene).
+    #[arg(long)]
+    pub height: Option<NonZeroU32>,
+    /// Random seed (overrides the scene; every frame of a sequence uses it).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// How samples are made: sobol (default), stratified or independent (overrides the scene).
+    #[arg(long)]
+    pub sampler: Option<SamplerKind>,
+}
+
+/// `--checkpoint-every` and `--resume`.
+pub struct Checkpointing {
+    /// Seconds between checkpoints.
+    pub every: f64,
+    /// Start from the checkpoint file if there is one.
+    pub resume: bool,
+}
+
+/// An image beside the render (`--aov`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Aov {
+    /// Mean albedo of the first surface that is not a perfect mirror or glass (the denoiser's
+    /// guide).
+    Albedo,
+    /// Its camera-facing shading normal, averaged (the denoiser's guide).
+    Normal,
+    /// Mean distance along the camera rays to the first surface (infinity where none).
+    Depth,
+    /// Variance of each pixel's mean, per channel.
+    Variance,
+    /// The render before denoising.
+    Noisy,
+}
+
+impl How {
+    /// Whether the denoiser's guides are needed.
+    pub fn guides(&self) -> bool {
+        self.denoise.is_some() || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
+    }
+
+    /// Refuses, before any work, AOVs that `output` cannot hold or that need `--denoise`.
+    pub fn check_aovs(&self, output: &Path) -> Result<(), String> {
+        let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        for a in &self.aov {
+            match a {
+                Aov::Depth | Aov::Variance if !exr => {
+                    return Err(
+                        format!("{}: --aov {a:?} needs an .exr output", output.display()).to_lowercase()
+                    );
+                }
+                Aov::Noisy if self.denoise.is_none() => return Err("--aov noisy needs --denoise".into()),
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What a render reads of [`RenderArgs`] besides the scene.
+pub struct How {
+    /// The -D parameter overrides (they change the scene, so they are in checkpoint keys).
+    pub defines: Vec<String>,
+    /// `-v`: list the pixels that discarded NaN/Inf samples.
+    pub verbose: bool,
+    /// `--denoise`.
+    pub denoise: Option<Denoiser>,
+    /// `--aov`.
+    pub aov: Vec<Aov>,
+    /// `--integrator`.
+    pub integrator: Integrator,
+    /// `--batch`.
+    pub batch: usize,
+    /// `--stats`: time the wavefront's stages.
+    pub stats: bool,
+    /// `--threads`.
+    pub threads: Option<usize>,
+    /// `-q`: no progress bar or lines.
+    pub quiet: bool,
+}

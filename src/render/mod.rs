@@ -1,0 +1,112 @@
+//! `pathwave render`: one image. Its flags ([`RenderCommand`]), the flags it shares with
+//! `animate`, `watch` and `farm slurm` ([`args`]), the scene loaded with their overrides
+//! ([`load`]), and the work from samples to file ([`image`], [`post_process`], [`stats`]), which
+//! `animate` runs for each frame.
+
+pub mod args;
+pub mod image;
+pub mod load;
+pub mod post_process;
+pub mod stats;
+
+use crate::checkpoint;
+use crate::denoiser;
+use crate::engine::render_scene::PixelWindow;
+use crate::engine::world::SceneWorld;
+use crate::io;
+use crate::shard;
+use crate::view::{ViewArgs, Viewers};
+use args::{Checkpointing, RenderArgs, TimeArgs};
+use image::{metadata, render_id, render_image};
+use load::{load, log_scene};
+use std::path::PathBuf;
+
+/// `pathwave render`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct RenderCommand {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Output image; the extension picks the format (.png or .exr).
+    #[arg(short, long, visible_alias = "outfile")]
+    pub output: PathBuf,
+    /// The flags `animate` takes too.
+    #[command(flatten)]
+    pub args: RenderArgs,
+    /// The moment rendered.
+    #[command(flatten)]
+    pub time: TimeArgs,
+    /// Continue from OUT.ckpt if it exists (same scene and settings; the result has the
+    /// bits of an uninterrupted render); checkpoints every 60 s unless --checkpoint-every.
+    #[arg(long)]
+    pub resume: bool,
+    /// Render only sample indices A..B of each pixel (of --spp) and keep them in OUT.ckpt,
+    /// for `pathwave merge` to add to the other parts; `auto`: this task's share, from a
+    /// Slurm job array's or a Kubernetes Indexed Job's environment.
+    #[arg(long, value_name = "A..B|auto")]
+    pub samples: Option<String>,
+    /// With `--samples auto`: the number of tasks (else SLURM_ARRAY_TASK_COUNT or
+    /// PATHWAVE_SHARD_COUNT).
+    #[arg(long, value_name = "N")]
+    pub shard_count: Option<u32>,
+    /// Where to show the passes.
+    #[command(flatten)]
+    pub view: ViewArgs,
+}
+
+/// Renders the scene into the output, as the flags say.
+pub fn run(c: &RenderCommand) -> Result<(), String> {
+    let (path, output, how) = (&c.scene, &c.output, c.args.how());
+    let every = c.args.checkpoint_every()?;
+    let samples = c.samples.as_deref().map(|r| shard::Samples::parse(r, c.shard_count)).transpose()?;
+    // A part is kept in its checkpoint for `merge`.
+    let checkpointing = (every.is_some() || c.resume || samples.is_some())
+        .then(|| Checkpointing { every: every.unwrap_or(60.0), resume: c.resume });
+    io::check_output(output, &[path], false)?;
+    how.check_aovs(output)?;
+    let time = c.time.checked()?;
+    let desc = load(path, &c.args.scene)?;
+    let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
+    let pool = crate::pool(how.threads)?;
+    if let Some(d) = how.denoise {
+        denoiser::prepare(d, pool.current_num_threads())?;
+    }
+    let mut world = SceneWorld::new(&desc);
+    let shutter = desc.camera.shutter;
+    world.set_time(time + shutter.0, time + shutter.1);
+    let scene = world.update();
+    log_scene(&scene);
+    let s = scene.settings;
+    let id = render_id(path, &scene, &how, time)?;
+    let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s);
+    let r =
+        render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
+    if how.stats {
+        match &r.stats {
+            Some(st) => stats::print_stats(st, r.secs, r.non_finite),
+            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        }
+    }
+    let metadata = metadata(id.key, &scene, &r);
+    let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
+    eprintln!(
+        "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
+        output.display(),
+        s.window.w,
+        s.window.h,
+        match s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height }) {
+            true => String::new(),
+            false => format!(" (crop at {},{} of {}x{})", s.window.x0, s.window.y0, s.width, s.height),
+        },
+        r.spp,
+        r.secs,
+        r.new_samples / r.secs.max(1e-9) / 1e6,
+        pool.current_num_threads(),
+        r.non_finite,
+        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
+        match checkpointing {
+            Some(_) => format!("; checkpoint {}", checkpoint::path_for(output).display()),
+            None => String::new(),
+        },
+    );
+    Ok(())
+}
