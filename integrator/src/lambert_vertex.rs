@@ -154,9 +154,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
     // Russian roulette.
     let beta = i.beta * i.albedo;
-    let rr = (beta * i.eta_scale).max_element();
-    let rr_drawn = i.rr_on && rr < 1.0;
-    let q = (1.0 - rr).max(0.0);
+    let (rr_drawn, q) = path::roulette_rule(i.rr_on, beta, i.eta_scale);
     let survive = !(rr_drawn && i.u_rr < q);
     let beta = if rr_drawn { beta / (1.0 - q) } else { beta };
     LambertOut {
@@ -194,7 +192,7 @@ impl VertexSamples {
             light_pick: path::light_choice(scene, sampler, depth),
             light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
             dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-            roulette: if depth + 1 >= scene.settings.rr_depth {
+            roulette: if path::plays_roulette(scene, depth + 1) {
                 sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))
             } else {
                 0.0
@@ -234,9 +232,9 @@ impl VertexSamples {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
-        let rr_depth = scene.settings.rr_depth;
         // Roulette's number only where some lane plays it.
-        let rr = if depths.iter().any(|&d| d + 1 >= rr_depth) {
+        let plays = depths.map(|d| path::plays_roulette(scene, d + 1));
+        let rr = if plays.contains(&true) {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE))
         } else {
             [0.0; LANES]
@@ -245,7 +243,7 @@ impl VertexSamples {
         for l in 0..LANES {
             (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
             (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
-            out.roulette[l] = if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 };
+            out.roulette[l] = if plays[l] { rr[l] } else { 0.0 };
         }
         out
     }
@@ -328,7 +326,7 @@ pub fn gather_surface(
 ) -> LambertIn {
     let mut i = surface_inputs(st, sp, wo, albedo);
     i.u_dir = [u.dir.x, u.dir.y];
-    i.rr_on = rr_on(scene, i.depth_after);
+    i.rr_on = path::plays_roulette(scene, i.depth_after);
     i.u_rr = u.roulette;
     i
 }
@@ -351,12 +349,6 @@ fn surface_inputs(st: PathIn, sp: &SurfacePoint, wo: Vec3A, albedo: Vec3) -> Lam
     }
 }
 
-/// Whether Russian roulette applies after a vertex that leaves `depth_after` bounces.
-#[inline(always)]
-fn rr_on(scene: &RenderScene, depth_after: u32) -> bool {
-    depth_after >= scene.settings.rr_depth
-}
-
 impl LambertInLanes {
     /// Sets lane `l`'s inputs from the surface and the path, as [`gather_surface`] does; the
     /// numbers are set for all lanes at once ([`Self::set_numbers`]), the light sample by
@@ -377,7 +369,7 @@ impl LambertInLanes {
     pub fn set_numbers(&mut self, scene: &RenderScene, u: &VertexSamplesLanes) {
         (self.u_dir, self.u_rr) = (u.dir, u.roulette);
         for l in 0..LANES {
-            self.rr_on[l] = rr_on(scene, self.depth_after[l]);
+            self.rr_on[l] = path::plays_roulette(scene, self.depth_after[l]);
         }
     }
 }

@@ -259,19 +259,41 @@ pub fn scatter_in_medium(
     (shadow, next)
 }
 
-/// Russian roulette after `rr_depth` bounces with the number `u()` (drawn only if needed):
-/// false when the path ends; survivors are reweighted.
+/// The depth limit: a path that has made `max_depth` bounces ends where it meets a surface or
+/// scatters in a medium, without scattering again (an emitter or the background it reached
+/// still counts).
+#[inline(always)]
+pub fn at_max_depth(scene: &RenderScene, depth: u32) -> bool {
+    depth == scene.settings.max_depth
+}
+
+/// Whether Russian roulette is played at the vertex that makes the path's bounce number
+/// `depth_after` (its roulette number is drawn only there).
+#[inline(always)]
+pub fn plays_roulette(scene: &RenderScene, depth_after: u32) -> bool {
+    depth_after >= scene.settings.rr_depth
+}
+
+/// Russian roulette's rule for a path whose new throughput is `beta` and IOR scale
+/// `eta_scale`, at a vertex where it `plays`: whether its number is drawn, and the probability
+/// `q` that the path ends (it ends when the number is below `q`; survivors' throughput is
+/// divided by `1 - q`). Branch-free, for the lane kernels too.
+#[inline(always)]
+pub fn roulette_rule(plays: bool, beta: Vec3, eta_scale: f32) -> (bool, f32) {
+    let rr = (beta * eta_scale).max_element();
+    (plays && rr < 1.0, (1.0 - rr).max(0.0))
+}
+
+/// Russian roulette ([`roulette_rule`]) after the bounce that made `st.depth`, with the number
+/// `u()` (drawn only if needed): false when the path ends; survivors are reweighted.
 #[inline]
 fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) -> bool {
-    if st.depth >= scene.settings.rr_depth {
-        let rr = (st.beta * st.eta_scale).max_element();
-        if rr < 1.0 {
-            let q = (1.0 - rr).max(0.0);
-            if u() < q {
-                return false;
-            }
-            st.beta /= 1.0 - q;
+    let (drawn, q) = roulette_rule(plays_roulette(scene, st.depth), st.beta, st.eta_scale);
+    if drawn {
+        if u() < q {
+            return false;
         }
+        st.beta /= 1.0 - q;
     }
     true
 }
@@ -292,7 +314,7 @@ impl ScatterSamples {
     /// The numbers of the vertex after `depth` bounces.
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let plays = depth + 1 >= scene.settings.rr_depth;
+        let plays = plays_roulette(scene, depth + 1);
         Self {
             dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
             lobe: sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
@@ -319,8 +341,7 @@ impl ScatterSamples {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE)),
             false => [0.0; N],
         };
-        let rr_depth = scene.settings.rr_depth;
-        let roulette = match depths.iter().any(|&d| d + 1 >= rr_depth) {
+        let roulette = match depths.iter().any(|&d| plays_roulette(scene, d + 1)) {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE)),
             false => [0.0; N],
         };

@@ -356,7 +356,7 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for k in 0..q.medium.len() {
         let (i, s) = (q.medium[k], q.medium[k] as usize);
         let mut st = p.state(s);
-        if st.depth == scene.settings.max_depth {
+        if path::at_max_depth(scene, st.depth) {
             q.finished.push(i);
             continue;
         }
@@ -383,19 +383,26 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     q.shade[kind as usize] = queue;
 }
 
+/// The paths of `queue` that may scatter again, in order (in the scratch list, to be handed
+/// back); those at [`path::at_max_depth`] end here.
+#[inline]
+fn below_max_depth(scene: &RenderScene, p: &Paths, q: &mut Queues, queue: &[u32]) -> Vec<u32> {
+    let mut live = std::mem::take(&mut q.scratch);
+    live.clear();
+    for &i in queue {
+        match path::at_max_depth(scene, p.depth[i as usize]) {
+            true => q.finished.push(i),
+            false => live.push(i),
+        }
+    }
+    live
+}
+
 /// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
 /// drawn at once, then BSDF sampling path by path.
 fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
-    let mut live = std::mem::take(&mut q.scratch);
-    live.clear();
-    for &i in queue {
-        if p.depth[i as usize] == scene.settings.max_depth {
-            q.finished.push(i);
-        } else {
-            live.push(i);
-        }
-    }
+    let live = below_max_depth(scene, p, q, queue);
     for chunk in live.chunks(LANES) {
         // The numbers of all lanes at once, those some lane's material reads.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
@@ -429,7 +436,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     for &i in queue {
         let s = i as usize;
         let mut st = p.state(s);
-        if st.depth == scene.settings.max_depth {
+        if path::at_max_depth(scene, st.depth) {
             q.finished.push(i);
             continue;
         }
@@ -448,19 +455,10 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 /// path's state in the reference path tracer).
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
-    let max_depth = scene.settings.max_depth;
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut lights = light_lanes::LightSampler::new(scene);
-    let mut live = std::mem::take(&mut q.scratch);
-    live.clear();
-    for &i in queue {
-        if p.depth[i as usize] == max_depth {
-            q.finished.push(i);
-        } else {
-            live.push(i);
-        }
-    }
+    let live = below_max_depth(scene, p, q, queue);
     for chunk in live.chunks(LANES) {
         // The vertex's numbers for all lanes at once.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
