@@ -184,20 +184,11 @@ pub struct VertexSamples {
 }
 
 impl VertexSamples {
-    /// The numbers of the vertex after `depth` bounces, one path at a time.
+    /// The numbers of the vertex after `depth` bounces, one path at a time
+    /// ([`Self::draw_lanes`]' numbers on one lane).
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let lights = !scene.lights.is_empty();
-        Self {
-            light_pick: path::light_choice(scene, sampler, depth),
-            light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
-            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-            roulette: if path::plays_roulette(scene, depth + 1) {
-                sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))
-            } else {
-                0.0
-            },
-        }
+        Self::draw_lanes_with::<1>(scene, &SamplerLanes::from(&[*sampler]), &[depth]).get(0)
     }
 
     /// The same numbers for `LANES` paths at once (the same bits, computed across lanes, with
@@ -214,20 +205,23 @@ impl VertexSamples {
         )
     }
 
+    /// The numbers of `N` paths' vertices after `depths` bounces, computed across lanes: the
+    /// light's choice where there are lights to choose from, its point where there are
+    /// lights, the direction, and roulette's where the lane plays it.
     #[inline(always)]
-    fn draw_lanes_with(
+    fn draw_lanes_with<const N: usize>(
         scene: &RenderScene,
-        samplers: &SamplerLanes<LANES>,
-        depths: &[u32; LANES],
-    ) -> VertexSamplesLanes {
+        samplers: &SamplerLanes<N>,
+        depths: &[u32; N],
+    ) -> VertexSamplesLanes<N> {
         let dims = |slot| Dims::vertex_lanes(depths, slot);
         let pick = if scene.lights.len() > 1 {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
         } else {
-            [0.0; LANES]
+            [0.0; N]
         };
         let light = if scene.lights.is_empty() {
-            [Vec2::ZERO; LANES]
+            [Vec2::ZERO; N]
         } else {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
@@ -237,10 +231,10 @@ impl VertexSamples {
         let rr = if plays.contains(&true) {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE))
         } else {
-            [0.0; LANES]
+            [0.0; N]
         };
         let mut out = VertexSamplesLanes { light_pick: pick, ..Default::default() };
-        for l in 0..LANES {
+        for l in 0..N {
             (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
             (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
             out.roulette[l] = if plays[l] { rr[l] } else { 0.0 };
@@ -249,21 +243,27 @@ impl VertexSamples {
     }
 }
 
-/// [`VertexSamples`] for [`LANES`] paths, one array per number: the light sampler reads its
-/// numbers as whole vectors.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct VertexSamplesLanes {
+/// [`VertexSamples`] for `N` paths ([`LANES`] unless said), one array per number: the light
+/// sampler reads its numbers as whole vectors.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexSamplesLanes<const N: usize = LANES> {
     /// Which light, per lane.
-    pub light_pick: [f32; LANES],
+    pub light_pick: [f32; N],
     /// Where on it: the two coordinates, per lane.
-    pub light: [[f32; LANES]; 2],
+    pub light: [[f32; N]; 2],
     /// The next direction: the two coordinates, per lane.
-    pub dir: [[f32; LANES]; 2],
+    pub dir: [[f32; N]; 2],
     /// Russian roulette, per lane.
-    pub roulette: [f32; LANES],
+    pub roulette: [f32; N],
 }
 
-impl VertexSamplesLanes {
+impl<const N: usize> Default for VertexSamplesLanes<N> {
+    fn default() -> Self {
+        Self { light_pick: [0.0; N], light: [[0.0; N]; 2], dir: [[0.0; N]; 2], roulette: [0.0; N] }
+    }
+}
+
+impl<const N: usize> VertexSamplesLanes<N> {
     /// Lane `l`.
     #[inline(always)]
     pub fn get(&self, l: usize) -> VertexSamples {

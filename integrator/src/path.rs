@@ -311,18 +311,14 @@ pub struct ScatterSamples {
 }
 
 impl ScatterSamples {
-    /// The numbers of the vertex after `depth` bounces.
+    /// The numbers of the vertex after `depth` bounces ([`Self::draw_lanes`] on one lane).
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let plays = plays_roulette(scene, depth + 1);
-        Self {
-            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-            lobe: sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
-            roulette: if plays { sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE)) } else { 0.0 },
-        }
+        let all = Reads { dir: true, lobe: true };
+        Self::draw_lanes(scene, &SamplerLanes::from(&[*sampler]), &[depth], all)[0]
     }
 
-    /// The same numbers for `N` paths at once (the same bits, computed across lanes): the
+    /// The numbers of `N` paths' vertices after `depths` bounces, computed across lanes: the
     /// direction's and the lobe's only where some lane's material `reads` them (the others
     /// stay zero, as no lane reads them), roulette's where some lane plays it.
     #[inline(always)]
