@@ -6,6 +6,7 @@
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
+use pathwave_engine::camera::RayLanes;
 use pathwave_engine::lighting::lights::OtherLight;
 use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
@@ -475,16 +476,38 @@ pub fn shade_glossy(
     (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf))
 }
 
-/// The first ray of sample `index` of pixel (x, y), and its random stream.
+/// The first ray of sample `index` of pixel (x, y), and its random stream ([`camera_rays`] on
+/// one lane).
 #[inline]
 pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
     let sampler = camera_sampler(scene, x, y, index);
-    let u = CameraSamples {
-        pixel: sampler.get_2d(Dims::PIXEL),
-        lens: if scene.camera.has_aperture() { sampler.get_2d(Dims::LENS) } else { glam::Vec2::ZERO },
-        time: if scene.features.motion { sampler.get_1d(Dims::TIME) } else { 0.0 },
+    (camera_rays(scene, &SamplerLanes::from(&[sampler]), &[(x, y)]).ray(0), sampler)
+}
+
+/// The camera rays of `N` samples through the pixels `pixel` with the random streams `s`, their
+/// numbers and rays computed across lanes: the lens and time numbers are drawn only where the
+/// camera has an aperture and something moves while the shutter is open (else zero).
+#[inline(always)]
+pub fn camera_rays<const N: usize>(
+    scene: &RenderScene,
+    s: &SamplerLanes<N>,
+    pixel: &[(u32, u32); N],
+) -> RayLanes<N> {
+    let u = crate::sampler::get_2d_lanes(s, &[Dims::PIXEL; N]);
+    let lens = match scene.camera.has_aperture() {
+        true => crate::sampler::get_2d_lanes(s, &[Dims::LENS; N]),
+        false => [Vec2::ZERO; N],
     };
-    (camera_ray_with(scene, x, y, &u), sampler)
+    let time = match scene.features.motion {
+        true => crate::sampler::get_1d_lanes(s, &[Dims::TIME; N]),
+        false => [0.0; N],
+    };
+    let (mut at, mut on_lens) = ([[0.0; 2]; N], [[0.0; 2]; N]);
+    for l in 0..N {
+        at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
+        on_lens[l] = [lens[l].x, lens[l].y];
+    }
+    scene.camera.generate_rays(&at, &on_lens, &time)
 }
 
 /// The random stream of sample `index` of pixel (x, y).
@@ -493,22 +516,4 @@ pub fn camera_sampler(scene: &RenderScene, x: u32, y: u32, index: u32) -> Sample
     let s = scene.settings;
     let sampler = Sampler::new(s.sampler, s.seed, y * s.width + x, index, s.spp);
     if scene.camera.has_aperture() { sampler.with_lens() } else { sampler }
-}
-
-/// The numbers a camera ray reads: the lens and time are drawn only where the camera has an
-/// aperture and something moves while the shutter is open (else zero).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CameraSamples {
-    /// Position in the pixel.
-    pub pixel: glam::Vec2,
-    /// Point on the lens.
-    pub lens: glam::Vec2,
-    /// Time in the shutter interval.
-    pub time: f32,
-}
-
-/// The camera ray through pixel (x, y) with the numbers `u`.
-#[inline]
-pub fn camera_ray_with(scene: &RenderScene, x: u32, y: u32, u: &CameraSamples) -> Ray {
-    scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + u.pixel, u.lens, u.time)
 }

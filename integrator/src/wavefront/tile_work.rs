@@ -8,7 +8,7 @@ use crate::aov::Guide;
 use crate::film::{PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
-use crate::sampler::{self, Dims, Sampler, SamplerLanes};
+use crate::sampler::{Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
@@ -197,28 +197,11 @@ impl<'a> TileWork<'a> {
     }
 }
 
-/// [`path::camera_ray`] for `LANES` samples at once, their numbers and rays computed across
-/// lanes (the same bits).
+/// [`path::camera_rays`] for `LANES` samples, with AVX-512 where the CPU has it.
 #[inline]
 fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> RayLanes<LANES> {
     pathwave_engine::simd::lanes(
         #[inline(always)]
-        || {
-            let u = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
-            let lens = match scene.camera.has_aperture() {
-                true => sampler::get_2d_lanes(s, &[Dims::LENS; LANES]),
-                false => [glam::Vec2::ZERO; LANES],
-            };
-            let time = match scene.features.motion {
-                true => sampler::get_1d_lanes(s, &[Dims::TIME; LANES]),
-                false => [0.0; LANES],
-            };
-            let (mut at, mut on_lens) = ([[0.0; 2]; LANES], [[0.0; 2]; LANES]);
-            for l in 0..LANES {
-                at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
-                on_lens[l] = [lens[l].x, lens[l].y];
-            }
-            scene.camera.generate_rays(&at, &on_lens, &time)
-        },
+        || path::camera_rays(scene, s, pixel),
     )
 }
