@@ -387,39 +387,16 @@ pub fn apply(
         ray: Ray { origin: o.so.into(), dir: o.sd.into(), time },
         contribution: o.contribution,
     });
-    let PathState { beta, delta, prev_pdf, prev_p, depth, .. } = st;
-    (shadow, go_on(i.p, i.depth_after, o, Bounce { beta, delta, prev_pdf, prev_p, depth }, time))
-}
-
-/// The parts of a path's state that a vertex which scatters sets, wherever the path is kept (a
-/// [`PathState`], or the wavefront's arrays: only these are written back there).
-pub struct Bounce<'a> {
-    /// Throughput.
-    pub beta: &'a mut Vec3,
-    /// The last scattering was a delta lobe.
-    pub delta: &'a mut bool,
-    /// BSDF pdf of the last scattering.
-    pub prev_pdf: &'a mut f32,
-    /// Last scattering point.
-    pub prev_p: &'a mut Vec3A,
-    /// Bounces so far.
-    pub depth: &'a mut u32,
-}
-
-/// The path after a vertex at `p` that makes its bounce number `depth_after`: where the kernel
-/// sampled a direction, the state `st` takes its throughput and density; returns the next ray
-/// (`None` when the path ends). [`apply`] and the wavefront's Lambertian loop both call it.
-#[inline(always)]
-pub fn go_on(p: Vec3, depth_after: u32, o: &LambertOut, st: Bounce, time: f32) -> Option<Ray> {
-    if !(o.pdf > 0.0) {
-        return None;
+    if o.pdf <= 0.0 {
+        return (shadow, None);
     }
-    *st.beta = o.beta;
-    *st.delta = false;
-    *st.prev_pdf = o.pdf;
-    *st.prev_p = p.into();
-    *st.depth = depth_after;
-    o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time })
+    st.beta = o.beta;
+    st.delta = false;
+    st.prev_pdf = o.pdf;
+    st.prev_p = i.p.into();
+    st.depth = i.depth_after;
+    let next = o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time });
+    (shadow, next)
 }
 
 /// Lanes processed together by [`lambert_lanes`], the light samples and the sample numbers:

@@ -450,9 +450,9 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 }
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
-/// the branch-free kernel runs on all lanes at once (vectorised), and outputs go to the shadow
-/// queue across lanes and to each path by [`lambert_vertex::go_on`] (as in the reference path
-/// tracer's [`lambert_vertex::apply`]).
+/// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
+/// straight to the paths' arrays and the queues (what [`lambert_vertex::apply`] does to one
+/// path's state in the reference path tracer).
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
     let mut ins = LambertInLanes::default();
@@ -484,18 +484,26 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             n += outs.shadow[l] as usize;
         }
         q.shadow.extend_lanes(&pick[..n], chunk, &times, &outs.so, &outs.sd, &outs.contribution);
+        let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let at = glam::Vec3::new(ins.p[0][l], ins.p[1][l], ins.p[2][l]);
-            let st = lambert_vertex::Bounce {
-                beta: &mut p.beta[s],
-                delta: &mut p.delta[s],
-                prev_pdf: &mut p.prev_pdf[s],
-                prev_p: &mut p.prev_p[s],
-                depth: &mut p.depth[s],
-            };
-            let next = lambert_vertex::go_on(at, ins.depth_after[l], &outs.get(l), st, times[l]);
-            route(p, q, i, None, next);
+            let pdf = outs.pdf[l];
+            if pdf > 0.0 {
+                p.beta[s] = v3(&outs.beta, l);
+                p.delta[s] = false;
+                p.prev_pdf[s] = pdf;
+                p.prev_p[s] = v3(&ins.p, l).into();
+                p.depth[s] = ins.depth_after[l];
+            }
+            if pdf > 0.0 && outs.alive[l] {
+                p.set_ray(
+                    s,
+                    Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },
+                );
+                q.next.push(i);
+            } else {
+                q.finished.push(i);
+            }
         }
     }
     q.scratch = live;
