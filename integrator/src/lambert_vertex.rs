@@ -406,7 +406,9 @@ pub fn apply(
 pub const LANES: usize = 16;
 
 /// A structure of `[_; LANES]` arrays mirroring a struct, with per-lane get and set: kernel
-/// loops over such locals vectorise (contiguous, and no aliasing to prove).
+/// loops over such locals vectorise (contiguous, and no aliasing to prove). Field kinds: `v3`
+/// (a `Vec3`), `f2` and `f3` (`[f32; 2]`, `[f32; 3]`), `[f3; N]` (`[[f32; 3]; N]`), `(lanes L)` (a
+/// struct that has the lanes struct `L`), or a plain type.
 macro_rules! lanes {
     ($vis:vis $lanes:ident for $t:ident { $($f:ident : $kind:tt),* $(,)? }) => {
         #[doc = concat!("`", stringify!($t), "` for [`LANES`] lanes, one array per component.")]
@@ -425,12 +427,33 @@ macro_rules! lanes {
     };
     (@ty v3) => { [[f32; LANES]; 3] };
     (@ty f2) => { [[f32; LANES]; 2] };
+    (@ty f3) => { [[f32; LANES]; 3] };
+    (@ty [f3; $n:literal]) => { [[[f32; LANES]; 3]; $n] };
+    (@ty (lanes $l:ident)) => { $l };
     (@ty $k:ty) => { [$k; LANES] };
     (@get $a:expr, $l:expr, v3) => { Vec3::new($a[0][$l], $a[1][$l], $a[2][$l]) };
     (@get $a:expr, $l:expr, f2) => { [$a[0][$l], $a[1][$l]] };
+    (@get $a:expr, $l:expr, f3) => { [$a[0][$l], $a[1][$l], $a[2][$l]] };
+    (@get $a:expr, $l:expr, [f3; $n:literal]) => {{
+        let mut m = [[0.0; 3]; $n];
+        for c in 0..$n {
+            m[c] = [$a[c][0][$l], $a[c][1][$l], $a[c][2][$l]];
+        }
+        m
+    }};
+    (@get $a:expr, $l:expr, (lanes $k:ident)) => { $a.get($l) };
     (@get $a:expr, $l:expr, $k:ty) => { $a[$l] };
     (@set $a:expr, $l:expr, $v:expr, v3) => { $a[0][$l] = $v.x; $a[1][$l] = $v.y; $a[2][$l] = $v.z; };
     (@set $a:expr, $l:expr, $v:expr, f2) => { $a[0][$l] = $v[0]; $a[1][$l] = $v[1]; };
+    (@set $a:expr, $l:expr, $v:expr, f3) => { $a[0][$l] = $v[0]; $a[1][$l] = $v[1]; $a[2][$l] = $v[2]; };
+    (@set $a:expr, $l:expr, $v:expr, [f3; $n:literal]) => {
+        for c in 0..$n {
+            $a[c][0][$l] = $v[c][0];
+            $a[c][1][$l] = $v[c][1];
+            $a[c][2][$l] = $v[c][2];
+        }
+    };
+    (@set $a:expr, $l:expr, $v:expr, (lanes $k:ident)) => { $a.set($l, &$v) };
     (@set $a:expr, $l:expr, $v:expr, $k:ty) => { $a[$l] = $v; };
 }
 
