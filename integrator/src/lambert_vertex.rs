@@ -387,16 +387,44 @@ pub fn apply(
         ray: Ray { origin: o.so.into(), dir: o.sd.into(), time },
         contribution: o.contribution,
     });
-    if o.pdf <= 0.0 {
+    let PathState { beta, delta, prev_pdf, prev_p, depth, .. } = st;
+    if !scattered(i.p, i.depth_after, o, Bounce { beta, delta, prev_pdf, prev_p, depth }) {
         return (shadow, None);
     }
-    st.beta = o.beta;
-    st.delta = false;
-    st.prev_pdf = o.pdf;
-    st.prev_p = i.p.into();
-    st.depth = i.depth_after;
     let next = o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time });
     (shadow, next)
+}
+
+/// The parts of a path's state that a vertex which scatters sets, wherever the path is kept (a
+/// [`PathState`], or the wavefront's arrays: only these are written back there).
+pub struct Bounce<'a> {
+    /// Throughput.
+    pub beta: &'a mut Vec3,
+    /// The last scattering was a delta lobe.
+    pub delta: &'a mut bool,
+    /// BSDF pdf of the last scattering.
+    pub prev_pdf: &'a mut f32,
+    /// Last scattering point.
+    pub prev_p: &'a mut Vec3A,
+    /// Bounces so far.
+    pub depth: &'a mut u32,
+}
+
+/// The path's state after a vertex at `p` that makes its bounce number `depth_after`: where
+/// the kernel sampled a direction (then true), `st` takes its throughput and density; else
+/// (false) the path ends as it was. [`apply`] and the wavefront's Lambertian loop both call it;
+/// each sends the next ray (`o.alive`) its own way.
+#[inline(always)]
+pub fn scattered(p: Vec3, depth_after: u32, o: &LambertOut, st: Bounce) -> bool {
+    if !(o.pdf > 0.0) {
+        return false;
+    }
+    *st.beta = o.beta;
+    *st.delta = false;
+    *st.prev_pdf = o.pdf;
+    *st.prev_p = p.into();
+    *st.depth = depth_after;
+    true
 }
 
 /// Lanes processed together by [`lambert_lanes`], the light samples and the sample numbers:

@@ -451,8 +451,8 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
 /// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
-/// straight to the paths' arrays and the queues (what [`lambert_vertex::apply`] does to one
-/// path's state in the reference path tracer).
+/// straight to the paths' arrays ([`lambert_vertex::scattered`], as the reference path
+/// tracer's [`lambert_vertex::apply`] does) and the queues.
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
     let mut ins = LambertInLanes::default();
@@ -487,15 +487,15 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let pdf = outs.pdf[l];
-            if pdf > 0.0 {
-                p.beta[s] = v3(&outs.beta, l);
-                p.delta[s] = false;
-                p.prev_pdf[s] = pdf;
-                p.prev_p[s] = v3(&ins.p, l).into();
-                p.depth[s] = ins.depth_after[l];
-            }
-            if pdf > 0.0 && outs.alive[l] {
+            let st = lambert_vertex::Bounce {
+                beta: &mut p.beta[s],
+                delta: &mut p.delta[s],
+                prev_pdf: &mut p.prev_pdf[s],
+                prev_p: &mut p.prev_p[s],
+                depth: &mut p.depth[s],
+            };
+            let o = outs.get(l);
+            if lambert_vertex::scattered(v3(&ins.p, l), ins.depth_after[l], &o, st) && o.alive {
                 p.set_ray(
                     s,
                     Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },
