@@ -154,9 +154,7 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
     // Russian roulette.
     let beta = i.beta * i.albedo;
-    let rr = (beta * i.eta_scale).max_element();
-    let rr_drawn = i.rr_on && rr < 1.0;
-    let q = (1.0 - rr).max(0.0);
+    let (rr_drawn, q) = path::roulette_rule(i.rr_on, beta, i.eta_scale);
     let survive = !(rr_drawn && i.u_rr < q);
     let beta = if rr_drawn { beta / (1.0 - q) } else { beta };
     LambertOut {
@@ -186,20 +184,11 @@ pub struct VertexSamples {
 }
 
 impl VertexSamples {
-    /// The numbers of the vertex after `depth` bounces, one path at a time.
+    /// The numbers of the vertex after `depth` bounces, one path at a time
+    /// ([`Self::draw_lanes`]' numbers on one lane).
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let lights = !scene.lights.is_empty();
-        Self {
-            light_pick: path::light_choice(scene, sampler, depth),
-            light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
-            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-            roulette: if depth + 1 >= scene.settings.rr_depth {
-                sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE))
-            } else {
-                0.0
-            },
-        }
+        Self::draw_lanes_with::<1>(scene, &SamplerLanes::from(&[*sampler]), &[depth]).get(0)
     }
 
     /// The same numbers for `LANES` paths at once (the same bits, computed across lanes, with
@@ -216,56 +205,65 @@ impl VertexSamples {
         )
     }
 
+    /// The numbers of `N` paths' vertices after `depths` bounces, computed across lanes: the
+    /// light's choice where there are lights to choose from, its point where there are
+    /// lights, the direction, and roulette's where the lane plays it.
     #[inline(always)]
-    fn draw_lanes_with(
+    fn draw_lanes_with<const N: usize>(
         scene: &RenderScene,
-        samplers: &SamplerLanes<LANES>,
-        depths: &[u32; LANES],
-    ) -> VertexSamplesLanes {
+        samplers: &SamplerLanes<N>,
+        depths: &[u32; N],
+    ) -> VertexSamplesLanes<N> {
         let dims = |slot| Dims::vertex_lanes(depths, slot);
         let pick = if scene.lights.len() > 1 {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK))
         } else {
-            [0.0; LANES]
+            [0.0; N]
         };
         let light = if scene.lights.is_empty() {
-            [Vec2::ZERO; LANES]
+            [Vec2::ZERO; N]
         } else {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
-        let rr_depth = scene.settings.rr_depth;
         // Roulette's number only where some lane plays it.
-        let rr = if depths.iter().any(|&d| d + 1 >= rr_depth) {
+        let plays = depths.map(|d| path::plays_roulette(scene, d + 1));
+        let rr = if plays.contains(&true) {
             crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE))
         } else {
-            [0.0; LANES]
+            [0.0; N]
         };
         let mut out = VertexSamplesLanes { light_pick: pick, ..Default::default() };
-        for l in 0..LANES {
+        for l in 0..N {
             (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
             (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
-            out.roulette[l] = if depths[l] + 1 >= rr_depth { rr[l] } else { 0.0 };
+            out.roulette[l] = if plays[l] { rr[l] } else { 0.0 };
         }
         out
     }
 }
 
-/// [`VertexSamples`] for [`LANES`] paths, one array per number: the light sampler reads its
-/// numbers as whole vectors.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct VertexSamplesLanes {
+/// [`VertexSamples`] for `N` paths ([`LANES`] unless said), one array per number: the light
+/// sampler reads its numbers as whole vectors.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexSamplesLanes<const N: usize = LANES> {
     /// Which light, per lane.
-    pub light_pick: [f32; LANES],
+    pub light_pick: [f32; N],
     /// Where on it: the two coordinates, per lane.
-    pub light: [[f32; LANES]; 2],
+    pub light: [[f32; N]; 2],
     /// The next direction: the two coordinates, per lane.
-    pub dir: [[f32; LANES]; 2],
+    pub dir: [[f32; N]; 2],
     /// Russian roulette, per lane.
-    pub roulette: [f32; LANES],
+    pub roulette: [f32; N],
 }
 
-impl VertexSamplesLanes {
+impl<const N: usize> Default for VertexSamplesLanes<N> {
+    fn default() -> Self {
+        Self { light_pick: [0.0; N], light: [[0.0; N]; 2], dir: [[0.0; N]; 2], roulette: [0.0; N] }
+    }
+}
+
+impl<const N: usize> VertexSamplesLanes<N> {
     /// Lane `l`.
     #[inline(always)]
     pub fn get(&self, l: usize) -> VertexSamples {
@@ -328,7 +326,7 @@ pub fn gather_surface(
 ) -> LambertIn {
     let mut i = surface_inputs(st, sp, wo, albedo);
     i.u_dir = [u.dir.x, u.dir.y];
-    i.rr_on = rr_on(scene, i.depth_after);
+    i.rr_on = path::plays_roulette(scene, i.depth_after);
     i.u_rr = u.roulette;
     i
 }
@@ -351,12 +349,6 @@ fn surface_inputs(st: PathIn, sp: &SurfacePoint, wo: Vec3A, albedo: Vec3) -> Lam
     }
 }
 
-/// Whether Russian roulette applies after a vertex that leaves `depth_after` bounces.
-#[inline(always)]
-fn rr_on(scene: &RenderScene, depth_after: u32) -> bool {
-    depth_after >= scene.settings.rr_depth
-}
-
 impl LambertInLanes {
     /// Sets lane `l`'s inputs from the surface and the path, as [`gather_surface`] does; the
     /// numbers are set for all lanes at once ([`Self::set_numbers`]), the light sample by
@@ -377,7 +369,7 @@ impl LambertInLanes {
     pub fn set_numbers(&mut self, scene: &RenderScene, u: &VertexSamplesLanes) {
         (self.u_dir, self.u_rr) = (u.dir, u.roulette);
         for l in 0..LANES {
-            self.rr_on[l] = rr_on(scene, self.depth_after[l]);
+            self.rr_on[l] = path::plays_roulette(scene, self.depth_after[l]);
         }
     }
 }
@@ -395,16 +387,44 @@ pub fn apply(
         ray: Ray { origin: o.so.into(), dir: o.sd.into(), time },
         contribution: o.contribution,
     });
-    if o.pdf <= 0.0 {
+    let PathState { beta, delta, prev_pdf, prev_p, depth, .. } = st;
+    if !scattered(i.p, i.depth_after, o, Bounce { beta, delta, prev_pdf, prev_p, depth }) {
         return (shadow, None);
     }
-    st.beta = o.beta;
-    st.delta = false;
-    st.prev_pdf = o.pdf;
-    st.prev_p = i.p.into();
-    st.depth = i.depth_after;
     let next = o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time });
     (shadow, next)
+}
+
+/// The parts of a path's state that a vertex which scatters sets, wherever the path is kept (a
+/// [`PathState`], or the wavefront's arrays: only these are written back there).
+pub struct Bounce<'a> {
+    /// Throughput.
+    pub beta: &'a mut Vec3,
+    /// The last scattering was a delta lobe.
+    pub delta: &'a mut bool,
+    /// BSDF pdf of the last scattering.
+    pub prev_pdf: &'a mut f32,
+    /// Last scattering point.
+    pub prev_p: &'a mut Vec3A,
+    /// Bounces so far.
+    pub depth: &'a mut u32,
+}
+
+/// The path's state after a vertex at `p` that makes its bounce number `depth_after`: where
+/// the kernel sampled a direction (then true), `st` takes its throughput and density; else
+/// (false) the path ends as it was. [`apply`] and the wavefront's Lambertian loop both call it;
+/// each sends the next ray (`o.alive`) its own way.
+#[inline(always)]
+pub fn scattered(p: Vec3, depth_after: u32, o: &LambertOut, st: Bounce) -> bool {
+    if !(o.pdf > 0.0) {
+        return false;
+    }
+    *st.beta = o.beta;
+    *st.delta = false;
+    *st.prev_pdf = o.pdf;
+    *st.prev_p = p.into();
+    *st.depth = depth_after;
+    true
 }
 
 /// Lanes processed together by [`lambert_lanes`], the light samples and the sample numbers:
@@ -414,7 +434,9 @@ pub fn apply(
 pub const LANES: usize = 16;
 
 /// A structure of `[_; LANES]` arrays mirroring a struct, with per-lane get and set: kernel
-/// loops over such locals vectorise (contiguous, and no aliasing to prove).
+/// loops over such locals vectorise (contiguous, and no aliasing to prove). Field kinds: `v3`
+/// (a `Vec3`), `f2` and `f3` (`[f32; 2]`, `[f32; 3]`), `[f3; N]` (`[[f32; 3]; N]`), `(lanes L)` (a
+/// struct that has the lanes struct `L`), or a plain type.
 macro_rules! lanes {
     ($vis:vis $lanes:ident for $t:ident { $($f:ident : $kind:tt),* $(,)? }) => {
         #[doc = concat!("`", stringify!($t), "` for [`LANES`] lanes, one array per component.")]
@@ -433,12 +455,33 @@ macro_rules! lanes {
     };
     (@ty v3) => { [[f32; LANES]; 3] };
     (@ty f2) => { [[f32; LANES]; 2] };
+    (@ty f3) => { [[f32; LANES]; 3] };
+    (@ty [f3; $n:literal]) => { [[[f32; LANES]; 3]; $n] };
+    (@ty (lanes $l:ident)) => { $l };
     (@ty $k:ty) => { [$k; LANES] };
     (@get $a:expr, $l:expr, v3) => { Vec3::new($a[0][$l], $a[1][$l], $a[2][$l]) };
     (@get $a:expr, $l:expr, f2) => { [$a[0][$l], $a[1][$l]] };
+    (@get $a:expr, $l:expr, f3) => { [$a[0][$l], $a[1][$l], $a[2][$l]] };
+    (@get $a:expr, $l:expr, [f3; $n:literal]) => {{
+        let mut m = [[0.0; 3]; $n];
+        for c in 0..$n {
+            m[c] = [$a[c][0][$l], $a[c][1][$l], $a[c][2][$l]];
+        }
+        m
+    }};
+    (@get $a:expr, $l:expr, (lanes $k:ident)) => { $a.get($l) };
     (@get $a:expr, $l:expr, $k:ty) => { $a[$l] };
     (@set $a:expr, $l:expr, $v:expr, v3) => { $a[0][$l] = $v.x; $a[1][$l] = $v.y; $a[2][$l] = $v.z; };
     (@set $a:expr, $l:expr, $v:expr, f2) => { $a[0][$l] = $v[0]; $a[1][$l] = $v[1]; };
+    (@set $a:expr, $l:expr, $v:expr, f3) => { $a[0][$l] = $v[0]; $a[1][$l] = $v[1]; $a[2][$l] = $v[2]; };
+    (@set $a:expr, $l:expr, $v:expr, [f3; $n:literal]) => {
+        for c in 0..$n {
+            $a[c][0][$l] = $v[c][0];
+            $a[c][1][$l] = $v[c][1];
+            $a[c][2][$l] = $v[c][2];
+        }
+    };
+    (@set $a:expr, $l:expr, $v:expr, (lanes $k:ident)) => { $a.set($l, &$v) };
     (@set $a:expr, $l:expr, $v:expr, $k:ty) => { $a[$l] = $v; };
 }
 

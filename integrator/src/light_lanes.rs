@@ -61,7 +61,7 @@ impl<'a> LightSampler<'a> {
         };
         if let Some([PlainLight::Quad(one)]) = plain {
             let pmf = scene.lights.pick(0.0).1;
-            (0..LANES).for_each(|l| me.ins.set(l, &QuadIn::new(one, pmf)));
+            (0..LANES).for_each(|l| me.ins.hold(l, one, pmf));
         }
         me
     }
@@ -113,19 +113,19 @@ impl<'a> LightSampler<'a> {
                 kind[l] = match &plain[light] {
                     PlainLight::Quad(q) => {
                         if std::mem::replace(&mut self.held[0][l], id) != id {
-                            self.ins.set(l, &QuadIn::new(q, pmf));
+                            self.ins.hold(l, q, pmf);
                         }
                         Kind::Quad
                     }
                     PlainLight::Sphere(s) => {
                         if std::mem::replace(&mut self.held[1][l], id) != id {
-                            self.sphere_ins.set(l, &SphereIn::new(s, pmf));
+                            self.sphere_ins.hold(l, s, pmf);
                         }
                         Kind::Sphere
                     }
                     PlainLight::Ellipsoid(e) => {
                         if std::mem::replace(&mut self.held[2][l], id) != id {
-                            self.ellipsoid_ins.set(l, &EllipsoidIn::new(e, pmf));
+                            self.ellipsoid_ins.hold(l, e, pmf);
                         }
                         Kind::Ellipsoid
                     }
@@ -156,6 +156,23 @@ impl<'a> LightSampler<'a> {
         }
     }
 }
+
+/// Holds a light and its pick probability in a lane of a kernel's inputs (the engine's light
+/// as it is, one array per field).
+macro_rules! hold {
+    ($($lanes:ident: $light:ident),*) => {$(
+        impl $lanes {
+            /// Lane `l` takes `light`, picked with probability `pmf`.
+            #[inline]
+            fn hold(&mut self, l: usize, light: &$light, pmf: f32) {
+                self.light.set(l, light);
+                self.pmf[l] = pmf;
+            }
+        }
+    )*};
+}
+
+hold!(QuadInLanes: QuadLight, SphereInLanes: SphereLight, EllipsoidInLanes: EllipsoidLight);
 
 /// The kind of light a lane picked, and so the kernel that samples it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -242,22 +259,11 @@ fn sky_lanes(
     )
 }
 
-/// What [`quad_by_area`] reads: the lane's light (see
-/// [`QuadLight`](pathwave_engine::shape::QuadLight)), its pick probability, the shading point
-/// and the two numbers.
-#[derive(Clone, Copy, Debug, Default)]
+/// What [`quad_by_area`] reads: the lane's light, its pick probability, the shading point and
+/// the two numbers.
+#[derive(Clone, Copy, Debug)]
 struct QuadIn {
-    q: Vec3,
-    u: Vec3,
-    v: Vec3,
-    n: Vec3,
-    center: Vec3,
-    area: f32,
-    inv_area: f32,
-    err: f32,
-    rect: bool,
-    emit: Vec3,
-    two_sided: bool,
+    light: QuadLight,
     pmf: f32,
     from: Vec3,
     uv: [f32; 2],
@@ -275,31 +281,12 @@ struct LightOut {
     scalar: bool,
 }
 
-impl QuadIn {
-    /// Light `q`, picked with probability `pmf`; the point and numbers left at zero.
-    fn new(q: &QuadLight, pmf: f32) -> Self {
-        Self {
-            q: q.q.into(),
-            u: q.u.into(),
-            v: q.v.into(),
-            n: q.n.into(),
-            center: q.center.into(),
-            area: q.area,
-            inv_area: q.inv_area,
-            err: q.err,
-            rect: q.rect,
-            emit: q.emit.into(),
-            two_sided: q.two_sided,
-            pmf,
-            ..Default::default()
-        }
-    }
-}
-
-lanes!(QuadInLanes for QuadIn {
-    q: v3, u: v3, v: v3, n: v3, center: v3, area: f32, inv_area: f32, err: f32, rect: bool,
-    emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
+lanes!(QuadLightLanes for QuadLight {
+    q: f3, u: f3, v: f3, n: f3, center: f3, area: f32, inv_area: f32, err: f32, rect: bool, emit: f3,
+    two_sided: bool,
 });
+
+lanes!(QuadInLanes for QuadIn { light: (lanes QuadLightLanes), pmf: f32, from: v3, uv: f2 });
 
 lanes!(LightOutLanes for LightOut { wi: v3, le: v3, pdf: f32, target: v3, scalar: bool });
 
@@ -320,60 +307,42 @@ fn quads_by_area_lanes(i: &QuadInLanes, o: &mut LightOutLanes) {
 /// do, and what `path::pick_light` derives from it, branch-free.
 #[inline(always)]
 fn quad_by_area(i: &QuadIn) -> LightOut {
-    let from = i.from;
+    let (from, light) = (i.from, &i.light);
+    let (q, u, v, n) = (Vec3::from(light.q), Vec3::from(light.u), Vec3::from(light.v), Vec3::from(light.n));
+    let (center, emit) = (Vec3::from(light.center), Vec3::from(light.emit));
     // `Quad::spherical`'s bound, from the quad's centre.
-    let c = Vec3::new(i.center.x - from.x, i.center.y - from.y, i.center.z - from.z);
+    let c = Vec3::new(center.x - from.x, center.y - from.y, center.z - from.z);
     let d2 = dot(c, c);
-    let spherical = i.rect && !(i.area * dot(i.n, c).abs() < SPHERICAL_MIN_ESTIMATE * d2 * d2.sqrt());
+    let spherical = light.rect && !(light.area * dot(n, c).abs() < SPHERICAL_MIN_ESTIMATE * d2 * d2.sqrt());
     // The point (`+ 0.0`: the light's zero motion offset that `LightTable::sample` adds) and
     // its density by area, in solid angle.
     let [a, b] = i.uv;
     let lp = Vec3::new(
-        i.q.x + a * i.u.x + b * i.v.x + 0.0,
-        i.q.y + a * i.u.y + b * i.v.y + 0.0,
-        i.q.z + a * i.u.z + b * i.v.z + 0.0,
+        q.x + a * u.x + b * v.x + 0.0,
+        q.y + a * u.y + b * v.y + 0.0,
+        q.z + a * u.z + b * v.z + 0.0,
     );
     let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
     let dist2 = dot(d, d);
     let dist = dist2.sqrt();
-    let cos = (dot(i.n, d) / dist).abs();
-    let pdf_area = if cos <= 0.0 { 0.0 } else { i.inv_area * dist2 / cos };
-    light_out(lp, i.n, pdf_area, i.err, i.emit, i.two_sided, i.pmf, from, spherical)
+    let cos = (dot(n, d) / dist).abs();
+    let pdf_area = if cos <= 0.0 { 0.0 } else { light.inv_area * dist2 / cos };
+    light_out(lp, n, pdf_area, light.err, emit, light.two_sided, i.pmf, from, spherical)
 }
 
-/// What [`sphere_by_cone`] reads: the lane's light (see
-/// [`SphereLight`](pathwave_engine::shape::SphereLight)), its pick probability, the shading
-/// point and the two numbers.
-#[derive(Clone, Copy, Debug, Default)]
+/// What [`sphere_by_cone`] reads: the lane's light, its pick probability, the shading point
+/// and the two numbers.
+#[derive(Clone, Copy, Debug)]
 struct SphereIn {
-    center: Vec3,
-    radius: f32,
-    err: f32,
-    emit: Vec3,
-    two_sided: bool,
+    light: SphereLight,
     pmf: f32,
     from: Vec3,
     uv: [f32; 2],
 }
 
-impl SphereIn {
-    /// Light `s`, picked with probability `pmf`; the point and numbers left at zero.
-    fn new(s: &SphereLight, pmf: f32) -> Self {
-        Self {
-            center: s.center.into(),
-            radius: s.radius,
-            err: s.err,
-            emit: s.emit.into(),
-            two_sided: s.two_sided,
-            pmf,
-            ..Default::default()
-        }
-    }
-}
+lanes!(SphereLightLanes for SphereLight { center: f3, radius: f32, err: f32, emit: f3, two_sided: bool });
 
-lanes!(SphereInLanes for SphereIn {
-    center: v3, radius: f32, err: f32, emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
-});
+lanes!(SphereInLanes for SphereIn { light: (lanes SphereLightLanes), pmf: f32, from: v3, uv: f2 });
 
 /// [`sphere_by_cone`] on all lanes.
 #[inline(never)]
@@ -392,16 +361,17 @@ fn spheres_by_cone_lanes(i: &SphereInLanes, o: &mut LightOutLanes) {
 /// `LightTable::sample` do, and what `path::pick_light` derives from it, branch-free.
 #[inline(always)]
 fn sphere_by_cone(i: &SphereIn) -> LightOut {
-    let from = i.from;
-    let (n, pdf_cone, inside) = cone_sample(i.center.to_array(), i.radius, from.to_array(), i.uv);
+    let (from, light) = (i.from, &i.light);
+    let (center, radius) = (Vec3::from(light.center), light.radius);
+    let (n, pdf_cone, inside) = cone_sample(light.center, radius, from.to_array(), i.uv);
     let n = Vec3::from(n);
     // The point (`+ 0.0`: the light's zero motion offset that `LightTable::sample` adds).
     let lp = Vec3::new(
-        i.center.x + i.radius * n.x + 0.0,
-        i.center.y + i.radius * n.y + 0.0,
-        i.center.z + i.radius * n.z + 0.0,
+        center.x + radius * n.x + 0.0,
+        center.y + radius * n.y + 0.0,
+        center.z + radius * n.z + 0.0,
     );
-    light_out(lp, n, pdf_cone, i.err, i.emit, i.two_sided, i.pmf, from, inside)
+    light_out(lp, n, pdf_cone, light.err, light.emit.into(), light.two_sided, i.pmf, from, inside)
 }
 
 /// What `path::pick_light` derives from a light sample (`lp`, unit normal `n`, density
@@ -442,62 +412,22 @@ fn light_out(
     }
 }
 
-/// What [`ellipsoid_by_area`] reads: the lane's light (see
-/// [`EllipsoidLight`](pathwave_engine::shape::EllipsoidLight)), its pick probability, the
-/// shading point and the two numbers.
-#[derive(Clone, Copy, Debug, Default)]
+/// What [`ellipsoid_by_area`] reads: the lane's light, its pick probability, the shading point
+/// and the two numbers.
+#[derive(Clone, Copy, Debug)]
 struct EllipsoidIn {
-    center: Vec3,
-    radius: f32,
-    w0: Vec3,
-    w1: Vec3,
-    w2: Vec3,
-    w3: Vec3,
-    n0: Vec3,
-    n1: Vec3,
-    n2: Vec3,
-    det: f32,
-    scale: f32,
-    shift: f32,
-    sphere_err: f32,
-    emit: Vec3,
-    two_sided: bool,
+    light: EllipsoidLight,
     pmf: f32,
     from: Vec3,
     uv: [f32; 2],
 }
 
-impl EllipsoidIn {
-    /// Light `e`, picked with probability `pmf`; the point and numbers left at zero.
-    fn new(e: &EllipsoidLight, pmf: f32) -> Self {
-        let [w0, w1, w2, w3] = e.world.map(Vec3::from);
-        let [n0, n1, n2] = e.normal.map(Vec3::from);
-        Self {
-            center: e.center.into(),
-            radius: e.radius,
-            w0,
-            w1,
-            w2,
-            w3,
-            n0,
-            n1,
-            n2,
-            det: e.det,
-            scale: e.scale,
-            shift: e.shift,
-            sphere_err: e.sphere_err,
-            emit: e.emit.into(),
-            two_sided: e.two_sided,
-            pmf,
-            ..Default::default()
-        }
-    }
-}
-
-lanes!(EllipsoidInLanes for EllipsoidIn {
-    center: v3, radius: f32, w0: v3, w1: v3, w2: v3, w3: v3, n0: v3, n1: v3, n2: v3, det: f32,
-    scale: f32, shift: f32, sphere_err: f32, emit: v3, two_sided: bool, pmf: f32, from: v3, uv: f2,
+lanes!(EllipsoidLightLanes for EllipsoidLight {
+    center: f3, radius: f32, world: [f3; 4], normal: [f3; 3], det: f32, scale: f32, shift: f32,
+    sphere_err: f32, emit: f3, two_sided: bool,
 });
+
+lanes!(EllipsoidInLanes for EllipsoidIn { light: (lanes EllipsoidLightLanes), pmf: f32, from: v3, uv: f2 });
 
 /// [`ellipsoid_by_area`] on all lanes.
 #[inline(never)]
@@ -517,22 +447,11 @@ fn ellipsoids_by_area_lanes(i: &EllipsoidInLanes, o: &mut LightOutLanes) {
 /// `path::pick_light` derives from it, branch-free.
 #[inline(always)]
 fn ellipsoid_by_area(i: &EllipsoidIn) -> LightOut {
-    let light = EllipsoidLight {
-        center: i.center.to_array(),
-        radius: i.radius,
-        world: [i.w0, i.w1, i.w2, i.w3].map(|c| c.to_array()),
-        normal: [i.n0, i.n1, i.n2].map(|c| c.to_array()),
-        det: i.det,
-        scale: i.scale,
-        shift: i.shift,
-        sphere_err: i.sphere_err,
-        emit: [0.0; 3],
-        two_sided: false,
-    };
-    let (p, n, pdf, err) = ellipsoid_sample(&light, i.from.to_array(), i.uv);
+    let light = &i.light;
+    let (p, n, pdf, err) = ellipsoid_sample(light, i.from.to_array(), i.uv);
     // `+ 0.0`: the light's zero motion offset that `LightTable::sample` adds.
     let lp = Vec3::new(p[0] + 0.0, p[1] + 0.0, p[2] + 0.0);
-    light_out(lp, n.into(), pdf, err, i.emit, i.two_sided, i.pmf, i.from, false)
+    light_out(lp, n.into(), pdf, err, light.emit.into(), light.two_sided, i.pmf, i.from, false)
 }
 
 #[cfg(test)]

@@ -74,7 +74,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
                     tmax,
                     sampler.get_1d(path::medium_dim(st.depth)),
                 ) {
-                    if st.depth == scene.settings.max_depth {
+                    if path::at_max_depth(scene, st.depth) {
                         break 'path;
                     }
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
@@ -90,7 +90,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
                 path::emit(scene, &mut st, &hit, mat, wo, ray.time);
                 break 'path;
             }
-            if st.depth == scene.settings.max_depth {
+            if path::at_max_depth(scene, st.depth) {
                 break 'path;
             }
             match mat.shading() {

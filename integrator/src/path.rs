@@ -6,6 +6,7 @@
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
+use pathwave_engine::camera::RayLanes;
 use pathwave_engine::lighting::lights::OtherLight;
 use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
@@ -259,19 +260,41 @@ pub fn scatter_in_medium(
     (shadow, next)
 }
 
-/// Russian roulette after `rr_depth` bounces with the number `u()` (drawn only if needed):
-/// false when the path ends; survivors are reweighted.
+/// The depth limit: a path that has made `max_depth` bounces ends where it meets a surface or
+/// scatters in a medium, without scattering again (an emitter or the background it reached
+/// still counts).
+#[inline(always)]
+pub fn at_max_depth(scene: &RenderScene, depth: u32) -> bool {
+    depth == scene.settings.max_depth
+}
+
+/// Whether Russian roulette is played at the vertex that makes the path's bounce number
+/// `depth_after` (its roulette number is drawn only there).
+#[inline(always)]
+pub fn plays_roulette(scene: &RenderScene, depth_after: u32) -> bool {
+    depth_after >= scene.settings.rr_depth
+}
+
+/// Russian roulette's rule for a path whose new throughput is `beta` and IOR scale
+/// `eta_scale`, at a vertex where it `plays`: whether its number is drawn, and the probability
+/// `q` that the path ends (it ends when the number is below `q`; survivors' throughput is
+/// divided by `1 - q`). Branch-free, for the lane kernels too.
+#[inline(always)]
+pub fn roulette_rule(plays: bool, beta: Vec3, eta_scale: f32) -> (bool, f32) {
+    let rr = (beta * eta_scale).max_element();
+    (plays && rr < 1.0, (1.0 - rr).max(0.0))
+}
+
+/// Russian roulette ([`roulette_rule`]) after the bounce that made `st.depth`, with the number
+/// `u()` (drawn only if needed): false when the path ends; survivors are reweighted.
 #[inline]
 fn roulette(scene: &RenderScene, st: &mut PathState, u: impl FnOnce() -> f32) -> bool {
-    if st.depth >= scene.settings.rr_depth {
-        let rr = (st.beta * st.eta_scale).max_element();
-        if rr < 1.0 {
-            let q = (1.0 - rr).max(0.0);
-            if u() < q {
-                return false;
-            }
-            st.beta /= 1.0 - q;
+    let (drawn, q) = roulette_rule(plays_roulette(scene, st.depth), st.beta, st.eta_scale);
+    if drawn {
+        if u() < q {
+            return false;
         }
+        st.beta /= 1.0 - q;
     }
     true
 }
@@ -289,18 +312,14 @@ pub struct ScatterSamples {
 }
 
 impl ScatterSamples {
-    /// The numbers of the vertex after `depth` bounces.
+    /// The numbers of the vertex after `depth` bounces ([`Self::draw_lanes`] on one lane).
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let plays = depth + 1 >= scene.settings.rr_depth;
-        Self {
-            dir: sampler.get_2d(Dims::vertex(depth, Dims::BSDF)),
-            lobe: sampler.get_1d(Dims::vertex(depth, Dims::LOBE)),
-            roulette: if plays { sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE)) } else { 0.0 },
-        }
+        let all = Reads { dir: true, lobe: true };
+        Self::draw_lanes(scene, &SamplerLanes::from(&[*sampler]), &[depth], all)[0]
     }
 
-    /// The same numbers for `N` paths at once (the same bits, computed across lanes): the
+    /// The numbers of `N` paths' vertices after `depths` bounces, computed across lanes: the
     /// direction's and the lobe's only where some lane's material `reads` them (the others
     /// stay zero, as no lane reads them), roulette's where some lane plays it.
     #[inline(always)]
@@ -319,8 +338,7 @@ impl ScatterSamples {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::LOBE)),
             false => [0.0; N],
         };
-        let rr_depth = scene.settings.rr_depth;
-        let roulette = match depths.iter().any(|&d| d + 1 >= rr_depth) {
+        let roulette = match depths.iter().any(|&d| plays_roulette(scene, d + 1)) {
             true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::ROULETTE)),
             false => [0.0; N],
         };
@@ -458,16 +476,38 @@ pub fn shade_glossy(
     (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf))
 }
 
-/// The first ray of sample `index` of pixel (x, y), and its random stream.
+/// The first ray of sample `index` of pixel (x, y), and its random stream ([`camera_rays`] on
+/// one lane).
 #[inline]
 pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
     let sampler = camera_sampler(scene, x, y, index);
-    let u = CameraSamples {
-        pixel: sampler.get_2d(Dims::PIXEL),
-        lens: if scene.camera.has_aperture() { sampler.get_2d(Dims::LENS) } else { glam::Vec2::ZERO },
-        time: if scene.features.motion { sampler.get_1d(Dims::TIME) } else { 0.0 },
+    (camera_rays(scene, &SamplerLanes::from(&[sampler]), &[(x, y)]).ray(0), sampler)
+}
+
+/// The camera rays of `N` samples through the pixels `pixel` with the random streams `s`, their
+/// numbers and rays computed across lanes: the lens and time numbers are drawn only where the
+/// camera has an aperture and something moves while the shutter is open (else zero).
+#[inline(always)]
+pub fn camera_rays<const N: usize>(
+    scene: &RenderScene,
+    s: &SamplerLanes<N>,
+    pixel: &[(u32, u32); N],
+) -> RayLanes<N> {
+    let u = crate::sampler::get_2d_lanes(s, &[Dims::PIXEL; N]);
+    let lens = match scene.camera.has_aperture() {
+        true => crate::sampler::get_2d_lanes(s, &[Dims::LENS; N]),
+        false => [Vec2::ZERO; N],
     };
-    (camera_ray_with(scene, x, y, &u), sampler)
+    let time = match scene.features.motion {
+        true => crate::sampler::get_1d_lanes(s, &[Dims::TIME; N]),
+        false => [0.0; N],
+    };
+    let (mut at, mut on_lens) = ([[0.0; 2]; N], [[0.0; 2]; N]);
+    for l in 0..N {
+        at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
+        on_lens[l] = [lens[l].x, lens[l].y];
+    }
+    scene.camera.generate_rays(&at, &on_lens, &time)
 }
 
 /// The random stream of sample `index` of pixel (x, y).
@@ -476,22 +516,4 @@ pub fn camera_sampler(scene: &RenderScene, x: u32, y: u32, index: u32) -> Sample
     let s = scene.settings;
     let sampler = Sampler::new(s.sampler, s.seed, y * s.width + x, index, s.spp);
     if scene.camera.has_aperture() { sampler.with_lens() } else { sampler }
-}
-
-/// The numbers a camera ray reads: the lens and time are drawn only where the camera has an
-/// aperture and something moves while the shutter is open (else zero).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CameraSamples {
-    /// Position in the pixel.
-    pub pixel: glam::Vec2,
-    /// Point on the lens.
-    pub lens: glam::Vec2,
-    /// Time in the shutter interval.
-    pub time: f32,
-}
-
-/// The camera ray through pixel (x, y) with the numbers `u`.
-#[inline]
-pub fn camera_ray_with(scene: &RenderScene, x: u32, y: u32, u: &CameraSamples) -> Ray {
-    scene.camera.generate_ray(glam::Vec2::new(x as f32, y as f32) + u.pixel, u.lens, u.time)
 }

@@ -49,108 +49,203 @@ impl Default for Options {
     }
 }
 
-/// The stages, for statistics.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// New camera rays.
-    GenerateCameraRays,
-    /// Closest-hit traversal.
-    IntersectClosest,
-    /// The denoiser's guides.
-    RecordGuides,
-    /// Background for rays that left.
-    HandleEscaped,
-    /// Emitter hits.
-    HandleEmissive,
-    /// Scattering in media.
-    ShadeMedium,
-    /// The shading loop of one material kind (not an emitter).
-    Shade(MaterialKind),
-    /// Occlusion tests.
-    TraceShadowRays,
-    /// Finished paths into the film.
-    AccumulateFilm,
+/// The wavefront's stages, each once, in pipeline order: its variant (with its doc), its name
+/// (also its tracing span's), when a tile runs it (`when`, from the tile's [`Setup`]), the items
+/// it takes from the queues (`items`) and what runs it (`run`, on the tile's [`TileWork`] and its
+/// paths and queues). A stage with a field (`Shade(kind: T in LIST)`) is one stage per value
+/// of `LIST` (a const array of `T`, whose `T::COUNT` values each get a statistics slot), bound
+/// as `kind` in its expressions. The table generates [`Stage`], [`Stage::ALL`],
+/// [`Stage::index`], [`Stage::SLOTS`], [`Stage::name`], and the tile's pipeline, item counts and
+/// dispatch ([`TileWork::new`], [`TileWork::items`], [`TileWork::stage`]); the first stage must
+/// be one without a field (it refills the slots, and the tile ends when it leaves none active).
+macro_rules! stages {
+    (@first $(#[$doc:meta])* $v:ident : $($rest:tt)*) => { Stage::$v };
+    (@width) => { 1 };
+    (@width $t:ident) => { $t::COUNT };
+    (@gen [$first:expr] $(
+        $(#[$doc:meta])*
+        $v:ident $(($kind:ident : $t:ident in $list:expr))? :
+            $name:expr, when $when:expr, items $items:expr, run $run:expr;
+    )*) => {
+        /// The stages (see `stages!` in `wavefront/mod.rs`, which lists them).
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum Stage { $($(#[$doc])* $v $(($t))?,)* }
+
+        /// The table's rows, in order.
+        enum Row { $($v,)* }
+
+        /// Statistics slots per row.
+        const WIDTHS: &[usize] = &[$(stages!(@width $($t)?)),*];
+
+        /// Stages per row.
+        const COUNTS: &[usize] = &[$(1 $(- 1 + $list.len())?),*];
+
+        /// The sum of `a[..n]`.
+        const fn sum(a: &[usize], n: usize) -> usize {
+            let (mut s, mut k) = (0, 0);
+            while k < n {
+                s += a[k];
+                k += 1;
+            }
+            s
+        }
+
+        impl Stage {
+            /// Slots in per-stage arrays ([`Stage::index`]); some may stay unused.
+            pub const SLOTS: usize = sum(WIDTHS, WIDTHS.len());
+
+            /// All stages in pipeline order.
+            pub const ALL: [Stage; sum(COUNTS, COUNTS.len())] = {
+                let mut all = [$first; sum(COUNTS, COUNTS.len())];
+                let mut n = 0;
+                $(stages!(@push all n $v $(($list))?);)*
+                assert!(n == all.len(), "every stage in its place");
+                all
+            };
+
+            /// Where the stage's figures are in [`Stats`]' arrays.
+            pub const fn index(self) -> usize {
+                match self {
+                    $(Stage::$v $(($kind))? => sum(WIDTHS, Row::$v as usize) $(+ $kind as usize)?,)*
+                }
+            }
+
+            /// The stage's name (also its tracing span's).
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Stage::$v $(($kind))? => $name,)*
+                }
+            }
+
+            /// Whether a tile set up as `setup` runs the stage.
+            fn runs(self, setup: &Setup) -> bool {
+                match self {
+                    $(Stage::$v $(($kind))? => when(setup, $when),)*
+                }
+            }
+        }
+
+        impl TileWork<'_> {
+            /// How many items (rays or paths) `stage` would take from the queues now.
+            pub(super) fn items(&self, stage: Stage, q: &Queues) -> usize {
+                match stage {
+                    $(Stage::$v $(($kind))? => items(self, q, $items),)*
+                }
+            }
+
+            /// Runs one stage.
+            pub(super) fn stage(&mut self, stage: Stage, p: &mut Paths, q: &mut Queues) {
+                match stage {
+                    $(Stage::$v $(($kind))? => run(self, p, q, $run),)*
+                }
+            }
+        }
+    };
+    (@push $all:ident $n:ident $v:ident) => {
+        $all[$n] = Stage::$v;
+        $n += 1;
+    };
+    (@push $all:ident $n:ident $v:ident ($list:expr)) => {
+        let list = $list;
+        let mut k = 0;
+        while k < list.len() {
+            $all[$n] = Stage::$v(list[k]);
+            ($n, k) = ($n + 1, k + 1);
+        }
+    };
+    ($($rows:tt)*) => { stages!(@gen [stages!(@first $($rows)*)] $($rows)*); };
 }
 
-/// How many stages there are apart from the shading loops.
-const FIXED_STAGES: usize = 8;
+stages! {
+    /// New camera rays.
+    GenerateCameraRays: "generate_camera_rays", when |_| true,
+        items |w, q| w.fresh(q), run |w, p, q| w.generate_camera_rays(p, q);
+    /// Closest-hit traversal.
+    IntersectClosest: "intersect_closest", when |_| true,
+        items |_, q| q.active.len(), run |w, p, q| stages::intersect_closest(w.scene, p, q);
+    /// The denoiser's guides.
+    RecordGuides: "record_guides", when |s| s.guides,
+        items |_, q| q.active.len(), run |w, p, q| stages::record_guides(w.scene, p, q);
+    /// Background for rays that left.
+    HandleEscaped: "handle_escaped", when |_| true,
+        items |_, q| q.escaped.len(), run |w, p, q| stages::handle_escaped(w.scene, p, q);
+    /// Emitter hits.
+    HandleEmissive: "handle_emissive", when |_| true,
+        items |_, q| q.emissive.len(), run |w, p, q| stages::handle_emissive(w.scene, p, q);
+    /// Scattering in media.
+    ShadeMedium: "shade_medium", when |_| true,
+        items |_, q| q.medium.len(), run |w, p, q| stages::shade_medium(w.scene, p, q);
+    /// The shading loop of one material kind (not an emitter).
+    Shade(kind: MaterialKind in SHADED_KINDS): kind.stage_name(), when |s| s.kinds.contains(&kind),
+        items |_, q| q.shade[kind as usize].len(), run |w, p, q| stages::shade(w.scene, p, q, kind);
+    /// Occlusion tests.
+    TraceShadowRays: "trace_shadow_rays", when |_| true,
+        items |_, q| q.shadow.len(), run |w, p, q| stages::trace_shadow_rays(w.scene, p, q);
+    /// Finished paths into the film.
+    AccumulateFilm: "accumulate_film", when |_| true,
+        items |_, q| q.finished.len(), run |w, p, q| w.accumulate_film(p, q);
+}
 
-/// The material kinds that have a shading loop (every kind but the emitters).
-const SHADED_KINDS: usize = {
-    let mut n = 0;
-    let mut k = 0;
+/// How many material kinds have a shading loop.
+const SHADED_COUNT: usize = {
+    let (mut n, mut k) = (0, 0);
     while k < MaterialKind::COUNT {
-        if !matches!(MaterialKind::ALL[k].shading(), Shading::Emitter) {
-            n += 1;
-        }
+        n += !matches!(MaterialKind::ALL[k].shading(), Shading::Emitter) as usize;
         k += 1;
     }
     n
 };
 
-impl Stage {
-    /// Slots in per-stage arrays ([`Stage::index`]); emitters' slots stay unused.
-    pub const SLOTS: usize = FIXED_STAGES + MaterialKind::COUNT;
-
-    /// All stages in pipeline order.
-    pub const ALL: [Stage; FIXED_STAGES + SHADED_KINDS] = {
-        let mut all = [Stage::GenerateCameraRays; FIXED_STAGES + SHADED_KINDS];
-        let head = [
-            Stage::GenerateCameraRays,
-            Stage::IntersectClosest,
-            Stage::RecordGuides,
-            Stage::HandleEscaped,
-            Stage::HandleEmissive,
-            Stage::ShadeMedium,
-        ];
-        let mut n = 0;
-        while n < head.len() {
-            all[n] = head[n];
+/// The material kinds that have a shading loop (every kind but the emitters), in registry
+/// order.
+const SHADED_KINDS: [MaterialKind; SHADED_COUNT] = {
+    let mut kinds = [MaterialKind::ALL[0]; SHADED_COUNT];
+    let (mut n, mut k) = (0, 0);
+    while k < MaterialKind::COUNT {
+        if !matches!(MaterialKind::ALL[k].shading(), Shading::Emitter) {
+            kinds[n] = MaterialKind::ALL[k];
             n += 1;
         }
-        let mut k = 0;
-        while k < MaterialKind::COUNT {
-            let kind = MaterialKind::ALL[k];
-            if !matches!(kind.shading(), Shading::Emitter) {
-                all[n] = Stage::Shade(kind);
-                n += 1;
-            }
-            k += 1;
-        }
-        all[n] = Stage::TraceShadowRays;
-        all[n + 1] = Stage::AccumulateFilm;
-        all
-    };
-
-    /// Where the stage's figures are in [`Stats`]' arrays.
-    pub const fn index(self) -> usize {
-        match self {
-            Stage::GenerateCameraRays => 0,
-            Stage::IntersectClosest => 1,
-            Stage::RecordGuides => 2,
-            Stage::HandleEscaped => 3,
-            Stage::HandleEmissive => 4,
-            Stage::ShadeMedium => 5,
-            Stage::TraceShadowRays => 6,
-            Stage::AccumulateFilm => 7,
-            Stage::Shade(kind) => FIXED_STAGES + kind as usize,
-        }
+        k += 1;
     }
+    kinds
+};
 
-    /// The stage's name (also its tracing span's).
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::GenerateCameraRays => "generate_camera_rays",
-            Stage::IntersectClosest => "intersect_closest",
-            Stage::RecordGuides => "record_guides",
-            Stage::HandleEscaped => "handle_escaped",
-            Stage::HandleEmissive => "handle_emissive",
-            Stage::ShadeMedium => "shade_medium",
-            Stage::Shade(kind) => kind.stage_name(),
-            Stage::TraceShadowRays => "trace_shadow_rays",
-            Stage::AccumulateFilm => "accumulate_film",
-        }
-    }
+/// What decides which stages a tile runs: whether the denoiser's guides are asked for, and the
+/// material kinds with a shading loop that the scene uses.
+struct Setup {
+    guides: bool,
+    kinds: Vec<MaterialKind>,
+}
+
+/// Calls a table row's `when` (typing its closure).
+#[inline(always)]
+fn when(setup: &Setup, f: impl FnOnce(&Setup) -> bool) -> bool {
+    f(setup)
+}
+
+/// Calls a table row's `items` (typing its closure).
+#[inline(always)]
+fn items<'a>(w: &TileWork<'a>, q: &Queues, f: impl FnOnce(&TileWork<'a>, &Queues) -> usize) -> usize {
+    f(w, q)
+}
+
+/// Calls a table row's `run` (typing its closure).
+#[inline(always)]
+fn run<'a>(
+    w: &mut TileWork<'a>,
+    p: &mut Paths,
+    q: &mut Queues,
+    f: impl FnOnce(&mut TileWork<'a>, &mut Paths, &mut Queues),
+) {
+    f(w, p, q)
+}
+
+/// The stages a tile runs, in order: those whose `when` holds for a tile of `scene`, with the
+/// denoiser's `guides` if asked for.
+fn pipeline(scene: &RenderScene, guides: bool) -> Vec<Stage> {
+    let setup = Setup { guides, kinds: material_kinds(scene) };
+    Stage::ALL.into_iter().filter(|s| s.runs(&setup)).collect()
 }
 
 /// Per-stage time and item counts, summed over workers.

@@ -229,7 +229,7 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for k in 0..q.medium.len() {
         let (i, s) = (q.medium[k], q.medium[k] as usize);
         let mut st = p.state(s);
-        if st.depth == scene.settings.max_depth {
+        if path::at_max_depth(scene, st.depth) {
             q.finished.push(i);
             continue;
         }
@@ -256,19 +256,26 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     q.shade[kind as usize] = queue;
 }
 
+/// The paths of `queue` that may scatter again, in order (in the scratch list, to be handed
+/// back); those at [`path::at_max_depth`] end here.
+#[inline]
+fn below_max_depth(scene: &RenderScene, p: &Paths, q: &mut Queues, queue: &[u32]) -> Vec<u32> {
+    let mut live = std::mem::take(&mut q.scratch);
+    live.clear();
+    for &i in queue {
+        match path::at_max_depth(scene, p.depth[i as usize]) {
+            true => q.finished.push(i),
+            false => live.push(i),
+        }
+    }
+    live
+}
+
 /// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
 /// drawn at once, then BSDF sampling path by path.
 fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
-    let mut live = std::mem::take(&mut q.scratch);
-    live.clear();
-    for &i in queue {
-        if p.depth[i as usize] == scene.settings.max_depth {
-            q.finished.push(i);
-        } else {
-            live.push(i);
-        }
-    }
+    let live = below_max_depth(scene, p, q, queue);
     for chunk in live.chunks(LANES) {
         // The numbers of all lanes at once, those some lane's material reads.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
@@ -302,7 +309,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     for &i in queue {
         let s = i as usize;
         let mut st = p.state(s);
-        if st.depth == scene.settings.max_depth {
+        if path::at_max_depth(scene, st.depth) {
             q.finished.push(i);
             continue;
         }
@@ -317,23 +324,14 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
 /// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
-/// straight to the paths' arrays and the queues (what [`lambert_vertex::apply`] does to one
-/// path's state in the reference path tracer).
+/// straight to the paths' arrays ([`lambert_vertex::scattered`], as the reference path
+/// tracer's [`lambert_vertex::apply`] does) and the queues.
 fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
-    let max_depth = scene.settings.max_depth;
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut lights = light_lanes::LightSampler::new(scene);
-    let mut live = std::mem::take(&mut q.scratch);
-    live.clear();
-    for &i in queue {
-        if p.depth[i as usize] == max_depth {
-            q.finished.push(i);
-        } else {
-            live.push(i);
-        }
-    }
+    let live = below_max_depth(scene, p, q, queue);
     for chunk in live.chunks(LANES) {
         // The vertex's numbers for all lanes at once.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
@@ -362,15 +360,15 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let pdf = outs.pdf[l];
-            if pdf > 0.0 {
-                p.beta[s] = v3(&outs.beta, l);
-                p.delta[s] = false;
-                p.prev_pdf[s] = pdf;
-                p.prev_p[s] = v3(&ins.p, l).into();
-                p.depth[s] = ins.depth_after[l];
-            }
-            if pdf > 0.0 && outs.alive[l] {
+            let st = lambert_vertex::Bounce {
+                beta: &mut p.beta[s],
+                delta: &mut p.delta[s],
+                prev_pdf: &mut p.prev_pdf[s],
+                prev_p: &mut p.prev_p[s],
+                depth: &mut p.depth[s],
+            };
+            let o = outs.get(l);
+            if lambert_vertex::scattered(v3(&ins.p, l), ins.depth_after[l], &o, st) && o.alive {
                 p.set_ray(
                     s,
                     Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },

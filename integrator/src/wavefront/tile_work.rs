@@ -1,14 +1,14 @@
-//! One tile's samples in progress ([`TileWork`]): the wavefront's iteration over the stages,
-//! each stage's dispatch and item count, and the two stages that live here (camera rays and
-//! film accumulation) rather than in `stages`.
+//! One tile's samples in progress ([`TileWork`]): the wavefront's iteration over the stages
+//! (whose list, dispatch and item counts `stages!` in `wavefront/mod.rs` generates), and the two
+//! stages that live here (camera rays and film accumulation) rather than in `stages`.
 
 use super::queues::{Paths, Queues};
-use super::{Stage, Stats, material_kinds, stages};
+use super::{Stage, Stats};
 use crate::aov::Guide;
 use crate::film::{PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
-use crate::sampler::{self, Dims, Sampler, SamplerLanes};
+use crate::sampler::{Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
@@ -23,7 +23,7 @@ pub(super) type Observer<'o, 'a> = dyn FnMut(u64, &TileWork<'a>, Stage, &Paths, 
 /// the statistics, and the stages each iteration runs.
 #[derive(Clone)]
 pub(super) struct TileWork<'a> {
-    scene: &'a RenderScene,
+    pub(super) scene: &'a RenderScene,
     tile: Tile,
     samples: Range<u32>,
     /// Samples of the tile (pixels times samples per pixel) and how many have started.
@@ -32,21 +32,15 @@ pub(super) struct TileWork<'a> {
     pub(super) film: Vec<PixelAccumulator>,
     pub(super) guide_sums: Option<Vec<[Vec3; 3]>>,
     pub(super) stats: Stats,
-    /// The stages after the camera rays, in order: the scene's shading kinds only, guides
-    /// only when asked for.
+    /// The stages each iteration runs, in order (`stages!` in `wavefront/mod.rs`): the
+    /// scene's shading kinds only, guides only when asked for.
     pipeline: Vec<Stage>,
 }
 
 impl<'a> TileWork<'a> {
     pub(super) fn new(scene: &'a RenderScene, tile: &Tile, samples: Range<u32>, guides: bool) -> Self {
         let pixels = (tile.w * tile.h) as usize;
-        let mut pipeline = vec![Stage::IntersectClosest];
-        if guides {
-            pipeline.push(Stage::RecordGuides);
-        }
-        pipeline.extend([Stage::HandleEscaped, Stage::HandleEmissive, Stage::ShadeMedium]);
-        pipeline.extend(material_kinds(scene).into_iter().map(Stage::Shade));
-        pipeline.extend([Stage::TraceShadowRays, Stage::AccumulateFilm]);
+        let pipeline = super::pipeline(scene, guides);
         Self {
             scene,
             tile: *tile,
@@ -74,17 +68,19 @@ impl<'a> TileWork<'a> {
         q.free.extend((0..batch as u32).rev());
         q.active.clear();
         let pipeline = std::mem::take(&mut self.pipeline);
+        // The first stage fills free slots with new paths: none active after it, the tile is done.
+        let (&refill, rest) = pipeline.split_first().expect("a pipeline starts with its camera rays");
         loop {
             let iteration = self.stats.iterations;
             let observe =
                 &mut |w: &TileWork<'a>, stage, p: &Paths, q: &Queues| observe(iteration, w, stage, p, q);
-            self.timed(clock, Stage::GenerateCameraRays, p, q, observe);
+            self.timed(clock, refill, p, q, observe);
             if q.active.is_empty() {
                 break;
             }
             self.stats.iterations += 1;
             self.stats.occupancy_sum += q.active.len() as f64 / batch as f64;
-            for &stage in &pipeline {
+            for &stage in rest {
                 self.timed(clock, stage, p, q, observe);
             }
             self.stats.paths += q.finished.len() as u64;
@@ -98,18 +94,10 @@ impl<'a> TileWork<'a> {
         self.pipeline = pipeline;
     }
 
-    /// How many items (rays or paths) `stage` would take from the queues now.
-    pub(super) fn items(&self, stage: Stage, q: &Queues) -> usize {
-        match stage {
-            Stage::GenerateCameraRays => q.free.len().min((self.work - self.next_sample) as usize),
-            Stage::IntersectClosest | Stage::RecordGuides => q.active.len(),
-            Stage::HandleEscaped => q.escaped.len(),
-            Stage::HandleEmissive => q.emissive.len(),
-            Stage::ShadeMedium => q.medium.len(),
-            Stage::Shade(kind) => q.shade[kind as usize].len(),
-            Stage::TraceShadowRays => q.shadow.len(),
-            Stage::AccumulateFilm => q.finished.len(),
-        }
+    /// How many new paths `generate_camera_rays` would start now: a free slot each, while the
+    /// tile has samples left.
+    pub(super) fn fresh(&self, q: &Queues) -> usize {
+        q.free.len().min((self.work - self.next_sample) as usize)
     }
 
     /// Runs `stage` if it has work (after `observe` has seen its input), recording its item
@@ -140,28 +128,12 @@ impl<'a> TileWork<'a> {
         self.stats.calls[k] += 1;
     }
 
-    /// Runs one stage.
-    pub(super) fn stage(&mut self, stage: Stage, p: &mut Paths, q: &mut Queues) {
-        let scene = self.scene;
-        match stage {
-            Stage::GenerateCameraRays => self.generate_camera_rays(p, q),
-            Stage::IntersectClosest => stages::intersect_closest(scene, p, q),
-            Stage::RecordGuides => stages::record_guides(scene, p, q),
-            Stage::HandleEscaped => stages::handle_escaped(scene, p, q),
-            Stage::HandleEmissive => stages::handle_emissive(scene, p, q),
-            Stage::ShadeMedium => stages::shade_medium(scene, p, q),
-            Stage::Shade(kind) => stages::shade(scene, p, q, kind),
-            Stage::TraceShadowRays => stages::trace_shadow_rays(scene, p, q),
-            Stage::AccumulateFilm => self.accumulate_film(p, q),
-        }
-    }
-
     /// `generate_camera_rays`: fills free slots with the tile's next samples, their numbers
     /// drawn across lanes a group at a time.
-    fn generate_camera_rays(&mut self, p: &mut Paths, q: &mut Queues) {
+    pub(super) fn generate_camera_rays(&mut self, p: &mut Paths, q: &mut Queues) {
         let (scene, tile) = (self.scene, &self.tile);
         let spp = self.samples.len() as u64;
-        let fresh = q.free.len().min((self.work - self.next_sample) as usize);
+        let fresh = self.fresh(q);
         for group in (0..fresh).step_by(LANES) {
             let m = LANES.min(fresh - group);
             // Sample k of the tile is sample k % spp of pixel k / spp: one division per group,
@@ -207,7 +179,7 @@ impl<'a> TileWork<'a> {
 
     /// `accumulate_film`: finished paths add their radiance (and guides) to their pixels and
     /// free their slots.
-    fn accumulate_film(&mut self, p: &Paths, q: &mut Queues) {
+    pub(super) fn accumulate_film(&mut self, p: &Paths, q: &mut Queues) {
         let clamp = self.scene.settings.clamp;
         for &i in &q.finished {
             self.film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], clamp));
@@ -225,28 +197,11 @@ impl<'a> TileWork<'a> {
     }
 }
 
-/// [`path::camera_ray`] for `LANES` samples at once, their numbers and rays computed across
-/// lanes (the same bits).
+/// [`path::camera_rays`] for `LANES` samples, with AVX-512 where the CPU has it.
 #[inline]
 fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> RayLanes<LANES> {
     pathwave_engine::simd::lanes(
         #[inline(always)]
-        || {
-            let u = sampler::get_2d_lanes(s, &[Dims::PIXEL; LANES]);
-            let lens = match scene.camera.has_aperture() {
-                true => sampler::get_2d_lanes(s, &[Dims::LENS; LANES]),
-                false => [glam::Vec2::ZERO; LANES],
-            };
-            let time = match scene.features.motion {
-                true => sampler::get_1d_lanes(s, &[Dims::TIME; LANES]),
-                false => [0.0; LANES],
-            };
-            let (mut at, mut on_lens) = ([[0.0; 2]; LANES], [[0.0; 2]; LANES]);
-            for l in 0..LANES {
-                at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
-                on_lens[l] = [lens[l].x, lens[l].y];
-            }
-            scene.camera.generate_rays(&at, &on_lens, &time)
-        },
+        || path::camera_rays(scene, s, pixel),
     )
 }
