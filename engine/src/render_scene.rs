@@ -10,6 +10,7 @@ use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
 use crate::math::Ray;
 use crate::media::Media;
+pub use crate::scene::SamplerKind;
 use crate::shape::SurfacePoint;
 use crate::texture::{MaterialTextures, Textures};
 use glam::{Vec2, Vec3, Vec3A};
@@ -78,29 +79,6 @@ pub struct RenderSettings {
     pub clamp: Option<f32>,
     /// How the random numbers of the samples are made.
     pub sampler: SamplerKind,
-}
-
-/// How the samples' random numbers are made (see the integrator's `sampler` module).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
-pub enum SamplerKind {
-    /// Owen-scrambled Sobol in every 1D and 2D dimension (extensible: the first N samples of a
-    /// pixel are those of an N-spp render).
-    #[default]
-    Sobol,
-    /// Correlated multi-jittered in every 2D dimension, jittered strata in every 1D one (the
-    /// pattern depends on the sample count).
-    Stratified,
-    /// Independent uniform numbers.
-    Independent,
-}
-
-impl SamplerKind {
-    /// The names, as the command line and scene files spell them.
-    pub const NAMES: [(&'static str, SamplerKind); 3] = [
-        ("sobol", SamplerKind::Sobol),
-        ("stratified", SamplerKind::Stratified),
-        ("independent", SamplerKind::Independent),
-    ];
 }
 
 impl std::str::FromStr for SamplerKind {

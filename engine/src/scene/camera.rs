@@ -2,7 +2,6 @@
 
 use crate::format::{Direction, Finite, Fov, NonNegative, Positive, UnitInterval, V3};
 use crate::placement::MAX_COORDINATE;
-use crate::render_scene::SamplerKind;
 use glam::Vec3;
 use serde::{Deserialize, Deserializer, de::Error};
 use std::num::NonZeroU32;
@@ -147,4 +146,27 @@ impl Default for RenderDesc {
             crop: None,
         }
     }
+}
+
+/// How the samples' random numbers are made (see the integrator's `sampler` module).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol in every 1D and 2D dimension (extensible: the first N samples of a
+    /// pixel are those of an N-spp render).
+    #[default]
+    Sobol,
+    /// Correlated multi-jittered in every 2D dimension, jittered strata in every 1D one (the
+    /// pattern depends on the sample count).
+    Stratified,
+    /// Independent uniform numbers.
+    Independent,
+}
+
+impl SamplerKind {
+    /// The names, as the command line and scene files spell them.
+    pub const NAMES: [(&'static str, SamplerKind); 3] = [
+        ("sobol", SamplerKind::Sobol),
+        ("stratified", SamplerKind::Stratified),
+        ("independent", SamplerKind::Independent),
+    ];
 }
