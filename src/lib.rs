@@ -10,6 +10,7 @@ pub mod bench_rays;
 pub mod checkpoint;
 pub mod cli;
 pub mod compare;
+pub mod convert;
 pub mod denoiser;
 pub mod farm;
 pub mod io;

@@ -7,12 +7,13 @@ use crate::animate::AnimateCommand;
 use crate::bench::BenchCommand;
 use crate::bench_rays::BenchRaysCommand;
 use crate::compare::CompareCommand;
+use crate::convert::ConvertCommand;
 use crate::farm::FarmCommand;
 use crate::merge::MergeCommand;
 use crate::render::RenderCommand;
 use crate::render::args::LogArgs;
 use crate::watch::WatchArgs;
-use crate::{animate, bench, bench_rays, compare, farm, merge, render, watch};
+use crate::{animate, bench, bench_rays, compare, convert, farm, merge, render, watch};
 use std::path::PathBuf;
 
 /// `pathwave`'s command line.
@@ -55,6 +56,9 @@ pub enum Command {
     /// files are linear (an EXR's beauty: R, G, B); an 8-bit file (PNG, JPEG) is sRGB-encoded,
     /// so comparing one with a linear file needs `--encoded` to say how to read it.
     Compare(CompareCommand),
+    /// Write a Mitsuba 3 XML scene as a RON scene that renders the same image (every command
+    /// that takes a scene also reads .xml directly).
+    Convert(ConvertCommand),
 }
 
 impl Command {
@@ -83,6 +87,7 @@ pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<(), String> {
             None => Err("farm: its flags are not where clap puts them".into()),
         },
         Command::Compare(c) => compare::run(&c),
+        Command::Convert(c) => convert::run(&c),
         Command::BenchRays(c) => bench_rays::run(&c),
         Command::Bench(c) => bench::run(&c),
     }

@@ -8,6 +8,7 @@ mod error;
 mod light;
 mod load;
 mod material;
+pub mod mitsuba;
 mod object;
 mod params;
 mod texture;

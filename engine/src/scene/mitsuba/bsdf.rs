@@ -1,0 +1,141 @@
+//! `<bsdf>` plugins as pathwave materials.
+//!
+//! Mitsuba's BSDFs other than `twosided` are one-sided (black seen from behind); pathwave's
+//! Lambertian reflects on both sides, as `twosided` makes Mitsuba's. Its conductors and
+//! dielectrics are the same on both sides in both renderers.
+
+use super::convert::{Converter, num, num32, v3};
+use super::props::{Plugin, Value};
+use super::xml::Element;
+use crate::scene::SceneError;
+use glam::DVec3;
+
+/// A colour parameter as RON: `(r, g, b)` or a texture's name.
+fn color<'d>(
+    cx: &mut Converter<'d>,
+    p: &Plugin<'d>,
+    name: &str,
+    default: DVec3,
+) -> Result<String, SceneError> {
+    match p.param(name) {
+        None => Ok(v3(default)),
+        Some(param) => match &param.value {
+            Value::Rgb(c) => Ok(v3(*c)),
+            Value::Float(f) => Ok(v3(DVec3::splat(*f))),
+            Value::Object(e) => Ok(format!("{:?}", cx.texture(e)?)),
+            _ => Err(param.at.error(format!("{}: `{name}` is a colour or a texture", p.label()))),
+        },
+    }
+}
+
+fn alpha(p: &Plugin) -> Result<f64, SceneError> {
+    if let Some((d, at)) = p.string("distribution")?
+        && d != "ggx"
+    {
+        return Err(at.error(format!("distribution \"{d}\": pathwave's microfacets are GGX")));
+    }
+    if p.param("alpha_u").is_some() || p.param("alpha_v").is_some() {
+        return Err(p.at.error(format!(
+            "{}: anisotropic roughness (alpha_u, alpha_v) is not in pathwave yet",
+            p.label()
+        )));
+    }
+    // Visible-normal sampling is how pathwave samples GGX; Mitsuba's switch changes only noise.
+    p.bool("sample_visible")?;
+    let a = p.float("alpha")?.unwrap_or(0.1);
+    if !(0.0..=1.0).contains(&a) {
+        return Err(p.at.error(format!("alpha {a}: pathwave takes 0 to 1")));
+    }
+    Ok(a)
+}
+
+fn unit_scale(p: &Plugin, name: &str) -> Result<(), SceneError> {
+    match p.rgb(name)? {
+        None => Ok(()),
+        Some(c) if c == DVec3::ONE => Ok(()),
+        Some(_) => Err(p.at.error(format!("{}: `{name}` other than 1 is not in pathwave yet", p.label()))),
+    }
+}
+
+/// The material a `<bsdf>` element becomes.
+pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
+    let p = Plugin::new(e)?;
+    let out = match p.kind.as_str() {
+        "diffuse" => {
+            let albedo = color(cx, &p, "reflectance", DVec3::splat(0.5))?;
+            p.finish(&["reflectance"])?;
+            format!("Lambertian(albedo: {albedo})")
+        }
+        "twosided" => {
+            let inner: Vec<&Element> = p.unnamed().collect();
+            p.finish(&[])?;
+            let [one] = inner.as_slice() else {
+                return Err(p.at.error(
+                    "<bsdf type=\"twosided\"> with two BSDFs: pathwave reads one, the same on both sides",
+                ));
+            };
+            let one = cx.by_id(one)?;
+            match Plugin::new(one)?.kind.as_str() {
+                "diffuse" => convert(cx, one)?,
+                k => {
+                    return Err(one
+                        .at
+                        .error(format!("twosided around \"{k}\": pathwave reads twosided around diffuse")));
+                }
+            }
+        }
+        "conductor" | "roughconductor" => {
+            let a = if p.kind == "roughconductor" { alpha(&p)? } else { 0.0 };
+            if let Some((m, at)) = p.string("material")?
+                && m != "none"
+            {
+                return Err(at.error(format!(
+                    "material \"{m}\": pathwave's named metals come in a later version; give eta and k"
+                )));
+            }
+            let eta = p.rgb("eta")?;
+            let k = p.rgb("k")?;
+            let tint = color(cx, &p, "specular_reflectance", DVec3::ONE)?;
+            p.finish(&[
+                "alpha",
+                "distribution",
+                "sample_visible",
+                "material",
+                "eta",
+                "k",
+                "specular_reflectance",
+            ])?;
+            let mut s = format!("RoughConductor(tint: {tint}, alpha: {}", num(a));
+            match (eta, k) {
+                (None, None) => {}
+                (eta, k) => {
+                    s += &format!(
+                        ", eta: {}, k: {}",
+                        v3(eta.unwrap_or(DVec3::ONE)),
+                        v3(k.unwrap_or(DVec3::ZERO))
+                    );
+                }
+            }
+            s + ")"
+        }
+        "dielectric" | "roughdielectric" => {
+            let a = if p.kind == "roughdielectric" { Some(alpha(&p)?) } else { None };
+            let int = Converter::ior(&p, "int_ior", 1.5046)?;
+            let ext = Converter::ior(&p, "ext_ior", 1.000277)?;
+            unit_scale(&p, "specular_reflectance")?;
+            unit_scale(&p, "specular_transmittance")?;
+            p.finish(&["alpha", "distribution", "sample_visible", "int_ior", "ext_ior"])?;
+            let ior = num32(int / ext);
+            match a {
+                None => format!("Dielectric(ior: {ior})"),
+                Some(a) => format!("RoughDielectric(ior: {ior}, alpha: {})", num(a)),
+            }
+        }
+        k => {
+            return Err(p.at.error(format!(
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric and roughdielectric"
+            )));
+        }
+    };
+    Ok(out)
+}

@@ -1,0 +1,668 @@
+//! Mitsuba plugins as pathwave's RON: the scene walk, and the sensor, film, integrator,
+//! BSDF, shape and emitter plugins that pathwave has kinds for. Each plugin converter reads the
+//! parameters it knows and [`Plugin::finish`] refuses the rest; a plugin type without a
+//! converter is refused, naming what pathwave reads.
+//!
+//! Defaults are Mitsuba 3's, from its plugin reference (mitsuba.readthedocs.io, "Plugin
+//! reference"): hdrfilm 768 x 576 with a gaussian filter, integrators' `max_depth` -1
+//! (unbounded) and `rr_depth` 5, `fov_axis` x, diffuse reflectance 0.5, dielectric
+//! `int_ior` bk7 and `ext_ior` air, roughconductor and roughdielectric `alpha` 0.1.
+
+use super::props::{Op, Plugin, Value, compose};
+use super::xml::{At, Document, Element};
+use crate::scene::SceneError;
+use glam::DVec3;
+use std::collections::HashMap;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// The deepest path pathwave renders (its `max_depth` bound), which Mitsuba's unbounded -1
+/// becomes.
+const UNBOUNDED_DEPTH: i64 = 1024;
+
+/// The pieces of RON a scene becomes, each with the XML element it came from.
+#[derive(Default)]
+pub struct Pieces {
+    /// `camera: (..)`.
+    pub camera: Option<(String, At)>,
+    /// `render: (..)` fields.
+    pub render: Vec<(String, String)>,
+    /// `background: ..`.
+    pub background: Option<(String, At)>,
+    /// `"name": Texture(..)`.
+    pub textures: Vec<(String, String, At)>,
+    /// `"name": Material(..)`.
+    pub materials: Vec<(String, String, At)>,
+    /// `(shape: .., material: .., transform: [..])`.
+    pub objects: Vec<(String, At)>,
+    /// `Point(..)`, ...
+    pub lights: Vec<(String, At)>,
+}
+
+/// A number as RON writes it: the shortest text that reads back as the same `f64` (which
+/// pathwave then rounds to `f32`, as Mitsuba rounds its doubles).
+pub fn num(x: f64) -> String {
+    let s = format!("{x:?}");
+    s.strip_suffix(".0").map(str::to_owned).unwrap_or(s)
+}
+
+/// A computed number (not one the scene wrote) as RON writes it: rounded to the `f32` that
+/// pathwave keeps, so `30` and not `29.999999999999996`.
+pub fn num32(x: f64) -> String {
+    num(format!("{:?}", x as f32).parse::<f64>().unwrap_or(x))
+}
+
+/// `(x, y, z)`.
+pub fn v3(v: DVec3) -> String {
+    format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
+}
+
+fn ops(list: &[Op]) -> String {
+    let one = |op: &Op| match op {
+        Op::Translate(t) => format!("Translate({})", v3(*t)),
+        Op::Rotate(axis, deg) => format!("Rotate(axis: {}, degrees: {})", v3(*axis), num(*deg)),
+        Op::Scale(s) if s.x == s.y && s.y == s.z => format!("UniformScale({})", num(s.x)),
+        Op::Scale(s) => format!("Scale({})", v3(*s)),
+        Op::Matrix(_) | Op::LookAt(..) => {
+            let m = op.matrix().transpose().to_cols_array_2d();
+            let rows: Vec<String> = m
+                .iter()
+                .map(|r| format!("[{}]", r.iter().map(|x| num32(*x)).collect::<Vec<_>>().join(", ")))
+                .collect();
+            format!("Matrix([{}])", rows.join(", "))
+        }
+    };
+    format!("[{}]", list.iter().map(one).collect::<Vec<_>>().join(", "))
+}
+
+/// A file name as the RON writes it: relative to the RON's folder `base` where it can be.
+fn file(path: &Path, base: &Path) -> String {
+    let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_owned());
+    let rel = pathdiff::diff_paths(abs(path), abs(base)).unwrap_or_else(|| abs(path));
+    format!("{:?}", rel.to_string_lossy().replace('\\', "/"))
+}
+
+/// Mitsuba's named indices of refraction (its `ior.h`).
+const IORS: [(&str, f64); 23] = [
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// A scene being converted.
+pub struct Converter<'d> {
+    doc: &'d Document,
+    /// The folder the RON's file names are relative to.
+    base: PathBuf,
+    ids: HashMap<String, &'d Element>,
+    /// Material names given to BSDF ids (and to anonymous BSDFs, by position).
+    named: HashMap<String, String>,
+    /// Objects made so far, for the bound.
+    pub out: Pieces,
+}
+
+/// The most objects a converted scene may hold (shapes after instancing is flattened).
+pub const MAX_OBJECTS: usize = 1_000_000;
+
+impl<'d> Converter<'d> {
+    /// A converter writing file names relative to `base`.
+    pub fn new(doc: &'d Document, base: &Path) -> Result<Self, SceneError> {
+        let mut ids = HashMap::new();
+        collect_ids(&doc.root, &mut ids)?;
+        Ok(Self { doc, base: base.to_owned(), ids, named: HashMap::new(), out: Pieces::default() })
+    }
+
+    fn referenced(&self, e: &'d Element) -> Result<&'d Element, SceneError> {
+        match e.tag.as_str() {
+            "ref" => {
+                let id = e.need("id")?;
+                self.ids
+                    .get(id)
+                    .copied()
+                    .ok_or_else(|| e.at.error(format!("<ref id=\"{id}\">: no element has this id")))
+            }
+            _ => Ok(e),
+        }
+    }
+
+    /// Converts the scene's top-level elements.
+    pub fn scene(&mut self) -> Result<(), SceneError> {
+        let root = &self.doc.root;
+        root.only(&["version", "type", "id"])?;
+        for e in &root.children {
+            match e.tag.as_str() {
+                "integrator" => self.integrator(e)?,
+                "sensor" => self.sensor(e)?,
+                "shape" => {
+                    let p = Plugin::new(e)?;
+                    if p.kind != "shapegroup" {
+                        self.shape(e, &[])?;
+                    }
+                }
+                "emitter" => self.emitter(e)?,
+                // Converted where they are used.
+                "bsdf" | "texture" => {
+                    e.need("id")?;
+                }
+                "medium" => {
+                    return Err(e
+                        .at
+                        .error("<medium>: pathwave reads participating media from XML in a later version"));
+                }
+                t => return Err(e.at.error(format!("<{t}> does not belong at the top of a <scene>"))),
+            }
+        }
+        if self.out.camera.is_none() {
+            return Err(root.at.error("the scene has no <sensor>: pathwave needs a camera"));
+        }
+        Ok(())
+    }
+
+    fn integrator(&mut self, e: &Element) -> Result<(), SceneError> {
+        let p = Plugin::new(e)?;
+        match p.kind.as_str() {
+            // The moment integrator wraps another and adds variance channels: the image is the
+            // inner integrator's.
+            "moment" => {
+                let inner: Vec<&Element> = p.unnamed().collect();
+                p.finish(&[])?;
+                match inner.as_slice() {
+                    [one] if one.tag == "integrator" => self.integrator(one),
+                    _ => Err(p.at.error("<integrator type=\"moment\"> wraps exactly one <integrator>")),
+                }
+            }
+            "path" | "volpath" | "direct" | "ptracer" => {
+                let default_depth = if p.kind == "direct" { 2 } else { -1 };
+                let depth = p.int("max_depth")?.unwrap_or(default_depth);
+                let rr = p.int("rr_depth")?.unwrap_or(5);
+                if p.bool("hide_emitters")?.unwrap_or(false) {
+                    return Err(p.at.error(format!("{}: pathwave does not hide emitters", p.label())));
+                }
+                if p.kind == "direct" {
+                    for n in ["emitter_samples", "bsdf_samples"] {
+                        if let Some(k) = p.int(n)?
+                            && k != 1 {
+                                return Err(p.at.error(format!("{}: pathwave takes one sample of each kind per pixel sample, not {n} = {k}", p.label())));
+                            }
+                    }
+                }
+                let reads = ["max_depth", "rr_depth", "hide_emitters", "emitter_samples", "bsdf_samples"];
+                p.finish(&reads)?;
+                // Mitsuba's depth counts path vertices after the camera (1: emitters seen
+                // directly); pathwave's counts scattering events.
+                let depth = match depth {
+                    -1 => UNBOUNDED_DEPTH,
+                    d if (1..=UNBOUNDED_DEPTH + 1).contains(&d) => d - 1,
+                    d => return Err(p.at.error(format!("max_depth must be -1 or 1 to {}, not {d}", UNBOUNDED_DEPTH + 1))),
+                };
+                if !(1..=1024).contains(&rr) {
+                    return Err(p.at.error(format!("rr_depth must be 1 to 1024, not {rr}")));
+                }
+                self.out.render.push(("max_depth".into(), depth.to_string()));
+                self.out.render.push(("rr_depth".into(), rr.to_string()));
+                Ok(())
+            }
+            k => Err(p.at.error(format!(
+                "<integrator type=\"{k}\">: pathwave renders path, volpath, direct and ptracer (all with its path tracer), and moment around one of them"
+            ))),
+        }
+    }
+
+    fn sensor(&mut self, e: &Element) -> Result<(), SceneError> {
+        if self.out.camera.is_some() {
+            return Err(e.at.error("a second <sensor>: pathwave renders one camera"));
+        }
+        let p = Plugin::new(e)?;
+        let to_world = p.transform("to_world")?.unwrap_or_default();
+        let mut fields = vec![format!("to_world: {}", ops(&to_world))];
+        let mut reads =
+            vec!["to_world", "near_clip", "far_clip", "shutter_open", "shutter_close", "film", "sampler"];
+        match p.kind.as_str() {
+            "perspective" | "thinlens" => {
+                let fov = match (p.float("fov")?, p.string("focal_length")?) {
+                    (Some(f), None) => f,
+                    (None, Some((f, at))) => {
+                        // Mitsuba: a 35 mm film's 36 mm width over the focal length, along x.
+                        let mm =
+                            f.trim().trim_end_matches("mm").trim().parse::<f64>().ok().filter(|v| *v > 0.0);
+                        let mm = mm.ok_or_else(|| {
+                            at.error(format!("focal_length \"{f}\" is not a length like \"50mm\""))
+                        })?;
+                        2.0 * (36.0 / (2.0 * mm)).atan().to_degrees()
+                    }
+                    (None, None) => 2.0 * (36.0f64 / 100.0).atan().to_degrees(),
+                    (Some(_), Some((_, at))) => return Err(at.error("give fov or focal_length, not both")),
+                };
+                let axis = match p.string("fov_axis")? {
+                    None => "X".to_owned(),
+                    Some((a, at)) => match a.as_str() {
+                        "x" => "X".into(),
+                        "y" => "Y".into(),
+                        "diagonal" => "Diagonal".into(),
+                        "smaller" => "Smaller".into(),
+                        "larger" => "Larger".into(),
+                        _ => {
+                            return Err(at.error(format!(
+                                "fov_axis \"{a}\": expected x, y, diagonal, smaller or larger"
+                            )));
+                        }
+                    },
+                };
+                fields.push(format!("projection: Perspective(fov: {}, fov_axis: {axis})", num32(fov)));
+                reads.extend(["fov", "focal_length", "fov_axis"]);
+            }
+            "orthographic" => fields.push("projection: Orthographic".into()),
+            k => {
+                return Err(p.at.error(format!(
+                    "<sensor type=\"{k}\">: pathwave's cameras are perspective, thinlens and orthographic"
+                )));
+            }
+        }
+        if p.kind == "thinlens" {
+            let r = p.float("aperture_radius")?.unwrap_or(0.03);
+            let f = p.float("focus_distance")?.unwrap_or(0.0);
+            fields.push(format!("aperture_radius: {}", num(r)));
+            fields.push(format!("focus_dist: {}", num(f)));
+            reads.extend(["aperture_radius", "focus_distance"]);
+        }
+        let near = p.float("near_clip")?.unwrap_or(0.01);
+        let far = p.float("far_clip")?.unwrap_or(10000.0);
+        if !(near > 0.0 && far > near) {
+            return Err(p.at.error(format!("near_clip {near} and far_clip {far}: need 0 < near < far")));
+        }
+        let open = p.float("shutter_open")?.unwrap_or(0.0);
+        let close = p.float("shutter_close")?.unwrap_or(0.0);
+        if (open, close) != (0.0, 0.0) {
+            fields.push(format!("shutter: ({}, {})", num(open), num(close)));
+        }
+        let mut film = None;
+        let mut sampler = None;
+        for c in p.unnamed() {
+            match c.tag.as_str() {
+                "film" => film = Some(c),
+                "sampler" => sampler = Some(c),
+                t => {
+                    return Err(c.at.error(format!(
+                        "<{t}> inside a <sensor>: pathwave reads <film> and <sampler> there"
+                    )));
+                }
+            }
+        }
+        p.finish(&reads)?;
+        self.film(film, &p.at)?;
+        if let Some(s) = sampler {
+            self.sampler(s)?;
+        }
+        self.out.camera = Some((format!("({})", fields.join(", ")), p.at.clone()));
+        Ok(())
+    }
+
+    fn film(&mut self, e: Option<&Element>, sensor: &At) -> Result<(), SceneError> {
+        let Some(e) = e else {
+            return Err(sensor.error("the <sensor> has no <film>: pathwave needs its size"));
+        };
+        let p = Plugin::new(e)?;
+        if p.kind != "hdrfilm" {
+            return Err(p.at.error(format!("<film type=\"{}\">: pathwave's film is hdrfilm", p.kind)));
+        }
+        let w = p.int("width")?.unwrap_or(768);
+        let h = p.int("height")?.unwrap_or(576);
+        for (n, v) in [("width", w), ("height", h)] {
+            if !(1..=65536).contains(&v) {
+                return Err(p.at.error(format!("film {n} {v}: expected 1 to 65536")));
+            }
+        }
+        // The output's format is pathwave's choice (the file's extension); these leave the
+        // pixels' values alone.
+        for n in ["file_format", "component_format"] {
+            p.string(n)?;
+        }
+        if let Some((f, at)) = p.string("pixel_format")?
+            && !matches!(f.as_str(), "rgb" | "rgba")
+        {
+            return Err(at.error(format!("pixel_format \"{f}\": pathwave writes rgb")));
+        }
+        if p.bool("sample_border")?.unwrap_or(false) {
+            return Err(p.at.error(
+                "sample_border: pathwave's filters keep each pixel's samples in reach of that pixel",
+            ));
+        }
+        let mut filter = "Gaussian(stddev: 0.5)".to_owned();
+        for c in p.unnamed() {
+            if c.tag != "rfilter" {
+                return Err(c
+                    .at
+                    .error(format!("<{}> inside a <film>: pathwave reads <rfilter> there", c.tag)));
+            }
+            filter = rfilter(c)?;
+        }
+        p.finish(&[
+            "width",
+            "height",
+            "file_format",
+            "component_format",
+            "pixel_format",
+            "sample_border",
+            "rfilter",
+        ])?;
+        self.out.render.push(("width".into(), w.to_string()));
+        self.out.render.push(("height".into(), h.to_string()));
+        self.out.render.push(("filter".into(), filter));
+        Ok(())
+    }
+
+    fn sampler(&mut self, e: &Element) -> Result<(), SceneError> {
+        let p = Plugin::new(e)?;
+        // Every Mitsuba sampler draws unbiased pixel samples; pathwave draws its own (the
+        // render's `sampler`), which changes the noise but not the image it converges to.
+        if !matches!(
+            p.kind.as_str(),
+            "independent" | "stratified" | "multijitter" | "orthogonal" | "ldsampler"
+        ) {
+            return Err(p
+                .at
+                .error(format!("<sampler type=\"{}\"> is not one of Mitsuba's samplers", p.kind)));
+        }
+        let spp = p.int("sample_count")?.unwrap_or(4);
+        if !(1..=1 << 24).contains(&spp) {
+            return Err(p.at.error(format!("sample_count {spp}: expected 1 to {}", 1 << 24)));
+        }
+        let seed = p.int("seed")?;
+        p.int("dimension")?;
+        p.bool("jitter")?;
+        p.finish(&["sample_count", "seed", "dimension", "jitter"])?;
+        self.out.render.push(("spp".into(), spp.to_string()));
+        if let Some(s) = seed {
+            self.out.render.push(("seed".into(), s.max(0).to_string()));
+        }
+        Ok(())
+    }
+
+    fn material(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        let e = self.referenced(e)?;
+        let key = match e.attr("id") {
+            Some(id) => id.to_owned(),
+            None => format!("{}:{}:{}", e.at.file.display(), e.at.line, e.at.col),
+        };
+        if let Some(name) = self.named.get(&key) {
+            return Ok(name.clone());
+        }
+        let ron = super::bsdf::convert(self, e)?;
+        let name = match e.attr("id") {
+            Some(id) => id.to_owned(),
+            None => format!("{}-{}", Plugin::new(e)?.kind, self.out.materials.len()),
+        };
+        self.out.materials.push((name.clone(), ron, e.at.clone()));
+        self.named.insert(key, name.clone());
+        Ok(name)
+    }
+
+    /// The name of the texture an element (or `<ref>`) becomes, converting it once.
+    pub fn texture(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        let e = self.referenced(e)?;
+        if e.tag != "texture" {
+            return Err(e.at.error(format!("<{}> where a texture or colour belongs", e.tag)));
+        }
+        let key = match e.attr("id") {
+            Some(id) => format!("texture {id}"),
+            None => format!("texture {}:{}:{}", e.at.file.display(), e.at.line, e.at.col),
+        };
+        if let Some(name) = self.named.get(&key) {
+            return Ok(name.clone());
+        }
+        let ron = texture(e)?;
+        let name = match e.attr("id") {
+            Some(id) => id.to_owned(),
+            None => format!("{}-{}", Plugin::new(e)?.kind, self.out.textures.len()),
+        };
+        self.out.textures.push((name.clone(), ron, e.at.clone()));
+        self.named.insert(key, name.clone());
+        Ok(name)
+    }
+
+    /// A `<shape>` placed by `outer` (the instances around it, innermost first).
+    fn shape(&mut self, e: &'d Element, outer: &[Op]) -> Result<(), SceneError> {
+        let p = Plugin::new(e)?;
+        if p.kind == "instance" {
+            let to_world = p.transform("to_world")?.unwrap_or_default();
+            let groups: Vec<&Element> = p.unnamed().collect();
+            p.finish(&["to_world"])?;
+            let [group] = groups.as_slice() else {
+                return Err(p.at.error("<shape type=\"instance\"> holds exactly one <ref> to a shapegroup"));
+            };
+            let group = self.referenced(group)?;
+            let g = Plugin::new(group)?;
+            if g.kind != "shapegroup" {
+                return Err(group.at.error("an instance refers to a <shape type=\"shapegroup\">"));
+            }
+            let members: Vec<&'d Element> = group.children.iter().collect();
+            let mut placed = to_world;
+            placed.extend_from_slice(outer);
+            for m in members {
+                if m.tag != "shape" {
+                    return Err(m.at.error(format!("<{}> in a shapegroup: it holds shapes", m.tag)));
+                }
+                self.shape(m, &placed)?;
+            }
+            return Ok(());
+        }
+        if p.kind == "shapegroup" {
+            return Err(p
+                .at
+                .error("a shapegroup inside a shape: pathwave reads shapegroups at the top of the scene"));
+        }
+        let mut bsdf = None;
+        let mut emitter = None;
+        for c in p.unnamed() {
+            let c = self.referenced(c)?;
+            match c.tag.as_str() {
+                "bsdf" if bsdf.is_none() => bsdf = Some(c),
+                "emitter" if emitter.is_none() => emitter = Some(c),
+                t => {
+                    return Err(c.at.error(format!(
+                        "<{t}> inside {}: pathwave reads one <bsdf> and one area <emitter>",
+                        p.label()
+                    )));
+                }
+            }
+        }
+        let (shape, mut to_world) = super::shape::convert(self, &p)?;
+        to_world.extend_from_slice(outer);
+        let material = match (emitter, bsdf) {
+            (Some(em), b) => {
+                if let Some(b) = b {
+                    // A black diffuse BSDF under an area light is the usual way of writing an
+                    // emitter; anything that reflects is not what pathwave's emitters do.
+                    if !black_diffuse(b)? {
+                        return Err(b.at.error("an area emitter's shape reflects here too: pathwave's emitters are black (give it a black diffuse BSDF or none)"));
+                    }
+                }
+                let ron = super::emitter::area(em)?;
+                let name = format!("light-{}", self.out.materials.len());
+                self.out.materials.push((name.clone(), ron, em.at.clone()));
+                name
+            }
+            (None, Some(b)) => self.material(b)?,
+            (None, None) => {
+                // Mitsuba's default BSDF.
+                let key = "(default diffuse)".to_owned();
+                match self.named.get(&key) {
+                    Some(n) => n.clone(),
+                    None => {
+                        self.out.materials.push((
+                            "default".into(),
+                            "Lambertian(albedo: (0.5, 0.5, 0.5))".into(),
+                            p.at.clone(),
+                        ));
+                        self.named.insert(key, "default".into());
+                        "default".into()
+                    }
+                }
+            }
+        };
+        if self.out.objects.len() >= MAX_OBJECTS {
+            return Err(p.at.error(format!("the scene has more than {MAX_OBJECTS} shapes")));
+        }
+        let mut text = format!("(shape: {shape}, material: {material:?}");
+        if !to_world.is_empty() {
+            write!(text, ", transform: {}", ops(&to_world)).unwrap();
+        }
+        text.push(')');
+        self.out.objects.push((text, p.at.clone()));
+        Ok(())
+    }
+
+    fn emitter(&mut self, e: &Element) -> Result<(), SceneError> {
+        match super::emitter::convert(self, e)? {
+            super::emitter::Emitter::Light(l) => self.out.lights.push((l, e.at.clone())),
+            super::emitter::Emitter::Background(b) => {
+                if self.out.background.is_some() {
+                    return Err(e.at.error("a second environment emitter: pathwave has one background"));
+                }
+                self.out.background = Some((b, e.at.clone()));
+            }
+        }
+        Ok(())
+    }
+
+    /// A file named in the scene, as the RON writes it.
+    pub fn file(&self, name: &str, at: &At) -> Result<String, SceneError> {
+        Ok(file(&self.doc.resolve(name, at)?, &self.base))
+    }
+
+    /// The scene's elements by id.
+    pub fn by_id(&self, e: &'d Element) -> Result<&'d Element, SceneError> {
+        self.referenced(e)
+    }
+
+    /// Mitsuba's named or numeric index of refraction.
+    pub fn ior(p: &Plugin, name: &str, default: f64) -> Result<f64, SceneError> {
+        let Some(param) = p.param(name) else { return Ok(default) };
+        match &param.value {
+            Value::Float(v) if *v > 0.0 => Ok(*v),
+            Value::Str(s) => IORS.iter().find(|(n, _)| n == s).map(|(_, v)| *v).ok_or_else(|| {
+                param.at.error(format!(
+                    "`{name}` \"{s}\" is not one of Mitsuba's named media ({})",
+                    IORS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+                ))
+            }),
+            _ => Err(param.at.error(format!("`{name}` is a positive number or a named medium"))),
+        }
+    }
+}
+
+fn black_diffuse(e: &Element) -> Result<bool, SceneError> {
+    let p = Plugin::new(e)?;
+    Ok(match p.kind.as_str() {
+        "diffuse" => matches!(p.rgb("reflectance"), Ok(Some(c)) if c == DVec3::ZERO),
+        "twosided" => match p.children.as_slice() {
+            [(inner, _)] if inner.tag == "bsdf" => black_diffuse(inner)?,
+            _ => false,
+        },
+        _ => false,
+    })
+}
+
+fn collect_ids<'d>(e: &'d Element, ids: &mut HashMap<String, &'d Element>) -> Result<(), SceneError> {
+    for c in &e.children {
+        if c.tag != "ref"
+            && let Some(id) = c.attr("id")
+            && ids.insert(id.to_owned(), c).is_some()
+        {
+            return Err(c.at.error(format!("the id \"{id}\" is given twice")));
+        }
+        collect_ids(c, ids)?;
+    }
+    Ok(())
+}
+
+/// `<rfilter>` as pathwave's pixel filter.
+fn rfilter(e: &Element) -> Result<String, SceneError> {
+    let p = Plugin::new(e)?;
+    let out = match p.kind.as_str() {
+        "box" => "Box".to_owned(),
+        "tent" => {
+            let r = p.float("radius")?.unwrap_or(1.0);
+            if !(r > 0.0 && r <= 16.0) {
+                return Err(p.at.error(format!("tent radius {r}: expected (0, 16]")));
+            }
+            format!("Tent(radius: {})", num(r))
+        }
+        "gaussian" => {
+            let s = p.float("stddev")?.unwrap_or(0.5);
+            if !(s > 0.0 && s <= 4.0) {
+                return Err(p.at.error(format!("gaussian stddev {s}: expected (0, 4]")));
+            }
+            format!("Gaussian(stddev: {})", num(s))
+        }
+        k => {
+            return Err(p
+                .at
+                .error(format!("<rfilter type=\"{k}\">: pathwave's filters are box, tent and gaussian")));
+        }
+    };
+    p.finish(&["radius", "stddev"])?;
+    Ok(out)
+}
+
+/// A `<texture>` as a pathwave texture.
+fn texture(e: &Element) -> Result<String, SceneError> {
+    let p = Plugin::new(e)?;
+    match p.kind.as_str() {
+        "checkerboard" => {
+            let c0 = p.rgb("color0")?.unwrap_or(DVec3::splat(0.4));
+            let c1 = p.rgb("color1")?.unwrap_or(DVec3::splat(0.2));
+            let to_uv = compose(&p.transform("to_uv")?.unwrap_or_default());
+            p.finish(&["color0", "color1", "to_uv"])?;
+            // Mitsuba's cells are half a unit of the transformed uv: cell (i, j) is color0
+            // when i and j have the same parity, as pathwave's even cells.
+            let (sx, sy) = (to_uv.x_axis.x, to_uv.y_axis.y);
+            let pure_scale = to_uv.x_axis.y == 0.0
+                && to_uv.y_axis.x == 0.0
+                && to_uv.w_axis.truncate() == DVec3::ZERO
+                && sx > 0.0
+                && sy > 0.0;
+            if !pure_scale {
+                return Err(p
+                    .at
+                    .error("checkerboard to_uv: pathwave reads a positive scale of u and v here"));
+            }
+            Ok(format!(
+                "UvChecker(u: {}, v: {}, even: {}, odd: {})",
+                num(2.0 * sx),
+                num(2.0 * sy),
+                v3(c0),
+                v3(c1)
+            ))
+        }
+        k => Err(p
+            .at
+            .error(format!("<texture type=\"{k}\">: pathwave reads checkerboard textures from XML so far"))),
+    }
+}
+
+/// The world position and direction a light's `to_world` gives its origin and +z.
+pub fn placed(to_world: &[Op]) -> (DVec3, DVec3) {
+    let m = compose(to_world);
+    (m.transform_point3(DVec3::ZERO), m.transform_vector3(DVec3::Z))
+}

@@ -1,0 +1,148 @@
+//! The XML reader's conversions and refusals, on small scenes written here.
+
+use super::to_ron;
+use std::path::{Path, PathBuf};
+
+fn scene(tag: &str, body: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let p = d.join("scene.xml");
+    std::fs::write(&p, format!("<scene version=\"3.0.0\">\n{SENSOR}\n{body}\n</scene>\n")).unwrap();
+    p
+}
+
+const SENSOR: &str = r#"<sensor type="perspective"><float name="fov" value="40"/>
+<transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+<film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="24"/><rfilter type="box"/></film></sensor>"#;
+
+fn ron(tag: &str, body: &str) -> String {
+    let p = scene(tag, body);
+    to_ron(&p, &[], p.parent().unwrap()).unwrap_or_else(|e| panic!("{e}")).ron
+}
+
+fn error(tag: &str, body: &str) -> crate::scene::SceneError {
+    let p = scene(tag, body);
+    match to_ron(&p, &[], p.parent().unwrap()) {
+        Ok(c) => panic!("converted:\n{}", c.ron),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn depths_count_scattering_events() {
+    let r = ron(
+        "depth",
+        r#"<integrator type="moment"><integrator type="path"><integer name="max_depth" value="3"/></integrator></integrator>"#,
+    );
+    assert!(r.contains("max_depth: 2, rr_depth: 5"), "{r}");
+    let r = ron("unbounded", r#"<integrator type="volpath"/>"#);
+    assert!(r.contains("max_depth: 1024"), "{r}");
+    let r = ron("direct", r#"<integrator type="direct"/>"#);
+    assert!(r.contains("max_depth: 1,"), "{r}");
+}
+
+#[test]
+fn plugins_become_pathwave_kinds() {
+    let r = ron(
+        "kinds",
+        r#"<bsdf type="twosided" id="white"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.6, 0.5"/></bsdf></bsdf>
+        <shape type="rectangle"><ref id="white"/><transform name="to_world"><scale value="2"/><translate z="-1"/></transform></shape>
+        <shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="water"/></bsdf></shape>
+        <shape type="sphere"><float name="radius" value="0.5"/><emitter type="area"><rgb name="radiance" value="4"/></emitter></shape>
+        <emitter type="point"><transform name="to_world"><translate value="1, 2, 3"/></transform><rgb name="intensity" value="10"/></emitter>"#,
+    );
+    for want in [
+        r#""white": Lambertian(albedo: (0.7, 0.6, 0.5))"#,
+        r#"(shape: Quad(q: (-1, -1, 0), u: (2, 0, 0), v: (0, 2, 0)), material: "white", transform: [UniformScale(2), Translate((0, 0, -1))])"#,
+        "Dielectric(ior: 1.33263",
+        "Sphere(center: (0, 0, 0), radius: 0.5)",
+        "DiffuseLight(emit: (4, 4, 4), two_sided: false)",
+        "Point(position: (1, 2, 3), intensity: (10, 10, 10))",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+}
+
+#[test]
+fn instances_place_their_group_members() {
+    let r = ron(
+        "instance",
+        r#"<shape type="shapegroup" id="g"><shape type="sphere"><transform name="to_world"><translate x="1"/></transform></shape></shape>
+        <shape type="instance"><ref id="g"/><transform name="to_world"><rotate y="1" angle="90"/></transform></shape>
+        <shape type="instance"><ref id="g"/></shape>"#,
+    );
+    assert!(r.contains("transform: [Translate((1, 0, 0)), Rotate(axis: (0, 1, 0), degrees: 90)]"), "{r}");
+    assert_eq!(r.matches("Sphere(").count(), 2, "{r}");
+}
+
+#[test]
+fn the_envmap_turns_as_mitsuba_turns_it() {
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-env-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    image::Rgb32FImage::new(4, 2).save(d.join("sky.exr")).unwrap();
+    let r = ron(
+        "env",
+        &format!(
+            r#"<emitter type="envmap"><string name="filename" value="{}"/><transform name="to_world"><rotate y="1" angle="30"/></transform></emitter>"#,
+            d.join("sky.exr").display()
+        ),
+    );
+    assert!(r.contains("rotate: 30"), "{r}");
+}
+
+/// Refusals name the place and what pathwave reads instead.
+#[test]
+fn what_is_not_supported_is_refused_where_it_is_written() {
+    let e = error("plugin", "\n<shape type=\"teapot\"/>");
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("teapot") && e.message.contains("rectangle, cube, sphere"), "{e}");
+    let e = error("param", "<shape type=\"sphere\"><float name=\"radios\" value=\"1\"/></shape>");
+    assert!(e.message.contains("`radios`") && e.message.contains("radius"), "{e}");
+    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"plastic\"/></shape>");
+    assert!(e.message.contains("plastic"), "{e}");
+    let e = error("ref", "<shape type=\"sphere\"><ref id=\"nope\"/></shape>");
+    assert!(e.message.contains("nope"), "{e}");
+    let e = error("twice", "<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"diffuse\" id=\"a\"/>");
+    assert!(e.message.contains("twice"), "{e}");
+    let e = error(
+        "hide",
+        "<integrator type=\"path\"><boolean name=\"hide_emitters\" value=\"true\"/></integrator>",
+    );
+    assert!(e.message.contains("hide"), "{e}");
+    let e = error(
+        "spectrum",
+        "<shape type=\"sphere\"><bsdf type=\"conductor\"><spectrum name=\"eta\" value=\"400:1, 700:2\"/></bsdf></shape>",
+    );
+    assert!(e.message.contains("spectra"), "{e}");
+}
+
+#[test]
+fn file_names_are_relative_to_the_ron() {
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-files-{}", std::process::id()));
+    std::fs::create_dir_all(d.join("meshes")).unwrap();
+    std::fs::write(d.join("meshes/t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        d.join("s.xml"),
+        format!("<scene version=\"3.0.0\">{SENSOR}<shape type=\"obj\"><string name=\"filename\" value=\"meshes/t.obj\"/></shape></scene>"),
+    )
+    .unwrap();
+    let r = to_ron(&d.join("s.xml"), &[], &d).unwrap().ron;
+    assert!(r.contains(r#"Mesh(file: "meshes/t.obj")"#), "{r}");
+    std::fs::create_dir_all(d.join("out")).unwrap();
+    let r = to_ron(&d.join("s.xml"), &[], &d.join("out")).unwrap().ron;
+    assert!(r.contains(r#"Mesh(file: "../meshes/t.obj")"#), "{r}");
+    let _ = Path::new("");
+}
+
+#[test]
+fn checkerboards_keep_mitsubas_cells() {
+    let r = ron(
+        "checker",
+        r#"<texture type="checkerboard" id="c"><transform name="to_uv"><scale x="5" y="3"/></transform><rgb name="color0" value="0.8"/></texture>
+        <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="c"/></bsdf></shape>
+        <shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></shape>"#,
+    );
+    assert!(r.contains(r#""c": UvChecker(u: 10, v: 6, even: (0.8, 0.8, 0.8), odd: (0.2, 0.2, 0.2))"#), "{r}");
+    assert!(r.contains(r#"Lambertian(albedo: "c")"#), "{r}");
+    assert!(r.contains("UvChecker(u: 2, v: 2, even: (0.4, 0.4, 0.4)"), "{r}");
+}
