@@ -260,8 +260,11 @@ pub fn knot_and_scene(knot: (u32, u32), cornell: Option<&std::path::Path>) -> Re
     if let Some(path) = cornell {
         let desc = crate::engine::scene::load(path).map_err(|e| e.to_string())?;
         let scene = crate::engine::world::SceneWorld::render_scene(&desc);
-        let c = desc.camera;
-        let cam = primary(c.look_from.into(), c.look_at.into(), c.vup.into(), c.vfov, 1024);
+        let crate::engine::scene::CameraView::LookAt { look_from, look_at, vup, vfov } = desc.camera.view
+        else {
+            return Err(format!("{}: bench-rays needs a look_from/look_at camera", path.display()));
+        };
+        let cam = primary(look_from.into(), look_at.into(), vup.into(), vfov, 1024);
         let light = scene.lights.prims.first().and_then(|&p| match scene.geometry.prims[p as usize] {
             Primitive::Quad(q) => Some([q.q, q.u, q.v]),
             _ => None,

@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use glam::{Affine3A, Vec3};
-use pathwave::engine::scene::{SceneDesc, TransformOp};
+use pathwave::engine::scene::{CameraView, SceneDesc, TransformOp};
 use pathwave::engine::world::SceneWorld;
 use pathwave::integrator::{film::Film, wavefront};
 use pathwave::io::LinearImage;
@@ -25,8 +25,13 @@ fn placed(mut desc: SceneDesc, s: f32, t: Vec3) -> SceneDesc {
         obj.transform.push(TransformOp(m));
     }
     let c = &mut desc.camera;
-    c.look_from = m.transform_point3(c.look_from);
-    c.look_at = m.transform_point3(c.look_at);
+    match &mut c.view {
+        CameraView::LookAt { look_from, look_at, .. } => {
+            *look_from = m.transform_point3(*look_from);
+            *look_at = m.transform_point3(*look_at);
+        }
+        CameraView::ToWorld { to_world, .. } => *to_world = m * *to_world,
+    }
     c.focus_dist *= s;
     desc
 }

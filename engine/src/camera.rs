@@ -1,10 +1,12 @@
-//! Thin-lens perspective camera with a shutter interval.
+//! Thin-lens perspective and orthographic cameras with a shutter interval.
 
 use crate::math::{Ray, disk_branch_free};
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Affine3A, Vec2, Vec3, Vec3A};
 
-/// Where the camera is and where its image lies: origin, image right / up / backward unit axes,
-/// and the top-left corner of the image on the focus plane with the pixel steps there.
+/// Where the camera is and where its image lies: origin, the lens's axes `u` and `v` (image
+/// right and up for [`Camera::new`]; a `to_world` camera's camera-space x and y, scaled as it
+/// scales them), the backward unit axis `w`, and the top-left corner of the image on the focus
+/// plane with the pixel steps there (an orthographic camera: on the plane its rays start from).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Pose {
     origin: Vec3A,
@@ -66,6 +68,8 @@ pub struct Camera {
     lens_radius: f32,
     /// Shutter open and close times.
     pub shutter: (f32, f32),
+    /// Orthographic: each ray starts at its image point and runs along `-w`.
+    orthographic: bool,
 }
 
 impl Camera {
@@ -95,7 +99,70 @@ impl Camera {
         let dv = -v * (h / height as f32);
         let corner = origin - focus_dist * w - 0.5 * wd * u + 0.5 * h * v;
         let pose = Pose { origin, u, v, w, corner, du, dv };
-        Self { pose, close: None, lens_radius: aperture_radius, shutter }
+        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic: false }
+    }
+
+    /// A perspective (thin-lens) camera placed by `to_world` in Mitsuba 3's camera space (it
+    /// looks along +z, +y is up, +x points to the image's left), whose horizontal field of
+    /// view has half-angle tangent `tan_half_x`; `aperture_radius` and `focus_dist` are in
+    /// camera space. A ray is the line Mitsuba 3's `perspective` and `thinlens` sensors
+    /// trace for the same image point and lens point (mitsuba3 `src/sensors/perspective.cpp`,
+    /// `thinlens.cpp`: the lens point `to_world(r x, r y, 0)`, aimed at `to_world` of the
+    /// image point on the camera-space plane z = focus_dist), with the direction normalised
+    /// after `to_world` (so a scale does not change what a pixel sees in camera space).
+    pub fn perspective(
+        to_world: Affine3A,
+        tan_half_x: f32,
+        aperture_radius: f32,
+        focus_dist: f32,
+        shutter: (f32, f32),
+        width: u32,
+        height: u32,
+    ) -> Self {
+        // Camera space: the image's top-left corner at (tx, ty, 1) f, with x decreasing to
+        // the right and y downwards.
+        let (tx, ty) = (tan_half_x, tan_half_x * height as f32 / width as f32);
+        let f = focus_dist;
+        let corner = Vec3A::new(tx * f, ty * f, f);
+        let du = Vec3A::new(-2.0 * tx * f / width as f32, 0.0, 0.0);
+        let dv = Vec3A::new(0.0, -2.0 * ty * f / height as f32, 0.0);
+        Self::placed(to_world, corner, du, dv, aperture_radius, shutter, false)
+    }
+
+    /// An orthographic camera placed by `to_world` in Mitsuba 3's camera space: the image
+    /// spans camera-space x from 1 (left) to -1 (right) and y from 1/aspect (top) to
+    /// -1/aspect, aspect = width / height; rays start there on the plane z = 0 and run along
+    /// `to_world`'s +z (mitsuba3 `src/sensors/orthographic.cpp`, without its near clip).
+    pub fn orthographic(to_world: Affine3A, shutter: (f32, f32), width: u32, height: u32) -> Self {
+        let inv_aspect = height as f32 / width as f32;
+        let corner = Vec3A::new(1.0, inv_aspect, 0.0);
+        let du = Vec3A::new(-2.0 / width as f32, 0.0, 0.0);
+        let dv = Vec3A::new(0.0, -2.0 * inv_aspect / height as f32, 0.0);
+        Self::placed(to_world, corner, du, dv, 0.0, shutter, true)
+    }
+
+    /// The camera whose image's camera-space corner and pixel steps are `corner`, `du`, `dv`,
+    /// taken to the world by `to_world`.
+    fn placed(
+        to_world: Affine3A,
+        corner: Vec3A,
+        du: Vec3A,
+        dv: Vec3A,
+        aperture_radius: f32,
+        shutter: (f32, f32),
+        orthographic: bool,
+    ) -> Self {
+        let m = to_world.matrix3;
+        let pose = Pose {
+            origin: to_world.translation,
+            u: m.x_axis,
+            v: m.y_axis,
+            w: -m.z_axis.normalize(),
+            corner: to_world.transform_point3a(corner),
+            du: m * du,
+            dv: m * dv,
+        };
+        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic }
     }
 
     /// This camera at shutter open, moving to `close`'s pose at shutter close (its aperture
@@ -123,6 +190,11 @@ impl Camera {
             Some(close) => self.pose.lerp(close, time_u),
             None => self.pose,
         };
+        if self.orthographic {
+            let origin = pose.corner + pixel.x * pose.du + pixel.y * pose.dv;
+            let (t0, t1) = self.shutter;
+            return Ray { origin, dir: -pose.w, time: t0 + (t1 - t0) * time_u };
+        }
         let (o, d, time) =
             self.ray_from(&pose, self.has_aperture(), pixel.to_array(), lens.to_array(), time_u);
         Ray { origin: o.into(), dir: d.into(), time }
@@ -148,7 +220,7 @@ impl Camera {
             }
             out.time[l] = t;
         };
-        if self.close.is_some() {
+        if self.close.is_some() || self.orthographic {
             for l in 0..N {
                 let r = self.generate_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
                 set(l, (r.origin.to_array(), r.dir.to_array(), r.time));
@@ -245,6 +317,109 @@ mod tests {
         assert!((pa - pb).length() < 1e-4, "{pa} {pb}");
     }
 
+    /// Mitsuba 3's `look_at` matrix: columns left = normalize(up x dir), up, dir, origin.
+    fn mitsuba_look_at(origin: Vec3, target: Vec3, up: Vec3) -> Affine3A {
+        let dir = (target - origin).normalize();
+        let left = up.normalize().cross(dir).normalize();
+        let new_up = dir.cross(left);
+        Affine3A::from_cols(left.into(), new_up.into(), dir.into(), origin.into())
+    }
+
+    /// A look_from/look_at camera and the same view given by Mitsuba's look_at matrix (its
+    /// vertical field of view as `fov_axis: Y`) trace the same rays: the image is not mirrored
+    /// and row 0 is the top.
+    #[test]
+    fn to_world_look_at_matches_look_from_look_at() {
+        let (from, at, up) = (Vec3::new(3.0, 2.0, 7.0), Vec3::new(-1.0, 0.5, 0.0), Vec3::new(0.1, 1.0, 0.0));
+        let (w, h) = (320, 200);
+        let a = Camera::new(from, at, up, 35.0, 0.0, 4.0, (0.0, 0.0), w, h);
+        let tan_x = crate::scene::FovAxis::Y.tan_half_x_fov(35.0, w as f64 / h as f64) as f32;
+        let b = Camera::perspective(mitsuba_look_at(from, at, up), tan_x, 0.0, 4.0, (0.0, 0.0), w, h);
+        for p in [[0.0, 0.0], [320.0, 0.0], [0.0, 200.0], [160.0, 100.0], [17.5, 181.25]] {
+            let (ra, rb) = (
+                a.generate_ray(Vec2::from(p), Vec2::ZERO, 0.0),
+                b.generate_ray(Vec2::from(p), Vec2::ZERO, 0.0),
+            );
+            assert!((ra.origin - rb.origin).length() < 1e-6, "{p:?}");
+            assert!((ra.dir - rb.dir).length() < 1e-6, "{p:?}: {} against {}", ra.dir, rb.dir);
+        }
+        // Image right is (look_at - look_from) x vup: for a camera on +z looking at the
+        // origin, the right edge looks towards +x and the top row towards +y.
+        let c = Camera::perspective(
+            mitsuba_look_at(Vec3::Z * 5.0, Vec3::ZERO, Vec3::Y),
+            0.5,
+            0.0,
+            1.0,
+            (0.0, 0.0),
+            64,
+            64,
+        );
+        assert!(c.generate_ray(Vec2::new(64.0, 32.0), Vec2::ZERO, 0.0).dir.x > 0.0);
+        assert!(c.generate_ray(Vec2::new(32.0, 0.0), Vec2::ZERO, 0.0).dir.y > 0.0);
+    }
+
+    /// `fov_axis` as Mitsuba 3's `parse_fov`: the half-angle tangents across x, y and the
+    /// diagonal of a 2:1 image, and Smaller / Larger choosing between x and y.
+    #[test]
+    fn fov_axes_as_mitsuba() {
+        use crate::scene::FovAxis;
+        let (w, h) = (200, 100);
+        let tan = |axis: FovAxis| axis.tan_half_x_fov(60.0, 2.0) as f32;
+        let t = (30f32).to_radians().tan();
+        let ray = |tx: f32, p: [f32; 2]| {
+            Camera::perspective(Affine3A::IDENTITY, tx, 0.0, 1.0, (0.0, 0.0), w, h)
+                .generate_ray(Vec2::from(p), Vec2::ZERO, 0.0)
+                .dir
+        };
+        // Camera space: +x is the image's left.
+        let left = ray(tan(FovAxis::X), [0.0, 50.0]);
+        assert!((left.x / left.z - t).abs() < 1e-6, "{left}");
+        let top = ray(tan(FovAxis::Y), [100.0, 0.0]);
+        assert!((top.y / top.z - t).abs() < 1e-6, "{top}");
+        let corner = ray(tan(FovAxis::Diagonal), [0.0, 0.0]);
+        assert!(((corner.x * corner.x + corner.y * corner.y).sqrt() / corner.z - t).abs() < 1e-6, "{corner}");
+        assert_eq!(tan(FovAxis::Smaller), tan(FovAxis::Y));
+        assert_eq!(tan(FovAxis::Larger), tan(FovAxis::X));
+        assert_eq!(FovAxis::Smaller.tan_half_x_fov(60.0, 0.5), FovAxis::X.tan_half_x_fov(60.0, 0.5));
+    }
+
+    /// A uniform scale in `to_world` changes no direction (Mitsuba normalises after it); the
+    /// thin lens still focuses on the plane at focus_dist (camera space, so scaled).
+    #[test]
+    fn to_world_scale_keeps_the_view() {
+        let m = mitsuba_look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let scaled = m * Affine3A::from_scale(Vec3::splat(3.0));
+        let a = Camera::perspective(m, 0.4, 0.0, 2.0, (0.0, 0.0), 50, 40);
+        let b = Camera::perspective(scaled, 0.4, 0.0, 2.0, (0.0, 0.0), 50, 40);
+        let p = Vec2::new(7.0, 31.0);
+        let (ra, rb) = (a.generate_ray(p, Vec2::ZERO, 0.0), b.generate_ray(p, Vec2::ZERO, 0.0));
+        assert!((ra.dir - rb.dir).length() < 1e-6 && (ra.origin - rb.origin).length() < 1e-6);
+        let lens = Camera::perspective(scaled, 0.4, 0.25, 2.0, (0.0, 0.0), 50, 40);
+        let (r1, r2) =
+            (lens.generate_ray(p, Vec2::new(0.1, 0.8), 0.0), lens.generate_ray(p, Vec2::new(0.7, 0.3), 0.0));
+        // Both pass through the image point at camera-space depth 2, world depth 6.
+        let focus = b.generate_ray(p, Vec2::ZERO, 0.0);
+        let target = focus.at(6.0 / focus.dir.dot(-b.pose.w));
+        for r in [r1, r2] {
+            let to = target - r.origin;
+            assert!((to.normalize() - r.dir).length() < 1e-5, "{} against {}", to.normalize(), r.dir);
+        }
+    }
+
+    /// Orthographic: rays parallel to `to_world`'s +z, starting on the camera-space square
+    /// x in [-1, 1], y in [-1/aspect, 1/aspect], +x to the left, sized by a scale.
+    #[test]
+    fn orthographic_as_mitsuba() {
+        let m =
+            Affine3A::from_translation(Vec3::new(0.0, 0.0, -4.0)) * Affine3A::from_scale(Vec3::splat(2.0));
+        let c = Camera::orthographic(m, (0.0, 0.0), 40, 20);
+        let top_left = c.generate_ray(Vec2::ZERO, Vec2::ZERO, 0.0);
+        assert_eq!(top_left.dir, Vec3A::Z);
+        assert!((top_left.origin - Vec3A::new(2.0, 1.0, -4.0)).length() < 1e-6, "{}", top_left.origin);
+        let bottom_right = c.generate_ray(Vec2::new(40.0, 20.0), Vec2::ZERO, 0.0);
+        assert!((bottom_right.origin - Vec3A::new(-2.0, -1.0, -4.0)).length() < 1e-6);
+    }
+
     /// The lane version gives the bits of the scalar one, with and without AVX-512, for a
     /// pinhole, a thin lens and a moving camera.
     #[test]
@@ -252,7 +427,11 @@ mod tests {
         let from = Vec3::new(13.0, 2.0, 3.0);
         let lens = Camera::new(from, Vec3::ZERO, Vec3::Y, 20.0, 0.05, 10.0, (0.0, 1.0), 384, 216);
         let close = Camera::new(from + Vec3::X, Vec3::ZERO, Vec3::Y, 20.0, 0.05, 10.0, (0.0, 1.0), 384, 216);
-        for cam in [cornell(), lens, lens.moving_to(&close)] {
+        let placed =
+            mitsuba_look_at(from, Vec3::ZERO, Vec3::Y) * Affine3A::from_scale(Vec3::new(1.0, 2.0, 0.5));
+        let to_world = Camera::perspective(placed, 0.7, 0.05, 10.0, (0.0, 1.0), 384, 216);
+        let ortho = Camera::orthographic(placed, (0.0, 1.0), 384, 216);
+        for cam in [cornell(), lens, lens.moving_to(&close), to_world, ortho] {
             let u = |k: usize, m: u32| ((k as u32 * m) % 1009) as f32 / 1009.0;
             let pixel: [[f32; 2]; 16] = std::array::from_fn(|k| [383.0 * u(k, 7), 215.0 * u(k, 13)]);
             let on_lens: [[f32; 2]; 16] = std::array::from_fn(|k| [u(k, 31), u(k, 101)]);

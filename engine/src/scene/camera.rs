@@ -1,39 +1,138 @@
 //! `camera: (..)` and `render: (..)`: the camera as placed and the image and sampling settings.
 
+use super::transform::{TransformOp, compose};
 use crate::format::{Direction, Finite, Fov, NonNegative, Positive, UnitInterval, V3};
 use crate::placement::MAX_COORDINATE;
-use glam::Vec3;
+use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::num::NonZeroU32;
 
-/// Thin-lens camera.
+/// Thin-lens camera: where it stands and how it projects ([`CameraView`]), its lens and its
+/// shutter.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
 #[serde(try_from = "RawCamera")]
 pub struct CameraDesc {
-    /// Eye position.
-    pub look_from: Vec3,
-    /// Point looked at.
-    pub look_at: Vec3,
-    /// Up vector (default (0, 1, 0)); must not be parallel to the view direction.
-    pub vup: Vec3,
-    /// Vertical field of view in degrees, in (0, 180).
-    pub vfov: f32,
-    /// Lens radius (default 0: pinhole).
+    /// Placement and projection.
+    pub view: CameraView,
+    /// Lens radius (default 0: pinhole). For a `to_world` camera it is in camera space, as
+    /// Mitsuba 3's `thinlens` `aperture_radius` (a scale in `to_world` scales it).
     pub aperture_radius: f32,
-    /// Distance to the plane in focus (default: |look_at - look_from|).
+    /// Distance to the plane in focus (default: |look_at - look_from|; a `to_world` camera
+    /// with a lens needs it, and it is in camera space, as Mitsuba 3's `focus_distance`).
     pub focus_dist: f32,
     /// Shutter open and close times (default (0, 0): no motion blur).
     pub shutter: (f32, f32),
 }
 
+/// The camera's two forms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CameraView {
+    /// `look_from`, `look_at`, `vup`, `vfov`: a perspective camera whose image has
+    /// right = normalize((look_at - look_from) x vup).
+    LookAt {
+        /// Eye position.
+        look_from: Vec3,
+        /// Point looked at.
+        look_at: Vec3,
+        /// Up vector (default (0, 1, 0)); not parallel to the view direction.
+        vup: Vec3,
+        /// Vertical field of view in degrees, in (0, 180).
+        vfov: f32,
+    },
+    /// `to_world` and `projection`: camera space as Mitsuba 3's sensors have it (the camera
+    /// looks along +z, +y is up, +x points to the image's left; `to_world` takes it to the
+    /// world, as the `to_world` of Mitsuba's `perspective`, `orthographic` and `thinlens`).
+    ToWorld {
+        /// Camera to world (invertible; may scale).
+        to_world: Affine3A,
+        /// How camera space maps to the image.
+        projection: Projection,
+    },
+}
+
+/// How a `to_world` camera projects (`projection: Perspective(fov: 39.3, fov_axis: X)` or
+/// `projection: Orthographic`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// Mitsuba 3's `perspective` (`thinlens` with an aperture): `fov` degrees across
+    /// `fov_axis`.
+    Perspective {
+        /// Field of view in degrees, in (0, 180).
+        fov: f32,
+        /// The image extent `fov` spans (default `X`).
+        fov_axis: FovAxis,
+    },
+    /// Mitsuba 3's `orthographic`: the view spans camera-space x in [-1, 1] and y in
+    /// [-1/aspect, 1/aspect] (aspect = width / height), then `to_world` applies (its scale
+    /// sizes the view); rays start on the plane z = 0 and run along +z.
+    Orthographic,
+}
+
+/// Which extent of the image a perspective `fov` spans, as Mitsuba 3's `fov_axis`
+/// (`parse_fov` in mitsuba3 `src/librender/sensor.cpp`).
+#[derive(Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[serde(rename = "FovAxis")]
+pub enum FovAxis {
+    /// The width (default).
+    #[default]
+    X,
+    /// The height.
+    Y,
+    /// The diagonal.
+    Diagonal,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+impl FovAxis {
+    /// tan(x_fov / 2), where x_fov is the horizontal field of view that `fov` degrees across
+    /// this axis gives an image of `aspect` = width / height, as Mitsuba 3's `parse_fov` (in
+    /// f64, as it).
+    pub fn tan_half_x_fov(self, fov: f32, aspect: f64) -> f64 {
+        let t = (0.5 * (fov as f64).to_radians()).tan();
+        let axis = match self {
+            FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
+            FovAxis::Smaller => FovAxis::X,
+            FovAxis::Larger if aspect > 1.0 => FovAxis::X,
+            FovAxis::Larger => FovAxis::Y,
+            other => other,
+        };
+        match axis {
+            FovAxis::Y => t * aspect,
+            FovAxis::Diagonal => t / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
+            _ => t,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Projection")]
+enum RawProjection {
+    Perspective {
+        fov: Fov,
+        #[serde(default)]
+        fov_axis: FovAxis,
+    },
+    Orthographic,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Camera")]
 struct RawCamera {
-    look_from: V3,
-    look_at: V3,
-    #[serde(default = "default_vup")]
-    vup: Direction,
-    vfov: Fov,
+    #[serde(default)]
+    look_from: Option<V3>,
+    #[serde(default)]
+    look_at: Option<V3>,
+    #[serde(default)]
+    vup: Option<Direction>,
+    #[serde(default)]
+    vfov: Option<Fov>,
+    #[serde(default)]
+    to_world: Option<Vec<TransformOp>>,
+    #[serde(default)]
+    projection: Option<RawProjection>,
     #[serde(default)]
     aperture_radius: NonNegative,
     #[serde(default)]
@@ -42,43 +141,103 @@ struct RawCamera {
     shutter: (Finite, Finite),
 }
 
-fn default_vup() -> Direction {
-    Direction(Vec3::Y)
-}
+/// The two forms' fields, for messages.
+const FORMS: &str = "a camera is either (look_from, look_at, vfov[, vup]) or (to_world, projection)";
 
 impl TryFrom<RawCamera> for CameraDesc {
     type Error = String;
     fn try_from(r: RawCamera) -> Result<Self, String> {
-        let view = r.look_at.0 - r.look_from.0;
-        if view.length_squared() == 0.0 {
-            return Err("camera: look_from and look_at are the same point".into());
-        }
-        if view.normalize().cross(r.vup.0.normalize()).length_squared() < 1e-12 {
-            return Err("camera: vup is parallel to the view direction".into());
-        }
-        let far = [r.look_from.0.abs().max_element(), r.look_at.0.abs().max_element(), r.aperture_radius.0]
-            .into_iter()
-            .chain(r.focus_dist.map(|f| f.0))
-            .any(|x| x > MAX_COORDINATE);
-        if far || view.length() > MAX_COORDINATE {
-            return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
-        }
         if r.shutter.1.0 < r.shutter.0.0 {
             return Err(format!(
                 "camera: shutter closes ({}) before it opens ({})",
                 r.shutter.1.0, r.shutter.0.0
             ));
         }
+        let far = |x: f32| !(x <= MAX_COORDINATE);
+        if far(r.aperture_radius.0) || r.focus_dist.is_some_and(|f| far(f.0)) {
+            return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
+        }
+        let shutter = (r.shutter.0.0, r.shutter.1.0);
+        let look_at_form = [r.look_from.is_some(), r.look_at.is_some(), r.vup.is_some(), r.vfov.is_some()];
+        let to_world_form = [r.to_world.is_some(), r.projection.is_some()];
+        if look_at_form.contains(&true) && to_world_form.contains(&true) {
+            return Err(format!(
+                "camera: look_from, look_at, vup and vfov do not go with to_world and projection: {FORMS}"
+            ));
+        }
+        if let Some(ops) = r.to_world.as_deref() {
+            let Some(projection) = r.projection else {
+                return Err(format!("camera: missing field `projection`: {FORMS}"));
+            };
+            let projection = match projection {
+                RawProjection::Perspective { fov, fov_axis } => {
+                    Projection::Perspective { fov: fov.0, fov_axis }
+                }
+                RawProjection::Orthographic => Projection::Orthographic,
+            };
+            let to_world = to_world_checked(ops)?;
+            if projection == Projection::Orthographic && r.aperture_radius.0 > 0.0 {
+                return Err(
+                    "camera: an Orthographic projection has no lens (aperture_radius must be 0)".into()
+                );
+            }
+            let focus_dist = match r.focus_dist {
+                Some(f) => f.0,
+                None if r.aperture_radius.0 > 0.0 => {
+                    return Err(
+                        "camera: a to_world camera with a lens (aperture_radius > 0) needs focus_dist".into(),
+                    );
+                }
+                // A pinhole's rays do not depend on it.
+                None => 1.0,
+            };
+            let view = CameraView::ToWorld { to_world, projection };
+            return Ok(Self { view, aperture_radius: r.aperture_radius.0, focus_dist, shutter });
+        }
+        if r.to_world.is_none() && r.projection.is_some() {
+            return Err(format!("camera: missing field `to_world`: {FORMS}"));
+        }
+        let missing = |name: &str| format!("camera: missing field `{name}`: {FORMS}");
+        let look_from = r.look_from.ok_or_else(|| missing("look_from"))?.0;
+        let look_at = r.look_at.ok_or_else(|| missing("look_at"))?.0;
+        let vfov = r.vfov.ok_or_else(|| missing("vfov"))?.0;
+        let vup = r.vup.map_or(Vec3::Y, |v| v.0);
+        let view = look_at - look_from;
+        if view.length_squared() == 0.0 {
+            return Err("camera: look_from and look_at are the same point".into());
+        }
+        if view.normalize().cross(vup.normalize()).length_squared() < 1e-12 {
+            return Err("camera: vup is parallel to the view direction".into());
+        }
+        let far_point = far(look_from.abs().max_element()) || far(look_at.abs().max_element());
+        if far_point || far(view.length()) {
+            return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
+        }
         Ok(Self {
-            look_from: r.look_from.0,
-            look_at: r.look_at.0,
-            vup: r.vup.0,
-            vfov: r.vfov.0,
+            view: CameraView::LookAt { look_from, look_at, vup, vfov },
             aperture_radius: r.aperture_radius.0,
             focus_dist: r.focus_dist.map_or(view.length(), |f| f.0),
-            shutter: (r.shutter.0.0, r.shutter.1.0),
+            shutter,
         })
     }
+}
+
+/// The product of a camera's `to_world` list, checked: invertible (relative to its own
+/// scale, as each step), its origin within [`MAX_COORDINATE`] and its axes no longer than it.
+fn to_world_checked(ops: &[TransformOp]) -> Result<Affine3A, String> {
+    let m = compose(ops);
+    let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+    let size = axes.iter().map(|a| a.length()).fold(0.0f32, f32::max);
+    if !(size <= MAX_COORDINATE) || !(m.translation.abs().max_element() <= MAX_COORDINATE) {
+        return Err(format!(
+            "camera: to_world must keep the camera within {MAX_COORDINATE:e} units (origin {}, largest axis {size})",
+            m.translation
+        ));
+    }
+    if !((m.matrix3 * size.recip()).determinant().abs() > f32::EPSILON) {
+        return Err("camera: to_world is singular (it flattens camera space)".into());
+    }
+    Ok(m)
 }
 
 /// Image size and sampling.

@@ -76,5 +76,21 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
         textures: names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
         dir,
     });
-    options.from_str(text).map_err(error)
+    let desc: SceneDesc = options.from_str(text).map_err(error)?;
+    let keys = &desc.animation.camera;
+    let placed_keys = keys.look_from.is_some() || keys.look_at.is_some() || keys.vfov.is_some();
+    if placed_keys && matches!(desc.camera.view, super::CameraView::ToWorld { .. }) {
+        // At the `animation` block, the first line that names it.
+        let line = text.lines().position(|l| l.trim_start().starts_with("animation")).map_or(0, |i| i + 1);
+        let (line, col) = if line > 0 { substituted.map_position(line, 1) } else { (0, 0) };
+        return Err(SceneError {
+            path: path.to_owned(),
+            line,
+            col,
+            message: "animation: camera keys look_from, look_at and vfov need a look_from/look_at camera, \
+                      not a to_world one (focus_dist keys work with both)"
+                .into(),
+        });
+    }
+    Ok(desc)
 }

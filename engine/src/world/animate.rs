@@ -3,7 +3,7 @@
 use super::components::{
     Animated, CameraKeys, CameraParams, EmitKeys, FrameTime, Materials, Motion, Transform,
 };
-use crate::scene::CameraDesc;
+use crate::scene::{CameraDesc, CameraView};
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3, Vec3A};
 
@@ -40,20 +40,25 @@ pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: R
     let at = |t: f32| {
         let mut c = keys.base;
         let k = &keys.keys;
-        if let Some(k) = &k.look_from {
-            c.look_from = k.at(t);
-        }
-        if let Some(k) = &k.look_at {
-            c.look_at = k.at(t);
-        }
-        if let Some(k) = &k.vfov {
-            c.vfov = k.at(t).clamp(1e-3, 179.0);
+        // The loader refuses look_from, look_at and vfov keys for a `to_world` camera.
+        let mut target = None;
+        if let CameraView::LookAt { look_from, look_at, vfov, .. } = &mut c.view {
+            if let Some(k) = &k.look_from {
+                *look_from = k.at(t);
+            }
+            if let Some(k) = &k.look_at {
+                *look_at = k.at(t);
+            }
+            if let Some(k) = &k.vfov {
+                *vfov = k.at(t).clamp(1e-3, 179.0);
+            }
+            target = Some(*look_at - *look_from);
         }
         if let Some(k) = &k.focus_dist {
             c.focus_dist = k.at(t).max(1e-6);
-        } else if k.look_from.is_some() || k.look_at.is_some() {
+        } else if let Some(view) = target.filter(|_| k.look_from.is_some() || k.look_at.is_some()) {
             // The default focus distance follows the target.
-            c.focus_dist = (c.look_at - c.look_from).length();
+            c.focus_dist = view.length();
         }
         c.shutter = (time.open, time.close);
         c
@@ -77,8 +82,7 @@ pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: R
 }
 
 fn same_camera(a: &CameraDesc, b: &CameraDesc) -> bool {
-    (a.look_from, a.look_at, a.vup, a.vfov, a.aperture_radius, a.focus_dist, a.shutter)
-        == (b.look_from, b.look_at, b.vup, b.vfov, b.aperture_radius, b.focus_dist, b.shutter)
+    a == b
 }
 
 /// Sets keyframed emitted radiance for the frame (at mid-shutter).

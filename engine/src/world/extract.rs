@@ -4,7 +4,7 @@
 use super::components::*;
 use crate::camera::Camera;
 use crate::render_scene::{Features, RenderScene};
-use crate::scene::CameraDesc;
+use crate::scene::{CameraDesc, CameraView, Projection};
 use bevy_ecs::prelude::*;
 use std::sync::Arc;
 
@@ -36,8 +36,19 @@ pub fn extract_render_scene(
     }
     let s = settings.0;
     let make = |c: &CameraDesc| {
-        let (from, at, up) = (c.look_from, c.look_at, c.vup);
-        Camera::new(from, at, up, c.vfov, c.aperture_radius, c.focus_dist, c.shutter, s.width, s.height)
+        let (r, f, shutter, w, h) = (c.aperture_radius, c.focus_dist, c.shutter, s.width, s.height);
+        match c.view {
+            CameraView::LookAt { look_from, look_at, vup, vfov } => {
+                Camera::new(look_from, look_at, vup, vfov, r, f, shutter, w, h)
+            }
+            CameraView::ToWorld { to_world, projection: Projection::Perspective { fov, fov_axis } } => {
+                let tan_half_x = fov_axis.tan_half_x_fov(fov, w as f64 / h as f64) as f32;
+                Camera::perspective(to_world, tan_half_x, r, f, shutter, w, h)
+            }
+            CameraView::ToWorld { to_world, projection: Projection::Orthographic } => {
+                Camera::orthographic(to_world, shutter, w, h)
+            }
+        }
     };
     let camera = match &camera.1 {
         Some(close) => make(&camera.0).moving_to(&make(close)),

@@ -313,7 +313,10 @@ mod tests {
         assert!(Arc::ptr_eq(&first, &again));
 
         // A camera edit re-extracts without touching the geometry.
-        w.world.resource_mut::<CameraParams>().0.vfov = 30.0;
+        match &mut w.world.resource_mut::<CameraParams>().0.view {
+            crate::scene::CameraView::LookAt { vfov, .. } => *vfov = 30.0,
+            other => panic!("the scene's camera is {other:?}"),
+        }
         let cam = w.update();
         assert_eq!(rebuilds(&w), 1);
         assert!(!Arc::ptr_eq(&first, &cam) && Arc::ptr_eq(&first.geometry, &cam.geometry));

@@ -1,0 +1,134 @@
+//! The camera given by a `to_world` transform (Mitsuba 3's camera space) and the pixel
+//! filters: the two camera forms render the same image, orthographic views have the size
+//! Mitsuba gives them, bad cameras are refused with clear errors.
+
+mod common;
+use common::*;
+use pathwave::engine::scene::{SceneDesc, parse};
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::film::Film;
+use pathwave::integrator::wavefront;
+use std::path::Path;
+
+/// A blue sphere at -x and a red one at +x under a white sky, seen from +z; `camera` and
+/// `render` are spliced in.
+fn two_spheres(camera: &str, render: &str) -> String {
+    format!(
+        r#"Scene(
+    camera: ({camera}),
+    render: ({render}),
+    background: Constant((1, 1, 1)),
+    materials: {{ "red": Lambertian(albedo: (0.8, 0.1, 0.1)), "blue": Lambertian(albedo: (0.1, 0.1, 0.8)) }},
+    objects: [
+        (shape: Sphere(center: (1.2, 0, 0), radius: 1), material: "red"),
+        (shape: Sphere(center: (-1.2, 0, 0), radius: 1), material: "blue"),
+    ],
+)"#
+    )
+}
+
+fn both(desc: &SceneDesc) -> [Film; 2] {
+    let scene = SceneWorld::render_scene(desc);
+    [render(desc), wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0]
+}
+
+/// Mean red minus blue over the left and the right half of the image.
+fn red_minus_blue(film: &Film) -> (f32, f32) {
+    let mean = film.mean();
+    let (mut l, mut r) = (0.0, 0.0);
+    for (i, p) in mean.iter().enumerate() {
+        let x = i as u32 % film.width;
+        if x < film.width / 2 { l += p.x - p.z } else { r += p.x - p.z }
+    }
+    let n = (film.width * film.height / 2) as f32;
+    (l / n, r / n)
+}
+
+/// Mitsuba's look_at(origin (0, 0, 6), target 0, up +y) has columns left = up x dir =
+/// (-1, 0, 0), up, dir = (0, 0, -1), origin: the same view as look_from/look_at, so the same
+/// image (to float rounding), with the red sphere (+x) on the right.
+#[test]
+fn to_world_renders_the_look_at_image_unmirrored() {
+    let size = "width: 48, height: 32, spp: 4";
+    let look_at = inline(&two_spheres("look_from: (0, 0, 6), look_at: (0, 0, 0), vfov: 40", size));
+    let to_world = inline(&two_spheres(
+        "to_world: [Matrix([[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 6], [0, 0, 0, 1]])], \
+         projection: Perspective(fov: 40, fov_axis: Y)",
+        size,
+    ));
+    for (a, b) in both(&look_at).iter().zip(&both(&to_world)) {
+        let (ma, mb) = (a.mean(), b.mean());
+        let differ = ma.iter().zip(&mb).filter(|(p, q)| (**p - **q).abs().max_element() > 1e-3).count();
+        assert!(differ <= 2, "{differ} pixels differ between the two camera forms");
+        let (left, right) = red_minus_blue(b);
+        assert!(left < -0.1 && right > 0.1, "the image is mirrored: left {left}, right {right}");
+    }
+    // The same matrix without the flip of x (x = +1: camera-space x to world +x) mirrors it.
+    let mirrored = inline(&two_spheres(
+        "to_world: [Matrix([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 6], [0, 0, 0, 1]])], \
+         projection: Perspective(fov: 40, fov_axis: Y)",
+        size,
+    ));
+    let (left, right) = red_minus_blue(&render(&mirrored));
+    assert!(left > 0.1 && right < -0.1, "left {left}, right {right}");
+}
+
+/// An orthographic view spans camera-space x in [-1, 1] and y in [-1/aspect, 1/aspect], then
+/// to_world's scale (2) applies: the unit sphere covers pi / (4 * 2) of a 2:1 image (x in
+/// [-2, 2], y in [-1, 1]), and, centred at x = 0.5, lies mostly in the right half.
+#[test]
+fn orthographic_view_is_sized_by_to_world() {
+    let text = two_spheres(
+        "to_world: [Scale((2, 2, 1)), RotateY(180), Translate((0, 0, 6))], projection: Orthographic",
+        "width: 128, height: 64, spp: 4",
+    )
+    .replace(r#"(shape: Sphere(center: (-1.2, 0, 0), radius: 1), material: "blue"),"#, "")
+    .replace("center: (1.2, 0, 0)", "center: (0.5, 0, 0)");
+    for film in both(&inline(&text)) {
+        let mean = film.mean();
+        let hit = mean.iter().filter(|p| p.y < 0.5).count() as f32 / mean.len() as f32;
+        let expected = std::f32::consts::PI / (4.0 * 2.0);
+        assert!((hit - expected).abs() < 0.01, "sphere covers {hit}, expected {expected}");
+        let (left, right) = red_minus_blue(&film);
+        assert!(right > left + 0.1, "left {left}, right {right}");
+    }
+}
+
+fn error(camera: &str, extra: &str) -> String {
+    let text = two_spheres(camera, "width: 8, height: 8").replace("\n)", &format!("\n    {extra}\n)"));
+    match parse(&text, Path::new("<test>")) {
+        Ok(_) => panic!("accepted: {camera}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_cameras_are_refused_clearly() {
+    let eye = "Matrix([[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, -1, 6], [0, 0, 0, 1]])";
+    for (camera, extra, expected) in [
+        ("to_world: [Scale((1, 0, 1))], projection: Orthographic".to_string(), "", "singular"),
+        (format!("to_world: [{eye}, Scale((1, 1e-9, 1))], projection: Orthographic"), "", "singular"),
+        (format!("to_world: [{eye}], projection: Perspective(fov: 180)"), "", "field of view in (0, 180)"),
+        (format!("to_world: [{eye}], projection: Perspective(fov: 0)"), "", "field of view in (0, 180)"),
+        (format!("to_world: [{eye}], projection: Perspective(fov: 30, fov_axis: Z)"), "", "Diagonal"),
+        (format!("to_world: [{eye}]"), "", "missing field `projection`"),
+        ("projection: Orthographic".to_string(), "", "missing field `to_world`"),
+        (format!("to_world: [{eye}], projection: Orthographic, vfov: 40"), "", "do not go with"),
+        (format!("to_world: [{eye}], projection: Orthographic, aperture_radius: 0.1"), "", "has no lens"),
+        (
+            format!("to_world: [{eye}], projection: Perspective(fov: 30), aperture_radius: 0.1"),
+            "",
+            "needs focus_dist",
+        ),
+        ("to_world: [Translate((0, 0, 2e15))], projection: Orthographic".to_string(), "", "within 1e15"),
+        ("look_from: (0, 0, 6), look_at: (0, 0, 0)".to_string(), "", "missing field `vfov`"),
+        (
+            format!("to_world: [{eye}], projection: Perspective(fov: 30)"),
+            "animation: (camera: (look_from: Linear([(0, (0, 0, 5))]))),",
+            "need a look_from/look_at camera",
+        ),
+    ] {
+        let e = error(&camera, extra);
+        assert!(e.contains(expected), "{camera}: {e}");
+    }
+}
