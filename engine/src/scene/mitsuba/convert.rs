@@ -239,34 +239,35 @@ impl<'d> Converter<'d> {
             vec!["to_world", "near_clip", "far_clip", "shutter_open", "shutter_close", "film", "sampler"];
         match p.kind.as_str() {
             "perspective" | "thinlens" => {
-                let fov = match (p.float("fov")?, p.string("focal_length")?) {
-                    (Some(f), None) => f,
-                    (None, Some((f, at))) => {
-                        // Mitsuba: a 35 mm film's 36 mm width over the focal length, along x.
-                        let mm =
-                            f.trim().trim_end_matches("mm").trim().parse::<f64>().ok().filter(|v| *v > 0.0);
-                        let mm = mm.ok_or_else(|| {
-                            at.error(format!("focal_length \"{f}\" is not a length like \"50mm\""))
-                        })?;
-                        2.0 * (36.0 / (2.0 * mm)).atan().to_degrees()
+                // Mitsuba's `parse_fov`: a focal length (default 50 mm) is 35 mm film
+                // equivalent, and gives the field of view along the 36 x 24 mm diagonal.
+                let diagonal = |mm: f64| 2.0 * (36.0f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees();
+                let (fov, axis) = match (p.float("fov")?, p.string("focal_length")?) {
+                    (Some(f), None) => {
+                        let axis = match p.string("fov_axis")? {
+                            None => "X",
+                            Some((a, at)) => match a.to_ascii_lowercase().as_str() {
+                                "x" => "X",
+                                "y" => "Y",
+                                "diagonal" => "Diagonal",
+                                "smaller" => "Smaller",
+                                "larger" => "Larger",
+                                _ => {
+                                    return Err(at.error(format!(
+                                        "fov_axis \"{a}\": expected x, y, diagonal, smaller or larger"
+                                    )));
+                                }
+                            },
+                        };
+                        (f, axis)
                     }
-                    (None, None) => 2.0 * (36.0f64 / 100.0).atan().to_degrees(),
+                    (None, Some((f, at))) => {
+                        let mm = f.trim().strip_suffix("mm").unwrap_or(&f).trim().parse::<f64>().ok().filter(|v| *v > 0.0);
+                        let mm = mm.ok_or_else(|| at.error(format!("focal_length \"{f}\" is not a length like \"50mm\"")))?;
+                        (diagonal(mm), "Diagonal")
+                    }
+                    (None, None) => (diagonal(50.0), "Diagonal"),
                     (Some(_), Some((_, at))) => return Err(at.error("give fov or focal_length, not both")),
-                };
-                let axis = match p.string("fov_axis")? {
-                    None => "X".to_owned(),
-                    Some((a, at)) => match a.as_str() {
-                        "x" => "X".into(),
-                        "y" => "Y".into(),
-                        "diagonal" => "Diagonal".into(),
-                        "smaller" => "Smaller".into(),
-                        "larger" => "Larger".into(),
-                        _ => {
-                            return Err(at.error(format!(
-                                "fov_axis \"{a}\": expected x, y, diagonal, smaller or larger"
-                            )));
-                        }
-                    },
                 };
                 fields.push(format!("projection: Perspective(fov: {}, fov_axis: {axis})", num32(fov)));
                 reads.extend(["fov", "focal_length", "fov_axis"]);
