@@ -132,3 +132,59 @@ fn bad_cameras_are_refused_clearly() {
         assert!(e.contains(expected), "{camera}: {e}");
     }
 }
+
+/// A sharp vertical edge (an emitter of radiance 1 over world x > 0, black elsewhere) seen by
+/// an orthographic camera whose pixel boundary lies on it: pixel column c's mean is the
+/// filter's normalised CDF at its centre's distance from the edge, c + 0.5 - 8 pixels (the
+/// box: 0 or 1; the tent of radius 1: 0.125 and 0.875 beside the edge), with both integrators.
+#[test]
+fn filters_blur_a_sharp_edge_by_their_cdf() {
+    use pathwave::engine::filter::PixelFilter;
+    use pathwave::engine::scene::FilterDesc;
+    for (filter, desc) in [
+        ("Box", FilterDesc::Box),
+        ("Tent(radius: 1)", FilterDesc::Tent { radius: 1.0 }),
+        ("Tent(radius: 2.5)", FilterDesc::Tent { radius: 2.5 }),
+        ("Gaussian(stddev: 0.5)", FilterDesc::Gaussian { stddev: 0.5 }),
+        ("Gaussian(stddev: 0.8)", FilterDesc::Gaussian { stddev: 0.8 }),
+    ] {
+        let text = format!(
+            r#"Scene(
+    camera: (to_world: [RotateY(180), Translate((0, 0, 5))], projection: Orthographic),
+    render: (width: 16, height: 2, spp: 1024, filter: {filter}),
+    materials: {{ "lamp": DiffuseLight(emit: (1, 1, 1)) }},
+    objects: [(shape: Quad(q: (0, -5, 0), u: (5, 0, 0), v: (0, 10, 0)), material: "lamp")],
+)"#
+        );
+        let f = PixelFilter::from(desc);
+        // The normalised CDF by the midpoint rule.
+        let cdf = |d: f32| {
+            let r = f.radius();
+            let at = |x: f32| f.eval(x) as f64;
+            let n = 20_000;
+            let step = 2.0 * r / n as f32;
+            let (mut below, mut all) = (0.0, 0.0);
+            for k in 0..n {
+                let x = -r + (k as f32 + 0.5) * step;
+                all += at(x);
+                if x < d {
+                    below += at(x);
+                }
+            }
+            below / all
+        };
+        for film in both(&inline(&text)) {
+            let mean = film.mean();
+            for c in 0..16u32 {
+                let expected = cdf(c as f32 + 0.5 - 8.0) as f32;
+                for row in 0..2 {
+                    let got = mean[(row * 16 + c) as usize].x;
+                    assert!(
+                        (got - expected).abs() < 0.02,
+                        "{filter}: column {c}: {got}, expected {expected}"
+                    );
+                }
+            }
+        }
+    }
+}

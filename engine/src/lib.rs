@@ -9,6 +9,7 @@
 pub mod accel;
 pub mod animation;
 pub mod camera;
+pub mod filter;
 pub mod format;
 pub mod lighting;
 pub mod material;

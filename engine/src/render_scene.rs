@@ -79,6 +79,8 @@ pub struct RenderSettings {
     pub clamp: Option<f32>,
     /// How the random numbers of the samples are made.
     pub sampler: SamplerKind,
+    /// Where in the image a pixel's samples land (the box: uniform over the pixel).
+    pub filter: crate::filter::PixelFilter,
 }
 
 impl std::str::FromStr for SamplerKind {

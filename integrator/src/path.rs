@@ -7,6 +7,7 @@ use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::camera::RayLanes;
+use pathwave_engine::filter::PixelFilter;
 use pathwave_engine::lighting::lights::OtherLight;
 use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
@@ -503,8 +504,21 @@ pub fn camera_rays<const N: usize>(
         false => [0.0; N],
     };
     let (mut at, mut on_lens) = ([[0.0; 2]; N], [[0.0; 2]; N]);
+    // The pixel filter draws the position from the pixel numbers (filter importance sampling:
+    // every sample weighs the same); the box keeps its own loop, the one before filters.
+    match &scene.settings.filter {
+        PixelFilter::Box => {
+            for l in 0..N {
+                at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
+            }
+        }
+        filter => {
+            for l in 0..N {
+                at[l] = filter.position(pixel[l], [u[l].x, u[l].y]);
+            }
+        }
+    }
     for l in 0..N {
-        at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
         on_lens[l] = [lens[l].x, lens[l].y];
     }
     scene.camera.generate_rays(&at, &on_lens, &time)

@@ -7,6 +7,7 @@
 use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
 use crate::engine::render_scene::SamplerKind;
+use crate::engine::scene::FilterDesc;
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
@@ -194,6 +195,10 @@ pub struct ImageArgs {
     /// How samples are made: sobol (default), stratified or independent (overrides the scene).
     #[arg(long)]
     pub sampler: Option<SamplerKind>,
+    /// Pixel filter: box (default), tent, tent:RADIUS, gaussian or gaussian:STDDEV, in pixels,
+    /// as Mitsuba 3's (overrides the scene's `render: (filter: ..)`).
+    #[arg(long)]
+    pub filter: Option<FilterDesc>,
 }
 
 /// `--checkpoint-every` and `--resume`.

@@ -4,6 +4,7 @@
 use super::args::{Checkpointing, How, Integrator};
 use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
+use crate::engine::filter::PixelFilter;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
 use crate::integrator::{film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
@@ -26,18 +27,25 @@ pub fn render_id(path: &Path, scene: &RenderScene, how: &How, time: f32) -> Resu
     let s = scene.settings;
     use crate::engine::scene::files;
     let w = &s.window;
-    let settings = checkpoint::settings_text(&[
-        ("size", format!("{}x{}", s.width, s.height)),
-        ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
-        ("seed", s.seed.to_string()),
-        ("max_depth", s.max_depth.to_string()),
-        ("rr_depth", s.rr_depth.to_string()),
-        ("clamp", format!("{:?}", s.clamp)),
-        ("time", time.to_string()),
-        ("integrator", format!("{:?}", how.integrator)),
-        ("sampler", format!("{:?}", s.sampler)),
-        ("defines", format!("{:?}", how.defines)),
-    ]);
+    // The filter only where it is not the box, so that earlier checkpoints keep their key.
+    let filter = (s.filter != PixelFilter::Box).then(|| ("filter", s.filter.describe()));
+    let settings = checkpoint::settings_text(
+        &[
+            ("size", format!("{}x{}", s.width, s.height)),
+            ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
+            ("seed", s.seed.to_string()),
+            ("max_depth", s.max_depth.to_string()),
+            ("rr_depth", s.rr_depth.to_string()),
+            ("clamp", format!("{:?}", s.clamp)),
+            ("time", time.to_string()),
+            ("integrator", format!("{:?}", how.integrator)),
+            ("sampler", format!("{:?}", s.sampler)),
+            ("defines", format!("{:?}", how.defines)),
+        ]
+        .into_iter()
+        .chain(filter)
+        .collect::<Vec<_>>(),
+    );
     if settings.len() > checkpoint::MAX_SETTINGS_BYTES {
         return Err(format!(
             "the -D values take {} bytes; at most {} fit in a checkpoint",

@@ -64,6 +64,7 @@ pub fn load(path: &Path, o: &SceneArgs) -> Result<scene::SceneDesc, String> {
     r.height = o.image.height.unwrap_or(r.height);
     r.seed = o.image.seed.unwrap_or(r.seed);
     r.sampler = o.image.sampler.unwrap_or(r.sampler);
+    r.filter = o.image.filter.unwrap_or(r.filter);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     r.clamp = o.clamp()?.or(r.clamp);
     r.crop = o.crop()?.or(r.crop);

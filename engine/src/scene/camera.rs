@@ -263,6 +263,107 @@ pub struct RenderDesc {
     /// Render only this window `(x0, x1, y0, y1)`, fractions of the image in [0, 1] as
     /// pbrt-v4's crop window (default: the whole image).
     pub crop: Option<CropWindow>,
+    /// The pixel filter: `Box` (default), `Tent(radius: 1)` or `Gaussian(stddev: 0.5)`.
+    pub filter: FilterDesc,
+}
+
+/// A pixel filter as Mitsuba 3 defines it (mitsuba3 `src/rfilters/`), in pixels: `Box`
+/// (radius 0.5), `Tent(radius)` (default 1, at most 64), `Gaussian(stddev)` (default 0.5, at
+/// most 16; radius 4 stddev). See [`crate::filter`].
+#[derive(Deserialize, Debug, Clone, Copy, Default, PartialEq)]
+#[serde(try_from = "RawFilter")]
+pub enum FilterDesc {
+    /// Uniform over the pixel.
+    #[default]
+    Box,
+    /// max(0, 1 - |x| / radius) per axis.
+    Tent {
+        /// In (0, 64] pixels.
+        radius: f32,
+    },
+    /// Mitsuba's windowed Gaussian per axis.
+    Gaussian {
+        /// In (0, 16] pixels.
+        stddev: f32,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Filter")]
+enum RawFilter {
+    Box,
+    Tent {
+        #[serde(default = "one")]
+        radius: Positive,
+    },
+    Gaussian {
+        #[serde(default = "half")]
+        stddev: Positive,
+    },
+}
+
+fn one() -> Positive {
+    Positive(1.0)
+}
+
+fn half() -> Positive {
+    Positive(0.5)
+}
+
+impl FilterDesc {
+    /// The largest tent radius (pixels).
+    pub const MAX_RADIUS: f32 = 64.0;
+    /// The largest Gaussian standard deviation (pixels).
+    pub const MAX_STDDEV: f32 = 16.0;
+
+    /// Checks the bounds.
+    pub fn checked(self) -> Result<Self, String> {
+        match self {
+            FilterDesc::Tent { radius } if !(radius > 0.0 && radius <= Self::MAX_RADIUS) => {
+                Err(format!("filter: a Tent's radius is in (0, {}] pixels, not {radius}", Self::MAX_RADIUS))
+            }
+            FilterDesc::Gaussian { stddev } if !(stddev > 0.0 && stddev <= Self::MAX_STDDEV) => Err(format!(
+                "filter: a Gaussian's stddev is in (0, {}] pixels, not {stddev}",
+                Self::MAX_STDDEV
+            )),
+            ok => Ok(ok),
+        }
+    }
+}
+
+impl TryFrom<RawFilter> for FilterDesc {
+    type Error = String;
+    fn try_from(r: RawFilter) -> Result<Self, String> {
+        match r {
+            RawFilter::Box => Ok(FilterDesc::Box),
+            RawFilter::Tent { radius } => FilterDesc::Tent { radius: radius.0 }.checked(),
+            RawFilter::Gaussian { stddev } => FilterDesc::Gaussian { stddev: stddev.0 }.checked(),
+        }
+    }
+}
+
+/// The command line's spelling: `box`, `tent`, `tent:RADIUS`, `gaussian`, `gaussian:STDDEV`.
+impl std::str::FromStr for FilterDesc {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (name, value) = s.split_once(':').map_or((s, None), |(n, v)| (n, Some(v)));
+        let number = |default: f32| -> Result<f32, String> {
+            value.map_or(Ok(default), |v| {
+                v.parse::<f32>().map_err(|_| format!("filter: '{v}' is not a number"))
+            })
+        };
+        let f = match (name, value) {
+            ("box", None) => FilterDesc::Box,
+            ("tent", _) => FilterDesc::Tent { radius: number(1.0)? },
+            ("gaussian", _) => FilterDesc::Gaussian { stddev: number(0.5)? },
+            _ => {
+                return Err(format!(
+                    "no filter '{s}': there are box, tent, tent:RADIUS, gaussian and gaussian:STDDEV"
+                ));
+            }
+        };
+        f.checked()
+    }
 }
 
 /// `(x0, x1, y0, y1)` in [0, 1], x0 < x1 and y0 < y1.
@@ -303,6 +404,7 @@ impl Default for RenderDesc {
             clamp: None,
             sampler: SamplerKind::default(),
             crop: None,
+            filter: FilterDesc::Box,
         }
     }
 }

@@ -90,6 +90,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         seed: r.seed,
         clamp: r.clamp.map(|c| c.0),
         sampler: r.sampler,
+        filter: r.filter.into(),
     }));
     world.insert_resource(CameraParams(desc.camera, None));
     world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });
