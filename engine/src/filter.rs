@@ -10,6 +10,10 @@
 
 /// A pixel filter ready to sample offsets.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[expect(
+    clippy::large_enum_variant,
+    reason = "held once in the render settings (which are Copy) and read in place, never moved per sample"
+)]
 pub enum PixelFilter {
     /// Radius 0.5: uniform over the pixel (the offset is the sample number itself).
     #[default]
