@@ -6,8 +6,9 @@
 //! u = atan2(d.x, -d.z) / (2 pi), wrapped to [0, 1), and v = acos(d.y) / pi: v = 0 is +y and
 //! the top row of the image, -z is u = 0 (the left edge), +x is u = 0.25, +z is u = 0.5 and -x
 //! is u = 0.75 (the mapping of Mitsuba 3's `envmap` emitter). Texel (i, j) (column i, row j
-//! from the top) has its centre at u = (i + 0.5) / W, v = (j + 0.5) / H; lookups interpolate
-//! bilinearly between texel centres, wrapping in u and clamping in v.
+//! from the top) lies at u = (i + 0.5) / W (texel-centred columns) and v = j / (H - 1) (the
+//! top row at the pole +y, the bottom row at -y), as Mitsuba 3.9 places them; lookups
+//! interpolate bilinearly between those points, wrapping in u and clamping in v.
 //!
 //! Rotation: `rotate_degrees` turns the map about +y by a right-handed rotation (positive =
 //! counter-clockwise seen from above, looking down -y): what the unrotated map shows in the
@@ -262,7 +263,7 @@ impl EnvironmentMap {
     }
 
     /// The radiance arriving from direction `dir` (any non-zero length; it is normalised
-    /// here), scaled, interpolated bilinearly between texel centres. Black for a zero or
+    /// here), scaled, interpolated bilinearly between texels (see the module documentation). Black for a zero or
     /// non-finite direction. Never negative or NaN.
     pub fn radiance(&self, dir: Vec3A) -> Vec3 {
         map_uv(dir, self.u_offset).map_or(Vec3::ZERO, |(uv, _)| self.radiance_at(uv))
@@ -285,8 +286,11 @@ impl EnvironmentMap {
         // The same product u * W as the sampler's cell lookup (`distribution::cell_of`), so
         // that a lookup in cell i reads only columns i - 1 ..= i + 1, which that cell's bound
         // covers.
+        // Columns are texel-centred (periodic in u); rows are corner-aligned, row 0 at v = 0
+        // (+y) and row H - 1 at v = 1 (-y), as Mitsuba 3's `envmap` (its `eval_spectrum`):
+        // the rows a lookup in the sampler's row j reads stay within j - 1 ..= j + 1.
         let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
+        let y = uv.y * (self.height - 1) as f32;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (i0, j0) = (x0 as i64, y0 as i64);
@@ -474,36 +478,42 @@ mod tests {
     }
 
     #[test]
-    fn bilinear_hits_texels_at_centres_and_means_halfway_across_the_seam() {
+    fn bilinear_hits_texels_and_means_halfway_across_the_seam() {
         let (w, h) = (8u32, 4u32);
         let mut r = uniform(11);
         let t: Vec<Vec3> = (0..w * h).map(|_| Vec3::new(r(), r(), r()) * 10.0).collect();
         let m = EnvironmentMap::new(w, h, t.clone(), 2.0, 0.0);
         let at = |i: u32, j: u32| 2.0 * t[(j * w + i) as usize];
-        let look = |u: f32, v: f32| m.radiance(uv_to_direction(Vec2::new(u, v)));
+        // At the map's (u, v): the poles' directions have no azimuth.
+        let look = |u: f32, v: f32| m.radiance_at(Vec2::new(u, v));
+        // Texel (i, j) lies at u = (i + 0.5) / W, v = j / (H - 1).
+        let row = |j: f32| j / (h - 1) as f32;
         for j in 0..h {
-            let vc = (j as f32 + 0.5) / h as f32;
+            let vc = row(j as f32);
             for i in 0..w {
                 let uc = (i as f32 + 0.5) / w as f32;
-                assert!(close(look(uc, vc), at(i, j), 1e-4), "centre {i} {j}");
+                assert!(close(look(uc, vc), at(i, j), 1e-4), "texel {i} {j}");
                 // Halfway to the right neighbour; column w - 1's is column 0, across u = 0/1.
                 let right = (i + 1) % w;
                 let mean = (at(i, j) + at(right, j)) / 2.0;
                 assert!(close(look((i as f32 + 1.0) / w as f32, vc), mean, 1e-4), "{i} {j}");
                 if j + 1 < h {
                     let mean = (at(i, j) + at(i, j + 1)) / 2.0;
-                    assert!(close(look(uc, (j as f32 + 1.0) / h as f32), mean, 1e-4), "{i} {j}");
+                    assert!(close(look(uc, row(j as f32 + 0.5)), mean, 1e-4), "{i} {j}");
                 }
             }
         }
-        // The seam itself, u = 0 (the direction -z), and the clamped rows above the first and
-        // below the last centre.
-        let v1 = 1.5 / h as f32;
-        assert!(close(m.radiance(uv_to_direction(Vec2::new(0.0, v1))), (at(7, 1) + at(0, 1)) / 2.0, 1e-4));
-        assert!(close(look(0.5 / w as f32, 0.1 / h as f32), at(0, 0), 1e-4));
-        assert!(close(look(0.5 / w as f32, 1.0 - 0.1 / h as f32), at(0, h - 1), 1e-4));
+        // The seam itself, u = 0 (the direction -z), and the poles, where the first and last
+        // rows lie.
+        assert!(close(
+            m.radiance(uv_to_direction(Vec2::new(0.0, row(1.0)))),
+            (at(7, 1) + at(0, 1)) / 2.0,
+            1e-4
+        ));
+        assert!(close(look(0.5 / w as f32, 0.0), at(0, 0), 1e-4));
+        assert!(close(look(0.5 / w as f32, 1.0), at(0, h - 1), 1e-4));
         // A quarter of the way in u and v: the bilinear weights.
-        let (u, v) = (2.75 / w as f32, 1.75 / h as f32);
+        let (u, v) = (2.75 / w as f32, row(1.25));
         let want = (at(2, 1) * 0.75 * 0.75 + at(3, 1) * 0.25 * 0.75)
             + (at(2, 2) * 0.75 * 0.25 + at(3, 2) * 0.25 * 0.25);
         assert!(close(look(u, v), want, 1e-4));
