@@ -1,0 +1,171 @@
+//! Mitsuba 3's own render tests on the scenes of its suite that pathwave reads
+//! (`tests/mitsuba-data`, copied from mitsuba-data with their references and variance images).
+//!
+//! The protocol is Mitsuba's `src/render/tests/test_renders.py`: render with 2,000,000 / pixels
+//! samples per pixel; in XYZ, z = |image - reference| * sqrt(spp / max(variance, 1e-4)) per pixel
+//! channel, with the reference's per-sample variance; two-sided p-value; Sidak-corrected
+//! alpha = 1 - 0.99^(1 / pixels); the scene passes when at least 99.75% of the pixel channels
+//! have p > alpha. Each scene must also fail once its image is 3% too bright, so the test can
+//! see a bias of that size.
+
+use glam::Vec3;
+use pathwave::engine::scene;
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::wavefront;
+use pathwave::io::read_linear;
+use std::path::{Path, PathBuf};
+
+fn suite() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/mitsuba-data/tests/scenes")
+}
+
+/// Linear sRGB to CIE XYZ (the matrix of Mitsuba's test).
+fn xyz(c: Vec3) -> Vec3 {
+    Vec3::new(
+        0.412453 * c.x + 0.357580 * c.y + 0.180423 * c.z,
+        0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z,
+        0.019334 * c.x + 0.119193 * c.y + 0.950227 * c.z,
+    )
+}
+
+/// The complementary error function (Numerical Recipes' `erfcc`, relative error below 1.2e-7).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}
+
+/// The fraction of pixel channels that pass Mitsuba's z-test.
+fn pass_fraction(image: &[Vec3], reference: &[Vec3], variance: &[Vec3], spp: u32) -> f64 {
+    let pixels = image.len() as f64;
+    let alpha = 1.0 - 0.99f64.powf(1.0 / pixels);
+    let mut pass = 0usize;
+    for ((i, r), v) in image.iter().zip(reference).zip(variance) {
+        let (i, r, v) = (xyz(*i), xyz(*r), xyz(*v));
+        for c in 0..3 {
+            let z = (i[c] as f64 - r[c] as f64).abs() * (spp as f64 / (v[c] as f64).max(1e-4)).sqrt();
+            let p = erfc(z / std::f64::consts::SQRT_2);
+            pass += (p > alpha) as usize;
+        }
+    }
+    pass as f64 / (3.0 * pixels)
+}
+
+/// Writes ours, the reference and the failing pixels (red: too bright, blue: too dark) side by
+/// side as an sRGB PNG under `target/`, and returns its path.
+fn side_by_side(
+    image: &[Vec3],
+    reference: &[Vec3],
+    variance: &[Vec3],
+    width: u32,
+    spp: u32,
+    stem: &str,
+) -> PathBuf {
+    let height = image.len() as u32 / width;
+    let alpha = 1.0 - 0.99f64.powf(1.0 / image.len() as f64);
+    let srgb = |c: f32| {
+        let c = c.clamp(0.0, 1.0);
+        let e = if c <= 0.0031308 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+        (e * 255.0 + 0.5) as u8
+    };
+    let mut out = image::RgbImage::new(3 * width, height);
+    for y in 0..height {
+        for x in 0..width {
+            let i = (y * width + x) as usize;
+            let (a, b) = (image[i], reference[i]);
+            out.put_pixel(x, y, image::Rgb([srgb(a.x), srgb(a.y), srgb(a.z)]));
+            out.put_pixel(width + x, y, image::Rgb([srgb(b.x), srgb(b.y), srgb(b.z)]));
+            let (xa, xb, v) = (xyz(a), xyz(b), xyz(variance[i]));
+            let fails = (0..3).any(|c| {
+                let z = (xa[c] as f64 - xb[c] as f64).abs() * (spp as f64 / (v[c] as f64).max(1e-4)).sqrt();
+                erfc(z / std::f64::consts::SQRT_2) <= alpha
+            });
+            let colour = match (fails, xa.y > xb.y) {
+                (false, _) => [0, 0, 0],
+                (true, true) => [255, 0, 0],
+                (true, false) => [0, 0, 255],
+            };
+            out.put_pixel(2 * width + x, y, image::Rgb(colour));
+        }
+    }
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/mitsuba-conformance");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{stem}.png"));
+    let k = (256 / width).max(1);
+    image::imageops::resize(&out, 3 * width * k, height * k, image::imageops::FilterType::Nearest)
+        .save(&path)
+        .unwrap();
+    path
+}
+
+/// Renders `dir/file` as Mitsuba's test does and checks it against `refs/stem_ref_rgb.exr`.
+fn conformance(dir: &str, file: &str, stem: &str) {
+    let scene_path = suite().join(dir).join(file);
+    let refs = suite().join(dir).join("refs");
+    let reference = read_linear(&refs.join(format!("{stem}_ref_rgb.exr"))).unwrap();
+    let variance = read_linear(&refs.join(format!("{stem}_ref_rgb_var.exr"))).unwrap();
+    let mut desc = scene::load(&scene_path).unwrap_or_else(|e| panic!("{e}"));
+    let pixels = reference.width * reference.height;
+    assert_eq!((desc.render.width.get(), desc.render.height.get()), (reference.width, reference.height));
+    let spp = 2_000_000 / pixels;
+    desc.render.spp = spp.try_into().unwrap();
+    desc.render.seed = 0;
+    let scene = SceneWorld::render_scene(&desc);
+    let image = wavefront::render(&scene, Default::default(), &|_, _| {}).0.mean();
+    let fraction = pass_fraction(&image, &reference.pixels, &variance.pixels, spp);
+    eprintln!("{dir}/{file}: {spp} spp, {:.4}% of the pixel channels pass", 100.0 * fraction);
+    if fraction < 0.9975 {
+        let png = side_by_side(&image, &reference.pixels, &variance.pixels, reference.width, spp, stem);
+        let mean = |v: &[Vec3]| v.iter().copied().sum::<Vec3>() / v.len() as f32;
+        panic!(
+            "{dir}/{file}: only {:.4}% pass (mean {} here, {} in the reference); ours | reference | failing pixels in {}",
+            100.0 * fraction,
+            mean(&image),
+            mean(&reference.pixels),
+            png.display()
+        );
+    }
+    let bright: Vec<Vec3> = image.iter().map(|c| *c * 1.03).collect();
+    let fraction = pass_fraction(&bright, &reference.pixels, &variance.pixels, spp);
+    eprintln!("{dir}/{file} 3% too bright: {:.4}% pass", 100.0 * fraction);
+    assert!(fraction < 0.9975, "{dir}/{file}: a 3% error passes ({:.4}%)", 100.0 * fraction);
+}
+
+#[test]
+fn erfc_matches_known_values() {
+    for (x, want) in
+        [(0.0, 1.0), (0.5, 0.4795001222), (1.0, 0.1572992070), (2.0, 0.004677734981), (-1.0, 1.842700793)]
+    {
+        assert!((erfc(x) - want).abs() < 2e-7 * want.max(1e-3), "erfc({x}) = {}, not {want}", erfc(x));
+    }
+}
+
+#[test]
+fn floating_sphere() {
+    conformance("floating_sphere", "test_directional_direct.xml", "test_directional");
+}
+
+#[test]
+fn infinite_mirrors() {
+    conformance("infinite_mirrors", "scene_path.xml", "scene");
+}
+
+#[test]
+fn instancing() {
+    conformance("instancing", "test_instancing_path.xml", "test_instancing");
+}
+
+#[test]
+fn orthographic_sensor() {
+    conformance("orthographic_sensor", "test_orthographic_path.xml", "test_orthographic");
+}
