@@ -6,6 +6,7 @@
 
 use super::convert::{Converter, num, num32, v3};
 use super::props::{Plugin, Value};
+use super::spectrum::Use;
 use super::xml::Element;
 use crate::scene::SceneError;
 use glam::DVec3;
@@ -20,8 +21,7 @@ fn color<'d>(
     match p.param(name) {
         None => Ok(v3(default)),
         Some(param) => match &param.value {
-            Value::Rgb(c) => Ok(v3(*c)),
-            Value::Float(f) => Ok(v3(DVec3::splat(*f))),
+            Value::Rgb(_) | Value::Spectrum(_) | Value::Float(_) => Ok(v3(p.rgb(name)?.expect("present"))),
             Value::Object(e) => Ok(format!("{:?}", cx.texture(e)?)),
             _ => Err(param.at.error(format!("{}: `{name}` is a colour or a texture", p.label()))),
         },
@@ -93,8 +93,8 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                     "material \"{m}\": pathwave's named metals come in a later version; give eta and k"
                 )));
             }
-            let eta = p.rgb("eta")?;
-            let k = p.rgb("k")?;
+            let eta = p.rgb_as("eta", Use::Unbounded)?;
+            let k = p.rgb_as("k", Use::Unbounded)?;
             let tint = color(cx, &p, "specular_reflectance", DVec3::ONE)?;
             p.finish(&[
                 "alpha",

@@ -262,8 +262,17 @@ impl<'d> Converter<'d> {
                         (f, axis)
                     }
                     (None, Some((f, at))) => {
-                        let mm = f.trim().strip_suffix("mm").unwrap_or(&f).trim().parse::<f64>().ok().filter(|v| *v > 0.0);
-                        let mm = mm.ok_or_else(|| at.error(format!("focal_length \"{f}\" is not a length like \"50mm\"")))?;
+                        let mm = f
+                            .trim()
+                            .strip_suffix("mm")
+                            .unwrap_or(&f)
+                            .trim()
+                            .parse::<f64>()
+                            .ok()
+                            .filter(|v| *v > 0.0);
+                        let mm = mm.ok_or_else(|| {
+                            at.error(format!("focal_length \"{f}\" is not a length like \"50mm\""))
+                        })?;
                         (diagonal(mm), "Diagonal")
                     }
                     (None, None) => (diagonal(50.0), "Diagonal"),

@@ -2,6 +2,7 @@
 
 use super::convert::{Converter, num, num32, placed, v3};
 use super::props::{Plugin, compose};
+use super::spectrum::Use;
 use super::xml::Element;
 use crate::scene::SceneError;
 use glam::DVec3;
@@ -22,7 +23,7 @@ fn rgb(p: &Plugin, name: &str) -> Result<DVec3, SceneError> {
                 p.label()
             )));
         }
-        Some(_) => p.rgb(name)?.expect("present"),
+        Some(_) => p.rgb_as(name, Use::Emission)?.expect("present"),
         None => DVec3::ONE,
     };
     if !(c.min_element() >= 0.0) {

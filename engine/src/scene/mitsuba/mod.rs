@@ -15,6 +15,7 @@ pub mod convert;
 pub mod emitter;
 pub mod props;
 pub mod shape;
+pub mod spectrum;
 pub mod xml;
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! plugins and `<ref>`s. Each parameter a converter reads is marked used; [`Plugin::finish`]
 //! refuses the rest, so nothing in a scene is silently ignored.
 
+use super::spectrum::{Spectrum, Use};
 use super::xml::{At, Element};
 use crate::scene::SceneError;
 use glam::{DMat4, DVec3, DVec4};
@@ -66,8 +67,10 @@ pub enum Value<'d> {
     Str(String),
     /// `<point>` or `<vector>`.
     Vector(DVec3),
-    /// `<rgb>`, or a constant `<spectrum>` (its RGB, as Mitsuba's RGB variants).
+    /// `<rgb>`.
     Rgb(DVec3),
+    /// `<spectrum>`, whose RGB depends on what it describes ([`Use`]).
+    Spectrum(Spectrum),
     /// `<transform>`.
     Transform(Vec<Op>),
     /// A nested plugin (`<bsdf>`, `<texture>`, ...) with a `name`, or a `<ref name=".." id=".."/>`.
@@ -82,7 +85,7 @@ impl Value<'_> {
             Value::Bool(_) => "a boolean",
             Value::Str(_) => "a string",
             Value::Vector(_) => "a point or vector",
-            Value::Rgb(_) => "a colour",
+            Value::Rgb(_) | Value::Spectrum(_) => "a colour",
             Value::Transform(_) => "a transform",
             Value::Object(_) => "a plugin",
         }
@@ -270,18 +273,21 @@ fn param_value(e: &Element) -> Result<Value<'_>, SceneError> {
         }
         "spectrum" => {
             e.only(&["name", "value", "filename"])?;
-            if e.attr("filename").is_some() {
-                return Err(e.at.error(
-                    "<spectrum filename=..>: pathwave does not convert measured spectra to RGB yet; give an <rgb> instead",
-                ));
+            match (e.attr("value"), e.attr("filename")) {
+                (Some(v), None) => Value::Spectrum(Spectrum::parse(v, &e.at)?),
+                (None, Some(f)) => {
+                    let bytes = crate::format::files::read_bounded(
+                        std::path::Path::new(f),
+                        16 << 20,
+                        "spectrum file",
+                    )
+                    .map_err(|m| e.at.error(m))?;
+                    let text = String::from_utf8(bytes)
+                        .map_err(|_| e.at.error(format!("the spectrum file {f} is not text")))?;
+                    Value::Spectrum(Spectrum::parse_file(&text, &e.at)?)
+                }
+                _ => return Err(e.at.error("<spectrum> takes a `value` or a `filename`, one of them")),
             }
-            let v = value()?;
-            if v.contains(':') {
-                return Err(e.at.error(
-                    "<spectrum> with wavelength:value pairs: pathwave does not convert spectra to RGB yet; give an <rgb> instead",
-                ));
-            }
-            Value::Rgb(DVec3::splat(float(v, &e.at)?))
         }
         "transform" => {
             e.only(&["name"])?;
@@ -402,15 +408,22 @@ impl<'d> Plugin<'d> {
             .transpose()
     }
 
-    /// A colour parameter: `<rgb>`, a constant `<spectrum>` or a `<float>` (grey).
-    pub fn rgb(&self, name: &str) -> Result<Option<DVec3>, SceneError> {
+    /// A colour parameter: `<rgb>`, `<spectrum>` or `<float>` (grey), a spectrum taken to RGB
+    /// as what it describes (`usage`).
+    pub fn rgb_as(&self, name: &str, usage: Use) -> Result<Option<DVec3>, SceneError> {
         self.get(name)
-            .map(|p| match p.value {
-                Value::Rgb(v) => Ok(v),
-                Value::Float(v) => Ok(DVec3::splat(v)),
+            .map(|p| match &p.value {
+                Value::Rgb(v) => Ok(*v),
+                Value::Spectrum(s) => Ok(s.to_rgb(usage)),
+                Value::Float(v) => Ok(DVec3::splat(*v)),
                 _ => Err(self.wrong(p, "a colour (<rgb>, <spectrum> or <float>)")),
             })
             .transpose()
+    }
+
+    /// A reflectance-like colour parameter ([`Self::rgb_as`] with [`Use::Reflectance`]).
+    pub fn rgb(&self, name: &str) -> Result<Option<DVec3>, SceneError> {
+        self.rgb_as(name, Use::Reflectance)
     }
 
     /// A transform parameter.

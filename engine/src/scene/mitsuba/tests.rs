@@ -111,9 +111,9 @@ fn what_is_not_supported_is_refused_where_it_is_written() {
     assert!(e.message.contains("hide"), "{e}");
     let e = error(
         "spectrum",
-        "<shape type=\"sphere\"><bsdf type=\"conductor\"><spectrum name=\"eta\" value=\"400:1, 700:2\"/></bsdf></shape>",
+        "<shape type=\"sphere\"><bsdf type=\"conductor\"><spectrum name=\"eta\" value=\"700:1, 400:2\"/></bsdf></shape>",
     );
-    assert!(e.message.contains("spectra"), "{e}");
+    assert!(e.message.contains("increase"), "{e}");
 }
 
 #[test]
@@ -145,4 +145,17 @@ fn checkerboards_keep_mitsubas_cells() {
     assert!(r.contains(r#""c": UvChecker(u: 10, v: 6, even: (0.8, 0.8, 0.8), odd: (0.2, 0.2, 0.2))"#), "{r}");
     assert!(r.contains(r#"Lambertian(albedo: "c")"#), "{r}");
     assert!(r.contains("UvChecker(u: 2, v: 2, even: (0.4, 0.4, 0.4)"), "{r}");
+}
+
+#[test]
+fn spectra_become_the_rgb_mitsuba_makes_of_them() {
+    let r = ron(
+        "spectra",
+        r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="0.5"/></bsdf></shape>
+        <shape type="cube"><emitter type="area"><spectrum name="radiance" value="2"/></emitter></shape>"#,
+    );
+    assert!(r.contains("Lambertian(albedo: (0.5, 0.5, 0.5))"), "{r}");
+    // Emission: 2 times equal-energy white in sRGB, not (2, 2, 2).
+    let white = super::spectrum::xyz_to_srgb(glam::DVec3::ONE) * 2.0;
+    assert!(r.contains(&format!("DiffuseLight(emit: {}", super::convert::v3(white))), "{r}");
 }

@@ -292,6 +292,20 @@ impl Reader {
             attrs.push((a.name().to_owned(), value));
         }
         let mut e = Element { tag, attrs, children: Vec::new(), at };
+        // A spectrum file is found now, with the <path> folders declared so far (as Mitsuba's
+        // file resolver at this point of the parse).
+        if e.tag == "spectrum"
+            && let Some((_, name)) = e.attrs.iter_mut().find(|(n, _)| n == "filename")
+        {
+            let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            if let Some(found) = std::iter::once(dir)
+                .chain(self.search.iter().rev().cloned())
+                .map(|d| d.join(&*name))
+                .find(|c| c.is_file())
+            {
+                *name = found.to_string_lossy().into_owned();
+            }
+        }
         match e.tag.as_str() {
             "default" => {
                 e.only(&["name", "value"])?;
