@@ -2,6 +2,9 @@
 //! `Variant(Type)`, becomes the enum of what a scene writes (`Kind(field: value, ...)`), an enum
 //! naming the kinds, and the `Deserialize` impl that reads a kind by its name. Each registry
 //! invokes [`registry!`] once, in the module of its kinds; a kind is a type in its own file.
+//! Materials have a macro of their own (`material/mod.rs`: it also generates the runtime enum
+//! the integrators read and its dispatch) that reads a kind with the same [`VariantName`] and
+//! [`fields`].
 //!
 //! A kind is read after its name by a function of the form of [`fields`] (named fields, the
 //! default) or [`value`] (one unnamed value, `Solid((r, g, b))`), or by the registry's own
