@@ -5,14 +5,19 @@
 //! parameter added to a kind, fails here until the README describes it.
 
 use pathwave::engine::material::MaterialDesc;
-use pathwave::engine::scene::ShapeDesc;
+use pathwave::engine::scene::{LightDesc, ShapeDesc, TextureDesc};
 use serde::de::{self, DeserializeSeed, Deserializer, EnumAccess, MapAccess, VariantAccess, Visitor};
 use std::fmt;
 
 /// The registries whose kinds the README describes: the name of the list for messages, and its
 /// kinds with their parameters. A registry is one line here.
 fn registries() -> Vec<(&'static str, Vec<Kind>)> {
-    vec![("materials", kinds::<MaterialDesc>()), ("shapes", kinds::<ShapeDesc>())]
+    vec![
+        ("materials", kinds::<MaterialDesc>()),
+        ("shapes", kinds::<ShapeDesc>()),
+        ("lights", kinds::<LightDesc>()),
+        ("textures", kinds::<TextureDesc>()),
+    ]
 }
 
 #[test]
@@ -31,21 +36,35 @@ fn a_missing_row_or_parameter_is_reported() {
     assert_eq!(missing(&without_metal), ["materials: `Metal` has no row in README.md"]);
     let without_radius = readme.replace("| `Sphere(center, radius)` |", "| `Sphere(center)` |");
     assert_eq!(missing(&without_radius), ["shapes: `Sphere`'s row does not name `radius`"]);
+    let without_spot: String =
+        readme.lines().filter(|l| !l.starts_with("| `Spot(")).collect::<Vec<_>>().join("\n");
+    assert_eq!(missing(&without_spot), ["lights: `Spot` has no row in README.md"]);
+    let without_color = readme.replace("`Marble(scale, depth, color)`", "`Marble(scale, depth)`");
+    assert_eq!(missing(&without_color), ["textures: `Marble`'s row does not name `color`"]);
 }
 
 /// The probe reads kinds and their parameters; the kinds registered only to test the registries
-/// (the engine's `test-material` and `test-shape` features, tested in `tests/kinds/`) are not
-/// among the user's, so the README has no row for them.
+/// (the engine's `test-material`, `test-shape`, `test-light` and `test-texture` features, tested
+/// in `tests/kinds/`) are not among the user's, so the README has no row for them.
 #[test]
 fn the_probe_finds_the_users_kinds_and_their_parameters() {
     let all: Vec<Kind> = registries().into_iter().flat_map(|(_, k)| k).collect();
-    for name in ["TestDiffuse", "TestDisk"] {
+    for name in ["TestDiffuse", "TestDisk", "TestPoint", "TestStripes"] {
         assert!(!all.iter().any(|k| k.name == name), "{name} is registered in the user's build");
     }
     let metal = all.iter().find(|k| k.name == "Metal").unwrap();
     assert_eq!(metal.params, ["albedo", "fuzz"]);
     let quad = all.iter().find(|k| k.name == "Quad").unwrap();
     assert_eq!(quad.params, ["q", "u", "v"]);
+    let mesh = all.iter().find(|k| k.name == "Mesh").unwrap();
+    assert_eq!(mesh.params, ["file"]);
+    let spot = all.iter().find(|k| k.name == "Spot").unwrap();
+    assert_eq!(spot.params, ["position", "look_at", "intensity", "cone_angle", "falloff_start"]);
+    let marble = all.iter().find(|k| k.name == "Marble").unwrap();
+    assert_eq!(marble.params, ["scale", "depth", "color"]);
+    // `Solid((r, g, b))`: one unnamed value, no parameter to name.
+    let solid = all.iter().find(|k| k.name == "Solid").unwrap();
+    assert!(solid.params.is_empty());
 }
 
 /// What is wrong with `readme`'s rows, one line each.
@@ -87,7 +106,8 @@ struct Kind {
 /// The kinds of the enum `T` as its `Deserialize` impl names them, each with the fields it
 /// accepts: the variant names from `deserialize_enum`, and each variant's fields from
 /// `struct_variant` or, for a variant holding a struct, from the error that struct's
-/// `deny_unknown_fields` gives for a key it does not know.
+/// `deny_unknown_fields` gives for a key it does not know (none for a variant holding one
+/// unnamed value that is not a struct, as `Solid((r, g, b))`).
 fn kinds<T: de::DeserializeOwned>() -> Vec<Kind> {
     let names = match T::deserialize(Probe::Enum) {
         Err(Learnt::Variants(v)) => v,
@@ -180,7 +200,7 @@ impl<'de> VariantAccess<'de> for Variant {
         Err(Learnt::Fields(&[]))
     }
     fn newtype_variant_seed<S: DeserializeSeed<'de>>(self, seed: S) -> Result<S::Value, Learnt> {
-        seed.deserialize(de::value::MapAccessDeserializer::new(UnknownKey))
+        seed.deserialize(Unnamed)
     }
     fn tuple_variant<V: Visitor<'de>>(self, _: usize, _: V) -> Result<V::Value, Learnt> {
         Err(Learnt::Other(format!("{}: a tuple variant", self.0)))
@@ -194,6 +214,31 @@ impl<'de> VariantAccess<'de> for Variant {
             [] => visitor.visit_map(UnknownKey),
             _ => Err(Learnt::Fields(fields)),
         }
+    }
+}
+
+/// A variant's one unnamed value: a struct is asked for its fields, anything else has none.
+struct Unnamed;
+
+impl<'de> Deserializer<'de> for Unnamed {
+    type Error = Learnt;
+    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Learnt> {
+        Err(Learnt::Fields(&[]))
+    }
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _: &'static str,
+        _: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, Learnt> {
+        visitor.visit_map(UnknownKey)
+    }
+    fn deserialize_map<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Learnt> {
+        visitor.visit_map(UnknownKey)
+    }
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf option
+        unit unit_struct newtype_struct seq tuple tuple_struct enum identifier ignored_any
     }
 }
 

@@ -52,8 +52,9 @@ fn a_solid_emission_texture_agrees_with_its_colour() {
     assert!(stats.agrees(), "{stats:?}");
     // And it would notice 5% less light.
     let mut dim = textured.clone();
-    dim.textures.0[0].1 =
-        pathwave::engine::scene::TextureDesc::Solid(pathwave::engine::scene::Rgb(glam::Vec3::splat(14.25)));
+    dim.textures.0[0].1 = pathwave::engine::scene::TextureDesc::Solid(
+        pathwave::engine::texture::solid::Solid(pathwave::engine::scene::Rgb(glam::Vec3::splat(14.25))),
+    );
     let stats = block_z(&render(&dim), &reference, 8, 64);
     assert!(!stats.agrees(), "5% less emission went unnoticed: {stats:?}");
 }

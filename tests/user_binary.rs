@@ -1,5 +1,6 @@
 //! The binary a user runs knows only the kinds a user can write. The engine's test-only
-//! material and shape (its `test-material` and `test-shape` features) are tested from
+//! material, shape, light and texture (its `test-material`, `test-shape`, `test-light` and
+//! `test-texture` features) are tested from
 //! `tests/kinds/`, a package outside the workspace: were any package of the workspace to enable
 //! them, cargo would build `target/release/pathwave` with them during `cargo test --workspace`,
 //! and the user's next render would accept them.
@@ -24,9 +25,24 @@ fn the_binary_refuses_the_test_only_kinds() {
     std::fs::create_dir_all(&dir).unwrap();
     let sphere = "Sphere(center: (0, 0, 0), radius: 1)";
     let disk = "TestDisk(center: (0, 0, 0), normal: (0, 1, 0), radius: 1)";
+    let point = "TestPoint(position: (0, 3, 0), power: (100, 100, 100))";
+    let stripes = "TestStripes(stripes: 4, even: (0, 0, 0), odd: (1, 1, 1))";
     for (name, text, kind, known) in [
         ("material", scene("TestDiffuse", sphere), "TestDiffuse", "Lambertian"),
         ("shape", scene("Lambertian", disk), "TestDisk", "Sphere"),
+        (
+            "light",
+            scene("Lambertian", sphere).replace("objects:", &format!("lights: [{point}], objects:")),
+            "TestPoint",
+            "Point",
+        ),
+        (
+            "texture",
+            scene("Lambertian", sphere)
+                .replace("materials:", &format!("textures: {{ \"t\": {stripes} }}, materials:")),
+            "TestStripes",
+            "Solid",
+        ),
         // The same scene with kinds a user can write renders: the refusals are the kinds'.
         ("user", scene("Lambertian", sphere), "", ""),
     ] {

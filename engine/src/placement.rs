@@ -45,6 +45,13 @@ macro_rules! forms {
                 }
             }
         }
+
+        $($(#[$attr])*
+        impl From<$ty> for Form {
+            fn from(s: $ty) -> Self {
+                Form::$variant(s)
+            }
+        })+
     };
 }
 with_shapes!(forms);

@@ -33,8 +33,8 @@ pub fn files_of(path: &Path, desc: &SceneDesc) -> BTreeSet<PathBuf> {
         }
     }
     for (_, t) in &desc.textures.0 {
-        if let TextureDesc::Image { file, .. } = t {
-            files.insert(dir.join(&file.path));
+        if let TextureDesc::Image(image) = t {
+            files.insert(dir.join(&image.file.path));
         }
     }
     if let BackgroundDesc::Environment { file, .. } = &desc.background {

@@ -1,13 +1,16 @@
 //! The material registry: a kind registered in one line (the engine's `TestDiffuse`, built with
 //! its `test-material` feature) is parsed, gets its own shading queue, stage and statistics row,
 //! and renders through the wavefront's generic stage to the image its Lambertian twin gives;
-//! the shape registry likewise with the engine's `TestDisk` (its `test-shape` feature).
+//! the shape registry likewise with the engine's `TestDisk` (its `test-shape` feature), the light
+//! registry with `TestPoint` (`test-light`) and the texture registry with `TestStripes`
+//! (`test-texture`).
 //!
 //! A package of its own (`tests/kinds/Cargo.toml`), outside the workspace, so that the features
 //! that add those kinds never reach the user's binary.
 
 use glam::DVec3;
 use pathwave_engine::material::{MaterialKind, Shading};
+use pathwave_engine::scene::{LightKind, ShapeKind, TextureKind};
 use pathwave_engine::scene::{SceneDesc, parse};
 use pathwave_engine::world::SceneWorld;
 use pathwave_integrator::film::Film;
@@ -90,6 +93,31 @@ fn unknown_kinds_are_refused_with_the_registered_names() {
     for k in MaterialKind::ALL {
         assert!(err.contains(k.variant_name()), "{err}");
     }
+    // The other registries, the test-only kinds among their names.
+    let lambertian = scene("Lambertian", 0.5);
+    for (text, names, kind) in [
+        (
+            lambertian.replace("Sphere(center: (0, 0.7, 0), radius: 0.7)", "Cone(h: 1)"),
+            ShapeKind::NAMES,
+            "TestDisk",
+        ),
+        (
+            lambertian.replace("objects: [", "lights: [Area(size: 1)], objects: ["),
+            LightKind::NAMES,
+            "TestPoint",
+        ),
+        (
+            lambertian.replace("materials: {", r#"textures: { "t": Wood(scale: 1) }, materials: {"#),
+            TextureKind::NAMES,
+            "TestStripes",
+        ),
+    ] {
+        let err = parse(&text, Path::new("<test>")).unwrap_err().to_string();
+        assert!(names.contains(&kind), "{kind} is registered");
+        for name in names {
+            assert!(err.contains(name), "{err}");
+        }
+    }
 }
 
 /// A one-sided disk lamp of radius `r` at height `h`, facing down onto a floor of albedo
@@ -136,4 +164,84 @@ fn a_shape_registered_in_one_line_renders_and_lights_exactly() {
     let (m, v) = image_mean(&darker);
     let z = ((m - DVec3::splat(want)) / v.map(f64::sqrt)).abs().min_element();
     assert!(z > 8.0, "5% off: mean {m}, want {want} (z {z})");
+}
+
+/// A Lambertian floor of albedo `albedo` lit only by `light` (no background), seen straight down
+/// through a narrow camera from under the light.
+fn floor_under(light: &str, albedo: f32) -> String {
+    format!(
+        r#"Scene(
+            camera: (look_from: (0, 1, 0), look_at: (0, 0, 0), vup: (0, 0, -1), vfov: 2),
+            render: (width: 8, height: 8, spp: 16),
+            background: Constant((0, 0, 0)),
+            materials: {{ "floor": Lambertian(albedo: ({albedo}, {albedo}, {albedo})) }},
+            objects: [(shape: Quad(q: (-50, 0, -50), u: (0, 0, 100), v: (100, 0, 0)), material: "floor")],
+            lights: [{light}],
+        )"#
+    )
+}
+
+/// The light registry: a kind registered in one line (the engine's `TestPoint`, built with its
+/// `test-light` feature, a point light given by its power) is parsed and becomes the point light
+/// of intensity `power / 4 pi`: the floor straight below it at height h has radiance
+/// `albedo power / (4 pi^2 h^2)`, and the image is, bit for bit and with both integrators, the
+/// one of the `Point` of that intensity.
+#[test]
+fn a_light_registered_in_one_line_is_the_point_light_of_its_power() {
+    let (h, power, albedo) = (2.0f32, 100.0f32, 0.5f32);
+    let test_point = format!("TestPoint(position: (0, {h}, 0), power: ({power}, {power}, {power}))");
+    let desc = inline(&floor_under(&test_point, albedo));
+    assert_eq!(desc.lights[0].kind(), LightKind::TestPoint);
+    let (film, _) = render(&floor_under(&test_point, albedo));
+    let want = (albedo * power / (4.0 * std::f32::consts::PI.powi(2) * h * h)) as f64;
+    let (mean, _) = image_mean(&film);
+    assert!((mean / want - 1.0).abs().max_element() < 1e-3, "mean {mean}, want {want}");
+    let oracle = oracle::render(&SceneWorld::render_scene(&desc), &|_, _| {});
+    assert!(oracle == film, "the oracle's bits");
+    // The point light of the intensity it stands for: the same bits.
+    let i = power / (4.0 * std::f32::consts::PI);
+    let point = format!("Point(position: (0, {h}, 0), intensity: ({i}, {i}, {i}))");
+    let (same, _) = render(&floor_under(&point, albedo));
+    assert!(same == film, "TestPoint differs from the Point of intensity {i}");
+}
+
+/// A floor of texture `texture` lit by a square lamp, seen from above at an angle.
+fn textured_floor(texture: &str) -> String {
+    format!(
+        r#"Scene(
+            camera: (look_from: (0, 3, 3), look_at: (0, 0, 0), vfov: 50),
+            render: (width: 24, height: 16, spp: 16),
+            background: Constant((0.2, 0.2, 0.2)),
+            textures: {{ "t": {texture} }},
+            materials: {{
+                "light": DiffuseLight(emit: (4, 4, 4)),
+                "floor": Lambertian(albedo: "t"),
+            }},
+            objects: [
+                (shape: Quad(q: (-1, 3, -1), u: (2, 0, 0), v: (0, 0, 2)), material: "light"),
+                (shape: Quad(q: (-2, 0, -2), u: (4, 0, 0), v: (0, 0, 4)), material: "floor"),
+            ],
+        )"#
+    )
+}
+
+/// The texture registry: a kind registered in one line (the engine's `TestStripes`, built with
+/// its `test-texture` feature) is parsed and evaluated at every hit as the `UvChecker` of
+/// `stripes` by 1 cells it stands for: the same bits with both integrators, and other bits with
+/// a stripe more or its colours swapped.
+#[test]
+fn a_texture_registered_in_one_line_renders_as_its_stripes() {
+    let stripes = "TestStripes(stripes: 5, even: (0.8, 0.8, 0.8), odd: (0.1, 0.3, 0.1))";
+    let desc = inline(&textured_floor(stripes));
+    assert_eq!(desc.textures.0[0].1.kind(), TextureKind::TestStripes);
+    let (film, _) = render(&textured_floor(stripes));
+    let oracle = oracle::render(&SceneWorld::render_scene(&desc), &|_, _| {});
+    assert!(oracle == film, "the oracle's bits");
+    let checker = |u: u32, even: &str, odd: &str| {
+        render(&textured_floor(&format!("UvChecker(u: {u}, v: 1, even: {even}, odd: {odd})"))).0
+    };
+    let (light, dark) = ("(0.8, 0.8, 0.8)", "(0.1, 0.3, 0.1)");
+    assert!(checker(5, light, dark) == film, "TestStripes differs from its UvChecker");
+    assert!(checker(6, light, dark) != film, "the stripe count goes unseen");
+    assert!(checker(5, dark, light) != film, "the stripes' colours go unseen");
 }

@@ -7,6 +7,7 @@
 mod color;
 pub(crate) mod context;
 pub mod files;
+pub mod registry;
 mod values;
 
 pub use color::Color;

@@ -21,6 +21,7 @@ pub mod rough_dielectric;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 
+use crate::format::registry::{VariantName, fields};
 use crate::texture::{MAX_TEXTURED_COLORS, MaterialTextures, TextureId};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -405,11 +406,9 @@ macro_rules! registry {
                         f.write_str("a material such as Lambertian(albedo: (0.5, 0.5, 0.5))")
                     }
                     fn visit_enum<A: serde::de::EnumAccess<'de>>(self, data: A) -> Result<MaterialDesc, A::Error> {
-                        use serde::de::VariantAccess;
                         let (VariantName(name), variant) = data.variant()?;
                         $($(#[$attr])* if name == stringify!($variant) {
-                            return variant
-                                .struct_variant(&[], Fields::<<$module::$ty as MaterialModel>::Desc>::default())
+                            return fields::<<$module::$ty as MaterialModel>::Desc, _>(variant)
                                 .map(MaterialDesc::$variant);
                         })+
                         Err(serde::de::Error::unknown_variant(&name, &VARIANT_NAMES))
@@ -432,44 +431,6 @@ static VARIANT_NAMES: [&str; MaterialKind::COUNT] = {
     }
     names
 };
-
-/// The name of a kind as the scene writes it (an identifier).
-struct VariantName(String);
-
-impl<'de> serde::Deserialize<'de> for VariantName {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Name;
-        impl<'de> serde::de::Visitor<'de> for Name {
-            type Value = VariantName;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("the name of a material kind")
-            }
-            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<VariantName, E> {
-                Ok(VariantName(v.to_owned()))
-            }
-        }
-        d.deserialize_identifier(Name)
-    }
-}
-
-/// Reads a kind's fields (`Kind(field: value, ...)`) into its description type.
-struct Fields<T>(std::marker::PhantomData<T>);
-
-impl<T> Default for Fields<T> {
-    fn default() -> Self {
-        Self(std::marker::PhantomData)
-    }
-}
-
-impl<'de, T: serde::Deserialize<'de>> serde::de::Visitor<'de> for Fields<T> {
-    type Value = T;
-    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("the material's fields")
-    }
-    fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
-        T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
-    }
-}
 
 impl Material {
     /// Radiance emitted towards a direction making cosine `cos_out` with the normal.

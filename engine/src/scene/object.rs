@@ -4,11 +4,12 @@
 use super::assets::{MeshFile, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
+use crate::format::registry::{fields, registry};
 use crate::format::{Albedo, Positive, V3};
 use crate::placement::{Form, primitives};
-use crate::shape::{BoxShape, QuadShape, SphereShape, TriangleShape};
-use glam::Vec3;
+use crate::shape::ShapeModel;
 use serde::Deserialize;
+use serde::de::{Error, VariantAccess};
 
 /// One object: a shape with either a material (a surface) or a medium (a volume), and an
 /// optional list of transforms.
@@ -109,136 +110,65 @@ impl TryFrom<RawObject> for ObjectDesc {
     }
 }
 
-/// Shapes.
-#[derive(Deserialize, Debug, Clone, PartialEq)]
-#[serde(try_from = "RawShape")]
-pub enum ShapeDesc {
-    /// `Sphere(center: (x, y, z), radius: r)`.
-    Sphere {
-        /// Centre.
-        center: Vec3,
-        /// Radius (> 0).
-        radius: f32,
-    },
-    /// `Quad(q: .., u: .., v: ..)`: the points q + a u + b v, a, b in [0, 1]; normal u x v.
-    Quad {
-        /// Corner.
-        q: Vec3,
-        /// First edge.
-        u: Vec3,
-        /// Second edge (not parallel to u).
-        v: Vec3,
-    },
-    /// `Triangle(a: .., b: .., c: ..)`: normal (b - a) x (c - a); uv = barycentric weights of
-    /// b and c.
-    Triangle {
-        /// First vertex.
-        a: Vec3,
-        /// Second vertex.
-        b: Vec3,
-        /// Third vertex.
-        c: Vec3,
-    },
-    /// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene
-    /// file), flat shaded; triangles without area are dropped.
-    Mesh(MeshFile),
-    /// `Box(a: .., b: ..)`: the axis-aligned box between two opposite corners, six quads facing out.
-    Box {
-        /// Minimum corner.
-        min: Vec3,
-        /// Maximum corner.
-        max: Vec3,
-    },
-    /// `TestDisk(center: .., normal: .., radius: r)` (feature `test-shape`).
-    #[cfg(feature = "test-shape")]
-    TestDisk(crate::shape::test_disk::TestDiskShape),
+/// `ShapeDesc` from the shape registry ([`crate::shape::with_shapes`]), with meshes beside it.
+macro_rules! shape_descs {
+    ($($(#[$attr:meta])* $variant:ident($ty:ty),)+) => {
+        registry! {
+            /// Shapes, in their own space: `Kind(field: value, ...)`, each checked as a whole.
+            #[derive(Debug, Clone, PartialEq)]
+            pub enum ShapeDesc, ShapeKind: dyn ShapeForm, "Shape",
+                "a shape such as Sphere(center: (0, 0, 0), radius: 1)", read_shape {
+                $($(#[$attr])* $variant($ty),)+
+                Mesh(MeshFile) = read_mesh,
+            }
+        }
+    };
+}
+crate::shape::with_shapes!(shape_descs);
+
+/// Reads a shape kind's fields and builds it, checked once its `)` is read, so that an error
+/// points there.
+fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T, A::Error> {
+    T::build(fields::<T::Desc, A>(variant)?).map_err(A::Error::custom)
+}
+
+/// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene file),
+/// read as the scene is parsed. Meshes are not in the shape registry: their runtime form is the
+/// shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshDesc {
+    file: MeshFile,
+}
+
+fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Error> {
+    fields::<MeshDesc, A>(variant).map(|m| m.file)
+}
+
+/// What a shape description becomes in the world.
+pub trait ShapeForm {
+    /// The shape as the world holds it (a mesh shared, not copied).
+    fn form(&self) -> Form;
+}
+
+impl<T: ShapeModel> ShapeForm for T
+where
+    Form: From<T>,
+{
+    fn form(&self) -> Form {
+        self.clone().into()
+    }
+}
+
+impl ShapeForm for MeshFile {
+    fn form(&self) -> Form {
+        Form::Mesh(self.mesh.clone())
+    }
 }
 
 impl ShapeDesc {
     /// The shape as the world holds it (the mesh shared, not copied).
     pub fn form(&self) -> Form {
-        match *self {
-            ShapeDesc::Sphere { center, radius } => {
-                Form::Sphere(SphereShape { center: center.into(), radius })
-            }
-            ShapeDesc::Quad { q, u, v } => Form::Quad(QuadShape { q: q.into(), u: u.into(), v: v.into() }),
-            ShapeDesc::Triangle { a, b, c } => {
-                Form::Triangle(TriangleShape { a: a.into(), b: b.into(), c: c.into() })
-            }
-            ShapeDesc::Mesh(ref file) => Form::Mesh(file.mesh.clone()),
-            ShapeDesc::Box { min, max } => Form::Box(BoxShape { min: min.into(), max: max.into() }),
-            #[cfg(feature = "test-shape")]
-            ShapeDesc::TestDisk(d) => Form::TestDisk(d),
-        }
-    }
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename = "Shape")]
-enum RawShape {
-    Sphere {
-        center: V3,
-        radius: Positive,
-    },
-    Quad {
-        q: V3,
-        u: V3,
-        v: V3,
-    },
-    Triangle {
-        a: V3,
-        b: V3,
-        c: V3,
-    },
-    Mesh {
-        file: MeshFile,
-    },
-    Box {
-        a: V3,
-        b: V3,
-    },
-    #[cfg(feature = "test-shape")]
-    TestDisk {
-        center: V3,
-        normal: V3,
-        radius: Positive,
-    },
-}
-
-impl TryFrom<RawShape> for ShapeDesc {
-    type Error = String;
-    fn try_from(r: RawShape) -> Result<Self, String> {
-        Ok(match r {
-            RawShape::Sphere { center, radius } => ShapeDesc::Sphere { center: center.0, radius: radius.0 },
-            RawShape::Quad { q, u, v } => {
-                let c = u.0.cross(v.0);
-                if !(c.length_squared() > 0.0) {
-                    return Err(format!("Quad has no area: u {} and v {} are parallel or zero", u.0, v.0));
-                }
-                ShapeDesc::Quad { q: q.0, u: u.0, v: v.0 }
-            }
-            RawShape::Triangle { a, b, c } => {
-                if !((b.0 - a.0).cross(c.0 - a.0).length_squared() > 0.0) {
-                    return Err(format!("Triangle has no area: {}, {} and {} are collinear", a.0, b.0, c.0));
-                }
-                ShapeDesc::Triangle { a: a.0, b: b.0, c: c.0 }
-            }
-            RawShape::Mesh { file } => ShapeDesc::Mesh(file),
-            #[cfg(feature = "test-shape")]
-            RawShape::TestDisk { center, normal, radius } => {
-                ShapeDesc::TestDisk(crate::shape::test_disk::TestDiskShape {
-                    center: center.0.into(),
-                    normal: normal.0.into(),
-                    radius: radius.0,
-                })
-            }
-            RawShape::Box { a, b } => {
-                let (min, max) = (a.0.min(b.0), a.0.max(b.0));
-                if (max - min).min_element() <= 0.0 {
-                    return Err(format!("Box is flat: corners {} and {} share a coordinate", a.0, b.0));
-                }
-                ShapeDesc::Box { min, max }
-            }
-        })
+        self.model().form()
     }
 }

@@ -1,13 +1,21 @@
 //! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`; meshes are the
 //! world's business) and the primitives they become in world space. Each file holds one kind:
-//! its shape in its own space ([`ShapeModel`]: the primitives it becomes under a transform,
-//! the volume it closes), its primitive ([`PrimitiveShape`]: bounds, intersection, surface
-//! data, light sampling) where it has one, and their tests.
+//! its RON description and its checks, its shape in its own space ([`ShapeModel`]: built from
+//! the description, the primitives it becomes under a transform, the volume it closes), its
+//! primitive ([`PrimitiveShape`]: bounds, intersection, surface data, light sampling) where it
+//! has one, and their tests.
 //!
-//! Two lists below name the kinds: [`with_shapes!`] (the shapes a scene places, from which
-//! `placement::Form` is generated) and `primitives!` (the primitives the BVH
-//! holds, generating [`Primitive`]). A new kind is its file, its `mod` line and its line in
-//! each list that it belongs to, plus its RON form in `scene/object.rs`.
+//! Two lists below name the kinds. [`with_shapes!`] is the registry of the shapes a scene
+//! places: `Variant(Type)`, the variant being the name a scene writes. From it come the scene
+//! format's `ShapeDesc` (the RON enum `Kind(field: value, ...)`, read by the registry of
+//! `format::registry`, with meshes beside it: see `scene/object.rs`) and `placement::Form`
+//! (what an entity's shape component holds). `primitives!` lists the primitives the BVH holds,
+//! generating [`Primitive`]. The two lists differ because a shape and a primitive are not one to
+//! one: a `Box` becomes six quads and has no primitive of its own, a `Sphere` becomes a `Sphere`
+//! or, under a transform that is not a uniform scale, a `TransformedSphere`, and a mesh's
+//! triangles are `Triangle`s. A new kind is its file (description, [`ShapeModel`], and where it
+//! needs one a [`PrimitiveShape`]), its `mod` line, its line in [`with_shapes!`] and, if it has
+//! a primitive, its line in `primitives!`; its README row is checked by `tests/readme_kinds.rs`.
 
 mod boxes;
 mod primitive;
@@ -38,8 +46,9 @@ primitives! {
     TestDisk(test_disk::TestDisk),
 }
 
-/// Calls the macro `$then!` with the list of shape kinds a scene places, `Variant(Type),`
-/// each (the variant is the name a scene writes). `placement` makes its `Form` of it.
+/// The registry of shapes: calls the macro `$then!` with the list of shape kinds a scene places,
+/// `Variant(Type),` each (the variant is the name a scene writes, the type a [`ShapeModel`]).
+/// `placement` makes its `Form` of it, the scene format its `ShapeDesc`.
 #[macro_export]
 #[doc(hidden)]
 macro_rules! with_shapes {
@@ -58,6 +67,14 @@ pub use with_shapes;
 
 /// One kind of shape in its own space, as a scene places it.
 pub trait ShapeModel: Clone + std::fmt::Debug + PartialEq + Send + Sync + 'static {
+    /// Its parameters as a scene writes them, inside `Kind(...)`: a struct that denies unknown
+    /// fields, of validated values (`format::V3`, `format::Positive`, ...).
+    type Desc: serde::de::DeserializeOwned;
+
+    /// The shape of a description, or why the description is not one (a scene's error shows the
+    /// message at the `)` that closes the shape).
+    fn build(desc: Self::Desc) -> Result<Self, String>;
+
     /// Appends the world-space primitives of the shape placed by `m`, or says why the placed
     /// shape cannot be rendered (a flattening transform). The caller checks the distance from
     /// the origin ([`MAX_COORDINATE`]).

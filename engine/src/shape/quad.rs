@@ -4,6 +4,7 @@
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
 };
+use crate::format::V3;
 use crate::math::{dot3 as dot, gamma};
 use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -291,7 +292,28 @@ pub struct QuadShape {
     pub v: Vec3A,
 }
 
+/// `Quad(q: .., u: .., v: ..)`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct QuadDesc {
+    /// Corner.
+    pub q: V3,
+    /// First edge.
+    pub u: V3,
+    /// Second edge (not parallel to u).
+    pub v: V3,
+}
+
 impl ShapeModel for QuadShape {
+    type Desc = QuadDesc;
+
+    fn build(QuadDesc { q, u, v }: QuadDesc) -> Result<Self, String> {
+        if !(u.0.cross(v.0).length_squared() > 0.0) {
+            return Err(format!("Quad has no area: u {} and v {} are parallel or zero", u.0, v.0));
+        }
+        Ok(Self { q: q.0.into(), u: u.0.into(), v: v.0.into() })
+    }
+
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
         place_quad(m, self.q, self.u, self.v, out)
     }

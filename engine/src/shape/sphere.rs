@@ -6,6 +6,7 @@ use super::{
     Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
     area_to_solid_angle,
 };
+use crate::format::{Positive, V3};
 use crate::math::{cos_sin_turn, dot3 as dot, gamma, uniform_sphere};
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -160,7 +161,23 @@ pub struct SphereShape {
     pub radius: f32,
 }
 
+/// `Sphere(center: (x, y, z), radius: r)`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct SphereDesc {
+    /// Centre.
+    pub center: V3,
+    /// Radius (> 0).
+    pub radius: Positive,
+}
+
 impl ShapeModel for SphereShape {
+    type Desc = SphereDesc;
+
+    fn build(d: SphereDesc) -> Result<Self, String> {
+        Ok(Self { center: d.center.0.into(), radius: d.radius.0 })
+    }
+
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
         let sphere = Sphere { center: self.center, radius: self.radius };
         // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything

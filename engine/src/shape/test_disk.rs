@@ -1,11 +1,13 @@
 //! A shape that exists to test the shape registry (cargo feature `test-shape`): a disk, its
-//! primitive and its placement in this one file, registered by one line in each list of
-//! `shape/mod.rs` and written `TestDisk(center: .., normal: .., radius: ..)` in a scene.
+//! RON description, its primitive and its placement in this one file, registered by one line
+//! in each list of `shape/mod.rs` and written `TestDisk(center: .., normal: .., radius: ..)` in
+//! a scene.
 //! Light sampling picks points uniformly by area.
 
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
 };
+use crate::format::{Positive, V3};
 use crate::math::{Frame, concentric_disk, gamma};
 use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -80,7 +82,25 @@ pub struct TestDiskShape {
     pub radius: f32,
 }
 
+/// `TestDisk(center: .., normal: .., radius: r)`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct TestDiskDesc {
+    /// Centre.
+    pub center: V3,
+    /// Normal (any length but zero).
+    pub normal: V3,
+    /// Radius (> 0).
+    pub radius: Positive,
+}
+
 impl ShapeModel for TestDiskShape {
+    type Desc = TestDiskDesc;
+
+    fn build(d: TestDiskDesc) -> Result<Self, String> {
+        Ok(Self { center: d.center.0.into(), normal: d.normal.0.into(), radius: d.radius.0 })
+    }
+
     /// Exact under rotations, translations and uniform scales (the radius scales by the cube
     /// root of the determinant); other transforms place the disk of the same area.
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {

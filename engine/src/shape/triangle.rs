@@ -10,6 +10,7 @@ use super::quad::SPHERICAL_SOLID_ANGLE;
 use super::{
     LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
 };
+use crate::format::V3;
 use crate::math::gamma;
 use glam::{Affine3A, DVec3, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -169,7 +170,28 @@ pub struct TriangleShape {
     pub c: Vec3A,
 }
 
+/// `Triangle(a: .., b: .., c: ..)`.
+#[derive(serde::Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleDesc {
+    /// First vertex.
+    pub a: V3,
+    /// Second vertex.
+    pub b: V3,
+    /// Third vertex (not on the line through the first two).
+    pub c: V3,
+}
+
 impl ShapeModel for TriangleShape {
+    type Desc = TriangleDesc;
+
+    fn build(TriangleDesc { a, b, c }: TriangleDesc) -> Result<Self, String> {
+        if !((b.0 - a.0).cross(c.0 - a.0).length_squared() > 0.0) {
+            return Err(format!("Triangle has no area: {}, {} and {} are collinear", a.0, b.0, c.0));
+        }
+        Ok(Self { a: a.0.into(), b: b.0.into(), c: c.0.into() })
+    }
+
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
         let [a, b, c] = [self.a, self.b, self.c].map(|p| m.transform_point3a(p));
         // A mirroring transform flips the winding; keep the normal facing the same side.

@@ -7,11 +7,9 @@ use crate::material::Material;
 use crate::media::Medium;
 use crate::placement::{Form, primitives};
 use crate::render_scene::{Background, PixelWindow, RenderSettings};
-use crate::scene::{
-    BackgroundDesc, Body, Color, MaterialDesc, Positive, Rgb, SceneDesc, TextureDesc, compose,
-};
+use crate::scene::{BackgroundDesc, Body, Color, MaterialDesc, Rgb, SceneDesc, compose};
 use crate::shape::Primitive;
-use crate::texture::{MaterialTextures, NoiseKind, Texture, TextureId, Textures};
+use crate::texture::{MaterialTextures, Texture, TextureId, Textures};
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3};
 use std::sync::Arc;
@@ -157,33 +155,7 @@ fn build_textures(desc: &SceneDesc) -> Textures {
             n + inline.len() as TextureId - 1
         }
     };
-    let noise = |kind, scale: &Positive, depth, color: &Rgb| Texture::Noise {
-        kind,
-        scale: scale.0,
-        depth,
-        color: color.0,
-    };
-    let mut list: Vec<Texture> = desc
-        .textures
-        .0
-        .iter()
-        .map(|(_, t)| match t {
-            TextureDesc::Solid(c) => Texture::Solid(c.0),
-            TextureDesc::Checker { scale, even, odd } => {
-                Texture::Checker { scale: scale.0, even: sub(even), odd: sub(odd) }
-            }
-            TextureDesc::UvChecker { u, v, even, odd } => {
-                Texture::UvChecker { u: u.0, v: v.0, even: sub(even), odd: sub(odd) }
-            }
-            TextureDesc::Image { file, wrap } => Texture::Image { image: file.image.clone(), wrap: *wrap },
-            TextureDesc::Noise { scale, color } => noise(NoiseKind::Smooth, scale, 0, color),
-            TextureDesc::BlockyNoise { scale, color } => noise(NoiseKind::Blocky, scale, 0, color),
-            TextureDesc::Turbulence { scale, depth, color } => {
-                noise(NoiseKind::Turbulence, scale, *depth, color)
-            }
-            TextureDesc::Marble { scale, depth, color } => noise(NoiseKind::Marble, scale, *depth, color),
-        })
-        .collect();
+    let mut list: Vec<Texture> = desc.textures.0.iter().map(|(_, t)| t.model().build(&mut sub)).collect();
     list.extend(inline);
     Textures { list }
 }

@@ -2,14 +2,62 @@
 //! hit point). Plain data in one flat list; a texture refers to others (checker squares) by
 //! index, and only to textures defined before it, so evaluation always terminates.
 //!
+//! Each kind a scene writes lives in its own file as its RON description implementing
+//! [`TextureModel`] (its conversion into the runtime [`Texture`]). The `registry!` invocation
+//! below is the one list of kinds: it generates [`TextureDesc`] (the RON enum the scene parser
+//! fills, `Kind(field: value, ...)`) and [`TextureKind`]. A kind whose runtime form exists (the
+//! noise kinds share [`Texture::Noise`]) is its file, its `mod` line and its line in the list; a
+//! kind that evaluates differently also adds its variant to [`Texture`] and its arms to
+//! [`Textures::eval`] and [`Textures::mean`], the runtime that shading reads.
+//!
 //! Conventions: u runs along a quad's `u` edge and around a sphere eastwards (see the README);
 //! v runs up. An image's row 0 is its top: v = 1. Solid textures (checker, noise) use world
 //! coordinates.
 
+pub mod blocky_noise;
+pub mod checker;
+pub mod image;
+pub mod marble;
+pub mod noise;
+pub mod solid;
+#[cfg(feature = "test-texture")]
+pub mod test_stripes;
+pub mod turbulence;
+pub mod uv_checker;
+
+use crate::format::registry::{fields, registry, value};
+use crate::format::{Color, Rgb};
 use crate::shape::SurfacePoint;
 use glam::{Vec2, Vec3, Vec3A};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
+
+registry! {
+    /// A texture as written in the scene; colours inside may name textures defined before it.
+    #[derive(Debug, Clone, PartialEq)]
+    pub enum TextureDesc, TextureKind: dyn TextureModel, "Texture",
+        "a texture such as Solid((0.5, 0.5, 0.5))", fields {
+        Solid(solid::Solid) = value,
+        Checker(checker::Checker),
+        UvChecker(uv_checker::UvChecker),
+        Image(image::Image),
+        Noise(noise::Noise),
+        BlockyNoise(blocky_noise::BlockyNoise),
+        Turbulence(turbulence::Turbulence),
+        Marble(marble::Marble),
+        #[cfg(feature = "test-texture")]
+        TestStripes(test_stripes::TestStripes),
+    }
+}
+
+/// One kind of texture, as its RON description (a struct that denies unknown fields, or one
+/// value read by `format::registry::value`).
+pub trait TextureModel {
+    /// The runtime texture. `color` gives the id of a colour written inside it (the texture
+    /// it names, or a solid texture added for a colour written out), to be called in the order
+    /// of the fields.
+    fn build(&self, color: &mut dyn FnMut(&Color<Rgb>) -> TextureId) -> Texture;
+}
 
 /// Index into [`Textures::list`].
 pub type TextureId = u32;
@@ -57,11 +105,11 @@ impl TextureImage {
     }
 
     /// A decoded image's texels (as [`Self::load`] reads them); `path` names it in errors.
-    pub fn from_image(img: image::DynamicImage, path: &Path) -> Result<Self, TextureError> {
+    pub fn from_image(img: ::image::DynamicImage, path: &Path) -> Result<Self, TextureError> {
         let (width, height) = (img.width(), img.height());
         let texels = match img {
             // A float file may hold NaN, infinities or negative values: they read as 0.
-            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_) => img
+            ::image::DynamicImage::ImageRgb32F(_) | ::image::DynamicImage::ImageRgba32F(_) => img
                 .into_rgb32f()
                 .pixels()
                 .map(|p| Vec3::from_array(p.0.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
@@ -434,7 +482,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("pathwave-tex-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("grey.png");
-        image::RgbImage::from_pixel(1, 1, image::Rgb([188, 128, 0])).save(&path).unwrap();
+        ::image::RgbImage::from_pixel(1, 1, ::image::Rgb([188, 128, 0])).save(&path).unwrap();
         let img = TextureImage::load(&path).unwrap();
         let t = img.texels[0];
         // sRGB 188/255 is linear 0.5029 (decoded twice it would be 0.2; not at all, 0.737).

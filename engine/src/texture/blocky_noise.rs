@@ -1,0 +1,21 @@
+//! `BlockyNoise(scale: 4)`: one random value per lattice cell, in [0, 1).
+
+use super::{NoiseKind, Texture, TextureId, TextureModel};
+use crate::format::{Color, Positive, Rgb, white};
+
+/// The lattice value of the cell of `scale * p`, times `color`.
+#[derive(serde::Deserialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BlockyNoise {
+    /// Frequency.
+    pub scale: Positive,
+    /// Colour the noise multiplies (default white).
+    #[serde(default = "white")]
+    pub color: Rgb,
+}
+
+impl TextureModel for BlockyNoise {
+    fn build(&self, _color: &mut dyn FnMut(&Color<Rgb>) -> TextureId) -> Texture {
+        Texture::Noise { kind: NoiseKind::Blocky, scale: self.scale.0, depth: 0, color: self.color.0 }
+    }
+}
