@@ -169,3 +169,32 @@ fn instancing() {
 fn orthographic_sensor() {
     conformance("orthographic_sensor", "test_orthographic_path.xml", "test_orthographic");
 }
+
+/// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
+#[test]
+fn converted_ron_renders_the_same_bits() {
+    let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    for (dir, file) in [
+        ("floating_sphere", "test_directional_direct.xml"),
+        ("infinite_mirrors", "scene_path.xml"),
+        ("instancing", "test_instancing_path.xml"),
+        ("orthographic_sensor", "test_orthographic_path.xml"),
+    ] {
+        let xml = suite().join(dir).join(file);
+        let ron_path = out.join(format!("{dir}.ron"));
+        let converted = scene::mitsuba::to_ron(&xml, &[], &out).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&ron_path, &converted.ron).unwrap();
+        let render = |path: &Path| {
+            let mut desc = scene::load(path).unwrap_or_else(|e| panic!("{e}"));
+            desc.render.spp = 2.try_into().unwrap();
+            let scene = SceneWorld::render_scene(&desc);
+            wavefront::render(&scene, Default::default(), &|_, _| {}).0.mean()
+        };
+        let (a, b) = (render(&xml), render(&ron_path));
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
+            "{dir}: the RON renders other bits"
+        );
+    }
+}
