@@ -8,7 +8,7 @@
 //! [`ParseScope`], checks every name against them while the parser still knows where that
 //! name stands, and reads the image and mesh files.
 
-use crate::accel::mesh::MeshData;
+use std::any::Any;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -35,8 +35,10 @@ struct Context {
     textures_before: Option<usize>,
     /// The index of the object being parsed, while inside `objects` (errors name it).
     object: Option<usize>,
-    /// Meshes read so far in this parse, by path: each file is read once and shared.
-    meshes: HashMap<PathBuf, Arc<MeshData>>,
+    /// Meshes read so far in this parse, by path: each file is read once and shared. Their type
+    /// (the scene's `MeshData`) is not named here, so that this module depends on nothing
+    /// else of the engine.
+    meshes: HashMap<PathBuf, Arc<dyn Any + Send + Sync>>,
 }
 
 thread_local! {
@@ -95,12 +97,12 @@ pub(crate) fn take_current_object() -> Option<usize> {
     with(|c| c.object.take())
 }
 
-/// The mesh of the file at `path` read earlier in this parse.
-pub(crate) fn mesh(path: &Path) -> Option<Arc<MeshData>> {
-    with(|c| c.meshes.get(path).cloned())
+/// The mesh of the file at `path` read earlier in this parse (as the type it was kept as).
+pub(crate) fn mesh<T: Any + Send + Sync>(path: &Path) -> Option<Arc<T>> {
+    with(|c| c.meshes.get(path).cloned()).and_then(|m| m.downcast().ok())
 }
 
 /// Keeps the mesh read from `path` for later objects naming it.
-pub(crate) fn keep_mesh(path: PathBuf, mesh: Arc<MeshData>) {
+pub(crate) fn keep_mesh<T: Any + Send + Sync>(path: PathBuf, mesh: Arc<T>) {
     with(|c| c.meshes.insert(path, mesh));
 }

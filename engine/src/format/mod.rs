@@ -1,8 +1,9 @@
 //! The RON vocabulary that the scene file and every registered description (materials,
-//! animation keys) share: validated values, colours that may name a texture, bounded file
-//! reads, and the parse context those checks consult. It depends on nothing else of the
-//! engine but the mesh type the context caches, so that the scene format above it and the
-//! kinds it lists can both use it.
+//! shapes, lights, textures, animation keys) share: validated values, colours that may name a
+//! texture, bounded file reads, the parse context those checks consult, and the registries'
+//! common macro. It depends on nothing else of the engine, so that the scene format above it
+//! and the kinds it lists (the shapes below the acceleration structures among them) can all
+//! use it.
 
 mod color;
 pub(crate) mod context;

@@ -1,29 +1,10 @@
-//! Files a scene names: images (textures, environment maps) and OBJ meshes, read in the second
-//! parsing pass relative to the scene file.
+//! Files a scene names: OBJ meshes and images (textures, environment maps; [`ImageFile`] lives
+//! with the image texture kind, `texture/image.rs`), read in the second parsing pass relative
+//! to the scene file.
 
 use crate::format::context;
-use crate::texture::TextureImage;
+pub use crate::texture::image::ImageFile;
 use serde::{Deserialize, Deserializer, de::Error};
-
-/// An image file, read when the scene is loaded.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ImageFile {
-    /// The path as written.
-    pub path: std::path::PathBuf,
-    /// The decoded image.
-    pub image: std::sync::Arc<TextureImage>,
-}
-
-impl<'de> Deserialize<'de> for ImageFile {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let path = std::path::PathBuf::from(String::deserialize(d)?);
-        let image = match context::scene_dir() {
-            Some(dir) => TextureImage::load(&dir.join(&path)).map_err(D::Error::custom)?,
-            None => TextureImage::default(),
-        };
-        Ok(ImageFile { path, image: std::sync::Arc::new(image) })
-    }
-}
 
 /// The triangles of an OBJ file, read when the scene is loaded. Objects naming the same file
 /// share one mesh (and, as instances, one BLAS).

@@ -16,7 +16,7 @@ pub mod test_point;
 use crate::format::V3;
 use crate::format::registry::{fields, registry};
 pub use crate::lighting::lights::PunctualLight;
-use crate::placement::MAX_COORDINATE;
+use crate::shape::MAX_COORDINATE;
 use glam::Vec3;
 use serde::{Deserialize, Deserializer, de::Error};
 
