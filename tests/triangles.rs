@@ -36,3 +36,31 @@ fn quads_split_into_triangles_render_alike() {
     let stats = block_z(&render(&small(&dim, 7)), &reference, 8, 64);
     assert!(!stats.agrees(), "5% less light went unnoticed: {stats:?}");
 }
+
+/// `face_normals: true` shades a mesh whose file has vertex normals flat (its own copy, shared
+/// by the objects that ask for it); without it the normals are kept.
+#[test]
+fn face_normals_drop_the_files_normals() {
+    use pathwave::engine::scene::{ShapeDesc, load};
+    let dir = std::env::temp_dir().join(format!("pathwave-face-normals-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("ball.obj"), sphere_obj(8, 16, true)).unwrap();
+    let scene = dir.join("s.ron");
+    std::fs::write(
+        &scene,
+        r#"Scene(camera: (look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 40),
+        materials: {"m": Lambertian(albedo: (0.5, 0.5, 0.5))},
+        objects: [(shape: Mesh(file: "ball.obj"), material: "m"),
+                  (shape: Mesh(file: "ball.obj", face_normals: true), material: "m"),
+                  (shape: Mesh(file: "ball.obj", face_normals: true), material: "m")])"#,
+    )
+    .unwrap();
+    let desc = load(&scene).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = |i: usize| match &desc.objects[i].shape {
+        ShapeDesc::Mesh(m) => m.mesh.clone(),
+        other => panic!("{other:?}"),
+    };
+    assert!(mesh(0).normals.is_some());
+    assert!(mesh(1).normals.is_none() && mesh(1).positions == mesh(0).positions);
+    assert!(std::sync::Arc::ptr_eq(&mesh(1), &mesh(2)), "the flat copy is shared");
+}

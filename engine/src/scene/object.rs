@@ -133,16 +133,36 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
 }
 
 /// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene file),
-/// read as the scene is parsed. Meshes are not in the shape registry: their runtime form is the
-/// shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
+/// read as the scene is parsed, smooth-shaded where the file gives vertex normals;
+/// `face_normals: true` shades it flat all the same (Mitsuba's `face_normals`). Meshes are not
+/// in the shape registry: their runtime form is the shared mesh data the world instances, not
+/// a [`ShapeModel`] that places primitives.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshDesc {
     file: MeshFile,
+    #[serde(default)]
+    face_normals: bool,
 }
 
 fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Error> {
-    fields::<MeshDesc, A>(variant).map(|m| m.file)
+    let MeshDesc { file, face_normals } = fields::<MeshDesc, A>(variant)?;
+    if !face_normals || file.mesh.normals.is_none() {
+        return Ok(file);
+    }
+    // One flat copy per file, shared by the objects that ask for it (one BLAS).
+    let key =
+        crate::format::context::scene_dir().map(|d| d.join(format!("{}#face_normals", file.path.display())));
+    let cached = key.as_deref().and_then(crate::format::context::mesh);
+    let mesh = cached.unwrap_or_else(|| {
+        let flat =
+            std::sync::Arc::new(crate::accel::mesh::MeshData { normals: None, ..(*file.mesh).clone() });
+        if let Some(k) = key {
+            crate::format::context::keep_mesh(k, flat.clone());
+        }
+        flat
+    });
+    Ok(MeshFile { path: file.path, mesh })
 }
 
 /// What a shape description becomes in the world.

@@ -37,15 +37,12 @@ pub fn convert(cx: &Converter, p: &Plugin) -> Result<(String, Vec<Op>), SceneErr
             let file = cx.file(&name, &at)?;
             let flat = p.bool("face_normals")?.unwrap_or(false);
             p.finish(&["to_world", "flip_normals", "filename", "face_normals"])?;
-            if flat {
-                return Err(p.at.error(format!(
-                    "{}: face_normals: pathwave shades a mesh with the normals its file gives (flat where it gives none)",
-                    p.label()
-                )));
-            }
             // pathwave reads an OBJ's vertex normals and texture coordinates as Mitsuba does
-            // (smooth shading where the file gives normals).
-            format!("Mesh(file: {file})")
+            // (smooth shading where the file gives normals, unless face_normals).
+            match flat {
+                true => format!("Mesh(file: {file}, face_normals: true)"),
+                false => format!("Mesh(file: {file})"),
+            }
         }
         k => {
             return Err(p.at.error(format!(
