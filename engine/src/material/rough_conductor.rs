@@ -14,7 +14,7 @@ use crate::format::{Albedo, Color, Rgb};
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `RoughConductor(tint: (r, g, b), alpha: 0.15, eta: (r, g, b), k: (r, g, b))`.
+/// `RoughConductor(tint: (r, g, b), alpha: 0.15, eta: (r, g, b), k: (r, g, b), two_sided: false)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RoughConductorDesc {
@@ -32,6 +32,10 @@ pub struct RoughConductorDesc {
     /// `Separable` (default) or `HeightCorrelated` Smith shadowing-masking.
     #[serde(default)]
     pub smith: Smith,
+    /// Reflects on both sides (Mitsuba's `twosided` around a conductor); by default the side
+    /// the normal points to reflects and the other is black.
+    #[serde(default)]
+    pub two_sided: bool,
 }
 
 /// Three finite numbers > 0 `(r, g, b)`.
@@ -72,9 +76,17 @@ pub struct RoughConductor {
     pub ior: Option<ComplexIor>,
     /// The shadowing-masking term's form.
     pub smith: Smith,
+    /// Reflects on both sides.
+    pub two_sided: bool,
 }
 
 impl RoughConductor {
+    /// The normal a two-sided conductor reflects about: `n` turned to `wo`'s side.
+    #[inline]
+    fn facing(&self, wo: Vec3A, n: Vec3A) -> Vec3A {
+        if self.two_sided && wo.dot(n) < 0.0 { -n } else { n }
+    }
+
     /// A smooth mirror: alpha below [`SMOOTH_ALPHA`].
     #[inline]
     pub fn is_smooth(&self) -> bool {
@@ -102,7 +114,13 @@ impl MaterialModel for RoughConductor {
                 Some(ComplexIor { eta: eta.map_or(Vec3::ONE, |e| e.0), k: k.map_or(Vec3::ZERO, |k| k.0) })
             }
         };
-        Self { tint: colors.get(&desc.tint).min(Vec3::ONE), alpha: desc.alpha.0, ior, smith: desc.smith }
+        Self {
+            tint: colors.get(&desc.tint).min(Vec3::ONE),
+            alpha: desc.alpha.0,
+            ior,
+            smith: desc.smith,
+            two_sided: desc.two_sided,
+        }
     }
 
     #[inline]
@@ -113,6 +131,7 @@ impl MaterialModel for RoughConductor {
     /// Visible-normal sampling and mirroring about the normal; `None` seen from below `n` or
     /// when the mirrored direction falls below the surface (single-scattering loss).
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, _uc: f32) -> Option<BsdfSample> {
+        let n = self.facing(wo, n);
         let cos_o = wo.dot(n);
         if cos_o <= 0.0 {
             return None;
@@ -149,6 +168,7 @@ impl MaterialModel for RoughConductor {
         if self.is_smooth() {
             return BsdfEval::ZERO;
         }
+        let n = self.facing(wo, n);
         let frame = Frame::from_normal(n);
         let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
         if lo.z <= 0.0 || li.z <= 0.0 {
@@ -271,7 +291,7 @@ mod tests {
         ComplexIor { eta: Vec3::new(0.143, 0.374, 1.442), k: Vec3::new(3.983, 2.385, 1.603) };
 
     fn conductor(alpha: f32, ior: Option<ComplexIor>) -> RoughConductor {
-        RoughConductor { tint: Vec3::ONE, alpha, ior, smith: Smith::Separable }
+        RoughConductor { tint: Vec3::ONE, alpha, ior, smith: Smith::Separable, two_sided: false }
     }
 
     /// A normal that is not an axis, and the direction `deg` degrees from it.
@@ -341,7 +361,13 @@ mod tests {
         {
             for alpha in [0.01f32, 0.05, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0, 89.5] {
-                    let m = RoughConductor { tint: Vec3::new(0.9, 0.6, 0.3), alpha, ior, smith };
+                    let m = RoughConductor {
+                        tint: Vec3::new(0.9, 0.6, 0.3),
+                        alpha,
+                        ior,
+                        smith,
+                        two_sided: false,
+                    };
                     let (n, wo) = setup(deg);
                     for _ in 0..200 {
                         let Some(s) = m.sample(wo, n, Vec2::new(r(), r()), r()) else { continue };
@@ -408,6 +434,29 @@ mod tests {
         assert!(q > 0.93 && q < 0.97, "{q}");
     }
 
+    /// A one-sided conductor is black seen from behind; a two-sided one reflects there as the
+    /// same conductor facing the other way.
+    #[test]
+    fn two_sided_conductors_reflect_from_behind() {
+        let (n, wo) = setup(30.0);
+        for alpha in [0.0f32, 0.3] {
+            let one = conductor(alpha, Some(GOLD));
+            let two = RoughConductor { two_sided: true, ..one };
+            let flipped = |u: Vec2| (one.sample(-wo, -n, u, 0.5), two.sample(-wo, n, u, 0.5));
+            for u in [Vec2::new(0.3, 0.6), Vec2::new(0.8, 0.1)] {
+                assert!(one.sample(-wo, n, u, 0.5).is_none(), "one-sided, seen from behind");
+                let (want, got) = flipped(u);
+                let (want, got) = (want.unwrap(), got.unwrap());
+                assert_eq!((got.wi, got.weight, got.pdf), (want.wi, want.weight, want.pdf));
+                assert!(got.wi.dot(n) < 0.0);
+                if alpha > 0.0 {
+                    assert_eq!(one.eval(-wo, got.wi, n), BsdfEval::ZERO);
+                    assert_eq!(two.eval(-wo, got.wi, n), one.eval(-wo, got.wi, -n));
+                }
+            }
+        }
+    }
+
     #[test]
     fn brdf_is_reciprocal() {
         let mut r = crate::testing::uniform(23);
@@ -424,6 +473,7 @@ mod tests {
                 alpha,
                 ior: Some(GOLD),
                 smith: Smith::Separable,
+                two_sided: false,
             };
             for _ in 0..500 {
                 let (wo, wi) = (dir(), dir());
@@ -456,6 +506,7 @@ mod tests {
                 alpha,
                 ior: Some(GOLD),
                 smith: Smith::Separable,
+                two_sided: false,
             };
             let n = Vec3A::Z;
             let wo = Vec3A::new(0.6, 0.0, 0.8);
@@ -514,6 +565,7 @@ mod tests {
                 alpha: 0.15,
                 ior: None,
                 smith: Smith::Separable,
+                two_sided: false,
             })
         );
         assert_eq!(m.shading(), Shading::Glossy);
@@ -526,7 +578,8 @@ mod tests {
                 tint: Vec3::ONE,
                 alpha: 0.3,
                 ior: Some(GOLD),
-                smith: Smith::Separable
+                smith: Smith::Separable,
+                two_sided: false,
             })
         );
         let Material::RoughConductor(c) = build("RoughConductor(tint: (1, 1, 1), alpha: 0.3, k: (3, 2, 1))")

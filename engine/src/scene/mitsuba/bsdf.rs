@@ -77,10 +77,16 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             let one = cx.by_id(one)?;
             match Plugin::new(one)?.kind.as_str() {
                 "diffuse" => convert(cx, one)?,
+                // pathwave's conductors are one-sided as Mitsuba's; `two_sided` makes them
+                // what `twosided` makes Mitsuba's.
+                "conductor" | "roughconductor" => {
+                    let inner = convert(cx, one)?;
+                    format!("{}, two_sided: true)", inner.strip_suffix(')').expect("a RON kind ends in ')'"))
+                }
                 k => {
-                    return Err(one
-                        .at
-                        .error(format!("twosided around \"{k}\": pathwave reads twosided around diffuse")));
+                    return Err(one.at.error(format!(
+                        "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor and roughconductor"
+                    )));
                 }
             }
         }
