@@ -1,7 +1,8 @@
 //! `<sensor>` with its `<film>`, `<rfilter>` and `<sampler>` as pathwave's `camera` and
 //! `render` fields. Mitsuba 3's defaults (its plugin reference, mitsuba.readthedocs.io, and
 //! mitsuba3 `src/sensors/perspective.cpp`, `thinlens.cpp`, `orthographic.cpp`): `fov_axis` x,
-//! a 50 mm focal length, hdrfilm 768 x 576 with a gaussian filter.
+//! a 50 mm focal length, `near_clip` 0.01 and `far_clip` 10000, hdrfilm 768 x 576 with a
+//! gaussian filter.
 
 use super::convert::{Converter, num, num32, ops};
 use super::props::Plugin;
@@ -77,11 +78,13 @@ impl Converter<'_> {
             fields.push(format!("focus_dist: {}", num(f)));
             reads.extend(["aperture_radius", "focus_distance"]);
         }
+        // Mitsuba always clips (its defaults 0.01 and 10000), so the camera always gets both.
         let near = p.float("near_clip")?.unwrap_or(0.01);
         let far = p.float("far_clip")?.unwrap_or(10000.0);
         if !(near > 0.0 && far > near) {
             return Err(p.at.error(format!("near_clip {near} and far_clip {far}: need 0 < near < far")));
         }
+        fields.push(format!("near_clip: {}, far_clip: {}", num(near), num(far)));
         let open = p.float("shutter_open")?.unwrap_or(0.0);
         let close = p.float("shutter_close")?.unwrap_or(0.0);
         if (open, close) != (0.0, 0.0) {
