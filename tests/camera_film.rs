@@ -1,6 +1,7 @@
 //! The camera given by a `to_world` transform (Mitsuba 3's camera space) and the pixel
 //! filters: the two camera forms render the same image, orthographic views have the size
-//! Mitsuba gives them, bad cameras are refused with clear errors.
+//! Mitsuba gives them, clip planes hide what lies outside them, bad cameras are refused with
+//! clear errors.
 
 mod common;
 use common::*;
@@ -123,6 +124,26 @@ fn bad_cameras_are_refused_clearly() {
         ("to_world: [Translate((0, 0, 2e15))], projection: Orthographic".to_string(), "", "within 1e15"),
         ("look_from: (0, 0, 6), look_at: (0, 0, 0)".to_string(), "", "missing field `vfov`"),
         (
+            format!("to_world: [{eye}], projection: Orthographic, near_clip: 2, far_clip: 2"),
+            "",
+            "less than far_clip",
+        ),
+        (
+            format!("to_world: [{eye}], projection: Orthographic, near_clip: 3, far_clip: 2"),
+            "",
+            "less than far_clip",
+        ),
+        (format!("to_world: [{eye}], projection: Orthographic, near_clip: 0"), "", "finite number > 0"),
+        (format!("to_world: [{eye}], projection: Orthographic, far_clip: -1"), "", "finite number > 0"),
+        (format!("to_world: [{eye}], projection: Orthographic, far_clip: inf"), "", "finite number > 0"),
+        (format!("to_world: [{eye}], projection: Orthographic, far_clip: 1e16"), "", "within 1e15"),
+        (
+            "look_from: (0, 0, 6), look_at: (0, 0, 0), vfov: 40, near_clip: 1".to_string(),
+            "",
+            "do not go with",
+        ),
+        ("near_clip: 1, far_clip: 2".to_string(), "", "missing field `to_world`"),
+        (
             format!("to_world: [{eye}], projection: Perspective(fov: 30)"),
             "animation: (camera: (look_from: Linear([(0, (0, 0, 5))]))),",
             "need a look_from/look_at camera",
@@ -186,5 +207,62 @@ fn filters_blur_a_sharp_edge_by_their_cdf() {
                 }
             }
         }
+    }
+}
+
+/// A camera at the origin looking along +z (`camera`: its projection and lens) with clip
+/// planes at camera-space depths 1 and 2, a red lamp square at depth `z` filling the view and
+/// a blue background; `extra` objects are spliced in.
+fn clipped(camera: &str, z: f32, extra: &str) -> SceneDesc {
+    let (q, s) = (-3.0 * z, 6.0 * z);
+    inline(&format!(
+        r#"Scene(
+    camera: (to_world: [Translate((0, 0, 0))], {camera}, near_clip: 1, far_clip: 2),
+    render: (width: 8, height: 8, spp: 16),
+    background: Constant((0, 0, 1)),
+    materials: {{ "lamp": DiffuseLight(emit: (1, 0, 0), two_sided: true), "mirror": Metal(albedo: (1, 1, 1)) }},
+    objects: [(shape: Quad(q: ({q}, {q}, {z}), u: ({s}, 0, 0), v: (0, {s}, 0)), material: "lamp"), {extra}],
+)"#
+    ))
+}
+
+/// Every pixel of both integrators' images is red (the lamp is seen) or blue (the background).
+fn assert_sees(desc: &SceneDesc, lamp: bool, what: &str) {
+    for (film, name) in both(desc).iter().zip(["oracle", "wavefront"]) {
+        for (i, p) in film.mean().iter().enumerate() {
+            let (x, y) = (i as u32 % film.width, i as u32 / film.width);
+            let seen = if lamp { p.x } else { p.z };
+            assert!(seen > 0.999 && p.x + p.z < 1.001, "{what}, {name}: pixel ({x}, {y}) is {p}");
+        }
+    }
+}
+
+/// Mitsuba 3's clip planes (mitsuba3 `src/sensors/perspective.cpp`, `thinlens.cpp`,
+/// `orthographic.cpp`): a lamp nearer than near_clip or farther than far_clip is not seen (the
+/// background is), one between them is, in every pixel. The planes are camera-space depths,
+/// not distances along the ray: at the image's corners (90 degrees across, so the corner rays
+/// are at 55 degrees to the axis) a distance of 1 along the ray reaches only depth 0.58, so the
+/// lamp at depth 0.8 would show there, and a distance of 2 only depth 1.15, hiding the one at
+/// 1.8.
+#[test]
+fn clip_planes_hide_what_lies_outside_them() {
+    for camera in [
+        "projection: Perspective(fov: 90)",
+        "projection: Perspective(fov: 90), aperture_radius: 0.2, focus_dist: 1.5",
+        "projection: Orthographic",
+    ] {
+        for (z, lamp) in [(0.8, false), (1.2, true), (1.8, true), (2.2, false)] {
+            assert_sees(&clipped(camera, z, ""), lamp, &format!("{camera}, lamp at depth {z}"));
+        }
+    }
+}
+
+/// The far plane limits the camera rays only: a mirror between the planes shows a lamp 10
+/// behind the camera (a path 11.5 long).
+#[test]
+fn far_clip_limits_only_camera_rays() {
+    let mirror = "(shape: Quad(q: (-5, -5, 1.5), u: (10, 0, 0), v: (0, 10, 0)), material: \"mirror\")";
+    for camera in ["projection: Perspective(fov: 90)", "projection: Orthographic"] {
+        assert_sees(&clipped(camera, -10.0, mirror), true, &format!("{camera}, lamp seen in a mirror"));
     }
 }

@@ -7,6 +7,9 @@ use glam::{Affine3A, Vec2, Vec3, Vec3A};
 /// right and up for [`Camera::new`]; a `to_world` camera's camera-space x and y, scaled as it
 /// scales them), the backward unit axis `w`, and the top-left corner of the image on the focus
 /// plane with the pixel steps there (an orthographic camera: on the plane its rays start from).
+/// For the clip planes: `ahead`, camera space's unit +z in the world (`-w` for
+/// [`Camera::new`], `to_world`'s z axis, scaled as it scales it), and `focus`, the camera-space
+/// depth of the focus plane (the image's plane for a perspective camera).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Pose {
     origin: Vec3A,
@@ -16,6 +19,8 @@ struct Pose {
     corner: Vec3A,
     du: Vec3A,
     dv: Vec3A,
+    ahead: Vec3A,
+    focus: f32,
 }
 
 impl Pose {
@@ -30,6 +35,8 @@ impl Pose {
             corner: self.corner.lerp(b.corner, s),
             du: self.du.lerp(b.du, s),
             dv: self.dv.lerp(b.dv, s),
+            ahead: self.ahead.lerp(b.ahead, s),
+            focus: self.focus + (b.focus - self.focus) * s,
         }
     }
 }
@@ -43,6 +50,9 @@ pub struct RayLanes<const N: usize> {
     pub d: [[f32; N]; 3],
     /// Times.
     pub time: [f32; N],
+    /// How far each ray reaches (along its unit direction, from its origin): the far clip
+    /// plane's distance ([`Camera::with_clip`]), infinite without one.
+    pub tmax: [f32; N],
 }
 
 impl<const N: usize> RayLanes<N> {
@@ -58,6 +68,21 @@ impl<const N: usize> RayLanes<N> {
     }
 }
 
+/// Near and far clip planes, camera-space depths as Mitsuba 3's `near_clip` and `far_clip`
+/// (mitsuba3 `src/sensors/perspective.cpp`, `thinlens.cpp`, `orthographic.cpp`): a
+/// perspective ray starts where it crosses the plane z = `near` and reaches to the plane
+/// z = `far` (Mitsuba's near_t = near_clip / d.z, far_t = far_clip / d.z for the normalised
+/// camera-space direction d from the lens point, on the lens plane z = 0); an orthographic ray
+/// starts on z = `near` and reaches `far - near` further along its unit direction (Mitsuba's
+/// `maxt`, in world units: with a scale along z that is not the plane z = `far`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clip {
+    /// Camera-space depth where rays start (0: at the lens or the image plane).
+    pub near: f32,
+    /// Camera-space depth beyond which nothing is seen (may be infinite), more than `near`.
+    pub far: f32,
+}
+
 /// A camera ready to generate rays for an image of a given size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
@@ -70,6 +95,8 @@ pub struct Camera {
     pub shutter: (f32, f32),
     /// Orthographic: each ray starts at its image point and runs along `-w`.
     orthographic: bool,
+    /// Clip planes (none: rays start at the lens and reach infinitely far).
+    clip: Option<Clip>,
 }
 
 impl Camera {
@@ -98,8 +125,8 @@ impl Camera {
         let du = u * (wd / width as f32);
         let dv = -v * (h / height as f32);
         let corner = origin - focus_dist * w - 0.5 * wd * u + 0.5 * h * v;
-        let pose = Pose { origin, u, v, w, corner, du, dv };
-        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic: false }
+        let pose = Pose { origin, u, v, w, corner, du, dv, ahead: -w, focus: focus_dist };
+        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic: false, clip: None }
     }
 
     /// A perspective (thin-lens) camera placed by `to_world` in Mitsuba 3's camera space (it
@@ -126,29 +153,32 @@ impl Camera {
         let corner = Vec3A::new(tx * f, ty * f, f);
         let du = Vec3A::new(-2.0 * tx * f / width as f32, 0.0, 0.0);
         let dv = Vec3A::new(0.0, -2.0 * ty * f / height as f32, 0.0);
-        Self::placed(to_world, corner, du, dv, aperture_radius, shutter, false)
+        Self::placed(to_world, corner, du, dv, aperture_radius, f, shutter, false)
     }
 
     /// An orthographic camera placed by `to_world` in Mitsuba 3's camera space: the image
     /// spans camera-space x from 1 (left) to -1 (right) and y from 1/aspect (top) to
-    /// -1/aspect, aspect = width / height; rays start there on the plane z = 0 and run along
-    /// `to_world`'s +z (mitsuba3 `src/sensors/orthographic.cpp`, without its near clip).
+    /// -1/aspect, aspect = width / height; rays start there on the plane z = 0 (z = near with
+    /// [`Self::with_clip`]) and run along `to_world`'s +z (mitsuba3
+    /// `src/sensors/orthographic.cpp`).
     pub fn orthographic(to_world: Affine3A, shutter: (f32, f32), width: u32, height: u32) -> Self {
         let inv_aspect = height as f32 / width as f32;
         let corner = Vec3A::new(1.0, inv_aspect, 0.0);
         let du = Vec3A::new(-2.0 / width as f32, 0.0, 0.0);
         let dv = Vec3A::new(0.0, -2.0 * inv_aspect / height as f32, 0.0);
-        Self::placed(to_world, corner, du, dv, 0.0, shutter, true)
+        Self::placed(to_world, corner, du, dv, 0.0, 1.0, shutter, true)
     }
 
-    /// The camera whose image's camera-space corner and pixel steps are `corner`, `du`, `dv`,
-    /// taken to the world by `to_world`.
+    /// The camera whose image's camera-space corner and pixel steps are `corner`, `du`, `dv`
+    /// (on the plane z = `focus`), taken to the world by `to_world`.
+    #[expect(clippy::too_many_arguments, reason = "the pose's parts and the lens")]
     fn placed(
         to_world: Affine3A,
         corner: Vec3A,
         du: Vec3A,
         dv: Vec3A,
         aperture_radius: f32,
+        focus: f32,
         shutter: (f32, f32),
         orthographic: bool,
     ) -> Self {
@@ -161,8 +191,22 @@ impl Camera {
             corner: to_world.transform_point3a(corner),
             du: m * du,
             dv: m * dv,
+            ahead: m.z_axis,
+            focus,
         };
-        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic }
+        Self { pose, close: None, lens_radius: aperture_radius, shutter, orthographic, clip: None }
+    }
+
+    /// This camera with the clip planes `clip` (none: rays start at the lens and reach
+    /// infinitely far, with the bits of a camera that never had clip planes).
+    pub fn with_clip(self, clip: Option<Clip>) -> Self {
+        Self { clip, ..self }
+    }
+
+    /// True when camera rays reach only a finite distance (a far clip plane).
+    #[inline]
+    pub fn has_far_clip(&self) -> bool {
+        self.clip.is_some_and(|c| c.far.is_finite())
     }
 
     /// This camera at shutter open, moving to `close`'s pose at shutter close (its aperture
@@ -186,18 +230,31 @@ impl Camera {
     /// [0,1)^2 and shutter fraction `time_u`. The direction is unit length.
     #[inline]
     pub fn generate_ray(&self, pixel: Vec2, lens: Vec2, time_u: f32) -> Ray {
+        self.generate_clipped_ray(pixel, lens, time_u).0
+    }
+
+    /// [`Self::generate_ray`] and how far the ray reaches (infinite without a far clip plane).
+    #[inline]
+    pub fn generate_clipped_ray(&self, pixel: Vec2, lens: Vec2, time_u: f32) -> (Ray, f32) {
         let pose = match &self.close {
             Some(close) => self.pose.lerp(close, time_u),
             None => self.pose,
         };
         if self.orthographic {
-            let origin = pose.corner + pixel.x * pose.du + pixel.y * pose.dv;
+            let mut origin = pose.corner + pixel.x * pose.du + pixel.y * pose.dv;
             let (t0, t1) = self.shutter;
-            return Ray { origin, dir: -pose.w, time: t0 + (t1 - t0) * time_u };
+            let mut tmax = f32::INFINITY;
+            if let Some(c) = self.clip {
+                // mitsuba3 `src/sensors/orthographic.cpp`: the sample on the plane z = near,
+                // `maxt = far_clip - near_clip`.
+                origin += pose.ahead * c.near;
+                tmax = c.far - c.near;
+            }
+            return (Ray { origin, dir: -pose.w, time: t0 + (t1 - t0) * time_u }, tmax);
         }
-        let (o, d, time) =
-            self.ray_from(&pose, self.has_aperture(), pixel.to_array(), lens.to_array(), time_u);
-        Ray { origin: o.into(), dir: d.into(), time }
+        let (o, d, time, tmax) =
+            self.ray_from(&pose, self.has_aperture(), self.clip, pixel.to_array(), lens.to_array(), time_u);
+        (Ray { origin: o.into(), dir: d.into(), time }, tmax)
     }
 
     /// [`Self::generate_ray`] for `N` samples at once (`pixel`, `lens` and `time_u` per lane),
@@ -213,45 +270,54 @@ impl Camera {
         lens: &[[f32; 2]; N],
         time_u: &[f32; N],
     ) -> RayLanes<N> {
-        let mut out = RayLanes { o: [[0.0; N]; 3], d: [[0.0; N]; 3], time: [0.0; N] };
-        let mut set = |l: usize, (o, d, t): ([f32; 3], [f32; 3], f32)| {
+        let mut out =
+            RayLanes { o: [[0.0; N]; 3], d: [[0.0; N]; 3], time: [0.0; N], tmax: [f32::INFINITY; N] };
+        let mut set = |l: usize, (o, d, t, tmax): ([f32; 3], [f32; 3], f32, f32)| {
             for a in 0..3 {
                 (out.o[a][l], out.d[a][l]) = (o[a], d[a]);
             }
-            out.time[l] = t;
+            (out.time[l], out.tmax[l]) = (t, tmax);
         };
         if self.close.is_some() || self.orthographic {
             for l in 0..N {
-                let r = self.generate_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
-                set(l, (r.origin.to_array(), r.dir.to_array(), r.time));
+                let (r, tmax) =
+                    self.generate_clipped_ray(Vec2::from(pixel[l]), Vec2::from(lens[l]), time_u[l]);
+                set(l, (r.origin.to_array(), r.dir.to_array(), r.time, tmax));
+            }
+        } else if self.clip.is_some() {
+            let lensed = self.has_aperture();
+            for l in 0..N {
+                set(l, self.ray_from(&self.pose, lensed, self.clip, pixel[l], lens[l], time_u[l]));
             }
         } else if self.has_aperture() {
             // One loop per case, so that a pinhole camera's lanes compute no lens point.
             for l in 0..N {
-                set(l, self.ray_from(&self.pose, true, pixel[l], lens[l], time_u[l]));
+                set(l, self.ray_from(&self.pose, true, None, pixel[l], lens[l], time_u[l]));
             }
         } else {
             for l in 0..N {
-                set(l, self.ray_from(&self.pose, false, pixel[l], lens[l], time_u[l]));
+                set(l, self.ray_from(&self.pose, false, None, pixel[l], lens[l], time_u[l]));
             }
         }
         out
     }
 
-    /// The ray of [`Self::generate_ray`] from `pose` on plain numbers (origin, unit direction,
-    /// time), the operations in glam's order (`Vec3A::normalize` sums `(x^2 + y^2) + z^2` and
-    /// divides by the length), so scalar and lane calls agree bit for bit.
-    /// The lens point comes from [`disk_branch_free`] (a polynomial sine and cosine); `lensed`
-    /// is [`Self::has_aperture`] (a parameter, so that callers can specialise on it).
+    /// The ray of [`Self::generate_clipped_ray`] from `pose` on plain numbers (origin, unit
+    /// direction, time, reach), the operations in glam's order (`Vec3A::normalize` sums
+    /// `(x^2 + y^2) + z^2` and divides by the length), so scalar and lane calls agree bit for
+    /// bit. The lens point comes from [`disk_branch_free`] (a polynomial sine and cosine);
+    /// `lensed` is [`Self::has_aperture`] and `clip` the camera's clip planes (parameters, so
+    /// that callers can specialise on them).
     #[inline(always)]
     fn ray_from(
         &self,
         pose: &Pose,
         lensed: bool,
+        clip: Option<Clip>,
         pixel: [f32; 2],
         lens: [f32; 2],
         time_u: f32,
-    ) -> ([f32; 3], [f32; 3], f32) {
+    ) -> ([f32; 3], [f32; 3], f32, f32) {
         let (c, du, dv) = (pose.corner.to_array(), pose.du.to_array(), pose.dv.to_array());
         let at = |a: usize| c[a] + pixel[0] * du[a] + pixel[1] * dv[a];
         let target = [at(0), at(1), at(2)];
@@ -270,7 +336,19 @@ impl Camera {
         let e = [target[0] - origin[0], target[1] - origin[1], target[2] - origin[2]];
         let len = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let (t0, t1) = self.shutter;
-        (origin, [e[0] / len, e[1] / len, e[2] / len], t0 + (t1 - t0) * time_u)
+        let (origin, tmax) = match clip {
+            None => (origin, f32::INFINITY),
+            // `e` runs from the lens (camera-space z = 0) to the focus plane (z = focus), so the
+            // point at camera-space depth z is origin + e z / focus: Mitsuba's
+            // origin + d near_clip / d.z (mitsuba3 `src/sensors/thinlens.cpp`), and the far
+            // plane lies (far - near) / focus |e| further along the unit direction.
+            Some(c) => {
+                let s = c.near / pose.focus;
+                let from = |a: usize| origin[a] + e[a] * s;
+                ([from(0), from(1), from(2)], len * ((c.far - c.near) / pose.focus))
+            }
+        };
+        (origin, [e[0] / len, e[1] / len, e[2] / len], t0 + (t1 - t0) * time_u, tmax)
     }
 
     /// The direction the camera looks along (at shutter open).
@@ -420,6 +498,36 @@ mod tests {
         assert!((bottom_right.origin - Vec3A::new(-2.0, -1.0, -4.0)).length() < 1e-6);
     }
 
+    /// Clip planes as Mitsuba 3's (mitsuba3 `src/sensors/thinlens.cpp`, `orthographic.cpp`):
+    /// a perspective ray, through a lens or not, at the image's corner or centre, starts on the
+    /// camera-space plane z = near and reaches the plane z = far; an orthographic one starts on
+    /// z = near and reaches far - near further.
+    #[test]
+    fn clip_planes_are_camera_space_depths() {
+        let m = mitsuba_look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::new(-2.0, 0.5, -1.0), Vec3::Y);
+        let to_camera = m.inverse();
+        let z = |p: Vec3A| to_camera.transform_point3a(p).z;
+        let clip = Some(Clip { near: 0.25, far: 7.0 });
+        let (w, h) = (40, 30);
+        for lens_radius in [0.0, 0.3] {
+            let c = Camera::perspective(m, 1.0, lens_radius, 2.0, (0.0, 0.0), w, h).with_clip(clip);
+            for p in [[0.0, 0.0], [40.0, 30.0], [20.0, 15.0], [3.5, 27.0]] {
+                let (r, tmax) = c.generate_clipped_ray(Vec2::from(p), Vec2::new(0.9, 0.3), 0.0);
+                assert!((z(r.origin) - 0.25).abs() < 1e-5, "{p:?}: starts at z = {}", z(r.origin));
+                assert!((z(r.at(tmax)) - 7.0).abs() < 1e-4, "{p:?}: reaches z = {}", z(r.at(tmax)));
+                // The same line as without clip planes.
+                let (plain, inf) =
+                    c.with_clip(None).generate_clipped_ray(Vec2::from(p), Vec2::new(0.9, 0.3), 0.0);
+                assert_eq!(inf, f32::INFINITY);
+                assert!((plain.dir - r.dir).length() < 1e-6);
+                assert!((plain.dir.cross(r.origin - plain.origin)).length() < 1e-5);
+            }
+        }
+        let o = Camera::orthographic(m, (0.0, 0.0), w, h).with_clip(clip);
+        let (r, tmax) = o.generate_clipped_ray(Vec2::new(3.0, 29.0), Vec2::ZERO, 0.0);
+        assert!((z(r.origin) - 0.25).abs() < 1e-5 && (z(r.at(tmax)) - 7.0).abs() < 1e-4);
+    }
+
     /// The lane version gives the bits of the scalar one, with and without AVX-512, for a
     /// pinhole, a thin lens and a moving camera.
     #[test]
@@ -431,7 +539,10 @@ mod tests {
             mitsuba_look_at(from, Vec3::ZERO, Vec3::Y) * Affine3A::from_scale(Vec3::new(1.0, 2.0, 0.5));
         let to_world = Camera::perspective(placed, 0.7, 0.05, 10.0, (0.0, 1.0), 384, 216);
         let ortho = Camera::orthographic(placed, (0.0, 1.0), 384, 216);
-        for cam in [cornell(), lens, lens.moving_to(&close), to_world, ortho] {
+        let clip = Some(Clip { near: 0.5, far: 40.0 });
+        let clipped =
+            [to_world.with_clip(clip), ortho.with_clip(clip), lens.moving_to(&close).with_clip(clip)];
+        for cam in [cornell(), lens, lens.moving_to(&close), to_world, ortho].into_iter().chain(clipped) {
             let u = |k: usize, m: u32| ((k as u32 * m) % 1009) as f32 / 1009.0;
             let pixel: [[f32; 2]; 16] = std::array::from_fn(|k| [383.0 * u(k, 7), 215.0 * u(k, 13)]);
             let on_lens: [[f32; 2]; 16] = std::array::from_fn(|k| [u(k, 31), u(k, 101)]);
@@ -442,12 +553,14 @@ mod tests {
             );
             let base = cam.generate_rays(&pixel, &on_lens, &time);
             for k in 0..16 {
-                let r = cam.generate_ray(Vec2::from(pixel[k]), Vec2::from(on_lens[k]), time[k]);
-                for got in [wide.ray(k), base.ray(k)] {
+                let (r, tmax) =
+                    cam.generate_clipped_ray(Vec2::from(pixel[k]), Vec2::from(on_lens[k]), time[k]);
+                for (got, got_tmax) in [(wide.ray(k), wide.tmax[k]), (base.ray(k), base.tmax[k])] {
                     let bits =
                         |r: &Ray| (r.origin.to_array().map(f32::to_bits), r.dir.to_array().map(f32::to_bits));
                     assert_eq!(bits(&got), bits(&r), "lane {k}");
                     assert_eq!(got.time.to_bits(), r.time.to_bits());
+                    assert_eq!(got_tmax.to_bits(), tmax.to_bits());
                 }
             }
         }

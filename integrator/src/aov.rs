@@ -48,7 +48,8 @@ pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
                 .map(|x| {
                     let mut sum = [Vec3::ZERO; 3];
                     for index in samples.clone() {
-                        let one = first_surface(scene, &path::camera_ray(scene, x, y, index).0);
+                        let (ray, tmax, _) = path::camera_ray(scene, x, y, index);
+                        let one = first_surface(scene, &ray, tmax);
                         (0..3).for_each(|k| sum[k] += one[k]);
                     }
                     sum.map(|v| v / n)
@@ -67,7 +68,8 @@ pub fn render(scene: &RenderScene, samples: Range<u32>) -> Aovs {
 
 /// Per pixel, the mean distance along the camera rays of samples `samples` to the first
 /// surface they meet (mirrors and glass included), over the rays that meet one; infinity where
-/// none does. Distances are in world units from the ray's origin on the lens.
+/// none does. Distances are in world units from the ray's origin (on the lens, or on the near
+/// clip plane).
 pub fn depth(scene: &RenderScene, samples: Range<u32>) -> Vec<f32> {
     let _span = tracing::info_span!("render_depth", samples = samples.len()).entered();
     let win = scene.settings.window;
@@ -78,8 +80,8 @@ pub fn depth(scene: &RenderScene, samples: Range<u32>) -> Vec<f32> {
             (win.x0..win.x0 + win.w).map(move |x| {
                 let (mut sum, mut n) = (0.0f64, 0u32);
                 for index in samples.clone() {
-                    let ray = path::camera_ray(scene, x, y, index).0;
-                    if let Some(h) = scene.intersect(&ray, f32::INFINITY) {
+                    let (ray, tmax, _) = path::camera_ray(scene, x, y, index);
+                    if let Some(h) = scene.intersect(&ray, tmax) {
                         sum += (h.t * ray.dir.length()) as f64;
                         n += 1;
                     }
@@ -160,9 +162,10 @@ const MAX_SPECULAR: u32 = 4;
 /// emission is the first surface's or the background's, as [`path::emit`] and [`path::escape`]
 /// add it at the first vertex. Albedo and normal are those of the first surface that is not a
 /// perfect mirror or glass (tinted by the mirrors on the way; glass refracts unless the light
-/// cannot get out), so that what those show keeps its edges.
-fn first_surface(scene: &RenderScene, camera: &Ray) -> [Vec3; 3] {
-    let first = scene.intersect(camera, f32::INFINITY);
+/// cannot get out), so that what those show keeps its edges. The camera ray sees surfaces
+/// closer than `tmax` (the far clip plane).
+fn first_surface(scene: &RenderScene, camera: &Ray, tmax: f32) -> [Vec3; 3] {
+    let first = scene.intersect(camera, tmax);
     let transmittance = if scene.features.media {
         scene.media.transmittance(camera.origin, camera.dir, first.map_or(f32::INFINITY, |h| h.t))
     } else {

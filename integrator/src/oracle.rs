@@ -52,17 +52,21 @@ pub fn render_samples(
 pub fn render_pixel(scene: &RenderScene, x: u32, y: u32, samples: Range<u32>) -> PixelAccumulator {
     let mut acc = PixelAccumulator::default();
     for i in samples {
-        let (ray, sampler) = path::camera_ray(scene, x, y, i);
-        acc.add(clamp_sample(radiance(scene, ray, &sampler), scene.settings.clamp));
+        let (ray, tmax, sampler) = path::camera_ray(scene, x, y, i);
+        acc.add(clamp_sample(radiance(scene, ray, tmax, &sampler), scene.settings.clamp));
     }
     acc
 }
 
-/// Radiance arriving at the ray origin along the ray (unit direction).
-pub fn radiance(scene: &RenderScene, mut ray: Ray, sampler: &Sampler) -> Vec3 {
+/// Radiance arriving at the ray origin along the ray (unit direction), which sees surfaces
+/// closer than `tmax` (the camera's far clip plane; beyond it the ray misses); the path's later
+/// rays reach infinitely far.
+pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler) -> Vec3 {
     let mut st = PathState::new(ray.origin);
+    let mut reach = tmax;
     'path: loop {
-        let hit = scene.intersect(&ray, f32::INFINITY);
+        let hit = scene.intersect(&ray, reach);
+        reach = f32::INFINITY;
         // Each vertex yields an optional shadow ray and the next ray (None: the path ends).
         let (shadow, next) = 'vertex: {
             if scene.features.media {

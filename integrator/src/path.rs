@@ -477,12 +477,13 @@ pub fn shade_glossy(
     (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf))
 }
 
-/// The first ray of sample `index` of pixel (x, y), and its random stream ([`camera_rays`] on
-/// one lane).
+/// The first ray of sample `index` of pixel (x, y), how far it reaches (the far clip plane;
+/// infinite without one) and its random stream ([`camera_rays`] on one lane).
 #[inline]
-pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, Sampler) {
+pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, f32, Sampler) {
     let sampler = camera_sampler(scene, x, y, index);
-    (camera_rays(scene, &SamplerLanes::from(&[sampler]), &[(x, y)]).ray(0), sampler)
+    let rays = camera_rays(scene, &SamplerLanes::from(&[sampler]), &[(x, y)]);
+    (rays.ray(0), rays.tmax[0], sampler)
 }
 
 /// The camera rays of `N` samples through the pixels `pixel` with the random streams `s`, their

@@ -47,7 +47,29 @@ pub enum CameraView {
         to_world: Affine3A,
         /// How camera space maps to the image.
         projection: Projection,
+        /// Camera-space depth where rays start, as Mitsuba 3's `near_clip` (default: none,
+        /// rays start at the lens or, orthographic, on the plane z = 0).
+        near_clip: Option<f32>,
+        /// Camera-space depth beyond which the camera sees nothing (its rays miss, seeing the
+        /// background), as Mitsuba 3's `far_clip` (default: none, unbounded).
+        far_clip: Option<f32>,
     },
+}
+
+impl CameraView {
+    /// The clip planes the camera's rays get ([`crate::camera::Clip`]; none when the scene
+    /// gives neither).
+    pub fn clip(&self) -> Option<crate::camera::Clip> {
+        match *self {
+            CameraView::ToWorld { near_clip, far_clip, .. } if near_clip.is_some() || far_clip.is_some() => {
+                Some(crate::camera::Clip {
+                    near: near_clip.unwrap_or(0.0),
+                    far: far_clip.unwrap_or(f32::INFINITY),
+                })
+            }
+            _ => None,
+        }
+    }
 }
 
 /// How a `to_world` camera projects (`projection: Perspective(fov: 39.3, fov_axis: X)` or
@@ -134,6 +156,10 @@ struct RawCamera {
     #[serde(default)]
     projection: Option<RawProjection>,
     #[serde(default)]
+    near_clip: Option<Positive>,
+    #[serde(default)]
+    far_clip: Option<Positive>,
+    #[serde(default)]
     aperture_radius: NonNegative,
     #[serde(default)]
     focus_dist: Option<Positive>,
@@ -142,7 +168,8 @@ struct RawCamera {
 }
 
 /// The two forms' fields, for messages.
-const FORMS: &str = "a camera is either (look_from, look_at, vfov[, vup]) or (to_world, projection)";
+const FORMS: &str =
+    "a camera is either (look_from, look_at, vfov[, vup]) or (to_world, projection[, near_clip, far_clip])";
 
 impl TryFrom<RawCamera> for CameraDesc {
     type Error = String;
@@ -159,11 +186,21 @@ impl TryFrom<RawCamera> for CameraDesc {
         }
         let shutter = (r.shutter.0.0, r.shutter.1.0);
         let look_at_form = [r.look_from.is_some(), r.look_at.is_some(), r.vup.is_some(), r.vfov.is_some()];
-        let to_world_form = [r.to_world.is_some(), r.projection.is_some()];
+        let clip = [r.near_clip.is_some(), r.far_clip.is_some()];
+        let to_world_form = [r.to_world.is_some(), r.projection.is_some(), clip[0], clip[1]];
         if look_at_form.contains(&true) && to_world_form.contains(&true) {
             return Err(format!(
-                "camera: look_from, look_at, vup and vfov do not go with to_world and projection: {FORMS}"
+                "camera: look_from, look_at, vup and vfov do not go with to_world, projection, near_clip and far_clip: {FORMS}"
             ));
+        }
+        let (near_clip, far_clip) = (r.near_clip.map(|n| n.0), r.far_clip.map(|f| f.0));
+        if near_clip.is_some_and(far) || far_clip.is_some_and(far) {
+            return Err(format!("camera: near_clip and far_clip must lie within {MAX_COORDINATE:e} units"));
+        }
+        if let (Some(n), Some(f)) = (near_clip, far_clip)
+            && !(n < f)
+        {
+            return Err(format!("camera: near_clip ({n}) must be less than far_clip ({f})"));
         }
         if let Some(ops) = r.to_world.as_deref() {
             let Some(projection) = r.projection else {
@@ -191,10 +228,10 @@ impl TryFrom<RawCamera> for CameraDesc {
                 // A pinhole's rays do not depend on it.
                 None => 1.0,
             };
-            let view = CameraView::ToWorld { to_world, projection };
+            let view = CameraView::ToWorld { to_world, projection, near_clip, far_clip };
             return Ok(Self { view, aperture_radius: r.aperture_radius.0, focus_dist, shutter });
         }
-        if r.to_world.is_none() && r.projection.is_some() {
+        if r.to_world.is_none() && (r.projection.is_some() || clip.contains(&true)) {
             return Err(format!("camera: missing field `to_world`: {FORMS}"));
         }
         let missing = |name: &str| format!("camera: missing field `{name}`: {FORMS}");

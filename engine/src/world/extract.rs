@@ -37,18 +37,21 @@ pub fn extract_render_scene(
     let s = settings.0;
     let make = |c: &CameraDesc| {
         let (r, f, shutter, w, h) = (c.aperture_radius, c.focus_dist, c.shutter, s.width, s.height);
-        match c.view {
+        let camera = match c.view {
             CameraView::LookAt { look_from, look_at, vup, vfov } => {
                 Camera::new(look_from, look_at, vup, vfov, r, f, shutter, w, h)
             }
-            CameraView::ToWorld { to_world, projection: Projection::Perspective { fov, fov_axis } } => {
+            CameraView::ToWorld {
+                to_world, projection: Projection::Perspective { fov, fov_axis }, ..
+            } => {
                 let tan_half_x = fov_axis.tan_half_x_fov(fov, w as f64 / h as f64) as f32;
                 Camera::perspective(to_world, tan_half_x, r, f, shutter, w, h)
             }
-            CameraView::ToWorld { to_world, projection: Projection::Orthographic } => {
+            CameraView::ToWorld { to_world, projection: Projection::Orthographic, .. } => {
                 Camera::orthographic(to_world, shutter, w, h)
             }
-        }
+        };
+        camera.with_clip(c.view.clip())
     };
     let camera = match &camera.1 {
         Some(close) => make(&camera.0).moving_to(&make(close)),

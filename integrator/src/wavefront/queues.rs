@@ -47,6 +47,10 @@ pub struct Paths {
     pub pixel: Vec<u32>,
     /// Closest hit of the last intersection.
     pub hit: Vec<Hit>,
+    /// How far the next ray reaches: the camera ray's far clip distance until its first
+    /// intersection, then infinity (written and read only when the camera has a far clip
+    /// plane).
+    pub far: Vec<f32>,
     /// Denoiser guides of the path's sample (only with [`super::Options::guides`]).
     pub guide: Vec<Guide>,
 }
@@ -80,6 +84,7 @@ impl Paths {
             sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
+            far: vec![f32::INFINITY; n],
             guide: vec![Guide::NEW; n],
         }
     }

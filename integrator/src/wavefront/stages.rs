@@ -14,7 +14,9 @@ use pathwave_engine::shape::SurfacePoint;
 
 /// `intersect_closest`: traces every active ray; misses go to `escaped`, hits to the queue of
 /// their material kind (the engine chooses how the rays are traced:
-/// [`Aggregate::trace_closest`](pathwave_engine::accel::queue::Aggregate::trace_closest)).
+/// [`Aggregate::trace_closest`](pathwave_engine::accel::queue::Aggregate::trace_closest)). With
+/// a far clip plane, a camera ray's hit at or beyond its reach is a miss (as the reference's
+/// `intersect(ray, tmax)`, which sees `t < tmax`).
 pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     if scene.features.media {
         free_flight_numbers(p, &q.active, &mut q.stream.u_medium);
@@ -25,9 +27,14 @@ pub fn intersect_closest(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let i = active[k] as usize;
         (p.origin[i], p.dir[i])
     });
+    let far_clip = scene.camera.has_far_clip();
     for k in 0..q.active.len() {
         let i = q.active[k] as usize;
-        let hit = surfaces.closest_hit(&q.stream.query, k, &p.ray(i));
+        let mut hit = surfaces.closest_hit(&q.stream.query, k, &p.ray(i));
+        if far_clip {
+            let far = std::mem::replace(&mut p.far[i], f32::INFINITY);
+            hit = hit.filter(|h| h.t < far);
+        }
         bin(scene, p, q, k, hit);
     }
 }

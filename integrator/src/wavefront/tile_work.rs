@@ -156,6 +156,7 @@ impl<'a> TileWork<'a> {
                 }
             }
             let guides = self.guide_sums.is_some();
+            let far_clip = scene.camera.has_far_clip();
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
             let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
@@ -167,6 +168,9 @@ impl<'a> TileWork<'a> {
                 p.set_state(s, &path::PathState::new(ray.origin));
                 p.sampler[s] = samplers[l];
                 p.pixel[s] = which[l].0;
+                if far_clip {
+                    p.far[s] = rays.tmax[l];
+                }
                 // Only what the denoiser reads is written (52 bytes per path otherwise).
                 if guides {
                     p.guide[s] = Guide::NEW;

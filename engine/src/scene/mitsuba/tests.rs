@@ -4,10 +4,15 @@ use super::to_ron;
 use std::path::{Path, PathBuf};
 
 fn scene(tag: &str, body: &str) -> PathBuf {
+    scene_with(tag, SENSOR, body)
+}
+
+/// A scene whose sensor is `sensor`.
+fn scene_with(tag: &str, sensor: &str, body: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("pathwave-mitsuba-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     let p = d.join("scene.xml");
-    std::fs::write(&p, format!("<scene version=\"3.0.0\">\n{SENSOR}\n{body}\n</scene>\n")).unwrap();
+    std::fs::write(&p, format!("<scene version=\"3.0.0\">\n{sensor}\n{body}\n</scene>\n")).unwrap();
     p
 }
 
@@ -158,4 +163,37 @@ fn spectra_become_the_rgb_mitsuba_makes_of_them() {
     // Emission: 2 times equal-energy white in sRGB, not (2, 2, 2).
     let white = super::spectrum::xyz_to_srgb(glam::DVec3::ONE) * 2.0;
     assert!(r.contains(&format!("DiffuseLight(emit: {}", super::convert::v3(white))), "{r}");
+}
+
+/// Mitsuba's sensors always clip: the camera gets near_clip and far_clip, the scene's or
+/// Mitsuba's defaults (0.01 and 10000), for perspective, thinlens and orthographic alike.
+#[test]
+fn sensors_keep_their_clip_planes() {
+    let film =
+        r#"<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>"#;
+    let convert = |tag: &str, sensor: &str| {
+        let p = scene_with(tag, sensor, "");
+        to_ron(&p, &[], p.parent().unwrap()).unwrap_or_else(|e| panic!("{e}")).ron
+    };
+    let r = ron("clip-default", "");
+    assert!(r.contains("near_clip: 0.01, far_clip: 10000"), "{r}");
+    for kind in ["perspective", "thinlens", "orthographic"] {
+        let lens = if kind == "thinlens" { r#"<float name="focus_distance" value="2"/>"# } else { "" };
+        let sensor = format!(
+            r#"<sensor type="{kind}"><float name="near_clip" value="0.5"/><float name="far_clip" value="25"/>{lens}{film}</sensor>"#
+        );
+        let r = convert(&format!("clip-{kind}"), &sensor);
+        assert!(r.contains("near_clip: 0.5, far_clip: 25"), "{kind}: {r}");
+        // The RON loader takes what the converter wrote.
+        let desc =
+            crate::scene::parse(&r, std::path::Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
+        let clip = desc.camera.view.clip().expect("clip planes");
+        assert_eq!((clip.near, clip.far), (0.5, 25.0), "{kind}");
+    }
+    let bad = format!(
+        r#"<sensor type="perspective"><float name="near_clip" value="3"/><float name="far_clip" value="2"/>{film}</sensor>"#
+    );
+    let p = scene_with("clip-bad", &bad, "");
+    let e = to_ron(&p, &[], p.parent().unwrap()).err().expect("refused").to_string();
+    assert!(e.contains("need 0 < near < far"), "{e}");
 }
