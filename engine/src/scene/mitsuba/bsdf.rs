@@ -21,7 +21,7 @@ fn color<'d>(
     match p.param(name) {
         None => Ok(v3(default)),
         Some(param) => match &param.value {
-            Value::Rgb(_) | Value::Spectrum(_) | Value::Float(_) => Ok(v3(p.rgb(name)?.expect("present"))),
+            Value::Rgb(_) | Value::Spectrum(_) | Value::Float(_) => Ok(v3(p.rgb(name)?.unwrap_or(default))),
             Value::Object(e) => Ok(format!("{:?}", cx.texture(e)?)),
             _ => Err(param.at.error(format!("{}: `{name}` is a colour or a texture", p.label()))),
         },
@@ -81,7 +81,10 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                 // what `twosided` makes Mitsuba's.
                 "conductor" | "roughconductor" => {
                     let inner = convert(cx, one)?;
-                    format!("{}, two_sided: true)", inner.strip_suffix(')').expect("a RON kind ends in ')'"))
+                    match inner.strip_suffix(')') {
+                        Some(head) => format!("{head}, two_sided: true)"),
+                        None => return Err(one.at.error(format!("twosided: cannot extend {inner}"))),
+                    }
                 }
                 k => {
                     return Err(one.at.error(format!(

@@ -23,7 +23,7 @@ fn rgb(p: &Plugin, name: &str) -> Result<DVec3, SceneError> {
                 p.label()
             )));
         }
-        Some(_) => p.rgb_as(name, Use::Emission)?.expect("present"),
+        Some(_) => p.rgb_as(name, Use::Emission)?.unwrap_or(DVec3::ONE),
         None => DVec3::ONE,
     };
     if !(c.min_element() >= 0.0) {

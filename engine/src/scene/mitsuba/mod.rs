@@ -67,7 +67,9 @@ pub fn to_ron(path: &Path, overrides: &[(String, String)], base: &Path) -> Resul
     line(&mut out, &format!("// Converted by pathwave from the Mitsuba scene {}.", path.display()), None);
     line(&mut out, "#![enable(implicit_some)]", None);
     line(&mut out, "Scene(", None);
-    let (camera, at) = p.camera.as_ref().expect("scene() requires a sensor");
+    let Some((camera, at)) = p.camera.as_ref() else {
+        return Err(doc.root.at.error("the scene has no <sensor>: pathwave needs a camera"));
+    };
     line(&mut out, &format!("    camera: {camera},"), Some(at));
     let mut render = String::new();
     for (k, v) in &p.render {

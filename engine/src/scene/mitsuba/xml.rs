@@ -218,11 +218,19 @@ impl Reader {
                 v.0, v.1, v.2
             )));
         }
+        // <default>, <path> and <include> act on the element around them: a file's root is a
+        // <scene> or one plugin.
+        let tag = root.tag_name().name();
+        if matches!(tag, "default" | "path" | "include") {
+            return Err(at.error(format!(
+                "the root element is <{tag}>: a scene file holds a <scene> (or one plugin)"
+            )));
+        }
         self.stack.push(canonical);
         let mut out = Vec::new();
         self.element(&doc, root, path, v.0 < 2, 0, &mut out)?;
         self.stack.pop();
-        Ok(out.pop().expect("the root element yields one element"))
+        out.pop().ok_or_else(|| at.error(format!("the root element <{tag}> holds nothing pathwave reads")))
     }
 
     fn at(&self, doc: &roxmltree::Document, node: roxmltree::Node, path: &Path) -> At {
@@ -466,6 +474,13 @@ mod tests {
         );
         let e = read(&write(&d, "deep.xml", &deep), &[]).unwrap_err();
         assert!(e.message.contains("nest"), "{e}");
+        for root in [
+            "<default version=\"3.0.0\" name=\"a\" value=\"1\"/>",
+            "<include version=\"3.0.0\" filename=\"v.xml\"/>",
+        ] {
+            let e = read(&write(&d, "root.xml", root), &[]).unwrap_err();
+            assert!(e.message.contains("root element"), "{e}");
+        }
         let e = read(&write(&d, "v.xml", "<scene version=\"4.0.0\"/>"), &[]).unwrap_err();
         assert!(e.message.contains("newer"), "{e}");
         #[cfg(unix)]
