@@ -7,7 +7,7 @@
 //! depends on a scene radius and would starve the finite lights of a large scene.
 
 use crate::accel::geometry::Geometry;
-use crate::material::{Emission, Material};
+use crate::lighting::area::AreaEmission;
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -133,6 +133,8 @@ pub struct LightTable {
     /// Each light (indexed like the lights) as plain numbers where it is of a kind the
     /// integrator samples across lanes, in scenes where nothing moves.
     pub plain: Vec<PlainLight>,
+    /// What the surfaces of each material id emit ([`crate::lighting::area`]).
+    pub emission: Vec<Option<AreaEmission>>,
 }
 
 /// A light as plain numbers for the integrator's lane kernels.
@@ -144,8 +146,8 @@ pub enum PlainLight {
     Sphere(SphereLight),
     /// An emitting ellipsoid.
     Ellipsoid(EllipsoidLight),
-    /// Another kind (a triangle, a punctual light, the background), or anything in a scene
-    /// with motion: sampled one point at a time.
+    /// Another kind (a triangle, a punctual light, the background), a textured emitter, or
+    /// anything in a scene with motion: sampled one point at a time.
     Other,
 }
 
@@ -177,8 +179,9 @@ pub struct LightInputs<'a> {
 }
 
 impl LightTable {
-    /// Collects the emitters of `geometry` and the lights of `inputs`.
-    pub fn build(geometry: &Geometry, materials: &[Material], inputs: LightInputs) -> Self {
+    /// Collects the emitting primitives of `geometry` (those whose material id `emission`
+    /// holds) and the lights of `inputs`.
+    pub fn build(geometry: &Geometry, emission: Vec<Option<AreaEmission>>, inputs: LightInputs) -> Self {
         let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
         if let Some((lo, hi)) = inputs.bounds {
             t.center = (lo + hi) * 0.5;
@@ -186,11 +189,11 @@ impl LightTable {
         }
         let mut power = Vec::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
-            let Some(Emission { emit, two_sided }) = materials[m as usize].emission() else {
+            let Some(AreaEmission { radiance, two_sided, .. }) = emission[m as usize] else {
                 continue;
             };
             let area = prim.area();
-            let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
+            let p = luminance(radiance) * area * if two_sided { 2.0 } else { 1.0 };
             if p > 0.0 {
                 t.light_of_prim[i] = t.prims.len() as u32;
                 t.prims.push(i as u32);
@@ -242,9 +245,9 @@ impl LightTable {
         // The lights of the kinds the integrator samples across lanes, as plain numbers.
         let still = geometry.velocity.is_none();
         t.plain = (t.prims.iter())
-            .map(|&prim| match materials[geometry.material[prim as usize] as usize].emission() {
-                Some(Emission { emit, two_sided }) if still => {
-                    let emit = emit.to_array();
+            .map(|&prim| match emission[geometry.material[prim as usize] as usize] {
+                Some(AreaEmission { radiance, texture: None, two_sided }) if still => {
+                    let emit = radiance.to_array();
                     match &geometry.prims[prim as usize] {
                         Primitive::Quad(q) => PlainLight::Quad(q.light(emit, two_sided)),
                         Primitive::Sphere(s) => PlainLight::Sphere(s.light(emit, two_sided)),
@@ -256,7 +259,14 @@ impl LightTable {
             })
             .chain(t.others.iter().map(|_| PlainLight::Other))
             .collect();
+        t.emission = emission;
         t
+    }
+
+    /// Whether surfaces of material `id` emit.
+    #[inline]
+    pub fn emits(&self, id: u32) -> bool {
+        self.emission[id as usize].is_some()
     }
 
     /// True when there is nothing to sample.
@@ -344,7 +354,7 @@ mod tests {
     fn choices_mix_power_and_even_shares() {
         let geo = Geometry::default();
         let table = |punctual: &[PunctualLight], environment| {
-            LightTable::build(&geo, &[], LightInputs { punctual, environment, bounds: None })
+            LightTable::build(&geo, Vec::new(), LightInputs { punctual, environment, bounds: None })
         };
         use BackgroundSampling::{Alone, Always, Never};
         let one = table(&[point(0.0, 5.0)], Never);
