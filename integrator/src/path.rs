@@ -152,7 +152,7 @@ pub(crate) fn pick_light(
 fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
     match light {
         OtherLight::Punctual(l) => {
-            let (wi, dist, le) = l.illuminate(p);
+            let (wi, dist, le) = l.illuminate(p, &scene.textures);
             if le == Vec3::ZERO || !(dist > 0.0) {
                 return None;
             }

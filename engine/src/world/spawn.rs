@@ -4,6 +4,7 @@ use super::components::*;
 use crate::accel::mesh::MeshData;
 use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::EnvironmentMap;
+use crate::lighting::punctual::LightTextures;
 use crate::material::Material;
 use crate::media::Medium;
 use crate::placement::{Form, primitives};
@@ -65,6 +66,9 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         .zip(&ids)
         .map(|(shape, id)| matches!(shape, Form::Mesh(_)) && id.is_some_and(|id| !emits(id)))
         .collect();
+    let id = |name: &str| texture_id(desc, name);
+    let lights =
+        desc.lights.iter().map(|l| l.to_light(&LightTextures { textures: &textures, id: &id })).collect();
     world.insert_resource(Materials(mats));
     world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
     world.insert_resource(ObjectEmission(emission));
@@ -134,7 +138,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
             )))
         }
     }));
-    world.insert_resource(PunctualLights(desc.lights.iter().map(|l| l.to_light()).collect()));
+    world.insert_resource(PunctualLights(lights));
     world.init_resource::<SceneLights>();
     world.init_resource::<SceneGeometry>();
     world.init_resource::<SceneInstances>();
