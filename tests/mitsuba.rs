@@ -170,6 +170,11 @@ fn orthographic_sensor() {
     conformance("orthographic_sensor", "test_orthographic_path.xml", "test_orthographic");
 }
 
+#[test]
+fn projector_constant() {
+    conformance("projector", "test_projector_constant_direct.xml", "test_projector_constant");
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
@@ -180,6 +185,7 @@ fn converted_ron_renders_the_same_bits() {
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
         ("orthographic_sensor", "test_orthographic_path.xml"),
+        ("projector", "test_projector_constant_direct.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}.ron"));

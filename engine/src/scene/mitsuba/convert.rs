@@ -318,19 +318,25 @@ impl<'d> Converter<'d> {
         }
         let (shape, mut to_world) = super::shape::convert(self, &p)?;
         to_world.extend_from_slice(outer);
+        // An area emitter on a shape with no BSDF or a black diffuse one (Mitsuba's default
+        // for an emitter) is an emitter; on one that reflects, the object emits besides its
+        // material.
+        let mut emit = None;
         let material = match (emitter, bsdf) {
             (Some(em), b) => {
-                if let Some(b) = b {
-                    // A black diffuse BSDF under an area light is the usual way of writing an
-                    // emitter; anything that reflects is not what pathwave's emitters do.
-                    if !black_diffuse(b)? {
-                        return Err(b.at.error("an area emitter's shape reflects here too: pathwave's emitters are black (give it a black diffuse BSDF or none)"));
+                let radiance = super::emitter::area(self, em)?;
+                match b {
+                    Some(b) if !black_diffuse(b)? => {
+                        emit = Some(radiance);
+                        self.material(b)?
+                    }
+                    _ => {
+                        let name = format!("light-{}", self.out.materials.len());
+                        let ron = format!("DiffuseLight(emit: {radiance}, two_sided: false)");
+                        self.out.materials.push((name.clone(), ron, em.at.clone()));
+                        name
                     }
                 }
-                let ron = super::emitter::area(em)?;
-                let name = format!("light-{}", self.out.materials.len());
-                self.out.materials.push((name.clone(), ron, em.at.clone()));
-                name
             }
             (None, Some(b)) => self.material(b)?,
             (None, None) => {
@@ -354,6 +360,9 @@ impl<'d> Converter<'d> {
             return Err(p.at.error(format!("the scene has more than {MAX_OBJECTS} shapes")));
         }
         let mut text = format!("(shape: {shape}, material: {material:?}");
+        if let Some(radiance) = emit {
+            write!(text, ", emit: (radiance: {radiance})").unwrap();
+        }
         if !to_world.is_empty() {
             write!(text, ", transform: {}", ops(&to_world)).unwrap();
         }
@@ -362,7 +371,7 @@ impl<'d> Converter<'d> {
         Ok(())
     }
 
-    fn emitter(&mut self, e: &Element) -> Result<(), SceneError> {
+    fn emitter(&mut self, e: &'d Element) -> Result<(), SceneError> {
         match super::emitter::convert(self, e)? {
             super::emitter::Emitter::Light(l) => self.out.lights.push((l, e.at.clone())),
             super::emitter::Emitter::Background(b) => {

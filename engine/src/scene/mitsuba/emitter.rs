@@ -1,7 +1,7 @@
-//! `<emitter>` plugins as pathwave lights, backgrounds and emitting materials.
+//! `<emitter>` plugins as pathwave lights, backgrounds and emitting surfaces.
 
 use super::convert::{Converter, num, num32, placed, v3};
-use super::props::{Plugin, compose};
+use super::props::{Op, Plugin, Value, compose};
 use super::spectrum::Use;
 use super::xml::Element;
 use crate::scene::SceneError;
@@ -17,11 +17,8 @@ pub enum Emitter {
 
 fn rgb(p: &Plugin, name: &str) -> Result<DVec3, SceneError> {
     let c = match p.param(name) {
-        Some(param) if matches!(param.value, super::props::Value::Object(_)) => {
-            return Err(param.at.error(format!(
-                "{}: a texture for `{name}`: pathwave reads textured emitters from XML in a later version",
-                p.label()
-            )));
+        Some(param) if matches!(param.value, Value::Object(_)) => {
+            return Err(param.at.error(format!("{}: `{name}` is a colour here, not a texture", p.label())));
         }
         Some(_) => p.rgb_as(name, Use::Emission)?.unwrap_or(DVec3::ONE),
         None => DVec3::ONE,
@@ -32,8 +29,42 @@ fn rgb(p: &Plugin, name: &str) -> Result<DVec3, SceneError> {
     Ok(c)
 }
 
+/// An emitted colour that may be a texture, as RON: `(r, g, b)` (a spectrum taken as
+/// emission, default white) or a texture's name.
+fn emission<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, name: &str) -> Result<String, SceneError> {
+    match p.param(name).map(|param| &param.value) {
+        Some(Value::Object(e)) => Ok(format!("{:?}", cx.texture(e)?)),
+        _ => Ok(v3(rgb(p, name)?)),
+    }
+}
+
+/// A light's origin, axis (+z) and up (+y) from its `to_world`, which must be a rotation and a
+/// uniform scale (returned) before a translation: a spot or projector in pathwave is placed
+/// by a point, a direction and an up.
+fn rigid(p: &Plugin, to_world: &[Op]) -> Result<(DVec3, DVec3, DVec3, f64), SceneError> {
+    let m = compose(to_world);
+    let [x, y, z] = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| m.transform_vector3(a));
+    let s = x.length();
+    let tol = 1e-6 * s * s;
+    let rigid = s > 0.0
+        && (y.length_squared() - s * s).abs() <= tol
+        && (z.length_squared() - s * s).abs() <= tol
+        && x.dot(y).abs() <= tol
+        && y.dot(z).abs() <= tol
+        && z.dot(x).abs() <= tol
+        && x.cross(y).dot(z) > 0.0
+        && m.row(3) == glam::DVec4::W;
+    if !rigid {
+        return Err(p.at.error(format!(
+            "{}: pathwave places this light by a rotation, a uniform scale and a translation (its to_world has a shear, an uneven scale or a mirror)",
+            p.label()
+        )));
+    }
+    Ok((m.transform_point3(DVec3::ZERO), z, y, s))
+}
+
 /// A top-level `<emitter>`.
-pub fn convert(cx: &Converter, e: &Element) -> Result<Emitter, SceneError> {
+pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<Emitter, SceneError> {
     let p = Plugin::new(e)?;
     let out = match p.kind.as_str() {
         "point" => {
@@ -109,25 +140,87 @@ pub fn convert(cx: &Converter, e: &Element) -> Result<Emitter, SceneError> {
             }
             Emitter::Background(s + ")")
         }
+        // Mitsuba's spot (`src/emitters/spot.cpp`): intensity linear in the angle from
+        // beam_width to cutoff_angle, an optional texture over the cone.
+        "spot" => {
+            let to_world = p.transform("to_world")?.unwrap_or_default();
+            let (position, axis, up, _) = rigid(&p, &to_world)?;
+            if let Some(param) = p.param("intensity")
+                && matches!(param.value, Value::Object(_))
+            {
+                return Err(param.at.error(format!("{}: `intensity` is a colour, not a texture", p.label())));
+            }
+            let intensity = rgb(&p, "intensity")?;
+            let cutoff = p.float("cutoff_angle")?.unwrap_or(20.0);
+            let beam = p.float("beam_width")?.unwrap_or(0.75 * cutoff);
+            let texture = match p.param("texture") {
+                None => None,
+                Some(param) => match &param.value {
+                    Value::Object(t) => Some(cx.texture(t)?),
+                    _ => {
+                        return Err(param.at.error(format!(
+                            "{}: `texture` is a <texture> (Mitsuba requires one that varies)",
+                            p.label()
+                        )));
+                    }
+                },
+            };
+            p.finish(&["to_world", "intensity", "cutoff_angle", "beam_width", "texture"])?;
+            let mut s = format!(
+                "Spot(position: {}, look_at: {}, intensity: {}, cone_angle: {}, falloff_start: {}, falloff: Linear",
+                v3(position),
+                v3(position + axis),
+                v3(intensity),
+                num(cutoff),
+                num(beam)
+            );
+            if let Some(t) = texture {
+                s += &format!(", texture: {t:?}, up: {}", v3(up));
+            }
+            Emitter::Light(s + ")")
+        }
+        // Mitsuba's projector (`src/emitters/projector.cpp`). Its intensity grows with a
+        // uniform scale in `to_world` (it divides by the local depth squared and the length
+        // of the scaled axis): the scale goes into `scale`.
+        "projector" => {
+            let to_world = p.transform("to_world")?.unwrap_or_default();
+            let (position, axis, up, size) = rigid(&p, &to_world)?;
+            let irradiance = emission(cx, &p, "irradiance")?;
+            let scale = p.float("scale")?.unwrap_or(1.0);
+            if !(scale >= 0.0) {
+                return Err(p.at.error(format!("{}: scale {scale}: expected >= 0", p.label())));
+            }
+            let (fov, axis_name) = super::sensor::perspective_fov(&p)?;
+            p.finish(&["to_world", "irradiance", "scale", "fov", "focal_length", "fov_axis"])?;
+            Emitter::Light(format!(
+                "Projector(position: {}, look_at: {}, up: {}, fov: {}, fov_axis: {axis_name}, irradiance: {irradiance}, scale: {})",
+                v3(position),
+                v3(position + axis),
+                v3(up),
+                num32(fov),
+                num(scale * size)
+            ))
+        }
         "area" => return Err(p.at.error("an area emitter belongs inside a <shape>")),
         k => {
             return Err(p.at.error(format!(
-                "<emitter type=\"{k}\">: pathwave reads point, directional, constant and envmap here, and area inside shapes"
+                "<emitter type=\"{k}\">: pathwave reads point, spot, projector, directional, constant and envmap here, and area inside shapes"
             )));
         }
     };
     Ok(out)
 }
 
-/// The material of a shape's `<emitter type="area">`: one-sided, as Mitsuba's.
-pub fn area(e: &Element) -> Result<String, SceneError> {
+/// The radiance of a shape's `<emitter type="area">` (`src/emitters/area.cpp`; one-sided), as
+/// RON: a colour or a texture's name.
+pub fn area<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
     if p.kind != "area" {
         return Err(p
             .at
             .error(format!("<emitter type=\"{}\"> inside a shape: only area emitters go there", p.kind)));
     }
-    let radiance = rgb(&p, "radiance")?;
+    let radiance = emission(cx, &p, "radiance")?;
     p.finish(&["radiance"])?;
-    Ok(format!("DiffuseLight(emit: {}, two_sided: false)", v3(radiance)))
+    Ok(radiance)
 }

@@ -22,45 +22,7 @@ impl Converter<'_> {
             vec!["to_world", "near_clip", "far_clip", "shutter_open", "shutter_close", "film", "sampler"];
         match p.kind.as_str() {
             "perspective" | "thinlens" => {
-                // Mitsuba's `parse_fov`: a focal length (default 50 mm) is 35 mm film
-                // equivalent, and gives the field of view along the 36 x 24 mm diagonal.
-                let diagonal = |mm: f64| 2.0 * (36.0f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees();
-                let (fov, axis) = match (p.float("fov")?, p.string("focal_length")?) {
-                    (Some(f), None) => {
-                        let axis = match p.string("fov_axis")? {
-                            None => "X",
-                            Some((a, at)) => match a.to_ascii_lowercase().as_str() {
-                                "x" => "X",
-                                "y" => "Y",
-                                "diagonal" => "Diagonal",
-                                "smaller" => "Smaller",
-                                "larger" => "Larger",
-                                _ => {
-                                    return Err(at.error(format!(
-                                        "fov_axis \"{a}\": expected x, y, diagonal, smaller or larger"
-                                    )));
-                                }
-                            },
-                        };
-                        (f, axis)
-                    }
-                    (None, Some((f, at))) => {
-                        let mm = f
-                            .trim()
-                            .strip_suffix("mm")
-                            .unwrap_or(&f)
-                            .trim()
-                            .parse::<f64>()
-                            .ok()
-                            .filter(|v| *v > 0.0);
-                        let mm = mm.ok_or_else(|| {
-                            at.error(format!("focal_length \"{f}\" is not a length like \"50mm\""))
-                        })?;
-                        (diagonal(mm), "Diagonal")
-                    }
-                    (None, None) => (diagonal(50.0), "Diagonal"),
-                    (Some(_), Some((_, at))) => return Err(at.error("give fov or focal_length, not both")),
-                };
+                let (fov, axis) = perspective_fov(&p)?;
                 fields.push(format!("projection: Perspective(fov: {}, fov_axis: {axis})", num32(fov)));
                 reads.extend(["fov", "focal_length", "fov_axis"]);
             }
@@ -221,4 +183,41 @@ fn rfilter(e: &Element) -> Result<String, SceneError> {
     };
     p.finish(&["radius", "stddev"])?;
     Ok(out)
+}
+
+/// The field of view (degrees) and the `FovAxis` it spans of a perspective sensor or a
+/// projector, as Mitsuba 3's `parse_fov` reads them (mitsuba3 `src/librender/sensor.cpp`):
+/// `fov` across `fov_axis` (default x), or a `focal_length` (default 50 mm) in 35 mm film
+/// equivalent, which gives the field of view along the 36 x 24 mm diagonal.
+pub fn perspective_fov(p: &Plugin) -> Result<(f64, &'static str), SceneError> {
+    let diagonal = |mm: f64| 2.0 * (36.0f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees();
+    Ok(match (p.float("fov")?, p.string("focal_length")?) {
+        (Some(f), None) => {
+            let axis = match p.string("fov_axis")? {
+                None => "X",
+                Some((a, at)) => match a.to_ascii_lowercase().as_str() {
+                    "x" => "X",
+                    "y" => "Y",
+                    "diagonal" => "Diagonal",
+                    "smaller" => "Smaller",
+                    "larger" => "Larger",
+                    _ => {
+                        return Err(
+                            at.error(format!("fov_axis \"{a}\": expected x, y, diagonal, smaller or larger"))
+                        );
+                    }
+                },
+            };
+            (f, axis)
+        }
+        (None, Some((f, at))) => {
+            let mm =
+                f.trim().strip_suffix("mm").unwrap_or(&f).trim().parse::<f64>().ok().filter(|v| *v > 0.0);
+            let mm =
+                mm.ok_or_else(|| at.error(format!("focal_length \"{f}\" is not a length like \"50mm\"")))?;
+            (diagonal(mm), "Diagonal")
+        }
+        (None, None) => (diagonal(50.0), "Diagonal"),
+        (Some(_), Some((_, at))) => return Err(at.error("give fov or focal_length, not both")),
+    })
 }

@@ -197,3 +197,52 @@ fn sensors_keep_their_clip_planes() {
     let e = to_ron(&p, &[], p.parent().unwrap()).err().expect("refused").to_string();
     assert!(e.contains("need 0 < near < far"), "{e}");
 }
+
+/// An area emitter on a shape whose BSDF reflects is an object's `emit` beside its material;
+/// with no BSDF or a black one it stays a `DiffuseLight`. Its radiance may be a texture.
+#[test]
+fn area_emitters_on_reflecting_shapes_emit_beside_their_material() {
+    let r = ron(
+        "area-reflects",
+        r#"<bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.8"/></bsdf>
+        <shape type="rectangle"><ref id="white"/><emitter type="area"><rgb name="radiance" value="0.2, 0.4, 0.6"/></emitter></shape>
+        <shape type="sphere"><ref id="white"/><emitter type="area"><texture name="radiance" type="checkerboard"/></emitter></shape>
+        <shape type="cube"><emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#,
+    );
+    assert!(r.contains(r#"material: "white", emit: (radiance: (0.2, 0.4, 0.6))"#), "{r}");
+    assert!(r.contains(r#"material: "white", emit: (radiance: "checkerboard-0")"#), "{r}");
+    assert!(r.contains("DiffuseLight(emit: (3, 3, 3), two_sided: false)"), "{r}");
+}
+
+/// Mitsuba's spot and projector: placed by their `to_world` (a rotation, a uniform scale and
+/// a translation; a projector's scale multiplies its intensity, as in Mitsuba), the spot with
+/// its linear falloff, `beam_width` defaulting to 3/4 of `cutoff_angle`.
+#[test]
+fn spots_and_projectors_keep_mitsubas_placement_and_falloff() {
+    let r = ron(
+        "spot-projector",
+        r#"<emitter type="spot"><rgb name="intensity" value="5"/><float name="cutoff_angle" value="20"/>
+            <transform name="to_world"><lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, 1"/></transform></emitter>
+        <emitter type="spot"><texture name="texture" type="checkerboard"/><float name="cutoff_angle" value="30"/><float name="beam_width" value="15"/>
+            <transform name="to_world"><lookat origin="1, 0, 0" target="1, 0, 1" up="0, 1, 0"/></transform></emitter>
+        <emitter type="projector"><float name="fov" value="45"/><float name="scale" value="3"/>
+            <transform name="to_world"><scale value="2"/><lookat origin="0, 0, 1" target="0, 0, 0" up="0, 1, 0"/></transform></emitter>"#,
+    );
+    for want in [
+        "Spot(position: (0, 3, 0), look_at: (0, 2, 0), intensity: (5, 5, 5), cone_angle: 20, falloff_start: 15, falloff: Linear)",
+        r#"Spot(position: (1, 0, 0), look_at: (1, 0, 1), intensity: (1, 1, 1), cone_angle: 30, falloff_start: 15, falloff: Linear, texture: "checkerboard-0", up: (0, 1, 0))"#,
+        "Projector(position: (0, 0, 1), look_at: (0, 0, -1), up: (0, 2, 0), fov: 45, fov_axis: X, irradiance: (1, 1, 1), scale: 6)",
+    ] {
+        assert!(r.contains(want), "{want} not in\n{r}");
+    }
+    let e = error(
+        "spot-sheared",
+        r#"<emitter type="spot"><transform name="to_world"><scale x="2"/></transform></emitter>"#,
+    );
+    assert!(e.to_string().contains("rotation, a uniform scale and a translation"), "{e}");
+    let e = error(
+        "spot-intensity-texture",
+        r#"<emitter type="spot"><texture name="intensity" type="checkerboard"/></emitter>"#,
+    );
+    assert!(e.to_string().contains("`intensity` is a colour, not a texture"), "{e}");
+}
