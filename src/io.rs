@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 use image::{ImageBuffer, Rgb, Rgb32FImage, RgbImage};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A linear RGB image, row 0 on top.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +60,48 @@ pub fn check_output(path: &Path, inputs: &[&Path], gif: bool) -> Result<(), Stri
     }
     // The folder must take a new file (a temporary one, removed at once).
     temp_beside(path).map(drop).map_err(|e| format!("{}: cannot write there: {e}", path.display()))
+}
+
+/// Checks, before any work, every file a render will write (`writes`: its output and the
+/// side files its flags add) against every file the scene read (`inputs`, the loaded scene's
+/// [`crate::engine::scene::SceneDesc::inputs`]; see [`Inputs`]), and that none names
+/// a folder, comes twice, or lies where a new file cannot be made (a missing folder, a name
+/// too long once the temporary file's affixes are added).
+pub fn check_writes(writes: &[PathBuf], inputs: &[PathBuf]) -> Result<(), String> {
+    let inputs = Inputs::new(inputs);
+    for (i, out) in writes.iter().enumerate() {
+        inputs.check(out)?;
+        if out.is_dir() {
+            return Err(format!("{}: is a folder; name the file to write", out.display()));
+        }
+        if writes[..i].iter().any(|o| o == out || same_file(o, out)) {
+            return Err(format!("{}: the render would write this file twice", out.display()));
+        }
+        temp_beside(out).map(drop).map_err(|e| format!("{}: cannot write there: {e}", out.display()))?;
+    }
+    Ok(())
+}
+
+/// The files a scene read, as their canonical paths: a file to be written must not be one.
+pub struct Inputs(Vec<PathBuf>);
+
+impl Inputs {
+    /// `inputs` as the loaded scene lists them ([`crate::engine::scene::SceneDesc::inputs`]).
+    pub fn new(inputs: &[PathBuf]) -> Self {
+        Inputs(inputs.iter().filter_map(|f| std::fs::canonicalize(f).ok()).collect())
+    }
+
+    /// Refuses `out` when it is one of the inputs (through any link or `..`); a file that does
+    /// not exist yet is none.
+    pub fn check(&self, out: &Path) -> Result<(), String> {
+        match std::fs::canonicalize(out) {
+            Ok(c) if self.0.contains(&c) => Err(format!(
+                "{}: the render would write over this file, which the scene reads",
+                out.display()
+            )),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// True when both paths exist and name the same file.

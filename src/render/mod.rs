@@ -63,8 +63,13 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         .then(|| Checkpointing { every: every.unwrap_or(60.0), resume: c.resume });
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
+    let mut writes = how.files(output);
+    writes.extend(checkpointing.as_ref().map(|_| checkpoint::path_for(output)));
+    writes.extend(c.args.profile.trace.clone());
+    io::check_writes(&writes, std::slice::from_ref(path))?;
     let time = c.time.checked()?;
     let desc = load(path, &c.args.scene)?;
+    io::check_writes(&writes, &desc.inputs)?;
     let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     let pool = crate::pool(how.threads)?;
     if let Some(d) = how.denoise {

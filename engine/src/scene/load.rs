@@ -24,15 +24,19 @@ pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, String
 /// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
 ///
 /// A `.xml` file is a Mitsuba 3 scene (see the `mitsuba` module); anything else is RON.
+/// The files it read are the description's `inputs`.
 pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
-    if super::mitsuba::is_xml(path) {
-        return super::mitsuba::load(path, overrides);
-    }
-    let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
-    let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
-        .map_err(fail)?;
-    let text = String::from_utf8(bytes).map_err(|e| fail(format!("the scene is not UTF-8 text: {e}")))?;
-    parse_with(&text, path, overrides)
+    let (desc, inputs) = crate::format::files::recording(|| {
+        if super::mitsuba::is_xml(path) {
+            return super::mitsuba::load(path, overrides);
+        }
+        let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
+        let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
+            .map_err(fail)?;
+        let text = String::from_utf8(bytes).map_err(|e| fail(format!("the scene is not UTF-8 text: {e}")))?;
+        parse_with(&text, path, overrides)
+    });
+    Ok(SceneDesc { inputs, ..desc? })
 }
 
 /// Parses scene text; `path` only names the source in errors.
