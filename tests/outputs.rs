@@ -147,3 +147,16 @@ fn outputs_that_cannot_be_written_are_refused_before_the_render() {
     refused(&dir, &["render", "s.ron", "-o", &long, "--aov", "albedo"], "cannot write there", &scene);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_farm_refuses_frames_that_would_replace_a_scene_input_before_submitting() {
+    let dir = folder("farm");
+    textured_scene(&dir, "s.ron", "f002.png");
+    let args =
+        ["farm", "slurm", "s.ron", "-o", "f{frame:03}.png", "--tasks", "2", "--frames", "0..4", "--dry-run"];
+    refused(&dir, &args, "the render would write over this file", &dir.join("f002.png"));
+    textured_scene(&dir, "t.ron", "one.png");
+    let args = ["farm", "slurm", "t.ron", "-o", "one.png", "--tasks", "2", "--split-samples", "--dry-run"];
+    refused(&dir, &args, "the render would write over this file", &dir.join("one.png"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
