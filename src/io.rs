@@ -1,5 +1,6 @@
 //! Image files: linear float EXR in and out, tone-clamped sRGB PNG out.
 
+use crate::engine::scene::SceneDesc;
 use glam::Vec3;
 use image::{ImageBuffer, Rgb, Rgb32FImage, RgbImage};
 use std::path::{Path, PathBuf};
@@ -63,12 +64,10 @@ pub fn check_output(path: &Path, inputs: &[&Path], gif: bool) -> Result<(), Stri
 }
 
 /// Checks, before any work, every file a render will write (`writes`: its output and the
-/// side files its flags add) against every file the scene read (`inputs`, the loaded scene's
-/// [`crate::engine::scene::SceneDesc::inputs`]; see [`Inputs`]), and that none names
-/// a folder, comes twice, or lies where a new file cannot be made (a missing folder, a name
-/// too long once the temporary file's affixes are added).
-pub fn check_writes(writes: &[PathBuf], inputs: &[PathBuf]) -> Result<(), String> {
-    let inputs = Inputs::new(inputs);
+/// side files its flags add) against the files the scene read ([`Inputs`]), and that none
+/// names a folder, comes twice, or lies where a new file cannot be made (a missing folder, a
+/// name too long once the temporary file's affixes are added).
+pub fn check_writes(writes: &[PathBuf], inputs: &Inputs) -> Result<(), String> {
     for (i, out) in writes.iter().enumerate() {
         inputs.check(out)?;
         if out.is_dir() {
@@ -86,9 +85,14 @@ pub fn check_writes(writes: &[PathBuf], inputs: &[PathBuf]) -> Result<(), String
 pub struct Inputs(Vec<PathBuf>);
 
 impl Inputs {
-    /// `inputs` as the loaded scene lists them ([`crate::engine::scene::SceneDesc::inputs`]).
-    pub fn new(inputs: &[PathBuf]) -> Self {
-        Inputs(inputs.iter().filter_map(|f| std::fs::canonicalize(f).ok()).collect())
+    /// These files (those that exist).
+    pub fn new<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Self {
+        Inputs(paths.into_iter().filter_map(|f| std::fs::canonicalize(f).ok()).collect())
+    }
+
+    /// Every file the load of `desc` read ([`SceneDesc::inputs`]).
+    pub fn of(desc: &SceneDesc) -> Self {
+        Self::new(desc.inputs.iter().map(|f| f.path.as_path()))
     }
 
     /// Refuses `out` when it is one of the inputs (through any link or `..`); a file that does

@@ -98,7 +98,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         ));
     }
     // No frame of this task, nor a file beside one, nor the trace may replace a scene's input.
-    let inputs = io::Inputs::new(&desc.inputs);
+    let inputs = io::Inputs::of(&desc);
     if let Some(trace) = &args.profile.trace {
         inputs.check(trace)?;
     }
@@ -136,7 +136,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         }
         let r = match &info.path {
             Some(out) => {
-                let id = render_id(path, scene, &how, info.open)?;
+                let id = render_id(&desc.inputs, scene, &how, info.open, (info.open, info.close))?;
                 let r = render_image(scene, &id, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
                 let metadata = metadata(id.key, scene, &r);
                 (r, metadata)

@@ -78,7 +78,7 @@ fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Resu
     let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
     // What the tasks and the merge will write must not replace a file the scene reads: found
     // now, not when the tasks start.
-    let inputs = crate::io::Inputs::new(&desc.inputs);
+    let inputs = crate::io::Inputs::of(&desc);
     match plan.work {
         job::Work::Frames { first, end } => {
             let how = args.how();

@@ -140,12 +140,12 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
         let start = Instant::now();
         let loaded = load(&args.scene, &args.settings);
         if let Ok(desc) = &loaded {
-            events.files = desc.inputs.iter().map(|f| normalize(f)).collect();
+            events.files = desc.inputs.iter().map(|f| normalize(&f.path)).collect();
         }
         // `-o` must not name a file the scene reads (it would reload for ever): an error in the
         // scene like any other, until either changes.
         let loaded = loaded.and_then(|desc| match &args.output {
-            Some(out) => io::Inputs::new(&desc.inputs).check(out).map(|()| desc),
+            Some(out) => io::Inputs::of(&desc).check(out).map(|()| desc),
             None => Ok(desc),
         });
         // Folders, not files: an editor that saves by renaming a new file over the old one

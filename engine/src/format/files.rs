@@ -3,7 +3,7 @@
 //! forever or exhaust memory.
 
 use std::cell::RefCell;
-use std::collections::BTreeSet;
+use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -34,29 +34,42 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
     if bytes.len() as u64 > max {
         return Err(format!("the {what} {} has more than the {max} bytes allowed", path.display()));
     }
-    record(path);
+    record(path, &bytes);
     Ok(bytes)
 }
 
-thread_local! {
-    /// The files [`read_bounded`] read on this thread inside [`recording`], when inside one.
-    static READ: RefCell<Option<BTreeSet<PathBuf>>> = const { RefCell::new(None) };
+/// A file a load read: its absolute path and a hash of the bytes read (XXH3, 64 bits), so that
+/// what identifies a render is what was loaded, not the file as it is later.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InputFile {
+    /// The path (absolute, as named: not resolved through links).
+    pub path: PathBuf,
+    /// XXH3-64 of its bytes.
+    pub hash: u64,
 }
 
-fn record(path: &Path) {
+thread_local! {
+    /// The files [`read_bounded`] read on this thread inside [`recording`], when inside one,
+    /// and their hashes.
+    static READ: RefCell<Option<BTreeMap<PathBuf, u64>>> = const { RefCell::new(None) };
+}
+
+fn record(path: &Path, bytes: &[u8]) {
     READ.with(|r| {
         if let Some(files) = r.borrow_mut().as_mut() {
-            files.insert(std::path::absolute(path).unwrap_or_else(|_| path.to_owned()));
+            let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+            files.insert(path, xxhash_rust::xxh3::xxh3_64(bytes));
         }
     });
 }
 
 /// Runs `f` and returns with its result every file that [`read_bounded`] read on this thread
-/// meanwhile (absolute paths, sorted, each once): a loaded scene's inputs, which no
-/// output may replace. Recordings nest: an outer one gets the inner one's files too.
-pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<PathBuf>) {
+/// meanwhile (sorted by path, each once, with the hash of what was read last): a loaded scene's
+/// inputs, which no output may replace and which identify its renders. Recordings nest: an
+/// outer one gets the inner one's files too.
+pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<InputFile>) {
     /// Puts the outer recording back, with this one's files added, however `f` ends.
-    struct Restore(Option<BTreeSet<PathBuf>>);
+    struct Restore(Option<BTreeMap<PathBuf, u64>>);
     impl Drop for Restore {
         fn drop(&mut self) {
             let outer = self.0.take();
@@ -70,9 +83,11 @@ pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<PathBuf>) {
             });
         }
     }
-    let restore = Restore(READ.with(|r| r.borrow_mut().replace(BTreeSet::new())));
+    let restore = Restore(READ.with(|r| r.borrow_mut().replace(BTreeMap::new())));
     let out = f();
-    let files = READ.with(|r| r.borrow().iter().flatten().cloned().collect());
+    let files = READ.with(|r| {
+        r.borrow().iter().flatten().map(|(path, &hash)| InputFile { path: path.clone(), hash }).collect()
+    });
     drop(restore);
     (out, files)
 }
@@ -115,11 +130,15 @@ mod tests {
             assert!(read_bounded(&dir.join("missing"), 10, "file").is_err());
             r
         });
-        assert_eq!(inner, vec![b.clone()]);
-        assert_eq!(outer, vec![a.clone(), b.clone()]);
+        let file = |path: &PathBuf, text: &str| InputFile {
+            path: path.clone(),
+            hash: xxhash_rust::xxh3::xxh3_64(text.as_bytes()),
+        };
+        assert_eq!(inner, vec![file(&b, "b")]);
+        assert_eq!(outer, vec![file(&a, "a"), file(&b, "b")]);
         // Outside a recording nothing is kept.
         read_bounded(&a, 10, "file").unwrap();
-        assert_eq!(recording(|| ()).1, Vec::<PathBuf>::new());
+        assert_eq!(recording(|| ()).1, Vec::new());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
