@@ -178,7 +178,12 @@ fn sensors_keep_their_clip_planes() {
     let r = ron("clip-default", "");
     assert!(r.contains("near_clip: 0.01, far_clip: 10000"), "{r}");
     for kind in ["perspective", "thinlens", "orthographic"] {
-        let lens = if kind == "thinlens" { r#"<float name="focus_distance" value="2"/>"# } else { "" };
+        let lens = match kind {
+            "thinlens" => {
+                r#"<float name="focus_distance" value="2"/><float name="aperture_radius" value="0.1"/>"#
+            }
+            _ => "",
+        };
         let sensor = format!(
             r#"<sensor type="{kind}"><float name="near_clip" value="0.5"/><float name="far_clip" value="25"/>{lens}{film}</sensor>"#
         );
@@ -196,4 +201,24 @@ fn sensors_keep_their_clip_planes() {
     let p = scene_with("clip-bad", &bad, "");
     let e = to_ron(&p, &[], p.parent().unwrap()).err().expect("refused").to_string();
     assert!(e.contains("need 0 < near < far"), "{e}");
+}
+
+/// A thin lens needs its aperture (Mitsuba has no default) and focuses at far_clip unless told
+/// (Mitsuba's `Sensor` constructor; its documentation's 0 is not what it does).
+#[test]
+fn a_thin_lens_needs_its_aperture_and_focuses_at_far_clip() {
+    let film =
+        r#"<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>"#;
+    let lens = |tag: &str, params: &str| {
+        let p = scene_with(tag, &format!(r#"<sensor type="thinlens">{params}{film}</sensor>"#), "");
+        to_ron(&p, &[], p.parent().unwrap())
+    };
+    let e = lens("lens-none", "").err().expect("refused").to_string();
+    assert!(e.contains("needs an aperture_radius"), "{e}");
+    let r =
+        lens("lens-far", r#"<float name="aperture_radius" value="0.1"/><float name="far_clip" value="50"/>"#)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .ron;
+    assert!(r.contains("aperture_radius: 0.1") && r.contains("focus_dist: 50"), "{r}");
+    crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
 }
