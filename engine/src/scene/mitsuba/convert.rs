@@ -117,6 +117,8 @@ pub struct Converter<'d> {
     ids: HashMap<String, &'d Element>,
     /// Material names given to BSDF ids (and to anonymous BSDFs, by position).
     named: HashMap<String, String>,
+    /// The names of the anonymous BSDFs' materials, by their RON.
+    anonymous: HashMap<String, String>,
     /// Objects made so far, for the bound.
     pub out: Pieces,
 }
@@ -129,7 +131,14 @@ impl<'d> Converter<'d> {
     pub fn new(doc: &'d Document, base: &Path) -> Result<Self, SceneError> {
         let mut ids = HashMap::new();
         collect_ids(&doc.root, &mut ids)?;
-        Ok(Self { doc, base: base.to_owned(), ids, named: HashMap::new(), out: Pieces::default() })
+        Ok(Self {
+            doc,
+            base: base.to_owned(),
+            ids,
+            named: HashMap::new(),
+            anonymous: HashMap::new(),
+            out: Pieces::default(),
+        })
     }
 
     fn referenced(&self, e: &'d Element) -> Result<&'d Element, SceneError> {
@@ -240,7 +249,20 @@ impl<'d> Converter<'d> {
         let ron = super::bsdf::convert(self, e)?;
         let name = match e.attr("id") {
             Some(id) => id.to_owned(),
-            None => format!("{}-{}", Plugin::new(e)?.kind, self.out.materials.len()),
+            // Anonymous BSDFs that say the same thing (one written inside each of many shapes)
+            // become one material, as an author would write it.
+            None => match self.anonymous.get(&ron) {
+                Some(name) => {
+                    let name = name.clone();
+                    self.named.insert(key, name.clone());
+                    return Ok(name);
+                }
+                None => {
+                    let name = format!("{}-{}", Plugin::new(e)?.kind, self.out.materials.len());
+                    self.anonymous.insert(ron.clone(), name.clone());
+                    name
+                }
+            },
         };
         self.out.materials.push((name.clone(), ron, e.at.clone()));
         self.named.insert(key, name.clone());

@@ -222,3 +222,21 @@ fn a_thin_lens_needs_its_aperture_and_focuses_at_far_clip() {
     assert!(r.contains("aperture_radius: 0.1") && r.contains("focus_dist: 50"), "{r}");
     crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// Anonymous BSDFs that convert to the same material are one material (as an author writes
+/// it); a BSDF with an id keeps its own name, and other anonymous ones stay apart.
+#[test]
+fn identical_anonymous_bsdfs_share_one_material() {
+    let r = ron(
+        "dedup",
+        r#"<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf></shape>
+        <shape type="sphere"><float name="radius" value="0.5"/><bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf></shape>
+        <shape type="cube"><bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf></shape>
+        <bsdf type="diffuse" id="named"><rgb name="reflectance" value="0.2"/></bsdf>
+        <shape type="rectangle"><ref id="named"/></shape>"#,
+    );
+    assert_eq!(r.matches("Lambertian(albedo: (0.2, 0.2, 0.2))").count(), 2, "{r}");
+    assert_eq!(r.matches("material: \"diffuse-0\"").count(), 2, "{r}");
+    assert!(r.contains("material: \"named\"") && r.contains("Lambertian(albedo: (0.3, 0.3, 0.3))"), "{r}");
+    crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
+}
