@@ -400,7 +400,7 @@ mod tests {
                 Vec3::new(0.0, 1.0, rnd() * 0.5),
                 Vec3::Z,
             ));
-            let sphere = Sphere { center: Vec3A::new(rnd(), rnd(), rnd()), radius: 0.5 + rnd().abs() };
+            let sphere = Sphere::new(Vec3A::new(rnd(), rnd(), rnd()), 0.5 + rnd().abs());
             let e = TransformedSphere::new(sphere, m).expect("invertible");
             let flat = Ellipsoid::new(&e);
             let c = m.transform_point3a(sphere.center);

@@ -26,11 +26,11 @@ pub mod test_disk;
 mod transformed_sphere;
 mod triangle;
 
-pub use boxes::BoxShape;
+pub use boxes::{BoxShape, BoxUv};
 pub use primitive::PrimitiveShape;
 use primitive::primitives;
 pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
-pub use sphere::{Sphere, SphereLight, SphereShape, cone_sample};
+pub use sphere::{Poles, Sphere, SphereLight, SphereShape, cone_sample};
 pub use transformed_sphere::{EllipsoidLight, TransformedSphere, ellipsoid_sample};
 pub use triangle::{Triangle, TriangleShape};
 
