@@ -170,6 +170,20 @@ fn orthographic_sensor() {
     conformance("orthographic_sensor", "test_orthographic_path.xml", "test_orthographic");
 }
 
+#[test]
+fn mesh_attributes_face() {
+    conformance("mesh_attributes", "test_mesh_attributes_3_face_direct.xml", "test_mesh_attributes_3_face");
+}
+
+#[test]
+fn mesh_attributes_vertex() {
+    conformance(
+        "mesh_attributes",
+        "test_mesh_attributes_3_vertex_direct.xml",
+        "test_mesh_attributes_3_vertex",
+    );
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
@@ -180,6 +194,8 @@ fn converted_ron_renders_the_same_bits() {
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
         ("orthographic_sensor", "test_orthographic_path.xml"),
+        ("mesh_attributes", "test_mesh_attributes_3_face_direct.xml"),
+        ("mesh_attributes", "test_mesh_attributes_3_vertex_direct.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}.ron"));
