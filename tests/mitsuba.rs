@@ -215,6 +215,20 @@ fn textured_diffuse_with_a_black_light() {
     conformance_of(&path, "bsdf_spheres", "test_textured_diffuse_path.xml", "test_textured_diffuse");
 }
 
+#[test]
+fn mesh_attributes_face() {
+    conformance("mesh_attributes", "test_mesh_attributes_3_face_direct.xml", "test_mesh_attributes_3_face");
+}
+
+#[test]
+fn mesh_attributes_vertex() {
+    conformance(
+        "mesh_attributes",
+        "test_mesh_attributes_3_vertex_direct.xml",
+        "test_mesh_attributes_3_vertex",
+    );
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
@@ -226,6 +240,8 @@ fn converted_ron_renders_the_same_bits() {
         ("instancing", "test_instancing_path.xml"),
         ("orthographic_sensor", "test_orthographic_path.xml"),
         ("texture_interp", "test_texture_interp_direct.xml"),
+        ("mesh_attributes", "test_mesh_attributes_3_face_direct.xml"),
+        ("mesh_attributes", "test_mesh_attributes_3_vertex_direct.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}.ron"));

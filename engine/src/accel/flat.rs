@@ -205,12 +205,7 @@ impl FlatPrims {
                     f.ellipsoid_id.push(i as u32);
                 }
                 Primitive::Triangle(_) => return None,
-                // Kinds without a stream test are tested ray by ray: today only the test-only
-                // shape (feature `test-shape`), hence the arm is unreachable in other builds.
-                #[cfg_attr(
-                    not(feature = "test-shape"),
-                    expect(unreachable_patterns, reason = "only the test-only shape reaches this arm")
-                )]
+                // Kinds without a stream test (disks, cylinders) are tested ray by ray.
                 other => {
                     f.others.push(*other);
                     f.other_id.push(i as u32);

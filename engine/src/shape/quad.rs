@@ -2,7 +2,8 @@
 //! "Quadrilaterals").
 
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::V3;
 use crate::math::{dot3 as dot, gamma};
@@ -155,6 +156,7 @@ impl Quad {
             ns: self.n,
             uv: Vec2::new(a, b),
             err: self.point_error(),
+            on: MeshPoint::NONE,
         }
     }
 

@@ -3,8 +3,8 @@
 //! Life"; pbrt-v4's `Sphere::Sample` from a reference point).
 
 use super::{
-    Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
-    area_to_solid_angle,
+    Closed, LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    TransformedSphere, area_to_solid_angle,
 };
 use crate::format::{Positive, V3};
 use crate::math::{cos_sin_turn, dot3 as dot, gamma, uniform_sphere};
@@ -264,7 +264,7 @@ impl PrimitiveShape for Sphere {
             }
             (false, _) => Vec2::ZERO,
         };
-        SurfacePoint { p, n, ns: n, uv, err: self.point_error() }
+        SurfacePoint { p, n, ns: n, uv, err: self.point_error(), on: MeshPoint::NONE }
     }
 
     /// Surface area.

@@ -2,7 +2,7 @@
 //! to object space, the hit point back, the normal by the inverse transpose (Pharr, Jakob and
 //! Humphreys, "Physically Based Rendering", 4th edition, section 3.10).
 
-use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, MeshPoint, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
 use crate::math::{cos_sin_turn, dot3 as dot, gamma};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -157,6 +157,7 @@ impl PrimitiveShape for TransformedSphere {
             ns: n,
             uv: local.uv,
             err: scale * local.err + gamma(4) * magnitude,
+            on: MeshPoint::NONE,
         }
     }
 

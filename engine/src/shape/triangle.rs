@@ -8,7 +8,8 @@
 
 use super::quad::SPHERICAL_SOLID_ANGLE;
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::V3;
 use crate::math::gamma;
@@ -111,7 +112,7 @@ impl Triangle {
         let p = b0 * p0 + b1 * p1 + b2 * p2;
         let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
         let n = self.cross().normalize();
-        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
+        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err, on: MeshPoint::NONE }
     }
 }
 

@@ -19,6 +19,7 @@ pub mod blocky_noise;
 pub mod checker;
 pub mod image;
 pub mod marble;
+pub mod mesh_attribute;
 pub mod noise;
 pub mod solid;
 #[cfg(feature = "test-texture")]
@@ -26,9 +27,10 @@ pub mod test_stripes;
 pub mod turbulence;
 pub mod uv_checker;
 
+use crate::accel::mesh::{MeshBlas, MeshData};
 use crate::format::registry::{fields, registry, value};
 use crate::format::{Color, Rgb};
-use crate::shape::SurfacePoint;
+use crate::shape::{MeshPoint, SurfacePoint};
 use glam::{Vec2, Vec3, Vec3A};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -46,6 +48,7 @@ registry! {
         BlockyNoise(blocky_noise::BlockyNoise),
         Turbulence(turbulence::Turbulence),
         Marble(marble::Marble),
+        MeshAttribute(mesh_attribute::MeshAttribute),
         #[cfg(feature = "test-texture")]
         TestStripes(test_stripes::TestStripes),
     }
@@ -320,6 +323,13 @@ pub enum Texture {
         /// Colour the grey value multiplies.
         color: Vec3,
     },
+    /// The values of the hit mesh's attribute `name` times `scale` (black off meshes).
+    MeshAttribute {
+        /// The attribute's name (`vertex_color`, `face_weight`).
+        name: String,
+        /// Multiplies the values.
+        scale: f32,
+    },
 }
 
 /// All textures of a scene.
@@ -330,19 +340,25 @@ pub struct Textures {
 }
 
 impl Textures {
-    /// The colour of texture `id` at a surface point.
+    /// The colour of texture `id` at a surface point that is not on a mesh (mesh attributes
+    /// read black).
     pub fn eval(&self, id: TextureId, uv: Vec2, p: Vec3A) -> Vec3 {
+        self.eval_on(id, uv, p, None)
+    }
+
+    /// [`Self::eval`] at the point `on` of the mesh `mesh`, when it is on one.
+    fn eval_on(&self, id: TextureId, uv: Vec2, p: Vec3A, mesh: Option<(&MeshData, MeshPoint)>) -> Vec3 {
         match &self.list[id as usize] {
             Texture::Solid(c) => *c,
             Texture::Checker { scale, even, odd } => {
                 let c = (p / *scale).floor();
                 let parity = (c.x + c.y + c.z).rem_euclid(2.0);
-                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+                self.eval_on(if parity < 1.0 { *even } else { *odd }, uv, p, mesh)
             }
             Texture::UvChecker { u, v, even, odd, transform } => {
                 let t = transform.map_or(uv, |m| m.apply(uv));
                 let parity = ((t.x * u).floor() + (t.y * v).floor()).rem_euclid(2.0);
-                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+                self.eval_on(if parity < 1.0 { *even } else { *odd }, uv, p, mesh)
             }
             Texture::Image { image, wrap, filter, transform } => {
                 image.lookup(transform.map_or(uv, |m| m.apply(uv)), *wrap, *filter)
@@ -361,13 +377,24 @@ impl Textures {
                 };
                 *color * grey
             }
+            Texture::MeshAttribute { name, scale } => {
+                let Some((m, on)) = mesh else { return Vec3::ZERO };
+                let (Some(a), Some(&v)) =
+                    (m.attributes.iter().find(|a| a.name == *name), m.triangles.get(on.triangle as usize))
+                else {
+                    return Vec3::ZERO;
+                };
+                a.at(on.triangle, v, on.b) * *scale
+            }
         }
     }
 
-    /// The colour at a surface point.
+    /// The colour at a surface point; `meshes` are the scene's (a point on one names its index,
+    /// [`MeshPoint::mesh`]).
     #[inline]
-    pub fn at(&self, id: TextureId, sp: &SurfacePoint) -> Vec3 {
-        self.eval(id, sp.uv, sp.p)
+    pub fn at(&self, id: TextureId, sp: &SurfacePoint, meshes: &[Arc<MeshBlas>]) -> Vec3 {
+        let mesh = meshes.get(sp.on.mesh as usize).map(|b| (&*b.mesh, sp.on));
+        self.eval_on(id, sp.uv, sp.p, mesh)
     }
 
     /// A representative mean colour (light power estimates, statistics).
@@ -381,6 +408,8 @@ impl Textures {
             Texture::Noise { kind, color, .. } => {
                 *color * if *kind == NoiseKind::Turbulence { 0.3 } else { 0.5 }
             }
+            // Unknown until a mesh is hit: half the scale (uniformly random values' mean).
+            Texture::MeshAttribute { scale, .. } => Vec3::splat(0.5 * scale),
         }
     }
 }

@@ -470,8 +470,24 @@ fn texture(cx: &Converter, e: &Element) -> Result<String, SceneError> {
             ))
         }
         "bitmap" => bitmap(cx, &p),
+        "mesh_attribute" => {
+            let (name, at) = p
+                .string("name")?
+                .ok_or_else(|| p.at.error("<texture type=\"mesh_attribute\"> needs a name"))?;
+            if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+                return Err(
+                    at.error(format!("mesh attribute \"{name}\": its name starts with vertex_ or face_"))
+                );
+            }
+            let scale = p.float("scale")?.unwrap_or(1.0);
+            if !(scale >= 0.0) {
+                return Err(p.at.error(format!("mesh_attribute scale {scale}: expected >= 0")));
+            }
+            p.finish(&["name", "scale"])?;
+            Ok(format!("MeshAttribute(name: {name:?}, scale: {})", num(scale)))
+        }
         k => Err(p.at.error(format!(
-            "<texture type=\"{k}\">: pathwave reads checkerboard and bitmap textures from XML so far"
+            "<texture type=\"{k}\">: pathwave reads checkerboard, bitmap and mesh_attribute textures from XML so far"
         ))),
     }
 }

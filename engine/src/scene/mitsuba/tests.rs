@@ -488,3 +488,46 @@ fn identical_anonymous_bsdfs_share_one_material() {
     assert!(r.contains("material: \"named\"") && r.contains("Lambertian(albedo: (0.3, 0.3, 0.3))"), "{r}");
     crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
 }
+
+#[test]
+fn disks_cylinders_and_mesh_files_convert_with_mitsubas_defaults() {
+    let p = scene(
+        "shapes",
+        r#"<shape type="disk"><boolean name="flip_normals" value="true"/></shape>
+        <shape type="cylinder"><point name="p0" value="0, 0, 1"/><point name="p1" value="0, 2, 1"/><float name="radius" value="0.5"/></shape>
+        <shape type="cylinder"/>
+        <shape type="obj"><string name="filename" value="m.obj"/></shape>
+        <shape type="obj"><string name="filename" value="m.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
+        <shape type="ply"><string name="filename" value="m.ply"/><boolean name="flip_normals" value="true"/>
+            <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/></texture></bsdf></shape>
+        <shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="2"/></shape>"#,
+    );
+    let dir = p.parent().unwrap();
+    for f in ["m.obj", "m.ply", "m.serialized"] {
+        std::fs::write(dir.join(f), "").unwrap();
+    }
+    let r = to_ron(&p, &[], dir).unwrap_or_else(|e| panic!("{e}")).ron;
+    for want in [
+        "Disk(center: (0, 0, 0), normal: (0, 0, 1), radius: 1, flip_normals: true)",
+        "Cylinder(p0: (0, 0, 1), p1: (0, 2, 1), radius: 0.5)",
+        "Cylinder(p0: (0, 0, 0), p1: (0, 0, 1), radius: 1)",
+        // Mitsuba flips an OBJ's v unless told not to, and reads the others' as written.
+        r#"Mesh(file: "m.obj")"#,
+        r#"Mesh(file: "m.obj", flip_tex_coords: true)"#,
+        r#"Mesh(file: "m.ply", flip_normals: true, flip_tex_coords: true)"#,
+        r#"Mesh(file: "m.serialized", shape_index: 2, flip_tex_coords: true)"#,
+        r#"MeshAttribute(name: "vertex_color", scale: 1)"#,
+    ] {
+        assert!(r.contains(want), "{want} in\n{r}");
+    }
+    let e = error("flip", r#"<shape type="sphere"><boolean name="flip_normals" value="true"/></shape>"#);
+    assert!(e.message.contains("flip_normals"), "{e}");
+    let e = error(
+        "attr",
+        r#"<texture type="mesh_attribute" id="t"><string name="name" value="color"/></texture>
+        <shape type="sphere"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>"#,
+    );
+    assert!(e.message.contains("vertex_ or face_"), "{e}");
+    let e = error("tube", r#"<shape type="cylinder"><float name="radius" value="0"/></shape>"#);
+    assert!(e.message.contains("radius > 0"), "{e}");
+}
