@@ -59,7 +59,10 @@ fn the_probe_finds_the_users_kinds_and_their_parameters() {
     let mesh = all.iter().find(|k| k.name == "Mesh").unwrap();
     assert_eq!(mesh.params, ["file", "shape_index", "face_normals", "flip_normals", "flip_tex_coords"]);
     let spot = all.iter().find(|k| k.name == "Spot").unwrap();
-    assert_eq!(spot.params, ["position", "look_at", "intensity", "cone_angle", "falloff_start"]);
+    assert_eq!(
+        spot.params,
+        ["position", "look_at", "intensity", "cone_angle", "falloff_start", "falloff", "texture", "up"]
+    );
     let marble = all.iter().find(|k| k.name == "Marble").unwrap();
     assert_eq!(marble.params, ["scale", "depth", "color"]);
     // `Solid((r, g, b))`: one unnamed value, no parameter to name.

@@ -162,7 +162,7 @@ impl TriBlock {
             let l = zero_edge.trailing_zeros() as usize;
             zero_edge &= zero_edge - 1;
             let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
-            out[l] = Triangle { p }.intersect(o, d, tmax);
+            out[l] = Triangle { p, uv: None }.intersect(o, d, tmax);
             hit |= ((out[l] < tmax) as u32) << l;
         }
         (out, hit)
@@ -515,7 +515,7 @@ impl MeshBlas {
     #[inline]
     pub fn surface(&self, hit: &MeshHit, p: Vec3A) -> (SurfacePoint, f32) {
         let [a, b, c] = hit.p;
-        let mut sp = Triangle { p: [a, b, c] }.surface(p);
+        let mut sp = Triangle { p: [a, b, c], uv: None }.surface(p);
         // The triangle's uv are its barycentric weights.
         sp.on = MeshPoint { mesh: u32::MAX, triangle: hit.id, b: sp.uv };
         if self.mesh.normals.is_none() && self.mesh.uvs.is_none() {
@@ -620,7 +620,7 @@ pub(crate) mod tests {
             let all: Vec<(f32, u32)> = (0..mesh.triangles.len() as u32)
                 .map(|k| {
                     let [a, b, c] = mesh.triangle(k);
-                    (Triangle { p: [a, b, c] }.intersect(o, d, f32::INFINITY), k)
+                    (Triangle { p: [a, b, c], uv: None }.intersect(o, d, f32::INFINITY), k)
                 })
                 .filter(|h| h.0.is_finite())
                 .collect();

@@ -5,7 +5,7 @@ use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
-use crate::format::{Albedo, Positive, V3};
+use crate::format::{Albedo, Color, Positive, Rgb, V3, context};
 use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
@@ -21,6 +21,8 @@ pub struct ObjectDesc {
     pub shape: ShapeDesc,
     /// What the shape is.
     pub body: Body,
+    /// Light the surface emits besides what its material reflects (default none).
+    pub emit: Option<EmitDesc>,
     /// Transforms applied in order, first to last (default none).
     pub transform: Vec<TransformOp>,
     /// How it moves (default: it does not).
@@ -36,6 +38,20 @@ pub struct ObjectDesc {
 pub struct MotionDesc {
     /// World units per unit of time.
     pub velocity: V3,
+}
+
+/// `emit: (radiance: (r, g, b), two_sided: false)`: the surface emits `radiance` (or a
+/// texture's value at the point, by name) besides what its material reflects, as Mitsuba 3's
+/// `area` emitter on a shape with a BSDF: on the side of the geometric normal only, unless
+/// `two_sided`. Sampled as a light like an emitter's surface.
+#[derive(Deserialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Emit")]
+pub struct EmitDesc {
+    /// Emitted radiance, or the name of a texture.
+    pub radiance: Color<Rgb>,
+    /// Emit on both sides (default false: only on the side of the normal).
+    #[serde(default)]
+    pub two_sided: bool,
 }
 
 /// What an object's shape bounds.
@@ -66,6 +82,8 @@ struct RawObject {
     material: Option<MaterialRef>,
     #[serde(default)]
     medium: Option<MediumDesc>,
+    #[serde(default)]
+    emit: Option<EmitDesc>,
     #[serde(default)]
     transform: Vec<TransformOp>,
     #[serde(default)]
@@ -100,6 +118,18 @@ impl TryFrom<RawObject> for ObjectDesc {
                 return Err("an object needs a `material` (a surface) or a `medium` (a volume)".into());
             }
         };
+        match (&body, &r.emit) {
+            (Body::Volume(_), Some(_)) => return Err("a medium does not emit: `emit` is for surfaces".into()),
+            (Body::Surface(name), Some(_))
+                if context::names(|n| n.is_some_and(|n| n.lights.contains(&name.0))) =>
+            {
+                return Err(format!(
+                    "material \"{}\" is a DiffuseLight, which emits already: `emit` is for surfaces whose material reflects",
+                    name.0
+                ));
+            }
+            _ => {}
+        }
         if r.motion.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `motion` is for surfaces".into());
         }
@@ -110,7 +140,14 @@ impl TryFrom<RawObject> for ObjectDesc {
             attributes_found(&r.shape, &m.0)?;
         }
         primitives(&r.shape.form(), &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
-        Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion, animate: r.animate })
+        Ok(Self {
+            shape: r.shape,
+            body,
+            emit: r.emit,
+            transform: r.transform,
+            motion: r.motion,
+            animate: r.animate,
+        })
     }
 }
 

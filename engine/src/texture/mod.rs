@@ -397,6 +397,14 @@ impl Textures {
         self.eval_on(id, sp.uv, sp.p, mesh)
     }
 
+    /// The width and height of texture `id`'s image, for one that is an image.
+    pub fn resolution(&self, id: TextureId) -> Option<(u32, u32)> {
+        match &self.list[id as usize] {
+            Texture::Image { image, .. } => Some((image.width, image.height)),
+            _ => None,
+        }
+    }
+
     /// A representative mean colour (light power estimates, statistics).
     pub fn mean(&self, id: TextureId) -> Vec3 {
         match &self.list[id as usize] {
