@@ -115,10 +115,11 @@ mod tests {
             .collect()
     }
 
-    /// Mitsuba's cube (`src/shapes/cube.cpp`): per face its outward normal and, at three of its
-    /// vertices, the position and Mitsuba's uv.
-    #[allow(clippy::type_complexity)]
-    const MITSUBA_CUBE: [([f32; 3], [([f32; 3], [f32; 2]); 3]); 6] = [
+    /// A face's outward normal and, at three of its vertices, the position and Mitsuba's uv.
+    type Face = ([f32; 3], [([f32; 3], [f32; 2]); 3]);
+
+    /// Mitsuba's cube (`src/shapes/cube.cpp`), from its vertex table.
+    const MITSUBA_CUBE: [Face; 6] = [
         ([0., -1., 0.], [([1., -1., -1.], [0., 1.]), ([1., -1., 1.], [1., 1.]), ([-1., -1., 1.], [1., 0.])]),
         ([0., 1., 0.], [([1., 1., -1.], [0., 1.]), ([-1., 1., -1.], [1., 1.]), ([-1., 1., 1.], [1., 0.])]),
         ([1., 0., 0.], [([1., -1., -1.], [0., 1.]), ([1., 1., -1.], [1., 1.]), ([1., 1., 1.], [1., 0.])]),
