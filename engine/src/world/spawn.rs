@@ -39,7 +39,8 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
                     (textures.mean(t), Some(t))
                 }
             };
-            (mats.push(mats[id]), per_material.push(per_material[id]));
+            mats.push(mats[id]);
+            per_material.push(per_material[id]);
             emission.push(Some(AreaEmission { radiance, texture, two_sided: emit.two_sided }));
             Some(mats.len() as u32 - 1)
         })
