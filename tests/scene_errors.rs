@@ -311,8 +311,8 @@ fn unknown_material_variant() {
 
 #[test]
 fn unknown_shape_variant() {
-    let text = with_object(r#"(shape: Cylinder(center: (0, 0, 0), radius: 1), material: "white"),"#);
-    assert_err(&text, 8, 17, &["`Cylinder`", "`Sphere`", "`Quad`", "`Box`"]);
+    let text = with_object(r#"(shape: Cone(center: (0, 0, 0), radius: 1), material: "white"),"#);
+    assert_err(&text, 8, 17, &["`Cone`", "`Sphere`", "`Quad`", "`Box`", "`Disk`", "`Cylinder`"]);
 }
 
 // 7. Missing field and syntax errors.
@@ -396,7 +396,7 @@ fn shipped_scenes_parse() {
 
 #[test]
 fn messages_name_user_facing_types() {
-    let e = err(&with_object(r#"(shape: Cylinder(radius: 1), material: "white"),"#));
+    let e = err(&with_object(r#"(shape: Cone(radius: 1), material: "white"),"#));
     assert!(e.message.contains("`Shape`") && !e.message.contains("Raw"), "{e}");
     let e = err(&with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfvo: 40"));
     assert!(e.message.contains("`Camera`") && !e.message.contains("Raw"), "{e}");

@@ -107,6 +107,7 @@ mod tests {
             triangles: vec![[0, 1, 2]],
             normals: None,
             uvs: Some(vec![Vec2::new(0.2, 0.9), Vec2::new(0.8, 0.9), Vec2::new(0.2, 0.1)]),
+            attributes: Vec::new(),
         };
         // The point a/4 + b/2 of the triangle: uv (0.2, 0.9) + (0.6, 0) / 4 + (0, -0.8) / 2.
         let want = Vec2::new(0.35, 0.5);

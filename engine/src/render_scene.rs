@@ -357,7 +357,7 @@ impl RenderScene {
         let mut m = self.materials[id];
         for (slot, t) in self.material_textures[id].0.iter().enumerate() {
             if let Some(t) = *t {
-                m.set_color(slot, self.textures.at(t, sp));
+                m.set_color(slot, self.textures.at(t, sp, &self.instances.blas));
             }
         }
         m

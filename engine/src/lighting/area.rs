@@ -30,7 +30,9 @@ impl AreaEmission {
         }
         match self.texture {
             None => self.radiance,
-            Some(t) => textures.at(t, &at()).max(Vec3::ZERO),
+            // No mesh attributes: a material that reads one may not emit (checked at load), and
+            // emitting meshes are baked into triangles of no mesh.
+            Some(t) => textures.at(t, &at(), &[]).max(Vec3::ZERO),
         }
     }
 }
@@ -82,7 +84,14 @@ mod tests {
         );
         assert_eq!((table[1], table[2]), (None, Some(own)));
         let textures = Textures { list: vec![Texture::Solid(Vec3::new(2.0, -1.0, 3.0))] };
-        let sp = SurfacePoint { p: Vec3A::ZERO, n: Vec3A::Z, ns: Vec3A::Z, uv: Vec2::ZERO, err: 0.0 };
+        let sp = SurfacePoint {
+            p: Vec3A::ZERO,
+            n: Vec3A::Z,
+            ns: Vec3A::Z,
+            uv: Vec2::ZERO,
+            err: 0.0,
+            on: crate::shape::MeshPoint::NONE,
+        };
         assert_eq!(own.emitted(&textures, 0.5, || sp), Vec3::new(2.0, 0.0, 3.0));
         assert_eq!(own.emitted(&textures, -0.5, || sp), Vec3::ZERO);
         let both = AreaEmission { texture: None, two_sided: true, ..own };

@@ -572,7 +572,7 @@ mod tests {
             list: vec![
                 crate::texture::Texture::Solid(Vec3::ONE),
                 crate::texture::Texture::Solid(Vec3::ZERO),
-                crate::texture::Texture::UvChecker { u, v, even: 0, odd: 1 },
+                crate::texture::Texture::UvChecker { u, v, even: 0, odd: 1, transform: None },
             ],
         };
         let texture = |x: Vec3A| SpotTexture {
@@ -621,7 +621,7 @@ mod tests {
             list: vec![
                 crate::texture::Texture::Solid(Vec3::ONE),
                 crate::texture::Texture::Solid(Vec3::ZERO),
-                crate::texture::Texture::UvChecker { u: 2.0, v: 2.0, even: 0, odd: 1 },
+                crate::texture::Texture::UvChecker { u: 2.0, v: 2.0, even: 0, odd: 1, transform: None },
             ],
         };
         let textured = light(Some(LightTexture { id: 2, mean: Vec3::splat(0.5) }));

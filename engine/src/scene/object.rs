@@ -1,7 +1,7 @@
 //! `objects: [..]`: a shape with a material (a surface) or a medium (a volume), its transform,
 //! motion and keyframes; checked as placed (`placement::primitives`) at load.
 
-use super::assets::{MeshFile, open_edge};
+use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
@@ -10,6 +10,7 @@ use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
 use serde::de::{Error, VariantAccess};
+use std::sync::Arc;
 
 /// One object: a shape with either a material (a surface) or a medium (a volume), and an
 /// optional list of transforms.
@@ -135,6 +136,9 @@ impl TryFrom<RawObject> for ObjectDesc {
         if r.animate.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `animate` is for surfaces".into());
         }
+        if let Body::Surface(m) = &body {
+            attributes_found(&r.shape, &m.0)?;
+        }
         primitives(&r.shape.form(), &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
         Ok(Self {
             shape: r.shape,
@@ -144,6 +148,37 @@ impl TryFrom<RawObject> for ObjectDesc {
             motion: r.motion,
             animate: r.animate,
         })
+    }
+}
+
+/// A surface whose material reads mesh attributes (`MeshAttribute` textures) must be a mesh
+/// that has them, and must not emit (emitting meshes are baked into world-space triangles,
+/// which keep no attributes).
+fn attributes_found(shape: &ShapeDesc, material: &str) -> Result<(), String> {
+    let (wanted, emits) = crate::format::context::names(|n| match n {
+        Some(n) => (
+            n.attributes.iter().find(|(m, _)| m == material).map(|(_, a)| a.clone()).unwrap_or_default(),
+            n.lights.iter().any(|l| l == material),
+        ),
+        None => (Vec::new(), false),
+    });
+    let Some(first) = wanted.first() else { return Ok(()) };
+    let ShapeDesc::Mesh(mesh) = shape else {
+        return Err(format!("material \"{material}\" reads the mesh attribute {first}: it goes on a Mesh"));
+    };
+    if emits {
+        return Err(format!(
+            "material \"{material}\" emits and reads the mesh attribute {first}: pathwave's emitting meshes keep no attributes"
+        ));
+    }
+    let has: Vec<&str> = mesh.mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+    match wanted.iter().find(|a| !has.contains(&a.as_str())) {
+        None => Ok(()),
+        Some(a) => Err(format!(
+            "material \"{material}\" reads the mesh attribute {a}, which the mesh {} does not have (it has {})",
+            mesh.path.display(),
+            if has.is_empty() { "none".to_owned() } else { has.join(", ") }
+        )),
     }
 }
 
@@ -169,37 +204,75 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
     T::build(fields::<T::Desc, A>(variant)?).map_err(A::Error::custom)
 }
 
-/// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene file),
-/// read as the scene is parsed, smooth-shaded where the file gives vertex normals;
-/// `face_normals: true` shades it flat all the same (Mitsuba's `face_normals`). Meshes are not
-/// in the shape registry: their runtime form is the shared mesh data the world instances, not
-/// a [`ShapeModel`] that places primitives.
+/// `Mesh(file: "assets/knot.obj")`: the triangles of a mesh file (relative to the scene
+/// file: OBJ, PLY, or Mitsuba's `.serialized`, whose mesh `shape_index` it is, default 0), read
+/// as the scene is parsed, smooth-shaded where the file gives vertex normals; `face_normals:
+/// true` shades it flat all the same (Mitsuba's `face_normals`), `flip_normals: true` turns it
+/// inside out (its faces wound the other way, its normals reversed), `flip_tex_coords: true`
+/// reads each uv's v as 1 - v. Meshes are not in the shape registry: their runtime form is the
+/// shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshDesc {
-    file: MeshFile,
+    file: MeshPath,
+    #[serde(default)]
+    shape_index: u32,
     #[serde(default)]
     face_normals: bool,
+    #[serde(default)]
+    flip_normals: bool,
+    #[serde(default)]
+    flip_tex_coords: bool,
 }
 
 fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Error> {
-    let MeshDesc { file, face_normals } = fields::<MeshDesc, A>(variant)?;
-    if !face_normals || file.mesh.normals.is_none() {
-        return Ok(file);
-    }
-    // One flat copy per file, shared by the objects that ask for it (one BLAS).
-    let key =
-        crate::format::context::scene_dir().map(|d| d.join(format!("{}#face_normals", file.path.display())));
-    let cached = key.as_deref().and_then(crate::format::context::mesh);
-    let mesh = cached.unwrap_or_else(|| {
-        let flat =
-            std::sync::Arc::new(crate::accel::mesh::MeshData { normals: None, ..(*file.mesh).clone() });
-        if let Some(k) = key {
-            crate::format::context::keep_mesh(k, flat.clone());
+    let d = fields::<MeshDesc, A>(variant)?;
+    let MeshPath { path, full, source } = d.file;
+    let mesh = match source {
+        MeshSource::Unread => return Ok(MeshFile { path, mesh: Default::default() }),
+        MeshSource::Mesh(m) if d.shape_index == 0 => m,
+        MeshSource::Mesh(_) => {
+            let message = format!("shape_index {} picks a mesh of a .serialized file", d.shape_index);
+            return Err(A::Error::custom(message));
         }
-        flat
+        MeshSource::Serialized(file) => {
+            let key = full.join(format!("#{}", d.shape_index));
+            match crate::format::context::mesh(&key) {
+                Some(m) => m,
+                None => {
+                    let m = Arc::new(file.mesh(d.shape_index as usize, &full).map_err(A::Error::custom)?);
+                    crate::format::context::keep_mesh(key, m.clone());
+                    m
+                }
+            }
+        }
+    };
+    let face_normals = d.face_normals && mesh.normals.is_some();
+    let flip_v = d.flip_tex_coords && mesh.uvs.is_some();
+    if !(face_normals || flip_v || d.flip_normals) {
+        return Ok(MeshFile { path, mesh });
+    }
+    // One changed copy per file, mesh and options, shared by the objects that ask for it (one
+    // BLAS).
+    let key = full.join(format!("#{}#{face_normals}#{}#{flip_v}", d.shape_index, d.flip_normals));
+    let cached = crate::format::context::mesh(&key);
+    let mesh = cached.unwrap_or_else(|| {
+        let mut m = (*mesh).clone();
+        if face_normals {
+            m.normals = None;
+        }
+        if flip_v {
+            m.uvs.iter_mut().flatten().for_each(|uv| uv.y = 1.0 - uv.y);
+        }
+        if d.flip_normals {
+            m.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+            m.normals.iter_mut().flatten().for_each(|n| *n = -*n);
+        }
+        let m = Arc::new(m);
+        crate::format::context::keep_mesh(key, m.clone());
+        m
     });
-    Ok(MeshFile { path: file.path, mesh })
+    Ok(MeshFile { path, mesh })
 }
 
 /// What a shape description becomes in the world.

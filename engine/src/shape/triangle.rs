@@ -8,7 +8,8 @@
 
 use super::quad::SPHERICAL_SOLID_ANGLE;
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::V3;
 use crate::math::gamma;
@@ -119,7 +120,7 @@ impl Triangle {
             None => Vec2::new(b1, b2),
             Some([t0, t1, t2]) => b0 * t0 + b1 * t1 + b2 * t2,
         };
-        SurfacePoint { p, n, ns: n, uv, err }
+        SurfacePoint { p, n, ns: n, uv, err, on: MeshPoint::NONE }
     }
 }
 

@@ -349,7 +349,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Sphere(SphereShape { center: Vec3A::Y, radius: 0.5 })),
+                Shape(Form::Sphere(SphereShape { center: Vec3A::Y, radius: 0.5, poles: Default::default() })),
                 MaterialId(0),
             ))
             .id();
@@ -410,7 +410,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE })),
+                Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE, uv: Default::default() })),
                 Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
             ))
             .id();

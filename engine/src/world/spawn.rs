@@ -162,7 +162,11 @@ fn flat_mesh(shape: &Form) -> Option<MeshData> {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend([q.q, q.q + q.u, q.q + q.u + q.v, q.q + q.v]);
         mesh.uvs.as_mut()?.extend([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::ONE, glam::Vec2::Y]);
-        mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        // The triangles turn as the quad faces: about u x v, or the other way if it is flipped.
+        match q.n.dot(q.u.cross(q.v)) < 0.0 {
+            false => mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]),
+            true => mesh.triangles.extend([[base, base + 2, base + 1], [base, base + 3, base + 2]]),
+        }
     }
     Some(mesh)
 }

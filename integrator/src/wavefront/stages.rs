@@ -105,10 +105,10 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize, hit: Option
 #[inline(always)]
 fn store_hit(dst: &mut Hit, h: &Hit) {
     let Hit { t, prim, material, surface } = h;
-    let SurfacePoint { p, n, ns, uv, err } = surface;
+    let SurfacePoint { p, n, ns, uv, err, on } = surface;
     (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
     let d = &mut dst.surface;
-    (d.p, d.n, d.ns, d.uv, d.err) = (*p, *n, *ns, *uv, *err);
+    (d.p, d.n, d.ns, d.uv, d.err, d.on) = (*p, *n, *ns, *uv, *err, *on);
 }
 
 /// Free-flight sampling for path `i` up to the surface at `tmax` with the number `u`: true (and
