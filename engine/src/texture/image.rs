@@ -6,7 +6,7 @@ use crate::format::{Color, Rgb, context};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::sync::Arc;
 
-/// PNG, JPEG, HDR or EXR, relative to the scene file; 8-bit images are sRGB (unless `raw`),
+/// PNG, JPEG, BMP, HDR or EXR, relative to the scene file; 8-bit images are sRGB (unless `raw`),
 /// float ones linear.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(from = "ImageFields")]

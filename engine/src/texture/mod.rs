@@ -149,7 +149,7 @@ pub enum TextureError {
 }
 
 impl TextureImage {
-    /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
+    /// Reads PNG, JPEG, BMP, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
     /// once, here, through a 256-entry table ([`srgb8_table`]); float images are already linear.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
         Self::from_image(crate::format::files::decode_image(path).map_err(TextureError::Read)?, path)
