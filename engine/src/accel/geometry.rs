@@ -43,6 +43,8 @@ pub struct Geometry {
     /// Velocity of each primitive (world units per unit time) when some primitive moves: at
     /// time `t` a primitive lies translated by `velocity * t`.
     pub velocity: Option<Vec<Vec3A>>,
+    /// The index each primitive had in the list it was built from (before the BVH's reorder).
+    pub source: Vec<u32>,
     bvh: Option<Bvh8>,
     flat: Option<FlatPrims>,
     /// Per slot, a sphere's centre and radius, or a NaN radius for the other primitives: the
@@ -114,6 +116,7 @@ impl Geometry {
         let prims: Vec<Primitive> = order.iter().map(|&i| prims[i as usize]).collect();
         let material = order.iter().map(|&i| material[i as usize]).collect();
         let velocity = velocity.map(|v| order.iter().map(|&i| v[i as usize]).collect());
+        let source = order.clone();
         let spheres = prims
             .iter()
             .map(|p| match p {
@@ -121,7 +124,7 @@ impl Geometry {
                 _ => [0.0, 0.0, 0.0, f32::NAN],
             })
             .collect();
-        Self { prims, material, velocity, bvh: Some(bvh), flat: None, spheres }
+        Self { prims, material, velocity, source, bvh: Some(bvh), flat: None, spheres }
     }
 
     /// Checks the BVH's invariants ([`Bvh8::validate`]); for still primitives also that each

@@ -1,10 +1,12 @@
 //! The emitter table used for next-event estimation: which lights can be sampled and with what
-//! probability. Emitting primitives, point and spot lights share one share of the choices, half
-//! in proportion to their power and half evenly (a defensive mixture: power alone starves a large
-//! dim light near the camera, an even choice wastes samples on irrelevant ones; measured in
-//! benches/RESULTS.md); each light at infinity (the environment, a directional light)
-//! takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power estimate for them
-//! depends on a scene radius and would starve the finite lights of a large scene.
+//! probability. Emitting primitives, point and spot lights and projectors share one share of
+//! the choices, half in proportion to their power and half evenly among emitting objects and
+//! those lights, an object's primitives splitting its part by power (a defensive mixture: power
+//! alone starves a large dim light near the camera, an even choice wastes samples on irrelevant
+//! ones; measured in benches/results/sampling.md); each light at infinity (the environment, a
+//! directional light) takes a share of its own, as pbrt-v4's `BVHLightSampler` does: a power
+//! estimate for them depends on a scene radius and would starve the finite lights of a large
+//! scene.
 
 use crate::accel::geometry::Geometry;
 use crate::lighting::area::AreaEmission;
@@ -302,6 +304,9 @@ pub struct LightInputs<'a> {
     pub environment: BackgroundSampling,
     /// A box that holds the scene (primitives and instances).
     pub bounds: Option<(Vec3A, Vec3A)>,
+    /// For each primitive of the geometry, the object it belongs to: the primitives of one
+    /// object share one even share of the light choices (`None`: each primitive is an object).
+    pub objects: Option<&'a [u32]>,
 }
 
 impl LightTable {
@@ -313,7 +318,9 @@ impl LightTable {
             t.center = (lo + hi) * 0.5;
             t.radius = (hi - lo).length() * 0.5;
         }
-        let mut power = Vec::new();
+        // Each finite light's group (its object, or itself) for the even share.
+        let (mut power, mut group) = (Vec::new(), Vec::new());
+        let mut groups = std::collections::HashMap::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
             let Some(AreaEmission { radiance, two_sided, .. }) = emission[m as usize] else {
                 continue;
@@ -324,15 +331,22 @@ impl LightTable {
                 t.light_of_prim[i] = t.prims.len() as u32;
                 t.prims.push(i as u32);
                 power.push(p);
+                let object = inputs.objects.map_or(i as u32, |o| o[i]);
+                let next = groups.len();
+                group.push(*groups.entry(object).or_insert(next));
             }
         }
         let mut infinite = Vec::new();
+        let mut count = groups.len();
         for l in inputs.punctual {
             let p = l.power_over_pi();
             if p > 0.0 {
                 infinite.push(l.infinite());
                 t.others.push(OtherLight::Punctual(*l));
                 power.push(p);
+                // Lights at infinity have shares of their own, outside the groups.
+                group.push(if l.infinite() { usize::MAX } else { count });
+                count += !l.infinite() as usize;
             }
         }
         let alone = t.prims.is_empty() && t.others.is_empty();
@@ -346,19 +360,29 @@ impl LightTable {
             t.others.push(OtherLight::Environment);
             infinite.push(true);
             power.push(1.0);
+            group.push(usize::MAX);
         }
-        // Finite lights share one share, half in proportion to power and half evenly; each
-        // infinite one has a share.
+        // Finite lights share one share, half in proportion to power and half evenly among
+        // objects (a mesh's triangles share its part by power, as Mitsuba picks an emitter
+        // and then a point on it by area); each infinite one has a share.
         infinite.splice(0..0, std::iter::repeat_n(false, t.prims.len()));
         let shares = infinite.iter().filter(|&&i| i).count() + infinite.iter().any(|&i| !i) as usize;
         let finite: f32 = power.iter().zip(&infinite).filter(|(_, i)| !**i).map(|(p, _)| p).sum();
-        let count = infinite.iter().filter(|&&i| !i).count() as f32;
+        let mut group_power = vec![0.0f32; count];
+        for (k, (p, inf)) in power.iter().zip(&infinite).enumerate() {
+            if !inf {
+                group_power[group[k]] += p;
+            }
+        }
+        let count = count as f32;
         let mut acc = 0.0;
-        for (p, inf) in power.into_iter().zip(infinite) {
+        for (k, (p, inf)) in power.into_iter().zip(infinite).enumerate() {
+            // The light's part of its group's even share: 1 for a light alone in its group.
+            let even = if inf { 0.0 } else { (p / group_power[group[k]]) / count };
             let pmf = match (inf, shares, count == 1.0) {
                 (false, 1, true) => p / finite,
-                (false, 1, false) => 0.5 * (p / finite) + 0.5 / count,
-                (false, _, _) => (0.5 * (p / finite) + 0.5 / count) / shares as f32,
+                (false, 1, false) => 0.5 * (p / finite) + 0.5 * even,
+                (false, _, _) => (0.5 * (p / finite) + 0.5 * even) / shares as f32,
                 (true, _, _) => 1.0 / shares as f32,
             };
             t.pmf.push(pmf);
@@ -480,7 +504,11 @@ mod tests {
     fn choices_mix_power_and_even_shares() {
         let geo = Geometry::default();
         let table = |punctual: &[PunctualLight], environment| {
-            LightTable::build(&geo, Vec::new(), LightInputs { punctual, environment, bounds: None })
+            LightTable::build(
+                &geo,
+                Vec::new(),
+                LightInputs { punctual, environment, bounds: None, objects: None },
+            )
         };
         use BackgroundSampling::{Alone, Always, Never};
         let one = table(&[point(0.0, 5.0)], Never);
@@ -500,6 +528,38 @@ mod tests {
         assert_eq!(table(&[point(0.0, 5.0)], Alone).environment, None);
         let sky = table(&[point(0.0, 0.0)], Alone);
         assert_eq!((sky.environment, sky.pmf.as_slice()), (Some(0), [1.0].as_slice()));
+    }
+
+    /// The even half of the choices goes to objects alike, an object's primitives splitting
+    /// its part by power: two emitting objects (one made of spheres of radius 1 and 2, one of a
+    /// sphere of radius 1) and a point light take a third each of that half.
+    #[test]
+    fn an_objects_primitives_share_its_even_part() {
+        use crate::shape::Sphere;
+        let sphere = |x: f32, r: f32| Primitive::Sphere(Sphere::new(Vec3A::new(x, 0.0, 0.0), r));
+        let geo = Geometry::build(vec![sphere(0.0, 1.0), sphere(5.0, 2.0), sphere(10.0, 1.0)], vec![0; 3]);
+        let objects: Vec<u32> = geo.source.iter().map(|&i| [0, 0, 1][i as usize]).collect();
+        let emission = vec![Some(AreaEmission { radiance: Vec3::ONE, texture: None, two_sided: false })];
+        let point = [point(0.0, 1.0)];
+        let inputs = LightInputs {
+            punctual: &point,
+            environment: BackgroundSampling::Never,
+            bounds: None,
+            objects: Some(&objects),
+        };
+        let table = LightTable::build(&geo, emission, inputs);
+        let area = |r: f32| 4.0 * std::f32::consts::PI * r * r * luminance(Vec3::ONE);
+        let total = 2.0 * area(1.0) + area(2.0) + point[0].power_over_pi();
+        for (l, &prim) in table.prims.iter().enumerate() {
+            let (r, object_power) = match objects[prim as usize] {
+                0 => (if geo.prims[prim as usize].area() > 20.0 { 2.0 } else { 1.0 }, area(1.0) + area(2.0)),
+                _ => (1.0, area(1.0)),
+            };
+            let want = 0.5 * area(r) / total + 0.5 * (area(r) / object_power) / 3.0;
+            assert!((table.pmf[l] - want).abs() < 1e-6, "light {l}: {} against {want}", table.pmf[l]);
+        }
+        let want = 0.5 * point[0].power_over_pi() / total + 0.5 / 3.0;
+        assert!((table.pmf[3] - want).abs() < 1e-6, "{} against {want}", table.pmf[3]);
     }
 
     /// A spot light is full inside its falloff angle, dark beyond its cone, smooth between.

@@ -133,6 +133,9 @@ pub struct SceneGeometry {
     pub rebuilds: u64,
     /// The entities it was built from, sorted.
     pub entities: Vec<Entity>,
+    /// For each primitive (in the geometry's order), the rank in `entities` of the object it
+    /// belongs to.
+    pub objects: Vec<u32>,
 }
 
 /// The world-space media volumes, rebuilt by [`rebuild_media`](super::rebuild_media).

@@ -56,16 +56,18 @@ pub fn rebuild_geometry(
     let mut objs: Vec<_> = objects.iter().collect();
     objs.sort_by_key(|(e, ..)| *e);
     out.entities = objs.iter().map(|(e, ..)| *e).collect();
-    let (mut prims, mut mats, mut velocity) = (Vec::new(), Vec::new(), Vec::new());
-    for (_, transform, shape, material, motion) in objs {
+    let (mut prims, mut mats, mut velocity, mut object) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (k, (_, transform, shape, material, motion)) in objs.into_iter().enumerate() {
         // Scene files are validated at load; objects spawned by code may still be bad.
         if let Err(e) = primitives(&shape.0, &transform.0, &mut prims) {
             tracing::error!("object skipped: {e}");
         }
         mats.resize(prims.len(), material.0);
         velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
+        object.resize(prims.len(), k as u32);
     }
     let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
+    out.objects = geometry.source.iter().map(|&i| object[i as usize]).collect();
     tracing::info!(
         primitives = geometry.prims.len(),
         moving = geometry.velocity.is_some(),
@@ -267,7 +269,12 @@ pub fn rebuild_lights(
         let (lo, hi) = (b.min, b.max);
         Some(acc.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))))
     });
-    let inputs = LightInputs { punctual: &punctual.0, environment: background.0.sampling(), bounds };
+    let inputs = LightInputs {
+        punctual: &punctual.0,
+        environment: background.0.sampling(),
+        bounds,
+        objects: Some(&geometry.objects),
+    };
     let emission = emission_table(&materials.0, &textures.per_material, &emitting.0);
     out.lights = Arc::new(LightTable::build(geo, emission, inputs));
     out.rebuilds += 1;
