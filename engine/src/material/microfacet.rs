@@ -102,7 +102,9 @@ pub trait Microfacet: Copy {
     /// weight once visible-normal sampling has divided out `G1(wo)`. Separable: `G1(wi)`;
     /// height-correlated: `(1 + Lambda(wo)) / (1 + Lambda(wo) + Lambda(wi))`, written with
     /// `1 + Lambda = 1 / G1` so that grazing directions give 0, not infinities.
-    #[inline]
+    // Always inlined, as `pdf_visible`: with two distributions the compiler left it out of line
+    // in the rough materials' sampling (callgrind, materials-env).
+    #[inline(always)]
     fn shadowing(&self, smith: Smith, wo: Vec3A, wi: Vec3A) -> f32 {
         let gi = self.g1(wi);
         match smith {
@@ -117,7 +119,7 @@ pub trait Microfacet: Copy {
 
     /// Density of visible normals seen from `wo` (local, `wo.z > 0`):
     /// `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)` (Heitz 2014, eq. 2 of Heitz 2018).
-    #[inline]
+    #[inline(always)]
     fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
         if wo.z <= 0.0 {
             return 0.0;

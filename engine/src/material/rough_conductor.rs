@@ -112,7 +112,7 @@ impl RoughConductor {
 
     /// [`MaterialModel::sample`] off the smooth limit, `n` facing `wo`, with the distribution
     /// `md`: visible-normal sampling and mirroring about the normal.
-    #[inline]
+    #[inline(always)]
     fn sample_rough<M: Microfacet>(&self, md: M, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> {
         let frame = Frame::from_normal(n);
         let lo = to_local(&frame, wo);
@@ -138,7 +138,7 @@ impl RoughConductor {
     }
 
     /// [`MaterialModel::eval`] off the smooth limit, `n` facing `wo`, with the distribution `md`.
-    #[inline]
+    #[inline(always)]
     fn eval_rough<M: Microfacet>(&self, md: M, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
         let frame = Frame::from_normal(n);
         let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
@@ -158,6 +158,19 @@ impl RoughConductor {
         }
         let f_cos = self.tint * self.fresnel(cos_om.min(1.0)) * (pdf * md.shadowing(self.smith, lo, li));
         BsdfEval { f_cos, pdf }
+    }
+
+    /// [`Self::sample_rough`] with Beckmann, out of line: inlined beside GGX's, it made the
+    /// compiler lay out GGX's path less well (0.4% more instructions on materials-env).
+    #[inline(never)]
+    fn sample_beckmann(&self, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> {
+        self.sample_rough(Beckmann { alpha: self.alpha }, wo, n, u)
+    }
+
+    /// [`Self::eval_rough`] with Beckmann, out of line as [`Self::sample_beckmann`].
+    #[inline(never)]
+    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, n)
     }
 }
 
@@ -201,7 +214,7 @@ impl MaterialModel for RoughConductor {
         }
         match self.distribution {
             Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, n, u),
-            Distribution::Beckmann => self.sample_rough(Beckmann { alpha: self.alpha }, wo, n, u),
+            Distribution::Beckmann => self.sample_beckmann(wo, n, u),
         }
     }
 
@@ -212,7 +225,7 @@ impl MaterialModel for RoughConductor {
         let n = self.facing(wo, n);
         match self.distribution {
             Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, wo, wi, n),
-            Distribution::Beckmann => self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, n),
+            Distribution::Beckmann => self.eval_beckmann(wo, wi, n),
         }
     }
 

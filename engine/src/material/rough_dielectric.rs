@@ -76,7 +76,7 @@ impl RoughDielectric {
 
     /// [`MaterialModel::sample`] off the smooth limit with the distribution `md`, the normal
     /// `nf` on `wo`'s side and the relative IOR `eta` seen from there.
-    #[inline]
+    #[inline(always)]
     fn sample_rough<M: Microfacet>(
         &self,
         md: M,
@@ -121,7 +121,7 @@ impl RoughDielectric {
 
     /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, the normal `nf`
     /// on `wo`'s side and the relative IOR `eta` seen from there.
-    #[inline]
+    #[inline(always)]
     fn eval_rough<M: Microfacet>(&self, md: M, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
         let frame = Frame::from_normal(nf);
         let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
@@ -154,6 +154,19 @@ impl RoughDielectric {
         }
         BsdfEval { f_cos: Vec3::splat(f_cos), pdf }
     }
+
+    /// [`Self::sample_rough`] with Beckmann, out of line: inlined beside GGX's, it made the
+    /// compiler lay out GGX's path less well (0.4% more instructions on materials-env).
+    #[inline(never)]
+    fn sample_beckmann(&self, wo: Vec3A, nf: Vec3A, eta: f32, u: Vec2, uc: f32) -> Option<BsdfSample> {
+        self.sample_rough(Beckmann { alpha: self.alpha }, wo, nf, eta, u, uc)
+    }
+
+    /// [`Self::eval_rough`] with Beckmann, out of line as [`Self::sample_beckmann`].
+    #[inline(never)]
+    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
+        self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, nf, eta)
+    }
 }
 
 impl MaterialModel for RoughDielectric {
@@ -173,7 +186,7 @@ impl MaterialModel for RoughDielectric {
         let (eta, nf) = self.side(wo, n)?;
         match self.distribution {
             Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, nf, eta, u, uc),
-            Distribution::Beckmann => self.sample_rough(Beckmann { alpha: self.alpha }, wo, nf, eta, u, uc),
+            Distribution::Beckmann => self.sample_beckmann(wo, nf, eta, u, uc),
         }
     }
 
@@ -184,7 +197,7 @@ impl MaterialModel for RoughDielectric {
         let Some((eta, nf)) = self.side(wo, n) else { return BsdfEval::ZERO };
         match self.distribution {
             Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, wo, wi, nf, eta),
-            Distribution::Beckmann => self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, nf, eta),
+            Distribution::Beckmann => self.eval_beckmann(wo, wi, nf, eta),
         }
     }
 
