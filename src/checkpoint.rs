@@ -59,11 +59,11 @@ pub fn path_for(output: &Path) -> PathBuf {
     output.with_file_name(format!("{name}.ckpt"))
 }
 
-/// FNV-1a over the scene file and a description of the settings that change what a sample is
-/// (not the sample count).
-pub fn key(scene_file: &[u8], settings: &str) -> u64 {
+/// FNV-1a over what identifies the loaded scene (the hashes of the files it read) and a
+/// description of the settings that change what a sample is (not the sample count).
+pub fn key(scene: &[u8], settings: &str) -> u64 {
     let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &b in scene_file.iter().chain([0xff].iter()).chain(settings.as_bytes()) {
+    for &b in scene.iter().chain([0xff].iter()).chain(settings.as_bytes()) {
         h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
     }
     h
@@ -97,14 +97,14 @@ pub fn differences<'a>(a: &'a str, b: &'a str) -> Vec<(&'a str, &'a str, &'a str
 }
 
 /// Why two renders' keys differ, in words: the settings that differ (`a` and `b` name the
-/// sides, e.g. "the checkpoint" and "this render"), or else the scene file.
+/// sides, e.g. "the checkpoint" and "this render"), or else the scene's files.
 pub fn mismatch(a_name: &str, a: &str, b_name: &str, b: &str) -> String {
     if a.is_empty() || b.is_empty() {
         return "its settings are not recorded: it was written by an older pathwave".into();
     }
     let diff = differences(a, b);
     if diff.is_empty() {
-        return "same settings: the scene file has changed".into();
+        return "same settings: the scene file or a file it reads has changed".into();
     }
     diff.iter()
         .map(|(name, va, vb)| format!("{name} {va} in {a_name}, {vb} in {b_name}"))
@@ -322,7 +322,10 @@ mod tests {
         assert!(differences(&a, &a).is_empty());
         let why = mismatch("the checkpoint", &a, "this render", &b);
         assert!(why.starts_with("seed 0 in the checkpoint, 7 in this render; defines"), "{why}");
-        assert_eq!(mismatch("x", &a, "y", &a), "same settings: the scene file has changed");
+        assert_eq!(
+            mismatch("x", &a, "y", &a),
+            "same settings: the scene file or a file it reads has changed"
+        );
         assert!(mismatch("x", "", "y", &a).contains("older pathwave"));
         // A value holding ": " keeps the rest of its line.
         let t = settings_text(&[("defines", "[(\"A\", \"b: c\")]".into())]);

@@ -1,8 +1,9 @@
 //! Image files: linear float EXR in and out, tone-clamped sRGB PNG out.
 
+use crate::engine::scene::SceneDesc;
 use glam::Vec3;
 use image::{ImageBuffer, Rgb, Rgb32FImage, RgbImage};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A linear RGB image, row 0 on top.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +61,51 @@ pub fn check_output(path: &Path, inputs: &[&Path], gif: bool) -> Result<(), Stri
     }
     // The folder must take a new file (a temporary one, removed at once).
     temp_beside(path).map(drop).map_err(|e| format!("{}: cannot write there: {e}", path.display()))
+}
+
+/// Checks, before any work, every file a render will write (`writes`: its output and the
+/// side files its flags add) against the files the scene read ([`Inputs`]), and that none
+/// names a folder, comes twice, or lies where a new file cannot be made (a missing folder, a
+/// name too long once the temporary file's affixes are added).
+pub fn check_writes(writes: &[PathBuf], inputs: &Inputs) -> Result<(), String> {
+    for (i, out) in writes.iter().enumerate() {
+        inputs.check(out)?;
+        if out.is_dir() {
+            return Err(format!("{}: is a folder; name the file to write", out.display()));
+        }
+        if writes[..i].iter().any(|o| o == out || same_file(o, out)) {
+            return Err(format!("{}: the render would write this file twice", out.display()));
+        }
+        temp_beside(out).map(drop).map_err(|e| format!("{}: cannot write there: {e}", out.display()))?;
+    }
+    Ok(())
+}
+
+/// The files a scene read, as their canonical paths: a file to be written must not be one.
+pub struct Inputs(Vec<PathBuf>);
+
+impl Inputs {
+    /// These files (those that exist).
+    pub fn new<'a>(paths: impl IntoIterator<Item = &'a Path>) -> Self {
+        Inputs(paths.into_iter().filter_map(|f| std::fs::canonicalize(f).ok()).collect())
+    }
+
+    /// Every file the load of `desc` read ([`SceneDesc::inputs`]).
+    pub fn of(desc: &SceneDesc) -> Self {
+        Self::new(desc.inputs.iter().map(|f| f.path.as_path()))
+    }
+
+    /// Refuses `out` when it is one of the inputs (through any link or `..`); a file that does
+    /// not exist yet is none.
+    pub fn check(&self, out: &Path) -> Result<(), String> {
+        match std::fs::canonicalize(out) {
+            Ok(c) if self.0.contains(&c) => Err(format!(
+                "{}: the render would write over this file, which the scene reads",
+                out.display()
+            )),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// True when both paths exist and name the same file.

@@ -583,3 +583,28 @@ fn animate_takes_the_render_flags() {
     assert!(String::from_utf8_lossy(&gif.stderr).contains("rather than a GIF"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A frame's checkpoint records its shutter interval: rendering the frame again with another
+/// shutter (`--overwrite --shutter 1` after `--shutter 0`) is refused with the difference,
+/// rather than resumed from the other shutter's samples.
+#[test]
+fn a_frame_checkpoint_of_another_shutter_is_refused() {
+    let dir = temp("shutter-key");
+    let scene = root().join("scenes/animation-bounce.ron");
+    let pattern = dir.join("f_{frame:02}.exr");
+    let animate = |extra: &[&str]| {
+        pathwave()
+            .arg("animate")
+            .arg(&scene)
+            .args(["-o", pattern.to_str().unwrap(), "--frames", "0..1", "-q", "--spp", "1"])
+            .args(["--width", "8", "--height", "8", "--checkpoint-every", "60"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    assert!(animate(&["--shutter", "0"]).status.success());
+    let o = animate(&["--shutter", "1", "--overwrite"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("shutter"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -195,3 +195,50 @@ fn a_resealed_checkpoint_of_another_size_is_refused() {
     assert_eq!(std::fs::read(&out).unwrap(), image);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A checkpoint is keyed by every file the scene read, as the load read it: a changed texture
+/// refuses the resume (it would mix two images), and a scene saved after the load does not
+/// change the key of the render that loaded it.
+#[test]
+fn a_checkpoint_is_keyed_by_every_file_the_scene_read_as_loaded() {
+    let dir = temp("inputs");
+    let texture = dir.join("t.png");
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 100, 50])).save(&texture).unwrap();
+    let scene = dir.join("s.ron");
+    let text = r#"Scene(
+        camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40),
+        render: (width: 8, height: 8),
+        background: Constant((1, 1, 1)),
+        textures: { "t": Image(file: "t.png") },
+        materials: { "m": Lambertian(albedo: "t") },
+        objects: [(shape: Sphere(center: (0, 0, 0), radius: 1), material: "m")],
+    )"#;
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("o.exr");
+    let render = |spp: &str| {
+        Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .arg("render")
+            .arg(&scene)
+            .args(["-q", "--resume", "--spp", spp, "-o"])
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    assert!(render("2").status.success());
+    image::RgbImage::from_pixel(2, 2, image::Rgb([10, 100, 50])).save(&texture).unwrap();
+    let o = render("4");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("the scene file or a file it reads has changed"), "{err}");
+
+    // What identifies a load is what it read, whatever the file holds afterwards.
+    let desc = pathwave::engine::scene::load(&scene).unwrap();
+    std::fs::write(&scene, text.replace("(1, 1, 1)", "(0.5, 0.5, 0.5)")).unwrap();
+    let again = pathwave::engine::scene::load(&scene).unwrap();
+    let hash = |d: &pathwave::engine::scene::SceneDesc| {
+        d.inputs.iter().find(|f| f.path.ends_with("s.ron")).expect("the scene is an input").hash
+    };
+    assert_eq!(hash(&desc), xxhash_rust::xxh3::xxh3_64(text.as_bytes()));
+    assert_ne!(hash(&desc), hash(&again));
+    assert_eq!(desc.inputs.len(), 2, "{:?}", desc.inputs);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -114,6 +114,55 @@ fn diffuse_sphere_inside_an_emitter_shows_its_albedo() {
     assert_all_pixels_near(&film, on_sphere);
 }
 
+/// Surfaces that emit and reflect (objects with an `emit`): a closed room whose walls are
+/// albedo-0.5 Lambertian and emit radiance 1 on their inner side (one-sided, two walls through
+/// a texture of value 1), holding an albedo-1 box, a perfect mirror and glass, which lose
+/// nothing. Every wall sees radiance L from every direction, so L = 1 + 0.5 L: every pixel is 2.
+/// Exercises emission added on hit with its MIS weight and the wall's BSDF scattering after
+/// it (Lambertian kernel, delta lobes), textured emitters sampled as lights, and the wavefront
+/// against the oracle.
+#[test]
+fn emitting_walls_that_reflect_give_emission_over_one_minus_albedo() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 0.2, 0.8), look_at: (0, -0.3, 0), vfov: 70),
+            render: (width: 32, height: 32, spp: 64, max_depth: 200),
+            textures: { "one": Solid((1, 1, 1)) },
+            materials: {
+                "wall": Lambertian(albedo: (0.5, 0.5, 0.5)),
+                "white": Lambertian(albedo: (1, 1, 1)),
+                "mirror": Metal(albedo: (1, 1, 1), fuzz: 0),
+                "glass": Dielectric(ior: 1.5),
+            },
+            objects: [
+                (shape: Quad(q: (-1, -1, -1), u: (0, 0, 2), v: (2, 0, 0)), material: "wall", emit: (radiance: (1, 1, 1))),
+                (shape: Quad(q: (-1, 1, -1), u: (2, 0, 0), v: (0, 0, 2)), material: "wall", emit: (radiance: (1, 1, 1))),
+                (shape: Quad(q: (-1, -1, -1), u: (0, 2, 0), v: (0, 0, 2)), material: "wall", emit: (radiance: "one")),
+                (shape: Quad(q: (1, -1, -1), u: (0, 0, 2), v: (0, 2, 0)), material: "wall", emit: (radiance: (1, 1, 1))),
+                (shape: Quad(q: (-1, -1, -1), u: (2, 0, 0), v: (0, 2, 0)), material: "wall", emit: (radiance: "one")),
+                (shape: Quad(q: (-1, -1, 1), u: (0, 2, 0), v: (2, 0, 0)), material: "wall", emit: (radiance: (1, 1, 1))),
+                (shape: Box(a: (-0.2, -1, -0.6), b: (0.2, -0.5, -0.2)), material: "white"),
+                (shape: Sphere(center: (-0.5, -0.6, 0), radius: 0.3), material: "mirror"),
+                (shape: Sphere(center: (0.5, -0.6, 0), radius: 0.3), material: "glass"),
+            ],
+        )"#,
+    );
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    assert_eq!(scene.lights.prims.len(), 6, "the walls are lights");
+    assert!(scene.features.emitting_surfaces && scene.features.textures);
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(2.0));
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    let differing = film.pixels.iter().zip(&oracle.pixels).filter(|(a, b)| a != b).count();
+    assert!(differing <= 2, "{differing} pixels differ from the oracle");
+    // Walls that emit but do not reflect (the emission alone) are a different room: 1 + the
+    // objects' reflections of it, so the test sees a lost bounce.
+    let mut black = desc.clone();
+    scale_albedo(&mut black, "wall", 0.0);
+    let result = std::panic::catch_unwind(|| assert_all_pixels_near(&render(&black), |_| Some(2.0)));
+    assert!(result.is_err());
+}
+
 /// A diffuse plane lit by a spherical emitter seen from outside: where the whole sphere is above
 /// the horizon, the plane's radiance is exactly rho L (r^2 / D^2) (h / D), with D the distance to
 /// the centre and h its height. Exercises cone sampling of spheres and its MIS with BSDF sampling.

@@ -1,4 +1,4 @@
-//! Point, spot and directional lights against their closed forms: a white Lambertian floor
+//! Point, spot and directional lights and projectors against their closed forms: a white Lambertian floor
 //! (albedo 1, nothing else in the scene, black background) lit by one light shows
 //! `E / pi` at each point, `E` the irradiance there. Each pixel's mean is compared with the
 //! closed form averaged over the pixel's box filter (16 x 16 points of the pixel).
@@ -14,10 +14,16 @@ const W: u32 = 32;
 
 /// The scene: a floor quad at y = 0 seen from straight above, lit by `light`.
 fn floor_scene(light: &str) -> String {
+    floor_scene_with("", light)
+}
+
+/// [`floor_scene`] with the `textures` map's entries.
+fn floor_scene_with(textures: &str, light: &str) -> String {
     format!(
         r#"Scene(
             camera: (look_from: (0, 6, 0), look_at: (0, 0, 0), vup: (0, 0, -1), vfov: 40),
             render: (width: {W}, height: {W}, spp: 256),
+            textures: {{ {textures} }},
             materials: {{ "white": Lambertian(albedo: (1, 1, 1)) }},
             objects: [
                 (shape: Quad(q: (-5, 0, -5), u: (10, 0, 0), v: (0, 0, 10)), material: "white"),
@@ -31,7 +37,12 @@ fn floor_scene(light: &str) -> String {
 /// 0.5% plus five standard errors of the pixel's mean (the pixel position is sampled: pixels
 /// where the light changes fast vary), for both integrators.
 fn check(light: &str, expected: impl Fn(Vec3) -> f32) {
-    let desc = inline(&floor_scene(light));
+    check_with("", light, expected)
+}
+
+/// [`check`] with the `textures` map's entries.
+fn check_with(textures: &str, light: &str, expected: impl Fn(Vec3) -> f32) {
+    let desc = inline(&floor_scene_with(textures, light));
     let scene = SceneWorld::render_scene(&desc);
     let films =
         [oracle::render(&scene, &|_, _| {}), wavefront::render(&scene, Default::default(), &|_, _| {}).0];
@@ -82,6 +93,76 @@ fn spot_light_is_full_inside_its_falloff_and_dark_outside_its_cone() {
             10.0 * t * t * (3.0 - 2.0 * t) * cos / d.length_squared() / PI
         },
     );
+}
+
+/// Mitsuba's spot falloff: linear in the angle from `falloff_start` to `cone_angle`.
+#[test]
+fn linear_spot_light_falls_off_linearly_in_the_angle() {
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    check(
+        "Spot(position: (0, 2, 0), look_at: (0, 0, 0), intensity: (10, 10, 10), cone_angle: 30, falloff_start: 20, falloff: Linear)",
+        |p| {
+            let d = light - p;
+            let cos = d.y / d.length();
+            let theta = cos.clamp(-1.0, 1.0).acos().to_degrees();
+            let f = ((30.0 - theta) / 10.0).clamp(0.0, 1.0);
+            10.0 * f * cos / d.length_squared() / PI
+        },
+    );
+}
+
+/// A frame as Mitsuba's `look_at` makes it (x = up x dir, y = dir x x, z = dir), and the
+/// coordinates of `v` in it.
+fn local(dir: Vec3, up: Vec3, v: Vec3) -> Vec3 {
+    let z = dir.normalize();
+    let x = up.cross(z).normalize();
+    Vec3::new(v.dot(x), v.dot(z.cross(x)), v.dot(z))
+}
+
+/// A 4 x 4 checker of 1 and 0.25 in uv.
+const CHECKER: &str = r#""c": UvChecker(u: 4, v: 4, even: (1, 1, 1), odd: (0.25, 0.25, 0.25))"#;
+
+fn checker(u: f32, v: f32) -> f32 {
+    if ((4.0 * u).floor() + (4.0 * v).floor()).rem_euclid(2.0) < 1.0 { 1.0 } else { 0.25 }
+}
+
+/// A spot's texture, read at Mitsuba's uv of each direction: (0.5 + x / (2 z tan), 0.5 - y / (2
+/// z tan)) in the frame of the axis and `up`.
+#[test]
+fn textured_spot_light_projects_its_texture() {
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    let tan = 30f32.to_radians().tan();
+    check_with(
+        CHECKER,
+        "Spot(position: (0, 2, 0), look_at: (0, 0, 0), up: (0, 0, -1), intensity: (10, 10, 10), cone_angle: 30, falloff_start: 30, falloff: Linear, texture: \"c\")",
+        |p| {
+            let d = light - p;
+            let l = local(-Vec3::Y, -Vec3::Z, p - light);
+            let (u, v) = (0.5 + l.x / (2.0 * l.z * tan), 0.5 - l.y / (2.0 * l.z * tan));
+            let inside = (d.y / d.length()) > 30f32.to_radians().cos();
+            let cos = d.y / d.length();
+            if inside { 10.0 * checker(u, v) * cos / d.length_squared() / PI } else { 0.0 }
+        },
+    );
+}
+
+/// A projector two units above the floor, facing it: the floor receives pi `scale` times the
+/// image's value over the square the 60-degree frustum cuts, at uv (0.5 - x / (2 z tan), 0.5 +
+/// y / (2 z tan)), so it shows `scale / 4` times the value; nothing outside.
+#[test]
+fn projector_lights_its_frustum_with_its_image() {
+    let light = Vec3::new(0.0, 2.0, 0.0);
+    let tan = 30f32.to_radians().tan();
+    let at = |p: Vec3| {
+        let l = local(-Vec3::Y, -Vec3::Z, p - light);
+        Some((0.5 - l.x / (2.0 * l.z * tan), 0.5 + l.y / (2.0 * l.z * tan)))
+            .filter(|(u, v)| (0.0..=1.0).contains(u) && (0.0..=1.0).contains(v))
+    };
+    let projector = "Projector(position: (0, 2, 0), look_at: (0, 0, 0), up: (0, 0, -1), fov: 60, scale: 0.5";
+    check(&format!("{projector})"), |p| at(p).map_or(0.0, |_| 0.125));
+    check_with(CHECKER, &format!("{projector}, irradiance: \"c\")"), |p| {
+        at(p).map_or(0.0, |(u, v)| 0.125 * checker(u, v))
+    });
 }
 
 #[test]
@@ -137,5 +218,25 @@ fn bad_spot_cones_are_refused_with_their_place() {
         let err =
             pathwave::engine::scene::parse(&text, std::path::Path::new("<test>")).unwrap_err().to_string();
         assert!(err.contains(what) && err.contains("<test>:"), "{err}");
+    }
+}
+
+#[test]
+fn spot_textures_and_projectors_that_cannot_be_oriented_are_refused() {
+    let spot = "Spot(position: (0, 2, 0), look_at: (0, 0, 0), intensity: (1, 1, 1)";
+    for (light, what) in [
+        (format!("{spot}, up: (0, 0, 1))"), "up orients a texture; this spot has none"),
+        (format!("{spot}, texture: \"c\")"), "up is along the axis"),
+        (
+            format!("{spot}, up: (0, 0, 1), cone_angle: 100, falloff_start: 10, texture: \"c\")"),
+            "less than 90",
+        ),
+        ("Projector(position: (0, 2, 0), look_at: (0, 0, 0), fov: 40)".into(), "up is along the axis"),
+        ("Projector(position: (0, 2, 0), look_at: (0, 0, 0), up: (0, 0, 1), fov: 180)".into(), "(0, 180)"),
+    ] {
+        let text = floor_scene_with(CHECKER, &light);
+        let err =
+            pathwave::engine::scene::parse(&text, std::path::Path::new("<test>")).unwrap_err().to_string();
+        assert!(err.contains(what) && err.contains("<test>:"), "{light}: {err}");
     }
 }

@@ -34,7 +34,7 @@ fn a_missing_row_or_parameter_is_reported() {
     let without_metal: String =
         readme.lines().filter(|l| !l.starts_with("| `Metal(")).collect::<Vec<_>>().join("\n");
     assert_eq!(missing(&without_metal), ["materials: `Metal` has no row in README.md"]);
-    let without_radius = readme.replace("| `Sphere(center, radius)` |", "| `Sphere(center)` |");
+    let without_radius = readme.replace("| `Sphere(center, radius, poles)` |", "| `Sphere(center, poles)` |");
     assert_eq!(missing(&without_radius), ["shapes: `Sphere`'s row does not name `radius`"]);
     let without_spot: String =
         readme.lines().filter(|l| !l.starts_with("| `Spot(")).collect::<Vec<_>>().join("\n");
@@ -55,11 +55,14 @@ fn the_probe_finds_the_users_kinds_and_their_parameters() {
     let metal = all.iter().find(|k| k.name == "Metal").unwrap();
     assert_eq!(metal.params, ["albedo", "fuzz"]);
     let quad = all.iter().find(|k| k.name == "Quad").unwrap();
-    assert_eq!(quad.params, ["q", "u", "v"]);
+    assert_eq!(quad.params, ["q", "u", "v", "flip_normal"]);
     let mesh = all.iter().find(|k| k.name == "Mesh").unwrap();
-    assert_eq!(mesh.params, ["file", "face_normals"]);
+    assert_eq!(mesh.params, ["file", "shape_index", "face_normals", "flip_normals", "flip_tex_coords"]);
     let spot = all.iter().find(|k| k.name == "Spot").unwrap();
-    assert_eq!(spot.params, ["position", "look_at", "intensity", "cone_angle", "falloff_start"]);
+    assert_eq!(
+        spot.params,
+        ["position", "look_at", "intensity", "cone_angle", "falloff_start", "falloff", "texture", "up"]
+    );
     let marble = all.iter().find(|k| k.name == "Marble").unwrap();
     assert_eq!(marble.params, ["scale", "depth", "color"]);
     // `Solid((r, g, b))`: one unnamed value, no parameter to name.

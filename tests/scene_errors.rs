@@ -189,6 +189,30 @@ fn object_with_neither_or_both_material_and_medium() {
     assert_err(&with_object(both), 8, 113, &["not both"]);
 }
 
+/// An object's `emit` goes with a material that reflects: not an emitter, not a medium; its
+/// radiance is a colour with no negative component or a defined texture.
+#[test]
+fn emit_is_for_surfaces_whose_material_reflects() {
+    let end = |object: &str| 9 + object.rfind(')').unwrap();
+    let on_light =
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "light", emit: (radiance: (1, 1, 1))),"#;
+    assert_err(
+        &with_object(on_light),
+        8,
+        end(on_light),
+        &["\"light\" is a DiffuseLight", "whose material reflects"],
+    );
+    let on_medium = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 1, 1)), emit: (radiance: (1, 1, 1))),"#;
+    assert_err(&with_object(on_medium), 8, end(on_medium), &["a medium does not emit"]);
+    let negative =
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", emit: (radiance: (1, -1, 1))),"#;
+    assert_err(&with_object(negative), 8, 9 + negative.find("(1, -1").unwrap() + 9, &["components >= 0"]);
+    let unknown =
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", emit: (radiance: "sky")),"#;
+    let e = err(&with_object(unknown));
+    assert!(e.line == 8 && e.message.contains("\"sky\""), "{e}");
+}
+
 #[test]
 fn medium_needs_a_closed_shape_and_valid_numbers() {
     let quad = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 1, 0)), medium: (density: 1, albedo: (1, 1, 1))),"#;
@@ -287,8 +311,8 @@ fn unknown_material_variant() {
 
 #[test]
 fn unknown_shape_variant() {
-    let text = with_object(r#"(shape: Cylinder(center: (0, 0, 0), radius: 1), material: "white"),"#);
-    assert_err(&text, 8, 17, &["`Cylinder`", "`Sphere`", "`Quad`", "`Box`"]);
+    let text = with_object(r#"(shape: Cone(center: (0, 0, 0), radius: 1), material: "white"),"#);
+    assert_err(&text, 8, 17, &["`Cone`", "`Sphere`", "`Quad`", "`Box`", "`Disk`", "`Cylinder`"]);
 }
 
 // 7. Missing field and syntax errors.
@@ -372,7 +396,7 @@ fn shipped_scenes_parse() {
 
 #[test]
 fn messages_name_user_facing_types() {
-    let e = err(&with_object(r#"(shape: Cylinder(radius: 1), material: "white"),"#));
+    let e = err(&with_object(r#"(shape: Cone(radius: 1), material: "white"),"#));
     assert!(e.message.contains("`Shape`") && !e.message.contains("Raw"), "{e}");
     let e = err(&with_camera("look_from: (0, 0, -5), look_at: (0, 0, 0), vfvo: 40"));
     assert!(e.message.contains("`Camera`") && !e.message.contains("Raw"), "{e}");

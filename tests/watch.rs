@@ -201,3 +201,32 @@ fn watch_takes_and_honours_the_flags_of_render() {
     drop(watch);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `watch -o` naming a file the scene reads (its texture) would render, write, reload and render
+/// for ever: it is an error in the scene, shown and waited out like any other, and the texture
+/// is left as it was. Pointed elsewhere by an edit of the scene, the watch renders.
+#[test]
+fn watch_refuses_an_output_that_the_scene_reads() {
+    let dir: PathBuf = std::env::temp_dir().join(format!("pathwave-watch-input-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let texture = dir.join("tex.exr");
+    image::Rgb32FImage::from_pixel(2, 2, image::Rgb([0.8, 0.4, 0.2])).save(&texture).unwrap();
+    let before = std::fs::read(&texture).unwrap();
+    let original = std::fs::read_to_string(root().join("scenes/cornell.ron")).unwrap();
+    let with = |file: &str| {
+        let t = format!("textures: {{ \"t\": Image(file: \"{file}\") }},\n    materials:");
+        original.replacen("materials:", &t, 1)
+    };
+    let scene = dir.join("scene.ron");
+    std::fs::write(&scene, with("tex.exr")).unwrap();
+    let (addr, _received, _server) = fake_tev(None);
+    let mut watch = Watch::start(&scene, &texture, &addr, &["--width", "8", "--height", "8", "--spp", "1"]);
+    watch.wait_for(&["error", "would write over this file, which the scene reads"]);
+    assert_eq!(std::fs::read(&texture).unwrap(), before);
+    std::fs::copy(&texture, dir.join("other.exr")).unwrap();
+    save(&scene, &with("other.exr"));
+    watch.wait_for(&["done, 1 spp"]);
+    drop(watch);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -60,11 +60,16 @@ with_shapes!(forms);
 fn place_mesh(mesh: &MeshData, m: &Affine3A, out: &mut Vec<Primitive>) {
     let world: Vec<_> = mesh.positions.iter().map(|&p| m.transform_point3a(p)).collect();
     let mirrored = m.matrix3.determinant() < 0.0;
-    for &[a, b, c] in mesh.triangles.iter() {
-        let [a, b, c] = [a, b, c].map(|i| world[i as usize]);
+    for &corners in mesh.triangles.iter() {
+        let [a, b, c] = corners.map(|i| world[i as usize]);
         let (b, c) = if mirrored { (c, b) } else { (b, c) };
         // Triangles without area cannot be hit: meshes often hold a few; drop them.
-        if let Some(t) = Triangle::new(a, b, c) {
+        if let Some(mut t) = Triangle::new(a, b, c) {
+            // The file's texture coordinates, in the order the corners took.
+            t.uv = mesh.uvs.as_ref().map(|uv| {
+                let [ta, tb, tc] = corners.map(|i| uv[i as usize]);
+                if mirrored { [ta, tc, tb] } else { [ta, tb, tc] }
+            });
             out.push(Primitive::Triangle(t));
         }
     }
@@ -85,4 +90,39 @@ pub fn primitives(shape: &Form, m: &Affine3A, out: &mut Vec<Primitive>) -> Resul
         return Err(ShapeError::TooFar);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shape::PrimitiveShape;
+    use glam::{Vec2, Vec3, Vec3A};
+
+    /// A mesh's baked triangles read its texture coordinates, also under a mirroring transform
+    /// (which reverses their corners), as an instance of it does.
+    #[test]
+    fn baked_triangles_keep_the_files_uvs() {
+        let mesh = MeshData {
+            positions: vec![Vec3A::ZERO, Vec3A::X, Vec3A::Y],
+            triangles: vec![[0, 1, 2]],
+            normals: None,
+            uvs: Some(vec![Vec2::new(0.2, 0.9), Vec2::new(0.8, 0.9), Vec2::new(0.2, 0.1)]),
+            attributes: Vec::new(),
+        };
+        // The point a/4 + b/2 of the triangle: uv (0.2, 0.9) + (0.6, 0) / 4 + (0, -0.8) / 2.
+        let want = Vec2::new(0.35, 0.5);
+        for m in [Affine3A::IDENTITY, Affine3A::from_scale(Vec3::new(-2.0, 1.0, 1.0))] {
+            let mut out = Vec::new();
+            primitives(&Form::Mesh(Arc::new(mesh.clone())), &m, &mut out).unwrap();
+            let [Primitive::Triangle(t)] = out.as_slice() else { panic!("{out:?}") };
+            let p = m.transform_point3a(Vec3A::new(0.25, 0.5, 0.0));
+            let uv = PrimitiveShape::surface(t, p, true).uv;
+            assert!((uv - want).abs().max_element() < 1e-6, "{uv} under {m:?}");
+        }
+        // Without texture coordinates: the barycentric weights, as before.
+        let plain = MeshData { uvs: None, ..mesh };
+        let mut out = Vec::new();
+        primitives(&Form::Mesh(Arc::new(plain)), &Affine3A::IDENTITY, &mut out).unwrap();
+        assert_eq!(out[0].surface(Vec3A::new(0.25, 0.5, 0.0), true).uv, Vec2::new(0.25, 0.5));
+    }
 }

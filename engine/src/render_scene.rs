@@ -5,6 +5,7 @@ use crate::accel::geometry::{Geometry, Hit};
 use crate::accel::instances::Instances;
 use crate::accel::queue::Aggregate;
 use crate::camera::Camera;
+use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::{EnvSample, EnvironmentMap};
 use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
@@ -208,9 +209,13 @@ pub struct Features {
     /// Something (or the camera) moves while the shutter is open: camera rays sample a time.
     /// Off, every ray is at the shutter's opening and no time is drawn.
     pub motion: bool,
-    /// Some material that a primitive uses takes a colour from a texture. Off, materials are
-    /// used as they are.
+    /// Some material that a primitive uses takes a colour from a texture, or some emitting
+    /// surface its radiance. Off, materials and emission are used as they are.
     pub textures: bool,
+    /// Some surface both emits and reflects (an object's `emit` over a material that is not an
+    /// emitter): its hits add the emission and shade. Off, only emitters emit, and their
+    /// paths end there.
+    pub emitting_surfaces: bool,
     /// Some mesh is instanced: rays also traverse the TLAS. Off, only the primitive BVH (or
     /// the flat lists of small scenes) is traced.
     pub instances: bool,
@@ -224,22 +229,33 @@ impl Features {
             motion: (geometry.velocity.is_some() || !instances.still() || camera.moves())
                 && camera.shutter.0 != camera.shutter.1,
             textures: false,
+            emitting_surfaces: false,
             instances: !instances.is_empty(),
         }
     }
 
-    /// Sets `textures` from what the primitives' materials use.
-    pub fn with_textures(
+    /// Sets `textures` and `emitting_surfaces` from what the primitives' material ids use:
+    /// their materials, their textured colours (`per_material`) and their emission
+    /// (`emission`, both indexed like `materials`).
+    pub fn with_materials(
         mut self,
         geometry: &Geometry,
         instances: &Instances,
+        materials: &[Material],
         per_material: &[MaterialTextures],
+        emission: &[Option<AreaEmission>],
     ) -> Self {
         let mut used = vec![false; per_material.len()];
         for &m in geometry.material.iter().chain(instances.list.iter().map(|i| &i.material)) {
             used[m as usize] = true;
         }
-        self.textures = per_material.iter().zip(&used).any(|(t, u)| *u && t.any());
+        let used = |id: &usize| used[*id];
+        let textured =
+            |id: usize| per_material[id].any() || emission[id].is_some_and(|e| e.texture.is_some());
+        self.textures = (0..per_material.len()).filter(used).any(textured);
+        self.emitting_surfaces = (0..materials.len())
+            .filter(used)
+            .any(|id| emission[id].is_some() && !materials[id].is_emissive());
         self
     }
 }
@@ -325,13 +341,23 @@ impl RenderScene {
         }
     }
 
+    /// The radiance that a surface of material `id` emits at `sp` towards a direction making
+    /// cosine `cos_out` with its geometric normal (zero for surfaces that do not emit).
+    #[inline]
+    pub fn emitted(&self, id: u32, sp: &SurfacePoint, cos_out: f32) -> Vec3 {
+        match &self.lights.emission[id as usize] {
+            Some(e) => e.emitted(&self.textures, cos_out, || *sp),
+            None => Vec3::ZERO,
+        }
+    }
+
     /// [`Self::material_at`] for scenes with textures (kept out of line).
     #[inline(never)]
     fn textured_material(&self, id: usize, sp: &SurfacePoint) -> Material {
         let mut m = self.materials[id];
         for (slot, t) in self.material_textures[id].0.iter().enumerate() {
             if let Some(t) = *t {
-                m.set_color(slot, self.textures.at(t, sp));
+                m.set_color(slot, self.textures.at(t, sp, &self.instances.blas));
             }
         }
         m

@@ -24,7 +24,7 @@ fn scale() -> impl Strategy<Value = f32> {
 }
 
 fn sphere() -> impl Strategy<Value = Sphere> {
-    (vec3(1.0), scale(), scale()).prop_map(|(c, offset, r)| Sphere { center: c * offset, radius: r })
+    (vec3(1.0), scale(), scale()).prop_map(|(c, offset, r)| Sphere::new(c * offset, r))
 }
 
 fn quad() -> impl Strategy<Value = Quad> {
@@ -175,7 +175,7 @@ proptest! {
         // every world tangent, the images M t of object tangents t (perpendicular to the object
         // normal).
         use pathwave_engine::shape::TransformedSphere;
-        let ts = TransformedSphere::new(Sphere { center: Vec3A::ZERO, radius: 1.0 }, m).unwrap();
+        let ts = TransformedSphere::new(Sphere::new(Vec3A::ZERO, 1.0), m).unwrap();
         let o = m.transform_point3a(from * 4.0);
         let d = m.transform_point3a(Vec3A::ZERO) - o;
         let t = ts.intersect(o, d, f32::INFINITY);

@@ -173,7 +173,7 @@ fn first_surface(scene: &RenderScene, camera: &Ray, tmax: f32) -> [Vec3; 3] {
     };
     let emission = match &first {
         None => scene.background.radiance(camera.dir),
-        Some(h) => scene.material_at(h.material, &h.surface).emitted(h.surface.n.dot(-camera.dir)),
+        Some(h) => scene.emitted(h.material, &h.surface, h.surface.n.dot(-camera.dir)),
     } * transmittance;
     // The last mirror's or glass's normal: a reflection of the sky keeps it, so that it does
     // not pass for the sky itself (whose pixels hold only emission).

@@ -91,8 +91,12 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
             let mat = &scene.material_at(hit.material, &hit.surface);
             let wo = -ray.dir;
             if mat.is_emissive() {
-                path::emit(scene, &mut st, &hit, mat, wo, ray.time);
+                path::emit(scene, &mut st, &hit, wo, ray.time);
                 break 'path;
+            }
+            // A surface that emits and reflects: its emission, then it scatters.
+            if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
+                path::emit(scene, &mut st, &hit, wo, ray.time);
             }
             if path::at_max_depth(scene, st.depth) {
                 break 'path;

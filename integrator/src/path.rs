@@ -82,11 +82,13 @@ pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
     st.l += st.beta * le * w;
 }
 
-/// A ray hit an emitter (whose BSDF is black: the path ends).
+/// A ray hit a surface that emits (an emitter, whose path ends there, or an object's `emit`
+/// over a material that then scatters): adds its emission, MIS-weighted against light sampling
+/// unless the path came by a delta lobe (or is a camera ray).
 #[inline]
-pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, mat: &Material, wo: Vec3A, time: f32) {
+pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, wo: Vec3A, time: f32) {
     let sp = &hit.surface;
-    let le = mat.emitted(sp.n.dot(wo));
+    let le = scene.emitted(hit.material, sp, sp.n.dot(wo));
     if le == Vec3::ZERO {
         return;
     }
@@ -134,12 +136,9 @@ pub(crate) fn pick_light(
     }
     let wi = to / dist;
     let prim = lights.prims[light];
-    let light_mat = if scene.features.textures {
-        scene.material_at(geo.material[prim as usize], &geo.surface(prim, ls.p, time))
-    } else {
-        scene.materials[geo.material[prim as usize] as usize]
-    };
-    let le = light_mat.emitted(ls.n.dot(-wi));
+    // A light's primitive emits: its material id is in the emission table.
+    let emission = lights.emission[geo.material[prim as usize] as usize].as_ref()?;
+    let le = emission.emitted(&scene.textures, ls.n.dot(-wi), || geo.surface(prim, ls.p, time));
     let pdf = ls.pdf * pmf;
     if le == Vec3::ZERO || !(pdf > 0.0) {
         return None;
@@ -153,7 +152,7 @@ pub(crate) fn pick_light(
 fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
     match light {
         OtherLight::Punctual(l) => {
-            let (wi, dist, le) = l.illuminate(p);
+            let (wi, dist, le) = l.illuminate(p, &scene.textures);
             if le == Vec3::ZERO || !(dist > 0.0) {
                 return None;
             }

@@ -3,6 +3,7 @@
 
 pub mod sequence;
 
+use crate::checkpoint;
 use crate::denoiser;
 use crate::engine::world::SceneWorld;
 use crate::integrator::wavefront;
@@ -96,6 +97,23 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
              render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
         ));
     }
+    // No frame of this task, nor a file beside one, nor the trace may replace a scene's input.
+    let inputs = io::Inputs::of(&desc);
+    if let Some(trace) = &args.profile.trace {
+        inputs.check(trace)?;
+    }
+    match gif {
+        true => inputs.check(&first)?,
+        false => {
+            let how = args.how();
+            for f in (frames.0..frames.1).filter(|f| (f - frames.0) % shard.1 == shard.0) {
+                let out = sequence::frame_path(output, f)?;
+                for w in how.files(&out).iter().chain(&every.map(|_| checkpoint::path_for(&out))) {
+                    inputs.check(w)?;
+                }
+            }
+        }
+    }
     // A frame killed half way resumes from its checkpoint.
     let checkpointing = every.map(|every| Checkpointing { every, resume: true });
     let pool = crate::pool(args.engine.threads)?;
@@ -118,7 +136,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         }
         let r = match &info.path {
             Some(out) => {
-                let id = render_id(path, scene, &how, info.open)?;
+                let id = render_id(&desc.inputs, scene, &how, info.open, (info.open, info.close))?;
                 let r = render_image(scene, &id, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
                 let metadata = metadata(id.key, scene, &r);
                 (r, metadata)

@@ -72,6 +72,8 @@ pub struct FrameInfo {
     pub frame: u32,
     /// When its shutter opens (seconds).
     pub open: f32,
+    /// When it closes.
+    pub close: f32,
     /// The file it will be written to (`None` for a GIF's frames).
     pub path: Option<PathBuf>,
     /// How long the ECS update took (keyframes, BVH rebuilds and refits, extraction).
@@ -130,8 +132,8 @@ pub fn run(
             scene_at(world, frame, seq.fps, seq.shutter)
         };
         let update = t0.elapsed();
-        let open = frame_time(frame, seq.fps, seq.shutter).0;
-        let out = render(&scene, &FrameInfo { frame, open, path: path.clone(), update })?;
+        let (open, close) = frame_time(frame, seq.fps, seq.shutter);
+        let out = render(&scene, &FrameInfo { frame, open, close, path: path.clone(), update })?;
         match &path {
             Some(p) => {
                 io::write_output(p, &out)?;

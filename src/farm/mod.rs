@@ -76,8 +76,20 @@ fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Resu
     let flags = <RenderArgs as clap::Args>::augment_args(clap::Command::new("render"));
     let forwarded = job::forwarded(&flags, matches)?;
     let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
-    if let job::Work::Frames { first, .. } = plan.work {
-        args.how().check_aovs(&frame_path(&plan.output, first)?)?;
+    // What the tasks and the merge will write must not replace a file the scene reads: found
+    // now, not when the tasks start.
+    let inputs = crate::io::Inputs::of(&desc);
+    match plan.work {
+        job::Work::Frames { first, end } => {
+            let how = args.how();
+            how.check_aovs(&frame_path(&plan.output, first)?)?;
+            for f in first..end {
+                for file in how.files(&frame_path(&plan.output, f)?) {
+                    inputs.check(&file)?;
+                }
+            }
+        }
+        job::Work::Samples { .. } => inputs.check(std::path::Path::new(&plan.output))?,
     }
     plan.submit(job.dry_run)
 }

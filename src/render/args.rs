@@ -226,15 +226,38 @@ pub enum Aov {
 }
 
 impl How {
+    /// Every file a render to `output` writes: the image; beside a PNG, NAME.albedo.png and
+    /// NAME.normal.png for those AOVs; with `--denoise`, NAME.noisy.EXT unless the noisy image
+    /// is a layer of the EXR. (The checkpoint and the trace are the caller's to add.)
+    pub fn files(&self, output: &Path) -> Vec<PathBuf> {
+        let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+        let mut files = vec![output.to_owned()];
+        if !exr {
+            for (aov, tag) in [(Aov::Albedo, "albedo"), (Aov::Normal, "normal")] {
+                if self.aov.contains(&aov) {
+                    files.push(sibling(output, tag));
+                }
+            }
+        }
+        if self.denoise.is_some() && !(exr && self.aov.contains(&Aov::Noisy)) {
+            files.push(sibling(output, "noisy"));
+        }
+        files
+    }
+
     /// Whether the denoiser's guides are needed.
     pub fn guides(&self) -> bool {
         self.denoise.is_some() || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
     }
 
-    /// Refuses, before any work, AOVs that `output` cannot hold or that need `--denoise`.
+    /// Refuses, before any work, AOVs that `output` cannot hold, that need `--denoise`, or
+    /// that come twice.
     pub fn check_aovs(&self, output: &Path) -> Result<(), String> {
         let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        for a in &self.aov {
+        for (i, a) in self.aov.iter().enumerate() {
+            if self.aov[..i].contains(a) {
+                return Err(format!("--aov {a:?} is named twice").to_lowercase());
+            }
             match a {
                 Aov::Depth | Aov::Variance if !exr => {
                     return Err(
@@ -269,4 +292,11 @@ pub struct How {
     pub threads: Option<usize>,
     /// `-q`: no progress bar or lines.
     pub quiet: bool,
+}
+
+/// The side file NAME.TAG.EXT beside the output NAME.EXT.
+pub fn sibling(output: &Path, tag: &str) -> PathBuf {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{stem}.{tag}.{ext}"))
 }

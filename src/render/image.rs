@@ -6,15 +6,17 @@ use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
+use crate::engine::scene::files::InputFile;
 use crate::integrator::{film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::view::{self, Viewers};
 use std::path::Path;
 use std::time::Instant;
 
-/// What identifies a render's samples: the checkpoint key (a hash of the scene file's bytes and
-/// of every setting that changes a sample) and those settings as text, so that a checkpoint of
-/// other settings is refused with the ones that differ.
+/// What identifies a render's samples: the checkpoint key (a hash of the bytes of every file the
+/// scene's load read, as it read them, and of every setting that changes a sample) and those
+/// settings as text, so that a checkpoint of other settings is refused with the ones that
+/// differ.
 pub struct RenderId {
     /// The checkpoint key.
     pub key: u64,
@@ -22,10 +24,16 @@ pub struct RenderId {
     pub settings: String,
 }
 
-/// The [`RenderId`] of a render of the scene file `path` at `time`.
-pub fn render_id(path: &Path, scene: &RenderScene, how: &How, time: f32) -> Result<RenderId, String> {
+/// The [`RenderId`] of a render of the scene loaded from `inputs` at `time`, its shutter open
+/// over `shutter` (seconds).
+pub fn render_id(
+    inputs: &[InputFile],
+    scene: &RenderScene,
+    how: &How,
+    time: f32,
+    shutter: (f32, f32),
+) -> Result<RenderId, String> {
     let s = scene.settings;
-    use crate::engine::scene::files;
     let w = &s.window;
     // The filter only where it is not the box, so that earlier checkpoints keep their key.
     let filter = (s.filter != PixelFilter::Box).then(|| ("filter", s.filter.describe()));
@@ -38,6 +46,7 @@ pub fn render_id(path: &Path, scene: &RenderScene, how: &How, time: f32) -> Resu
             ("rr_depth", s.rr_depth.to_string()),
             ("clamp", format!("{:?}", s.clamp)),
             ("time", time.to_string()),
+            ("shutter", format!("{} to {}", shutter.0, shutter.1)),
             ("integrator", format!("{:?}", how.integrator)),
             ("sampler", format!("{:?}", s.sampler)),
             ("defines", format!("{:?}", how.defines)),
@@ -53,8 +62,9 @@ pub fn render_id(path: &Path, scene: &RenderScene, how: &How, time: f32) -> Resu
             checkpoint::MAX_SETTINGS_BYTES
         ));
     }
-    let scene_file = files::read_bounded(path, files::MAX_SCENE_BYTES, "scene")?;
-    Ok(RenderId { key: checkpoint::key(&scene_file, &settings), settings })
+    // The files in path order, by content only: a scene moved with its files keeps its key.
+    let loaded: Vec<u8> = inputs.iter().flat_map(|f| f.hash.to_le_bytes()).collect();
+    Ok(RenderId { key: checkpoint::key(&loaded, &settings), settings })
 }
 
 /// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a

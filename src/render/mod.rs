@@ -63,8 +63,13 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         .then(|| Checkpointing { every: every.unwrap_or(60.0), resume: c.resume });
     io::check_output(output, &[path], false)?;
     how.check_aovs(output)?;
+    let mut writes = how.files(output);
+    writes.extend(checkpointing.as_ref().map(|_| checkpoint::path_for(output)));
+    writes.extend(c.args.profile.trace.clone());
+    io::check_writes(&writes, &io::Inputs::new([path.as_path()]))?;
     let time = c.time.checked()?;
     let desc = load(path, &c.args.scene)?;
+    io::check_writes(&writes, &io::Inputs::of(&desc))?;
     let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     let pool = crate::pool(how.threads)?;
     if let Some(d) = how.denoise {
@@ -76,7 +81,7 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     let scene = world.update();
     log_scene(&scene);
     let s = scene.settings;
-    let id = render_id(path, &scene, &how, time)?;
+    let id = render_id(&desc.inputs, &scene, &how, time, (time + shutter.0, time + shutter.1))?;
     let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s);
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;

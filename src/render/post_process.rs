@@ -28,11 +28,7 @@ pub fn post_process(
         (None, false) => aov::Aovs::default(),
     };
     let aov_secs = start.elapsed().as_secs_f64();
-    let sibling = |tag: &str| {
-        let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let ext = output.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
-        output.with_file_name(format!("{stem}.{tag}.{ext}"))
-    };
+    let sibling = |tag: &str| super::args::sibling(output, tag);
     let image = |pixels| LinearImage { width: img.width, height: img.height, pixels };
     let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     let flat = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();

@@ -1,6 +1,5 @@
-//! The files a scene depends on, and their changes (debounced file events).
+//! Changes of the files a scene read (debounced file events).
 
-use crate::engine::scene::{BackgroundDesc, SceneDesc, ShapeDesc, TextureDesc};
 use notify_debouncer_full::DebounceEventResult;
 use notify_debouncer_full::notify::EventKind;
 use std::collections::BTreeSet;
@@ -21,26 +20,6 @@ pub fn normalize(p: &Path) -> PathBuf {
         }
     }
     out
-}
-
-/// The files a loaded scene depends on: the scene file, its meshes and images.
-pub fn files_of(path: &Path, desc: &SceneDesc) -> BTreeSet<PathBuf> {
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let mut files = BTreeSet::from([path.to_path_buf()]);
-    for o in &desc.objects {
-        if let ShapeDesc::Mesh(m) = &o.shape {
-            files.insert(dir.join(&m.path));
-        }
-    }
-    for (_, t) in &desc.textures.0 {
-        if let TextureDesc::Image(image) = t {
-            files.insert(dir.join(&image.file.path));
-        }
-    }
-    if let BackgroundDesc::Environment { file, .. } = &desc.background {
-        files.insert(dir.join(&file.path));
-    }
-    files.iter().map(|f| normalize(&std::path::absolute(f).unwrap_or_else(|_| f.clone()))).collect()
 }
 
 /// Whether an event can change a file's contents: not reading it (which the reload itself

@@ -13,7 +13,7 @@ use crate::io::{self, LinearImage};
 use crate::render::args::{EngineArgs, Integrator, LogArgs, SceneArgs, TimeArgs};
 use crate::render::load::load;
 use crate::view::{self, Pass, ViewArgs, Viewers};
-use events::{Events, files_of, normalize};
+use events::{Events, normalize};
 use notify_debouncer_full::new_debouncer;
 use notify_debouncer_full::notify::RecursiveMode;
 use std::collections::BTreeSet;
@@ -140,8 +140,14 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
         let start = Instant::now();
         let loaded = load(&args.scene, &args.settings);
         if let Ok(desc) = &loaded {
-            events.files = files_of(&scene_file, desc);
+            events.files = desc.inputs.iter().map(|f| normalize(&f.path)).collect();
         }
+        // `-o` must not name a file the scene reads (it would reload for ever): an error in the
+        // scene like any other, until either changes.
+        let loaded = loaded.and_then(|desc| match &args.output {
+            Some(out) => io::Inputs::of(&desc).check(out).map(|()| desc),
+            None => Ok(desc),
+        });
         // Folders, not files: an editor that saves by renaming a new file over the old one
         // replaces the file a watch would follow.
         for folder in events.files.iter().filter_map(|f| f.parent()) {

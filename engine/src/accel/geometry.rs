@@ -381,7 +381,7 @@ mod tests {
             let c = Vec3A::new(rnd(), rnd(), rnd()) * 20.0 - 10.0;
             if i % 2 == 0 {
                 let r = [0.001, 0.3, 2.0, 50.0][i % 4 / 2 + (i % 7 == 0) as usize * 2];
-                v.push(Primitive::Sphere(Sphere { center: c, radius: r }));
+                v.push(Primitive::Sphere(Sphere::new(c, r)));
             } else {
                 let u = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
                 let w = Vec3A::new(rnd(), rnd(), rnd()) * 3.0;
@@ -435,7 +435,7 @@ mod tests {
                 c.into(),
             );
             prims.push(Primitive::TransformedSphere(
-                TransformedSphere::new(Sphere { center: Vec3A::ZERO, radius: 1.5 }, m).unwrap(),
+                TransformedSphere::new(Sphere::new(Vec3A::ZERO, 1.5), m).unwrap(),
             ));
         }
         let n = prims.len() as u32;
@@ -489,7 +489,7 @@ mod tests {
     #[test]
     fn axis_aligned_rays_with_negative_zero_components_hit() {
         // -Z is (-0, -0, -1): obvhs used to miss every node with such a ray.
-        let s = Primitive::Sphere(Sphere { center: Vec3A::ZERO, radius: 1.0 });
+        let s = Primitive::Sphere(Sphere::new(Vec3A::ZERO, 1.0));
         let geo = Geometry::build_bvh(vec![s, s], vec![0, 0]);
         for dir in [-Vec3A::X, -Vec3A::Y, -Vec3A::Z, Vec3A::X, Vec3A::Y, Vec3A::Z] {
             let ray = Ray::new(-4.0 * dir, dir);

@@ -6,7 +6,7 @@ use crate::accel::bvh8::{Bvh8, PACKET};
 use crate::accel::geometry::Hit;
 use crate::accel::mesh::{MeshBlas, MeshHit};
 use crate::math::{Ray, gamma, transform_box};
-use crate::shape::{SurfacePoint, adapt_shading_normal};
+use crate::shape::{MeshPoint, SurfacePoint, adapt_shading_normal};
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use std::sync::Arc;
@@ -404,7 +404,7 @@ impl Instances {
                 err += 0.5 * h * (1.0 + gamma(4)) / n.abs().element_sum() + gamma(2) * p.abs().max_element();
             }
         }
-        SurfacePoint { p, n, ns, uv: local.uv, err }
+        SurfacePoint { p, n, ns, uv: local.uv, err, on: MeshPoint { mesh: inst.blas, ..local.on } }
     }
 }
 

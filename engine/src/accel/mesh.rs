@@ -9,7 +9,7 @@
 
 use crate::accel::bvh8::{Bvh8, PACKET};
 use crate::math::gamma;
-use crate::shape::{PrimitiveShape, SurfacePoint, Triangle};
+use crate::shape::{MeshPoint, PrimitiveShape, SurfacePoint, Triangle};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use std::sync::Arc;
@@ -26,6 +26,50 @@ pub struct MeshData {
     pub normals: Option<Vec<Vec3A>>,
     /// Vertex texture coordinates (indexed like `positions`); `None`: barycentric uv.
     pub uvs: Option<Vec<glam::Vec2>>,
+    /// Named values per vertex or per triangle (a PLY file's other properties), for the
+    /// `MeshAttribute` texture.
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// Values a mesh file gives each vertex or each face beside its positions, normals and uv
+/// (Mitsuba 3's mesh attributes, `include/mitsuba/render/mesh.h`): flat, `channels` per vertex
+/// (indexed like `MeshData::positions`) or per triangle (like `MeshData::triangles`; a polygon's
+/// triangles repeat its values).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    /// Mitsuba's name: `vertex_` or `face_` and the property's prefix (`vertex_color`,
+    /// `face_weight`); the first word says which.
+    pub name: String,
+    /// Values per vertex or triangle: 1 or 3.
+    pub channels: usize,
+    /// The values, `channels` per vertex or triangle.
+    pub values: Vec<f32>,
+}
+
+impl MeshAttribute {
+    /// Per vertex (interpolated by barycentric weights), not per face.
+    pub fn per_vertex(&self) -> bool {
+        self.name.starts_with("vertex_")
+    }
+
+    /// The attribute at a point of triangle `tri` (vertices `v`) with barycentric weights `b` of
+    /// its second and third vertices: interpolated per vertex, constant per face; one channel is
+    /// grey. Indices beyond the values give black (a checked mesh has none).
+    pub fn at(&self, tri: u32, v: [u32; 3], b: glam::Vec2) -> glam::Vec3 {
+        let value = |i: usize| {
+            let c = self.channels;
+            match self.values.get(i * c..i * c + c) {
+                Some(&[x]) => glam::Vec3::splat(x),
+                Some(&[x, y, z]) => glam::Vec3::new(x, y, z),
+                _ => glam::Vec3::ZERO,
+            }
+        };
+        if !self.per_vertex() {
+            return value(tri as usize);
+        }
+        let [a, bb, c] = v.map(|i| value(i as usize));
+        (1.0 - b.x - b.y) * a + b.x * bb + b.y * c
+    }
 }
 
 impl MeshData {
@@ -72,7 +116,7 @@ impl MeshData {
                 triangles.push([a, c, d]);
             }
         }
-        Self { positions, triangles, normals: None, uvs: None }
+        Self { positions, triangles, normals: None, uvs: None, attributes: Vec::new() }
     }
 }
 
@@ -118,7 +162,7 @@ impl TriBlock {
             let l = zero_edge.trailing_zeros() as usize;
             zero_edge &= zero_edge - 1;
             let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
-            out[l] = Triangle { p }.intersect(o, d, tmax);
+            out[l] = Triangle { p, uv: None }.intersect(o, d, tmax);
             hit |= ((out[l] < tmax) as u32) << l;
         }
         (out, hit)
@@ -467,11 +511,13 @@ impl MeshBlas {
     /// triangle (along `sp.n`) of the smooth surface that its vertex normals describe
     /// ([`terminator_lift`]; 0 without them). With vertex normals the shading normal
     /// interpolates them (and the geometric normal turns to its side); with vertex uvs, uv
-    /// interpolates them.
+    /// interpolates them. `on` names the triangle and the weights (the mesh is the caller's).
     #[inline]
     pub fn surface(&self, hit: &MeshHit, p: Vec3A) -> (SurfacePoint, f32) {
         let [a, b, c] = hit.p;
-        let mut sp = Triangle { p: [a, b, c] }.surface(p);
+        let mut sp = Triangle { p: [a, b, c], uv: None }.surface(p);
+        // The triangle's uv are its barycentric weights.
+        sp.on = MeshPoint { mesh: u32::MAX, triangle: hit.id, b: sp.uv };
         if self.mesh.normals.is_none() && self.mesh.uvs.is_none() {
             return (sp, 0.0);
         }
@@ -574,7 +620,7 @@ pub(crate) mod tests {
             let all: Vec<(f32, u32)> = (0..mesh.triangles.len() as u32)
                 .map(|k| {
                     let [a, b, c] = mesh.triangle(k);
-                    (Triangle { p: [a, b, c] }.intersect(o, d, f32::INFINITY), k)
+                    (Triangle { p: [a, b, c], uv: None }.intersect(o, d, f32::INFINITY), k)
                 })
                 .filter(|h| h.0.is_finite())
                 .collect();

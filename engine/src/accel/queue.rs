@@ -255,7 +255,7 @@ mod tests {
             .filter_map(|i| {
                 let c = Vec3A::new(rnd(), rnd(), rnd()) * 8.0;
                 match i % 2 {
-                    0 => Some(Primitive::Sphere(Sphere { center: c, radius: 0.3 + rnd().abs() })),
+                    0 => Some(Primitive::Sphere(Sphere::new(c, 0.3 + rnd().abs()))),
                     _ => Quad::new(
                         c,
                         Vec3A::new(rnd(), rnd(), rnd()) * 3.0,

@@ -22,6 +22,9 @@ pub(crate) struct Names {
     pub lights: Vec<String>,
     /// All texture names, in file order.
     pub textures: Vec<String>,
+    /// The mesh attributes each material reads through its textures (materials that read
+    /// none are left out).
+    pub attributes: Vec<(String, Vec<String>)>,
     /// The directory image and mesh paths are relative to.
     pub dir: PathBuf,
 }

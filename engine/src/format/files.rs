@@ -2,8 +2,10 @@
 //! folders), at most a documented size, so that no path in a scene can make a load read
 //! forever or exhaust memory.
 
+use std::cell::RefCell;
+use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The largest scene file read: 256 MiB.
 pub const MAX_SCENE_BYTES: u64 = 256 << 20;
@@ -32,7 +34,62 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
     if bytes.len() as u64 > max {
         return Err(format!("the {what} {} has more than the {max} bytes allowed", path.display()));
     }
+    record(path, &bytes);
     Ok(bytes)
+}
+
+/// A file a load read: its absolute path and a hash of the bytes read (XXH3, 64 bits), so that
+/// what identifies a render is what was loaded, not the file as it is later.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InputFile {
+    /// The path (absolute, as named: not resolved through links).
+    pub path: PathBuf,
+    /// XXH3-64 of its bytes.
+    pub hash: u64,
+}
+
+thread_local! {
+    /// The files [`read_bounded`] read on this thread inside [`recording`], when inside one,
+    /// and their hashes.
+    static READ: RefCell<Option<BTreeMap<PathBuf, u64>>> = const { RefCell::new(None) };
+}
+
+fn record(path: &Path, bytes: &[u8]) {
+    READ.with(|r| {
+        if let Some(files) = r.borrow_mut().as_mut() {
+            let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+            files.insert(path, xxhash_rust::xxh3::xxh3_64(bytes));
+        }
+    });
+}
+
+/// Runs `f` and returns with its result every file that [`read_bounded`] read on this thread
+/// meanwhile (sorted by path, each once, with the hash of what was read last): a loaded scene's
+/// inputs, which no output may replace and which identify its renders. Recordings nest: an
+/// outer one gets the inner one's files too.
+pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<InputFile>) {
+    /// Puts the outer recording back, with this one's files added, however `f` ends.
+    struct Restore(Option<BTreeMap<PathBuf, u64>>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            let outer = self.0.take();
+            READ.with(|r| {
+                let mut r = r.borrow_mut();
+                let inner = r.take().unwrap_or_default();
+                *r = outer.map(|mut o| {
+                    o.extend(inner);
+                    o
+                });
+            });
+        }
+    }
+    let restore = Restore(READ.with(|r| r.borrow_mut().replace(BTreeMap::new())));
+    let out = f();
+    let files = READ.with(|r| {
+        r.borrow().iter().flatten().map(|(path, &hash)| InputFile { path: path.clone(), hash }).collect()
+    });
+    drop(restore);
+    (out, files)
 }
 
 /// Decodes an image file within [`MAX_IMAGE_SIDE`] and 1 GiB of decoded pixels (`image`'s
@@ -53,4 +110,35 @@ pub fn decode_image_bytes(bytes: Vec<u8>, path: &Path, max_side: u32) -> Result<
     limits.max_alloc = Some(MAX_ASSET_BYTES);
     reader.limits(limits);
     reader.decode().map_err(|e| format!("cannot read the image {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recording_lists_the_files_read_and_nests() {
+        let dir = std::env::temp_dir().join(format!("pathwave-recording-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b) = (dir.join("a.txt"), dir.join("b.txt"));
+        std::fs::write(&a, "a").unwrap();
+        std::fs::write(&b, "b").unwrap();
+        let ((_, inner), outer) = recording(|| {
+            read_bounded(&a, 10, "file").unwrap();
+            let r = recording(|| read_bounded(&b, 10, "file").unwrap());
+            // A refused read is not an input.
+            assert!(read_bounded(&dir.join("missing"), 10, "file").is_err());
+            r
+        });
+        let file = |path: &PathBuf, text: &str| InputFile {
+            path: path.clone(),
+            hash: xxhash_rust::xxh3::xxh3_64(text.as_bytes()),
+        };
+        assert_eq!(inner, vec![file(&b, "b")]);
+        assert_eq!(outer, vec![file(&a, "a"), file(&b, "b")]);
+        // Outside a recording nothing is kept.
+        read_bounded(&a, 10, "file").unwrap();
+        assert_eq!(recording(|| ()).1, Vec::new());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -150,3 +150,42 @@ impl<'de> Deserialize<'de> for UnitInterval {
 pub(crate) fn white() -> Rgb {
     Rgb(Vec3::ONE)
 }
+
+/// Which extent of the image a perspective `fov` spans, as Mitsuba 3's `fov_axis`
+/// (`parse_fov` in mitsuba3 `src/librender/sensor.cpp`); a camera's and a projector's.
+#[derive(Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[serde(rename = "FovAxis")]
+pub enum FovAxis {
+    /// The width (default).
+    #[default]
+    X,
+    /// The height.
+    Y,
+    /// The diagonal.
+    Diagonal,
+    /// The smaller of width and height.
+    Smaller,
+    /// The larger of width and height.
+    Larger,
+}
+
+impl FovAxis {
+    /// tan(x_fov / 2), where x_fov is the horizontal field of view that `fov` degrees across
+    /// this axis gives an image of `aspect` = width / height, as Mitsuba 3's `parse_fov` (in
+    /// f64, as it).
+    pub fn tan_half_x_fov(self, fov: f32, aspect: f64) -> f64 {
+        let t = (0.5 * (fov as f64).to_radians()).tan();
+        let axis = match self {
+            FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
+            FovAxis::Smaller => FovAxis::X,
+            FovAxis::Larger if aspect > 1.0 => FovAxis::X,
+            FovAxis::Larger => FovAxis::Y,
+            other => other,
+        };
+        match axis {
+            FovAxis::Y => t * aspect,
+            FovAxis::Diagonal => t / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
+            _ => t,
+        }
+    }
+}

@@ -7,8 +7,9 @@
 //! depends on a scene radius and would starve the finite lights of a large scene.
 
 use crate::accel::geometry::Geometry;
-use crate::material::{Emission, Material};
+use crate::lighting::area::AreaEmission;
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
+use crate::texture::{TextureId, Textures};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Marks a primitive that is not in the light table.
@@ -26,8 +27,8 @@ pub enum PunctualLight {
         intensity: Vec3,
     },
     /// A point light shining into a cone: the intensity towards a direction at angle `theta` from
-    /// `axis` is `intensity * smoothstep(cos_total, cos_falloff, cos theta)` (pbrt-v4's
-    /// `SpotLight`): full inside `falloff_start`, none outside `cone_angle`.
+    /// `axis` is `intensity` times the falloff (full inside `falloff_start`, none outside
+    /// `cone_angle`) and times the texture's value there, if it has one.
     Spot {
         /// Where it is.
         position: Vec3A,
@@ -39,6 +40,10 @@ pub enum PunctualLight {
         cos_falloff: f32,
         /// Cosine of the cone's half angle.
         cos_total: f32,
+        /// How the intensity falls off between the two.
+        falloff: SpotFalloff,
+        /// A texture over the cone.
+        texture: Option<SpotTexture>,
     },
     /// Parallel light from one direction, of irradiance `irradiance` (W/m^2) on a surface
     /// facing it.
@@ -48,6 +53,68 @@ pub enum PunctualLight {
         /// Irradiance.
         irradiance: Vec3,
     },
+    /// A projector (Mitsuba 3's `projector`, `src/emitters/projector.cpp`): a pinhole at
+    /// `position` projecting an image through a perspective frustum along `z`. A point at
+    /// `(x, y, z)` in its frame (`z > 0`) is lit through the image's `uv = (0.5 - x / (2 z
+    /// tan_x), 0.5 + y / (2 z tan_y))` (outside [0, 1]^2, not at all), with intensity `pi
+    /// irradiance E(uv) / cos^3 theta`: a plane at unit distance facing it receives `pi
+    /// irradiance E(uv)`, the texture's value `E` (1 without one).
+    Projector {
+        /// Where the pinhole is.
+        position: Vec3A,
+        /// Unit axes of its frame: `x` to the image's left (seen from behind the projector),
+        /// `y` to its top, `z` the direction it shines in.
+        frame: [Vec3A; 3],
+        /// Half the image's width on the plane `z = 1`: tan of half the horizontal field of view.
+        tan_x: f32,
+        /// Half its height there.
+        tan_y: f32,
+        /// The irradiance factor (the colour, or 1 under a texture, times the scale).
+        irradiance: Vec3,
+        /// The projected image.
+        texture: Option<LightTexture>,
+    },
+}
+
+/// How a spot light's intensity falls off between its falloff angle and its cone's edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum SpotFalloff {
+    /// `smoothstep(cos_total, cos_falloff, cos theta)`, pbrt-v4's `SpotLight` (`smoothstep(a, b,
+    /// x)` = 3t^2 - 2t^3, t = (x - a) / (b - a) clamped to [0, 1]).
+    #[default]
+    Smoothstep,
+    /// Linear in the angle, Mitsuba 3's `spot` (`src/emitters/spot.cpp`): `(total - theta) /
+    /// (total - falloff)`.
+    Linear {
+        /// The cone's half angle, radians.
+        total: f32,
+        /// `1 / (total - falloff)`, the falloff angle in radians (infinite when they are equal).
+        inv_width: f32,
+    },
+}
+
+/// A texture a punctual light projects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightTexture {
+    /// The texture.
+    pub id: TextureId,
+    /// Its mean (the light's power estimate).
+    pub mean: Vec3,
+}
+
+/// A texture over a spot light's cone, as Mitsuba 3's `spot` maps it: a direction `(x, y, z)`
+/// in the frame (`x`, `y`, the axis) reads `uv = (0.5 + x / (2 z tan), 0.5 - y / (2 z tan))`,
+/// `tan` that of the cone's half angle (Mitsuba's uv with pathwave's v, 1 - Mitsuba's).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpotTexture {
+    /// The texture.
+    pub texture: LightTexture,
+    /// Unit x axis of the frame (Mitsuba's `look_at` frame: `normalize(up x axis)`).
+    pub x: Vec3A,
+    /// Unit y axis (`axis x x`).
+    pub y: Vec3A,
+    /// `1 / tan(cone angle)`.
+    pub inv_tan: f32,
 }
 
 impl PunctualLight {
@@ -56,10 +123,26 @@ impl PunctualLight {
     fn power_over_pi(&self) -> f32 {
         match *self {
             PunctualLight::Point { intensity, .. } => 4.0 * luminance(intensity),
-            PunctualLight::Spot { intensity, cos_falloff, cos_total, .. } => {
-                2.0 * luminance(intensity) * ((1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_total))
+            PunctualLight::Spot { intensity, cos_falloff, cos_total, falloff, texture, .. } => {
+                let mean = texture.map_or(Vec3::ONE, |t| t.texture.mean);
+                // The integral of the falloff over the sphere, over 2 pi.
+                let cone = match falloff {
+                    SpotFalloff::Smoothstep => (1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_total),
+                    SpotFalloff::Linear { total, inv_width } if inv_width.is_finite() => {
+                        let (sin_total, sin_falloff) =
+                            ((total as f64).sin(), (1.0 - (cos_falloff as f64).powi(2)).sqrt());
+                        (1.0 - (sin_total - sin_falloff) * inv_width as f64) as f32
+                    }
+                    SpotFalloff::Linear { .. } => 1.0 - cos_total,
+                };
+                2.0 * luminance(intensity * mean) * cone
             }
             PunctualLight::Directional { irradiance, .. } => luminance(irradiance),
+            // The image's irradiance over the plane z = 1 (2 tan_x by 2 tan_y), times pi.
+            PunctualLight::Projector { tan_x, tan_y, irradiance, texture, .. } => {
+                let mean = texture.map_or(Vec3::ONE, |t| t.mean);
+                luminance(irradiance * mean) * 4.0 * tan_x * tan_y
+            }
         }
     }
 
@@ -70,9 +153,10 @@ impl PunctualLight {
 
     /// The light seen from `from`: the unit direction towards it, the distance (infinite for a
     /// directional light) and the radiance-like factor that, divided by the choice's
-    /// probability, is the light's estimate (`intensity / d^2` or the irradiance).
+    /// probability, is the light's estimate (`intensity / d^2` or the irradiance); `textures`
+    /// are the scene's.
     #[inline]
-    pub fn illuminate(&self, from: Vec3A) -> (Vec3A, f32, Vec3) {
+    pub fn illuminate(&self, from: Vec3A, textures: &Textures) -> (Vec3A, f32, Vec3) {
         match *self {
             PunctualLight::Point { position, intensity } => {
                 let to = position - from;
@@ -80,16 +164,58 @@ impl PunctualLight {
                 let d = d2.sqrt();
                 (to / d, d, intensity / d2)
             }
-            PunctualLight::Spot { position, axis, intensity, cos_falloff, cos_total } => {
+            PunctualLight::Spot { position, axis, intensity, cos_falloff, cos_total, falloff, texture } => {
                 let to = position - from;
                 let d2 = to.length_squared();
                 let d = d2.sqrt();
                 let wi = to / d;
-                let falloff = smoothstep(cos_total, cos_falloff, -wi.dot(axis));
-                (wi, d, intensity * (falloff / d2))
+                let cos = -wi.dot(axis);
+                let f = match falloff {
+                    SpotFalloff::Smoothstep => smoothstep(cos_total, cos_falloff, cos),
+                    SpotFalloff::Linear { total, inv_width } => {
+                        linear_falloff(cos, cos_total, cos_falloff, total, inv_width)
+                    }
+                };
+                let le = intensity * (f / d2);
+                match texture {
+                    Some(t) if f > 0.0 => {
+                        let (x, y) = (-wi.dot(t.x), -wi.dot(t.y));
+                        let s = 0.5 * t.inv_tan / cos;
+                        let uv = Vec2::new(0.5 + x * s, 0.5 - y * s);
+                        (wi, d, le * textures.eval(t.texture.id, uv, position))
+                    }
+                    _ => (wi, d, le),
+                }
             }
             PunctualLight::Directional { to_light, irradiance } => (to_light, f32::INFINITY, irradiance),
+            PunctualLight::Projector { position, frame: [x, y, z], tan_x, tan_y, irradiance, texture } => {
+                let to = position - from;
+                let d = to.length();
+                let wi = to / d;
+                let (lx, ly, lz) = (-to.dot(x), -to.dot(y), -to.dot(z));
+                let uv = Vec2::new(0.5 - 0.5 * lx / (lz * tan_x), 0.5 + 0.5 * ly / (lz * tan_y));
+                let inside = lz > 0.0 && (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y);
+                if !inside {
+                    return (wi, d, Vec3::ZERO);
+                }
+                let e = texture.map_or(Vec3::ONE, |t| textures.eval(t.id, uv, position));
+                // Mitsuba's pi E / (z^2 cos theta), cos theta = z / d.
+                (wi, d, irradiance * e * (std::f32::consts::PI * d / (lz * lz * lz)))
+            }
         }
+    }
+}
+
+/// Mitsuba 3's spot falloff: 1 from the axis to the falloff angle (cosine `cos_falloff`), then
+/// linear in the angle down to 0 at the cone's edge (`total`, cosine `cos_total`), 0 beyond.
+#[inline]
+fn linear_falloff(cos: f32, cos_total: f32, cos_falloff: f32, total: f32, inv_width: f32) -> f32 {
+    if !(cos > cos_total) {
+        0.0
+    } else if cos >= cos_falloff {
+        1.0
+    } else {
+        ((total - crate::math::acos(cos)) * inv_width).clamp(0.0, 1.0)
     }
 }
 
@@ -133,6 +259,8 @@ pub struct LightTable {
     /// Each light (indexed like the lights) as plain numbers where it is of a kind the
     /// integrator samples across lanes, in scenes where nothing moves.
     pub plain: Vec<PlainLight>,
+    /// What the surfaces of each material id emit ([`crate::lighting::area`]).
+    pub emission: Vec<Option<AreaEmission>>,
 }
 
 /// A light as plain numbers for the integrator's lane kernels.
@@ -144,8 +272,8 @@ pub enum PlainLight {
     Sphere(SphereLight),
     /// An emitting ellipsoid.
     Ellipsoid(EllipsoidLight),
-    /// Another kind (a triangle, a punctual light, the background), or anything in a scene
-    /// with motion: sampled one point at a time.
+    /// Another kind (a triangle, a punctual light, the background), a textured emitter, or
+    /// anything in a scene with motion: sampled one point at a time.
     Other,
 }
 
@@ -177,8 +305,9 @@ pub struct LightInputs<'a> {
 }
 
 impl LightTable {
-    /// Collects the emitters of `geometry` and the lights of `inputs`.
-    pub fn build(geometry: &Geometry, materials: &[Material], inputs: LightInputs) -> Self {
+    /// Collects the emitting primitives of `geometry` (those whose material id `emission`
+    /// holds) and the lights of `inputs`.
+    pub fn build(geometry: &Geometry, emission: Vec<Option<AreaEmission>>, inputs: LightInputs) -> Self {
         let mut t = LightTable { light_of_prim: vec![NO_LIGHT; geometry.prims.len()], ..Default::default() };
         if let Some((lo, hi)) = inputs.bounds {
             t.center = (lo + hi) * 0.5;
@@ -186,11 +315,11 @@ impl LightTable {
         }
         let mut power = Vec::new();
         for (i, (prim, &m)) in geometry.prims.iter().zip(&geometry.material).enumerate() {
-            let Some(Emission { emit, two_sided }) = materials[m as usize].emission() else {
+            let Some(AreaEmission { radiance, two_sided, .. }) = emission[m as usize] else {
                 continue;
             };
             let area = prim.area();
-            let p = luminance(emit) * area * if two_sided { 2.0 } else { 1.0 };
+            let p = luminance(radiance) * area * if two_sided { 2.0 } else { 1.0 };
             if p > 0.0 {
                 t.light_of_prim[i] = t.prims.len() as u32;
                 t.prims.push(i as u32);
@@ -242,9 +371,9 @@ impl LightTable {
         // The lights of the kinds the integrator samples across lanes, as plain numbers.
         let still = geometry.velocity.is_none();
         t.plain = (t.prims.iter())
-            .map(|&prim| match materials[geometry.material[prim as usize] as usize].emission() {
-                Some(Emission { emit, two_sided }) if still => {
-                    let emit = emit.to_array();
+            .map(|&prim| match emission[geometry.material[prim as usize] as usize] {
+                Some(AreaEmission { radiance, texture: None, two_sided }) if still => {
+                    let emit = radiance.to_array();
                     match &geometry.prims[prim as usize] {
                         Primitive::Quad(q) => PlainLight::Quad(q.light(emit, two_sided)),
                         Primitive::Sphere(s) => PlainLight::Sphere(s.light(emit, two_sided)),
@@ -256,7 +385,14 @@ impl LightTable {
             })
             .chain(t.others.iter().map(|_| PlainLight::Other))
             .collect();
+        t.emission = emission;
         t
+    }
+
+    /// Whether surfaces of material `id` emit.
+    #[inline]
+    pub fn emits(&self, id: u32) -> bool {
+        self.emission[id as usize].is_some()
     }
 
     /// True when there is nothing to sample.
@@ -344,7 +480,7 @@ mod tests {
     fn choices_mix_power_and_even_shares() {
         let geo = Geometry::default();
         let table = |punctual: &[PunctualLight], environment| {
-            LightTable::build(&geo, &[], LightInputs { punctual, environment, bounds: None })
+            LightTable::build(&geo, Vec::new(), LightInputs { punctual, environment, bounds: None })
         };
         use BackgroundSampling::{Alone, Always, Never};
         let one = table(&[point(0.0, 5.0)], Never);
@@ -376,15 +512,122 @@ mod tests {
             intensity: Vec3::ONE,
             cos_falloff,
             cos_total,
+            falloff: SpotFalloff::Smoothstep,
+            texture: None,
         };
         let at = |deg: f32| {
             let r = deg.to_radians();
-            spot.illuminate(Vec3A::new(r.sin(), -r.cos(), 0.0)).2.x
+            spot.illuminate(Vec3A::new(r.sin(), -r.cos(), 0.0), &Textures::default()).2.x
         };
         assert_eq!(at(0.0), 1.0);
         assert_eq!(at(19.9), 1.0);
         assert_eq!(at(30.1), 0.0);
         let mid = at(25.0);
         assert!(mid > 0.0 && mid < 1.0 && at(22.0) > mid && mid > at(28.0));
+    }
+
+    fn spot(falloff: SpotFalloff, texture: Option<SpotTexture>) -> PunctualLight {
+        let (cos_total, cos_falloff) = (30f32.to_radians().cos(), 15f32.to_radians().cos());
+        PunctualLight::Spot {
+            position: Vec3A::ZERO,
+            axis: Vec3A::Z,
+            intensity: Vec3::ONE,
+            cos_falloff,
+            cos_total,
+            falloff,
+            texture,
+        }
+    }
+
+    /// Mitsuba's spot: full within 15 degrees, none beyond 30, linear in the angle between; its
+    /// power is the integral of that over the sphere.
+    #[test]
+    fn linear_spot_falloff_is_linear_in_the_angle() {
+        let total = 30f32.to_radians();
+        let light = spot(SpotFalloff::Linear { total, inv_width: 1.0 / (total - 15f32.to_radians()) }, None);
+        let at = |deg: f32| {
+            let r = deg.to_radians();
+            light.illuminate(Vec3A::new(r.sin(), 0.0, r.cos()), &Textures::default()).2.x
+        };
+        assert_eq!((at(0.0), at(14.9), at(30.1)), (1.0, 1.0, 0.0));
+        for (deg, want) in [(22.5, 0.5), (26.0, 4.0 / 15.0), (16.0, 14.0 / 15.0)] {
+            assert!((at(deg) - want).abs() < 1e-5, "{deg} degrees: {} against {want}", at(deg));
+        }
+        // 2 pi times the integral of the falloff over theta, by the midpoint rule, over pi.
+        let n = 100_000;
+        let integral: f64 = (0..n)
+            .map(|k| {
+                let t = (k as f64 + 0.5) / n as f64 * std::f64::consts::PI;
+                at((t as f32).to_degrees()) as f64 * t.sin() * std::f64::consts::PI / n as f64
+            })
+            .sum();
+        assert!((light.power_over_pi() as f64 - 2.0 * integral).abs() < 1e-4, "{}", light.power_over_pi());
+    }
+
+    /// A texture over a spot's cone reads Mitsuba's uv: u grows along the frame's x, v
+    /// against its y, and the cone's edge along x is u = 1.
+    #[test]
+    fn a_spot_texture_reads_the_directions_uv() {
+        let checker = |u: f32, v: f32| Textures {
+            list: vec![
+                crate::texture::Texture::Solid(Vec3::ONE),
+                crate::texture::Texture::Solid(Vec3::ZERO),
+                crate::texture::Texture::UvChecker { u, v, even: 0, odd: 1, transform: None },
+            ],
+        };
+        let texture = |x: Vec3A| SpotTexture {
+            texture: LightTexture { id: 2, mean: Vec3::splat(0.5) },
+            x,
+            y: Vec3A::Y,
+            inv_tan: 1.0 / 30f32.to_radians().tan(),
+        };
+        let light = spot(SpotFalloff::Smoothstep, Some(texture(Vec3A::X)));
+        let lit = |t: &Textures, x: f32, y: f32| light.illuminate(Vec3A::new(x, y, 1.0), t).2.x > 0.0;
+        // Two cells along u: x > 0 is u > 1/2, odd (dark).
+        let (along_u, along_v) = (checker(2.0, 1.0), checker(1.0, 2.0));
+        assert!(lit(&along_u, -0.1, 0.05) && !lit(&along_u, 0.1, 0.05));
+        // Two along v: y > 0 is v < 1/2, even (lit).
+        assert!(lit(&along_v, 0.05, 0.1) && !lit(&along_v, 0.05, -0.1));
+        // Four along u: the cell boundary at u = 3/4 lies halfway to the edge of the cone.
+        let quarters = checker(4.0, 1.0);
+        let half = 0.5 * 30f32.to_radians().tan();
+        assert!(lit(&quarters, half - 0.01, 0.0) && !lit(&quarters, half + 0.01, 0.0));
+    }
+
+    /// A projector lights the plane at unit distance facing it with pi times its irradiance
+    /// wherever its image reaches, and nothing beyond the image or behind it; u grows against
+    /// the frame's x and v along its y.
+    #[test]
+    fn a_projector_gives_pi_irradiance_on_the_unit_plane() {
+        let light = |texture| PunctualLight::Projector {
+            position: Vec3A::ZERO,
+            frame: [Vec3A::X, Vec3A::Y, Vec3A::Z],
+            tan_x: 1.0,
+            tan_y: 0.5,
+            irradiance: Vec3::splat(2.0),
+            texture,
+        };
+        let none = Textures::default();
+        for (x, y) in [(0.0, 0.0), (0.9, 0.4), (-0.5, -0.45)] {
+            let p = Vec3A::new(x, y, 1.0);
+            let (wi, _, le) = light(None).illuminate(p, &none);
+            let e = le.x * -wi.z;
+            assert!((e - 2.0 * std::f32::consts::PI).abs() < 1e-5, "({x}, {y}): {e}");
+        }
+        for p in [Vec3A::new(1.1, 0.0, 1.0), Vec3A::new(0.0, 0.6, 1.0), Vec3A::new(0.0, 0.0, -1.0)] {
+            assert_eq!(light(None).illuminate(p, &none).2, Vec3::ZERO, "{p}");
+        }
+        let textures = Textures {
+            list: vec![
+                crate::texture::Texture::Solid(Vec3::ONE),
+                crate::texture::Texture::Solid(Vec3::ZERO),
+                crate::texture::Texture::UvChecker { u: 2.0, v: 2.0, even: 0, odd: 1, transform: None },
+            ],
+        };
+        let textured = light(Some(LightTexture { id: 2, mean: Vec3::splat(0.5) }));
+        let lit = |x: f32, y: f32| textured.illuminate(Vec3A::new(x, y, 1.0), &textures).2.x > 0.0;
+        // x > 0, y > 0: u < 1/2, v > 1/2: odd (dark); the other quadrants alternate.
+        assert!(!lit(0.5, 0.2) && lit(-0.5, 0.2) && lit(0.5, -0.2) && !lit(-0.5, -0.2));
+        assert!((textured.power_over_pi() - luminance(Vec3::ONE) * 4.0 * 0.5).abs() < 1e-6);
     }
 }

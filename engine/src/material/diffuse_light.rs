@@ -46,7 +46,7 @@ impl MaterialModel for DiffuseLight {
 
     #[inline]
     fn emission(&self) -> Option<Emission> {
-        Some(Emission { emit: self.emit, two_sided: self.two_sided })
+        Some(Emission { emit: self.emit, two_sided: self.two_sided, slot: 0 })
     }
 
     fn set_emission(&mut self, emit: Vec3) {

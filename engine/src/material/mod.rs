@@ -72,13 +72,16 @@ pub enum Specular {
     },
 }
 
-/// An emitter's radiance, for light sampling.
+/// An emitter's radiance (see [`crate::lighting::area`], which holds it per material id).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Emission {
     /// Emitted radiance.
     pub emit: Vec3,
     /// Emits on both sides; otherwise only on the side of the geometric normal.
     pub two_sided: bool,
+    /// The colour slot (see [`Colors`]) the radiance was taken from: a texture there makes it
+    /// vary over the surface.
+    pub slot: usize,
 }
 
 /// A sampled scattering direction.
@@ -433,16 +436,7 @@ static VARIANT_NAMES: [&str; MaterialKind::COUNT] = {
 };
 
 impl Material {
-    /// Radiance emitted towards a direction making cosine `cos_out` with the normal.
-    #[inline]
-    pub fn emitted(&self, cos_out: f32) -> Vec3 {
-        match self.emission() {
-            Some(e) if e.two_sided || cos_out > 0.0 => e.emit,
-            _ => Vec3::ZERO,
-        }
-    }
-
-    /// True for emitters.
+    /// True for emitters (whose BSDF is black: a path that meets one ends there).
     #[inline]
     pub fn is_emissive(&self) -> bool {
         self.kind().shading() == Shading::Emitter

@@ -1,35 +1,73 @@
-//! Files a scene names: OBJ meshes and images (textures, environment maps; [`ImageFile`] lives
-//! with the image texture kind, `texture/image.rs`), read in the second parsing pass relative
-//! to the scene file.
+//! Files a scene names: meshes (OBJ, PLY and Mitsuba's `.serialized`) and images (textures,
+//! environment maps; [`ImageFile`] lives with the image texture kind, `texture/image.rs`), read
+//! in the second parsing pass relative to the scene file.
 
+use super::serialized::SerializedFile;
+use crate::accel::mesh::{MeshAttribute, MeshData};
 use crate::format::context;
 pub use crate::texture::image::ImageFile;
 use serde::{Deserialize, Deserializer, de::Error};
+use std::sync::Arc;
 
-/// The triangles of an OBJ file, read when the scene is loaded. Objects naming the same file
-/// share one mesh (and, as instances, one BLAS).
+/// The triangles of a mesh file, read when the scene is loaded. Objects naming the same file
+/// (and the same mesh and options of it) share one mesh (and, as instances, one BLAS).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshFile {
     /// The path as written.
     pub path: std::path::PathBuf,
     /// Positions and triangles.
-    pub mesh: std::sync::Arc<crate::accel::mesh::MeshData>,
+    pub mesh: Arc<MeshData>,
 }
 
-impl<'de> Deserialize<'de> for MeshFile {
+/// A mesh file as `Mesh(file: ..)` names it, read when the name is: an OBJ or PLY file decoded
+/// whole, a `.serialized` file (by its extension) kept whole until the shape says which of its
+/// meshes it is. Other extensions are read as OBJ.
+#[derive(Debug, Clone)]
+pub struct MeshPath {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// The path from the scene's folder (the key of the parse's file cache).
+    pub full: std::path::PathBuf,
+    /// What the file holds.
+    pub source: MeshSource,
+}
+
+/// What a mesh file holds.
+#[derive(Debug, Clone)]
+pub enum MeshSource {
+    /// Not read: the first parsing pass reads no files.
+    Unread,
+    /// One mesh (OBJ, PLY).
+    Mesh(Arc<MeshData>),
+    /// Meshes to pick from.
+    Serialized(Arc<SerializedFile>),
+}
+
+impl<'de> Deserialize<'de> for MeshPath {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
         let Some(dir) = context::scene_dir() else {
-            return Ok(MeshFile { path, mesh: Default::default() });
+            return Ok(MeshPath { full: path.clone(), path, source: MeshSource::Unread });
         };
         let full = dir.join(&path);
-        if let Some(mesh) = context::mesh(&full) {
-            return Ok(MeshFile { path, mesh });
+        if let Some(source) = context::mesh::<MeshSource>(&full) {
+            return Ok(MeshPath { path, full, source: (*source).clone() });
         }
-        let mesh = std::sync::Arc::new(read_obj(&full).map_err(D::Error::custom)?);
-        context::keep_mesh(full, mesh.clone());
-        Ok(MeshFile { path, mesh })
+        let source = read_mesh_file(&full).map_err(D::Error::custom)?;
+        context::keep_mesh(full.clone(), Arc::new(source.clone()));
+        Ok(MeshPath { path, full, source })
     }
+}
+
+/// Reads the mesh file at `path` by its extension.
+fn read_mesh_file(path: &std::path::Path) -> Result<MeshSource, String> {
+    let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+    Ok(match ext.as_deref() {
+        Some("ply") => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
+        Some("serialized") => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
+        _ => MeshSource::Mesh(Arc::new(parse_obj(&bytes, path)?)),
+    })
 }
 
 /// An edge (by vertex position) that borders an odd number of triangles, and that number: a
@@ -50,14 +88,9 @@ pub fn open_edge(mesh: &crate::accel::mesh::MeshData) -> Option<(glam::Vec3A, gl
     odd.first().map(|&((a, b), n)| (pos(a), pos(b), n))
 }
 
-/// Positions and triangles of every model in an OBJ file (faces triangulated as fans).
-fn read_obj(path: &std::path::Path) -> Result<crate::accel::mesh::MeshData, String> {
-    parse_obj(&super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?, path)
-}
-
 /// Positions and triangles of every model in the OBJ text `bytes` (faces triangulated as
 /// fans); `path` names the file in errors.
-pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::accel::mesh::MeshData, String> {
+pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<MeshData, String> {
     check_obj_indices(bytes, path)?;
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     // `mtllib` lines are ignored: materials come from the scene, and a line naming any file
@@ -85,9 +118,22 @@ pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::accel::m
             _ => uvs = None,
         }
     }
-    // Vertex normals of unit length, as written when they are (within 1e-4), else normalised
-    // (scaled down first: the square of a component of 1e38 overflowed when they were
-    // interpolated, found by the obj fuzzer), or zero.
+    finish_mesh(positions, triangles, normals, uvs, Vec::new(), path)
+}
+
+/// A mesh file's data checked (finite positions, at least one face, indices in range) and
+/// cleaned: vertex normals of unit length, as written when they are (within 1e-4), else
+/// normalised (scaled down first: the square of a component of 1e38 overflowed when they were
+/// interpolated, found by the obj fuzzer), or zero; normals or uvs with a value that is not
+/// finite are dropped, as are attributes with a value that is not (with a warning).
+pub(super) fn finish_mesh(
+    positions: Vec<glam::Vec3A>,
+    triangles: Vec<[u32; 3]>,
+    normals: Option<Vec<glam::Vec3A>>,
+    uvs: Option<Vec<glam::Vec2>>,
+    mut attributes: Vec<MeshAttribute>,
+    path: &std::path::Path,
+) -> Result<MeshData, String> {
     let unit = |n: glam::Vec3A| match (n.length_squared() - 1.0).abs() < 1e-4 {
         true => n,
         false => (n / n.abs().max_element()).normalize_or_zero(),
@@ -104,7 +150,18 @@ pub fn parse_obj(bytes: &[u8], path: &std::path::Path) -> Result<crate::accel::m
     if triangles.iter().flatten().any(|&i| i as usize >= positions.len()) {
         return Err(format!("the mesh {} has a face with a vertex index out of range", path.display()));
     }
-    Ok(crate::accel::mesh::MeshData { positions, triangles, normals, uvs })
+    attributes.retain(|a| {
+        let finite = a.values.iter().all(|v| v.is_finite());
+        if !finite {
+            tracing::warn!(
+                "the mesh {}: the attribute {} has a value that is not finite: dropped",
+                path.display(),
+                a.name
+            );
+        }
+        finite
+    });
+    Ok(MeshData { positions, triangles, normals, uvs, attributes })
 }
 
 /// Refuses face indices that refer to no vertex, texture coordinate or normal: a relative

@@ -1,7 +1,7 @@
 //! `camera: (..)` and `render: (..)`: the camera as placed and the image and sampling settings.
 
 use super::transform::{TransformOp, compose};
-use crate::format::{Direction, Finite, Fov, NonNegative, Positive, UnitInterval, V3};
+use crate::format::{Direction, Finite, Fov, FovAxis, NonNegative, Positive, UnitInterval, V3};
 use crate::placement::MAX_COORDINATE;
 use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
@@ -88,45 +88,6 @@ pub enum Projection {
     /// [-1/aspect, 1/aspect] (aspect = width / height), then `to_world` applies (its scale
     /// sizes the view); rays start on the plane z = 0 and run along +z.
     Orthographic,
-}
-
-/// Which extent of the image a perspective `fov` spans, as Mitsuba 3's `fov_axis`
-/// (`parse_fov` in mitsuba3 `src/librender/sensor.cpp`).
-#[derive(Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
-#[serde(rename = "FovAxis")]
-pub enum FovAxis {
-    /// The width (default).
-    #[default]
-    X,
-    /// The height.
-    Y,
-    /// The diagonal.
-    Diagonal,
-    /// The smaller of width and height.
-    Smaller,
-    /// The larger of width and height.
-    Larger,
-}
-
-impl FovAxis {
-    /// tan(x_fov / 2), where x_fov is the horizontal field of view that `fov` degrees across
-    /// this axis gives an image of `aspect` = width / height, as Mitsuba 3's `parse_fov` (in
-    /// f64, as it).
-    pub fn tan_half_x_fov(self, fov: f32, aspect: f64) -> f64 {
-        let t = (0.5 * (fov as f64).to_radians()).tan();
-        let axis = match self {
-            FovAxis::Smaller if aspect > 1.0 => FovAxis::Y,
-            FovAxis::Smaller => FovAxis::X,
-            FovAxis::Larger if aspect > 1.0 => FovAxis::X,
-            FovAxis::Larger => FovAxis::Y,
-            other => other,
-        };
-        match axis {
-            FovAxis::Y => t * aspect,
-            FovAxis::Diagonal => t / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
-            _ => t,
-        }
-    }
 }
 
 #[derive(Deserialize)]

@@ -44,6 +44,12 @@ pub struct SceneDesc {
     /// keyframes (default: a still).
     #[serde(default)]
     pub animation: AnimationDesc,
+    /// Every file the load read, with a hash of what it read: the scene file, its includes,
+    /// meshes, images and spectra. Not written in a scene: [`super::load_with`] fills it; a
+    /// command checks each file it will write against it before any work, and the hashes
+    /// identify the render in its checkpoints.
+    #[serde(skip)]
+    pub inputs: Vec<crate::format::files::InputFile>,
 }
 
 /// `animation: (frames: 48, fps: 24, shutter: 0.5, camera: (..), emit: [("light", ..)])`.

@@ -24,15 +24,19 @@ pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, String
 /// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
 ///
 /// A `.xml` file is a Mitsuba 3 scene (see the `mitsuba` module); anything else is RON.
+/// The files it read are the description's `inputs`.
 pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
-    if super::mitsuba::is_xml(path) {
-        return super::mitsuba::load(path, overrides);
-    }
-    let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
-    let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
-        .map_err(fail)?;
-    let text = String::from_utf8(bytes).map_err(|e| fail(format!("the scene is not UTF-8 text: {e}")))?;
-    parse_with(&text, path, overrides)
+    let (desc, inputs) = crate::format::files::recording(|| {
+        if super::mitsuba::is_xml(path) {
+            return super::mitsuba::load(path, overrides);
+        }
+        let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
+        let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
+            .map_err(fail)?;
+        let text = String::from_utf8(bytes).map_err(|e| fail(format!("the scene is not UTF-8 text: {e}")))?;
+        parse_with(&text, path, overrides)
+    });
+    Ok(SceneDesc { inputs, ..desc? })
 }
 
 /// Parses scene text; `path` only names the source in errors.
@@ -74,6 +78,7 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             .map(|(n, _)| n.clone())
             .collect(),
         textures: names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
+        attributes: attributes_read(&names),
         dir,
     });
     let desc: SceneDesc = options.from_str(text).map_err(error)?;
@@ -93,4 +98,40 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
         });
     }
     Ok(desc)
+}
+
+/// The mesh attributes each material of `desc` reads through its textures, directly or inside
+/// another texture (materials that read none are left out).
+fn attributes_read(desc: &SceneDesc) -> Vec<(String, Vec<String>)> {
+    use crate::texture::TextureDesc;
+    let textures = &desc.textures.0;
+    let index = |name: &str| textures.iter().position(|(n, _)| n == name);
+    // Per texture in file order (a texture names only those before it).
+    let mut per_texture: Vec<Vec<String>> = Vec::new();
+    for (_, t) in textures {
+        let mut read = match t {
+            TextureDesc::MeshAttribute(a) => vec![a.name.0.clone()],
+            _ => Vec::new(),
+        };
+        t.model().build(&mut |c| {
+            if let super::Color::Texture(n) = c
+                && let Some(i) = index(n)
+            {
+                read.extend(per_texture.get(i).into_iter().flatten().cloned());
+            }
+            0
+        });
+        per_texture.push(read);
+    }
+    let materials = desc.materials.iter().map(|(name, m)| {
+        let mut read: Vec<String> = Vec::new();
+        crate::material::Material::build(m, &mut |n| {
+            read.extend(index(n).and_then(|i| per_texture.get(i)).into_iter().flatten().cloned());
+            (0, glam::Vec3::ZERO)
+        });
+        read.sort_unstable();
+        read.dedup();
+        (name.clone(), read)
+    });
+    materials.filter(|(_, read)| !read.is_empty()).collect()
 }

@@ -11,6 +11,8 @@ mod material;
 pub mod mitsuba;
 mod object;
 mod params;
+mod ply;
+mod serialized;
 mod texture;
 mod transform;
 
@@ -23,5 +25,7 @@ pub use light::*;
 pub use load::{load, load_with, parse, parse_defines, parse_with};
 pub use material::*;
 pub use object::*;
+pub use ply::parse_ply;
+pub use serialized::SerializedFile;
 pub use texture::*;
 pub use transform::*;

@@ -1,15 +1,16 @@
 //! `objects: [..]`: a shape with a material (a surface) or a medium (a volume), its transform,
 //! motion and keyframes; checked as placed (`placement::primitives`) at load.
 
-use super::assets::{MeshFile, open_edge};
+use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
-use crate::format::{Albedo, Positive, V3};
+use crate::format::{Albedo, Color, Positive, Rgb, V3, context};
 use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
 use serde::de::{Error, VariantAccess};
+use std::sync::Arc;
 
 /// One object: a shape with either a material (a surface) or a medium (a volume), and an
 /// optional list of transforms.
@@ -20,6 +21,8 @@ pub struct ObjectDesc {
     pub shape: ShapeDesc,
     /// What the shape is.
     pub body: Body,
+    /// Light the surface emits besides what its material reflects (default none).
+    pub emit: Option<EmitDesc>,
     /// Transforms applied in order, first to last (default none).
     pub transform: Vec<TransformOp>,
     /// How it moves (default: it does not).
@@ -35,6 +38,20 @@ pub struct ObjectDesc {
 pub struct MotionDesc {
     /// World units per unit of time.
     pub velocity: V3,
+}
+
+/// `emit: (radiance: (r, g, b), two_sided: false)`: the surface emits `radiance` (or a
+/// texture's value at the point, by name) besides what its material reflects, as Mitsuba 3's
+/// `area` emitter on a shape with a BSDF: on the side of the geometric normal only, unless
+/// `two_sided`. Sampled as a light like an emitter's surface.
+#[derive(Deserialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Emit")]
+pub struct EmitDesc {
+    /// Emitted radiance, or the name of a texture.
+    pub radiance: Color<Rgb>,
+    /// Emit on both sides (default false: only on the side of the normal).
+    #[serde(default)]
+    pub two_sided: bool,
 }
 
 /// What an object's shape bounds.
@@ -65,6 +82,8 @@ struct RawObject {
     material: Option<MaterialRef>,
     #[serde(default)]
     medium: Option<MediumDesc>,
+    #[serde(default)]
+    emit: Option<EmitDesc>,
     #[serde(default)]
     transform: Vec<TransformOp>,
     #[serde(default)]
@@ -99,14 +118,67 @@ impl TryFrom<RawObject> for ObjectDesc {
                 return Err("an object needs a `material` (a surface) or a `medium` (a volume)".into());
             }
         };
+        match (&body, &r.emit) {
+            (Body::Volume(_), Some(_)) => return Err("a medium does not emit: `emit` is for surfaces".into()),
+            (Body::Surface(name), Some(_))
+                if context::names(|n| n.is_some_and(|n| n.lights.contains(&name.0))) =>
+            {
+                return Err(format!(
+                    "material \"{}\" is a DiffuseLight, which emits already: `emit` is for surfaces whose material reflects",
+                    name.0
+                ));
+            }
+            _ => {}
+        }
         if r.motion.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `motion` is for surfaces".into());
         }
         if r.animate.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `animate` is for surfaces".into());
         }
+        if let Body::Surface(m) = &body {
+            attributes_found(&r.shape, &m.0)?;
+        }
         primitives(&r.shape.form(), &compose(&r.transform), &mut Vec::new()).map_err(|e| e.to_string())?;
-        Ok(Self { shape: r.shape, body, transform: r.transform, motion: r.motion, animate: r.animate })
+        Ok(Self {
+            shape: r.shape,
+            body,
+            emit: r.emit,
+            transform: r.transform,
+            motion: r.motion,
+            animate: r.animate,
+        })
+    }
+}
+
+/// A surface whose material reads mesh attributes (`MeshAttribute` textures) must be a mesh
+/// that has them, and must not emit (emitting meshes are baked into world-space triangles,
+/// which keep no attributes).
+fn attributes_found(shape: &ShapeDesc, material: &str) -> Result<(), String> {
+    let (wanted, emits) = crate::format::context::names(|n| match n {
+        Some(n) => (
+            n.attributes.iter().find(|(m, _)| m == material).map(|(_, a)| a.clone()).unwrap_or_default(),
+            n.lights.iter().any(|l| l == material),
+        ),
+        None => (Vec::new(), false),
+    });
+    let Some(first) = wanted.first() else { return Ok(()) };
+    let ShapeDesc::Mesh(mesh) = shape else {
+        return Err(format!("material \"{material}\" reads the mesh attribute {first}: it goes on a Mesh"));
+    };
+    if emits {
+        return Err(format!(
+            "material \"{material}\" emits and reads the mesh attribute {first}: pathwave's emitting meshes keep no attributes"
+        ));
+    }
+    let has: Vec<&str> = mesh.mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+    match wanted.iter().find(|a| !has.contains(&a.as_str())) {
+        None => Ok(()),
+        Some(a) => Err(format!(
+            "material \"{material}\" reads the mesh attribute {a}, which the mesh {} does not have (it has {})",
+            mesh.path.display(),
+            if has.is_empty() { "none".to_owned() } else { has.join(", ") }
+        )),
     }
 }
 
@@ -132,37 +204,75 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
     T::build(fields::<T::Desc, A>(variant)?).map_err(A::Error::custom)
 }
 
-/// `Mesh(file: "assets/knot.obj")`: the triangles of an OBJ file (relative to the scene file),
-/// read as the scene is parsed, smooth-shaded where the file gives vertex normals;
-/// `face_normals: true` shades it flat all the same (Mitsuba's `face_normals`). Meshes are not
-/// in the shape registry: their runtime form is the shared mesh data the world instances, not
-/// a [`ShapeModel`] that places primitives.
+/// `Mesh(file: "assets/knot.obj")`: the triangles of a mesh file (relative to the scene
+/// file: OBJ, PLY, or Mitsuba's `.serialized`, whose mesh `shape_index` it is, default 0), read
+/// as the scene is parsed, smooth-shaded where the file gives vertex normals; `face_normals:
+/// true` shades it flat all the same (Mitsuba's `face_normals`), `flip_normals: true` turns it
+/// inside out (its faces wound the other way, its normals reversed), `flip_tex_coords: true`
+/// reads each uv's v as 1 - v. Meshes are not in the shape registry: their runtime form is the
+/// shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshDesc {
-    file: MeshFile,
+    file: MeshPath,
+    #[serde(default)]
+    shape_index: u32,
     #[serde(default)]
     face_normals: bool,
+    #[serde(default)]
+    flip_normals: bool,
+    #[serde(default)]
+    flip_tex_coords: bool,
 }
 
 fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Error> {
-    let MeshDesc { file, face_normals } = fields::<MeshDesc, A>(variant)?;
-    if !face_normals || file.mesh.normals.is_none() {
-        return Ok(file);
-    }
-    // One flat copy per file, shared by the objects that ask for it (one BLAS).
-    let key =
-        crate::format::context::scene_dir().map(|d| d.join(format!("{}#face_normals", file.path.display())));
-    let cached = key.as_deref().and_then(crate::format::context::mesh);
-    let mesh = cached.unwrap_or_else(|| {
-        let flat =
-            std::sync::Arc::new(crate::accel::mesh::MeshData { normals: None, ..(*file.mesh).clone() });
-        if let Some(k) = key {
-            crate::format::context::keep_mesh(k, flat.clone());
+    let d = fields::<MeshDesc, A>(variant)?;
+    let MeshPath { path, full, source } = d.file;
+    let mesh = match source {
+        MeshSource::Unread => return Ok(MeshFile { path, mesh: Default::default() }),
+        MeshSource::Mesh(m) if d.shape_index == 0 => m,
+        MeshSource::Mesh(_) => {
+            let message = format!("shape_index {} picks a mesh of a .serialized file", d.shape_index);
+            return Err(A::Error::custom(message));
         }
-        flat
+        MeshSource::Serialized(file) => {
+            let key = full.join(format!("#{}", d.shape_index));
+            match crate::format::context::mesh(&key) {
+                Some(m) => m,
+                None => {
+                    let m = Arc::new(file.mesh(d.shape_index as usize, &full).map_err(A::Error::custom)?);
+                    crate::format::context::keep_mesh(key, m.clone());
+                    m
+                }
+            }
+        }
+    };
+    let face_normals = d.face_normals && mesh.normals.is_some();
+    let flip_v = d.flip_tex_coords && mesh.uvs.is_some();
+    if !(face_normals || flip_v || d.flip_normals) {
+        return Ok(MeshFile { path, mesh });
+    }
+    // One changed copy per file, mesh and options, shared by the objects that ask for it (one
+    // BLAS).
+    let key = full.join(format!("#{}#{face_normals}#{}#{flip_v}", d.shape_index, d.flip_normals));
+    let cached = crate::format::context::mesh(&key);
+    let mesh = cached.unwrap_or_else(|| {
+        let mut m = (*mesh).clone();
+        if face_normals {
+            m.normals = None;
+        }
+        if flip_v {
+            m.uvs.iter_mut().flatten().for_each(|uv| uv.y = 1.0 - uv.y);
+        }
+        if d.flip_normals {
+            m.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+            m.normals.iter_mut().flatten().for_each(|n| *n = -*n);
+        }
+        let m = Arc::new(m);
+        crate::format::context::keep_mesh(key, m.clone());
+        m
     });
-    Ok(MeshFile { path: file.path, mesh })
+    Ok(MeshFile { path, mesh })
 }
 
 /// What a shape description becomes in the world.

@@ -1,8 +1,8 @@
-//! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`; meshes are the
-//! world's business) and the primitives they become in world space. Each file holds one kind:
-//! its RON description and its checks, its shape in its own space ([`ShapeModel`]: built from
-//! the description, the primitives it becomes under a transform, the volume it closes), its
-//! primitive ([`PrimitiveShape`]: bounds, intersection, surface data, light sampling) where it
+//! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`, `Disk`, `Cylinder`;
+//! meshes are the world's business) and the primitives they become in world space. Each file
+//! holds one kind: its RON description and its checks, its shape in its own space
+//! ([`ShapeModel`]: built from the description, the primitives it becomes under a transform,
+//! the volume it closes), its primitive ([`PrimitiveShape`]: bounds, intersection, surface data, light sampling) where it
 //! has one, and their tests.
 //!
 //! Two lists below name the kinds. [`with_shapes!`] is the registry of the shapes a scene
@@ -18,6 +18,8 @@
 //! a primitive, its line in `primitives!`; its README row is checked by `tests/readme_kinds.rs`.
 
 mod boxes;
+mod cylinder;
+mod disk;
 mod primitive;
 pub(crate) mod quad;
 pub(crate) mod sphere;
@@ -26,11 +28,13 @@ pub mod test_disk;
 mod transformed_sphere;
 mod triangle;
 
-pub use boxes::BoxShape;
+pub use boxes::{BoxShape, BoxUv};
+pub use cylinder::{Cylinder, CylinderShape};
+pub use disk::{Disk, DiskShape};
 pub use primitive::PrimitiveShape;
 use primitive::primitives;
 pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
-pub use sphere::{Sphere, SphereLight, SphereShape, cone_sample};
+pub use sphere::{Poles, Sphere, SphereLight, SphereShape, cone_sample};
 pub use transformed_sphere::{EllipsoidLight, TransformedSphere, ellipsoid_sample};
 pub use triangle::{Triangle, TriangleShape};
 
@@ -42,6 +46,8 @@ primitives! {
     Quad(Quad),
     TransformedSphere(TransformedSphere),
     Triangle(Triangle),
+    Disk(Disk),
+    Cylinder(Cylinder),
     #[cfg(feature = "test-shape")]
     TestDisk(test_disk::TestDisk),
 }
@@ -58,6 +64,8 @@ macro_rules! with_shapes {
             Quad($crate::shape::QuadShape),
             Triangle($crate::shape::TriangleShape),
             Box($crate::shape::BoxShape),
+            Disk($crate::shape::DiskShape),
+            Cylinder($crate::shape::CylinderShape),
             #[cfg(feature = "test-shape")]
             TestDisk($crate::shape::test_disk::TestDiskShape),
         }
@@ -118,6 +126,12 @@ pub enum ShapeError {
     /// A quad whose edges are parallel (or tiny).
     #[error("a quad with edges {0} and {1} has no area (or less than 1e-38)")]
     FlatQuad(Vec3A, Vec3A),
+    /// A cylinder placed so that its cross-section is not a circle at right angles to its axis.
+    #[error(
+        "the transform makes the cylinder's cross-section an ellipse or shears its axis: pathwave's \
+         cylinders stay circular (scale it the same across its axis)"
+    )]
+    OvalCylinder,
     /// A sphere under a singular transform.
     #[error("the transform flattens the sphere")]
     FlatSphere,
@@ -148,6 +162,27 @@ pub struct SurfacePoint {
     pub uv: Vec2,
     /// Bound on the absolute error of each coordinate of `p` (for spawning rays off it).
     pub err: f32,
+    /// Where on a mesh the point lies ([`MeshPoint::NONE`] off meshes), for the mesh's
+    /// attributes.
+    pub on: MeshPoint,
+}
+
+/// A point of a placed mesh's triangle, by which the `MeshAttribute` texture reads the mesh's
+/// per-vertex and per-face values: the mesh (its index in the scene's list of meshes,
+/// `accel::instances::Instances::blas`), the triangle and its barycentric weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshPoint {
+    /// Index of the mesh among the scene's meshes, or `u32::MAX` off meshes.
+    pub mesh: u32,
+    /// Index of the triangle in the mesh.
+    pub triangle: u32,
+    /// Barycentric weights of the triangle's second and third vertices.
+    pub b: Vec2,
+}
+
+impl MeshPoint {
+    /// Not on a mesh.
+    pub const NONE: MeshPoint = MeshPoint { mesh: u32::MAX, triangle: 0, b: Vec2::ZERO };
 }
 
 /// A point sampled on an emitter, with its density in solid angle as seen from the reference point.

@@ -2,14 +2,16 @@
 //! "Quadrilaterals").
 
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::V3;
 use crate::math::{dot3 as dot, gamma};
 use glam::{Affine3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
-/// A parallelogram. Its normal is `normalize(u x v)`; `uv` = (a, b).
+/// A parallelogram. Its normal is `normalize(u x v)`, or its opposite ([`Self::flipped`]);
+/// `uv` = (a, b).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Quad {
     /// Corner.
@@ -18,7 +20,7 @@ pub struct Quad {
     pub u: Vec3A,
     /// Second edge.
     pub v: Vec3A,
-    /// Unit normal `normalize(u x v)`.
+    /// Unit normal `normalize(u x v)` (or its opposite).
     pub n: Vec3A,
     /// `v x w` and `w x u` for `w = (u x v) / |u x v|^2`: the coordinates (a, b) of a point
     /// `q + ph` of the plane are `ea . ph` and `eb . ph` (the triple products `w . (ph x v)`
@@ -119,6 +121,13 @@ impl Quad {
         (k > 0.0 && finite).then_some(Self { q, u, v, n, ea, eb, area, err, rect })
     }
 
+    /// The same quad facing the other way: normal `-normalize(u x v)`, the same points, uv
+    /// and intersections (the plane test's `t` is a ratio of two dot products with the normal,
+    /// so its sign cancels to the bit).
+    pub fn flipped(self) -> Self {
+        Self { n: -self.n, ..self }
+    }
+
     /// Error bound of points computed as `q + a u + b v`, scaled by the conditioning
     /// `|u| |v| / |u x v|` of the edges: the intersection test's plane (through `q`, normal
     /// `n`) tilts from the true one by the error of `n`, which grows as the edges near
@@ -147,6 +156,7 @@ impl Quad {
             ns: self.n,
             uv: Vec2::new(a, b),
             err: self.point_error(),
+            on: MeshPoint::NONE,
         }
     }
 
@@ -281,7 +291,7 @@ pub fn quad_t(k: [[f32; 3]; 4], o: [f32; 3], d: [f32; 3], tmax: f32) -> f32 {
 }
 
 /// A parallelogram in its own space, as a scene places it: the points q + a u + b v, a, b in
-/// [0, 1]; normal u x v.
+/// [0, 1]; normal u x v, or -(u x v) if `flip_normal`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QuadShape {
     /// Corner.
@@ -290,9 +300,11 @@ pub struct QuadShape {
     pub u: Vec3A,
     /// Second edge.
     pub v: Vec3A,
+    /// The normal is -(u x v).
+    pub flip_normal: bool,
 }
 
-/// `Quad(q: .., u: .., v: ..)`.
+/// `Quad(q: .., u: .., v: .., flip_normal: false)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct QuadDesc {
@@ -302,38 +314,45 @@ pub struct QuadDesc {
     pub u: V3,
     /// Second edge (not parallel to u).
     pub v: V3,
+    /// Face the side of -(u x v) (default false): a quad whose uv runs the other way round
+    /// its normal, as Mitsuba's `rectangle` with pathwave's v.
+    #[serde(default)]
+    pub flip_normal: bool,
 }
 
 impl ShapeModel for QuadShape {
     type Desc = QuadDesc;
 
-    fn build(QuadDesc { q, u, v }: QuadDesc) -> Result<Self, String> {
+    fn build(QuadDesc { q, u, v, flip_normal }: QuadDesc) -> Result<Self, String> {
         if !(u.0.cross(v.0).length_squared() > 0.0) {
             return Err(format!("Quad has no area: u {} and v {} are parallel or zero", u.0, v.0));
         }
-        Ok(Self { q: q.0.into(), u: u.0.into(), v: v.0.into() })
+        Ok(Self { q: q.0.into(), u: u.0.into(), v: v.0.into(), flip_normal })
     }
 
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
-        place_quad(m, self.q, self.u, self.v, out)
+        place_quad(m, self.q, self.u, self.v, self.flip_normal, out)
     }
 }
 
-/// Appends the quad `q`, `u`, `v` placed by `m` (also the faces of a box).
+/// Appends the quad `q`, `u`, `v` placed by `m` (also the faces of a box), facing the side of
+/// u x v, or of -(u x v) if `flip`, in its own space.
 pub(crate) fn place_quad(
     m: &Affine3A,
     q: Vec3A,
     u: Vec3A,
     v: Vec3A,
+    flip: bool,
     out: &mut Vec<Primitive>,
 ) -> Result<(), ShapeError> {
     let (q, mut u, mut v) = (m.transform_point3a(q), m.transform_vector3a(u), m.transform_vector3a(v));
-    // A mirroring transform flips u x v; swap the edges so the normal keeps facing out.
+    // A mirroring transform flips u x v; swap the edges so the normal keeps facing its side
+    // (the uv becomes (b, a)).
     if m.matrix3.determinant() < 0.0 {
         std::mem::swap(&mut u, &mut v);
     }
     let quad = Quad::new(q, u, v).ok_or(ShapeError::FlatQuad(u, v))?;
-    out.push(Primitive::Quad(quad));
+    out.push(Primitive::Quad(if flip { quad.flipped() } else { quad }));
     Ok(())
 }
 

@@ -3,8 +3,8 @@
 //! Life"; pbrt-v4's `Sphere::Sample` from a reference point).
 
 use super::{
-    Closed, LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, TransformedSphere,
-    area_to_solid_angle,
+    Closed, LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    TransformedSphere, area_to_solid_angle,
 };
 use crate::format::{Positive, V3};
 use crate::math::{cos_sin_turn, dot3 as dot, gamma, uniform_sphere};
@@ -70,16 +70,35 @@ pub fn cone_sample(center: [f32; 3], radius: f32, from: [f32; 3], u: [f32; 2]) -
     (n, 1.0 / (2.0 * PI * one_minus_cos_max), dc2 <= r2)
 }
 
-/// A sphere. `uv`: u = (atan2(-z, x) + pi) / 2pi around +y, v = acos(-y) / pi from the bottom pole.
+/// A sphere. `uv` as its [`Poles`] say, of the unit vector n from the centre to the point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sphere {
     /// Centre.
     pub center: Vec3A,
     /// Radius (> 0).
     pub radius: f32,
+    /// The axis of its uv.
+    pub poles: Poles,
+}
+
+/// The axis through the poles of a sphere's uv; v runs up it from 0 to 1.
+#[derive(serde::Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Poles {
+    /// u = (atan2(-z, x) + pi) / 2pi around +y (u = 0 and 1 at -x, 0.5 at +x, 0.75 at -z),
+    /// v = acos(-y) / pi (default).
+    #[default]
+    Y,
+    /// Mitsuba 3's sphere (its `src/shapes/sphere.cpp`) with pathwave's v (1 - Mitsuba's):
+    /// u = atan2(y, x) / 2pi wrapped to [0, 1) (u = 0 at +x, 0.25 at +y), v = acos(-z) / pi.
+    Z,
 }
 
 impl Sphere {
+    /// The sphere of centre `center` and radius `radius`, its uv about +y.
+    pub const fn new(center: Vec3A, radius: f32) -> Self {
+        Self { center, radius, poles: Poles::Y }
+    }
+
     /// The sphere as a light for lanes of points, emitting `emit` (inwards too if
     /// `two_sided`): see [`SphereLight`].
     pub fn light(&self, emit: [f32; 3], two_sided: bool) -> SphereLight {
@@ -159,9 +178,11 @@ pub struct SphereShape {
     pub center: Vec3A,
     /// Radius (> 0).
     pub radius: f32,
+    /// The axis of its uv.
+    pub poles: Poles,
 }
 
-/// `Sphere(center: (x, y, z), radius: r)`.
+/// `Sphere(center: (x, y, z), radius: r, poles: Y)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct SphereDesc {
@@ -169,17 +190,20 @@ pub struct SphereDesc {
     pub center: V3,
     /// Radius (> 0).
     pub radius: Positive,
+    /// The axis of its uv, in its own space (default `Y`).
+    #[serde(default)]
+    pub poles: Poles,
 }
 
 impl ShapeModel for SphereShape {
     type Desc = SphereDesc;
 
     fn build(d: SphereDesc) -> Result<Self, String> {
-        Ok(Self { center: d.center.0.into(), radius: d.radius.0 })
+        Ok(Self { center: d.center.0.into(), radius: d.radius.0, poles: d.poles })
     }
 
     fn place(&self, m: &Affine3A, out: &mut Vec<Primitive>) -> Result<(), ShapeError> {
-        let sphere = Sphere { center: self.center, radius: self.radius };
+        let sphere = Sphere { center: self.center, radius: self.radius, poles: self.poles };
         // Translation and uniform scale keep a sphere a sphere (and its uv frame); anything
         // else is intersected in object space.
         let lin = m.matrix3;
@@ -187,7 +211,7 @@ impl ShapeModel for SphereShape {
         let diagonal_uniform = s > 0.0 && lin == Mat3A::from_diagonal(Vec3::splat(s));
         if diagonal_uniform {
             let center = m.transform_point3a(sphere.center);
-            out.push(Primitive::Sphere(Sphere { center, radius: self.radius * s }));
+            out.push(Primitive::Sphere(Sphere { center, radius: self.radius * s, poles: self.poles }));
         } else {
             let ts = TransformedSphere::new(sphere, *m).ok_or(ShapeError::FlatSphere)?;
             out.push(Primitive::TransformedSphere(ts));
@@ -224,14 +248,23 @@ impl PrimitiveShape for Sphere {
         let d = p - self.center;
         let n = d / d.length();
         let p = self.center + self.radius * n;
-        let uv = match uv {
-            true => Vec2::new(
+        let uv = match (uv, self.poles) {
+            (true, Poles::Y) => Vec2::new(
                 (crate::math::atan2(-n.z, n.x) + PI) / (2.0 * PI),
                 crate::math::acos((-n.y).clamp(-1.0, 1.0)) / PI,
             ),
-            false => Vec2::ZERO,
+            (true, Poles::Z) => {
+                let phi = crate::math::atan2(n.y, n.x);
+                let phi = if phi < 0.0 { phi + 2.0 * PI } else { phi };
+                // 2 pi rounded up for phi just below 0: u stays below 1.
+                Vec2::new(
+                    (phi / (2.0 * PI)).min(1.0 - f32::EPSILON / 2.0),
+                    crate::math::acos((-n.z).clamp(-1.0, 1.0)) / PI,
+                )
+            }
+            (false, _) => Vec2::ZERO,
         };
-        SurfacePoint { p, n, ns: n, uv, err: self.point_error() }
+        SurfacePoint { p, n, ns: n, uv, err: self.point_error(), on: MeshPoint::NONE }
     }
 
     /// Surface area.
@@ -277,7 +310,7 @@ mod tests {
     use super::*;
 
     fn unit() -> Sphere {
-        Sphere { center: Vec3A::ZERO, radius: 1.0 }
+        Sphere::new(Vec3A::ZERO, 1.0)
     }
 
     #[test]
@@ -312,7 +345,7 @@ mod tests {
     #[test]
     fn huge_sphere_is_precise() {
         // The spheres-sky ground: a ray from the camera height hitting y = 0 far away.
-        let s = Sphere { center: Vec3A::new(0.0, -1000.0, 0.0), radius: 1000.0 };
+        let s = Sphere::new(Vec3A::new(0.0, -1000.0, 0.0), 1000.0);
         let o = Vec3A::new(13.0, 2.0, 3.0);
         let d = Vec3A::new(-13.0, -2.0, -3.0).normalize();
         let t = s.intersect(o, d, f32::INFINITY);
@@ -354,9 +387,37 @@ mod tests {
         assert!((sp.uv - Vec2::new(0.5, 0.5)).length() < 1e-6, "{:?}", sp.uv);
     }
 
+    /// `Poles::Z` is Mitsuba's sphere uv (`src/shapes/sphere.cpp`: u = phi / 2pi, phi =
+    /// atan2(y, x) in [0, 2pi); v = theta / pi, theta from +z) with v flipped.
+    #[test]
+    fn z_poles_are_mitsubas_uv_with_v_flipped() {
+        let s = Sphere { poles: Poles::Z, ..unit() };
+        let mitsuba = |p: Vec3| {
+            let phi = (p.y as f64).atan2(p.x as f64).rem_euclid(std::f64::consts::TAU);
+            let theta = (p.z as f64).acos();
+            Vec2::new((phi / std::f64::consts::TAU) as f32, (theta / std::f64::consts::PI) as f32)
+        };
+        for p in [
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(-1.0, 0.1, 0.0),
+            Vec3::new(0.3, -0.8, 0.5),
+            Vec3::new(-0.2, -0.3, -0.9),
+            Vec3::new(0.0, 0.0, 1.0),
+        ] {
+            let p = p.normalize();
+            let uv = s.surface(p.into(), true).uv;
+            let want = mitsuba(p);
+            assert!((uv - Vec2::new(want.x, 1.0 - want.y)).length() < 1e-5, "{p}: {uv} vs Mitsuba's {want}");
+        }
+        // Just below phi = 0 the wrapped u stays in [0, 1).
+        let uv = s.surface(Vec3A::new(1.0, -1e-9, 0.0), true).uv;
+        assert!(uv.x < 1.0, "{uv}");
+    }
+
     #[test]
     fn cone_samples_lie_on_visible_cap_with_constant_pdf() {
-        let s = Sphere { center: Vec3A::new(0.0, 0.0, 10.0), radius: 2.0 };
+        let s = Sphere::new(Vec3A::new(0.0, 0.0, 10.0), 2.0);
         let from = Vec3A::ZERO;
         for i in 0..64 {
             let u = Vec2::new((i as f32 + 0.5) / 64.0, ((i * 37) % 64) as f32 / 64.0);
@@ -377,7 +438,7 @@ mod tests {
         use crate::material::chi2::{chi2, chi2_critical};
         // A wide cone, and one narrow enough for the Taylor expansion of 1 - cos.
         for radius in [4.0f32, 0.2] {
-            let s = Sphere { center: Vec3A::new(0.0, 0.0, 10.0), radius };
+            let s = Sphere::new(Vec3A::new(0.0, 0.0, 10.0), radius);
             let sin2_max = (radius as f64 / 10.0).powi(2);
             let cos_max = (1.0 - sin2_max).sqrt();
             let density = 1.0 / (2.0 * std::f64::consts::PI * (1.0 - cos_max));

@@ -5,7 +5,8 @@
 //! Light sampling picks points uniformly by area.
 
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::{Positive, V3};
 use crate::math::{Frame, concentric_disk, gamma};
@@ -51,7 +52,7 @@ impl PrimitiveShape for TestDisk {
         let f = Frame::from_normal(self.n);
         let local = (p - self.center) / self.radius;
         let uv = Vec2::new(local.dot(f.t), local.dot(f.b)) * 0.5 + 0.5;
-        SurfacePoint { p, n: self.n, ns: self.n, uv, err: self.point_error() }
+        SurfacePoint { p, n: self.n, ns: self.n, uv, err: self.point_error(), on: MeshPoint::NONE }
     }
 
     fn area(&self) -> f32 {

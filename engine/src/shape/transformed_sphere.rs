@@ -2,7 +2,7 @@
 //! to object space, the hit point back, the normal by the inverse transpose (Pharr, Jakob and
 //! Humphreys, "Physically Based Rendering", 4th edition, section 3.10).
 
-use super::{LightSample, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
+use super::{LightSample, MeshPoint, PrimitiveShape, Sphere, SurfacePoint, area_to_solid_angle};
 use crate::math::{cos_sin_turn, dot3 as dot, gamma};
 use glam::{Affine3A, Mat3A, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
@@ -157,6 +157,7 @@ impl PrimitiveShape for TransformedSphere {
             ns: n,
             uv: local.uv,
             err: scale * local.err + gamma(4) * magnitude,
+            on: MeshPoint::NONE,
         }
     }
 
@@ -203,7 +204,7 @@ mod tests {
     #[test]
     fn ellipsoid_matches_analytic_hit_and_normal() {
         // x^2/4 + y^2 + z^2/9 = 1
-        let s = Sphere { center: Vec3A::ZERO, radius: 1.0 };
+        let s = Sphere::new(Vec3A::ZERO, 1.0);
         let ts = TransformedSphere::new(s, Affine3A::from_scale(Vec3::new(2.0, 1.0, 3.0))).unwrap();
         let t = ts.intersect(Vec3A::new(-10.0, 0.0, 0.0), Vec3A::X, f32::INFINITY);
         assert!((t - 8.0).abs() < 1e-5);
@@ -226,7 +227,7 @@ mod tests {
             * Affine3A::from_mat3(glam::Mat3::from_cols_array(&[
                 1.5, 0.0, 0.4, 0.6, 0.7, 0.0, 0.0, 0.3, 1.1,
             ]));
-        let ts = TransformedSphere::new(Sphere { center: Vec3A::ZERO, radius: 1.0 }, m).unwrap();
+        let ts = TransformedSphere::new(Sphere::new(Vec3A::ZERO, 1.0), m).unwrap();
         let x = Vec3A::ZERO;
         let n = 200_000;
         // The R2 low-discrepancy sequence (Roberts), shifted differently for the two estimates.
@@ -254,7 +255,7 @@ mod tests {
     #[test]
     fn ellipsoid_area() {
         // Semi-axes 2, 1, 1 (prolate): 2 pi (1 + 2 asin(e) / e), e = sqrt(3) / 2.
-        let s = Sphere { center: Vec3A::ZERO, radius: 1.0 };
+        let s = Sphere::new(Vec3A::ZERO, 1.0);
         let ts = TransformedSphere::new(s, Affine3A::from_scale(glam::Vec3::new(2.0, 1.0, 1.0))).unwrap();
         let e = 3f32.sqrt() / 2.0;
         let exact = 2.0 * std::f32::consts::PI * (1.0 + 2.0 * e.asin() / e);
@@ -263,7 +264,7 @@ mod tests {
 
     #[test]
     fn singular_transform_is_rejected() {
-        let s = Sphere { center: Vec3A::ZERO, radius: 1.0 };
+        let s = Sphere::new(Vec3A::ZERO, 1.0);
         assert!(TransformedSphere::new(s, Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0))).is_none());
     }
 }

@@ -8,19 +8,23 @@
 
 use super::quad::SPHERICAL_SOLID_ANGLE;
 use super::{
-    LightSample, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint, area_to_solid_angle,
+    LightSample, MeshPoint, Primitive, PrimitiveShape, ShapeError, ShapeModel, SurfacePoint,
+    area_to_solid_angle,
 };
 use crate::format::V3;
 use crate::math::gamma;
 use glam::{Affine3A, DVec3, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
-/// A triangle. Its normal is `normalize((p1 - p0) x (p2 - p0))`; `uv` = (b1, b2), the
-/// barycentric weights of `p1` and `p2`.
+/// A triangle. Its normal is `normalize((p1 - p0) x (p2 - p0))`; its surface's uv is (b1, b2),
+/// the barycentric weights of `p1` and `p2`, or the vertices' texture coordinates interpolated
+/// by them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Triangle {
     /// Vertices.
     pub p: [Vec3A; 3],
+    /// Texture coordinates of the vertices (a mesh's, where its file gives them).
+    pub uv: Option<[Vec2; 3]>,
 }
 
 /// Triangles estimated to subtend less than this (steradians) are sampled by area. Measured at
@@ -42,7 +46,7 @@ impl Triangle {
 
     /// `None` when the vertices are collinear (no area) or the area is not finite.
     pub fn new(p0: Vec3A, p1: Vec3A, p2: Vec3A) -> Option<Self> {
-        let t = Self { p: [p0, p1, p2] };
+        let t = Self { p: [p0, p1, p2], uv: None };
         let a = t.area();
         (a > 0.0 && a.is_finite()).then_some(t)
     }
@@ -111,7 +115,12 @@ impl Triangle {
         let p = b0 * p0 + b1 * p1 + b2 * p2;
         let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
         let n = self.cross().normalize();
-        SurfacePoint { p, n, ns: n, uv: Vec2::new(b1, b2), err }
+        // A mesh's interpolation (`accel::mesh`), so that its baked triangles read its uvs.
+        let uv = match self.uv {
+            None => Vec2::new(b1, b2),
+            Some([t0, t1, t2]) => b0 * t0 + b1 * t1 + b2 * t2,
+        };
+        SurfacePoint { p, n, ns: n, uv, err, on: MeshPoint::NONE }
     }
 }
 

@@ -1,18 +1,50 @@
-//! `Image(file: "earth.png", wrap: Repeat)`: an image file, bilinearly filtered.
+//! `Image(file: "earth.png", wrap: Repeat, filter: Bilinear, raw: false, uv_transform: ..)`:
+//! an image file, bilinearly filtered or nearest.
 
-use super::{Texture, TextureId, TextureImage, TextureModel, Wrap};
+use super::{Filter, Texture, TextureId, TextureImage, TextureModel, UvTransform, Wrap};
 use crate::format::{Color, Rgb, context};
 use serde::{Deserialize, Deserializer, de::Error};
+use std::sync::Arc;
 
-/// PNG, JPEG, HDR or EXR, relative to the scene file; 8-bit images are sRGB, float ones linear.
+/// PNG, JPEG, HDR or EXR, relative to the scene file; 8-bit images are sRGB (unless `raw`),
+/// float ones linear.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
-#[serde(deny_unknown_fields)]
+#[serde(from = "ImageFields")]
 pub struct Image {
-    /// The file.
+    /// The file (its 8-bit texels left undecoded if the scene says `raw: true`).
     pub file: ImageFile,
     /// `Repeat` (default), `Clamp` or `Mirror`.
-    #[serde(default)]
     pub wrap: Wrap,
+    /// `Bilinear` (default) or `Nearest`.
+    pub filter: Filter,
+    /// Applied to the surface's uv before the lookup (default: none).
+    pub uv_transform: Option<UvTransform>,
+}
+
+/// The fields as written; `raw` is applied to the file once it is read.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields, rename = "Image")]
+struct ImageFields {
+    file: ImageFile,
+    #[serde(default)]
+    wrap: Wrap,
+    #[serde(default)]
+    filter: Filter,
+    /// The 8-bit file's codes / 255, without the sRGB decoding (default false).
+    #[serde(default)]
+    raw: bool,
+    #[serde(default)]
+    uv_transform: Option<UvTransform>,
+}
+
+impl From<ImageFields> for Image {
+    fn from(f: ImageFields) -> Self {
+        let mut file = f.file;
+        if f.raw && file.image.srgb8 {
+            file.image = Arc::new(file.image.undecoded());
+        }
+        Image { file, wrap: f.wrap, filter: f.filter, uv_transform: f.uv_transform }
+    }
 }
 
 /// An image file, read when the scene is loaded (also an environment map's).
@@ -21,7 +53,7 @@ pub struct ImageFile {
     /// The path as written.
     pub path: std::path::PathBuf,
     /// The decoded image.
-    pub image: std::sync::Arc<TextureImage>,
+    pub image: Arc<TextureImage>,
 }
 
 impl<'de> Deserialize<'de> for ImageFile {
@@ -31,12 +63,17 @@ impl<'de> Deserialize<'de> for ImageFile {
             Some(dir) => TextureImage::load(&dir.join(&path)).map_err(D::Error::custom)?,
             None => TextureImage::default(),
         };
-        Ok(ImageFile { path, image: std::sync::Arc::new(image) })
+        Ok(ImageFile { path, image: Arc::new(image) })
     }
 }
 
 impl TextureModel for Image {
     fn build(&self, _color: &mut dyn FnMut(&Color<Rgb>) -> TextureId) -> Texture {
-        Texture::Image { image: self.file.image.clone(), wrap: self.wrap }
+        Texture::Image {
+            image: self.file.image.clone(),
+            wrap: self.wrap,
+            filter: self.filter,
+            transform: self.uv_transform,
+        }
     }
 }

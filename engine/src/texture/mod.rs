@@ -11,13 +11,15 @@
 //! [`Textures::eval`] and [`Textures::mean`], the runtime that shading reads.
 //!
 //! Conventions: u runs along a quad's `u` edge and around a sphere eastwards (see the README);
-//! v runs up. An image's row 0 is its top: v = 1. Solid textures (checker, noise) use world
-//! coordinates.
+//! v runs up. An image's row 0 is its top: v = 1 (Mitsuba 3 puts row 0 at its v = 0 and flips
+//! an OBJ file's v on load, so the two agree on meshes, and a converted Mitsuba shape's v is
+//! 1 - Mitsuba's). Solid textures (checker, noise) use world coordinates.
 
 pub mod blocky_noise;
 pub mod checker;
 pub mod image;
 pub mod marble;
+pub mod mesh_attribute;
 pub mod noise;
 pub mod solid;
 #[cfg(feature = "test-texture")]
@@ -25,9 +27,10 @@ pub mod test_stripes;
 pub mod turbulence;
 pub mod uv_checker;
 
+use crate::accel::mesh::{MeshBlas, MeshData};
 use crate::format::registry::{fields, registry, value};
 use crate::format::{Color, Rgb};
-use crate::shape::SurfacePoint;
+use crate::shape::{MeshPoint, SurfacePoint};
 use glam::{Vec2, Vec3, Vec3A};
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
@@ -45,6 +48,7 @@ registry! {
         BlockyNoise(blocky_noise::BlockyNoise),
         Turbulence(turbulence::Turbulence),
         Marble(marble::Marble),
+        MeshAttribute(mesh_attribute::MeshAttribute),
         #[cfg(feature = "test-texture")]
         TestStripes(test_stripes::TestStripes),
     }
@@ -74,6 +78,44 @@ pub enum Wrap {
     Mirror,
 }
 
+/// How an image is read between texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+pub enum Filter {
+    /// Bilinear interpolation between the four nearest texel centres (default).
+    #[default]
+    Bilinear,
+    /// The texel the point falls in.
+    Nearest,
+}
+
+/// An affine map of the uv plane, applied to a surface's uv before a texture reads it (Mitsuba's
+/// `to_uv`): `u' = m[0][0] u + m[0][1] v + m[0][2]`, `v' = m[1][0] u + m[1][1] v + m[1][2]`.
+/// RON: `((a, b, c), (d, e, f))`, rows, finite numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform(pub [[f32; 3]; 2]);
+
+impl UvTransform {
+    /// The transformed uv (products and sums in this order, no fused multiply-add).
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let [a, b] = self.0;
+        Vec2::new(a[0] * uv.x + a[1] * uv.y + a[2], b[0] * uv.x + b[1] * uv.y + b[2])
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for UvTransform {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let ((a, b, c), (e, f, g)) = <((f32, f32, f32), (f32, f32, f32))>::deserialize(d)?;
+        let m = [[a, b, c], [e, f, g]];
+        match m.iter().flatten().all(|x| x.is_finite()) {
+            true => Ok(Self(m)),
+            false => Err(serde::de::Error::custom(format!(
+                "expected a uv transform of finite numbers, found (({a}, {b}, {c}), ({e}, {f}, {g}))"
+            ))),
+        }
+    }
+}
+
 /// A decoded image in linear RGB, row 0 on top.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct TextureImage {
@@ -83,6 +125,15 @@ pub struct TextureImage {
     pub height: u32,
     /// Row-major linear RGB texels.
     pub texels: Vec<Vec3>,
+    /// The texels were decoded from an 8-bit file through [`srgb8_table`] (so
+    /// [`Self::undecoded`] can give back the file's values).
+    pub srgb8: bool,
+}
+
+/// The linear values of the 256 8-bit sRGB codes, strictly increasing.
+pub fn srgb8_table() -> &'static [f32; 256] {
+    static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)))
 }
 
 /// Why an image texture cannot be used.
@@ -99,7 +150,7 @@ pub enum TextureError {
 
 impl TextureImage {
     /// Reads PNG, JPEG, HDR or EXR. 8-bit images are sRGB-encoded: they are decoded to linear
-    /// once, here, through a 256-entry table; float images are already linear.
+    /// once, here, through a 256-entry table ([`srgb8_table`]); float images are already linear.
     pub fn load(path: &Path) -> Result<Self, TextureError> {
         Self::from_image(crate::format::files::decode_image(path).map_err(TextureError::Read)?, path)
     }
@@ -107,15 +158,17 @@ impl TextureImage {
     /// A decoded image's texels (as [`Self::load`] reads them); `path` names it in errors.
     pub fn from_image(img: ::image::DynamicImage, path: &Path) -> Result<Self, TextureError> {
         let (width, height) = (img.width(), img.height());
-        let texels = match img {
+        let float =
+            matches!(img, ::image::DynamicImage::ImageRgb32F(_) | ::image::DynamicImage::ImageRgba32F(_));
+        let texels = match float {
             // A float file may hold NaN, infinities or negative values: they read as 0.
-            ::image::DynamicImage::ImageRgb32F(_) | ::image::DynamicImage::ImageRgba32F(_) => img
+            true => img
                 .into_rgb32f()
                 .pixels()
                 .map(|p| Vec3::from_array(p.0.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
                 .collect(),
-            _ => {
-                let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+            false => {
+                let lut = srgb8_table();
                 img.into_rgb8()
                     .pixels()
                     .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
@@ -125,7 +178,41 @@ impl TextureImage {
         if width == 0 || height == 0 {
             return Err(TextureError::Empty(path.to_owned()));
         }
-        Ok(Self { width, height, texels })
+        Ok(Self { width, height, texels, srgb8: !float })
+    }
+
+    /// The image without the sRGB decoding of an 8-bit file: each texel the file's code / 255
+    /// (Mitsuba's `raw`). The table is strictly increasing, so each decoded value names its
+    /// code exactly. A float image is returned as it is.
+    pub fn undecoded(&self) -> Self {
+        if !self.srgb8 {
+            return self.clone();
+        }
+        let lut = srgb8_table();
+        let code = |c: f32| lut.partition_point(|&x| x < c) as f32 / 255.0;
+        let texels = self.texels.iter().map(|t| Vec3::new(code(t.x), code(t.y), code(t.z))).collect();
+        Self { width: self.width, height: self.height, texels, srgb8: false }
+    }
+
+    /// The image at `uv` read through `filter`.
+    #[inline]
+    pub fn lookup(&self, uv: Vec2, wrap: Wrap, filter: Filter) -> Vec3 {
+        match filter {
+            Filter::Bilinear => self.bilinear(uv, wrap),
+            Filter::Nearest => self.nearest(uv, wrap),
+        }
+    }
+
+    /// The texel that `uv` falls in: column floor(u w), row floor((1 - v) h) from the top, as
+    /// Mitsuba's nearest filter (Dr.Jit's `texture.h`: the position times the resolution,
+    /// without the half-texel shift of the bilinear lookup), wrapped by `wrap`.
+    #[inline]
+    pub fn nearest(&self, uv: Vec2, wrap: Wrap) -> Vec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        // Bounded as in `bilinear`; NaN reads texel 0.
+        let x = (uv.x * w as f32).clamp(-2.1e9, 2.1e9).floor() as i64;
+        let y = ((1.0 - uv.y) * h as f32).clamp(-2.1e9, 2.1e9).floor() as i64;
+        self.texels[(wrap_index(y, h, wrap) * w + wrap_index(x, w, wrap)) as usize]
     }
 
     /// Bilinear lookup at `uv` (texel centres at (i + 0.5) / size).
@@ -201,7 +288,7 @@ pub enum Texture {
         /// Texture of odd cells.
         odd: TextureId,
     },
-    /// Checker in uv: `u` by `v` cells over the [0, 1]^2 square.
+    /// Checker in uv: `u` by `v` cells over the [0, 1]^2 square (of the transformed uv).
     UvChecker {
         /// Cells along u.
         u: f32,
@@ -211,13 +298,19 @@ pub enum Texture {
         even: TextureId,
         /// Texture of odd cells.
         odd: TextureId,
+        /// Applied to the surface's uv first (`None`: the identity).
+        transform: Option<UvTransform>,
     },
-    /// An image, bilinearly filtered.
+    /// An image.
     Image {
         /// The texels.
         image: Arc<TextureImage>,
         /// Wrap mode.
         wrap: Wrap,
+        /// Filter.
+        filter: Filter,
+        /// Applied to the surface's uv first (`None`: the identity).
+        transform: Option<UvTransform>,
     },
     /// Noise of world position times `scale`, times `color`.
     Noise {
@@ -230,6 +323,13 @@ pub enum Texture {
         /// Colour the grey value multiplies.
         color: Vec3,
     },
+    /// The values of the hit mesh's attribute `name` times `scale` (black off meshes).
+    MeshAttribute {
+        /// The attribute's name (`vertex_color`, `face_weight`).
+        name: String,
+        /// Multiplies the values.
+        scale: f32,
+    },
 }
 
 /// All textures of a scene.
@@ -240,20 +340,29 @@ pub struct Textures {
 }
 
 impl Textures {
-    /// The colour of texture `id` at a surface point.
+    /// The colour of texture `id` at a surface point that is not on a mesh (mesh attributes
+    /// read black).
     pub fn eval(&self, id: TextureId, uv: Vec2, p: Vec3A) -> Vec3 {
+        self.eval_on(id, uv, p, None)
+    }
+
+    /// [`Self::eval`] at the point `on` of the mesh `mesh`, when it is on one.
+    fn eval_on(&self, id: TextureId, uv: Vec2, p: Vec3A, mesh: Option<(&MeshData, MeshPoint)>) -> Vec3 {
         match &self.list[id as usize] {
             Texture::Solid(c) => *c,
             Texture::Checker { scale, even, odd } => {
                 let c = (p / *scale).floor();
                 let parity = (c.x + c.y + c.z).rem_euclid(2.0);
-                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+                self.eval_on(if parity < 1.0 { *even } else { *odd }, uv, p, mesh)
             }
-            Texture::UvChecker { u, v, even, odd } => {
-                let parity = ((uv.x * u).floor() + (uv.y * v).floor()).rem_euclid(2.0);
-                self.eval(if parity < 1.0 { *even } else { *odd }, uv, p)
+            Texture::UvChecker { u, v, even, odd, transform } => {
+                let t = transform.map_or(uv, |m| m.apply(uv));
+                let parity = ((t.x * u).floor() + (t.y * v).floor()).rem_euclid(2.0);
+                self.eval_on(if parity < 1.0 { *even } else { *odd }, uv, p, mesh)
             }
-            Texture::Image { image, wrap } => image.bilinear(uv, *wrap),
+            Texture::Image { image, wrap, filter, transform } => {
+                image.lookup(transform.map_or(uv, |m| m.apply(uv)), *wrap, *filter)
+            }
             Texture::Noise { kind, scale, depth, color } => {
                 let q = Vec3::from(p) * *scale;
                 let perlin = Perlin::shared();
@@ -268,13 +377,32 @@ impl Textures {
                 };
                 *color * grey
             }
+            Texture::MeshAttribute { name, scale } => {
+                let Some((m, on)) = mesh else { return Vec3::ZERO };
+                let (Some(a), Some(&v)) =
+                    (m.attributes.iter().find(|a| a.name == *name), m.triangles.get(on.triangle as usize))
+                else {
+                    return Vec3::ZERO;
+                };
+                a.at(on.triangle, v, on.b) * *scale
+            }
         }
     }
 
-    /// The colour at a surface point.
+    /// The colour at a surface point; `meshes` are the scene's (a point on one names its index,
+    /// [`MeshPoint::mesh`]).
     #[inline]
-    pub fn at(&self, id: TextureId, sp: &SurfacePoint) -> Vec3 {
-        self.eval(id, sp.uv, sp.p)
+    pub fn at(&self, id: TextureId, sp: &SurfacePoint, meshes: &[Arc<MeshBlas>]) -> Vec3 {
+        let mesh = meshes.get(sp.on.mesh as usize).map(|b| (&*b.mesh, sp.on));
+        self.eval_on(id, sp.uv, sp.p, mesh)
+    }
+
+    /// The width and height of texture `id`'s image, for one that is an image.
+    pub fn resolution(&self, id: TextureId) -> Option<(u32, u32)> {
+        match &self.list[id as usize] {
+            Texture::Image { image, .. } => Some((image.width, image.height)),
+            _ => None,
+        }
     }
 
     /// A representative mean colour (light power estimates, statistics).
@@ -288,6 +416,8 @@ impl Textures {
             Texture::Noise { kind, color, .. } => {
                 *color * if *kind == NoiseKind::Turbulence { 0.3 } else { 0.5 }
             }
+            // Unknown until a mesh is hit: half the scale (uniformly random values' mean).
+            Texture::MeshAttribute { scale, .. } => Vec3::splat(0.5 * scale),
         }
     }
 }
@@ -450,7 +580,7 @@ mod tests {
                 Texture::Solid(Vec3::ZERO),
                 Texture::Solid(Vec3::ONE),
                 Texture::Checker { scale: 2.0, even: 0, odd: 1 },
-                Texture::UvChecker { u: 4.0, v: 2.0, even: 0, odd: 1 },
+                Texture::UvChecker { u: 4.0, v: 2.0, even: 0, odd: 1, transform: None },
             ],
         };
         assert_eq!(t.eval(2, Vec2::ZERO, Vec3A::new(0.5, 0.5, 0.5)), Vec3::ZERO);
@@ -464,7 +594,12 @@ mod tests {
     #[test]
     fn bilinear_wraps_and_runs_v_upwards() {
         // 2 x 2: top row red, green; bottom row blue, white.
-        let img = TextureImage { width: 2, height: 2, texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE] };
+        let img = TextureImage {
+            width: 2,
+            height: 2,
+            texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
+            srgb8: false,
+        };
         // Texel centres: (0.25, 0.75) is the top-left texel.
         assert_eq!(img.bilinear(Vec2::new(0.25, 0.75), Wrap::Repeat), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(0.75, 0.25), Wrap::Repeat), Vec3::ONE);
@@ -475,6 +610,98 @@ mod tests {
         assert_eq!(img.bilinear(Vec2::new(0.0, 0.75), Wrap::Clamp), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(-0.25, 0.75), Wrap::Mirror), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(1.25, 0.75), Wrap::Repeat), Vec3::X);
+    }
+
+    /// A 4 x 2 image whose texel in column i, row j (from the top) is (i, j, 0).
+    fn grid() -> TextureImage {
+        let texels = (0..2).flat_map(|j| (0..4).map(move |i| Vec3::new(i as f32, j as f32, 0.0))).collect();
+        TextureImage { width: 4, height: 2, texels, srgb8: false }
+    }
+
+    /// Mitsuba's nearest lookup (Dr.Jit's `tex_eval`): texel (floor(u w), floor(v h)) of its uv,
+    /// whose v is 1 - pathwave's, each index wrapped (`tex_wrap`: repeat is the Euclidean
+    /// remainder, mirror reflects every other period, clamp clamps).
+    #[test]
+    fn nearest_takes_the_texel_the_point_falls_in() {
+        let img = grid();
+        let at = |u: f32, v: f32, wrap| img.nearest(Vec2::new(u, v), wrap);
+        // Mitsuba's uv (0.3, 0.2): texel (floor(1.2), floor(0.4)) = (1, 0), the top row.
+        assert_eq!(at(0.3, 0.8, Wrap::Repeat), Vec3::new(1.0, 0.0, 0.0));
+        assert_eq!(at(0.99, 0.01, Wrap::Repeat), Vec3::new(3.0, 1.0, 0.0));
+        // u = -0.1: column -1; u = 1.1: column 4; u = -0.3: column -2.
+        for (u, repeat, mirror, clamp) in [(-0.1, 3.0, 0.0, 0.0), (1.1, 0.0, 3.0, 3.0), (-0.3, 2.0, 1.0, 0.0)]
+        {
+            assert_eq!(at(u, 0.8, Wrap::Repeat).x, repeat, "repeat at u = {u}");
+            assert_eq!(at(u, 0.8, Wrap::Mirror).x, mirror, "mirror at u = {u}");
+            assert_eq!(at(u, 0.8, Wrap::Clamp).x, clamp, "clamp at u = {u}");
+        }
+        // v = 1.3 (Mitsuba's -0.3): row -1, which mirror and clamp read as row 0, repeat as 1.
+        assert_eq!(at(0.3, 1.3, Wrap::Repeat).y, 1.0);
+        assert_eq!(at(0.3, 1.3, Wrap::Mirror).y, 0.0);
+        assert_eq!(at(0.3, 1.3, Wrap::Clamp).y, 0.0);
+        // Far away and NaN stay in the image.
+        assert!(at(1e30, f32::NAN, Wrap::Mirror).is_finite());
+    }
+
+    /// Mitsuba's bilinear lookup: x = u w - 1/2, the texels floor(x) and floor(x) + 1 weighted
+    /// 1 - frac(x) and frac(x), each index wrapped; the same in v.
+    #[test]
+    fn bilinear_wraps_texel_indices_as_mitsuba() {
+        let img = grid();
+        let at = |u: f32, wrap| img.lookup(Vec2::new(u, 0.75), wrap, Filter::Bilinear).x;
+        // u = 0.05: x = -0.3, texels -1 (weight 0.3) and 0 (0.7).
+        assert!((at(0.05, Wrap::Repeat) - 0.3 * 3.0).abs() < 1e-6);
+        assert!(at(0.05, Wrap::Mirror).abs() < 1e-6 && at(0.05, Wrap::Clamp).abs() < 1e-6);
+        // u = 0.95: x = 3.3, texels 3 (0.7) and 4 (0.3): repeat reads column 0 for 4.
+        assert!((at(0.95, Wrap::Repeat) - 0.7 * 3.0).abs() < 1e-6);
+        assert!((at(0.95, Wrap::Mirror) - 3.0).abs() < 1e-6 && (at(0.95, Wrap::Clamp) - 3.0).abs() < 1e-6);
+        // The filter switch: nearest there is column 3.
+        assert_eq!(img.lookup(Vec2::new(0.95, 0.75), Wrap::Repeat, Filter::Nearest).x, 3.0);
+    }
+
+    #[test]
+    fn uv_transforms_apply_before_the_lookup() {
+        let m = UvTransform([[2.0, 0.0, -0.5], [0.0, 2.0, -0.5]]);
+        assert_eq!(m.apply(Vec2::new(0.5, 0.25)), Vec2::new(0.5, 0.0));
+        let swap = UvTransform([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
+        let t = Textures {
+            list: vec![
+                Texture::Image {
+                    image: Arc::new(grid()),
+                    wrap: Wrap::Clamp,
+                    filter: Filter::Nearest,
+                    transform: None,
+                },
+                Texture::Image {
+                    image: Arc::new(grid()),
+                    wrap: Wrap::Clamp,
+                    filter: Filter::Nearest,
+                    transform: Some(swap),
+                },
+                Texture::Solid(Vec3::ZERO),
+                Texture::Solid(Vec3::ONE),
+                Texture::UvChecker { u: 2.0, v: 2.0, even: 2, odd: 3, transform: Some(m) },
+            ],
+        };
+        let uv = Vec2::new(0.9, 0.2);
+        assert_eq!(t.eval(1, uv, Vec3A::ZERO), t.eval(0, Vec2::new(0.2, 0.9), Vec3A::ZERO));
+        // (0.3, 0.3) becomes (0.1, 0.1): cell (0, 0); (0.6, 0.3) becomes (0.7, 0.1): cell (1, 0).
+        assert_eq!(t.eval(4, Vec2::new(0.3, 0.3), Vec3A::ZERO), Vec3::ZERO);
+        assert_eq!(t.eval(4, Vec2::new(0.6, 0.3), Vec3A::ZERO), Vec3::ONE);
+    }
+
+    #[test]
+    fn raw_gives_back_the_eight_bit_codes() {
+        let codes = ::image::RgbImage::from_fn(256, 1, |i, _| ::image::Rgb([i as u8, 255 - i as u8, 7]));
+        let img = TextureImage::from_image(codes.into(), Path::new("codes.png")).unwrap();
+        assert!(img.srgb8);
+        let raw = img.undecoded();
+        for (i, t) in raw.texels.iter().enumerate() {
+            assert_eq!(*t, Vec3::new(i as f32 / 255.0, (255 - i) as f32 / 255.0, 7.0 / 255.0), "code {i}");
+        }
+        // Float images are linear already.
+        let hdr = TextureImage { srgb8: false, ..img.clone() };
+        assert_eq!(hdr.undecoded(), hdr);
     }
 
     #[test]

@@ -20,6 +20,12 @@ pub struct TestStripes {
 
 impl TextureModel for TestStripes {
     fn build(&self, color: &mut dyn FnMut(&Color<Rgb>) -> TextureId) -> Texture {
-        Texture::UvChecker { u: self.stripes.0, v: 1.0, even: color(&self.even), odd: color(&self.odd) }
+        Texture::UvChecker {
+            u: self.stripes.0,
+            v: 1.0,
+            even: color(&self.even),
+            odd: color(&self.odd),
+            transform: None,
+        }
     }
 }

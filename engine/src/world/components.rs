@@ -3,6 +3,7 @@
 use crate::accel::geometry::Geometry;
 use crate::accel::instances::Instances;
 use crate::accel::mesh::{MeshBlas, MeshData};
+use crate::lighting::area::AreaEmission;
 use crate::lighting::lights::{LightTable, PunctualLight};
 use crate::material::Material;
 use crate::media::{Media, Medium};
@@ -82,13 +83,19 @@ pub struct EmitKeys(pub Vec<(u32, crate::animation::Track<Vec3>)>);
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub struct ObjectIndex(pub u32);
 
-/// Index into the [`Materials`] resource.
+/// Index into the [`Materials`] resource (a material's, or an emitting object's copy of it:
+/// see [`ObjectEmission`]).
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MaterialId(pub u32);
 
 /// All materials.
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Materials(pub Vec<Material>);
+
+/// The `emit` of objects, by the material id each was given (indexed like [`Materials`]; `None`
+/// for the ids of the named materials).
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct ObjectEmission(pub Vec<Option<AreaEmission>>);
 
 /// The camera as described (turned into a [`Camera`](crate::camera::Camera) for the image size at extraction), and,
 /// when keyframes move it while the shutter is open, as it is at shutter close (the first is

@@ -59,7 +59,13 @@ pub fn extract_render_scene(
     };
     out.0 = Some(Arc::new(RenderScene {
         features: Features::detect(&geometry.geometry, &instances.instances, &media.media, &camera)
-            .with_textures(&geometry.geometry, &instances.instances, &textures.per_material),
+            .with_materials(
+                &geometry.geometry,
+                &instances.instances,
+                &materials.0,
+                &textures.per_material,
+                &lights.lights.emission,
+            ),
         camera,
         settings: s,
         background: background.0.clone(),

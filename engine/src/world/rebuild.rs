@@ -5,6 +5,7 @@ use super::components::*;
 use crate::accel::geometry::Geometry;
 use crate::accel::instances::{Instance, Instances, ShutterMotion};
 use crate::accel::mesh::MeshBlas;
+use crate::lighting::area::emission_table;
 use crate::lighting::lights::{LightInputs, LightTable};
 use crate::media::{Boundary, Media, Volume};
 use crate::placement::{Form, primitives};
@@ -237,17 +238,22 @@ pub fn rebuild_media(
 
 /// Rebuilds the light table when the primitives, the instances (they bound the scene), the
 /// materials (which emit), the punctual lights or the background changed.
+#[expect(clippy::too_many_arguments, reason = "an ECS system takes each resource it reads as a parameter")]
 pub fn rebuild_lights(
     mut out: ResMut<SceneLights>,
     geometry: Res<SceneGeometry>,
     instances: Res<SceneInstances>,
     materials: Res<Materials>,
+    textures: Res<SceneTextures>,
+    emitting: Res<ObjectEmission>,
     punctual: Res<PunctualLights>,
     background: Res<BackgroundLight>,
 ) {
     let any = geometry.is_changed()
         || instances.is_changed()
         || materials.is_changed()
+        || textures.is_changed()
+        || emitting.is_changed()
         || punctual.is_changed()
         || background.is_changed();
     if !any && out.rebuilds > 0 {
@@ -262,7 +268,8 @@ pub fn rebuild_lights(
         Some(acc.map_or((lo, hi), |(a, c)| (a.min(lo), c.max(hi))))
     });
     let inputs = LightInputs { punctual: &punctual.0, environment: background.0.sampling(), bounds };
-    out.lights = Arc::new(LightTable::build(geo, &materials.0, inputs));
+    let emission = emission_table(&materials.0, &textures.per_material, &emitting.0);
+    out.lights = Arc::new(LightTable::build(geo, emission, inputs));
     out.rebuilds += 1;
     tracing::info!(lights = out.lights.len(), "light table built");
 }
@@ -342,7 +349,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Sphere(SphereShape { center: Vec3A::Y, radius: 0.5 })),
+                Shape(Form::Sphere(SphereShape { center: Vec3A::Y, radius: 0.5, poles: Default::default() })),
                 MaterialId(0),
             ))
             .id();
@@ -403,7 +410,7 @@ mod tests {
             .world
             .spawn((
                 Transform(Affine3A::IDENTITY),
-                Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE })),
+                Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE, uv: Default::default() })),
                 Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
             ))
             .id();

@@ -6,8 +6,8 @@
 use crate::scene::SceneDesc;
 use crate::world::{
     Animated, BackgroundLight, CameraKeys, EmitKeys, Filling, FrameTime, Instanced, MaterialId, Materials,
-    MeshLibrary, Motion, ObjectIndex, PunctualLights, SceneGeometry, SceneInstances, SceneLights, SceneMedia,
-    SceneTextures, SceneWorld, Settings, Shape, Transform,
+    MeshLibrary, Motion, ObjectEmission, ObjectIndex, PunctualLights, SceneGeometry, SceneInstances,
+    SceneLights, SceneMedia, SceneTextures, SceneWorld, Settings, Shape, Transform,
 };
 use bevy_ecs::component::Mutable;
 use bevy_ecs::prelude::*;
@@ -127,6 +127,7 @@ impl SceneWorld {
         let mut report = Reload::default();
         let named = [
             ("materials", sync_resource::<Materials>(world, &fresh)),
+            ("emission", sync_resource::<ObjectEmission>(world, &fresh)),
             ("textures", sync_resource::<SceneTextures>(world, &fresh)),
             ("settings", sync_resource::<Settings>(world, &fresh)),
             ("camera", sync_resource::<CameraKeys>(world, &fresh)),

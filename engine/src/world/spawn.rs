@@ -2,7 +2,9 @@
 
 use super::components::*;
 use crate::accel::mesh::MeshData;
+use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::EnvironmentMap;
+use crate::lighting::punctual::LightTextures;
 use crate::material::Material;
 use crate::media::Medium;
 use crate::placement::{Form, primitives};
@@ -18,58 +20,80 @@ use std::sync::Arc;
 pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
     let textures = build_textures(desc);
-    let (mats, per_material): (Vec<Material>, _) =
+    let (mut mats, mut per_material): (Vec<Material>, Vec<MaterialTextures>) =
         desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
-    let emits = |id: usize| mats[id].is_emissive();
+    // Each object with an `emit` gets a material id of its own: its material's copy, with
+    // the emission beside it (the ids of the named materials emit only if they are emitters).
+    let mut emission = vec![None; mats.len()];
+    let ids: Vec<Option<u32>> = desc
+        .objects
+        .iter()
+        .map(|o| {
+            let Body::Surface(name) = &o.body else { return None };
+            let id = names.iter().position(|n| *n == name.0).expect("material names are validated at load");
+            let Some(emit) = &o.emit else { return Some(id as u32) };
+            let (radiance, texture) = match &emit.radiance {
+                Color::Value(v) => (v.0, None),
+                Color::Texture(t) => {
+                    let t = texture_id(desc, t);
+                    (textures.mean(t), Some(t))
+                }
+            };
+            mats.push(mats[id]);
+            per_material.push(per_material[id]);
+            emission.push(Some(AreaEmission { radiance, texture, two_sided: emit.two_sided }));
+            Some(mats.len() as u32 - 1)
+        })
+        .collect();
+    let emits = |id: u32| mats[id as usize].is_emissive() || emission[id as usize].is_some();
     // Boxes and quads whose keyframes turn or scale them become meshes, so that they blur
     // by their motion over the shutter as instances do (not at their mid-shutter pose).
     let shapes: Vec<Form> = desc
         .objects
         .iter()
-        .map(|o| {
+        .zip(&ids)
+        .map(|(o, id)| {
             let turns = o.animate.as_ref().is_some_and(|a| a.rotate.is_some() || a.scale.is_some());
-            let surface = matches!(&o.body, Body::Surface(name)
-                if !emits(names.iter().position(|n| *n == name.0).expect("validated")));
+            let surface = id.is_some_and(|id| !emits(id));
             match (turns && surface).then(|| flat_mesh(&o.shape.form())).flatten() {
                 Some(mesh) => Form::Mesh(Arc::new(mesh)),
                 None => o.shape.form(),
             }
         })
         .collect();
-    let instanced: Vec<bool> = desc
-        .objects
+    // Emitting meshes stay primitives, so that light sampling finds their triangles.
+    let instanced: Vec<bool> = shapes
         .iter()
-        .zip(&shapes)
-        .map(|(o, shape)| match (shape, &o.body) {
-            (Form::Mesh(_), Body::Surface(name)) => {
-                !emits(names.iter().position(|n| *n == name.0).expect("validated"))
-            }
-            _ => false,
-        })
+        .zip(&ids)
+        .map(|(shape, id)| matches!(shape, Form::Mesh(_)) && id.is_some_and(|id| !emits(id)))
         .collect();
+    let id = |name: &str| texture_id(desc, name);
+    let lights =
+        desc.lights.iter().map(|l| l.to_light(&LightTextures { textures: &textures, id: &id })).collect();
     world.insert_resource(Materials(mats));
     world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
-    for (i, ((obj, instanced), shape)) in desc.objects.iter().zip(instanced).zip(shapes).enumerate() {
+    world.insert_resource(ObjectEmission(emission));
+    for (i, (((obj, instanced), shape), id)) in
+        desc.objects.iter().zip(instanced).zip(shapes).zip(ids).enumerate()
+    {
         let placed = (Transform(compose(&obj.transform)), Shape(shape), ObjectIndex(i as u32));
-        match &obj.body {
-            Body::Surface(name) => {
-                let id =
-                    names.iter().position(|n| *n == name.0).expect("material names are validated at load");
-                let mut e = world.spawn((placed, MaterialId(id as u32)));
-                let velocity = obj.motion.map_or(Vec3::ZERO, |m| m.velocity.0);
-                if obj.motion.is_some() || obj.animate.is_some() {
-                    e.insert(Motion { velocity });
-                }
-                if let Some(keys) = &obj.animate {
-                    e.insert(Animated { base: compose(&obj.transform), keys: keys.clone(), velocity });
-                }
-                if instanced {
-                    e.insert(Instanced);
-                }
-            }
-            Body::Volume(m) => {
+        // Objects without a material id are volumes.
+        let Some(id) = id else {
+            if let Body::Volume(m) = &obj.body {
                 world.spawn((placed, Filling(Medium { sigma_t: m.density.0, albedo: m.albedo.0 })));
             }
+            continue;
+        };
+        let mut e = world.spawn((placed, MaterialId(id)));
+        let velocity = obj.motion.map_or(Vec3::ZERO, |m| m.velocity.0);
+        if obj.motion.is_some() || obj.animate.is_some() {
+            e.insert(Motion { velocity });
+        }
+        if let Some(keys) = &obj.animate {
+            e.insert(Animated { base: compose(&obj.transform), keys: keys.clone(), velocity });
+        }
+        if instanced {
+            e.insert(Instanced);
         }
     }
     let r = desc.render;
@@ -115,7 +139,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
             )))
         }
     }));
-    world.insert_resource(PunctualLights(desc.lights.iter().map(|l| l.to_light()).collect()));
+    world.insert_resource(PunctualLights(lights));
     world.init_resource::<SceneLights>();
     world.init_resource::<SceneGeometry>();
     world.init_resource::<SceneInstances>();
@@ -138,7 +162,11 @@ fn flat_mesh(shape: &Form) -> Option<MeshData> {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend([q.q, q.q + q.u, q.q + q.u + q.v, q.q + q.v]);
         mesh.uvs.as_mut()?.extend([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::ONE, glam::Vec2::Y]);
-        mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        // The triangles turn as the quad faces: about u x v, or the other way if it is flipped.
+        match q.n.dot(q.u.cross(q.v)) < 0.0 {
+            false => mesh.triangles.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]),
+            true => mesh.triangles.extend([[base, base + 2, base + 1], [base, base + 3, base + 2]]),
+        }
     }
     Some(mesh)
 }

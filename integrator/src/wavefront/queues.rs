@@ -68,6 +68,7 @@ impl Paths {
                 ns: Vec3A::Z,
                 uv: glam::Vec2::ZERO,
                 err: 0.0,
+                on: pathwave_engine::shape::MeshPoint::NONE,
             },
         };
         Self {

@@ -88,7 +88,13 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize, hit: Option
     let kind = scene.materials[hit.material as usize].kind();
     match kind.shading() {
         Shading::Emitter => q.emissive.push(i),
-        Shading::Diffuse | Shading::Sampled | Shading::Glossy => q.shade[kind as usize].push(i),
+        Shading::Diffuse | Shading::Sampled | Shading::Glossy => {
+            // A surface that emits and reflects: `handle_emissive` adds its emission first.
+            if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
+                q.emissive.push(i);
+            }
+            q.shade[kind as usize].push(i)
+        }
     }
 }
 
@@ -99,10 +105,10 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize, hit: Option
 #[inline(always)]
 fn store_hit(dst: &mut Hit, h: &Hit) {
     let Hit { t, prim, material, surface } = h;
-    let SurfacePoint { p, n, ns, uv, err } = surface;
+    let SurfacePoint { p, n, ns, uv, err, on } = surface;
     (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
     let d = &mut dst.surface;
-    (d.p, d.n, d.ns, d.uv, d.err) = (*p, *n, *ns, *uv, *err);
+    (d.p, d.n, d.ns, d.uv, d.err, d.on) = (*p, *n, *ns, *uv, *err, *on);
 }
 
 /// Free-flight sampling for path `i` up to the surface at `tmax` with the number `u`: true (and
@@ -166,11 +172,15 @@ pub fn record_guides(scene: &RenderScene, p: &mut Paths, q: &Queues) {
         let s = i as usize;
         if p.guide[s].open {
             let hit = p.hit[s];
-            let mat = scene.material_at(hit.material, &hit.surface);
             if p.depth[s] == 0 {
-                p.guide[s].emission = p.beta[s] * mat.emitted(hit.surface.n.dot(-p.dir[s]));
+                let sp = &hit.surface;
+                p.guide[s].emission = p.beta[s] * scene.emitted(hit.material, sp, sp.n.dot(-p.dir[s]));
             }
-            p.guide[s].surface(&mat, facing(hit.surface.ns, p.dir[s]));
+            // A surface that also reflects is in a shading queue, where the loop below sees it.
+            let mat = scene.material_at(hit.material, &hit.surface);
+            if mat.is_emissive() {
+                p.guide[s].surface(&mat, facing(hit.surface.ns, p.dir[s]));
+            }
         }
     }
     for queue in &q.shade {
@@ -217,16 +227,18 @@ pub fn handle_escaped(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     }
 }
 
-/// `handle_emissive`: adds MIS-weighted emission; the paths end (emitters do not scatter).
+/// `handle_emissive`: adds MIS-weighted emission; the paths on emitters end (they do not
+/// scatter), those on surfaces that also reflect go on in their material's shading queue.
 pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for &i in &q.emissive {
         let s = i as usize;
         let hit = p.hit[s];
-        let mat = &scene.material_at(hit.material, &hit.surface);
         let mut st = p.state(s);
-        path::emit(scene, &mut st, &hit, mat, -p.dir[s], p.time[s]);
+        path::emit(scene, &mut st, &hit, -p.dir[s], p.time[s]);
         p.l[s] = st.l;
-        q.finished.push(i);
+        if scene.materials[hit.material as usize].is_emissive() {
+            q.finished.push(i);
+        }
     }
 }
 

@@ -10,10 +10,13 @@
 //! (Ize 2013: rounding cannot make a ray miss a box it touches), and visits hit children
 //! nearest first. What a leaf holds is the caller's business: a leaf is a range
 //! `(first, count)` that the caller assigned when building, and the caller tests it.
+//!
+//! Crowds of primitives that PLOC cannot order (copies of one primitive, primitives nested
+//! about one centre) are built top-down instead, and no tree is deeper than [`MAX_DEPTH`]
+//! levels, which the traversal stacks hold ([`build`]).
 
 use glam::Vec3A;
-use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2};
-use std::time::Duration;
+use obvhs::{BvhBuildParams, aabb::Aabb};
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -79,21 +82,34 @@ pub struct Bvh8 {
     pub bounds: Aabb,
 }
 
+mod build;
 mod packet;
 mod traverse;
 
+pub use build::{BuildStats, MAX_DEPTH};
+use build::{Kind, Tree};
 pub use packet::PACKET;
 pub use traverse::BoxRay;
 
 impl Bvh8 {
-    /// Builds a binary BVH over `aabbs` with obvhs and collapses it. `leaf` receives the
-    /// indices (into `aabbs`) of each leaf's primitives, every subtree of at most `max_leaf`
-    /// of them as one leaf, stores them as it likes and returns the `(first, count)` range
-    /// (count 1..=8) that [`Self::closest`] and [`Self::any`] will hand back for that leaf.
+    /// Builds a binary BVH over `aabbs` (with obvhs, crowds top-down: [`build`]) and
+    /// collapses it. `leaf` receives the indices (into `aabbs`) of each leaf's primitives,
+    /// every subtree of at most `max_leaf` of them as one leaf, stores them as it likes and
+    /// returns the `(first, count)` range (count 1..=8) that [`Self::closest`] and
+    /// [`Self::any`] will hand back for that leaf.
     pub fn build(aabbs: &[Aabb], max_leaf: u32, leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
+        Self::build_with_stats(aabbs, max_leaf, leaf).0
+    }
+
+    /// [`Self::build`], and what the build did.
+    pub fn build_with_stats(
+        aabbs: &[Aabb],
+        max_leaf: u32,
+        leaf: impl FnMut(&[u32]) -> (u32, u32),
+    ) -> (Self, BuildStats) {
         assert!((1..=255).contains(&max_leaf));
         if aabbs.is_empty() {
-            return Self::default();
+            return (Self::default(), BuildStats::default());
         }
         // obvhs's fast preset (PLOC, light reinsertion), its leaf collapse made to take every
         // subtree that fits (a traversal cost far above the intersection cost): on the
@@ -105,58 +121,93 @@ impl Bvh8 {
             collapse_traversal_cost: 1e6,
             ..BvhBuildParams::fast_build()
         };
-        let bvh2 = obvhs::bvh2::builder::build_bvh2(aabbs, params, &mut Duration::default());
-        Self::collapse(&bvh2, leaf)
+        let (tree, stats) = Tree::build(aabbs, max_leaf, params);
+        if stats.crowds + stats.rebuilt > 0 {
+            tracing::debug!(
+                primitives = aabbs.len(),
+                crowds = stats.crowds,
+                crowd_primitives = stats.crowd_prims,
+                rebuilt = stats.rebuilt,
+                height = stats.height,
+                "BVH: crowds built top-down"
+            );
+        }
+        let bvh = Self::collapse(&tree, leaf);
+        // The build bounds the binary tree's height; the traversal stacks rely on it.
+        let depth = bvh.depth();
+        assert!(depth <= MAX_DEPTH, "BVH depth {depth} beyond {MAX_DEPTH} (binary height {})", stats.height);
+        (bvh, stats)
     }
 
     /// Collapses a binary BVH: each node takes the two children of its binary counterpart and
     /// repeatedly opens the largest (by surface area) inner child until it has eight.
-    pub fn collapse(bvh2: &Bvh2, mut leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
-        let n2 = &bvh2.nodes;
-        let mut out = Self { nodes: vec![Node::EMPTY], bounds: *n2[0].aabb() };
+    fn collapse(tree: &Tree, mut leaf: impl FnMut(&[u32]) -> (u32, u32)) -> Self {
+        let n2 = &tree.nodes;
+        let mut out = Self { nodes: vec![Node::EMPTY], bounds: n2[0].aabb };
         // (binary node, wide node to fill)
         let mut todo = vec![(0usize, 0usize)];
-        let mut leaf_ref = |i: usize| {
-            let b = &n2[i];
-            let prims =
-                &bvh2.primitive_indices[b.first_index as usize..(b.first_index + b.prim_count) as usize];
-            let (first, count) = leaf(prims);
+        let mut leaf_ref = |first: u32, n: u32| {
+            let (first, count) = leaf(&tree.prims[first as usize..(first + n) as usize]);
             assert!(first <= MAX_FIRST && (1..=8).contains(&count), "leaf range {first}, {count}");
             LEAF | first << 3 | (count - 1)
         };
         while let Some((bi, wi)) = todo.pop() {
             let root = &n2[bi];
-            if root.is_leaf() {
-                // A tree that is one leaf: a root with one child.
-                let c = leaf_ref(bi);
-                out.nodes[wi].set_box(0, root.aabb());
-                out.nodes[wi].child[0] = c;
-                continue;
-            }
-            let mut kids = vec![root.first_index as usize, root.first_index as usize + 1];
+            let (l, r) = match root.kind {
+                Kind::Leaf(first, n) => {
+                    // A tree that is one leaf: a root with one child.
+                    let c = leaf_ref(first, n);
+                    out.nodes[wi].set_box(0, &root.aabb);
+                    out.nodes[wi].child[0] = c;
+                    continue;
+                }
+                Kind::Inner(l, r) => (l, r),
+            };
+            let mut kids = vec![l as usize, r as usize];
             while kids.len() < WIDTH {
                 let open = kids
                     .iter()
                     .enumerate()
-                    .filter(|(_, k)| !n2[**k].is_leaf())
-                    .max_by(|a, b| n2[*a.1].aabb().half_area().total_cmp(&n2[*b.1].aabb().half_area()));
-                let Some((pos, &k)) = open else { break };
+                    .filter_map(|(pos, &k)| match n2[k].kind {
+                        Kind::Inner(l, r) => Some((pos, (l, r), n2[k].aabb.half_area())),
+                        Kind::Leaf(..) => None,
+                    })
+                    .max_by(|a, b| a.2.total_cmp(&b.2));
+                let Some((pos, (l, r), _)) = open else { break };
                 kids.swap_remove(pos);
-                kids.extend([n2[k].first_index as usize, n2[k].first_index as usize + 1]);
+                kids.extend([l as usize, r as usize]);
             }
             for (slot, &k) in kids.iter().enumerate() {
-                out.nodes[wi].set_box(slot, n2[k].aabb());
-                out.nodes[wi].child[slot] = if n2[k].is_leaf() {
-                    leaf_ref(k)
-                } else {
-                    out.nodes.push(Node::EMPTY);
-                    let w = out.nodes.len() - 1;
-                    todo.push((k, w));
-                    w as u32
+                out.nodes[wi].set_box(slot, &n2[k].aabb);
+                out.nodes[wi].child[slot] = match n2[k].kind {
+                    Kind::Leaf(first, n) => leaf_ref(first, n),
+                    Kind::Inner(..) => {
+                        out.nodes.push(Node::EMPTY);
+                        let w = out.nodes.len() - 1;
+                        todo.push((k, w));
+                        w as u32
+                    }
                 };
             }
         }
         out
+    }
+
+    /// Most nodes on a path from the root to a leaf (0 for an empty tree).
+    pub fn depth(&self) -> usize {
+        // Children come after their parents.
+        let mut depth = vec![0usize; self.nodes.len()];
+        if let Some(root) = depth.first_mut() {
+            *root = 1;
+        }
+        for i in 0..self.nodes.len() {
+            for &c in &self.nodes[i].child {
+                if c != EMPTY && c & LEAF == 0 {
+                    depth[c as usize] = depth[i] + 1;
+                }
+            }
+        }
+        depth.into_iter().max().unwrap_or(0)
     }
 
     /// Recomputes every box from the leaves' bounds (`bounds(first, count)`), keeping the
@@ -485,5 +536,139 @@ mod tests {
             }
         }
         assert!(hits > 1000, "{hits}");
+    }
+
+    /// Boxes no PLOC can order: many copies of one box, boxes nested about one centre (and
+    /// about centres a rounding apart, and about centres spread along a line), duplicates of
+    /// ordinary boxes around a crowd, and a cloud beside one far box (one Morton cell).
+    fn crowds() -> Vec<(&'static str, Vec<Aabb>)> {
+        let cube = |c: Vec3A, r: f32| Aabb { min: c - r, max: c + r };
+        let mut rnd = crate::testing::uniform(9);
+        let c = Vec3A::new(10.1, 20.3, 30.7);
+        let mut mixed: Vec<Aabb> = boxes().into_iter().flat_map(|b| [b; 3]).collect();
+        mixed.extend([cube(Vec3A::splat(50.0), 1.0); 2000]);
+        let mut far: Vec<Aabb> =
+            (0..3000).map(|_| cube(Vec3A::new(rnd(), rnd(), rnd()), 1e-3 * (rnd() + 0.5))).collect();
+        far.push(cube(Vec3A::splat(1e6), 1.0));
+        vec![
+            ("identical", vec![cube(c, 1.0); 3000]),
+            ("concentric", (0..3000).map(|i| cube(Vec3A::ZERO, 1.0 + i as f32)).collect()),
+            (
+                "concentric about a centre that rounds",
+                (0..3000).map(|i| cube(c, 0.37 * (1 + i) as f32)).collect(),
+            ),
+            (
+                "nested along a line",
+                (0..3000).map(|i| cube(Vec3A::X * (i as f32 * 0.01), 1.0 + i as f32)).collect(),
+            ),
+            ("duplicates around a crowd", mixed),
+            ("a cloud and a far box", far),
+        ]
+    }
+
+    /// Every crowd builds a valid, shallow tree that every traversal answers as a scan of the
+    /// boxes does (PLOC alone chained the crowds, and the chains overflowed the traversal
+    /// stacks).
+    #[test]
+    fn crowds_are_traversed_as_a_scan_finds() {
+        for (name, aabbs) in crowds() {
+            for max_leaf in [1, 2, 24] {
+                // Leaf `k` (handed back as `(k, 1)`) holds `order[leaves[k].0..leaves[k].1]`.
+                let (mut order, mut leaves) = (Vec::new(), Vec::new());
+                let (bvh, stats) = Bvh8::build_with_stats(&aabbs, max_leaf, |p| {
+                    leaves.push((order.len(), order.len() + p.len()));
+                    order.extend_from_slice(p);
+                    (leaves.len() as u32 - 1, 1)
+                });
+                // A chain of 3000 would be hundreds of levels deep; eight wide, log8(3000) is 4.
+                assert!(bvh.depth() < 20, "{name}, leaves of {max_leaf}: depth {}, {stats:?}", bvh.depth());
+                let items = |leaf: u32, _| &order[leaves[leaf as usize].0..leaves[leaf as usize].1];
+                bvh.validate(|first, count| {
+                    items(first, count).iter().fold(Aabb::empty(), |a, &i| a.union(&aabbs[i as usize]))
+                })
+                .unwrap_or_else(|e| panic!("{name}, leaves of {max_leaf}: {e}"));
+                assert!(
+                    leaves.iter().all(|(a, b)| b - a <= max_leaf as usize),
+                    "{name}: leaves of {max_leaf}"
+                );
+                let bounds = aabbs.iter().fold(Aabb::empty(), |a, b| a.union(b));
+                let size = (bounds.max - bounds.min).max_element();
+                let mut rnd = crate::testing::uniform(31);
+                let mut aim = || {
+                    let b = &aabbs[(rnd() * (aabbs.len() - 1) as f32) as usize];
+                    b.center() + (b.max - b.min) * (rnd() - 0.5)
+                };
+                let mut dir = crate::testing::signed(37);
+                let mut hits = 0;
+                for r in 0..200 {
+                    // From outside the crowd (or 2000 away) towards a box of it, and from inside a box.
+                    let to = aim();
+                    let out = Vec3A::new(dir(), dir(), dir()).normalize_or(Vec3A::Y);
+                    let reach = size.min(1e3) * 2.0;
+                    let (o, d) = if r % 4 == 3 { (to, out) } else { (to + out * reach, -out) };
+                    let want =
+                        aabbs.iter().filter_map(|b| enters(b, o, d, 1e30)).fold(f32::INFINITY, f32::min);
+                    let got = bvh.closest(o, d, f32::INFINITY, |first, count, best| {
+                        items(first, count)
+                            .iter()
+                            .filter_map(|&i| enters(&aabbs[i as usize], o, d, best))
+                            .fold(best, f32::min)
+                    });
+                    assert_eq!(want, got, "{name}, leaves of {max_leaf}, ray {r}");
+                    let any = bvh.any(o, d, f32::INFINITY, |first, count| {
+                        items(first, count)
+                            .iter()
+                            .any(|&i| enters(&aabbs[i as usize], o, d, f32::INFINITY).is_some())
+                    });
+                    assert_eq!(any, want.is_finite(), "{name}, leaves of {max_leaf}, ray {r}");
+                    hits += want.is_finite() as u32;
+                }
+                assert!(hits > 100, "{name}: {hits}");
+                // A packet of rays from one point into the crowd.
+                let from = aim() + Vec3A::new(0.3, 0.9, -0.2).normalize() * size.min(1e3) * 2.0;
+                let (mut o, mut d) = ([[0.0; PACKET]; 3], [[0.0; PACKET]; 3]);
+                for l in 0..PACKET {
+                    let dir = aim() - from;
+                    for a in 0..3 {
+                        (o[a][l], d[a][l]) = (from[a], dir[a]);
+                    }
+                }
+                let ray =
+                    |l: usize| (Vec3A::new(o[0][l], o[1][l], o[2][l]), Vec3A::new(d[0][l], d[1][l], d[2][l]));
+                let mut best = [f32::INFINITY; PACKET];
+                bvh.closest_packet(&o, &d, &mut best, |first, count, active, best| {
+                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                        let (o, d) = ray(l);
+                        best[l] = items(first, count)
+                            .iter()
+                            .filter_map(|&i| enters(&aabbs[i as usize], o, d, best[l]))
+                            .fold(best[l], f32::min);
+                    }
+                });
+                let tmax = [f32::INFINITY; PACKET];
+                let occluded = bvh.any_packet(&o, &d, &tmax, |first, count, active| {
+                    let mut hit = 0;
+                    for l in (0..PACKET).filter(|l| active >> l & 1 != 0) {
+                        let (o, d) = ray(l);
+                        let any = items(first, count)
+                            .iter()
+                            .any(|&i| enters(&aabbs[i as usize], o, d, tmax[l]).is_some());
+                        hit |= (any as u32) << l;
+                    }
+                    hit
+                });
+                for l in 0..PACKET {
+                    let (o, d) = ray(l);
+                    let want =
+                        aabbs.iter().filter_map(|b| enters(b, o, d, 1e30)).fold(f32::INFINITY, f32::min);
+                    assert_eq!(best[l], want, "{name}, leaves of {max_leaf}, packet lane {l}");
+                    assert_eq!(
+                        occluded >> l & 1 != 0,
+                        want.is_finite(),
+                        "{name}, leaves of {max_leaf}, lane {l}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -5,7 +5,7 @@
     reason = "AVX2 intrinsics for the node tests, prefetches, and uninitialised traversal stacks"
 )]
 
-use super::{Bvh8, LEAF, Node, WIDTH, leaf_range};
+use super::{Bvh8, LEAF, MAX_DEPTH, Node, WIDTH, leaf_range};
 use crate::math::gamma;
 use glam::Vec3A;
 
@@ -117,8 +117,11 @@ fn prefetch_children(nodes: &[Node], node: &Node, mut mask: u32, leaf: &impl Fn(
     }
 }
 
-/// Traversal stack depth: at most seven entries per level.
-const STACK: usize = 8 * 64;
+/// Traversal stack entries. Every traversal pushes at most seven entries per level of the
+/// path it is on (the entered children it does not take at once: all but the nearest, or all
+/// of them with one popped at once), so a tree [`MAX_DEPTH`] levels deep, which is as deep as
+/// [`Bvh8::build`] makes one, needs at most `7 * MAX_DEPTH + 1`.
+const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 
 /// A fixed-size traversal stack left uninitialised: zeroing 4 KB per ray cost measurable time.
 pub(super) struct Stack<T: Copy> {
@@ -134,7 +137,7 @@ impl<T: Copy> Stack<T> {
 
     #[inline(always)]
     pub(super) fn push(&mut self, v: T) {
-        // Bounds-checked: an overflow panics.
+        // Bounds-checked, although the depth bound rules an overflow out.
         self.items[self.len] = std::mem::MaybeUninit::new(v);
         self.len += 1;
     }

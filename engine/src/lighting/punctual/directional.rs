@@ -14,7 +14,7 @@ pub struct Directional {
 }
 
 impl LightModel for Directional {
-    fn to_light(&self) -> PunctualLight {
+    fn to_light(&self, _: &super::LightTextures) -> PunctualLight {
         PunctualLight::Directional {
             to_light: (-self.direction.0.normalize()).into(),
             irradiance: self.irradiance.0,

@@ -14,7 +14,7 @@ pub struct Point {
 }
 
 impl LightModel for Point {
-    fn to_light(&self) -> PunctualLight {
+    fn to_light(&self, _: &super::LightTextures) -> PunctualLight {
         PunctualLight::Point { position: self.position.0.into(), intensity: self.intensity.0 }
     }
 }

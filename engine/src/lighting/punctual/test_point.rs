@@ -18,7 +18,7 @@ pub struct TestPoint {
 }
 
 impl LightModel for TestPoint {
-    fn to_light(&self) -> PunctualLight {
+    fn to_light(&self, _: &super::LightTextures) -> PunctualLight {
         PunctualLight::Point { position: self.position.0.into(), intensity: self.power.0 / (4.0 * PI) }
     }
 }

@@ -118,6 +118,8 @@ pub struct Converter<'d> {
     ids: HashMap<String, &'d Element>,
     /// Material names given to BSDF ids (and to anonymous BSDFs, by position).
     named: HashMap<String, String>,
+    /// The names of the anonymous BSDFs' materials, by their RON.
+    anonymous: HashMap<String, String>,
     /// Objects made so far, for the bound.
     pub out: Pieces,
 }
@@ -130,7 +132,14 @@ impl<'d> Converter<'d> {
     pub fn new(doc: &'d Document, base: &Path) -> Result<Self, SceneError> {
         let mut ids = HashMap::new();
         collect_ids(&doc.root, &mut ids)?;
-        Ok(Self { doc, base: base.to_owned(), ids, named: HashMap::new(), out: Pieces::default() })
+        Ok(Self {
+            doc,
+            base: base.to_owned(),
+            ids,
+            named: HashMap::new(),
+            anonymous: HashMap::new(),
+            out: Pieces::default(),
+        })
     }
 
     fn referenced(&self, e: &'d Element) -> Result<&'d Element, SceneError> {
@@ -241,7 +250,20 @@ impl<'d> Converter<'d> {
         let ron = super::bsdf::convert(self, e)?;
         let name = match e.attr("id") {
             Some(id) => id.to_owned(),
-            None => format!("{}-{}", Plugin::new(e)?.kind, self.out.materials.len()),
+            // Anonymous BSDFs that say the same thing (one written inside each of many shapes)
+            // become one material, as an author would write it.
+            None => match self.anonymous.get(&ron) {
+                Some(name) => {
+                    let name = name.clone();
+                    self.named.insert(key, name.clone());
+                    return Ok(name);
+                }
+                None => {
+                    let name = format!("{}-{}", Plugin::new(e)?.kind, self.out.materials.len());
+                    self.anonymous.insert(ron.clone(), name.clone());
+                    name
+                }
+            },
         };
         self.out.materials.push((name.clone(), ron, e.at.clone()));
         self.named.insert(key, name.clone());
@@ -261,7 +283,7 @@ impl<'d> Converter<'d> {
         if let Some(name) = self.named.get(&key) {
             return Ok(name.clone());
         }
-        let ron = texture(e)?;
+        let ron = texture(self, e)?;
         let name = match e.attr("id") {
             Some(id) => id.to_owned(),
             None => format!("{}-{}", Plugin::new(e)?.kind, self.out.textures.len()),
@@ -317,8 +339,7 @@ impl<'d> Converter<'d> {
                 }
             }
         }
-        let (shape, mut to_world) = super::shape::convert(self, &p)?;
-        to_world.extend_from_slice(outer);
+        let (shape, to_world) = super::shape::convert(self, &p, outer)?;
         let material = match (emitter, bsdf) {
             (Some(em), b) => {
                 if let Some(b) = b {
@@ -428,39 +449,123 @@ fn collect_ids<'d>(e: &'d Element, ids: &mut HashMap<String, &'d Element>) -> Re
 }
 
 /// A `<texture>` as a pathwave texture.
-fn texture(e: &Element) -> Result<String, SceneError> {
+fn texture(cx: &Converter, e: &Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
     match p.kind.as_str() {
+        // Mitsuba's checkerboard (`src/textures/checkerboard.cpp`): of the uv after `to_uv`,
+        // color0 where the fractional parts of u and v are both below 1/2 or both above, i.e.
+        // where floor(2 u) + floor(2 v) is even: a 2 by 2 UvChecker of Mitsuba's uv.
         "checkerboard" => {
             let c0 = p.rgb("color0")?.unwrap_or(DVec3::splat(0.4));
             let c1 = p.rgb("color1")?.unwrap_or(DVec3::splat(0.2));
-            let to_uv = compose(&p.transform("to_uv")?.unwrap_or_default());
+            let to_uv = p.transform("to_uv")?.unwrap_or_default();
             p.finish(&["color0", "color1", "to_uv"])?;
-            // Mitsuba's cells are half a unit of the transformed uv: cell (i, j) is color0
-            // when i and j have the same parity, as pathwave's even cells.
-            let (sx, sy) = (to_uv.x_axis.x, to_uv.y_axis.y);
-            let pure_scale = to_uv.x_axis.y == 0.0
-                && to_uv.y_axis.x == 0.0
-                && to_uv.w_axis.truncate() == DVec3::ZERO
-                && sx > 0.0
-                && sy > 0.0;
-            if !pure_scale {
-                return Err(p
-                    .at
-                    .error("checkerboard to_uv: pathwave reads a positive scale of u and v here"));
-            }
+            let [a, b] = to_uv_rows(&to_uv);
+            // Mitsuba's uv is (u, 1 - v) of pathwave's: to_uv after that flip.
+            let m = [[a[0], -a[1], a[1] + a[2]], [b[0], -b[1], b[1] + b[2]]];
             Ok(format!(
-                "UvChecker(u: {}, v: {}, even: {}, odd: {})",
-                num(2.0 * sx),
-                num(2.0 * sy),
+                "UvChecker(u: 2, v: 2, even: {}, odd: {}, uv_transform: {})",
                 v3(c0),
-                v3(c1)
+                v3(c1),
+                uv_transform(m)
             ))
         }
-        k => Err(p
-            .at
-            .error(format!("<texture type=\"{k}\">: pathwave reads checkerboard textures from XML so far"))),
+        "bitmap" => bitmap(cx, &p),
+        "mesh_attribute" => {
+            let (name, at) = p
+                .string("name")?
+                .ok_or_else(|| p.at.error("<texture type=\"mesh_attribute\"> needs a name"))?;
+            if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+                return Err(
+                    at.error(format!("mesh attribute \"{name}\": its name starts with vertex_ or face_"))
+                );
+            }
+            let scale = p.float("scale")?.unwrap_or(1.0);
+            if !(scale >= 0.0) {
+                return Err(p.at.error(format!("mesh_attribute scale {scale}: expected >= 0")));
+            }
+            p.finish(&["name", "scale"])?;
+            Ok(format!("MeshAttribute(name: {name:?}, scale: {})", num(scale)))
+        }
+        k => Err(p.at.error(format!(
+            "<texture type=\"{k}\">: pathwave reads checkerboard, bitmap and mesh_attribute textures from XML so far"
+        ))),
     }
+}
+
+/// Mitsuba's `to_uv` as the rows of a 2-D affine map, as its `Transform::extract` makes one of
+/// a 4 x 4 (`include/mitsuba/core/transform.h`: the upper-left 2 x 2 and the first two
+/// entries of the last column).
+fn to_uv_rows(to_uv: &[Op]) -> [[f64; 3]; 2] {
+    let m = compose(to_uv);
+    [[m.x_axis.x, m.y_axis.x, m.w_axis.x], [m.x_axis.y, m.y_axis.y, m.w_axis.y]]
+}
+
+/// A uv transform as RON writes it: `((a, b, c), (d, e, f))` (a negated zero written 0).
+fn uv_transform(m: [[f64; 3]; 2]) -> String {
+    let row = |r: [f64; 3]| format!("({}, {}, {})", num32(r[0] + 0.0), num32(r[1] + 0.0), num32(r[2] + 0.0));
+    format!("({}, {})", row(m[0]), row(m[1]))
+}
+
+/// Mitsuba's `bitmap` texture (`src/textures/bitmap.cpp`) as an `Image`. Its lookups are
+/// pathwave's: bilinear between texel centres at ((i + 0.5) / width, (j + 0.5) / height) of
+/// Mitsuba's uv, or the texel that uv * size falls in (`nearest`); `repeat`, `mirror` and
+/// `clamp` wrap texel indices; 8-bit files are sRGB-decoded per texel before interpolating
+/// (Mitsuba decodes its 8-bit storage on each lookup, pathwave once at load: the same values
+/// but for rounding), unless `raw`. Mitsuba's v is 1 - pathwave's, and its image rows run
+/// down its v where pathwave's run down from v = 1: the lookups agree, and `to_uv` is written
+/// between the two flips.
+fn bitmap(cx: &Converter, p: &Plugin) -> Result<String, SceneError> {
+    let (name, at) =
+        p.string("filename")?.ok_or_else(|| p.at.error("<texture type=\"bitmap\"> needs a filename"))?;
+    let file = cx.file(&name, &at)?;
+    let filter = match p.string("filter_type")? {
+        None => "Bilinear",
+        Some((f, _)) if f == "bilinear" => "Bilinear",
+        Some((f, _)) if f == "nearest" => "Nearest",
+        Some((f, at)) => {
+            return Err(
+                at.error(format!("filter_type \"{f}\": Mitsuba's bitmap filters are bilinear and nearest"))
+            );
+        }
+    };
+    let wrap = match p.string("wrap_mode")? {
+        None => "Repeat",
+        Some((w, _)) if w == "repeat" => "Repeat",
+        Some((w, _)) if w == "mirror" => "Mirror",
+        Some((w, _)) if w == "clamp" => "Clamp",
+        Some((w, at)) => {
+            return Err(
+                at.error(format!("wrap_mode \"{w}\": Mitsuba's bitmap wraps are repeat, mirror and clamp"))
+            );
+        }
+    };
+    let raw = p.bool("raw")?.unwrap_or(false);
+    // pathwave keeps texels as 32-bit floats: Mitsuba's `variant` storage, and its `auto` but
+    // for rounding (8-bit codes decoded once, 16-bit files read through 8 bits).
+    if let Some((f, at)) = p.string("format")?
+        && f != "auto"
+        && f != "variant"
+    {
+        return Err(at.error(format!(
+            "format \"{f}\": pathwave stores textures as 32-bit floats (Mitsuba's auto or variant)"
+        )));
+    }
+    // Hardware interpolation on CUDA; on the CPU Mitsuba interpolates as pathwave does.
+    p.bool("accel")?;
+    let to_uv = p.transform("to_uv")?.unwrap_or_default();
+    p.finish(&["filename", "filter_type", "wrap_mode", "raw", "format", "accel", "to_uv"])?;
+    let mut out = format!("Image(file: {file}, wrap: {wrap}, filter: {filter}");
+    if raw {
+        out += ", raw: true";
+    }
+    let [a, b] = to_uv_rows(&to_uv);
+    if [a, b] != [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        // (u, v) -> (u, 1 - v), to_uv, (u, v) -> (u, 1 - v).
+        let m = [[a[0], -a[1], a[1] + a[2]], [-b[0], b[1], 1.0 - b[1] - b[2]]];
+        write!(out, ", uv_transform: {}", uv_transform(m)).unwrap();
+    }
+    Ok(out + ")")
 }
 
 /// The world position and direction a light's `to_world` gives its origin and +z.

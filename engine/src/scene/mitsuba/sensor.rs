@@ -71,18 +71,23 @@ impl Converter<'_> {
                 )));
             }
         }
-        if p.kind == "thinlens" {
-            let r = p.float("aperture_radius")?.unwrap_or(0.03);
-            let f = p.float("focus_distance")?.unwrap_or(0.0);
-            fields.push(format!("aperture_radius: {}", num(r)));
-            fields.push(format!("focus_dist: {}", num(f)));
-            reads.extend(["aperture_radius", "focus_distance"]);
-        }
         // Mitsuba always clips (its defaults 0.01 and 10000), so the camera always gets both.
         let near = p.float("near_clip")?.unwrap_or(0.01);
         let far = p.float("far_clip")?.unwrap_or(10000.0);
         if !(near > 0.0 && far > near) {
             return Err(p.at.error(format!("near_clip {near} and far_clip {far}: need 0 < near < far")));
+        }
+        if p.kind == "thinlens" {
+            // Mitsuba requires the aperture (0 is its pinhole), and focuses at far_clip unless
+            // told otherwise (`Sensor`'s constructor in src/render/sensor.cpp; its plugin
+            // documentation says 0).
+            let r = p
+                .float("aperture_radius")?
+                .ok_or_else(|| p.at.error("<sensor type=\"thinlens\"> needs an aperture_radius"))?;
+            let f = p.float("focus_distance")?.unwrap_or(far);
+            fields.push(format!("aperture_radius: {}", num(r)));
+            fields.push(format!("focus_dist: {}", num(f)));
+            reads.extend(["aperture_radius", "focus_distance"]);
         }
         fields.push(format!("near_clip: {}, far_clip: {}", num(near), num(far)));
         let open = p.float("shutter_open")?.unwrap_or(0.0);

@@ -58,9 +58,10 @@ fn plugins_become_pathwave_kinds() {
     );
     for want in [
         r#""white": Lambertian(albedo: (0.7, 0.6, 0.5))"#,
-        r#"(shape: Quad(q: (-1, -1, 0), u: (2, 0, 0), v: (0, 2, 0)), material: "white", transform: [UniformScale(2), Translate((0, 0, -1))])"#,
+        r#"(shape: Quad(q: (-1, 1, 0), u: (2, 0, 0), v: (0, -2, 0), flip_normal: true), material: "white", transform: [UniformScale(2), Translate((0, 0, -1))])"#,
+        "Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba)",
         "Dielectric(ior: 1.33263",
-        "Sphere(center: (0, 0, 0), radius: 0.5)",
+        "Sphere(center: (0, 0, 0), radius: 0.5, poles: Z)",
         "DiffuseLight(emit: (4, 4, 4), two_sided: false)",
         "Point(position: (1, 2, 3), intensity: (10, 10, 10))",
     ] {
@@ -136,6 +137,18 @@ fn file_names_are_relative_to_the_ron() {
     std::fs::create_dir_all(d.join("out")).unwrap();
     let r = to_ron(&d.join("s.xml"), &[], &d.join("out")).unwrap().ron;
     assert!(r.contains(r#"Mesh(file: "../meshes/t.obj")"#), "{r}");
+    // Mitsuba's default flip of v is pathwave's reading; the other is refused.
+    for (flip, ok) in [("true", true), ("false", false)] {
+        let obj = format!(
+            r#"<shape type="obj"><string name="filename" value="meshes/t.obj"/><boolean name="flip_tex_coords" value="{flip}"/></shape>"#
+        );
+        std::fs::write(d.join("f.xml"), format!("<scene version=\"3.0.0\">{SENSOR}{obj}</scene>")).unwrap();
+        let r = to_ron(&d.join("f.xml"), &[], &d);
+        assert_eq!(r.is_ok(), ok, "flip_tex_coords {flip}");
+        if let Err(e) = r {
+            assert!(e.message.contains("flip_tex_coords false"), "{e}");
+        }
+    }
     let _ = Path::new("");
 }
 
@@ -147,9 +160,244 @@ fn checkerboards_keep_mitsubas_cells() {
         <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="c"/></bsdf></shape>
         <shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard"/></bsdf></shape>"#,
     );
-    assert!(r.contains(r#""c": UvChecker(u: 10, v: 6, even: (0.8, 0.8, 0.8), odd: (0.2, 0.2, 0.2))"#), "{r}");
+    // Mitsuba's uv (u, 1 - v), then to_uv.
+    let c = r#""c": UvChecker(u: 2, v: 2, even: (0.8, 0.8, 0.8), odd: (0.2, 0.2, 0.2), uv_transform: ((5, 0, 0), (0, -3, 3)))"#;
+    assert!(r.contains(c), "{r}");
     assert!(r.contains(r#"Lambertian(albedo: "c")"#), "{r}");
-    assert!(r.contains("UvChecker(u: 2, v: 2, even: (0.4, 0.4, 0.4)"), "{r}");
+    assert!(r.contains("UvChecker(u: 2, v: 2, even: (0.4, 0.4, 0.4), odd: (0.2, 0.2, 0.2), uv_transform: ((1, 0, 0), (0, -1, 1)))"), "{r}");
+}
+
+/// A 4 x 3 PNG whose texels all differ: column i, row j (from the top) is
+/// (10 + 60 i, 20 + 70 j, 5 + 15 (i + j)).
+fn texels_png(dir: &Path) -> PathBuf {
+    let img = image::RgbImage::from_fn(4, 3, |i, j| {
+        image::Rgb([10 + 60 * i as u8, 20 + 70 * j as u8, 5 + 15 * (i + j) as u8])
+    });
+    let path = dir.join("texels.png");
+    img.save(&path).unwrap();
+    path
+}
+
+/// Texel (i, j) of [`texels_png`] as Mitsuba reads it (sRGB-decoded), or `raw`.
+fn texel(i: i64, j: i64, raw: bool) -> glam::Vec3 {
+    let code = [10 + 60 * i, 20 + 70 * j, 5 + 15 * (i + j)];
+    glam::Vec3::from_array(code.map(|c| match raw {
+        true => c as f32 / 255.0,
+        false => crate::texture::srgb8_table()[c as usize],
+    }))
+}
+
+#[test]
+fn bitmaps_become_images() {
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-bitmap-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let png = texels_png(&d);
+    let r = ron(
+        "bitmap",
+        &format!(
+            r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="{png}"/></texture></bsdf></shape>
+            <shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="{png}"/>
+                <string name="filter_type" value="nearest"/><string name="wrap_mode" value="mirror"/><boolean name="raw" value="true"/>
+                <transform name="to_uv"><scale x="2" y="3"/><translate x="-0.5" y="0.25"/></transform></texture></bsdf></shape>"#,
+            png = png.display()
+        ),
+    );
+    assert!(r.contains(r#"Image(file: "texels.png", wrap: Repeat, filter: Bilinear)"#), "{r}");
+    // (u, 1 - v), to_uv (u' = 2 u - 0.5, v' = 3 v + 0.25), (u, 1 - v): u' = 2 u - 0.5,
+    // v' = 1 - (3 (1 - v) + 0.25) = 3 v - 2.25.
+    let want = r#"Image(file: "texels.png", wrap: Mirror, filter: Nearest, raw: true, uv_transform: ((2, 0, -0.5), (0, 3, -2.25)))"#;
+    assert!(r.contains(want), "{r}");
+    let refused = |tag: &str, param: &str| {
+        error(
+            tag,
+            &format!(
+                r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="{}"/>
+                {param}</texture></bsdf></shape>"#,
+                png.display()
+            ),
+        )
+    };
+    let e = refused("bitmap-filter", r#"<string name="filter_type" value="cubic"/>"#);
+    assert!(e.message.contains(r#""cubic""#) && e.message.contains("bilinear and nearest"), "{e}");
+    assert_eq!(e.line, 6, "{e}");
+    let e = refused("bitmap-wrap", r#"<string name="wrap_mode" value="border"/>"#);
+    assert!(e.message.contains(r#""border""#) && e.message.contains("repeat, mirror and clamp"), "{e}");
+    let e = refused("bitmap-format", r#"<string name="format" value="uint8"/>"#);
+    assert!(e.message.contains(r#""uint8""#) && e.message.contains("32-bit"), "{e}");
+    let e = error(
+        "bitmap-ior",
+        &format!(
+            r#"<shape type="sphere"><bsdf type="conductor"><texture type="bitmap" name="eta"><string name="filename" value="{}"/></texture></bsdf></shape>"#,
+            png.display()
+        ),
+    );
+    assert!(e.message.contains("`eta` must be a colour"), "{e}");
+    let e = error(
+        "bitmap-none",
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"/></bsdf></shape>"#,
+    );
+    assert!(e.message.contains("needs a filename"), "{e}");
+}
+
+/// Renders nothing: loads the converted scene and reads, at Mitsuba's local points of each
+/// shape, the reflectance pathwave shades with, against the texel Mitsuba's definitions give
+/// there (its shapes' uv, `src/shapes/{rectangle,sphere,cube}.cpp`; the nearest lookup of
+/// `src/textures/bitmap.cpp` through Dr.Jit: texel (floor(u w), floor(v h)), row 0 of the file
+/// at v = 0; the checkerboard's cells).
+#[test]
+fn converted_shapes_read_the_texels_mitsuba_reads() {
+    use crate::math::Ray;
+    use glam::{DMat4, DVec3, Vec3A};
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-texels-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let png = texels_png(&d);
+    let bitmap = format!(
+        r#"<texture type="bitmap" id="t"><string name="filename" value="{}"/><string name="filter_type" value="nearest"/></texture>
+        <texture type="checkerboard" id="c"><transform name="to_uv"><scale x="3" y="2"/></transform><rgb name="color0" value="0.9"/><rgb name="color1" value="0.1"/></texture>
+        <bsdf type="diffuse" id="b"><ref name="reflectance" id="t"/></bsdf>
+        <bsdf type="diffuse" id="k"><ref name="reflectance" id="c"/></bsdf>"#,
+        png.display()
+    );
+    // Each shape alone, placed by `to_world` (a mirroring one among them).
+    let placements = [
+        r#"<rotate x="1" angle="30"/><translate z="-3"/>"#,
+        r#"<scale x="-1" y="2"/><rotate y="1" angle="20"/><translate z="-3"/>"#,
+    ];
+    let mitsuba_texel = |uv: DVec3| texel((uv.x * 4.0).floor() as i64, (uv.y * 3.0).floor() as i64, false);
+    let checker = |uv: DVec3| {
+        let (a, b) = ((uv.x * 3.0).fract() > 0.5, (uv.y * 2.0).fract() > 0.5);
+        glam::Vec3::splat(if a == b { 0.9 } else { 0.1 })
+    };
+    let mut rnd = crate::testing::signed(5);
+    for (kind, shape) in [("rectangle", "rectangle"), ("sphere", "sphere"), ("cube", "cube")] {
+        for (pi, place) in placements.iter().enumerate() {
+            for (bsdf, expect) in [("b", &mitsuba_texel as &dyn Fn(DVec3) -> glam::Vec3), ("k", &checker)] {
+                let tag = format!("texels-{kind}-{pi}-{bsdf}");
+                let p = scene(
+                    &tag,
+                    &format!(
+                        r#"{bitmap}<shape type="{shape}"><ref id="{bsdf}"/><transform name="to_world">{place}</transform></shape>"#
+                    ),
+                );
+                let desc = crate::scene::load(&p).unwrap_or_else(|e| panic!("{e}"));
+                let scene = crate::world::SceneWorld::render_scene(&desc);
+                let to_world = super::props::compose(&mitsuba_to_world(place));
+                let normal_to_world =
+                    DMat4::from_mat3(glam::DMat3::from_mat4(to_world).inverse().transpose());
+                let mut checked = 0;
+                for _ in 0..400 {
+                    // A local point, its outward normal and Mitsuba's uv there.
+                    let (local, n, uv) = match kind {
+                        "rectangle" => {
+                            let (x, y) = (rnd() as f64, rnd() as f64);
+                            (
+                                DVec3::new(x, y, 0.0),
+                                DVec3::Z,
+                                DVec3::new((x + 1.0) / 2.0, (y + 1.0) / 2.0, 0.0),
+                            )
+                        }
+                        "sphere" => {
+                            let v = DVec3::new(rnd() as f64, rnd() as f64, rnd() as f64);
+                            if !(v.length() > 0.1 && v.length() < 1.0) {
+                                continue;
+                            }
+                            let v = v.normalize();
+                            let phi = v.y.atan2(v.x).rem_euclid(std::f64::consts::TAU);
+                            (
+                                v,
+                                v,
+                                DVec3::new(
+                                    phi / std::f64::consts::TAU,
+                                    v.z.acos() / std::f64::consts::PI,
+                                    0.0,
+                                ),
+                            )
+                        }
+                        _ => {
+                            let face = (rnd().abs() * 5.999) as usize;
+                            let (s, t) = (rnd() as f64, rnd() as f64);
+                            cube_point(face, s, t)
+                        }
+                    };
+                    // Away from texel and cell edges, where f32 rounding may pick either side.
+                    let near_edge = |x: f64, k: f64| ((x * k).fract() - 0.5).abs() > 0.49;
+                    if near_edge(uv.x, 4.0)
+                        || near_edge(uv.y, 3.0)
+                        || near_edge(uv.x, 6.0)
+                        || near_edge(uv.y, 4.0)
+                    {
+                        continue;
+                    }
+                    let wp = to_world.transform_point3(local);
+                    let wn = normal_to_world.transform_vector3(n).normalize();
+                    let o = wp + wn * 0.01;
+                    let ray = Ray::new(Vec3A::from(o.as_vec3()), Vec3A::from((-wn).as_vec3()));
+                    let hit =
+                        scene.intersect(&ray, 1.0).unwrap_or_else(|| panic!("{tag}: no hit at {local}"));
+                    let albedo = scene.albedo_at(hit.material, &hit.surface);
+                    let want = expect(uv);
+                    assert!(
+                        (albedo - want).abs().max_element() < 1e-6,
+                        "{tag}: at {local} (Mitsuba's uv {uv}) {albedo}, not {want}"
+                    );
+                    assert!(
+                        hit.surface.n.dot(Vec3A::from(wn.as_vec3())) > 0.99,
+                        "{tag}: the normal faces in at {local}"
+                    );
+                    checked += 1;
+                }
+                assert!(checked > 100, "{tag}: {checked} points");
+            }
+        }
+    }
+}
+
+/// The `<transform>` steps of `xml`.
+fn mitsuba_to_world(xml: &str) -> Vec<super::props::Op> {
+    use super::props::Op;
+    use glam::DVec3;
+    let attr = |e: &str, name: &str| -> f64 {
+        e.split(&format!("{name}=\""))
+            .nth(1)
+            .and_then(|r| r.split('"').next())
+            .map_or(0.0, |v| v.parse().unwrap())
+    };
+    xml.split('<')
+        .filter(|e| !e.is_empty())
+        .map(|e| {
+            if e.starts_with("rotate") {
+                Op::Rotate(DVec3::new(attr(e, "x"), attr(e, "y"), attr(e, "z")), attr(e, "angle"))
+            } else if e.starts_with("translate") {
+                Op::Translate(DVec3::new(attr(e, "x"), attr(e, "y"), attr(e, "z")))
+            } else {
+                let one = |v: f64| if v == 0.0 { 1.0 } else { v };
+                Op::Scale(DVec3::new(one(attr(e, "x")), one(attr(e, "y")), one(attr(e, "z"))))
+            }
+        })
+        .collect()
+}
+
+/// A point of Mitsuba's cube (`src/shapes/cube.cpp`) on face `face` at (s, t) in [-1, 1]^2,
+/// its outward normal and Mitsuba's uv there (each face's two triangles interpolate its
+/// vertices' uv, an affine map of the face).
+fn cube_point(face: usize, s: f64, t: f64) -> (glam::DVec3, glam::DVec3, glam::DVec3) {
+    use glam::DVec3;
+    let (a, b) = ((s + 1.0) / 2.0, (t + 1.0) / 2.0);
+    // Per face: the point at (s, t), the normal, and uv as read off the vertex table.
+    match face {
+        // -y: vertices 0-3; u = (z + 1) / 2, v = (x + 1) / 2.
+        0 => (DVec3::new(s, -1.0, t), -DVec3::Y, DVec3::new(b, a, 0.0)),
+        // +y: u = (1 - x) / 2, v = (1 - z) / 2.
+        1 => (DVec3::new(s, 1.0, t), DVec3::Y, DVec3::new(1.0 - a, 1.0 - b, 0.0)),
+        // +x: u = (y + 1) / 2, v = (1 - z) / 2.
+        2 => (DVec3::new(1.0, s, t), DVec3::X, DVec3::new(a, 1.0 - b, 0.0)),
+        // +z: u = (y + 1) / 2, v = (x + 1) / 2.
+        3 => (DVec3::new(s, t, 1.0), DVec3::Z, DVec3::new(b, a, 0.0)),
+        // -x: u = (y + 1) / 2, v = (z + 1) / 2.
+        4 => (DVec3::new(-1.0, s, t), -DVec3::X, DVec3::new(a, b, 0.0)),
+        // -z: u = (1 - y) / 2, v = (x + 1) / 2.
+        _ => (DVec3::new(s, t, -1.0), -DVec3::Z, DVec3::new(1.0 - b, a, 0.0)),
+    }
 }
 
 #[test]
@@ -178,7 +426,12 @@ fn sensors_keep_their_clip_planes() {
     let r = ron("clip-default", "");
     assert!(r.contains("near_clip: 0.01, far_clip: 10000"), "{r}");
     for kind in ["perspective", "thinlens", "orthographic"] {
-        let lens = if kind == "thinlens" { r#"<float name="focus_distance" value="2"/>"# } else { "" };
+        let lens = match kind {
+            "thinlens" => {
+                r#"<float name="focus_distance" value="2"/><float name="aperture_radius" value="0.1"/>"#
+            }
+            _ => "",
+        };
         let sensor = format!(
             r#"<sensor type="{kind}"><float name="near_clip" value="0.5"/><float name="far_clip" value="25"/>{lens}{film}</sensor>"#
         );
@@ -196,6 +449,87 @@ fn sensors_keep_their_clip_planes() {
     let p = scene_with("clip-bad", &bad, "");
     let e = to_ron(&p, &[], p.parent().unwrap()).err().expect("refused").to_string();
     assert!(e.contains("need 0 < near < far"), "{e}");
+}
+
+/// A thin lens needs its aperture (Mitsuba has no default) and focuses at far_clip unless told
+/// (Mitsuba's `Sensor` constructor; its documentation's 0 is not what it does).
+#[test]
+fn a_thin_lens_needs_its_aperture_and_focuses_at_far_clip() {
+    let film =
+        r#"<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>"#;
+    let lens = |tag: &str, params: &str| {
+        let p = scene_with(tag, &format!(r#"<sensor type="thinlens">{params}{film}</sensor>"#), "");
+        to_ron(&p, &[], p.parent().unwrap())
+    };
+    let e = lens("lens-none", "").err().expect("refused").to_string();
+    assert!(e.contains("needs an aperture_radius"), "{e}");
+    let r =
+        lens("lens-far", r#"<float name="aperture_radius" value="0.1"/><float name="far_clip" value="50"/>"#)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .ron;
+    assert!(r.contains("aperture_radius: 0.1") && r.contains("focus_dist: 50"), "{r}");
+    crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Anonymous BSDFs that convert to the same material are one material (as an author writes
+/// it); a BSDF with an id keeps its own name, and other anonymous ones stay apart.
+#[test]
+fn identical_anonymous_bsdfs_share_one_material() {
+    let r = ron(
+        "dedup",
+        r#"<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf></shape>
+        <shape type="sphere"><float name="radius" value="0.5"/><bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf></shape>
+        <shape type="cube"><bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf></shape>
+        <bsdf type="diffuse" id="named"><rgb name="reflectance" value="0.2"/></bsdf>
+        <shape type="rectangle"><ref id="named"/></shape>"#,
+    );
+    assert_eq!(r.matches("Lambertian(albedo: (0.2, 0.2, 0.2))").count(), 2, "{r}");
+    assert_eq!(r.matches("material: \"diffuse-0\"").count(), 2, "{r}");
+    assert!(r.contains("material: \"named\"") && r.contains("Lambertian(albedo: (0.3, 0.3, 0.3))"), "{r}");
+    crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn disks_cylinders_and_mesh_files_convert_with_mitsubas_defaults() {
+    let p = scene(
+        "shapes",
+        r#"<shape type="disk"><boolean name="flip_normals" value="true"/></shape>
+        <shape type="cylinder"><point name="p0" value="0, 0, 1"/><point name="p1" value="0, 2, 1"/><float name="radius" value="0.5"/></shape>
+        <shape type="cylinder"/>
+        <shape type="obj"><string name="filename" value="m.obj"/></shape>
+        <shape type="obj"><string name="filename" value="m.obj"/><boolean name="flip_tex_coords" value="false"/></shape>
+        <shape type="ply"><string name="filename" value="m.ply"/><boolean name="flip_normals" value="true"/>
+            <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/></texture></bsdf></shape>
+        <shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="2"/></shape>"#,
+    );
+    let dir = p.parent().unwrap();
+    for f in ["m.obj", "m.ply", "m.serialized"] {
+        std::fs::write(dir.join(f), "").unwrap();
+    }
+    let r = to_ron(&p, &[], dir).unwrap_or_else(|e| panic!("{e}")).ron;
+    for want in [
+        "Disk(center: (0, 0, 0), normal: (0, 0, 1), radius: 1, flip_normals: true)",
+        "Cylinder(p0: (0, 0, 1), p1: (0, 2, 1), radius: 0.5)",
+        "Cylinder(p0: (0, 0, 0), p1: (0, 0, 1), radius: 1)",
+        // Mitsuba flips an OBJ's v unless told not to, and reads the others' as written.
+        r#"Mesh(file: "m.obj")"#,
+        r#"Mesh(file: "m.obj", flip_tex_coords: true)"#,
+        r#"Mesh(file: "m.ply", flip_normals: true, flip_tex_coords: true)"#,
+        r#"Mesh(file: "m.serialized", shape_index: 2, flip_tex_coords: true)"#,
+        r#"MeshAttribute(name: "vertex_color", scale: 1)"#,
+    ] {
+        assert!(r.contains(want), "{want} in\n{r}");
+    }
+    let e = error("flip", r#"<shape type="sphere"><boolean name="flip_normals" value="true"/></shape>"#);
+    assert!(e.message.contains("flip_normals"), "{e}");
+    let e = error(
+        "attr",
+        r#"<texture type="mesh_attribute" id="t"><string name="name" value="color"/></texture>
+        <shape type="sphere"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>"#,
+    );
+    assert!(e.message.contains("vertex_ or face_"), "{e}");
+    let e = error("tube", r#"<shape type="cylinder"><float name="radius" value="0"/></shape>"#);
+    assert!(e.message.contains("radius > 0"), "{e}");
 }
 
 /// Rough BSDFs take Mitsuba's distribution (Beckmann unless told `ggx`) and an isotropic alpha,
