@@ -65,6 +65,9 @@ fn modules(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
     }
     let mut files = Vec::new();
     walk(src, &mut files);
+    // A unit-test module in a file of its own (`#[cfg(test)] mod tests;`) is test code too.
+    let tests: BTreeSet<PathBuf> = files.iter().flat_map(|f| test_files(f)).collect();
+    files.retain(|f| !tests.contains(f));
     let mut by_module: BTreeMap<String, Vec<PathBuf>> = BTreeMap::new();
     for f in files {
         let rel = f.strip_prefix(src).unwrap();
@@ -76,6 +79,25 @@ fn modules(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
         by_module.entry(name).or_default().push(f);
     }
     by_module
+}
+
+/// The files of the modules that `file` declares as `#[cfg(test)] mod name;`.
+fn test_files(file: &Path) -> Vec<PathBuf> {
+    let text = std::fs::read_to_string(file).unwrap();
+    let stem = file.file_stem().unwrap().to_string_lossy();
+    // Where `file`'s submodules live: beside it for a `mod.rs` or crate root, else in a folder
+    // named after it.
+    let dir = match &*stem {
+        "mod" | "lib" | "main" => file.parent().unwrap().to_path_buf(),
+        _ => file.with_extension(""),
+    };
+    let lines: Vec<&str> = text.lines().map(str::trim).collect();
+    lines
+        .windows(2)
+        .filter(|w| w[0] == "#[cfg(test)]")
+        .filter_map(|w| w[1].strip_prefix("mod ")?.strip_suffix(';'))
+        .flat_map(|name| [dir.join(format!("{name}.rs")), dir.join(name).join("mod.rs")])
+        .collect()
 }
 
 /// Arrows between the top-level modules of `src`: (from, to) -> a file that makes it.
@@ -182,4 +204,24 @@ fn paths_are_read_from_groups_and_not_from_comments() {
                 #[cfg(test)]\nmod tests { use crate::i; }";
     let found: Vec<String> = crate_paths(text).into_iter().collect();
     assert_eq!(found, ["a", "b", "c", "e"]);
+}
+
+#[test]
+fn test_modules_in_files_of_their_own_are_found() {
+    let dir = std::env::temp_dir().join(format!("pathwave-modules-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("a")).unwrap();
+    std::fs::write(dir.join("a.rs"), "mod inner;\n#[cfg(test)]\nmod tests;\n").unwrap();
+    std::fs::write(dir.join("mod.rs"), "#[cfg(test)]\n  mod checks;\nmod kept;\n").unwrap();
+    let mut found = test_files(&dir.join("a.rs"));
+    found.extend(test_files(&dir.join("mod.rs")));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(
+        found,
+        [
+            dir.join("a/tests.rs"),
+            dir.join("a/tests/mod.rs"),
+            dir.join("checks.rs"),
+            dir.join("checks/mod.rs")
+        ]
+    );
 }
