@@ -195,24 +195,47 @@ fn textured_diffuse() {
 /// either way (checked at 256 spp), and the reference holds.
 #[test]
 fn textured_diffuse_with_a_black_light() {
+    let path = with_a_black_light("test_textured_diffuse_path.xml", "textured");
+    conformance_of(&path, "bsdf_spheres", "test_textured_diffuse_path.xml", "test_textured_diffuse");
+}
+
+/// A copy of the bsdf_spheres scene `file` (a single sphere under `fragments/single_sphere.xml`'s
+/// lights) whose area light's BSDF is black instead of grey, in a folder of its own named by
+/// `tag`; its `<path>` points at the suite's `common`.
+fn with_a_black_light(file: &str, tag: &str) -> PathBuf {
     let dir = suite().join("bsdf_spheres");
-    let out = std::env::temp_dir().join(format!("pathwave-black-light-{}", std::process::id()));
+    let out = std::env::temp_dir().join(format!("pathwave-black-light-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(out.join("fragments")).unwrap();
     let read = |p: &str| std::fs::read_to_string(dir.join(p)).unwrap();
     let common = suite().join("../../common").canonicalize().unwrap();
-    let scene = read("test_textured_diffuse_path.xml")
+    let scene = read(file)
         .replace(r#"<path value="../../../common"/>"#, &format!(r#"<path value="{}"/>"#, common.display()));
     let grey = r#"<spectrum name="reflectance" value="400:0.78, 500:0.78, 600:0.78, 700:0.78"/>"#;
     let fragment = read("fragments/single_sphere.xml");
     assert!(fragment.contains(grey) && scene.contains(&common.display().to_string()));
-    std::fs::write(out.join("test_textured_diffuse_path.xml"), scene).unwrap();
+    std::fs::write(out.join(file), scene).unwrap();
     std::fs::write(
         out.join("fragments/single_sphere.xml"),
         fragment.replace(grey, r#"<rgb name="reflectance" value="0"/>"#),
     )
     .unwrap();
-    let path = out.join("test_textured_diffuse_path.xml");
-    conformance_of(&path, "bsdf_spheres", "test_textured_diffuse_path.xml", "test_textured_diffuse");
+    out.join(file)
+}
+
+/// An OBJ sphere of rough glass (Beckmann, alpha 0.02, BK7 in air) under the area light, the
+/// environment map and the point light of `fragments/single_sphere.xml`.
+#[test]
+#[ignore = "the area light's shape has a grey diffuse BSDF, and the XML reader refuses emitters that reflect until it has them (branch emitters)"]
+fn roughdielectric() {
+    conformance("bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
+}
+
+/// [`roughdielectric`] with its area light's BSDF black, which changes nothing Mitsuba renders
+/// (see [`textured_diffuse_with_a_black_light`]).
+#[test]
+fn roughdielectric_with_a_black_light() {
+    let path = with_a_black_light("test_roughdielectric_path.xml", "roughdielectric");
+    conformance_of(&path, "bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
 }
 
 #[test]
@@ -234,7 +257,7 @@ fn mesh_attributes_vertex() {
 fn converted_ron_renders_the_same_bits() {
     let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
-    for (dir, file) in [
+    let mut scenes: Vec<PathBuf> = [
         ("floating_sphere", "test_directional_direct.xml"),
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
@@ -242,9 +265,13 @@ fn converted_ron_renders_the_same_bits() {
         ("texture_interp", "test_texture_interp_direct.xml"),
         ("mesh_attributes", "test_mesh_attributes_3_face_direct.xml"),
         ("mesh_attributes", "test_mesh_attributes_3_vertex_direct.xml"),
-    ] {
-        let xml = suite().join(dir).join(file);
-        let ron_path = out.join(format!("{dir}.ron"));
+    ]
+    .map(|(dir, file)| suite().join(dir).join(file))
+    .into();
+    scenes.push(with_a_black_light("test_roughdielectric_path.xml", "roughdielectric-ron"));
+    for xml in scenes {
+        let name = xml.file_stem().unwrap().to_string_lossy().into_owned();
+        let ron_path = out.join(format!("{name}.ron"));
         let converted = scene::mitsuba::to_ron(&xml, &[], &out).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&ron_path, &converted.ron).unwrap();
         let render = |path: &Path| {
@@ -256,7 +283,7 @@ fn converted_ron_renders_the_same_bits() {
         let (a, b) = (render(&xml), render(&ron_path));
         assert!(
             a.iter().zip(&b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
-            "{dir}: the RON renders other bits"
+            "{name}: the RON renders other bits"
         );
     }
 }
