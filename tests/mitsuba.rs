@@ -254,6 +254,14 @@ fn various_emitters() {
     );
 }
 
+/// An OBJ sphere of rough glass (Beckmann, alpha 0.02, BK7 in air) under the area light (on a
+/// grey diffuse shape), the environment map and the point light of
+/// `fragments/single_sphere.xml`.
+#[test]
+fn roughdielectric() {
+    conformance("bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
+}
+
 #[test]
 fn mesh_attributes_face() {
     conformance("mesh_attributes", "test_mesh_attributes_3_face_direct.xml", "test_mesh_attributes_3_face");
@@ -273,7 +281,7 @@ fn mesh_attributes_vertex() {
 fn converted_ron_renders_the_same_bits() {
     let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
-    for (dir, file) in [
+    let mut scenes: Vec<PathBuf> = [
         ("floating_sphere", "test_directional_direct.xml"),
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
@@ -286,6 +294,7 @@ fn converted_ron_renders_the_same_bits() {
         ("spot_light", "test_spot_direct.xml"),
         ("various_emitters", "test_various_emitters_ptracer.xml"),
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
+        ("bsdf_spheres", "test_roughdielectric_path.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}.ron"));
@@ -300,7 +309,7 @@ fn converted_ron_renders_the_same_bits() {
         let (a, b) = (render(&xml), render(&ron_path));
         assert!(
             a.iter().zip(&b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
-            "{dir}: the RON renders other bits"
+            "{name}: the RON renders other bits"
         );
     }
 }

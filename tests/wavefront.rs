@@ -63,8 +63,9 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
 
 /// Smooth-shaded meshes (vertex normals: adapted shading normals, lifted ray origins, and
 /// directions the two normals disagree about) take the same shared code in both integrators:
-/// a coarse sphere mesh in each material kind that shades (Lambertian, Metal, both rough ones,
-/// glass), one of them sheared, under a lamp, a point light and the sky, gives the oracle's bits.
+/// a coarse sphere mesh in each material kind that shades (Lambertian, Metal, both rough ones
+/// with either distribution, glass), one of them sheared, under a lamp, a point light and the
+/// sky, gives the oracle's bits.
 #[test]
 fn reproduces_the_oracle_on_smooth_shaded_meshes() {
     let dir = tempfile::tempdir().unwrap();
@@ -81,6 +82,8 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
                 "metal": Metal(albedo: (0.9, 0.8, 0.7), fuzz: 0.2),
                 "gold": RoughConductor(tint: (1, 0.8, 0.4), alpha: 0.3),
                 "frost": RoughDielectric(ior: 1.5, alpha: 0.2),
+                "copper": RoughConductor(tint: (1, 0.6, 0.4), alpha: 0.2, distribution: Beckmann),
+                "etched": RoughDielectric(ior: 1.5, alpha: 0.3, distribution: Beckmann),
                 "glass": Dielectric(ior: 1.5),
                 "lamp": DiffuseLight(emit: (30, 30, 30), two_sided: true),
             },
@@ -91,6 +94,8 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
                 (shape: Mesh(file: "ball.obj"), material: "gold", transform: [Translate((0.6, 0, 0))]),
                 (shape: Mesh(file: "ball.obj"), material: "frost", transform: [Translate((2.4, 0, 0))]),
                 (shape: Mesh(file: "ball.obj"), material: "glass", transform: [UniformScale(0.7), Translate((0, 0.5, 2))]),
+                (shape: Mesh(file: "ball.obj"), material: "copper", transform: [UniformScale(0.6), Translate((-2, 0.2, 2))]),
+                (shape: Mesh(file: "ball.obj"), material: "etched", transform: [UniformScale(0.6), Translate((2, 0.2, 2))]),
                 (shape: Quad(q: (4, 3, -1), u: (0, 0, 1), v: (-0.3, 1, 0)), material: "lamp"),
             ],
             lights: [Point(position: (-4, 4, 3), intensity: (20, 20, 20))],

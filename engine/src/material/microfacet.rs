@@ -1,20 +1,24 @@
-//! The isotropic GGX (Trowbridge-Reitz) microfacet distribution shared by the rough materials.
+//! The microfacet distributions shared by the rough materials: isotropic GGX (Trowbridge-Reitz)
+//! and Beckmann ([`beckmann`]), behind the [`Microfacet`] trait the materials are generic over.
 //!
 //! Sources:
 //! - Walter, Marschner, Li and Torrance 2007, "Microfacet Models for Refraction through Rough
-//!   Surfaces" (EGSR): the GGX distribution `D`, its Smith shadowing `G1`, and the reflection
-//!   and transmission BSDFs through the half vector.
+//!   Surfaces" (EGSR): the GGX and Beckmann distributions `D`, their Smith shadowing `G1`, and
+//!   the reflection and transmission BSDFs through the half vector.
 //! - Heitz 2014, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs" (JCGT
 //!   3(2)): the distribution of visible normals `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)`,
 //!   which integrates to one, and `G1 = 1 / (1 + Lambda)`.
 //! - Heitz 2018, "Sampling the GGX Distribution of Visible Normals" (JCGT 7(4)): the sampling
-//!   routine [`Ggx::sample_visible`].
+//!   routine of [`Ggx`].
 //!
 //! Everything here works in a local frame whose z axis is the (macro) normal: use [`to_local`]
 //! with [`Frame::from_normal`]. Shadowing-masking is the separable Smith form
 //! `G(wo, wi) = G1(wo) G1(wi)` (not the height-correlated one).
 
+mod beckmann;
+
 use crate::math::Frame;
+pub use beckmann::Beckmann;
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
 
@@ -25,8 +29,8 @@ use std::f32::consts::PI;
 /// same threshold.
 pub const SMOOTH_ALPHA: f32 = 1e-3;
 
-/// A roughness `alpha` in [0, 1] as a scene writes it: the GGX width, the scale of the
-/// microfacet slopes (0 is smooth).
+/// A roughness `alpha` in [0, 1] as a scene writes it: the width of the distribution, the scale
+/// of the microfacet slopes (0 is smooth; for Beckmann the RMS slope).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Roughness(pub f32);
 
@@ -65,61 +69,43 @@ pub enum Smith {
     HeightCorrelated,
 }
 
-/// The isotropic GGX distribution of width `alpha` (> 0).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ggx {
-    /// Width: the roughness.
-    pub alpha: f32,
+/// Which distribution of microfacet normals a rough material has.
+#[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Distribution {
+    /// GGX (Trowbridge-Reitz): long tails (the default).
+    #[default]
+    Ggx,
+    /// Beckmann: Gaussian slopes, shorter tails (Mitsuba's default).
+    Beckmann,
 }
 
-impl Ggx {
-    /// The distribution of normals at the unit local microfacet normal `m`:
-    /// `D(m) = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2)`, written as
-    /// `alpha^2 / (pi (alpha^2 cos^2 + sin^2)^2)` (no division by cos); 0 below the surface.
-    /// Normalised so that the integral of `D(m) cos(theta_m)` over the hemisphere is 1.
-    #[inline]
-    pub fn d(&self, m: Vec3A) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
-        let a2 = self.alpha * self.alpha;
-        let t = a2 * m.z * m.z + sin2(m);
-        if t <= 0.0 {
-            return 0.0;
-        }
-        a2 / (PI * t * t)
-    }
+/// An isotropic distribution of microfacet normals, in the local frame of the macro normal. The
+/// rough materials are generic over it, so each distribution's code is compiled on its own.
+pub trait Microfacet: Copy {
+    /// The distribution of normals at the unit local microfacet normal `m`, normalised so that
+    /// the integral of `D(m) cos(theta_m)` over the hemisphere is 1; 0 below the surface.
+    fn d(&self, m: Vec3A) -> f32;
 
-    /// Smith masking of the unit local direction `w` (either side; the side tests are the
-    /// BSDF's): `G1 = 1 / (1 + Lambda) = 2 / (1 + sqrt(1 + alpha^2 tan^2))`, written as
-    /// `2 |cos| / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`. 0 at grazing.
-    #[inline]
-    pub fn g1(&self, w: Vec3A) -> f32 {
-        let c = w.z.abs();
-        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
-        if den > 0.0 { 2.0 * c / den } else { 0.0 }
-    }
+    /// Smith masking `G1 = 1 / (1 + Lambda)` of the unit local direction `w` (either side; the
+    /// side tests are the BSDF's). 1 along the normal, 0 at grazing.
+    fn g1(&self, w: Vec3A) -> f32;
 
-    /// `G1(w) / |cos(w)|`, finite at grazing: `2 / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
-    #[inline]
-    pub fn g1_over_cos(&self, w: Vec3A) -> f32 {
-        let c = w.z.abs();
-        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
-        if den > 0.0 { 2.0 / den } else { 0.0 }
-    }
+    /// `G1(w) / |cos(w)|`, finite at grazing.
+    fn g1_over_cos(&self, w: Vec3A) -> f32;
 
-    /// Separable shadowing-masking `G1(wo) G1(wi)`.
-    #[inline]
-    pub fn g(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        self.g1(wo) * self.g1(wi)
-    }
+    /// Samples a visible microfacet normal from `wo` (local, `wo.z > 0`) and `u` in [0, 1]^2,
+    /// with density [`Self::pdf_visible`]. The result may be degenerate (`m.z <= 0`, or zero)
+    /// at the boundary of the domain; callers check.
+    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A;
 
     /// `G(wo, wi) / G1(wo)` under `smith`: what is left of the shadowing-masking in a sample's
     /// weight once visible-normal sampling has divided out `G1(wo)`. Separable: `G1(wi)`;
     /// height-correlated: `(1 + Lambda(wo)) / (1 + Lambda(wo) + Lambda(wi))`, written with
     /// `1 + Lambda = 1 / G1` so that grazing directions give 0, not infinities.
-    #[inline]
-    pub fn shadowing(&self, smith: Smith, wo: Vec3A, wi: Vec3A) -> f32 {
+    // Always inlined, as `pdf_visible`: with two distributions the compiler left it out of line
+    // in the rough materials' sampling (callgrind, materials-env).
+    #[inline(always)]
+    fn shadowing(&self, smith: Smith, wo: Vec3A, wi: Vec3A) -> f32 {
         let gi = self.g1(wi);
         match smith {
             Smith::Separable => gi,
@@ -133,19 +119,58 @@ impl Ggx {
 
     /// Density of visible normals seen from `wo` (local, `wo.z > 0`):
     /// `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)` (Heitz 2014, eq. 2 of Heitz 2018).
-    #[inline]
-    pub fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
+    #[inline(always)]
+    fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
         if wo.z <= 0.0 {
             return 0.0;
         }
         self.g1_over_cos(wo) * wo.dot(m).max(0.0) * self.d(m)
     }
+}
 
-    /// Samples a visible microfacet normal from `wo` (local, `wo.z > 0`) and `u` in [0, 1]^2,
-    /// with density [`Self::pdf_visible`]: Heitz 2018, listing 1 (isotropic). The result may
-    /// be degenerate (`m.z == 0`) at the boundary of the domain; callers check.
+/// The isotropic GGX distribution of width `alpha` (> 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ggx {
+    /// Width: the roughness.
+    pub alpha: f32,
+}
+
+impl Microfacet for Ggx {
+    /// `D(m) = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2)`, written as
+    /// `alpha^2 / (pi (alpha^2 cos^2 + sin^2)^2)` (no division by cos).
     #[inline]
-    pub fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+    fn d(&self, m: Vec3A) -> f32 {
+        if m.z <= 0.0 {
+            return 0.0;
+        }
+        let a2 = self.alpha * self.alpha;
+        let t = a2 * m.z * m.z + sin2(m);
+        if t <= 0.0 {
+            return 0.0;
+        }
+        a2 / (PI * t * t)
+    }
+
+    /// `G1 = 2 / (1 + sqrt(1 + alpha^2 tan^2))`, written as
+    /// `2 |cos| / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
+    #[inline]
+    fn g1(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        if den > 0.0 { 2.0 * c / den } else { 0.0 }
+    }
+
+    /// `2 / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
+    #[inline]
+    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        if den > 0.0 { 2.0 / den } else { 0.0 }
+    }
+
+    /// Heitz 2018, listing 1 (isotropic).
+    #[inline]
+    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
         let a = self.alpha;
         // Section 3.2: stretch the view direction to the hemisphere configuration.
         let vh = Vec3A::new(a * wo.x, a * wo.y, wo.z).normalize();
@@ -324,7 +349,7 @@ mod tests {
 
     /// Integral over the hemisphere of `g(theta, phi)` in spherical coordinates, midpoint rule
     /// in theta (fine, for narrow lobes) and phi, in f64.
-    fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
+    pub(super) fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
         let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
         let mut sum = 0.0;
         for i in 0..nt {

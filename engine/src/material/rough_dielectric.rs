@@ -1,6 +1,7 @@
-//! Rough dielectric: GGX microfacet reflection and transmission after Walter, Marschner, Li and
-//! Torrance 2007, "Microfacet Models for Refraction through Rough Surfaces", with separable Smith
-//! shadowing-masking and visible-normal sampling (Heitz 2018; see [`super::microfacet`]).
+//! Rough dielectric: microfacet reflection and transmission after Walter, Marschner, Li and
+//! Torrance 2007, "Microfacet Models for Refraction through Rough Surfaces", with the GGX or the
+//! Beckmann distribution, separable Smith shadowing-masking and visible-normal sampling (see
+//! [`super::microfacet`]).
 //! Two-sided: from inside (`wo . n < 0`) the relative index of refraction is `1 / ior`.
 //!
 //! With `eta` the relative IOR (`n_t / n_i`, from the side of `wo`), the half vector `h`, and
@@ -17,32 +18,37 @@
 //! Below [`SMOOTH_ALPHA`] (or with `ior` 1) it is the smooth dielectric.
 
 use super::dielectric::{Fresnel, fresnel_exact, refract};
-use super::microfacet::{Ggx, Roughness, SMOOTH_ALPHA, Smith, to_local};
+use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::Positive;
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `RoughDielectric(ior: 1.5, alpha: 0.1)`.
+/// `RoughDielectric(ior: 1.5, alpha: 0.1, distribution: Ggx)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RoughDielectricDesc {
     /// Index of refraction inside (> 0; outside is 1).
     pub ior: Positive,
-    /// GGX roughness in [0, 1]; below 1e-3 smooth glass.
+    /// Roughness in [0, 1]; below 1e-3 smooth glass.
     pub alpha: Roughness,
+    /// `Ggx` (default) or `Beckmann`.
+    #[serde(default)]
+    pub distribution: Distribution,
     /// `Separable` (default) or `HeightCorrelated` Smith shadowing-masking.
     #[serde(default)]
     pub smith: Smith,
 }
 
-/// Rough clear dielectric: GGX reflection and transmission weighted by Fresnel.
+/// Rough clear dielectric: microfacet reflection and transmission weighted by Fresnel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoughDielectric {
     /// Index of refraction inside (outside is 1).
     pub ior: f32,
-    /// GGX roughness in [0, 1].
+    /// Roughness in [0, 1].
     pub alpha: f32,
+    /// The distribution of microfacet normals.
+    pub distribution: Distribution,
     /// The shadowing-masking term's form.
     pub smith: Smith,
 }
@@ -67,32 +73,27 @@ impl RoughDielectric {
             None
         }
     }
-}
 
-impl MaterialModel for RoughDielectric {
-    type Desc = RoughDielectricDesc;
-    const SHADING: Shading = Shading::Glossy;
-
-    fn build(desc: &RoughDielectricDesc, _colors: &mut Colors) -> Self {
-        Self { ior: desc.ior.0, alpha: desc.alpha.0, smith: desc.smith }
-    }
-
-    /// A visible normal from `u`, then reflection if `uc < F`, refraction otherwise; `None` when
-    /// the direction ends on the wrong side of the surface (single-scattering loss).
-    fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
-        if self.is_smooth() {
-            return super::dielectric::sample(self.ior, Fresnel::Exact, wo, n, uc);
-        }
-        let (eta, nf) = self.side(wo, n)?;
+    /// [`MaterialModel::sample`] off the smooth limit with the distribution `md`, the normal
+    /// `nf` on `wo`'s side and the relative IOR `eta` seen from there.
+    #[inline(always)]
+    fn sample_rough<M: Microfacet>(
+        &self,
+        md: M,
+        wo: Vec3A,
+        nf: Vec3A,
+        eta: f32,
+        u: Vec2,
+        uc: f32,
+    ) -> Option<BsdfSample> {
         let frame = Frame::from_normal(nf);
         let lo = to_local(&frame, wo);
-        let ggx = Ggx { alpha: self.alpha };
-        let m = ggx.sample_visible(lo, u);
+        let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
         if lo.z <= 0.0 || m.z <= 0.0 || cos_om <= 0.0 {
             return None;
         }
-        let pdf_m = ggx.pdf_visible(lo, m);
+        let pdf_m = md.pdf_visible(lo, m);
         let fr = fresnel_exact(cos_om.min(1.0), eta);
         let (li, pdf, weight, eta) = if uc < fr {
             let li = reflect(lo, m);
@@ -100,7 +101,7 @@ impl MaterialModel for RoughDielectric {
                 return None;
             }
             // f cos_i / pdf = G / G1(wo): F, D and G1(wo) / cos_o cancel.
-            (li, pdf_m / (4.0 * cos_om) * fr, ggx.shadowing(self.smith, lo, li), 1.0)
+            (li, pdf_m / (4.0 * cos_om) * fr, md.shadowing(self.smith, lo, li), 1.0)
         } else {
             let li = refract(lo, m, eta)?.normalize();
             let cos_im = li.dot(m);
@@ -109,7 +110,7 @@ impl MaterialModel for RoughDielectric {
             }
             let den = (cos_im + cos_om / eta).powi(2);
             // f cos_i / pdf = G / G1(wo) / eta^2 (the radiance scaling).
-            (li, pdf_m * -cos_im / den * (1.0 - fr), ggx.shadowing(self.smith, lo, li) / (eta * eta), eta)
+            (li, pdf_m * -cos_im / den * (1.0 - fr), md.shadowing(self.smith, lo, li) / (eta * eta), eta)
         };
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
@@ -118,11 +119,10 @@ impl MaterialModel for RoughDielectric {
         Some(BsdfSample { wi, weight: Vec3::splat(weight), pdf, eta, delta: false })
     }
 
-    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        if self.is_smooth() {
-            return BsdfEval::ZERO;
-        }
-        let Some((eta, nf)) = self.side(wo, n) else { return BsdfEval::ZERO };
+    /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, the normal `nf`
+    /// on `wo`'s side and the relative IOR `eta` seen from there.
+    #[inline(always)]
+    fn eval_rough<M: Microfacet>(&self, md: M, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
         let frame = Frame::from_normal(nf);
         let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
         if lo.z <= 0.0 || li.z == 0.0 {
@@ -137,23 +137,68 @@ impl MaterialModel for RoughDielectric {
         if m.z <= 0.0 || cos_om <= 0.0 || (cos_im > 0.0) != reflection || cos_im == 0.0 {
             return BsdfEval::ZERO;
         }
-        let ggx = Ggx { alpha: self.alpha };
         let fr = fresnel_exact(cos_om.min(1.0), eta);
         // D_wo(m) = G1(wo) (wo.m) D(m) / cos_o: the density of the sampled normal.
-        let d_wo = ggx.g1_over_cos(lo) * cos_om * ggx.d(m);
+        let d_wo = md.g1_over_cos(lo) * cos_om * md.d(m);
         let (f_cos, pdf) = if reflection {
             let pdf_r = d_wo / (4.0 * cos_om);
-            (pdf_r * fr * ggx.shadowing(self.smith, lo, li), pdf_r * fr)
+            (pdf_r * fr * md.shadowing(self.smith, lo, li), pdf_r * fr)
         } else {
             let den = (cos_im + cos_om / eta).powi(2);
             // |d h / d wi| = |wi.h| / (wi.h + wo.h / eta)^2 (Walter et al. eq. 17).
             let pdf_t = d_wo * -cos_im / den;
-            (pdf_t * (1.0 - fr) * ggx.shadowing(self.smith, lo, li) / (eta * eta), pdf_t * (1.0 - fr))
+            (pdf_t * (1.0 - fr) * md.shadowing(self.smith, lo, li) / (eta * eta), pdf_t * (1.0 - fr))
         };
         if !(pdf > 0.0 && pdf.is_finite() && f_cos.is_finite()) {
             return BsdfEval::ZERO;
         }
         BsdfEval { f_cos: Vec3::splat(f_cos), pdf }
+    }
+
+    /// [`Self::sample_rough`] with Beckmann, out of line: inlined beside GGX's, it made the
+    /// compiler lay out GGX's path less well (0.4% more instructions on materials-env).
+    #[inline(never)]
+    fn sample_beckmann(&self, wo: Vec3A, nf: Vec3A, eta: f32, u: Vec2, uc: f32) -> Option<BsdfSample> {
+        self.sample_rough(Beckmann { alpha: self.alpha }, wo, nf, eta, u, uc)
+    }
+
+    /// [`Self::eval_rough`] with Beckmann, out of line as [`Self::sample_beckmann`].
+    #[inline(never)]
+    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
+        self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, nf, eta)
+    }
+}
+
+impl MaterialModel for RoughDielectric {
+    type Desc = RoughDielectricDesc;
+    const SHADING: Shading = Shading::Glossy;
+
+    fn build(desc: &RoughDielectricDesc, _colors: &mut Colors) -> Self {
+        Self { ior: desc.ior.0, alpha: desc.alpha.0, distribution: desc.distribution, smith: desc.smith }
+    }
+
+    /// A visible normal from `u`, then reflection if `uc < F`, refraction otherwise; `None` when
+    /// the direction ends on the wrong side of the surface (single-scattering loss).
+    fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
+        if self.is_smooth() {
+            return super::dielectric::sample(self.ior, Fresnel::Exact, wo, n, uc);
+        }
+        let (eta, nf) = self.side(wo, n)?;
+        match self.distribution {
+            Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, nf, eta, u, uc),
+            Distribution::Beckmann => self.sample_beckmann(wo, nf, eta, u, uc),
+        }
+    }
+
+    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        if self.is_smooth() {
+            return BsdfEval::ZERO;
+        }
+        let Some((eta, nf)) = self.side(wo, n) else { return BsdfEval::ZERO };
+        match self.distribution {
+            Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, wo, wi, nf, eta),
+            Distribution::Beckmann => self.eval_beckmann(wo, wi, nf, eta),
+        }
     }
 
     /// Clear glass shows as white in the albedo guide.
@@ -179,18 +224,25 @@ mod tests {
         (n, Frame::from_normal(n).to_world(Vec3A::new(t.sin(), 0.0, z)))
     }
 
+    /// Rough glass of index 1.5, separable shadowing.
+    fn glass(alpha: f32, distribution: Distribution) -> RoughDielectric {
+        RoughDielectric { ior: 1.5, alpha, distribution, smith: Smith::Separable }
+    }
+
+    /// Both distributions.
+    const DISTRIBUTIONS: [Distribution; 2] = [Distribution::Ggx, Distribution::Beckmann];
     const ALPHAS: [f32; 3] = [0.05, 0.2, 0.6];
     const ANGLES: [f32; 3] = [1.0, 60.0, 85.0];
 
     /// Reflection and transmission separately, each about its own (smooth) direction, so that
     /// narrow lobes get their own cells.
-    fn chi2_both_lobes(inside: bool) {
+    fn chi2_both_lobes(inside: bool, distribution: Distribution) {
         for alpha in ALPHAS {
             for deg in ANGLES {
-                let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
+                let m = glass(alpha, distribution);
                 let (n, wo) = setup(deg, inside);
                 let (eta, nf) = m.side(wo, n).unwrap();
-                let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
+                let what = format!("{distribution:?}, inside {inside}, alpha {alpha}, {deg} deg");
                 let on_side = |wi: Vec3A, up: bool| (wi.dot(nf) > 0.0) == up;
                 let dof = assert_chi2(
                     &format!("{what}, reflection"),
@@ -204,7 +256,13 @@ mod tests {
                     &format!("{what}, transmission"),
                     |u, uc| m.sample(wo, n, u, uc).map(|s| s.wi).filter(|&w| on_side(w, false)),
                     |wi| if on_side(wi, false) { m.eval(wo, wi, n).pdf } else { 0.0 },
-                    (nf, refract(wo, nf, eta).map_or(-nf, |w| w.normalize()), alpha),
+                    // From outside the transmitted lobe is narrower than the reflected one (by
+                    // about 1 - 1 / eta): cells a third as wide resolve Beckmann's Gaussian peak.
+                    (
+                        nf,
+                        refract(wo, nf, eta).map_or(-nf, |w| w.normalize()),
+                        if inside { alpha } else { alpha / 3.0 },
+                    ),
                     400_000,
                 );
                 // From inside beyond the critical angle, little is transmitted.
@@ -217,28 +275,38 @@ mod tests {
 
     #[test]
     fn sampling_matches_eval_pdf_chi2_from_outside() {
-        chi2_both_lobes(false);
+        chi2_both_lobes(false, Distribution::Ggx);
     }
 
     #[test]
     fn sampling_matches_eval_pdf_chi2_from_inside() {
-        chi2_both_lobes(true);
+        chi2_both_lobes(true, Distribution::Ggx);
+    }
+
+    #[test]
+    fn beckmann_sampling_matches_eval_pdf_chi2_from_outside() {
+        chi2_both_lobes(false, Distribution::Beckmann);
+    }
+
+    #[test]
+    fn beckmann_sampling_matches_eval_pdf_chi2_from_inside() {
+        chi2_both_lobes(true, Distribution::Beckmann);
     }
 
     #[test]
     fn sample_weight_and_pdf_agree_with_eval() {
         let mut r = crate::testing::uniform(7);
-        for inside in [false, true] {
+        for (inside, distribution) in DISTRIBUTIONS.iter().flat_map(|&d| [(false, d), (true, d)]) {
             for alpha in [0.01f32, 0.05, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0, 89.5] {
-                    let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
+                    let m = glass(alpha, distribution);
                     let (n, wo) = setup(deg, inside);
                     let (eta, nf) = m.side(wo, n).unwrap();
                     let (mut reflected, mut transmitted) = (0, 0);
                     for _ in 0..400 {
                         let Some(s) = m.sample(wo, n, Vec2::new(r(), r()), r()) else { continue };
                         let e = m.eval(wo, s.wi, n);
-                        let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
+                        let what = format!("{distribution:?}, inside {inside}, alpha {alpha}, {deg} deg");
                         assert!(!s.delta && (s.wi.length() - 1.0).abs() < 1e-5, "{what}");
                         if s.wi.dot(nf) > 0.0 {
                             reflected += 1;
@@ -277,7 +345,8 @@ mod tests {
             }
         }
         let mean = sum / count as f64;
-        (mean, ((sum2 / count as f64 - mean * mean) / count as f64).sqrt())
+        // At least 0: rounding may take it below when every weight is the same.
+        (mean, ((sum2 / count as f64 - mean * mean) / count as f64).max(0.0).sqrt())
     }
 
     /// The same by quadrature of `eval` over the sphere (uniform grid in (cos theta, phi)),
@@ -302,17 +371,12 @@ mod tests {
 
     #[test]
     fn white_furnace_never_exceeds_one() {
-        for inside in [false, true] {
+        for (inside, distribution) in DISTRIBUTIONS.iter().flat_map(|&d| [(false, d), (true, d)]) {
             for alpha in [0.05f32, 0.2, 0.6, 1.0] {
                 for deg in [0.0f32, 30.0, 60.0, 85.0] {
                     let (n, wo) = setup(deg, inside);
-                    let (e, se) = energy_by_sampling(
-                        &RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable },
-                        wo,
-                        n,
-                        50_000,
-                    );
-                    let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
+                    let (e, se) = energy_by_sampling(&glass(alpha, distribution), wo, n, 50_000);
+                    let what = format!("{distribution:?}, inside {inside}, alpha {alpha}, {deg} deg");
                     assert!(e <= 1.0 + 3.0 * se + 1e-4, "{what}: {e}");
                     // Single scattering loses much at alpha 1 and grazing incidence (0.39).
                     assert!(e > 0.3, "{what}: {e}");
@@ -323,16 +387,18 @@ mod tests {
 
     #[test]
     fn energy_by_quadrature_matches_sampling() {
-        for inside in [false, true] {
+        for (inside, distribution) in DISTRIBUTIONS.iter().flat_map(|&d| [(false, d), (true, d)]) {
             for alpha in [0.3f32, 1.0] {
                 for deg in [0.0f32, 60.0] {
-                    let m = RoughDielectric { ior: 1.5, alpha, smith: Smith::Separable };
+                    let m = glass(alpha, distribution);
                     let (n, wo) = setup(deg, inside);
                     let q = energy_by_quadrature(&m, wo, n);
                     let (e, se) = energy_by_sampling(&m, wo, n, 100_000);
-                    let what = format!("inside {inside}, alpha {alpha}, {deg} deg");
+                    let what = format!("{distribution:?}, inside {inside}, alpha {alpha}, {deg} deg");
                     assert!(q <= 1.0 + 2e-3, "{what}: {q}");
-                    assert!((q - e).abs() < 4.0 * se + 3e-3, "{what}: {q} vs {e}");
+                    // Beckmann's sampling has the exact masking, its weights the rational one
+                    // (0.35%).
+                    assert!((q - e).abs() < 4.0 * se + 5e-3, "{what}: {q} vs {e}");
                 }
             }
         }
@@ -353,8 +419,8 @@ mod tests {
         let ior = 1.5f32;
         let index = |w: Vec3A| if w.dot(n) > 0.0 { 1.0 } else { ior };
         let mut nonzero = 0;
-        for alpha in [0.1f32, 0.3, 1.0] {
-            let m = RoughDielectric { ior, alpha, smith: Smith::Separable };
+        for (alpha, distribution) in DISTRIBUTIONS.iter().flat_map(|&d| [(0.1f32, d), (0.3, d), (1.0, d)]) {
+            let m = RoughDielectric { ior, alpha, distribution, smith: Smith::Separable };
             for k in 0..2000 {
                 let (wo, wi) = (dir(k % 2 == 0), dir(k % 3 == 0));
                 let a = m.eval(wo, wi, n).f_cos.x / wi.dot(n).abs() / index(wo).powi(2);
@@ -363,15 +429,12 @@ mod tests {
                 nonzero += (a > 1e-3) as u32;
             }
         }
-        assert!(nonzero > 2000, "{nonzero}");
+        assert!(nonzero > 4000, "{nonzero}");
     }
 
     #[test]
     fn smooth_alpha_is_the_smooth_dielectric() {
-        for m in [
-            RoughDielectric { ior: 1.5, alpha: 0.0, smith: Smith::Separable },
-            RoughDielectric { ior: 1.5, alpha: 5e-4, smith: Smith::Separable },
-        ] {
+        for m in [glass(0.0, Distribution::Ggx), glass(5e-4, Distribution::Beckmann)] {
             for inside in [false, true] {
                 let (n, wo) = setup(40.0, inside);
                 for uc in [0.01f32, 0.5, 0.99] {
@@ -385,20 +448,22 @@ mod tests {
             }
             assert_eq!(m.specular(), Specular::Glass { ior: 1.5 });
         }
-        let index_matched = RoughDielectric { ior: 1.0, alpha: 0.3, smith: Smith::Separable };
+        let index_matched = RoughDielectric { ior: 1.0, ..glass(0.3, Distribution::Ggx) };
         let wo = Vec3A::new(0.6, 0.0, 0.8);
         let s = index_matched.sample(wo, Vec3A::Z, Vec2::new(0.3, 0.6), 0.5).unwrap();
         assert!(s.delta && (s.wi + wo).length() < 1e-6, "passes straight through");
-        assert_eq!(
-            RoughDielectric { ior: 1.5, alpha: 0.2, smith: Smith::Separable }.specular(),
-            Specular::No
-        );
-        assert_eq!(RoughDielectric { ior: 1.5, alpha: 0.2, smith: Smith::Separable }.albedo(), Vec3::ONE);
+        assert_eq!(glass(0.2, Distribution::Ggx).specular(), Specular::No);
+        assert_eq!(glass(0.2, Distribution::Ggx).albedo(), Vec3::ONE);
     }
 
     #[test]
     fn grazing_and_degenerate_directions_give_nothing() {
-        let m = RoughDielectric { ior: 1.5, alpha: 0.3, smith: Smith::Separable };
+        for m in DISTRIBUTIONS.map(|d| glass(0.3, d)) {
+            grazing_and_degenerate(m);
+        }
+    }
+
+    fn grazing_and_degenerate(m: RoughDielectric) {
         let n = Vec3A::Z;
         assert!(m.sample(Vec3A::X, n, Vec2::splat(0.4), 0.5).is_none());
         assert_eq!(m.eval(Vec3A::X, Vec3A::Z, n), BsdfEval::ZERO);
@@ -427,14 +492,10 @@ mod tests {
         };
         let d = parse("RoughDielectric(ior: 1.5, alpha: 0.1)").unwrap();
         let (m, _) = crate::material::Material::build(&d, &mut |_| unreachable!());
-        assert_eq!(
-            m,
-            crate::material::Material::RoughDielectric(RoughDielectric {
-                ior: 1.5,
-                alpha: 0.1,
-                smith: Smith::Separable
-            })
-        );
+        assert_eq!(m, crate::material::Material::RoughDielectric(glass(0.1, Distribution::Ggx)));
+        let d = parse("RoughDielectric(ior: 1.5, alpha: 0.1, distribution: Beckmann)").unwrap();
+        let (m, _) = crate::material::Material::build(&d, &mut |_| unreachable!());
+        assert_eq!(m, crate::material::Material::RoughDielectric(glass(0.1, Distribution::Beckmann)));
         assert_eq!(m.shading(), Shading::Glossy);
         let e = parse("RoughDielectric(ior: 1.5, alpha: 2)").unwrap_err();
         assert!(e.contains("expected a roughness alpha in [0, 1], found 2"), "{e}");

@@ -28,25 +28,47 @@ fn color<'d>(
     }
 }
 
-fn alpha(p: &Plugin) -> Result<f64, SceneError> {
-    if let Some((d, at)) = p.string("distribution")?
-        && d != "ggx"
-    {
-        return Err(at.error(format!("distribution \"{d}\": pathwave's microfacets are GGX")));
-    }
-    if p.param("alpha_u").is_some() || p.param("alpha_v").is_some() {
-        return Err(p.at.error(format!(
-            "{}: anisotropic roughness (alpha_u, alpha_v) is not in pathwave yet",
-            p.label()
-        )));
-    }
-    // Visible-normal sampling is how pathwave samples GGX; Mitsuba's switch changes only noise.
+/// The microfacet parameters of roughconductor and roughdielectric as RON fields,
+/// `alpha: A, distribution: D`, read as Mitsuba's `MicrofacetDistribution` reads them: the
+/// distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1) or both `alpha_u`
+/// and `alpha_v`, which pathwave's isotropic distributions take only when they are equal.
+fn microfacet(p: &Plugin) -> Result<String, SceneError> {
+    let distribution = match p.string("distribution")? {
+        None => "Beckmann",
+        Some((d, at)) => match d.to_lowercase().as_str() {
+            "beckmann" => "Beckmann",
+            "ggx" => "Ggx",
+            _ => {
+                return Err(at.error(format!(
+                    "distribution \"{d}\": Mitsuba and pathwave read \"beckmann\" and \"ggx\""
+                )));
+            }
+        },
+    };
+    // Visible-normal sampling is how pathwave samples both; Mitsuba's switch changes only noise.
     p.bool("sample_visible")?;
-    let a = p.float("alpha")?.unwrap_or(0.1);
+    let (alpha_u, alpha_v) = (p.float("alpha_u")?, p.float("alpha_v")?);
+    let a = match (p.float("alpha")?, alpha_u, alpha_v) {
+        (a, None, None) => a.unwrap_or(0.1),
+        (Some(_), _, _) => {
+            return Err(p.at.error(format!("{}: give either alpha or alpha_u and alpha_v", p.label())));
+        }
+        (None, Some(u), Some(v)) if u == v => u,
+        (None, Some(u), Some(v)) => {
+            let at = p.param("alpha_v").map_or(&p.at, |param| &param.at);
+            return Err(at.error(format!(
+                "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): pathwave's microfacets are isotropic; give one alpha",
+                p.label()
+            )));
+        }
+        (None, _, _) => {
+            return Err(p.at.error(format!("{}: alpha_u and alpha_v go together", p.label())));
+        }
+    };
     if !(0.0..=1.0).contains(&a) {
         return Err(p.at.error(format!("alpha {a}: pathwave takes 0 to 1")));
     }
-    Ok(a)
+    Ok(format!("alpha: {}, distribution: {distribution}", num(a)))
 }
 
 fn unit_scale(p: &Plugin, name: &str) -> Result<(), SceneError> {
@@ -94,7 +116,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             }
         }
         "conductor" | "roughconductor" => {
-            let a = if p.kind == "roughconductor" { alpha(&p)? } else { 0.0 };
+            let rough = if p.kind == "roughconductor" { microfacet(&p)? } else { "alpha: 0".to_owned() };
             if let Some((m, at)) = p.string("material")?
                 && m != "none"
             {
@@ -107,6 +129,8 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             let tint = color(cx, &p, "specular_reflectance", DVec3::ONE)?;
             p.finish(&[
                 "alpha",
+                "alpha_u",
+                "alpha_v",
                 "distribution",
                 "sample_visible",
                 "material",
@@ -114,7 +138,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                 "k",
                 "specular_reflectance",
             ])?;
-            let mut s = format!("RoughConductor(tint: {tint}, alpha: {}", num(a));
+            let mut s = format!("RoughConductor(tint: {tint}, {rough}");
             match (eta, k) {
                 (None, None) => {}
                 (eta, k) => {
@@ -128,16 +152,24 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             s + ")"
         }
         "dielectric" | "roughdielectric" => {
-            let a = if p.kind == "roughdielectric" { Some(alpha(&p)?) } else { None };
+            let rough = if p.kind == "roughdielectric" { Some(microfacet(&p)?) } else { None };
             let int = Converter::ior(&p, "int_ior", 1.5046)?;
             let ext = Converter::ior(&p, "ext_ior", 1.000277)?;
             unit_scale(&p, "specular_reflectance")?;
             unit_scale(&p, "specular_transmittance")?;
-            p.finish(&["alpha", "distribution", "sample_visible", "int_ior", "ext_ior"])?;
+            p.finish(&[
+                "alpha",
+                "alpha_u",
+                "alpha_v",
+                "distribution",
+                "sample_visible",
+                "int_ior",
+                "ext_ior",
+            ])?;
             let ior = num32(int / ext);
-            match a {
+            match rough {
                 None => format!("Dielectric(ior: {ior})"),
-                Some(a) => format!("RoughDielectric(ior: {ior}, alpha: {})", num(a)),
+                Some(rough) => format!("RoughDielectric(ior: {ior}, {rough})"),
             }
         }
         k => {

@@ -6,7 +6,8 @@
 //! Defaults are Mitsuba 3's, from its plugin reference (mitsuba.readthedocs.io, "Plugin
 //! reference"): hdrfilm 768 x 576 with a gaussian filter, integrators' `max_depth` -1
 //! (unbounded) and `rr_depth` 5, `fov_axis` x, diffuse reflectance 0.5, dielectric
-//! `int_ior` bk7 and `ext_ior` air, roughconductor and roughdielectric `alpha` 0.1.
+//! `int_ior` bk7 and `ext_ior` air, roughconductor and roughdielectric `alpha` 0.1 and
+//! `distribution` beckmann.
 
 use super::props::{Op, Plugin, Value, compose};
 use super::xml::{At, Document, Element};

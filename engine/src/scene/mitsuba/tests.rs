@@ -577,3 +577,45 @@ fn disks_cylinders_and_mesh_files_convert_with_mitsubas_defaults() {
     let e = error("tube", r#"<shape type="cylinder"><float name="radius" value="0"/></shape>"#);
     assert!(e.message.contains("radius > 0"), "{e}");
 }
+
+/// Rough BSDFs take Mitsuba's distribution (Beckmann unless told `ggx`) and an isotropic alpha,
+/// from `alpha` or from equal `alpha_u` and `alpha_v`; unequal ones are refused where written.
+#[test]
+fn microfacets_keep_their_distribution() {
+    let r = ron(
+        "rough",
+        r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughdielectric"><string name="distribution" value="GGX"/></bsdf></shape>
+        <shape type="rectangle"><bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+            <float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.3"/></bsdf></shape>"#,
+    );
+    for want in [
+        "RoughConductor(tint: (1, 1, 1), alpha: 0.2, distribution: Beckmann)",
+        "RoughDielectric(ior: 1.504",
+        "alpha: 0.1, distribution: Ggx)",
+        "RoughConductor(tint: (1, 1, 1), alpha: 0.3, distribution: Ggx)",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    let e = error(
+        "aniso",
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n<float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>",
+    );
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("anisotropic") && e.message.contains("isotropic"), "{e}");
+    for (tag, body, message) in [
+        ("one-axis", r#"<float name="alpha_u" value="0.1"/>"#, "alpha_u and alpha_v go together"),
+        (
+            "both",
+            r#"<float name="alpha" value="0.1"/><float name="alpha_u" value="0.1"/>"#,
+            "either alpha or",
+        ),
+        ("phong", r#"<string name="distribution" value="phong"/>"#, "\"beckmann\" and \"ggx\""),
+    ] {
+        let e = error(
+            tag,
+            &format!("<shape type=\"sphere\"><bsdf type=\"roughdielectric\">{body}</bsdf></shape>"),
+        );
+        assert!(e.message.contains(message), "{tag}: {e}");
+    }
+}
