@@ -59,7 +59,8 @@ pub fn denoise(color: &[Vec3], variance: &[Vec3], aovs: &Aovs, opts: &Options) -
     // The emission taken out is at most the pixel's colour: where the film discarded samples
     // (non-finite, or above its cap) that the emission image kept, the difference would be
     // negative, and the result too.
-    let emission: Vec<Vec3> = aovs.emission.iter().zip(color).map(|(le, c)| le.min(*c).max(Vec3::ZERO)).collect();
+    let emission: Vec<Vec3> =
+        aovs.emission.iter().zip(color).map(|(le, c)| le.min(*c).max(Vec3::ZERO)).collect();
     let mut e: Vec<Vec3> =
         color.iter().zip(&emission).zip(&divisor).map(|((c, le), d)| (*c - *le) / *d).collect();
     // Variance of the illumination's luminance (channels taken as independent).
