@@ -146,6 +146,27 @@ fn albedo_above_one() {
     assert_err(&text, 5, 50, &["albedo with components in [0, 1]", "[0.5, 1.5, 0.5]"]);
 }
 
+/// Emitted colours above what the film records (it discards samples above 1e12): a light of
+/// 1e20 rendered its room black, a 3e38 point light added nothing, and both exited 0.
+#[test]
+fn emission_beyond_the_films_range() {
+    let light = r#""light": DiffuseLight(emit: (1e20, 1, 1)),"#;
+    let col = 8 + light.find("))").unwrap() + 1;
+    assert_err(&with_material(light), 5, col, &["emitted colour with components in [0, 1e10]"]);
+    for lights in [
+        "Point(position: (0, 5, 0), intensity: (3e38, 3e38, 3e38))",
+        "Directional(direction: (0, -1, 0), irradiance: (1, 2e10, 1))",
+    ] {
+        let text = with_camera(CAMERA)
+            .replace("    objects: [", &format!("    lights: [{lights}],\n    objects: ["));
+        let e = err(&text);
+        assert!(e.line == 7 && e.message.contains("components in [0, 1e10]"), "{lights}: {e}");
+    }
+    // At the bound, a light is read.
+    let text = with_material(r#""light": DiffuseLight(emit: (1e10, 1e10, 1e10)),"#);
+    parse(&text, Path::new("test.ron")).unwrap_or_else(|e| panic!("{e}"));
+}
+
 #[test]
 fn zero_area_quad() {
     let text = with_object(r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (2, 0, 0)), material: "white"),"#);
@@ -206,7 +227,12 @@ fn emit_is_for_surfaces_whose_material_reflects() {
     assert_err(&with_object(on_medium), 8, end(on_medium), &["a medium does not emit"]);
     let negative =
         r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", emit: (radiance: (1, -1, 1))),"#;
-    assert_err(&with_object(negative), 8, 9 + negative.find("(1, -1").unwrap() + 9, &["components >= 0"]);
+    assert_err(
+        &with_object(negative),
+        8,
+        9 + negative.find("(1, -1").unwrap() + 9,
+        &["components in [0, 1e10]"],
+    );
     let unknown =
         r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", emit: (radiance: "sky")),"#;
     let e = err(&with_object(unknown));

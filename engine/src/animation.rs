@@ -3,7 +3,7 @@
 //! as written (see [`RotationTrack`]), so 0 to 720 degrees is two turns. Before the first key a
 //! track holds the first value, after the last the last.
 
-use crate::format::{Direction, Finite, Rgb, V3};
+use crate::format::{Direction, Finite, Radiance, V3};
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
 
@@ -142,13 +142,13 @@ impl<'de> Deserialize<'de> for Track<f32> {
     }
 }
 
-/// A colour track (emitted radiance, components >= 0).
+/// A colour track (emitted radiance, components in [0, MAX_EMISSION]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbTrack(pub Track<Vec3>);
 
 impl<'de> Deserialize<'de> for RgbTrack {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        track(d, |v: Rgb| v.0).map(RgbTrack)
+        track(d, |v: Radiance| v.0).map(RgbTrack)
     }
 }
 

@@ -56,8 +56,13 @@ pub fn denoise(color: &[Vec3], variance: &[Vec3], aovs: &Aovs, opts: &Options) -
     let (w, h) = (aovs.width as usize, aovs.height as usize);
     assert!(color.len() == w * h && variance.len() == w * h && aovs.albedo.len() == w * h);
     let divisor: Vec<Vec3> = aovs.albedo.iter().map(|a| a.max(Vec3::splat(MIN_ALBEDO))).collect();
+    // The emission taken out is at most the pixel's colour: where the film discarded samples
+    // (non-finite, or above its cap) that the emission image kept, the difference would be
+    // negative, and the result too.
+    let emission: Vec<Vec3> =
+        aovs.emission.iter().zip(color).map(|(le, c)| le.min(*c).max(Vec3::ZERO)).collect();
     let mut e: Vec<Vec3> =
-        color.iter().zip(&aovs.emission).zip(&divisor).map(|((c, le), d)| (*c - *le) / *d).collect();
+        color.iter().zip(&emission).zip(&divisor).map(|((c, le), d)| (*c - *le) / *d).collect();
     // Variance of the illumination's luminance (channels taken as independent).
     let mut var: Vec<f32> =
         variance.iter().zip(&divisor).map(|(v, d)| (*v * LUMA * LUMA / (*d * *d)).element_sum()).collect();
@@ -68,7 +73,7 @@ pub fn denoise(color: &[Vec3], variance: &[Vec3], aovs: &Aovs, opts: &Options) -
         let (ne, nv) = guides.pass(&e, &var, &smooth, 1 << pass, opts);
         (e, var) = (ne, nv);
     }
-    e.iter().zip(&divisor).zip(&aovs.emission).map(|((e, d), le)| *e * *d + *le).collect()
+    e.iter().zip(&divisor).zip(&emission).map(|((e, d), le)| *e * *d + *le).collect()
 }
 
 /// The guide images of one denoise.
@@ -252,5 +257,27 @@ mod tests {
         let blind = Options { sigma_luminance: f32::INFINITY, ..Options::default() };
         let flat = aovs(64, 32, |_, _| Vec3::splat(0.5), |_, _| Vec3::Z);
         assert!(seam(&denoise(&color, &var, &flat, &blind)) > 0.06);
+    }
+
+    /// Where the film discarded samples that the emission image kept (a light above the
+    /// film's cap, a NaN), the emission image exceeds the colour: the result stays finite and
+    /// non-negative.
+    #[test]
+    fn emission_beyond_the_colour_leaves_no_negative_or_nan() {
+        let (w, h) = (16usize, 16usize);
+        let color = noisy(&vec![Vec3::splat(0.5); w * h], 0.05);
+        let var = vec![Vec3::splat(0.0025); w * h];
+        let mut g = aovs(16, 16, |_, _| Vec3::splat(0.5), |_, _| Vec3::Z);
+        for (p, le) in g.emission.iter_mut().enumerate() {
+            *le = match p % 3 {
+                0 => Vec3::splat(1e20),
+                1 => Vec3::splat(f32::NAN),
+                _ => Vec3::ZERO,
+            };
+        }
+        let out = denoise(&color, &var, &g, &Options::default());
+        for (p, o) in out.iter().enumerate() {
+            assert!(o.is_finite() && o.min_element() >= 0.0, "pixel {p}: {o}");
+        }
     }
 }

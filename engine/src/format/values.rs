@@ -58,6 +58,35 @@ impl From<Rgb> for Vec3 {
     }
 }
 
+/// The largest component of an emitted colour ([`Radiance`]): the film sums samples exactly up
+/// to 1e12 (larger ones are discarded and counted), and this leaves two orders of magnitude for
+/// the gains of a path (a light seen close up, a lens focusing it) before a sample of an
+/// ordinary bright light reaches that cap.
+pub const MAX_EMISSION: f32 = 1e10;
+
+/// An emitted colour `(r, g, b)` (radiance, intensity or irradiance): every component in
+/// [0, [`MAX_EMISSION`]].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Radiance(pub Vec3);
+
+impl<'de> Deserialize<'de> for Radiance {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = vec3(d)?;
+        let ok = v.min_element() >= 0.0 && v.max_element() <= MAX_EMISSION;
+        check::<D, _>(
+            ok,
+            Radiance(v),
+            &format!("expected an emitted colour with components in [0, {MAX_EMISSION:e}], found {v}"),
+        )
+    }
+}
+
+impl From<Radiance> for Vec3 {
+    fn from(c: Radiance) -> Vec3 {
+        c.0
+    }
+}
+
 /// A reflectance `(r, g, b)` with every component in [0, 1] (more would create energy).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Albedo(pub Vec3);

@@ -2,7 +2,7 @@
 //! black BSDF. Light sampling picks emitters by power (see [`crate::lighting::lights`]).
 
 use super::{Colors, Emission, MaterialModel, Shading};
-use crate::format::{Color, Rgb};
+use crate::format::{Color, Radiance};
 use glam::Vec3;
 
 /// `DiffuseLight(emit: (r, g, b), two_sided: false)`.
@@ -10,7 +10,7 @@ use glam::Vec3;
 #[serde(deny_unknown_fields)]
 pub struct DiffuseLightDesc {
     /// Emitted radiance, or a texture.
-    pub emit: Color<Rgb>,
+    pub emit: Color<Radiance>,
     /// Emit on both sides (default false: only on the side of the normal).
     #[serde(default)]
     pub two_sided: bool,

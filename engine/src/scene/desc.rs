@@ -19,7 +19,7 @@ use std::num::NonZeroU32;
 pub struct SceneDesc {
     /// Declared parameters and their defaults, as RON text: `$name` elsewhere in the file
     /// stands for the value (substituted before parsing; `-D name=value` overrides).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::params::declarations")]
     pub parameters: std::collections::BTreeMap<String, String>,
     /// The camera.
     pub camera: CameraDesc,

@@ -2,7 +2,7 @@
 //! kinds are registered in `lighting::punctual`).
 
 use super::assets::ImageFile;
-use crate::format::{Finite, NonNegative, Rgb, white};
+use crate::format::{Finite, NonNegative, Radiance};
 pub use crate::lighting::punctual::{LightDesc, LightKind, LightModel, LightPosition};
 use glam::Vec3;
 use serde::Deserialize;
@@ -15,15 +15,15 @@ pub enum BackgroundDesc {
     #[default]
     Black,
     /// The same radiance in every direction.
-    Constant(Rgb),
+    Constant(Radiance),
     /// `(1 - a) * bottom + a * top` with `a = 0.5 * (dir.y + 1)`.
     Sky {
         /// Radiance straight down (default (1, 1, 1)).
         #[serde(default = "white")]
-        bottom: Rgb,
+        bottom: Radiance,
         /// Radiance straight up (default (0.5, 0.7, 1.0)).
         #[serde(default = "sky_blue")]
-        top: Rgb,
+        top: Radiance,
     },
     /// `Environment(file: "sky.exr", scale: 1, rotate: 0)`: a lat-long HDR map (EXR or HDR,
     /// linear; relative to the scene file), sampled as a light by its luminance. A direction
@@ -45,6 +45,10 @@ fn unit_scale() -> NonNegative {
     NonNegative(1.0)
 }
 
-fn sky_blue() -> Rgb {
-    Rgb(Vec3::new(0.5, 0.7, 1.0))
+fn white() -> Radiance {
+    Radiance(Vec3::ONE)
+}
+
+fn sky_blue() -> Radiance {
+    Radiance(Vec3::new(0.5, 0.7, 1.0))
 }

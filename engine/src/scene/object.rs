@@ -5,7 +5,7 @@ use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
-use crate::format::{Albedo, Color, Positive, Rgb, V3, context};
+use crate::format::{Albedo, Color, Positive, Radiance, V3, context};
 use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
@@ -48,7 +48,7 @@ pub struct MotionDesc {
 #[serde(deny_unknown_fields, rename = "Emit")]
 pub struct EmitDesc {
     /// Emitted radiance, or the name of a texture.
-    pub radiance: Color<Rgb>,
+    pub radiance: Color<Radiance>,
     /// Emit on both sides (default false: only on the side of the normal).
     #[serde(default)]
     pub two_sided: bool,

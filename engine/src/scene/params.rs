@@ -70,8 +70,31 @@ fn references(text: &str) -> Vec<Reference> {
 #[derive(serde::Deserialize)]
 #[serde(rename = "Scene")]
 struct Declared {
-    #[serde(default)]
+    #[serde(default, deserialize_with = "declarations")]
     parameters: BTreeMap<String, String>,
+}
+
+/// A scene's `parameters` map, each name declared once.
+pub fn declarations<'de, D: serde::Deserializer<'de>>(d: D) -> Result<BTreeMap<String, String>, D::Error> {
+    struct V;
+    impl<'de> serde::de::Visitor<'de> for V {
+        type Value = BTreeMap<String, String>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map from parameter names to RON text")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+            let mut out = BTreeMap::new();
+            while let Some(name) = map.next_key::<String>()? {
+                if out.contains_key(&name) {
+                    return Err(serde::de::Error::custom(format!("parameter \"{name}\" is declared twice")));
+                }
+                let value = map.next_value()?;
+                out.insert(name, value);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(V)
 }
 
 impl Substituted {
@@ -89,21 +112,25 @@ impl Substituted {
             s.text = text.to_owned();
             return Ok(s);
         }
-        // The declared defaults, read with every reference standing in as `()`.
-        let mut blank = String::with_capacity(text.len());
+        // The declared defaults, read with every reference standing in as `()`. A file that
+        // cannot be read so has a syntax error (or a bad `parameters`), reported where it is.
+        let mut blank = Substituted { text: String::new(), spans: Vec::new(), lines: s.lines.clone() };
         let mut last = 0;
         for r in &refs {
-            blank.push_str(&text[last..r.start]);
-            blank.push_str("()");
+            blank.text.push_str(&text[last..r.start]);
+            blank.spans.push((blank.text.len(), 2, r.start, r.end - r.start));
+            blank.text.push_str("()");
             last = r.end;
         }
-        blank.push_str(&text[last..]);
+        blank.text.push_str(&text[last..]);
         let options =
             ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        let declared = match options.from_str::<Declared>(&blank) {
+        let declared = match options.from_str::<Declared>(&blank.text) {
             Ok(d) => d.parameters,
-            // The full parse reports what is wrong with the file.
-            Err(_) => BTreeMap::new(),
+            Err(e) => {
+                let (line, col) = blank.map_position(e.span.start.line, e.span.start.col);
+                return Err(SceneError { path: path.to_owned(), line, col, message: e.code.to_string() });
+            }
         };
         let names = || declared.keys().map(|k| format!("\"{k}\"")).collect::<Vec<_>>().join(", ");
         for (name, _) in overrides {
@@ -172,11 +199,11 @@ mod tests {
 
     #[test]
     fn references_outside_strings_and_comments_are_replaced() {
-        let text = "A(x: $a, s: \"$a\", // $a\n y: $b /* $b */)";
+        let text = "Scene(x: $a, s: \"$a\", // $a\n y: $b /* $b */)";
         let s = Substituted::new(text, &[], Path::new("t")).map(|s| s.text);
         // `a` is not declared (no `parameters`): an error at its place.
         let e = s.unwrap_err();
-        assert_eq!((e.line, e.col), (1, 6), "{e}");
+        assert_eq!((e.line, e.col), (1, 10), "{e}");
         let text =
             "Scene(parameters: {\"a\": \"1\", \"b\": \"2\"},\n x: $a, s: \"$a\", // $a\n y: $b /* $b */)";
         let s = Substituted::new(text, &[("b".into(), "(3, 4)".into())], Path::new("t")).unwrap();
@@ -191,5 +218,23 @@ mod tests {
         assert_eq!(s.map_position(2, 9), (2, 9 + 1));
         let undeclared = Substituted::new(text, &[("c".into(), "1".into())], Path::new("t"));
         assert!(undeclared.err().unwrap().message.contains("declares no such parameter"));
+    }
+
+    /// A syntax error in a file that declares parameters is reported as itself, where it is
+    /// (past the references before it), not as the references' fault.
+    #[test]
+    fn syntax_errors_are_reported_where_they_are() {
+        let text = "Scene(parameters: {\"long_name\": \"1\"},\n x: $long_name, y: $long_name,, z: 1)";
+        let e = Substituted::new(text, &[], Path::new("t")).err().unwrap();
+        assert_eq!((e.line, e.col), (2, 31), "{e}");
+        assert!(!e.message.contains("parameter"), "{e}");
+    }
+
+    #[test]
+    fn a_parameter_declared_twice_is_refused() {
+        let text = "Scene(parameters: {\"a\": \"1\", \"a\": \"2\"}, x: $a)";
+        let e = Substituted::new(text, &[], Path::new("t")).err().unwrap();
+        assert!(e.message.contains("\"a\" is declared twice"), "{e}");
+        assert_eq!(e.line, 1, "{e}");
     }
 }

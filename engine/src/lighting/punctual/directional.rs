@@ -1,7 +1,7 @@
 //! `Directional(direction: (0, -1, 0), irradiance: (3, 3, 3))`: parallel light.
 
 use super::{LightModel, PunctualLight};
-use crate::format::{Direction, Rgb};
+use crate::format::{Direction, Radiance};
 
 /// Parallel light travelling along `direction`, of irradiance (W/m^2) on a surface facing it.
 #[derive(serde::Deserialize, Debug, Clone, Copy)]
@@ -10,7 +10,7 @@ pub struct Directional {
     /// The direction the light travels in.
     pub direction: Direction,
     /// Irradiance on a surface facing the light.
-    pub irradiance: Rgb,
+    pub irradiance: Radiance,
 }
 
 impl LightModel for Directional {

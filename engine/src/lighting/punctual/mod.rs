@@ -15,7 +15,7 @@ pub mod spot;
 pub mod test_point;
 
 use crate::format::registry::{fields, registry};
-use crate::format::{Color, Rgb, V3};
+use crate::format::{Color, Radiance, V3};
 use crate::lighting::lights::LightTexture;
 pub use crate::lighting::lights::PunctualLight;
 use crate::shape::MAX_COORDINATE;
@@ -73,7 +73,7 @@ pub struct LightTextures<'a> {
 impl LightTextures<'_> {
     /// A colour written out as a factor and no texture, or a texture's name as a factor of one
     /// and the texture.
-    pub fn color(&self, c: &Color<Rgb>) -> (Vec3, Option<LightTexture>) {
+    pub fn color(&self, c: &Color<Radiance>) -> (Vec3, Option<LightTexture>) {
         match c {
             Color::Value(v) => (v.0, None),
             Color::Texture(name) => {

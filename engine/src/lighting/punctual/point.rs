@@ -1,7 +1,7 @@
 //! `Point(position: (2, 3, 2), intensity: (10, 10, 10))`: an isotropic point light.
 
 use super::{LightModel, LightPosition, PunctualLight};
-use crate::format::Rgb;
+use crate::format::Radiance;
 
 /// Radiant intensity in W/sr, the same in every direction.
 #[derive(serde::Deserialize, Debug, Clone, Copy)]
@@ -10,7 +10,7 @@ pub struct Point {
     /// Where it is.
     pub position: LightPosition,
     /// Radiant intensity (W/sr).
-    pub intensity: Rgb,
+    pub intensity: Radiance,
 }
 
 impl LightModel for Point {

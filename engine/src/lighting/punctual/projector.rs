@@ -3,7 +3,7 @@
 //! projects an image through a perspective frustum, the reciprocal of a perspective camera.
 
 use super::{LightModel, LightPosition, LightTextures, PunctualLight, look_frame};
-use crate::format::{Color, Fov, FovAxis, NonNegative, Rgb, V3};
+use crate::format::{Color, Fov, FovAxis, NonNegative, Radiance, V3};
 use glam::Vec3;
 
 /// A projector (see [`PunctualLight::Projector`]). Its image is `irradiance` (a texture, or
@@ -28,7 +28,7 @@ pub struct Projector {
     /// The image: a plane at unit distance facing the projector receives pi times its value
     /// (times `scale`); a colour or a texture's name (default (1, 1, 1)).
     #[serde(default = "white")]
-    pub irradiance: Color<Rgb>,
+    pub irradiance: Color<Radiance>,
     /// Factor on the irradiance (default 1).
     #[serde(default = "unit")]
     pub scale: NonNegative,
@@ -38,8 +38,8 @@ fn default_up() -> V3 {
     V3(Vec3::Y)
 }
 
-fn white() -> Color<Rgb> {
-    Color::Value(Rgb(Vec3::ONE))
+fn white() -> Color<Radiance> {
+    Color::Value(Radiance(Vec3::ONE))
 }
 
 fn unit() -> NonNegative {

@@ -4,7 +4,7 @@
 //! Mitsuba 3's `spot` (`falloff: Linear`), optionally through a texture over the cone.
 
 use super::{LightModel, LightPosition, LightTextures, PunctualLight, look_frame};
-use crate::format::{Color, Finite, Rgb, V3};
+use crate::format::{Color, Finite, Radiance, V3};
 use crate::lighting::lights::{SpotFalloff, SpotTexture};
 use glam::Vec3;
 
@@ -17,7 +17,7 @@ pub struct Spot {
     /// A point on the cone's axis.
     pub look_at: V3,
     /// Radiant intensity on the axis (W/sr).
-    pub intensity: Rgb,
+    pub intensity: Radiance,
     /// Half angle of the cone in degrees, in (0, 180) (default 30).
     #[serde(default = "default_cone")]
     pub cone_angle: Finite,
@@ -31,7 +31,7 @@ pub struct Spot {
     /// A texture over the cone (default none): the intensity is times its value at the
     /// direction's uv (see [`SpotTexture`]); a colour written out tints it.
     #[serde(default)]
-    pub texture: Option<Color<Rgb>>,
+    pub texture: Option<Color<Radiance>>,
     /// Orients a texture: its frame's y axis is `up` made orthogonal to the cone's axis
     /// (default (0, 1, 0); it may not lie along the axis).
     #[serde(default)]
