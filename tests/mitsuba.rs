@@ -281,7 +281,7 @@ fn mesh_attributes_vertex() {
 fn converted_ron_renders_the_same_bits() {
     let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
-    let mut scenes: Vec<PathBuf> = [
+    let scenes = [
         ("floating_sphere", "test_directional_direct.xml"),
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
@@ -295,8 +295,10 @@ fn converted_ron_renders_the_same_bits() {
         ("various_emitters", "test_various_emitters_ptracer.xml"),
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
-    ] {
+    ];
+    for (dir, file) in scenes {
         let xml = suite().join(dir).join(file);
+        let name = format!("{dir}/{file}");
         let ron_path = out.join(format!("{dir}.ron"));
         let converted = scene::mitsuba::to_ron(&xml, &[], &out).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&ron_path, &converted.ron).unwrap();
