@@ -84,7 +84,7 @@ impl Element {
 pub struct Document {
     /// The root element.
     pub root: Element,
-    /// `<path>` folders, in order.
+    /// The scene file's folder, then the `<path>` folders in order (searched last to first).
     pub search: Vec<PathBuf>,
 }
 
@@ -123,7 +123,11 @@ pub fn read(path: &Path, overrides: &[(String, String)]) -> Result<Document, Sce
         }
         params.push((format!("${n}"), v.clone()));
     }
-    let mut reader = Reader { params, search: Vec::new(), stack: Vec::new(), elements: 0 };
+    // The scene file's folder is searched last, after the including file's own folder and the
+    // <path> folders (Mitsuba's file resolver starts with it, and <path> prepends): an included
+    // file may name another relative to the scene.
+    let scene_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut reader = Reader { params, search: vec![scene_dir], stack: Vec::new(), elements: 0 };
     let root = reader.file(path, None)?;
     if root.tag != "scene" {
         return Err(root.at.error(format!("the root element is <{}>, not <scene>", root.tag)));
@@ -443,6 +447,19 @@ mod tests {
         write(&d, "b.xml", r#"<scene version="3.0.0"><include filename="a.xml"/></scene>"#);
         let e = read(&a, &[]).unwrap_err();
         assert!(e.message.contains("include cycle"), "{e}");
+        // An included file may name another relative to the scene's folder, as Mitsuba's
+        // participating_media scenes do (include/base.xml includes include/preamble.xml).
+        std::fs::create_dir_all(d.join("include")).unwrap();
+        write(&d.join("include"), "pre.xml", r#"<scene version="3.0.0"><float name="g" value="2"/></scene>"#);
+        write(
+            &d.join("include"),
+            "base.xml",
+            r#"<scene version="3.0.0"><include filename="include/pre.xml"/></scene>"#,
+        );
+        let p =
+            write(&d, "m.xml", r#"<scene version="3.0.0"><include filename="include/base.xml"/></scene>"#);
+        let doc = read(&p, &[]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(doc.root.children[0].tag, "float");
     }
 
     #[test]
