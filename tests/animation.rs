@@ -85,7 +85,7 @@ fn a_keyframed_instance_blurs_like_the_same_motion_without_instancing() {
             }
         }
         // Frame 1 of 4 per second with a full shutter: the knot sweeps 0.75 units.
-        let scene = sequence::scene_at(&mut w, 1, 4.0, shutter);
+        let scene = sequence::scene_at(&mut w, 1, 4.0, shutter).unwrap();
         assert_eq!(scene.features.instances, instanced);
         assert_eq!(scene.features.motion, shutter > 0.0);
         wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0.mean()
@@ -104,7 +104,7 @@ fn a_static_scene_rebuilds_no_bvh_after_the_first_frame() {
     let desc = scene("mesh.ron");
     let mut w = SceneWorld::new(&desc);
     for frame in 0..8 {
-        sequence::scene_at(&mut w, frame, 24.0, 0.5);
+        sequence::scene_at(&mut w, frame, 24.0, 0.5).unwrap();
     }
     assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 1);
     let i = w.world.resource::<SceneInstances>();
@@ -112,7 +112,7 @@ fn a_static_scene_rebuilds_no_bvh_after_the_first_frame() {
     // Whereas a scene whose ball moves rebuilds its primitives each frame.
     let mut w = SceneWorld::new(&scene("animation-bounce.ron"));
     for frame in 0..8 {
-        sequence::scene_at(&mut w, frame, 24.0, 0.5);
+        sequence::scene_at(&mut w, frame, 24.0, 0.5).unwrap();
     }
     assert_eq!(w.world.resource::<SceneGeometry>().rebuilds, 8);
 }
@@ -607,4 +607,77 @@ fn a_frame_checkpoint_of_another_shutter_is_refused() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("shutter"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A frame that is not the scene the file asks for fails, naming why, instead of rendering
+/// something else with exit code 0: an animated camera the loader would refuse (look_from
+/// reaching look_at, a Smooth vfov overshooting below zero between keys), an object animated
+/// beyond 1e15, a shutter that carries a moving object to infinity. Each rendered black or
+/// clamped in silence before.
+#[test]
+fn frames_the_scene_does_not_describe_fail() {
+    let dir = temp("bad-frames");
+    let scene = |camera: &str, object: &str, animation: &str| {
+        format!(
+            r#"Scene(
+    camera: ({camera}),
+    render: (width: 16, height: 12, spp: 1),
+    materials: {{ "m": Lambertian(albedo: (0.5, 0.5, 0.5)) }},
+    objects: [(shape: Sphere(center: (0, 0, 0), radius: 1), material: "m"{object})],
+    animation: ({animation}),
+)"#
+        )
+    };
+    let still = "look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40";
+    let cases = [
+        (
+            "look_from reaches look_at",
+            scene(still, "", "camera: (look_from: Linear([(0, (0, 0, 5)), (1, (0, 0, 0))]))"),
+            "1",
+            "look_from and look_at are the same point",
+        ),
+        (
+            // Catmull-Rom through 1, 1, 1, 170: about -11.5 degrees at t = 2/3.
+            "vfov overshoots",
+            scene(still, "", "camera: (vfov: Smooth([(0, 1), (1, 1), (2, 170), (3, 1)]))"),
+            "0.6667",
+            "vfov must lie in (0, 180)",
+        ),
+        (
+            "object animated away",
+            scene(still, ", animate: (translate: Linear([(0, (0, 0, 0)), (1, (1e16, 0, 0))]))", ""),
+            "1",
+            "objects[0]",
+        ),
+        (
+            "moving object, endless shutter",
+            scene(&format!("{still}, shutter: (-2e38, 2e38)"), ", motion: (velocity: (1, 0, 0))", ""),
+            "0",
+            "beyond 1e15 units",
+        ),
+    ];
+    for (what, text, time, words) in &cases {
+        let path = dir.join("s.ron");
+        std::fs::write(&path, &text).unwrap();
+        let out = pathwave()
+            .args(["render", "--time", time, "-o"])
+            .arg(dir.join("s.png"))
+            .arg(&path)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(words), "{what}: {err}");
+        assert!(!dir.join("s.png").exists(), "{what}: an image was written");
+    }
+    // Frame 1 of the first, through `animate`, is refused too; frame 0 is fine alone.
+    std::fs::write(dir.join("s.ron"), &cases[0].1).unwrap();
+    let pattern = dir.join("f_{frame}.png");
+    let out = pathwave()
+        .args(["animate", "--fps", "1", "--frames", "0..2", "-o"])
+        .arg(&pattern)
+        .arg(dir.join("s.ron"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("frame 1:"), "{err}");
 }

@@ -40,11 +40,17 @@ pub fn frame_time(frame: u32, fps: f32, shutter: f32) -> (f32, f32) {
     (t, t + shutter / fps)
 }
 
-/// Sets the world to `frame` and returns the scene to render.
-pub fn scene_at(world: &mut SceneWorld, frame: u32, fps: f32, shutter: f32) -> Arc<RenderScene> {
+/// Sets the world to `frame` and returns the scene to render, or why the frame is not the scene
+/// the file asks for.
+pub fn scene_at(
+    world: &mut SceneWorld,
+    frame: u32,
+    fps: f32,
+    shutter: f32,
+) -> Result<Arc<RenderScene>, String> {
     let (open, close) = frame_time(frame, fps, shutter);
     world.set_time(open, close);
-    world.update()
+    world.update_checked().map_err(|e| format!("frame {frame}: {e}"))
 }
 
 /// What `run` needs besides the world.
@@ -129,7 +135,7 @@ pub fn run(
         let t0 = Instant::now();
         let scene = {
             let _span = tracing::info_span!("scene_update", frame).entered();
-            scene_at(world, frame, seq.fps, seq.shutter)
+            scene_at(world, frame, seq.fps, seq.shutter)?
         };
         let update = t0.elapsed();
         let (open, close) = frame_time(frame, seq.fps, seq.shutter);

@@ -78,7 +78,7 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     let mut world = SceneWorld::new(&desc);
     let shutter = desc.camera.shutter;
     world.set_time(time + shutter.0, time + shutter.1);
-    let scene = world.update();
+    let scene = world.update_checked()?;
     log_scene(&scene);
     let s = scene.settings;
     let id = render_id(&desc.inputs, &scene, &how, time, (time + shutter.0, time + shutter.1))?;

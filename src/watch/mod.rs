@@ -171,47 +171,45 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
                 // As `render --time` (the shutter may have changed).
                 let shutter = desc.camera.shutter;
                 w.set_time(time + shutter.0, time + shutter.1);
-                let scene = w.update();
-                let s = scene.settings;
-                let ms = start.elapsed().as_secs_f64() * 1e3;
-                match reloaded {
-                    Some((r, before)) => eprintln!(
-                        "{name}: reloaded in {ms:.0} ms: {} objects changed, {} added, {} removed, {}; {}",
-                        r.changed,
-                        r.added,
-                        r.removed,
-                        match r.resources.is_empty() {
-                            true => "no other change".to_string(),
-                            false => format!("{} changed", r.resources.join(", ")),
-                        },
-                        w.builds().since(&before)
-                    ),
-                    None => eprintln!("{name}: loaded in {ms:.0} ms"),
-                }
-                // A new size: new viewers (the old window closes first).
-                if viewers.as_ref().is_none_or(|v| (v.1, v.2, v.3) != (s.window, s.width, s.height)) {
-                    viewers = None;
-                }
-                let (v, ..) = viewers.get_or_insert_with(|| {
-                    (Viewers::open(&args.view, &name, &s), s.window, s.width, s.height)
-                });
-                let f = film.insert(Film::new(s.window.w, s.window.h));
-                match passes(&scene, f, v, &events, args.engine, &pool) {
-                    Ended::Done => {
-                        write(&args, f)?;
-                        eprintln!("{name}: done, {} spp", s.spp);
+                match w.update_checked() {
+                    Err(e) => show_error(&mut viewers, &e),
+                    Ok(scene) => {
+                        let s = scene.settings;
+                        let ms = start.elapsed().as_secs_f64() * 1e3;
+                        match reloaded {
+                            Some((r, before)) => eprintln!(
+                                "{name}: reloaded in {ms:.0} ms: {} objects changed, {} added, {} removed, {}; {}",
+                                r.changed,
+                                r.added,
+                                r.removed,
+                                match r.resources.is_empty() {
+                                    true => "no other change".to_string(),
+                                    false => format!("{} changed", r.resources.join(", ")),
+                                },
+                                w.builds().since(&before)
+                            ),
+                            None => eprintln!("{name}: loaded in {ms:.0} ms"),
+                        }
+                        // A new size: new viewers (the old window closes first).
+                        if viewers.as_ref().is_none_or(|v| (v.1, v.2, v.3) != (s.window, s.width, s.height)) {
+                            viewers = None;
+                        }
+                        let (v, ..) = viewers.get_or_insert_with(|| {
+                            (Viewers::open(&args.view, &name, &s), s.window, s.width, s.height)
+                        });
+                        let f = film.insert(Film::new(s.window.w, s.window.h));
+                        match passes(&scene, f, v, &events, args.engine, &pool) {
+                            Ended::Done => {
+                                write(&args, f)?;
+                                eprintln!("{name}: done, {} spp", s.spp);
+                            }
+                            Ended::Changed => continue,
+                            Ended::Closed => break,
+                        }
                     }
-                    Ended::Changed => continue,
-                    Ended::Closed => break,
                 }
             }
-            Err(e) => {
-                // The last good image stays on show.
-                eprintln!("error: {e}");
-                if let Some((v, ..)) = viewers.as_mut() {
-                    v.note(&format!("error: {e}"));
-                }
-            }
+            Err(e) => show_error(&mut viewers, &e),
         }
         // Until a file changes or the window closes.
         loop {
@@ -224,4 +222,13 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
         }
     }
     film.as_ref().map_or(Ok(()), |f| write(&args, f))
+}
+
+/// Reports an error in the scene (or in the frame it makes) on the terminal and in the window,
+/// where the last good image stays on show.
+fn show_error(viewers: &mut Option<(Viewers, PixelWindow, u32, u32)>, e: &str) {
+    eprintln!("error: {e}");
+    if let Some((v, ..)) = viewers.as_mut() {
+        v.note(&format!("error: {e}"));
+    }
 }

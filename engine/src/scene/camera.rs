@@ -200,24 +200,54 @@ impl TryFrom<RawCamera> for CameraDesc {
         let look_at = r.look_at.ok_or_else(|| missing("look_at"))?.0;
         let vfov = r.vfov.ok_or_else(|| missing("vfov"))?.0;
         let vup = r.vup.map_or(Vec3::Y, |v| v.0);
-        let view = look_at - look_from;
-        if view.length_squared() == 0.0 {
-            return Err("camera: look_from and look_at are the same point".into());
-        }
-        if view.normalize().cross(vup.normalize()).length_squared() < 1e-12 {
-            return Err("camera: vup is parallel to the view direction".into());
-        }
-        let far_point = far(look_from.abs().max_element()) || far(look_at.abs().max_element());
-        if far_point || far(view.length()) {
-            return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
-        }
-        Ok(Self {
+        let camera = Self {
             view: CameraView::LookAt { look_from, look_at, vup, vfov },
             aperture_radius: r.aperture_radius.0,
-            focus_dist: r.focus_dist.map_or(view.length(), |f| f.0),
+            focus_dist: r.focus_dist.map_or((look_at - look_from).length(), |f| f.0),
             shutter,
-        })
+        };
+        camera.check()?;
+        Ok(camera)
     }
+}
+
+impl CameraDesc {
+    /// What a camera's pose must be, checked at load and at each frame of an animated camera:
+    /// look_from and look_at apart, vup not along the view, positions and distances within
+    /// [`MAX_COORDINATE`], vfov in (0, 180) degrees, focus_dist > 0.
+    pub fn check(&self) -> Result<(), String> {
+        let far = |x: f32| !(x <= MAX_COORDINATE);
+        if let CameraView::LookAt { look_from, look_at, vup, vfov } = self.view {
+            look_at_checked(look_from, look_at, vup, vfov)?;
+        }
+        if !(self.focus_dist > 0.0) || far(self.focus_dist) {
+            return Err(format!(
+                "camera: focus_dist must be > 0 and within {MAX_COORDINATE:e} units, not {}",
+                self.focus_dist
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The checks of a look_from/look_at camera's pose (see [`CameraDesc::check`]).
+fn look_at_checked(look_from: Vec3, look_at: Vec3, vup: Vec3, vfov: f32) -> Result<(), String> {
+    let far = |x: f32| !(x <= MAX_COORDINATE);
+    let view = look_at - look_from;
+    if view.length_squared() == 0.0 {
+        return Err("camera: look_from and look_at are the same point".into());
+    }
+    let far_point = far(look_from.abs().max_element()) || far(look_at.abs().max_element());
+    if far_point || far(view.length()) {
+        return Err(format!("camera: positions and distances must lie within {MAX_COORDINATE:e} units"));
+    }
+    if view.normalize().cross(vup.normalize()).length_squared() < 1e-12 {
+        return Err("camera: vup is parallel to the view direction".into());
+    }
+    if !(vfov > 0.0 && vfov < 180.0) {
+        return Err(format!("camera: vfov must lie in (0, 180) degrees, not {vfov}"));
+    }
+    Ok(())
 }
 
 /// The product of a camera's `to_world` list, checked: invertible (relative to its own

@@ -1,7 +1,7 @@
 //! The animation systems: keyframed objects, camera and emission set for the frame's shutter.
 
 use super::components::{
-    Animated, CameraKeys, CameraParams, EmitKeys, FrameTime, Materials, Motion, Transform,
+    Animated, CameraKeys, CameraParams, EmitKeys, FrameErrors, FrameTime, Materials, Motion, Transform,
 };
 use crate::scene::{CameraDesc, CameraView};
 use bevy_ecs::prelude::*;
@@ -33,7 +33,12 @@ pub fn animate_objects(
 }
 
 /// Sets the camera for the frame: keyframes at mid-shutter, shutter = the frame's.
-pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: ResMut<CameraParams>) {
+pub fn animate_camera(
+    time: Res<FrameTime>,
+    keys: Res<CameraKeys>,
+    mut camera: ResMut<CameraParams>,
+    mut errors: ResMut<FrameErrors>,
+) {
     if !(time.is_changed() || keys.is_changed()) {
         return;
     }
@@ -50,12 +55,12 @@ pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: R
                 *look_at = k.at(t);
             }
             if let Some(k) = &k.vfov {
-                *vfov = k.at(t).clamp(1e-3, 179.0);
+                *vfov = k.at(t);
             }
             target = Some(*look_at - *look_from);
         }
         if let Some(k) = &k.focus_dist {
-            c.focus_dist = k.at(t).max(1e-6);
+            c.focus_dist = k.at(t);
         } else if let Some(view) = target.filter(|_| k.look_from.is_some() || k.look_at.is_some()) {
             // The default focus distance follows the target.
             c.focus_dist = view.length();
@@ -66,6 +71,14 @@ pub fn animate_camera(time: Res<FrameTime>, keys: Res<CameraKeys>, mut camera: R
     // A camera that moves while the shutter is open: its poses at open and close, between
     // which camera rays interpolate.
     let (open, close) = (at(time.open), at(time.close));
+    // The keys may carry the camera where the loader would refuse it (look_from onto look_at,
+    // vup along the view, a vfov or focus_dist through zero): the frame reports it.
+    for (t, c) in [(time.open, &open), (time.close, &close)] {
+        if let Err(e) = c.check() {
+            errors.0.push(format!("animation: at time {t}, {e}"));
+            return;
+        }
+    }
     let next = if same_camera(&open, &close) {
         (at(0.5 * (time.open + time.close)), None)
     } else {

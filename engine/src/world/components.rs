@@ -66,6 +66,13 @@ pub struct FrameTime {
     pub close: f32,
 }
 
+/// Why this frame's scene is not the one the scene file asks for (an object moved or animated
+/// beyond [`MAX_COORDINATE`](crate::shape::MAX_COORDINATE), an animated camera that the loader
+/// would refuse): written by the systems of one update, read by the commands, which fail rather
+/// than render it.
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct FrameErrors(pub Vec<String>);
+
 /// The camera as the scene file places it, and its keyframes.
 #[derive(Resource, Clone, Debug, PartialEq)]
 pub struct CameraKeys {

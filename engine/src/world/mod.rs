@@ -58,11 +58,30 @@ impl SceneWorld {
         }
     }
 
-    /// Runs the systems and returns the current render scene.
+    /// Runs the systems and returns the current render scene; [`Self::errors`] says whether it
+    /// is the scene the file asks for.
     pub fn update(&mut self) -> Arc<RenderScene> {
+        self.world.resource_mut::<FrameErrors>().0.clear();
         self.schedule.run(&mut self.world);
         self.world.clear_trackers();
         self.world.resource::<Extracted>().0.clone().expect("extract_render_scene always runs")
+    }
+
+    /// Why the last [`Self::update`]'s scene is not the one the scene file asks for (empty when
+    /// it is): an object its motion or animation carried beyond the world's bounds (left out),
+    /// an animated camera that the loader would refuse (kept as it was).
+    pub fn errors(&self) -> &[String] {
+        &self.world.resource::<FrameErrors>().0
+    }
+
+    /// [`Self::update`], failing with [`Self::errors`] where there are any: what a command that
+    /// renders the scene calls.
+    pub fn update_checked(&mut self) -> Result<Arc<RenderScene>, String> {
+        let scene = self.update();
+        match self.errors() {
+            [] => Ok(scene),
+            e => Err(e.join("; ")),
+        }
     }
 
     /// Convenience: spawn and extract in one step.

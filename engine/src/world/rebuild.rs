@@ -9,6 +9,7 @@ use crate::lighting::area::emission_table;
 use crate::lighting::lights::{LightInputs, LightTable};
 use crate::media::{Boundary, Media, Volume};
 use crate::placement::{Form, primitives};
+use crate::shape::MAX_COORDINATE;
 use bevy_ecs::prelude::*;
 use glam::{Affine3A, Vec3A};
 use std::sync::Arc;
@@ -20,7 +21,10 @@ use std::sync::Arc;
 #[expect(clippy::too_many_arguments, reason = "an ECS system takes each query and resource as a parameter")]
 pub fn rebuild_geometry(
     mut out: ResMut<SceneGeometry>,
-    objects: Query<(Entity, &Transform, &Shape, &MaterialId, Option<&Motion>), Without<Instanced>>,
+    objects: Query<
+        (Entity, &Transform, &Shape, &MaterialId, Option<&Motion>, Option<&ObjectIndex>),
+        Without<Instanced>,
+    >,
     changed: Query<
         (),
         (
@@ -35,6 +39,7 @@ pub fn rebuild_geometry(
     mut stopped: RemovedComponents<Motion>,
     mut not_instanced: RemovedComponents<Instanced>,
     camera: Res<CameraParams>,
+    mut errors: ResMut<FrameErrors>,
 ) {
     // Only removals from entities the geometry was built from matter (not from volumes or
     // instances); an entity that stops being an instance joins.
@@ -57,10 +62,32 @@ pub fn rebuild_geometry(
     objs.sort_by_key(|(e, ..)| *e);
     out.entities = objs.iter().map(|(e, ..)| *e).collect();
     let (mut prims, mut mats, mut velocity, mut object) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (k, (_, transform, shape, material, motion)) in objs.into_iter().enumerate() {
-        // Scene files are validated at load; objects spawned by code may still be bad.
-        if let Err(e) = primitives(&shape.0, &transform.0, &mut prims) {
-            tracing::error!("object skipped: {e}");
+    let (t0, t1) = camera.0.shutter;
+    for (k, (_, transform, shape, material, motion, index)) in objs.into_iter().enumerate() {
+        // Scene files are validated at load, but an animation or a shutter may carry an object
+        // away, and objects spawned by code may be bad: the object is left out, and the frame
+        // reports it.
+        let start = prims.len();
+        let placed = primitives(&shape.0, &transform.0, &mut prims).map_err(|e| e.to_string()).and_then(|()| {
+            let Some(m) = motion else { return Ok(()) };
+            let sweep = Vec3A::from(m.velocity).abs().max_element() * t0.abs().max(t1.abs());
+            let reach = prims[start..].iter().map(|p| {
+                let b = p.aabb();
+                b.min.abs().max(b.max.abs()).max_element() + sweep
+            });
+            match reach.fold(0.0f32, |a, r| if r <= a { a } else { r }) <= MAX_COORDINATE {
+                true => Ok(()),
+                false => Err(format!(
+                    "its motion carries it beyond {MAX_COORDINATE:e} units from the origin within the shutter ({t0}, {t1})"
+                )),
+            }
+        });
+        if let Err(e) = placed {
+            prims.truncate(start);
+            errors.0.push(match index {
+                Some(i) => format!("objects[{}]: {e}", i.0),
+                None => format!("an object: {e}"),
+            });
         }
         mats.resize(prims.len(), material.0);
         velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));

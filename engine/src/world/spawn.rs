@@ -146,6 +146,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     world.init_resource::<MeshLibrary>();
     world.init_resource::<SceneMedia>();
     world.init_resource::<Extracted>();
+    world.init_resource::<FrameErrors>();
 }
 
 /// A shape made of quads (a box, a quad) as a triangle mesh in its own space (two triangles
