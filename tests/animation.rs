@@ -658,7 +658,7 @@ fn frames_the_scene_does_not_describe_fail() {
     ];
     for (what, text, time, words) in &cases {
         let path = dir.join("s.ron");
-        std::fs::write(&path, &text).unwrap();
+        std::fs::write(&path, text).unwrap();
         let out = pathwave()
             .args(["render", "--time", time, "-o"])
             .arg(dir.join("s.png"))
