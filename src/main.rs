@@ -65,7 +65,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            // Errors quote the scene's names and values: nothing in them may drive the terminal.
+            eprintln!("error: {}", cli::terminal::safe(&e));
             ExitCode::FAILURE
         }
     }

@@ -402,6 +402,29 @@ fn cli_reports_position_without_panicking() {
     assert!(!stderr.contains("panicked"), "stderr:\n{stderr}");
 }
 
+/// Names from a scene reach the terminal inside errors; their control characters (a colour, a
+/// screen clear, a carriage return) are written as escapes, not sent to it.
+#[test]
+fn cli_errors_do_not_pass_control_characters_to_the_terminal() {
+    let dir = std::env::temp_dir().join(format!("pathwave-scene-escapes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene_path = dir.join("bad.ron");
+    let name = "\u{1b}[2J\u{1b}]0;title\u{7}\rwhite\u{9b}31m";
+    std::fs::write(&scene_path, with_object(&OBJECT.replace("\"white\"", &format!("\"{name}\"")))).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("render")
+        .arg(&scene_path)
+        .arg("-o")
+        .arg(dir.join("bad.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(!out.status.success() && stderr.contains("unknown material"), "stderr:\n{stderr}");
+    assert!(!stderr.contains(|c: char| c.is_control() && c != '\n'), "stderr: {stderr:?}");
+    assert!(stderr.contains("\\u{1b}[2J"), "stderr: {stderr:?}");
+}
+
 // 10. Positive control.
 
 #[test]

@@ -2,6 +2,7 @@
 //! and the log they write ([`logging`]).
 
 pub mod logging;
+pub mod terminal;
 
 use crate::animate::AnimateCommand;
 use crate::bench::BenchCommand;
