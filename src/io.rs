@@ -116,10 +116,13 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// A temporary file in `path`'s directory, named after it, created with the permissions a
-/// new file gets (0o666 less the umask, not `tempfile`'s private 0o600), since it becomes
-/// `path`.
-/// Its errors do not name the temporary file ([`without_temp_name`]).
+/// A temporary file in `path`'s directory, named after it (`.NAME.XXXXXX.tmp`), created with
+/// the permissions a new file gets (0o666 less the umask, not `tempfile`'s private 0o600),
+/// since it becomes `path`.
+///
+/// It is locked (`File::lock`) while it lives, and the temporary files of `path` that no live
+/// process holds (left by one killed while writing) are removed first: interrupted writes leave
+/// nothing behind for long. Its errors do not name the temporary file ([`without_temp_name`]).
 pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -127,11 +130,34 @@ pub fn temp_beside(path: &Path) -> std::io::Result<tempfile::NamedTempFile> {
     };
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let prefix = format!(".{name}.");
+    remove_stale_temps(dir, &prefix);
     let mut b = tempfile::Builder::new();
     b.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
     b.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    b.tempfile_in(dir).map_err(without_temp_name)
+    let tmp = b.tempfile_in(dir).map_err(without_temp_name)?;
+    tmp.as_file().lock()?;
+    Ok(tmp)
+}
+
+/// Removes the files `dir/PREFIX??????.tmp` (a [`temp_beside`]'s names) whose lock no process
+/// holds. Best effort: a file that cannot be read or removed is left.
+fn remove_stale_temps(dir: &Path, prefix: &str) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(name) = name.to_str() else { continue };
+        let random = name.strip_prefix(prefix).and_then(|r| r.strip_suffix(".tmp"));
+        if !random.is_some_and(|r| r.len() == 6 && r.chars().all(|c| c.is_ascii_alphanumeric())) {
+            continue;
+        }
+        // A lock taken is a file nobody writes: its writer died.
+        if let Ok(f) = std::fs::File::open(e.path())
+            && f.try_lock().is_ok()
+        {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 /// `e` without the temporary file's name, which `tempfile` wraps around the system's errors
@@ -349,6 +375,28 @@ pub struct ExrChannels {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A write removes the temporary files of its output that a killed writer left, and keeps
+    /// those a live writer holds.
+    #[test]
+    fn stale_temporary_files_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out.exr");
+        let stale = dir.path().join(".out.exr.Ab12Cd.tmp");
+        std::fs::write(&stale, b"half written").unwrap();
+        let live = dir.path().join(".out.exr.Zz99Yy.tmp");
+        let held = std::fs::File::create(&live).unwrap();
+        held.lock().unwrap();
+        let other = dir.path().join(".other.exr.Ab12Cd.tmp");
+        std::fs::write(&other, b"another output's").unwrap();
+        atomically(&out, b"image").unwrap();
+        assert!(!stale.exists(), "the stale file is left");
+        assert!(live.exists() && other.exists(), "a live writer's or another output's file is removed");
+        assert_eq!(std::fs::read(&out).unwrap(), b"image");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(left.len(), 3, "{left:?}");
+        drop(held);
+    }
 
     /// A beauty with albedo, normal and depth layers: one file whose channels read back by name
     /// (float and half), with its metadata, and which the plain reader sees as the beauty.
