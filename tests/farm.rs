@@ -203,6 +203,8 @@ fn a_dry_run_prints_the_jobs_with_the_render_flags() {
         format!("#SBATCH --output={}/logs/task-%a.log", job.display()),
         format!("-o '{}' --frames 0..4 --shard auto --shard-count 2", pattern.display()),
         "--spp=2 '-Dwall=(0.1, 0.2, 0.3)' --aov=depth --verbose --verbose".into(),
+        // A scene sent to a farm reads files from its own folder only, unless told otherwise.
+        format!("--assets-under={}", dir.display()),
         format!("farm merge -o '{}' --tasks 2 --frames 0..4", pattern.display()),
         "RENDER=$(sbatch --parsable --mem=1G ".into(),
         "sbatch --dependency=afterok:$RENDER --kill-on-invalid-dep=yes --mem=1G ".into(),

@@ -425,6 +425,65 @@ fn cli_errors_do_not_pass_control_characters_to_the_terminal() {
     assert!(stderr.contains("\\u{1b}[2J"), "stderr: {stderr:?}");
 }
 
+/// With `--assets-under DIR`, a scene may read only files in DIR (links resolved): not through
+/// `../`, an absolute path or a link out of it; `farm slurm` confines a scene to its folder by
+/// default. Without the flag the same scene loads.
+#[test]
+fn assets_under_keeps_a_scene_in_its_folder() {
+    let dir = std::env::temp_dir().join(format!("pathwave-assets-under-{}", std::process::id()));
+    let inside = dir.join("scene");
+    std::fs::create_dir_all(&inside).unwrap();
+    let png = |p: &Path| {
+        image::RgbImage::from_pixel(2, 2, image::Rgb([200, 100, 50]))
+            .save_with_format(p, image::ImageFormat::Png)
+            .unwrap()
+    };
+    png(&dir.join("private.png"));
+    png(&inside.join("own.png"));
+    std::os::unix::fs::symlink(dir.join("private.png"), inside.join("link.png")).unwrap();
+    let private = dir.join("private.png").display().to_string();
+    let scene = inside.join("s.ron");
+    let write_scene = |texture: &str| {
+        let text = with_material(r#""t": Lambertian(albedo: "tex"),"#).replace(
+            "    materials:",
+            &format!("    textures: {{ \"tex\": Image(file: \"{texture}\") }},\n    materials:"),
+        );
+        std::fs::write(&scene, text).unwrap();
+    };
+    let render = |texture: &str, flags: &[&str]| {
+        write_scene(texture);
+        Command::new(env!("CARGO_BIN_EXE_pathwave"))
+            .args(["render", "--spp", "1", "--width", "4", "--height", "4"])
+            .args(flags)
+            .arg(&scene)
+            .arg("-o")
+            .arg(inside.join("o.png"))
+            .output()
+            .unwrap()
+    };
+    let under = inside.display().to_string();
+    for texture in ["../private.png", private.as_str(), "link.png"] {
+        let o = render(texture, &["--assets-under", &under]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains("lies outside"), "{texture}: {err}");
+        let o = render(texture, &[]);
+        assert!(o.status.success(), "{texture} without the flag: {}", String::from_utf8_lossy(&o.stderr));
+    }
+    let o = render("own.png", &["--assets-under", &under]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // farm slurm: the scene's folder by default.
+    write_scene("../private.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["farm", "slurm", "--tasks", "2", "--dry-run", "-o"])
+        .arg(dir.join("f_{frame}.png"))
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("lies outside"), "farm: {err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 // 10. Positive control.
 
 #[test]

@@ -72,9 +72,29 @@ fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Resu
     if job.split_samples && (args.denoise.is_some() || args.aov.is_some()) {
         return Err("--split-samples: the merge adds samples; it does not denoise or write AOVs".into());
     }
-    let desc = load(&job.scene, &args.scene)?;
+    // Scenes sent to a farm often come from elsewhere: their files must lie in the scene's
+    // folder unless --assets-under says where.
+    let mut scene_args = args.scene.clone();
+    let default_root = match &scene_args.assets_under {
+        Some(_) => None,
+        None => {
+            let dir = std::path::absolute(&job.scene)
+                .map_err(|e| format!("{}: {e}", job.scene.display()))?
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default();
+            scene_args.assets_under = Some(dir.clone());
+            Some(dir)
+        }
+    };
+    let desc = load(&job.scene, &scene_args)?;
     let flags = <RenderArgs as clap::Args>::augment_args(clap::Command::new("render"));
-    let forwarded = job::forwarded(&flags, matches)?;
+    let mut forwarded = job::forwarded(&flags, matches)?;
+    if let Some(dir) = default_root {
+        let dir =
+            dir.to_str().ok_or_else(|| format!("{}: the scene's folder is not Unicode", dir.display()))?;
+        forwarded.push(format!("--assets-under={dir}"));
+    }
     let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
     // What the tasks and the merge will write must not replace a file the scene reads: found
     // now, not when the tasks start.

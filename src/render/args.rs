@@ -42,6 +42,10 @@ pub struct SceneArgs {
     /// `$NAME`) to VALUE, RON text; repeatable.
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub define: Vec<String>,
+    /// Every file the scene reads (includes, meshes, images, spectra) must lie in DIR once links
+    /// are resolved, for a scene from elsewhere (`farm slurm`: the scene's folder by default).
+    #[arg(long, value_name = "DIR")]
+    pub assets_under: Option<PathBuf>,
 }
 
 /// How `render`, `animate` and `watch` compute samples (not what the samples are: every choice

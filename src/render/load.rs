@@ -50,7 +50,11 @@ pub fn load(path: &Path, o: &SceneArgs) -> Result<scene::SceneDesc, String> {
     let _span = tracing::info_span!("load_scene", file = %path.display()).entered();
     o.check()?;
     let defines = scene::parse_defines(&o.define)?;
-    let mut desc = scene::load_with(path, &defines).map_err(|e| e.to_string())?;
+    let load = || scene::load_with(path, &defines).map_err(|e| e.to_string());
+    let mut desc = match &o.assets_under {
+        Some(root) => crate::engine::format::files::confined(root, path, load)??,
+        None => load()?,
+    };
     tracing::info!(
         file = %path.display(),
         objects = desc.objects.len(),

@@ -17,7 +17,23 @@ pub const MAX_IMAGE_SIDE: u32 = 32768;
 /// The bytes of the regular file `path`, refused beyond `max` bytes; `what` names it in errors.
 pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String> {
     let fail = |e: std::io::Error| format!("cannot read the {what} {}: {e}", path.display());
-    let meta = std::fs::metadata(path).map_err(fail)?;
+    // Inside `confined`, the file as resolved (links followed), which is then what is read.
+    let real = CONFINED.with(|c| match &*c.borrow() {
+        None => Ok(None),
+        Some((root, exempt)) => {
+            let real = path.canonicalize().map_err(fail)?;
+            match real == *exempt || real.starts_with(root) {
+                true => Ok(Some(real)),
+                false => Err(format!(
+                    "the {what} {} lies outside {}, the folder the scene's files must be in (--assets-under)",
+                    path.display(),
+                    root.display()
+                )),
+            }
+        }
+    })?;
+    let path_read = real.as_deref().unwrap_or(path);
+    let meta = std::fs::metadata(path_read).map_err(fail)?;
     if !meta.is_file() {
         return Err(format!("the {what} {} is not a regular file", path.display()));
     }
@@ -30,7 +46,7 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);
     // A file that grows while it is read stops at the bound too.
-    std::fs::File::open(path).and_then(|f| f.take(max + 1).read_to_end(&mut bytes)).map_err(fail)?;
+    std::fs::File::open(path_read).and_then(|f| f.take(max + 1).read_to_end(&mut bytes)).map_err(fail)?;
     if bytes.len() as u64 > max {
         return Err(format!("the {what} {} has more than the {max} bytes allowed", path.display()));
     }
@@ -49,6 +65,8 @@ pub struct InputFile {
 }
 
 thread_local! {
+    /// Inside [`confined`]: the folder files must lie in, and the file exempt (both resolved).
+    static CONFINED: RefCell<Option<(PathBuf, PathBuf)>> = const { RefCell::new(None) };
     /// The files [`read_bounded`] read on this thread inside [`recording`], when inside one,
     /// and their hashes.
     static READ: RefCell<Option<BTreeMap<PathBuf, u64>>> = const { RefCell::new(None) };
@@ -90,6 +108,30 @@ pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<InputFile>) {
     });
     drop(restore);
     (out, files)
+}
+
+/// Runs `f` with every file that [`read_bounded`] reads on this thread required to lie in the
+/// folder `root` once links are resolved, but `exempt` (the scene file the user named): a scene
+/// from elsewhere then cannot render a private file (`../`, an absolute path, `/proc`) into its
+/// image. Loads read their files on the calling thread.
+pub fn confined<R>(root: &Path, exempt: &Path, f: impl FnOnce() -> R) -> Result<R, String> {
+    /// Puts the outer confinement back however `f` ends.
+    struct Restore(Option<(PathBuf, PathBuf)>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            CONFINED.with(|c| *c.borrow_mut() = self.0.take());
+        }
+    }
+    let fail = |e: std::io::Error| format!("--assets-under {}: {e}", root.display());
+    let dir = root.canonicalize().map_err(fail)?;
+    if !dir.is_dir() {
+        return Err(format!("--assets-under {}: not a folder", root.display()));
+    }
+    let exempt = exempt.canonicalize().unwrap_or_else(|_| exempt.to_owned());
+    let restore = Restore(CONFINED.with(|c| c.borrow_mut().replace((dir, exempt))));
+    let out = f();
+    drop(restore);
+    Ok(out)
 }
 
 /// Decodes an image file within [`MAX_IMAGE_SIDE`] and 1 GiB of decoded pixels (`image`'s
