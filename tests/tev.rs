@@ -87,3 +87,31 @@ fn a_closed_connection_is_reported_once_and_the_render_goes_on() {
     assert!(log.contains("--tev 127.0.0.1:1: cannot connect"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A tev that accepts and never reads holds up the render by at most one send timeout (3 s):
+/// the packets are written by a thread of their own. Before, every pass waited for its writes
+/// to time out (10 s each: a 0.1 s render took 31 s). The images (1024 x 1024, 12 MB each) are
+/// larger than the loopback socket's buffers, so the writes do block.
+#[test]
+fn a_tev_that_never_reads_does_not_hold_up_the_render() {
+    let dir = temp("stuck");
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let held = std::thread::spawn(move || {
+        let (s, _) = listener.accept().unwrap();
+        std::thread::sleep(std::time::Duration::from_secs(30));
+        drop(s);
+    });
+    let render = |extra: &[&str]| {
+        let start = std::time::Instant::now();
+        let out = common::render_cornell(&dir.join("o.exr"), (1024, 1024), 2, extra).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        (start.elapsed().as_secs_f64(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (plain, _) = render(&[]);
+    let (shown, log) = render(&["--tev", &addr]);
+    assert!(log.contains("the connection was lost"), "{log}");
+    assert!(shown - plain < 7.0, "the render took {shown:.1} s with tev, {plain:.1} s without");
+    drop(held);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -15,6 +15,8 @@ use super::{Pass, Viewer};
 use crate::integrator::film::Film;
 use std::io::Write;
 use std::net::{TcpStream, ToSocketAddrs};
+use std::sync::mpsc::{SyncSender, TrySendError, sync_channel};
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 /// `CreateImage`'s type byte.
@@ -23,8 +25,13 @@ pub const CREATE_IMAGE: u8 = 4;
 pub const UPDATE_IMAGE_V3: u8 = 6;
 /// Floats per packet, about (whole rows are sent).
 const BAND_FLOATS: usize = 1 << 18;
-/// How long a send may block before tev counts as gone.
-const SEND_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long a write may make no progress before tev counts as gone (a packet is about a
+/// mebibyte, which a tev that reads takes in milliseconds).
+const SEND_TIMEOUT: Duration = Duration::from_secs(3);
+
+/// Images queued for the sending thread: a tev that reads gets every pass (they come no faster
+/// than their samples double), and memory stays bounded when it does not.
+const QUEUED: usize = 4;
 
 /// A packet being written.
 struct Packet(Vec<u8>);
@@ -81,16 +88,44 @@ fn channels(film: &Film) -> Vec<(&'static str, Vec<f32>)> {
     out
 }
 
-/// A connection to tev.
+/// A connection to tev. Its packets are written by a thread of their own, so that a tev that
+/// reads slowly, or not at all, never holds up the render: up to [`QUEUED`] passes' images
+/// queue for it, beyond that the newest waits here (replacing an older one that waited), and
+/// the last image is handed over when the viewer is dropped (the thread gives up on a tev that
+/// takes nothing for [`SEND_TIMEOUT`]).
 pub struct Tev {
     addr: String,
     name: String,
     /// The whole image's size and where the film lies in it.
     image: (u32, u32),
     at: (u32, u32),
-    stream: Option<TcpStream>,
-    /// The channels tev's image was created with.
+    link: Option<Link>,
+    /// The channels of the image last handed to the thread (it creates tev's image first).
     created: Option<Vec<&'static str>>,
+    /// The newest image not yet handed over, and its channels.
+    waiting: Option<(Vec<Vec<u8>>, Vec<&'static str>)>,
+}
+
+/// The sending thread and the way to it (one image's packets at a time).
+struct Link {
+    tx: SyncSender<Vec<Vec<u8>>>,
+    thread: JoinHandle<()>,
+}
+
+impl Link {
+    fn new(mut stream: TcpStream, addr: &str) -> std::io::Result<Self> {
+        let (tx, rx) = sync_channel::<Vec<Vec<u8>>>(QUEUED);
+        let addr = addr.to_string();
+        let thread = std::thread::Builder::new().name("tev".into()).spawn(move || {
+            for packets in rx {
+                if let Err(e) = packets.iter().try_for_each(|p| stream.write_all(p)) {
+                    eprintln!("--tev {addr}: the connection was lost ({e}); rendering on without tev");
+                    return;
+                }
+            }
+        })?;
+        Ok(Self { tx, thread })
+    }
 }
 
 impl Tev {
@@ -98,11 +133,12 @@ impl Tev {
     /// (width, height), of which the film holds the rectangle at `at`. When tev cannot be
     /// reached, says so once; the render goes on without it.
     pub fn connect(addr: &str, name: &str, image: (u32, u32), at: (u32, u32)) -> Self {
-        let stream = Self::open(addr);
-        if let Err(e) = &stream {
+        let link = Self::open(addr).and_then(|s| Link::new(s, addr).map_err(|e| e.to_string()));
+        if let Err(e) = &link {
             eprintln!("--tev {addr}: {e}; rendering without tev");
         }
-        Self { addr: addr.to_string(), name: name.to_string(), image, at, stream: stream.ok(), created: None }
+        let (addr, name) = (addr.to_string(), name.to_string());
+        Self { addr, name, image, at, link: link.ok(), created: None, waiting: None }
     }
 
     fn open(addr: &str) -> Result<TcpStream, String> {
@@ -125,8 +161,9 @@ impl Tev {
     }
 
     /// The packets that show `film`: the image created first (again when its channels
-    /// changed), then the film's rectangle in bands of rows.
-    fn packets(&mut self, film: &Film) -> Vec<Vec<u8>> {
+    /// changed since the last image handed over), then the film's rectangle in bands of rows;
+    /// and the channels.
+    fn packets(&self, film: &Film) -> (Vec<Vec<u8>>, Vec<&'static str>) {
         let chans = channels(film);
         let names: Vec<&'static str> = chans.iter().map(|(n, _)| *n).collect();
         let mut out = Vec::new();
@@ -138,7 +175,6 @@ impl Tev {
                 p.str(n);
             }
             out.push(p.finish().to_vec());
-            self.created = Some(names.clone());
         }
         let w = film.width as usize;
         let rows = (BAND_FLOATS / (w * chans.len()).max(1)).max(1);
@@ -162,21 +198,35 @@ impl Tev {
             }
             out.push(p.finish().to_vec());
         }
-        out
+        (out, names)
     }
 }
 
 impl Viewer for Tev {
     fn show(&mut self, film: &Film, _pass: &Pass) -> bool {
-        if self.stream.is_none() {
-            return true;
-        }
-        let packets = self.packets(film);
-        let sent = self.stream.as_mut().map(|s| packets.iter().try_for_each(|p| s.write_all(p)));
-        if let Some(Err(e)) = sent {
-            eprintln!("--tev {}: the connection was lost ({e}); rendering on without tev", self.addr);
-            self.stream = None;
+        let Some(link) = &self.link else { return true };
+        let (packets, names) = self.packets(film);
+        match link.tx.try_send(packets) {
+            Ok(()) => (self.created, self.waiting) = (Some(names), None),
+            // Still sending older images: this one waits, the newest.
+            Err(TrySendError::Full(packets)) => self.waiting = Some((packets, names)),
+            // The thread said why.
+            Err(TrySendError::Disconnected(_)) => self.link = None,
         }
         true
+    }
+}
+
+impl Drop for Tev {
+    /// Hands over the last image and waits for the thread to send it or to give up on tev.
+    fn drop(&mut self) {
+        let Some(Link { tx, thread }) = self.link.take() else { return };
+        if let Some((packets, _)) = self.waiting.take() {
+            let _ = tx.send(packets);
+        }
+        drop(tx);
+        if thread.join().is_err() {
+            eprintln!("--tev {}: the sending thread panicked", self.addr);
+        }
     }
 }
