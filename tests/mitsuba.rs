@@ -281,7 +281,7 @@ fn mesh_attributes_vertex() {
 fn converted_ron_renders_the_same_bits() {
     let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
-    let mut scenes: Vec<PathBuf> = [
+    for (dir, file) in [
         ("floating_sphere", "test_directional_direct.xml"),
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
@@ -297,7 +297,7 @@ fn converted_ron_renders_the_same_bits() {
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
     ] {
         let xml = suite().join(dir).join(file);
-        let ron_path = out.join(format!("{dir}.ron"));
+        let ron_path = out.join(format!("{dir}-{file}.ron"));
         let converted = scene::mitsuba::to_ron(&xml, &[], &out).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&ron_path, &converted.ron).unwrap();
         let render = |path: &Path| {
@@ -309,7 +309,7 @@ fn converted_ron_renders_the_same_bits() {
         let (a, b) = (render(&xml), render(&ron_path));
         assert!(
             a.iter().zip(&b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
-            "{name}: the RON renders other bits"
+            "{dir}/{file}: the RON renders other bits"
         );
     }
 }
