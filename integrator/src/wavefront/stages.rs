@@ -350,7 +350,18 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut lights = light_lanes::LightSampler::new(scene);
-    let live = below_max_depth(scene, p, q, queue);
+    let mut live = below_max_depth(scene, p, q, queue);
+    if scene.features.one_sided {
+        live.retain(|&i| {
+            let hit = &p.hit[i as usize];
+            let behind =
+                path::black_behind(&scene.materials[hit.material as usize], &hit.surface, -p.dir[i as usize]);
+            if behind {
+                q.finished.push(i);
+            }
+            !behind
+        });
+    }
     for chunk in live.chunks(LANES) {
         // The vertex's numbers for all lanes at once.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
