@@ -276,6 +276,14 @@ fn mesh_attributes_vertex() {
     );
 }
 
+/// Every shape kind with one-sided `diffuse` under a checkerboard: sphere, cylinder (its
+/// inside black), disk, rectangle, cubes, the serialized, OBJ and PLY rectangles, and an
+/// instanced `sdfgrid` torus with smooth normals.
+#[test]
+fn various_shapes() {
+    conformance("various_shapes", "test_various_shapes_path.xml", "test_various_shapes");
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
@@ -295,6 +303,7 @@ fn converted_ron_renders_the_same_bits() {
         ("various_emitters", "test_various_emitters_ptracer.xml"),
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
+        ("various_shapes", "test_various_shapes_path.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}-{file}.ron"));
