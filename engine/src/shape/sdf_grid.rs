@@ -250,7 +250,7 @@ impl SdfVoxel {
     ) -> Self {
         let at = |x: i64, y: i64, z: i64| grid.at(v[0] + x, v[1] + y, v[2] + z);
         let mut values = [0.0; 32];
-        values[..8].copy_from_slice(&corners(&at));
+        values[..8].copy_from_slice(&corners(at));
         for (k, side) in [-1i64, 2].into_iter().enumerate() {
             for i in 0..4i64 {
                 let (a, b) = (i & 1, i >> 1);
@@ -341,7 +341,7 @@ impl SdfVoxel {
 
     /// A voxel-space gradient `g` as a unit world-space normal.
     #[inline]
-    fn to_world(&self, g: Vec3A) -> Vec3A {
+    fn world_normal(&self, g: Vec3A) -> Vec3A {
         (self.local_from_world.matrix3.transpose() * g).normalize()
     }
 
@@ -503,13 +503,13 @@ impl PrimitiveShape for SdfVoxel {
     fn surface(&self, p: Vec3A, _uv: bool) -> SurfacePoint {
         let l = self.local_from_world.transform_point3a(p).clamp(Vec3A::ZERO, Vec3A::ONE);
         let g = Vec3A::new(self.gradient(0, 0, l), self.gradient(1, 0, l), self.gradient(2, 0, l));
-        let n = self.to_world(g);
+        let n = self.world_normal(g);
         // A gradient of zero (a flat spot of the interpolant) leaves no normal: +z then.
         let n = if n.is_finite() { n } else { Vec3A::Z };
         let ns = match self.smooth {
             true => {
                 let cells = Vec3A::from_array(self.cells.map(f32::from));
-                let s = self.to_world(self.smooth_normal(l) / cells);
+                let s = self.world_normal(self.smooth_normal(l) / cells);
                 if s.is_finite() { s } else { n }
             }
             false => n,
