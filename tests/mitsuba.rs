@@ -276,12 +276,20 @@ fn mesh_attributes_vertex() {
     );
 }
 
+/// Every shape kind with one-sided `diffuse` under a checkerboard: sphere, cylinder (its
+/// inside black), disk, rectangle, cubes, the serialized, OBJ and PLY rectangles, and an
+/// instanced `sdfgrid` torus with smooth normals.
+#[test]
+fn various_shapes() {
+    conformance("various_shapes", "test_various_shapes_path.xml", "test_various_shapes");
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
     let out = std::env::temp_dir().join(format!("pathwave-roundtrip-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
-    let scenes = [
+    for (dir, file) in [
         ("floating_sphere", "test_directional_direct.xml"),
         ("infinite_mirrors", "scene_path.xml"),
         ("instancing", "test_instancing_path.xml"),
@@ -295,11 +303,10 @@ fn converted_ron_renders_the_same_bits() {
         ("various_emitters", "test_various_emitters_ptracer.xml"),
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
-    ];
-    for (dir, file) in scenes {
+        ("various_shapes", "test_various_shapes_path.xml"),
+    ] {
         let xml = suite().join(dir).join(file);
-        let name = format!("{dir}/{file}");
-        let ron_path = out.join(format!("{dir}.ron"));
+        let ron_path = out.join(format!("{dir}-{file}.ron"));
         let converted = scene::mitsuba::to_ron(&xml, &[], &out).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&ron_path, &converted.ron).unwrap();
         let render = |path: &Path| {
@@ -311,7 +318,7 @@ fn converted_ron_renders_the_same_bits() {
         let (a, b) = (render(&xml), render(&ron_path));
         assert!(
             a.iter().zip(&b).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
-            "{name}: the RON renders other bits"
+            "{dir}/{file}: the RON renders other bits"
         );
     }
 }

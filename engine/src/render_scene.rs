@@ -219,6 +219,9 @@ pub struct Features {
     /// Some mesh is instanced: rays also traverse the TLAS. Off, only the primitive BVH (or
     /// the flat lists of small scenes) is traced.
     pub instances: bool,
+    /// Some surface's material is one-sided ([`Material::one_sided`]): hits on it from behind
+    /// end their paths. Off, the Lambertian stage looks at no side.
+    pub one_sided: bool,
 }
 
 impl Features {
@@ -231,10 +234,11 @@ impl Features {
             textures: false,
             emitting_surfaces: false,
             instances: !instances.is_empty(),
+            one_sided: false,
         }
     }
 
-    /// Sets `textures` and `emitting_surfaces` from what the primitives' material ids use:
+    /// Sets `textures`, `emitting_surfaces` and `one_sided` from what the primitives' material ids use:
     /// their materials, their textured colours (`per_material`) and their emission
     /// (`emission`, both indexed like `materials`).
     pub fn with_materials(
@@ -256,6 +260,7 @@ impl Features {
         self.emitting_surfaces = (0..materials.len())
             .filter(used)
             .any(|id| emission[id].is_some() && !materials[id].is_emissive());
+        self.one_sided = (0..materials.len()).filter(used).any(|id| materials[id].one_sided());
         self
     }
 }

@@ -103,6 +103,9 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
             }
             match mat.shading() {
                 Shading::Diffuse => {
+                    if path::black_behind(mat, &hit.surface, wo) {
+                        break 'path;
+                    }
                     let u = lambert_vertex::VertexSamples::draw(scene, sampler, st.depth);
                     let input = lambert_vertex::gather(
                         scene,

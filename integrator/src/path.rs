@@ -268,6 +268,16 @@ pub fn at_max_depth(scene: &RenderScene, depth: u32) -> bool {
     depth == scene.settings.max_depth
 }
 
+/// A [`Shading::Diffuse`] material that is one-sided ([`Material::one_sided`]), met from behind
+/// its shading normal (`wo` the unit direction back along the ray): it reflects nothing there
+/// (Mitsuba's `diffuse`: black where cos theta of `wo` or `wi` is not positive), so the path
+/// ends without a light sample or a next direction. The Lambertian kernel samples `wi` on
+/// `wo`'s side, so on the front no other change is needed.
+#[inline(always)]
+pub fn black_behind(mat: &Material, sp: &SurfacePoint, wo: Vec3A) -> bool {
+    mat.one_sided() && !(wo.dot(sp.ns) > 0.0)
+}
+
 /// Whether Russian roulette is played at the vertex that makes the path's bounce number
 /// `depth_after` (its roulette number is drawn only there).
 #[inline(always)]

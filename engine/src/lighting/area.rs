@@ -70,7 +70,7 @@ mod tests {
     #[test]
     fn the_table_holds_emitters_and_objects_that_emit() {
         let lamp = Material::from(DiffuseLight { emit: Vec3::splat(0.5), two_sided: false });
-        let white = Material::from(Lambertian { albedo: Vec3::ONE });
+        let white = Material::from(Lambertian { albedo: Vec3::ONE, two_sided: true });
         let textured = MaterialTextures([Some(1), None]);
         let own = AreaEmission { radiance: Vec3::X, texture: Some(0), two_sided: false };
         let table = emission_table(

@@ -1,5 +1,6 @@
-//! Lambertian diffuse reflection, two-sided, sampled with the cosine density (Shirley, "Ray
-//! Tracing: The Rest of Your Life").
+//! Lambertian diffuse reflection, sampled with the cosine density (Shirley, "Ray Tracing: The
+//! Rest of Your Life"): two-sided by default, or one-sided as Mitsuba 3's `diffuse`
+//! (`src/bsdfs/diffuse.cpp`: black where `wo` or `wi` lies below the shading normal).
 //! The integrators shade it with their Lambertian lane kernel (light sampling and MIS);
 //! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 
@@ -9,19 +10,29 @@ use crate::math::{Frame, concentric_disk};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
-/// `Lambertian(albedo: (r, g, b))`.
+/// `Lambertian(albedo: (r, g, b), two_sided: true)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct LambertianDesc {
     /// Reflectance, components in [0, 1], or a texture (clamped to [0, 1]).
     pub albedo: Color<Albedo>,
+    /// Reflects on both sides alike (default); false: black seen from behind its shading
+    /// normal.
+    #[serde(default = "yes")]
+    pub two_sided: bool,
 }
 
-/// Ideal diffuse reflector, two-sided.
+fn yes() -> bool {
+    true
+}
+
+/// Ideal diffuse reflector.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lambertian {
     /// Reflectance in [0, 1].
     pub albedo: Vec3,
+    /// Reflects on both sides; else only where `wo` and `wi` lie above the shading normal.
+    pub two_sided: bool,
 }
 
 impl MaterialModel for Lambertian {
@@ -29,7 +40,7 @@ impl MaterialModel for Lambertian {
     const SHADING: Shading = Shading::Diffuse;
 
     fn build(desc: &LambertianDesc, colors: &mut Colors) -> Self {
-        Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE) }
+        Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE), two_sided: desc.two_sided }
     }
 
     #[inline]
@@ -39,7 +50,14 @@ impl MaterialModel for Lambertian {
 
     #[inline]
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, _uc: f32) -> Option<BsdfSample> {
+        if self.black_behind(wo, n) {
+            return None;
+        }
         sample(self.albedo, wo, n, u)
+    }
+
+    fn one_sided(&self) -> bool {
+        !self.two_sided
     }
 
     #[inline]
@@ -50,6 +68,14 @@ impl MaterialModel for Lambertian {
     /// The cosine lobe's two numbers, no lobe choice.
     fn reads(&self) -> Reads {
         Reads { dir: true, lobe: false }
+    }
+}
+
+impl Lambertian {
+    /// One-sided and seen from behind (or edge-on): black, the path ends here.
+    #[inline]
+    pub fn black_behind(&self, wo: Vec3A, n: Vec3A) -> bool {
+        !self.two_sided && !(wo.dot(n) > 0.0)
     }
 }
 
@@ -115,6 +141,21 @@ mod tests {
             let (f, pdf) = eval(albedo, wo, s.wi, n);
             assert!((pdf - s.pdf).abs() < 1e-4 * pdf.max(1.0));
             assert!((f / pdf - s.weight).length() < 1e-4);
+        }
+    }
+
+    /// One-sided, it scatters only seen from the front; two-sided, from both sides.
+    #[test]
+    fn one_sided_is_black_from_behind() {
+        let n = Vec3A::Z;
+        let (front, back) = (Vec3A::new(0.3, 0.0, 0.9).normalize(), Vec3A::new(0.3, 0.0, -0.9).normalize());
+        let u = Vec2::new(0.3, 0.6);
+        for two_sided in [false, true] {
+            let m = Lambertian { albedo: Vec3::splat(0.5), two_sided };
+            assert!(m.sample(front, n, u, 0.0).is_some_and(|s| s.wi.dot(n) > 0.0));
+            assert_eq!(m.sample(back, n, u, 0.0).is_some(), two_sided);
+            assert_eq!(m.black_behind(back, n), !two_sided);
+            assert!(!m.black_behind(front, n));
         }
     }
 

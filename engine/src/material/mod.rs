@@ -183,6 +183,13 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     fn specular(&self) -> Specular {
         Specular::No
     }
+
+    /// A [`Shading::Diffuse`] kind that reflects only on the side its shading normal faces: a
+    /// path that meets it from behind (`wo . n <= 0`) ends there, as Mitsuba's one-sided BSDFs
+    /// are black seen from behind.
+    fn one_sided(&self) -> bool {
+        false
+    }
 }
 
 /// The colours of one material being built: plain values, or textures whose mean stands in
@@ -382,6 +389,14 @@ macro_rules! registry {
                     $($(#[$attr])* Material::$variant(m) => m.specular(),)+
                 }
             }
+
+            /// See [`MaterialModel::one_sided`].
+            #[inline]
+            pub fn one_sided(&self) -> bool {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.one_sided(),)+
+                }
+            }
         }
 
         $($(#[$attr])*
@@ -471,7 +486,7 @@ mod tests {
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.0 }),
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.3 }),
             Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
-            Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5) }),
+            Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5), two_sided: true }),
         ];
         let n = Vec3A::Z;
         for m in mats {

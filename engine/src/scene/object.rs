@@ -130,6 +130,12 @@ impl TryFrom<RawObject> for ObjectDesc {
             }
             _ => {}
         }
+        if let (ShapeDesc::SdfGrid(_), Body::Surface(name)) = (&r.shape, &body) {
+            let light = context::names(|n| n.is_some_and(|n| n.lights.contains(&name.0)));
+            if light || r.emit.is_some() {
+                return Err("an SdfGrid does not emit (nor does Mitsuba's sdfgrid): give it a material that reflects and no `emit`".into());
+            }
+        }
         if r.motion.is_some() && matches!(body, Body::Volume(_)) {
             return Err("media do not move: `motion` is for surfaces".into());
         }

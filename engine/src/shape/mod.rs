@@ -1,4 +1,5 @@
-//! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`, `Disk`, `Cylinder`;
+//! Shapes: the kinds a scene places (`Sphere`, `Quad`, `Triangle`, `Box`, `Disk`, `Cylinder`,
+//! `SdfGrid`;
 //! meshes are the world's business) and the primitives they become in world space. Each file
 //! holds one kind: its RON description and its checks, its shape in its own space
 //! ([`ShapeModel`]: built from the description, the primitives it becomes under a transform,
@@ -22,6 +23,7 @@ mod cylinder;
 mod disk;
 mod primitive;
 pub(crate) mod quad;
+mod sdf_grid;
 pub(crate) mod sphere;
 #[cfg(feature = "test-shape")]
 pub mod test_disk;
@@ -34,6 +36,7 @@ pub use disk::{Disk, DiskShape};
 pub use primitive::PrimitiveShape;
 use primitive::primitives;
 pub use quad::{Quad, QuadLight, QuadShape, SPHERICAL_MIN_ESTIMATE};
+pub use sdf_grid::{SdfGridData, SdfGridShape, SdfNormals, SdfVoxel};
 pub use sphere::{Poles, Sphere, SphereLight, SphereShape, cone_sample};
 pub use transformed_sphere::{EllipsoidLight, TransformedSphere, ellipsoid_sample};
 pub use triangle::{Triangle, TriangleShape};
@@ -48,6 +51,7 @@ primitives! {
     Triangle(Triangle),
     Disk(Disk),
     Cylinder(Cylinder),
+    SdfVoxel(SdfVoxel),
     #[cfg(feature = "test-shape")]
     TestDisk(test_disk::TestDisk),
 }
@@ -66,6 +70,7 @@ macro_rules! with_shapes {
             Box($crate::shape::BoxShape),
             Disk($crate::shape::DiskShape),
             Cylinder($crate::shape::CylinderShape),
+            SdfGrid($crate::shape::SdfGridShape),
             #[cfg(feature = "test-shape")]
             TestDisk($crate::shape::test_disk::TestDiskShape),
         }

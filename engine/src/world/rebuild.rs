@@ -371,7 +371,7 @@ mod tests {
         // A material edit rebuilds the light table, not the geometry: the light goes dark.
         let tables = w.world.resource::<SceneLights>().rebuilds;
         w.world.resource_mut::<Materials>().0[1] =
-            crate::material::lambertian::Lambertian { albedo: Vec3::ONE }.into();
+            crate::material::lambertian::Lambertian { albedo: Vec3::ONE, two_sided: true }.into();
         let dark = w.update();
         assert_eq!(rebuilds(&w), 2);
         assert_eq!(w.world.resource::<SceneLights>().rebuilds, tables + 1);

@@ -350,7 +350,10 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut lights = light_lanes::LightSampler::new(scene);
-    let live = below_max_depth(scene, p, q, queue);
+    let mut live = below_max_depth(scene, p, q, queue);
+    if scene.features.one_sided {
+        end_behind(scene, p, q, &mut live);
+    }
     for chunk in live.chunks(LANES) {
         // The vertex's numbers for all lanes at once.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
@@ -399,6 +402,22 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         }
     }
     q.scratch = live;
+}
+
+/// Ends the paths of `live` that meet a one-sided Lambertian from behind
+/// ([`path::black_behind`]). Out of line, so that the Lambertian stage's code is as it was for
+/// scenes without one-sided materials (benches/RESULTS.md).
+#[inline(never)]
+fn end_behind(scene: &RenderScene, p: &Paths, q: &mut Queues, live: &mut Vec<u32>) {
+    live.retain(|&i| {
+        let hit = &p.hit[i as usize];
+        let behind =
+            path::black_behind(&scene.materials[hit.material as usize], &hit.surface, -p.dir[i as usize]);
+        if behind {
+            q.finished.push(i);
+        }
+        !behind
+    });
 }
 
 /// `trace_shadow_rays`: occlusion tests (and transmittance through media); what gets through

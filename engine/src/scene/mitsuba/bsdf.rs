@@ -1,8 +1,9 @@
 //! `<bsdf>` plugins as pathwave materials.
 //!
-//! Mitsuba's BSDFs other than `twosided` are one-sided (black seen from behind); pathwave's
-//! Lambertian reflects on both sides, as `twosided` makes Mitsuba's. Its conductors and
-//! dielectrics are the same on both sides in both renderers.
+//! Mitsuba's BSDFs other than `twosided` are one-sided (black seen from behind): `diffuse`
+//! becomes a Lambertian with `two_sided: false`, and `twosided` around it the two-sided
+//! Lambertian. Its conductors are one-sided as pathwave's, and its dielectrics the same on
+//! both sides in both renderers.
 
 use super::convert::{Converter, num, num32, v3};
 use super::props::{Plugin, Value};
@@ -79,15 +80,22 @@ fn unit_scale(p: &Plugin, name: &str) -> Result<(), SceneError> {
     }
 }
 
+/// Mitsuba's `diffuse` (`src/bsdfs/diffuse.cpp`) as a Lambertian: one-sided, or both sides
+/// alike inside `twosided` (the RON default).
+fn diffuse<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let albedo = color(cx, p, "reflectance", DVec3::splat(0.5))?;
+    p.finish(&["reflectance"])?;
+    Ok(match two_sided {
+        true => format!("Lambertian(albedo: {albedo})"),
+        false => format!("Lambertian(albedo: {albedo}, two_sided: false)"),
+    })
+}
+
 /// The material a `<bsdf>` element becomes.
 pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
     let out = match p.kind.as_str() {
-        "diffuse" => {
-            let albedo = color(cx, &p, "reflectance", DVec3::splat(0.5))?;
-            p.finish(&["reflectance"])?;
-            format!("Lambertian(albedo: {albedo})")
-        }
+        "diffuse" => diffuse(cx, &p, false)?,
         "twosided" => {
             let inner: Vec<&Element> = p.unnamed().collect();
             p.finish(&[])?;
@@ -97,8 +105,9 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                 ));
             };
             let one = cx.by_id(one)?;
-            match Plugin::new(one)?.kind.as_str() {
-                "diffuse" => convert(cx, one)?,
+            let inner = Plugin::new(one)?;
+            match inner.kind.as_str() {
+                "diffuse" => diffuse(cx, &inner, true)?,
                 // pathwave's conductors are one-sided as Mitsuba's; `two_sided` makes them
                 // what `twosided` makes Mitsuba's.
                 "conductor" | "roughconductor" => {

@@ -78,6 +78,30 @@ pub fn convert(cx: &Converter, p: &Plugin, outer: &[Op]) -> Result<(String, Vec<
                 flag("flip_normals", flip)
             )
         }
+        // Mitsuba's sdfgrid (`src/shapes/sdfgrid.cpp`): the grid from a file (its `grid`
+        // tensor is for Python and C++ only), shaded with `normals` smooth (its default) or
+        // analytic.
+        "sdfgrid" => {
+            flip_here("SDF grids")?;
+            let (name, at) = p.string("filename")?.ok_or_else(|| {
+                p.at.error("<shape type=\"sdfgrid\"> needs a filename (pathwave reads grids from files)")
+            })?;
+            let file = cx.file(&name, &at)?;
+            let normals = match p.string("normals")? {
+                None => "Smooth",
+                Some((n, at)) => match n.as_str() {
+                    "smooth" => "Smooth",
+                    "analytic" => "Analytic",
+                    _ => {
+                        return Err(at.error(format!(
+                            "normals \"{n}\": Mitsuba and pathwave read \"smooth\" and \"analytic\""
+                        )));
+                    }
+                },
+            };
+            p.finish(&["to_world", "filename", "normals"])?;
+            format!("SdfGrid(file: {file}, normals: {normals})")
+        }
         "obj" | "ply" | "serialized" => {
             let kind = p.kind.as_str();
             let (name, at) = p
@@ -115,7 +139,7 @@ pub fn convert(cx: &Converter, p: &Plugin, outer: &[Op]) -> Result<(String, Vec<
         }
         k => {
             return Err(p.at.error(format!(
-                "<shape type=\"{k}\">: pathwave reads rectangle, cube, sphere, disk, cylinder, obj, ply, serialized, shapegroup and instance"
+                "<shape type=\"{k}\">: pathwave reads rectangle, cube, sphere, disk, cylinder, obj, ply, serialized, sdfgrid, shapegroup and instance"
             )));
         }
     };

@@ -160,7 +160,7 @@ fn checkerboards_keep_mitsubas_cells() {
     // Mitsuba's uv (u, 1 - v), then to_uv.
     let c = r#""c": UvChecker(u: 2, v: 2, even: (0.8, 0.8, 0.8), odd: (0.2, 0.2, 0.2), uv_transform: ((5, 0, 0), (0, -3, 3)))"#;
     assert!(r.contains(c), "{r}");
-    assert!(r.contains(r#"Lambertian(albedo: "c")"#), "{r}");
+    assert!(r.contains(r#"Lambertian(albedo: "c", two_sided: false)"#), "{r}");
     assert!(r.contains("UvChecker(u: 2, v: 2, even: (0.4, 0.4, 0.4), odd: (0.2, 0.2, 0.2), uv_transform: ((1, 0, 0), (0, -1, 1)))"), "{r}");
 }
 
@@ -404,7 +404,7 @@ fn spectra_become_the_rgb_mitsuba_makes_of_them() {
         r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="0.5"/></bsdf></shape>
         <shape type="cube"><emitter type="area"><spectrum name="radiance" value="2"/></emitter></shape>"#,
     );
-    assert!(r.contains("Lambertian(albedo: (0.5, 0.5, 0.5))"), "{r}");
+    assert!(r.contains("Lambertian(albedo: (0.5, 0.5, 0.5), two_sided: false)"), "{r}");
     // Emission: 2 times equal-energy white in sRGB, not (2, 2, 2).
     let white = super::spectrum::xyz_to_srgb(glam::DVec3::ONE) * 2.0;
     assert!(r.contains(&format!("DiffuseLight(emit: {}", super::convert::v3(white))), "{r}");
@@ -529,9 +529,13 @@ fn identical_anonymous_bsdfs_share_one_material() {
         <bsdf type="diffuse" id="named"><rgb name="reflectance" value="0.2"/></bsdf>
         <shape type="rectangle"><ref id="named"/></shape>"#,
     );
-    assert_eq!(r.matches("Lambertian(albedo: (0.2, 0.2, 0.2))").count(), 2, "{r}");
+    assert_eq!(r.matches("Lambertian(albedo: (0.2, 0.2, 0.2), two_sided: false)").count(), 2, "{r}");
     assert_eq!(r.matches("material: \"diffuse-0\"").count(), 2, "{r}");
-    assert!(r.contains("material: \"named\"") && r.contains("Lambertian(albedo: (0.3, 0.3, 0.3))"), "{r}");
+    assert!(
+        r.contains("material: \"named\"")
+            && r.contains("Lambertian(albedo: (0.3, 0.3, 0.3), two_sided: false)"),
+        "{r}"
+    );
     crate::scene::parse(&r, Path::new("<converted>")).unwrap_or_else(|e| panic!("{e}"));
 }
 
