@@ -1,20 +1,23 @@
 """Load time and peak memory of XML scenes in pathwave and in Mitsuba 3, run by hand.
 
-    python benches/load/load_cost.py --pathwave target/release/pathwave SCENE.xml [...]
+    python benches/load/load_cost.py --pathwave target/release/pathwave [--reps 11] SCENE.xml [...]
 
-with a Python that imports `mitsuba` (3.x). For each scene and renderer it runs a fresh process
-three times and prints a markdown row with the shortest wall time (the machine is shared; the best run is the least disturbed) and the largest peak resident
-set size:
-- pathwave: `render --width 1 --height 1 --spp 1` (parse, meshes and textures read, BVHs and
-  light table built, one sample), the whole process;
+with a Python that imports `mitsuba` (3.x). For each scene, each repetition runs a fresh process
+of each renderer, alternating (so that a change in the machine's load falls on both), and prints
+a markdown row per renderer with the median wall time, its spread (least and most) and the
+median peak resident set size:
+- pathwave: `render --width 1 --height 1 --spp 1` (parse, meshes and textures read, BVHs
+  and light table built, one sample), the whole process, timed from outside; its peak RSS is
+  the process's own (`wait4`);
 - Mitsuba: `mi.load_file` in the `scalar_rgb` variant (parse, shapes and BVH built), timed
-  inside a process that has already imported Mitsuba; its peak RSS minus the RSS after the
-  import is reported beside the whole process's.
+  inside a process that has already imported Mitsuba; its peak RSS is the whole process's, and
+  its peak minus the RSS after the import is reported beside it.
+With `--json FILE` every run is also written there, one object a line.
 """
 
 import argparse
 import json
-import resource
+import os
 import statistics
 import subprocess
 import sys
@@ -36,14 +39,18 @@ print(json.dumps({"time": dt, "peak_kb": peak, "base_kb": base}))
 
 
 def pathwave(binary: str, scene: str) -> dict:
+    """One run of pathwave: wall time and the peak RSS of that process alone."""
     with tempfile.TemporaryDirectory() as d:
+        args = [binary, "render", scene, "--width", "1", "--height", "1", "--spp", "1"]
+        args += ["-q", "-o", str(Path(d) / "x.exr")]
         t = time.perf_counter()
-        subprocess.run(
-            [binary, "render", scene, "--width", "1", "--height", "1", "--spp", "1", "-q", "-o", str(Path(d) / "x.exr")],
-            check=True,
-        )
+        p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        _, status, usage = os.wait4(p.pid, 0)
         dt = time.perf_counter() - t
-    return {"time": dt, "peak_kb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}
+        p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        raise SystemExit(f"pathwave exited {p.returncode} on {scene}")
+    return {"time": dt, "peak_kb": usage.ru_maxrss}
 
 
 def mitsuba(scene: str) -> dict:
@@ -51,31 +58,38 @@ def mitsuba(scene: str) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def row(name: str, renderer: str, runs: list, note: str) -> str:
+    times = [r["time"] for r in runs]
+    peak = statistics.median(r["peak_kb"] for r in runs) / 1024
+    return (
+        f"| {name} | {renderer} | {statistics.median(times):.3f} | {min(times):.3f}-{max(times):.3f} "
+        f"| {peak:.0f} | {note} |"
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--pathwave", required=True)
-    ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--reps", type=int, default=11)
+    ap.add_argument("--json", help="write every run here, one object a line")
     ap.add_argument("scenes", nargs="+")
     a = ap.parse_args()
-    print("| scene | renderer | load s (best of reps) | peak RSS MB | note |")
-    print("|---|---|---|---|---|")
+    log = open(a.json, "a") if a.json else None
+    print("| scene | renderer | load s (median) | spread s | peak RSS MB (median) | note |")
+    print("|---|---|---|---|---|---|")
     for s in a.scenes:
         name = Path(s).parent.name
-        # Mitsuba first: RUSAGE_CHILDREN's peak is the largest child so far, so pathwave's runs
-        # come after it would be wrong; measure pathwave in a clean interpreter instead.
-        runs = [mitsuba(s) for _ in range(a.reps)]
-        t = min(r["time"] for r in runs)
-        peak = max(r["peak_kb"] for r in runs) / 1024
-        extra = max(r["peak_kb"] - r["base_kb"] for r in runs) / 1024
-        print(f"| {name} | Mitsuba 3 | {t:.3f} | {peak:.0f} | {extra:.0f} MB above the import |", flush=True)
-        code = (
-            "import sys; sys.path.insert(0, %r); import load_cost as l, json; "
-            "print(json.dumps([l.pathwave(%r, %r) for _ in range(%d)]))"
-        ) % (str(Path(__file__).parent), a.pathwave, s, a.reps)
-        runs = json.loads(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout)
-        t = min(r["time"] for r in runs)
-        peak = max(r["peak_kb"] for r in runs) / 1024
-        print(f"| {name} | pathwave | {t:.3f} | {peak:.0f} | whole process, 1x1 render |", flush=True)
+        mi_runs, pw_runs = [], []
+        for rep in range(a.reps):
+            mi_runs.append(mitsuba(s))
+            pw_runs.append(pathwave(a.pathwave, s))
+            if log:
+                for renderer, r in (("mitsuba", mi_runs[-1]), ("pathwave", pw_runs[-1])):
+                    log.write(json.dumps({"scene": name, "renderer": renderer, "rep": rep, **r}) + "\n")
+                log.flush()
+        extra = statistics.median(r["peak_kb"] - r["base_kb"] for r in mi_runs) / 1024
+        print(row(name, "Mitsuba 3", mi_runs, f"load_file; {extra:.0f} MB above the import"), flush=True)
+        print(row(name, "pathwave", pw_runs, "whole process, 1x1 render at 1 spp"), flush=True)
 
 
 if __name__ == "__main__":

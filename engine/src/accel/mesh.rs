@@ -525,21 +525,35 @@ impl MeshBlas {
         let b0 = 1.0 - b1 - b2;
         let [i, j, k] = self.mesh.triangles[hit.id as usize].map(|v| v as usize);
         let mut lift = 0.0;
-        if let Some(n) = &self.mesh.normals {
-            let ns = b0 * n[i] + b1 * n[j] + b2 * n[k];
-            if ns.length_squared() > 0.0 && ns.is_finite() {
-                sp.ns = ns.normalize();
-                if sp.n.dot(sp.ns) < 0.0 {
-                    sp.n = -sp.n;
-                }
-                lift = terminator_lift(sp.p, sp.n, [a, b, c], [n[i], n[j], n[k]], [b0, b1, b2]);
+        if let Some(n) = &self.mesh.normals
+            && let Some(ns) = unit_or_none(b0 * n[i] + b1 * n[j] + b2 * n[k])
+        {
+            sp.ns = ns;
+            if sp.n.dot(sp.ns) < 0.0 {
+                sp.n = -sp.n;
             }
+            lift = terminator_lift(sp.p, sp.n, [a, b, c], [n[i], n[j], n[k]], [b0, b1, b2]);
         }
         if let Some(uv) = &self.mesh.uvs {
             sp.uv = b0 * uv[i] + b1 * uv[j] + b2 * uv[k];
         }
         (sp, lift)
     }
+}
+
+/// `v` normalised, or `None` when it is zero or not finite. Vertex normals that (nearly)
+/// cancel sum to a vector whose squared length is below `f32`'s normal range (or 0), where it keeps
+/// too few bits for `normalize` to give a unit vector (a length of 0.92 was found by the
+/// `serialized` fuzzer): such a vector is scaled up by its largest component first. Others are
+/// normalised as they were, to the same bits.
+fn unit_or_none(v: Vec3A) -> Option<Vec3A> {
+    if !(v.is_finite() && v != Vec3A::ZERO) {
+        return None;
+    }
+    Some(match v.length_squared() < 1e-30 {
+        true => (v / v.abs().max_element()).normalize(),
+        false => v.normalize(),
+    })
 }
 
 /// The shadow-terminator offset of Hanika ("Hacking the Shadow Terminator", Ray Tracing Gems
@@ -575,6 +589,21 @@ pub fn terminator_lift(x: Vec3A, n: Vec3A, p: [Vec3A; 3], vn: [Vec3A; 3], b: [f3
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// Vectors whose squared length is subnormal or underflows normalise to unit length (the
+    /// sum of cancelling vertex normals the `serialized` fuzzer found normalised to 0.92);
+    /// ordinary ones to the bits `normalize` gives.
+    #[test]
+    fn shading_normals_of_cancelling_vertex_normals_are_unit() {
+        for v in [Vec3A::new(1e-20, 0.0, 5e-38), Vec3A::new(3e-23, -2e-23, 1e-45), Vec3A::splat(1e-30)] {
+            let n = unit_or_none(v).unwrap();
+            assert!((n.length() - 1.0).abs() < 1e-6, "{v} -> {n}");
+        }
+        let v = Vec3A::new(0.3, -0.2, 0.9);
+        assert_eq!(unit_or_none(v), Some(v.normalize()));
+        assert_eq!(unit_or_none(Vec3A::ZERO), None);
+        assert_eq!(unit_or_none(Vec3A::new(f32::NAN, 0.0, 1.0)), None);
+    }
 
     /// The AVX2 block test and its scalar fallback agree: the same lanes hit, the same lanes
     /// left to the exact test, the same distances where hit (rays through the knot's blocks,

@@ -129,7 +129,7 @@ fn table(bytes: &[u8], version: u16) -> Option<Vec<usize>> {
         .collect();
     let ok = offsets.first() == Some(&0)
         && offsets.windows(2).all(|w| w[0] < w[1])
-        && offsets.iter().all(|&o| o + 4 <= start && header(bytes, o).is_ok());
+        && offsets.iter().all(|&o| o < start && start - o >= 4 && header(bytes, o).is_ok());
     ok.then_some(offsets)
 }
 
@@ -280,5 +280,22 @@ mod tests {
         says(&huge, "more than");
         let out_of_range = file(&[stream(0, false, &SQUARE, false, &[[0, 1, 7]])]);
         says(&out_of_range, "out of range");
+    }
+
+    /// A table offset near `u64::MAX` overflowed `offset + 4` where overflow is checked (debug
+    /// builds, the `serialized` fuzzer, which found it): the table is broken, and mesh 0 is
+    /// still read.
+    #[test]
+    fn a_table_offset_near_the_largest_u64_is_a_broken_table() {
+        let p = Path::new("t.serialized");
+        let mesh = stream(3, false, &SQUARE, true, &[[0, 1, 2]]);
+        let mut b = mesh.clone();
+        b.extend(0u64.to_le_bytes());
+        b.extend(u64::MAX.to_le_bytes());
+        b.extend(2u32.to_le_bytes());
+        let f = SerializedFile::new(b, p).unwrap();
+        assert_eq!(f.count(), 1);
+        assert!(f.mesh(0, p).is_ok());
+        assert!(f.mesh(1, p).unwrap_err().contains("table of meshes"));
     }
 }

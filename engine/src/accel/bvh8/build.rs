@@ -20,9 +20,10 @@
 //!
 //! Ordinary primitive sets have neither, and get obvhs's tree unchanged.
 
+use obvhs::bvh2::{Bvh2, leaf_collapser::collapse, reinsertion::ReinsertionOptimizer};
+use obvhs::ploc::PlocBuilder;
 use obvhs::{BvhBuildParams, aabb::Aabb};
 use std::cmp::Ordering;
-use std::time::Duration;
 
 /// Most inner nodes on a path from the root to a leaf, in the binary tree and so in the
 /// collapsed one (each of its levels takes at least one binary level): the traversal stacks
@@ -106,6 +107,29 @@ fn cells(aabbs: &[Aabb]) -> Vec<(u64, u32)> {
     keyed
 }
 
+/// obvhs's binary BVH of `aabbs`: the steps of its `bvh2::builder::build_bvh2` (PLOC,
+/// reinsertion, leaf collapse, reinsertion) without its validation, which debug builds run and
+/// which asserts the tree no deeper than obvhs's own stack bound. Boxes nested across Morton
+/// cells make PLOC chain them thousands of levels deep (the reinsertion can add one more than
+/// PLOC counted): [`Tree::bound_height`] rebuilds such chains, but the assertion panicked first
+/// (found by the `bvh` fuzzer, `fuzz/seeds/bvh/line-and-scatter`).
+fn ploc(aabbs: &[Aabb], params: BvhBuildParams) -> Bvh2 {
+    let indices = (0..aabbs.len() as u32).collect();
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        aabbs,
+        indices,
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    let mut reinsertion = ReinsertionOptimizer::default();
+    reinsertion.run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    collapse(&mut bvh2, params.max_prims_per_leaf.clamp(1, 255), params.collapse_traversal_cost);
+    let ratio = params.reinsertion_batch_ratio * params.post_collapse_reinsertion_batch_ratio_multiplier;
+    reinsertion.run(&mut bvh2, ratio, None);
+    bvh2
+}
+
 impl Tree {
     /// Builds the tree of `aabbs` (not empty) with leaves of at most `max_leaf` primitives.
     pub fn build(aabbs: &[Aabb], max_leaf: u32, params: BvhBuildParams) -> (Self, BuildStats) {
@@ -122,7 +146,7 @@ impl Tree {
         drop(keyed);
         let mut tree = if crowds.is_empty() {
             stats.ploc_items = aabbs.len();
-            let bvh2 = obvhs::bvh2::builder::build_bvh2(aabbs, params, &mut Duration::default());
+            let bvh2 = ploc(aabbs, params);
             let nodes = bvh2.nodes.iter().map(|n| Node2 {
                 aabb: *n.aabb(),
                 kind: match n.is_leaf() {
@@ -164,7 +188,7 @@ impl Tree {
         stats.ploc_items = item.len();
         stats.crowds = crowds.len();
         stats.crowd_prims = crowds.iter().map(Vec::len).sum();
-        let bvh2 = obvhs::bvh2::builder::build_bvh2(&boxes, params, &mut Duration::default());
+        let bvh2 = ploc(&boxes, params);
         let mut tree = Self {
             nodes: bvh2
                 .nodes
