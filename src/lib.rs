@@ -19,6 +19,7 @@ pub mod merge;
 pub mod metrics;
 pub mod render;
 pub mod shard;
+pub mod terminal;
 pub mod trace;
 pub mod view;
 pub mod watch;

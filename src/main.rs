@@ -66,7 +66,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // Errors quote the scene's names and values: nothing in them may drive the terminal.
-            eprintln!("error: {}", cli::terminal::safe(&e));
+            eprintln!("error: {}", pathwave::terminal::safe(&e));
             ExitCode::FAILURE
         }
     }

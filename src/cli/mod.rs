@@ -2,7 +2,6 @@
 //! and the log they write ([`logging`]).
 
 pub mod logging;
-pub mod terminal;
 
 use crate::animate::AnimateCommand;
 use crate::bench::BenchCommand;

@@ -227,7 +227,7 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
 /// Reports an error in the scene (or in the frame it makes) on the terminal and in the window,
 /// where the last good image stays on show.
 fn show_error(viewers: &mut Option<(Viewers, PixelWindow, u32, u32)>, e: &str) {
-    eprintln!("error: {}", crate::cli::terminal::safe(e));
+    eprintln!("error: {}", crate::terminal::safe(e));
     if let Some((v, ..)) = viewers.as_mut() {
         v.note(&format!("error: {e}"));
     }
