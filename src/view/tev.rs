@@ -25,9 +25,37 @@ pub const CREATE_IMAGE: u8 = 4;
 pub const UPDATE_IMAGE_V3: u8 = 6;
 /// Floats per packet, about (whole rows are sent).
 const BAND_FLOATS: usize = 1 << 18;
-/// How long a write may make no progress before tev counts as gone (a packet is about a
-/// mebibyte, which a tev that reads takes in milliseconds).
+/// How long one packet may take before tev counts as gone (a packet is about a mebibyte, which
+/// a tev that reads takes in milliseconds). A socket's own write timeout does not bound it: a
+/// write that times out after sending part returns that part, and the next one waits again.
 const SEND_TIMEOUT: Duration = Duration::from_secs(3);
+/// The socket's write timeout: how often a stalled write gets to check [`SEND_TIMEOUT`].
+const WRITE_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Writes one packet within [`SEND_TIMEOUT`].
+fn send(stream: &mut TcpStream, packet: &[u8]) -> std::io::Result<()> {
+    let start = std::time::Instant::now();
+    let mut rest = packet;
+    while !rest.is_empty() {
+        if start.elapsed() > SEND_TIMEOUT {
+            let e = format!("tev took no packet for {} s", SEND_TIMEOUT.as_secs());
+            return Err(std::io::Error::new(std::io::ErrorKind::TimedOut, e));
+        }
+        match stream.write(rest) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => rest = &rest[n..],
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::Interrupted
+                        | std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
+}
 
 /// Images queued for the sending thread: a tev that reads gets every pass (they come no faster
 /// than their samples double), and memory stays bounded when it does not.
@@ -118,7 +146,7 @@ impl Link {
         let addr = addr.to_string();
         let thread = std::thread::Builder::new().name("tev".into()).spawn(move || {
             for packets in rx {
-                if let Err(e) = packets.iter().try_for_each(|p| stream.write_all(p)) {
+                if let Err(e) = packets.iter().try_for_each(|p| send(&mut stream, p)) {
                     eprintln!("--tev {addr}: the connection was lost ({e}); rendering on without tev");
                     return;
                 }
@@ -150,7 +178,7 @@ impl Tev {
         for a in addrs {
             match TcpStream::connect_timeout(&a, Duration::from_secs(5)) {
                 Ok(s) => {
-                    s.set_write_timeout(Some(SEND_TIMEOUT)).map_err(|e| e.to_string())?;
+                    s.set_write_timeout(Some(WRITE_TIMEOUT)).map_err(|e| e.to_string())?;
                     s.set_nodelay(true).map_err(|e| e.to_string())?;
                     return Ok(s);
                 }
