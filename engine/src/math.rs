@@ -95,6 +95,39 @@ pub fn step_away(x: f32, o: f32) -> f32 {
     if stays { x } else { f32::from_bits(moved) }
 }
 
+/// The length of `v`, also where its squared length leaves `f32`'s normal range: the cross
+/// product of two edges 1e10 long squares to 1e41, beyond `f32::MAX`. Such a vector is divided
+/// by its largest component first; others are measured as `length` measures them, to the same
+/// bits.
+#[inline]
+pub fn length(v: Vec3A) -> f32 {
+    let m = v.abs().max_element();
+    match squared_in_range(v) || !(m > 0.0 && m.is_finite()) {
+        true => v.length(),
+        false => m * (v / m).length(),
+    }
+}
+
+/// `v` normalised, or `None` when it is zero or not finite; scaled first where its squared
+/// length leaves `f32`'s normal range, as [`length`] does (vertex normals that nearly cancel,
+/// the normal of a triangle 1e10 across), to `normalize`'s bits elsewhere.
+#[inline]
+pub fn unit(v: Vec3A) -> Option<Vec3A> {
+    if !(v.is_finite() && v != Vec3A::ZERO) {
+        return None;
+    }
+    Some(match squared_in_range(v) {
+        true => v.normalize(),
+        false => (v / v.abs().max_element()).normalize(),
+    })
+}
+
+#[inline]
+fn squared_in_range(v: Vec3A) -> bool {
+    let l2 = v.length_squared();
+    (1e-30..=f32::MAX).contains(&l2)
+}
+
 /// Mirror reflection of `wo` (pointing away from the surface) about `n`.
 #[inline]
 pub fn reflect(wo: Vec3A, n: Vec3A) -> Vec3A {
@@ -385,6 +418,33 @@ pub fn transform_box(b: &obvhs::aabb::Aabb, m: &glam::Affine3A) -> obvhs::aabb::
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Vectors whose squared length is subnormal or underflows normalise to unit length (the
+    /// sum of cancelling vertex normals the `serialized` fuzzer found normalised to 0.92), and
+    /// so do those whose squared length overflows (the normal of a triangle 1e10 across, once
+    /// dropped as having no finite area); ordinary ones to the bits `normalize` and `length`
+    /// give.
+    #[test]
+    fn lengths_and_unit_vectors_beyond_the_squares_range() {
+        for v in [Vec3A::new(1e-20, 0.0, 5e-38), Vec3A::new(3e-23, -2e-23, 1e-45), Vec3A::splat(1e-30)] {
+            let n = unit(v).unwrap();
+            assert!((n.length() - 1.0).abs() < 1e-6, "{v} -> {n}");
+        }
+        for v in [Vec3A::new(4e20, -3e20, 0.0), Vec3A::new(1e30, 2e30, -2e30), Vec3A::splat(f32::MAX)] {
+            let n = unit(v).unwrap();
+            assert!((n.length() - 1.0).abs() < 1e-6, "{v} -> {n}");
+            let expected = v.as_dvec3().length();
+            assert!((length(v) as f64 / expected - 1.0).abs() < 1e-6 || expected > f32::MAX as f64);
+        }
+        assert_eq!(length(Vec3A::new(4e20, -3e20, 0.0)), 5e20);
+        let v = Vec3A::new(0.3, -0.2, 0.9);
+        assert_eq!(unit(v), Some(v.normalize()));
+        assert_eq!(length(v), v.length());
+        assert_eq!(unit(Vec3A::ZERO), None);
+        assert_eq!(unit(Vec3A::new(f32::NAN, 0.0, 1.0)), None);
+        assert_eq!(length(Vec3A::ZERO), 0.0);
+        assert!(length(Vec3A::new(f32::NAN, 0.0, 1.0)).is_nan());
+    }
 
     #[test]
     fn polynomial_sine_and_cosine_are_accurate_on_the_quarter() {

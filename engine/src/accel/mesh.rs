@@ -8,7 +8,7 @@
 )]
 
 use crate::accel::bvh8::{Bvh8, PACKET};
-use crate::math::gamma;
+use crate::math::{gamma, unit};
 use crate::shape::{MeshPoint, PrimitiveShape, SurfacePoint, Triangle};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
@@ -153,14 +153,14 @@ impl TriRay {
 impl TriBlock {
     /// Distances of the eight lanes, each in `(0, tmax)` where the lane's bit in the returned
     /// mask is set (the other lanes hold anything); lanes whose edge functions are exactly
-    /// zero in `f32` are decided by the scalar test (in `f64`).
+    /// zero in `f32`, or whose distance overflows it, are decided by the scalar test (in `f64`).
     #[inline(always)]
     fn intersect(&self, r: &TriRay, o: Vec3A, d: Vec3A, tmax: f32) -> ([f32; 8], u32) {
-        let (mut out, mut hit, mut zero_edge) = self.lanes(r, tmax);
+        let (mut out, mut hit, mut scalar) = self.lanes(r, tmax);
         // NaN lanes compare unequal to zero, so unused lanes never come here.
-        while zero_edge != 0 {
-            let l = zero_edge.trailing_zeros() as usize;
-            zero_edge &= zero_edge - 1;
+        while scalar != 0 {
+            let l = scalar.trailing_zeros() as usize;
+            scalar &= scalar - 1;
             let p = [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][l], self.v[j][1][l], self.v[j][2][l]));
             out[l] = Triangle { p, uv: None }.intersect(o, d, tmax);
             hit |= ((out[l] < tmax) as u32) << l;
@@ -175,8 +175,8 @@ impl TriBlock {
         self.lanes_scalar(r, tmax)
     }
 
-    /// The eight tests: distances, the lanes hit and the lanes with an edge function exactly
-    /// zero (left to the caller).
+    /// The eight tests: distances, the lanes hit and the lanes left to the caller's scalar test
+    /// (an edge function exactly zero, a distance beyond `f32`).
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     #[inline(always)]
     fn lanes(&self, r: &TriRay, tmax: f32) -> ([f32; 8], u32, u32) {
@@ -214,11 +214,15 @@ impl TriBlock {
             if _mm256_movemask_ps(inside) == 0 {
                 return ([f32::INFINITY; 8], 0, zero_edge);
             }
+            let abs = |v| _mm256_andnot_ps(splat(-0.0), v);
             let det = add(add(e0, e1), e2);
             let t_scaled = add(add(mul(e0, z[0]), mul(e1, z[1])), mul(e2, z[2]));
+            // A distance beyond f32's range (a triangle 1e13 across, 3e13 away) is the scalar
+            // test's, in f64.
+            let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(abs(t_scaled), splat(f32::INFINITY));
+            let scalar = zero_edge | _mm256_movemask_ps(_mm256_andnot_ps(finite, inside)) as u32;
             let inv_det = _mm256_div_ps(splat(1.0), det);
             let t = mul(t_scaled, inv_det);
-            let abs = |v| _mm256_andnot_ps(splat(-0.0), v);
             let max3 = |v: [__m256; 3]| _mm256_max_ps(_mm256_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
             let (max_x, max_y, max_z) = (max3(x), max3(y), max3(z));
             let delta_z = mul(splat(gamma(3)), max_z);
@@ -249,7 +253,7 @@ impl TriBlock {
             );
             let mut out = [0.0f32; 8];
             _mm256_storeu_ps(out.as_mut_ptr(), t);
-            (out, _mm256_movemask_ps(hit) as u32 & !zero_edge, zero_edge)
+            (out, _mm256_movemask_ps(hit) as u32 & !scalar, scalar)
         }
     }
 
@@ -272,14 +276,16 @@ impl TriBlock {
         }
         let mut out = [f32::INFINITY; 8];
         let mut hit = 0u32;
-        let mut zero_edge = 0u32;
+        let mut scalar = 0u32;
         for l in 0..8 {
             let e0 = x[1][l] * y[2][l] - y[1][l] * x[2][l];
             let e1 = x[2][l] * y[0][l] - y[2][l] * x[0][l];
             let e2 = x[0][l] * y[1][l] - y[0][l] * x[1][l];
-            zero_edge |= ((e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0)) as u32 * (1 << l);
             let det = e0 + e1 + e2;
             let t_scaled = e0 * z[0][l] + e1 * z[1][l] + e2 * z[2][l];
+            let same_sign = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+            let zero = (e0 == 0.0) | (e1 == 0.0) | (e2 == 0.0);
+            scalar |= (zero || (same_sign && !(t_scaled.abs() < f32::INFINITY))) as u32 * (1 << l);
             let inv_det = 1.0 / det;
             let t = t_scaled * inv_det;
             let max_z = z[0][l].abs().max(z[1][l].abs()).max(z[2][l].abs());
@@ -292,7 +298,6 @@ impl TriBlock {
             let max_e = e0.abs().max(e1.abs()).max(e2.abs());
             let delta_t =
                 3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs();
-            let same_sign = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
             let in_range = if det < 0.0 {
                 t_scaled < 0.0 && t_scaled >= tmax * det
             } else {
@@ -303,7 +308,7 @@ impl TriBlock {
                 hit |= 1 << l;
             }
         }
-        (out, hit & !zero_edge, zero_edge)
+        (out, hit & !scalar, scalar)
     }
 }
 
@@ -526,7 +531,7 @@ impl MeshBlas {
         let [i, j, k] = self.mesh.triangles[hit.id as usize].map(|v| v as usize);
         let mut lift = 0.0;
         if let Some(n) = &self.mesh.normals
-            && let Some(ns) = unit_or_none(b0 * n[i] + b1 * n[j] + b2 * n[k])
+            && let Some(ns) = unit(b0 * n[i] + b1 * n[j] + b2 * n[k])
         {
             sp.ns = ns;
             if sp.n.dot(sp.ns) < 0.0 {
@@ -539,21 +544,6 @@ impl MeshBlas {
         }
         (sp, lift)
     }
-}
-
-/// `v` normalised, or `None` when it is zero or not finite. Vertex normals that (nearly)
-/// cancel sum to a vector whose squared length is below `f32`'s normal range (or 0), where it keeps
-/// too few bits for `normalize` to give a unit vector (a length of 0.92 was found by the
-/// `serialized` fuzzer): such a vector is scaled up by its largest component first. Others are
-/// normalised as they were, to the same bits.
-fn unit_or_none(v: Vec3A) -> Option<Vec3A> {
-    if !(v.is_finite() && v != Vec3A::ZERO) {
-        return None;
-    }
-    Some(match v.length_squared() < 1e-30 {
-        true => (v / v.abs().max_element()).normalize(),
-        false => v.normalize(),
-    })
 }
 
 /// The shadow-terminator offset of Hanika ("Hacking the Shadow Terminator", Ray Tracing Gems
@@ -590,21 +580,6 @@ pub fn terminator_lift(x: Vec3A, n: Vec3A, p: [Vec3A; 3], vn: [Vec3A; 3], b: [f3
 pub(crate) mod tests {
     use super::*;
 
-    /// Vectors whose squared length is subnormal or underflows normalise to unit length (the
-    /// sum of cancelling vertex normals the `serialized` fuzzer found normalised to 0.92);
-    /// ordinary ones to the bits `normalize` gives.
-    #[test]
-    fn shading_normals_of_cancelling_vertex_normals_are_unit() {
-        for v in [Vec3A::new(1e-20, 0.0, 5e-38), Vec3A::new(3e-23, -2e-23, 1e-45), Vec3A::splat(1e-30)] {
-            let n = unit_or_none(v).unwrap();
-            assert!((n.length() - 1.0).abs() < 1e-6, "{v} -> {n}");
-        }
-        let v = Vec3A::new(0.3, -0.2, 0.9);
-        assert_eq!(unit_or_none(v), Some(v.normalize()));
-        assert_eq!(unit_or_none(Vec3A::ZERO), None);
-        assert_eq!(unit_or_none(Vec3A::new(f32::NAN, 0.0, 1.0)), None);
-    }
-
     /// The AVX2 block test and its scalar fallback agree: the same lanes hit, the same lanes
     /// left to the exact test, the same distances where hit (rays through the knot's blocks,
     /// some from its vertices).
@@ -632,6 +607,38 @@ pub(crate) mod tests {
             }
         }
         assert!(hits > 1000, "the rays hit triangles ({hits})");
+    }
+
+    /// Triangles up to the scene's coordinate bound (1e15) are hit, by the mesh and alone, at
+    /// their distance, with a unit normal: at 1e10 their area once squared beyond `f32` (the
+    /// mesh dropped them as having no finite area), and from 1e13 the watertight test's scaled
+    /// distance overflowed (they were missed).
+    #[test]
+    fn triangles_as_large_and_far_as_the_scene_allows_are_hit() {
+        for s in [1.0f32, 1e10, 1e12, 1e13, 1e14, 3e14] {
+            let mesh = Arc::new(MeshData {
+                positions: vec![Vec3A::new(-s, -s, 0.0), Vec3A::new(s, -s, 0.0), Vec3A::new(0.0, s, 0.0)],
+                triangles: vec![[0, 1, 2]],
+                ..Default::default()
+            });
+            let blas = MeshBlas::build(mesh.clone());
+            let tri = Triangle::new(mesh.positions[0], mesh.positions[1], mesh.positions[2]).unwrap();
+            assert!(tri.area() / (2.0 * s * s) - 1.0 < 1e-6, "{s}: area {}", tri.area());
+            for (o, d) in [
+                (Vec3A::new(0.0, 0.0, 3.0 * s), Vec3A::NEG_Z),
+                (Vec3A::new(0.1 * s, -0.2 * s, -3.0 * s), Vec3A::new(0.01, 0.02, 1.0)),
+            ] {
+                let want = 3.0 * s / d.z.abs();
+                let alone = tri.intersect(o, d, f32::INFINITY);
+                let hit = blas.intersect(o, d, f32::INFINITY).unwrap_or_else(|| panic!("{s}: missed"));
+                assert!((alone / want - 1.0).abs() < 1e-5, "{s}: t {alone} for {want}");
+                assert_eq!(hit.t, alone, "{s}");
+                assert!(blas.occluded(o, d, f32::INFINITY), "{s}");
+                assert!(!blas.occluded(o, d, 0.5 * want), "{s}");
+                let n = tri.surface(o + hit.t * d).n;
+                assert!((n.length() - 1.0).abs() < 1e-6 && n.z.abs() > 0.999, "{s}: normal {n}");
+            }
+        }
     }
 
     #[test]

@@ -44,6 +44,12 @@ impl Triangle {
         (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
     }
 
+    /// The unit normal (zero for a triangle without area, which [`Self::new`] never makes).
+    #[inline]
+    fn normal(&self) -> Vec3A {
+        crate::math::unit(self.cross()).unwrap_or(Vec3A::ZERO)
+    }
+
     /// `None` when the vertices are collinear (no area) or the area is not finite.
     pub fn new(p0: Vec3A, p1: Vec3A, p2: Vec3A) -> Option<Self> {
         let t = Self { p: [p0, p1, p2], uv: None };
@@ -58,9 +64,16 @@ impl Triangle {
         // stays accurate for thin triangles (the normal equations square their conditioning).
         let (e1, e2, v) = (self.p[1] - self.p[0], self.p[2] - self.p[0], p - self.p[0]);
         let n = e1.cross(e2);
+        // A triangle 1e10 across squares its normal beyond `f32::MAX`: measure it in units of
+        // its largest component there (elsewhere the scale is 1, and the bits are kept).
+        let s = match n.length_squared() <= f32::MAX {
+            true => 1.0,
+            false => 1.0 / n.abs().max_element(),
+        };
+        let n = n * s;
         let inv = 1.0 / n.length_squared();
-        let b1 = (v.cross(e2).dot(n) * inv).clamp(0.0, 1.0);
-        let b2 = (e1.cross(v).dot(n) * inv).clamp(0.0, 1.0 - b1);
+        let b1 = ((v.cross(e2) * s).dot(n) * inv).clamp(0.0, 1.0);
+        let b2 = ((e1.cross(v) * s).dot(n) * inv).clamp(0.0, 1.0 - b1);
         (b1, b2)
     }
 
@@ -114,7 +127,7 @@ impl Triangle {
         let [p0, p1, p2] = self.p;
         let p = b0 * p0 + b1 * p1 + b2 * p2;
         let err = gamma(7) * (b0 * p0.abs() + b1 * p1.abs() + b2 * p2.abs()).max_element();
-        let n = self.cross().normalize();
+        let n = self.normal();
         // A mesh's interpolation (`accel::mesh`), so that its baked triangles read its uvs.
         let uv = match self.uv {
             None => Vec2::new(b1, b2),
@@ -122,6 +135,29 @@ impl Triangle {
         };
         SurfacePoint { p, n, ns: n, uv, err, on: MeshPoint::NONE }
     }
+}
+
+/// The end of [`Triangle::intersect`] for a triangle so large and so far from the ray's origin
+/// that its scaled distance (edge functions times depths, about size^2 x distance) overflows
+/// `f32` (a triangle 1e13 across seen from 3e13 away): the same distance and error bound, from
+/// the same `f32` edge functions and sheared corners `q`, in `f64`.
+#[cold]
+fn far_intersect(e: [f32; 3], q: &[Vec3A; 3], tmax: f32) -> f32 {
+    let e = e.map(f64::from);
+    let z = q.map(|v| v.z as f64);
+    let t = (e[0] * z[0] + e[1] * z[1] + e[2] * z[2]) / (e[0] + e[1] + e[2]);
+    let max = |c: usize| q.iter().fold(0.0f64, |m, v| m.max(v[c].abs() as f64));
+    let (max_x, max_y, max_z) = (max(0), max(1), max(2));
+    let g = |n| gamma(n) as f64;
+    let delta_z = g(3) * max_z;
+    let delta_x = g(5) * (max_x + max_z);
+    let delta_y = g(5) * (max_y + max_z);
+    let delta_e = 2.0 * (g(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    let max_e = e.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+    let det = e[0] + e[1] + e[2];
+    let delta_t = 3.0 * (g(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) / det.abs();
+    let hit = t > delta_t && (t as f32) < tmax;
+    if hit { t as f32 } else { f32::INFINITY }
 }
 
 fn v64(v: Vec3A) -> DVec3 {
@@ -271,6 +307,9 @@ impl PrimitiveShape for Triangle {
             v.z *= sz;
         }
         let t_scaled = e0 * q[0].z + e1 * q[1].z + e2 * q[2].z;
+        if !t_scaled.is_finite() {
+            return far_intersect([e0, e1, e2], &q, tmax);
+        }
         if det < 0.0 && (t_scaled >= 0.0 || t_scaled < tmax * det) {
             return MISS;
         }
@@ -299,7 +338,7 @@ impl PrimitiveShape for Triangle {
 
     /// Area.
     fn area(&self) -> f32 {
-        0.5 * self.cross().length()
+        0.5 * crate::math::length(self.cross())
     }
 
     /// Samples a point of the triangle as seen from `from`: uniformly in its solid angle where
@@ -338,7 +377,7 @@ impl PrimitiveShape for Triangle {
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, _n: Vec3A) -> f32 {
         match self.spherical(from) {
             Some(t) => (1.0 / t.s) as f32,
-            None => area_to_solid_angle(1.0 / self.area(), from, p, self.cross().normalize()),
+            None => area_to_solid_angle(1.0 / self.area(), from, p, self.normal()),
         }
     }
 }
