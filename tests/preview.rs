@@ -1,8 +1,9 @@
-//! `--preview`: progressive passes give the bits of one render; without a display the render
-//! goes on; under Xvfb the window shows the passes with the PNG output's tone mapping. The two
-//! tests under Xvfb need Xvfb, xwd and xdotool, so they are ignored unless asked for (`cargo
-//! test --release --test preview -- --ignored`, as `.ci/run` does); asked for where they cannot
-//! run, they fail saying what is missing.
+//! `--preview`: progressive passes give the bits of one render; without a display, or with one
+//! that never answers, the render goes on; under Xvfb the window shows the passes with the PNG
+//! output's tone mapping. The tests under Xvfb need Xvfb, xwd and xdotool, the silent display
+//! libX11, so they are ignored unless asked for (`cargo test --release --test preview --
+//! --ignored`, as `.ci/run` does); asked for where they cannot run, they fail saying what is
+//! missing.
 
 mod common;
 use std::io::Read;
@@ -39,6 +40,37 @@ fn progressive_passes_without_a_display_give_the_bits_of_one_render() {
         std::fs::read(&plain).unwrap(),
         "the passes changed the image"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A display that takes the connection and never answers (a stalled X server, a forwarded
+/// display whose far end hangs) holds `XOpenDisplay` for ever: the render waits for it a few
+/// seconds, then goes on without the window. Needs libX11 (installed with Xvfb).
+#[test]
+#[ignore = "needs libX11 (installed with Xvfb): cargo test --release --test preview -- --ignored"]
+fn a_display_that_never_answers_does_not_hold_up_the_render() {
+    let dir = temp("silent");
+    // An X display over TCP is port 6000 + its number.
+    let (listener, n) = (100..400)
+        .find_map(|n| std::net::TcpListener::bind(("127.0.0.1", 6000 + n)).ok().map(|l| (l, n)))
+        .expect("a free port for a display");
+    std::thread::spawn(move || {
+        let mut held = Vec::new();
+        for c in listener.incoming().flatten() {
+            held.push(c);
+        }
+    });
+    let start = Instant::now();
+    let run = pathwave(&dir.join("a.png"), 16, 2, &["--preview"])
+        .env("DISPLAY", format!("127.0.0.1:{n}"))
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{log}");
+    assert!(log.contains(&format!("the display \"127.0.0.1:{n}\" did not answer within 10 s")), "{log}");
+    assert!(log.contains("rendering without a window"), "{log}");
+    assert!(start.elapsed() < Duration::from_secs(60), "{:?}", start.elapsed());
+    assert!(dir.join("a.png").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -17,6 +17,9 @@ use std::sync::mpsc;
 const FPS: usize = 60;
 /// The image is drawn again (over whatever covered it) at least this often.
 const REDRAW: std::time::Duration = std::time::Duration::from_millis(250);
+/// How long the display has to let the window open: an X server answers in milliseconds, and
+/// one that took the connection and never answers would hold `XOpenDisplay` for ever.
+const OPEN_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
 
 /// What the render sends the window.
 enum Message {
@@ -98,7 +101,7 @@ impl Preview {
                 }
             })
             .map_err(|e| format!("cannot start the window's thread: {e}"))?;
-        match started.recv() {
+        match started.recv_timeout(OPEN_WAIT) {
             Ok(Ok(())) => {
                 Ok(Self { name: name.to_string(), to_window: Some(to_window), open, thread: Some(thread) })
             }
@@ -109,7 +112,15 @@ impl Preview {
                     std::env::var("DISPLAY").unwrap_or_default()
                 ))
             }
-            Err(_) => {
+            // Left blocked in XOpenDisplay: the thread is not joined (it ends, or the process
+            // does); were the display to answer later, the window would close at once, its
+            // sender gone.
+            Err(mpsc::RecvTimeoutError::Timeout) => Err(format!(
+                "the display {:?} did not answer within {} s",
+                std::env::var("DISPLAY").unwrap_or_default(),
+                OPEN_WAIT.as_secs()
+            )),
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
                 let _ = thread.join();
                 Err("the window's thread ended before opening it".into())
             }
