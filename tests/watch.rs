@@ -230,3 +230,28 @@ fn watch_refuses_an_output_that_the_scene_reads() {
     drop(watch);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene's folder removed and made again (a checkout, a sync tool) takes the folder's watch
+/// with it: `watch` says so, looks for the folder until it is back, and then reloads from it.
+#[test]
+fn watch_follows_a_folder_removed_and_made_again() {
+    let dir: PathBuf = std::env::temp_dir().join(format!("pathwave-watch-gone-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let folder = dir.join("scene");
+    std::fs::create_dir_all(&folder).unwrap();
+    let scene = folder.join("scene.ron");
+    std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
+    let (addr, _received, _server) = fake_tev(None);
+    let out = dir.join("out.exr");
+    let mut watch = Watch::start(&scene, &out, &addr, &["--width", "8", "--height", "8", "--spp", "1"]);
+    watch.wait_for(&["done, 1 spp"]);
+    std::fs::remove_dir_all(&folder).unwrap();
+    watch.wait_for(&["was removed: waiting for it to come back"]);
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
+    watch.wait_for(&["is back"]);
+    watch.wait_for(&["reloaded"]);
+    watch.wait_for(&["done, 1 spp"]);
+    drop(watch);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

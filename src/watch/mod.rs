@@ -12,6 +12,7 @@ use crate::integrator::{film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::render::args::{EngineArgs, Integrator, LogArgs, SceneArgs, TimeArgs};
 use crate::render::load::load;
+use crate::terminal::safe;
 use crate::view::{self, Pass, ViewArgs, Viewers};
 use events::{Events, normalize};
 use notify_debouncer_full::new_debouncer;
@@ -132,6 +133,9 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
         normalize(&std::path::absolute(&args.scene).map_err(|e| format!("{}: {e}", args.scene.display()))?);
     let mut events = Events { rx, files: BTreeSet::from([scene_file.clone()]) };
     let mut folders = BTreeSet::new();
+    // Watched folders that were removed: their watch went with them, so they are looked for
+    // until they are back (a checkout, a sync tool, `rm -r` and a copy).
+    let mut missing = BTreeSet::new();
     let mut world: Option<SceneWorld> = None;
     let mut viewers: Option<(Viewers, PixelWindow, u32, u32)> = None;
     let mut film: Option<Film> = None;
@@ -151,10 +155,17 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
         // Folders, not files: an editor that saves by renaming a new file over the old one
         // replaces the file a watch would follow.
         for folder in events.files.iter().filter_map(|f| f.parent()) {
-            if folders.insert(folder.to_path_buf()) {
-                debouncer
-                    .watch(folder, RecursiveMode::NonRecursive)
-                    .map_err(|e| format!("cannot watch {}: {e}", folder.display()))?;
+            if !folders.contains(folder) && !missing.contains(folder) {
+                match folder.is_dir() {
+                    true => debouncer
+                        .watch(folder, RecursiveMode::NonRecursive)
+                        .map_err(|e| format!("cannot watch {}: {e}", folder.display()))?,
+                    false => {
+                        missing.insert(folder.to_path_buf());
+                        continue;
+                    }
+                }
+                folders.insert(folder.to_path_buf());
             }
         }
         match loaded {
@@ -211,9 +222,26 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
             }
             Err(e) => show_error(&mut viewers, &e),
         }
-        // Until a file changes or the window closes.
+        // Until a file changes, a removed folder is back, or the window closes.
         loop {
             if events.changed(Duration::from_millis(100)) {
+                break;
+            }
+            let gone: Vec<PathBuf> = folders.iter().filter(|f| !f.is_dir()).cloned().collect();
+            for folder in gone {
+                folders.remove(&folder);
+                let _ = debouncer.unwatch(&folder);
+                let shown = safe(&folder.display().to_string());
+                eprintln!("watch: the folder {shown} was removed: waiting for it to come back");
+                missing.insert(folder);
+            }
+            if let Some(back) = missing.iter().find(|f| f.is_dir()).cloned() {
+                missing.remove(&back);
+                debouncer
+                    .watch(&back, RecursiveMode::NonRecursive)
+                    .map_err(|e| format!("cannot watch {}: {e}", back.display()))?;
+                eprintln!("watch: the folder {} is back", safe(&back.display().to_string()));
+                folders.insert(back);
                 break;
             }
             if viewers.as_ref().is_some_and(|v| v.0.closed()) {
