@@ -453,40 +453,66 @@ pub fn check_samples(parts: &Path, tasks: u32, spp: u32) -> Result<Vec<PathBuf>,
         false => Err(format!(
             "shares not ready ({} of {tasks}), so nothing is merged:\n  {}",
             problems.len(),
-            problems.join("\n  ")
+            listed(problems.iter().cloned(), problems.len(), "\n  ")
         )),
     }
 }
 
+/// How many entries an error lists before it says how many more there are: two million
+/// missing frames make a few lines, not 112 MB.
+const LISTED: usize = 12;
+
+/// `items` joined by `sep`, the first [`LISTED`] of `count` of them, then how many are left out.
+fn listed(items: impl Iterator<Item = String>, count: usize, sep: &str) -> String {
+    let shown: Vec<String> = items.take(LISTED).collect();
+    match count - shown.len() {
+        0 => shown.join(sep),
+        more => format!("{}{sep}and {more} more", shown.join(sep)),
+    }
+}
+
 /// Checks that every frame `[first, end)` of `pattern` is there; otherwise names the missing
-/// ones by the task of `tasks` that renders them.
+/// ones by the task of `tasks` that renders them (the first few of each task, the first few
+/// tasks, and how many more).
 pub fn check_frames(pattern: &str, (first, end): (u32, u32), tasks: u32) -> Result<(), String> {
     if tasks == 0 {
         return Err("--tasks must be at least 1".into());
     }
-    let mut missing: Vec<Vec<(u32, PathBuf)>> = vec![Vec::new(); tasks.min(end - first) as usize];
+    /// A task's missing frames: how many, the first few, and the first one's file.
+    #[derive(Clone, Default)]
+    struct Missing {
+        count: usize,
+        frames: Vec<u32>,
+        path: PathBuf,
+    }
+    let mut missing = vec![Missing::default(); tasks.min(end - first) as usize];
     for frame in first..end {
         let path = sequence::frame_path(pattern, frame)?;
         if !sequence::frame_written(&path) {
-            missing[((frame - first) % tasks) as usize].push((frame, path));
+            let m = &mut missing[((frame - first) % tasks) as usize];
+            if m.count == 0 {
+                m.path = path;
+            }
+            if m.frames.len() < LISTED {
+                m.frames.push(frame);
+            }
+            m.count += 1;
         }
     }
-    let lines: Vec<String> = (missing.iter().enumerate())
-        .filter(|(_, m)| !m.is_empty())
-        .map(|(task, m)| {
-            let frames: Vec<String> = m.iter().map(|(f, _)| f.to_string()).collect();
-            format!(
-                "task {task} (frame {} and every {tasks} after it): frames {} missing (the first: {})",
-                first + task as u32,
-                frames.join(", "),
-                m[0].1.display()
-            )
-        })
-        .collect();
-    match lines.is_empty() {
-        true => Ok(()),
-        false => Err(format!("frames of {first}..{end} are missing:\n  {}", lines.join("\n  "))),
+    let tasks_missing = missing.iter().filter(|m| m.count > 0).count();
+    if tasks_missing == 0 {
+        return Ok(());
     }
+    let lines = (missing.iter().enumerate()).filter(|(_, m)| m.count > 0).map(|(task, m)| {
+        format!(
+            "task {task} (frame {} and every {tasks} after it): frames {} missing (the first: {})",
+            first + task as u32,
+            listed(m.frames.iter().map(u32::to_string), m.count, ", "),
+            m.path.display()
+        )
+    });
+    let lines = listed(lines, tasks_missing, "\n  ");
+    Err(format!("frames of {first}..{end} are missing, of {tasks_missing} tasks:\n  {lines}"))
 }
 
 /// The render flags of `matches` that were given on the command line, written back as
@@ -582,5 +608,13 @@ mod tests {
         assert!(err.contains("task 1 (frame 1 and every 3 after it): frames 4, 7 missing"), "{err}");
         assert!(err.contains("task 2 (frame 2 and every 3 after it): frames 8 missing"), "{err}");
         assert!(!err.contains("task 0"), "{err}");
+        // Many missing frames: the first few of each task, the first few tasks, and how many
+        // more (two million missing frames once made an error of 112 MB).
+        let err = check_frames(&pattern, (0, 100_000), 40).unwrap_err();
+        assert!(err.len() < 4000, "{} bytes", err.len());
+        assert!(err.contains("of 40 tasks"), "{err}");
+        assert!(err.contains("task 1 (frame 1 and every 40 after it): frames 41, 81, "), "{err}");
+        assert!(err.contains(", and 2487 more missing"), "{err}");
+        assert!(err.ends_with("\n  and 28 more"), "{err}");
     }
 }
