@@ -211,37 +211,68 @@ impl Checkpoint {
 /// ranges; the result starts at the lowest first sample. Its samples may have gaps: the second
 /// value is the end of the last range (`first_sample + film.spp` when there are none).
 pub fn merge(parts: &[Checkpoint]) -> Result<(Checkpoint, u32), String> {
-    let mut order: Vec<&Checkpoint> = parts.iter().collect();
-    order.sort_by_key(|c| c.first_sample);
-    let first = *order.first().ok_or("nothing to merge")?;
-    let mut out = Checkpoint { film: Film::new(first.film.width, first.film.height), ..first.clone() };
-    let mut end = first.first_sample;
-    for c in order {
+    let mut m = Merger::default();
+    for c in parts {
+        m.add(c.clone())?;
+    }
+    m.finish()
+}
+
+/// [`merge`] as the parts come, one at a time: what it holds is the sum so far and each part's
+/// sample range, so that 64 shares of a 4K frame cost the memory of two, not 64. The sums are
+/// integers ([`Film`]'s fixed point), so the order the parts come in does not change a bit.
+#[derive(Default)]
+pub struct Merger {
+    sum: Option<Checkpoint>,
+    /// Each part's samples, as `first..end`.
+    ranges: Vec<(u32, u32)>,
+}
+
+impl Merger {
+    /// Adds a part: refused if it is of another render than the first part added.
+    pub fn add(&mut self, c: Checkpoint) -> Result<(), String> {
         let range = |c: &Checkpoint| format!("samples {}..{}", c.first_sample, c.first_sample + c.film.spp);
-        let why = if c.key != first.key {
-            Some(mismatch(&range(c), &c.settings, &range(first), &first.settings))
-        } else if c.target_spp != first.target_spp {
-            Some(format!("started for {} and {} samples per pixel", c.target_spp, first.target_spp))
-        } else if (c.film.width, c.film.height) != (first.film.width, first.film.height) {
-            let (a, b) = (&c.film, &first.film);
+        let Some(sum) = &mut self.sum else {
+            self.ranges.push((c.first_sample, c.first_sample + c.film.spp));
+            self.sum = Some(c);
+            return Ok(());
+        };
+        let (first, _) = self.ranges[0];
+        let first = format!("samples {first}..{}", self.ranges[0].1);
+        let why = if c.key != sum.key {
+            Some(mismatch(&range(&c), &c.settings, &first, &sum.settings))
+        } else if c.target_spp != sum.target_spp {
+            Some(format!("started for {} and {} samples per pixel", c.target_spp, sum.target_spp))
+        } else if (c.film.width, c.film.height) != (sum.film.width, sum.film.height) {
+            let (a, b) = (&c.film, &sum.film);
             Some(format!("images of {}x{} and {}x{}", a.width, a.height, b.width, b.height))
         } else {
             None
         };
         if let Some(why) = why {
-            return Err(format!("{} are of another render than {}: {why}", range(c), range(first)));
+            return Err(format!("{} are of another render than {first}: {why}", range(&c)));
         }
-        if c.first_sample < end {
-            return Err(format!(
-                "samples {}..{} overlap samples before {end}: each sample must come from one part",
-                c.first_sample,
-                c.first_sample + c.film.spp
-            ));
-        }
-        end = c.first_sample + c.film.spp;
-        out.film.merge(&c.film);
+        self.ranges.push((c.first_sample, c.first_sample + c.film.spp));
+        sum.first_sample = sum.first_sample.min(c.first_sample);
+        sum.film.merge(&c.film);
+        Ok(())
     }
-    Ok((out, end))
+
+    /// The merged checkpoint and the end of its last range, once no two parts' samples overlap.
+    pub fn finish(mut self) -> Result<(Checkpoint, u32), String> {
+        let sum = self.sum.ok_or("nothing to merge")?;
+        self.ranges.sort_unstable();
+        let mut end = self.ranges[0].0;
+        for &(first, last) in &self.ranges {
+            if first < end {
+                return Err(format!(
+                    "samples {first}..{last} overlap samples before {end}: each sample must come from one part"
+                ));
+            }
+            end = last;
+        }
+        Ok((sum, end))
+    }
 }
 
 #[cfg(test)]

@@ -28,8 +28,12 @@ pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
             p.display()
         ));
     }
-    let loaded = parts.iter().map(|p| Checkpoint::load(p)).collect::<Result<Vec<_>, _>>()?;
-    let (merged, hi) = checkpoint::merge(&loaded)?;
+    // One part in memory at a time, added to the sum as it is read.
+    let mut merger = checkpoint::Merger::default();
+    for p in parts {
+        merger.add(Checkpoint::load(p)?)?;
+    }
+    let (merged, hi) = merger.finish()?;
     let f = &merged.film;
     io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() })?;
     let lo = merged.first_sample;
