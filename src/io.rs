@@ -194,23 +194,83 @@ pub fn srgb8(img: &LinearImage) -> (Vec<u8>, usize) {
     (data, clamped)
 }
 
-/// Writes an animated GIF (sRGB, clamped, 256 colours per frame) played at `fps`, atomically.
-pub fn write_gif(path: &Path, frames: &[LinearImage], fps: f32) -> Result<(), String> {
-    use image::codecs::gif::{GifEncoder, Repeat};
-    let err = |e: image::ImageError| format!("{}: {e}", path.display());
-    let mut bytes = Vec::new();
-    {
-        let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(Repeat::Infinite).map_err(err)?;
-        let delay = image::Delay::from_numer_denom_ms(1000, fps.max(1e-3).round().max(1.0) as u32);
-        for f in frames {
-            let (rgb, _) = srgb8(f);
-            let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect();
-            let buf = image::RgbaImage::from_raw(f.width, f.height, rgba).expect("size");
-            enc.encode_frame(image::Frame::from_parts(buf, 0, 0, delay)).map_err(err)?;
-        }
+/// An animated GIF (sRGB, clamped, 256 colours per frame, played at `fps`, looping) written as
+/// its frames come: each frame is encoded and appended to a temporary file beside the output
+/// at once, so no frame stays in memory; [`GifWriter::finish`] renames it over the output.
+/// Dropped unfinished (an error, an interrupt), it leaves the output as it was.
+pub struct GifWriter {
+    path: PathBuf,
+    tmp: tempfile::NamedTempFile,
+    /// What the encoder wrote since the last frame was appended to `tmp`.
+    spool: std::rc::Rc<std::cell::RefCell<Vec<u8>>>,
+    enc: Option<image::codecs::gif::GifEncoder<Spool>>,
+    fps: f64,
+    frames: u64,
+}
+
+/// The encoder's output, appended to the file after each frame (so that a failed write is
+/// seen where it happens, which a buffered writer dropped at the end would hide).
+struct Spool(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl std::io::Write for Spool {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
     }
-    atomically(path, &bytes)
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl GifWriter {
+    /// Starts the GIF at `path`, played at `fps` (> 0).
+    pub fn create(path: &Path, fps: f32) -> Result<Self, String> {
+        let fail = |e: std::io::Error| format!("{}: cannot write: {e}", path.display());
+        let tmp = temp_beside(path).map_err(fail)?;
+        let spool = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        let mut enc = image::codecs::gif::GifEncoder::new_with_speed(Spool(spool.clone()), 10);
+        enc.set_repeat(image::codecs::gif::Repeat::Infinite)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(Self { path: path.to_owned(), tmp, spool, enc: Some(enc), fps: fps as f64, frames: 0 })
+    }
+
+    /// Appends a frame. GIF delays are whole hundredths of a second: frame i shows from
+    /// round(100 i / fps) to round(100 (i + 1) / fps) (at least one hundredth), so that 24 fps
+    /// alternates 4 and 5 and plays at 24 frames a second on average, not 25.
+    pub fn add(&mut self, img: &LinearImage) -> Result<(), String> {
+        let at = |i: u64| (100.0 * i as f64 / self.fps).round() as u64;
+        let hundredths = (at(self.frames + 1) - at(self.frames)).clamp(1, u16::MAX as u64) as u32;
+        let delay = image::Delay::from_numer_denom_ms(10 * hundredths, 1);
+        let (rgb, _) = srgb8(img);
+        let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect();
+        let buf = image::RgbaImage::from_raw(img.width, img.height, rgba).expect("size");
+        let enc = self.enc.as_mut().expect("frames are added before finish");
+        enc.encode_frame(image::Frame::from_parts(buf, 0, 0, delay))
+            .map_err(|e| format!("{}: {e}", self.path.display()))?;
+        self.frames += 1;
+        self.append()
+    }
+
+    /// Ends the GIF and renames it over the output, synced to the disk.
+    pub fn finish(mut self) -> Result<(), String> {
+        // The encoder writes the trailer when dropped.
+        drop(self.enc.take());
+        self.append()?;
+        let fail = |e: std::io::Error| format!("{}: cannot write: {e}", self.path.display());
+        self.tmp.as_file().sync_all().map_err(fail)?;
+        self.tmp.persist(&self.path).map_err(|e| fail(e.error))?;
+        Ok(())
+    }
+
+    fn append(&mut self) -> Result<(), String> {
+        use std::io::Write;
+        let bytes = std::mem::take(&mut *self.spool.borrow_mut());
+        // Through the `File`: `NamedTempFile`'s own methods add the temporary file's name to errors.
+        self.tmp
+            .as_file_mut()
+            .write_all(&bytes)
+            .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))
+    }
 }
 
 /// The file's bytes for `path`'s format, and how many pixels a PNG clamped.

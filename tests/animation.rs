@@ -197,6 +197,8 @@ fn animate_writes_an_animated_gif() {
         "32",
         "--height",
         "24",
+        "--fps",
+        "24",
     ]));
     use image::AnimationDecoder;
     let dec =
@@ -205,6 +207,10 @@ fn animate_writes_an_animated_gif() {
     let frames = dec.into_frames().collect_frames().unwrap();
     assert_eq!(frames.len(), 3);
     assert_eq!(frames[0].buffer().dimensions(), (32, 24));
+    // GIF delays are hundredths of a second: 24 fps alternates 4 and 5 (at 1/24 s each, the
+    // frames end at 4.2, 8.3 and 12.5 hundredths), where one delay of 4 would play at 25.
+    let delays: Vec<(u32, u32)> = frames.iter().map(|f| f.delay().numer_denom_ms()).collect();
+    assert_eq!(delays, [(40, 1), (40, 1), (50, 1)]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

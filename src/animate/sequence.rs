@@ -115,7 +115,11 @@ pub fn run(
     let frames: Vec<u32> = (first..end).filter(|f| (f - first) % shards == shard).collect();
     let total = frames.len() as u32;
     let start = Instant::now();
-    let (mut times, mut skipped, mut images) = (Vec::new(), 0u32, Vec::new());
+    let (mut times, mut skipped) = (Vec::new(), 0u32);
+    let mut gif_out = match gif {
+        true => Some(io::GifWriter::create(Path::new(seq.output), seq.fps)?),
+        false => None,
+    };
     for (i, frame) in frames.into_iter().enumerate() {
         let path = if gif { None } else { Some(frame_path(seq.output, frame)?) };
         if let Some(p) = &path
@@ -144,7 +148,7 @@ pub fn run(
             Some(p) => {
                 io::write_output(p, &out)?;
             }
-            None => images.push(out.img),
+            None => gif_out.as_mut().expect("a GIF's writer").add(&out.img)?,
         }
         let secs = t0.elapsed().as_secs_f64();
         tracing::info!(frame, update_ms = update.as_secs_f64() * 1e3, "frame rendered in {secs:.2} s");
@@ -157,8 +161,9 @@ pub fn run(
             eprintln!("frame {}/{total} ({frame}): {what} in {secs:.2} s; ETA {eta:.1} s", i + 1);
         }
     }
-    if gif && !images.is_empty() {
-        io::write_gif(Path::new(seq.output), &images, seq.fps)?;
+    // A GIF of no frame (all of them outside the range) is not written.
+    if let Some(out) = gif_out.filter(|_| !times.is_empty()) {
+        out.finish()?;
     }
     // A fold from +0 (an empty f64 sum is -0.0, printed as -0.00).
     let sum = times.iter().fold(0.0, |a, t| a + t.1);
