@@ -8,7 +8,7 @@
 //! [`ParseScope`], checks every name against them while the parser still knows where that
 //! name stands, and reads the image and mesh files.
 
-use std::any::Any;
+use std::any::{Any, TypeId};
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -38,10 +38,11 @@ struct Context {
     textures_before: Option<usize>,
     /// The index of the object being parsed, while inside `objects` (errors name it).
     object: Option<usize>,
-    /// Meshes read so far in this parse, by path: each file is read once and shared. Their type
-    /// (the scene's `MeshData`) is not named here, so that this module depends on nothing
-    /// else of the engine.
-    meshes: HashMap<PathBuf, Arc<dyn Any + Send + Sync>>,
+    /// Files read so far in this parse (meshes, images), by path and by the type they were
+    /// read as: each file is read once and shared. The types (the scene's `MeshData`, a
+    /// texture's image) are not named here, so that this module depends on nothing else of the
+    /// engine.
+    files: HashMap<(PathBuf, TypeId), Arc<dyn Any + Send + Sync>>,
 }
 
 thread_local! {
@@ -100,12 +101,13 @@ pub(crate) fn take_current_object() -> Option<usize> {
     with(|c| c.object.take())
 }
 
-/// The mesh of the file at `path` read earlier in this parse (as the type it was kept as).
-pub(crate) fn mesh<T: Any + Send + Sync>(path: &Path) -> Option<Arc<T>> {
-    with(|c| c.meshes.get(path).cloned()).and_then(|m| m.downcast().ok())
+/// What was read from the file at `path` earlier in this parse, as a `T`.
+pub(crate) fn read_before<T: Any + Send + Sync>(path: &Path) -> Option<Arc<T>> {
+    let key = (path.to_owned(), TypeId::of::<T>());
+    with(|c| c.files.get(&key).cloned()).and_then(|m| m.downcast().ok())
 }
 
-/// Keeps the mesh read from `path` for later objects naming it.
-pub(crate) fn keep_mesh<T: Any + Send + Sync>(path: PathBuf, mesh: Arc<T>) {
-    with(|c| c.meshes.insert(path, mesh));
+/// Keeps what was read from `path` for later uses of the file in this parse.
+pub(crate) fn keep<T: Any + Send + Sync>(path: PathBuf, read: Arc<T>) {
+    with(|c| c.files.insert((path, TypeId::of::<T>()), read));
 }

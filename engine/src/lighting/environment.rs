@@ -244,7 +244,7 @@ impl EnvironmentMap {
     /// [`TextureImage::load`] and its bounds on reads and decoding.
     pub fn load(path: &Path, scale: f32, rotate_degrees: f32) -> Result<Self, TextureError> {
         let image = TextureImage::load(path)?;
-        Ok(Self::new(image.width, image.height, image.texels, scale, rotate_degrees))
+        Ok(Self::new(image.width, image.height, image.texels(), scale, rotate_degrees))
     }
 
     /// Width in texels.

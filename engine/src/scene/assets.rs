@@ -50,11 +50,11 @@ impl<'de> Deserialize<'de> for MeshPath {
             return Ok(MeshPath { full: path.clone(), path, source: MeshSource::Unread });
         };
         let full = dir.join(&path);
-        if let Some(source) = context::mesh::<MeshSource>(&full) {
+        if let Some(source) = context::read_before::<MeshSource>(&full) {
             return Ok(MeshPath { path, full, source: (*source).clone() });
         }
         let source = read_mesh_file(&full).map_err(D::Error::custom)?;
-        context::keep_mesh(full.clone(), Arc::new(source.clone()));
+        context::keep(full.clone(), Arc::new(source.clone()));
         Ok(MeshPath { path, full, source })
     }
 }

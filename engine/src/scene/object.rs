@@ -243,11 +243,11 @@ fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Erro
         }
         MeshSource::Serialized(file) => {
             let key = full.join(format!("#{}", d.shape_index));
-            match crate::format::context::mesh(&key) {
+            match crate::format::context::read_before(&key) {
                 Some(m) => m,
                 None => {
                     let m = Arc::new(file.mesh(d.shape_index as usize, &full).map_err(A::Error::custom)?);
-                    crate::format::context::keep_mesh(key, m.clone());
+                    crate::format::context::keep(key, m.clone());
                     m
                 }
             }
@@ -261,7 +261,7 @@ fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Erro
     // One changed copy per file, mesh and options, shared by the objects that ask for it (one
     // BLAS).
     let key = full.join(format!("#{}#{face_normals}#{}#{flip_v}", d.shape_index, d.flip_normals));
-    let cached = crate::format::context::mesh(&key);
+    let cached = crate::format::context::read_before(&key);
     let mesh = cached.unwrap_or_else(|| {
         let mut m = (*mesh).clone();
         if face_normals {
@@ -275,7 +275,7 @@ fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Erro
             m.normals.iter_mut().flatten().for_each(|n| *n = -*n);
         }
         let m = Arc::new(m);
-        crate::format::context::keep_mesh(key, m.clone());
+        crate::format::context::keep(key, m.clone());
         m
     });
     Ok(MeshFile { path, mesh })

@@ -40,7 +40,7 @@ struct ImageFields {
 impl From<ImageFields> for Image {
     fn from(f: ImageFields) -> Self {
         let mut file = f.file;
-        if f.raw && file.image.srgb8 {
+        if f.raw && file.image.srgb8() {
             file.image = Arc::new(file.image.undecoded());
         }
         Image { file, wrap: f.wrap, filter: f.filter, uv_transform: f.uv_transform }
@@ -59,11 +59,20 @@ pub struct ImageFile {
 impl<'de> Deserialize<'de> for ImageFile {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
-        let image = match context::scene_dir() {
-            Some(dir) => TextureImage::load(&dir.join(&path)).map_err(D::Error::custom)?,
-            None => TextureImage::default(),
+        let Some(dir) = context::scene_dir() else {
+            return Ok(ImageFile { path, image: Arc::default() });
         };
-        Ok(ImageFile { path, image: Arc::new(image) })
+        // Read once however many textures and maps name the file.
+        let full = dir.join(&path);
+        let image = match context::read_before::<TextureImage>(&full) {
+            Some(image) => image,
+            None => {
+                let image = Arc::new(TextureImage::load(&full).map_err(D::Error::custom)?);
+                context::keep(full, image.clone());
+                image
+            }
+        };
+        Ok(ImageFile { path, image })
     }
 }
 

@@ -116,18 +116,38 @@ impl<'de> serde::Deserialize<'de> for UvTransform {
     }
 }
 
-/// A decoded image in linear RGB, row 0 on top.
+/// A decoded image, row 0 on top. An 8-bit file keeps its codes, 3 bytes a texel, read through
+/// a 256-entry table ([`srgb8_table`], or code / 255 for a raw one): a 16384 x 16384 PNG holds
+/// 768 MiB, not the 3 GiB of `f32` RGB, and its decoded and raw views share them. Float files
+/// are linear RGB.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct TextureImage {
     /// Width in texels.
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// Row-major linear RGB texels.
-    pub texels: Vec<Vec3>,
-    /// The texels were decoded from an 8-bit file through [`srgb8_table`] (so
-    /// [`Self::undecoded`] can give back the file's values).
-    pub srgb8: bool,
+    texels: Texels,
+}
+
+/// The texels of a [`TextureImage`], row-major.
+#[derive(Clone, Debug, PartialEq)]
+enum Texels {
+    /// An 8-bit file's codes, R, G, B for each texel, and the linear value of each code.
+    Codes { codes: Arc<Vec<u8>>, table: &'static [f32; 256] },
+    /// Linear RGB.
+    Linear(Vec<Vec3>),
+}
+
+impl Default for Texels {
+    fn default() -> Self {
+        Texels::Linear(Vec::new())
+    }
+}
+
+/// The values code / 255 of the 256 8-bit codes (a raw image's).
+fn unit8_table() -> &'static [f32; 256] {
+    static TABLE: OnceLock<[f32; 256]> = OnceLock::new();
+    TABLE.get_or_init(|| std::array::from_fn(|i| i as f32 / 255.0))
 }
 
 /// The linear values of the 256 8-bit sRGB codes, strictly increasing.
@@ -158,40 +178,81 @@ impl TextureImage {
     /// A decoded image's texels (as [`Self::load`] reads them); `path` names it in errors.
     pub fn from_image(img: ::image::DynamicImage, path: &Path) -> Result<Self, TextureError> {
         let (width, height) = (img.width(), img.height());
+        if width == 0 || height == 0 {
+            return Err(TextureError::Empty(path.to_owned()));
+        }
         let float =
             matches!(img, ::image::DynamicImage::ImageRgb32F(_) | ::image::DynamicImage::ImageRgba32F(_));
         let texels = match float {
             // A float file may hold NaN, infinities or negative values: they read as 0.
-            true => img
-                .into_rgb32f()
-                .pixels()
-                .map(|p| Vec3::from_array(p.0.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
-                .collect(),
-            false => {
-                let lut = srgb8_table();
-                img.into_rgb8()
+            true => Texels::Linear(
+                img.into_rgb32f()
                     .pixels()
-                    .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
-                    .collect()
-            }
+                    .map(|p| Vec3::from_array(p.0.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })))
+                    .collect(),
+            ),
+            false => Texels::Codes { codes: Arc::new(img.into_rgb8().into_raw()), table: srgb8_table() },
         };
-        if width == 0 || height == 0 {
-            return Err(TextureError::Empty(path.to_owned()));
-        }
-        Ok(Self { width, height, texels, srgb8: !float })
+        Ok(Self { width, height, texels })
+    }
+
+    /// A `width` x `height` image of linear RGB `texels` (row-major, the top row first).
+    ///
+    /// # Panics
+    /// If `texels.len() != width * height`.
+    pub fn linear(width: u32, height: u32, texels: Vec<Vec3>) -> Self {
+        assert_eq!(texels.len(), width as usize * height as usize, "{width} x {height} texels expected");
+        Self { width, height, texels: Texels::Linear(texels) }
+    }
+
+    /// Whether the texels are an 8-bit file's, sRGB-decoded.
+    pub fn srgb8(&self) -> bool {
+        matches!(self.texels, Texels::Codes { table, .. } if std::ptr::eq(table, srgb8_table()))
     }
 
     /// The image without the sRGB decoding of an 8-bit file: each texel the file's code / 255
-    /// (Mitsuba's `raw`). The table is strictly increasing, so each decoded value names its
-    /// code exactly. A float image is returned as it is.
+    /// (Mitsuba's `raw`), sharing the codes. A float image is returned as it is.
     pub fn undecoded(&self) -> Self {
-        if !self.srgb8 {
-            return self.clone();
+        let texels = match &self.texels {
+            Texels::Codes { codes, .. } => Texels::Codes { codes: codes.clone(), table: unit8_table() },
+            linear => linear.clone(),
+        };
+        Self { width: self.width, height: self.height, texels }
+    }
+
+    /// Texel `i` (row-major), linear RGB.
+    #[inline]
+    pub fn texel(&self, i: usize) -> Vec3 {
+        match &self.texels {
+            Texels::Codes { codes, table } => {
+                let c = &codes[3 * i..3 * i + 3];
+                Vec3::new(table[c[0] as usize], table[c[1] as usize], table[c[2] as usize])
+            }
+            Texels::Linear(t) => t[i],
         }
-        let lut = srgb8_table();
-        let code = |c: f32| lut.partition_point(|&x| x < c) as f32 / 255.0;
-        let texels = self.texels.iter().map(|t| Vec3::new(code(t.x), code(t.y), code(t.z))).collect();
-        Self { width: self.width, height: self.height, texels, srgb8: false }
+    }
+
+    /// All texels, row-major, linear RGB.
+    pub fn texels(&self) -> Vec<Vec3> {
+        (0..self.len()).map(|i| self.texel(i)).collect()
+    }
+
+    /// The number of texels.
+    pub fn len(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Whether the image has no texels (only the default one).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The bytes its texels take.
+    pub fn texel_bytes(&self) -> usize {
+        match &self.texels {
+            Texels::Codes { codes, .. } => codes.len(),
+            Texels::Linear(t) => std::mem::size_of_val(t.as_slice()),
+        }
     }
 
     /// The image at `uv` read through `filter`.
@@ -212,7 +273,7 @@ impl TextureImage {
         // Bounded as in `bilinear`; NaN reads texel 0.
         let x = (uv.x * w as f32).clamp(-2.1e9, 2.1e9).floor() as i64;
         let y = ((1.0 - uv.y) * h as f32).clamp(-2.1e9, 2.1e9).floor() as i64;
-        self.texels[(wrap_index(y, h, wrap) * w + wrap_index(x, w, wrap)) as usize]
+        self.texel((wrap_index(y, h, wrap) * w + wrap_index(x, w, wrap)) as usize)
     }
 
     /// Bilinear lookup at `uv` (texel centres at (i + 0.5) / size).
@@ -228,7 +289,7 @@ impl TextureImage {
         let (x0, y0) = (x0 as i64, y0 as i64);
         let texel = |i: i64, j: i64| {
             let (i, j) = (wrap_index(i, w, wrap), wrap_index(j, h, wrap));
-            self.texels[(j * w + i) as usize]
+            self.texel((j * w + i) as usize)
         };
         let top = texel(x0, y0).lerp(texel(x0 + 1, y0), fx);
         let bottom = texel(x0, y0 + 1).lerp(texel(x0 + 1, y0 + 1), fx);
@@ -237,7 +298,7 @@ impl TextureImage {
 
     /// Mean texel.
     pub fn mean(&self) -> Vec3 {
-        self.texels.iter().copied().sum::<Vec3>() / self.texels.len() as f32
+        (0..self.len()).map(|i| self.texel(i)).sum::<Vec3>() / self.len() as f32
     }
 }
 
@@ -594,12 +655,7 @@ mod tests {
     #[test]
     fn bilinear_wraps_and_runs_v_upwards() {
         // 2 x 2: top row red, green; bottom row blue, white.
-        let img = TextureImage {
-            width: 2,
-            height: 2,
-            texels: vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE],
-            srgb8: false,
-        };
+        let img = TextureImage::linear(2, 2, vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]);
         // Texel centres: (0.25, 0.75) is the top-left texel.
         assert_eq!(img.bilinear(Vec2::new(0.25, 0.75), Wrap::Repeat), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(0.75, 0.25), Wrap::Repeat), Vec3::ONE);
@@ -615,7 +671,7 @@ mod tests {
     /// A 4 x 2 image whose texel in column i, row j (from the top) is (i, j, 0).
     fn grid() -> TextureImage {
         let texels = (0..2).flat_map(|j| (0..4).map(move |i| Vec3::new(i as f32, j as f32, 0.0))).collect();
-        TextureImage { width: 4, height: 2, texels, srgb8: false }
+        TextureImage::linear(4, 2, texels)
     }
 
     /// Mitsuba's nearest lookup (Dr.Jit's `tex_eval`): texel (floor(u w), floor(v h)) of its uv,
@@ -694,14 +750,62 @@ mod tests {
     fn raw_gives_back_the_eight_bit_codes() {
         let codes = ::image::RgbImage::from_fn(256, 1, |i, _| ::image::Rgb([i as u8, 255 - i as u8, 7]));
         let img = TextureImage::from_image(codes.into(), Path::new("codes.png")).unwrap();
-        assert!(img.srgb8);
+        assert!(img.srgb8());
         let raw = img.undecoded();
-        for (i, t) in raw.texels.iter().enumerate() {
+        assert!(!raw.srgb8());
+        for (i, t) in raw.texels().iter().enumerate() {
             assert_eq!(*t, Vec3::new(i as f32 / 255.0, (255 - i) as f32 / 255.0, 7.0 / 255.0), "code {i}");
         }
+        // 3 bytes a texel, shared by the two views.
+        assert_eq!((img.texel_bytes(), raw.texel_bytes()), (3 * 256, 3 * 256));
         // Float images are linear already.
-        let hdr = TextureImage { srgb8: false, ..img.clone() };
+        let hdr = TextureImage::linear(256, 1, img.texels());
         assert_eq!(hdr.undecoded(), hdr);
+    }
+
+    /// An image file named by several textures and the environment is read once: one copy of
+    /// its codes serves them all, raw views included.
+    #[test]
+    fn an_image_named_many_times_is_read_once() {
+        let dir = std::env::temp_dir().join(format!("pathwave-shared-tex-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        ::image::RgbImage::from_pixel(64, 32, ::image::Rgb([188, 128, 0])).save(dir.join("t.png")).unwrap();
+        let path = dir.join("scene.ron");
+        std::fs::write(
+            &path,
+            r#"Scene(
+                camera: (look_from: (0, 0, 1), look_at: (0, 0, 0), vfov: 40),
+                background: Environment(file: "t.png"),
+                textures: {
+                    "a": Image(file: "t.png"),
+                    "b": Image(file: "./t.png", filter: Nearest),
+                    "c": Image(file: "t.png", raw: true),
+                },
+                materials: { "m": Lambertian(albedo: "a"), "n": Lambertian(albedo: "b") },
+                objects: [],
+            )"#,
+        )
+        .unwrap();
+        let desc = crate::scene::load(&path).unwrap();
+        let images: Vec<&TextureImage> = desc
+            .textures
+            .0
+            .iter()
+            .map(|(_, t)| match t {
+                TextureDesc::Image(i) => &*i.file.image,
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        let crate::scene::BackgroundDesc::Environment { file, .. } = &desc.background else { panic!() };
+        let codes = |i: &TextureImage| match &i.texels {
+            Texels::Codes { codes, .. } => Arc::as_ptr(codes),
+            Texels::Linear(_) => panic!("8-bit texels"),
+        };
+        for i in images.iter().chain([&&*file.image]) {
+            assert_eq!(codes(i), codes(images[0]));
+        }
+        assert!(images[0].srgb8() && !images[2].srgb8());
+        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
@@ -711,7 +815,7 @@ mod tests {
         let path = dir.join("grey.png");
         ::image::RgbImage::from_pixel(1, 1, ::image::Rgb([188, 128, 0])).save(&path).unwrap();
         let img = TextureImage::load(&path).unwrap();
-        let t = img.texels[0];
+        let t = img.texel(0);
         // sRGB 188/255 is linear 0.5029 (decoded twice it would be 0.2; not at all, 0.737).
         assert!((t.x - 0.502_886).abs() < 1e-4, "{t}");
         assert!((t.y - srgb_to_linear(128.0 / 255.0)).abs() < 1e-6 && t.z == 0.0);

@@ -133,7 +133,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         BackgroundDesc::Sky { bottom, top } => Background::Sky { bottom: bottom.0, top: top.0 },
         BackgroundDesc::Environment { file, scale, rotate } => {
             let img = &file.image;
-            let texels = img.texels.clone();
+            let texels = img.texels();
             Background::Environment(Arc::new(EnvironmentMap::new(
                 img.width, img.height, texels, scale.0, rotate.0,
             )))
