@@ -3,7 +3,7 @@
 //! as written (see [`RotationTrack`]), so 0 to 720 degrees is two turns. Before the first key a
 //! track holds the first value, after the last the last.
 
-use crate::format::{Direction, Finite, Radiance, V3};
+use crate::format::{Direction, Finite, MAX_EMISSION, Radiance, V3};
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
 
@@ -148,7 +148,55 @@ pub struct RgbTrack(pub Track<Vec3>);
 
 impl<'de> Deserialize<'de> for RgbTrack {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        track(d, |v: Radiance| v.0).map(RgbTrack)
+        let t = RgbTrack(track(d, |v: Radiance| v.0)?);
+        match t.overshoot() {
+            None => Ok(t),
+            Some((time, v, (t0, t1))) => Err(D::Error::custom(format!(
+                "this Smooth curve of emitted radiance reaches {v} at time {time}, between its keys at \
+                 {t0} and {t1}, outside [0, {MAX_EMISSION:e}] (a Catmull-Rom curve overshoots beside a \
+                 step, as keys 5, 0, 0 dip below 0): make the track Linear, or add keys that hold it"
+            ))),
+        }
+    }
+}
+
+impl RgbTrack {
+    /// Where a `Smooth` track leaves [0, [`MAX_EMISSION`]] between its keys (which lie in it):
+    /// the time, the value there and the keys around it. Each channel of a segment is the cubic
+    /// `a s^3 + b s^2 + c s + d` of [`catmull_rom_weights`]; its extremes inside the segment are
+    /// where `3 a s^2 + 2 b s + c` is zero. Values within 1e-6 of the keys' scale of 0 are
+    /// rounding, not overshoot.
+    fn overshoot(&self) -> Option<(f32, f32, (f32, f32))> {
+        let Track { interpolation: Interpolation::Smooth, keys } = &self.0 else { return None };
+        let last = keys.len() - 1;
+        for i in 0..last {
+            let (t0, t1) = (keys[i].0, keys[i + 1].0);
+            let p = [keys[i.saturating_sub(1)].1, keys[i].1, keys[i + 1].1, keys[(i + 2).min(last)].1];
+            for ch in 0..3 {
+                let [p0, p1, p2, p3] = p.map(|v| v[ch] as f64);
+                let a = 0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
+                let b = 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3);
+                let c = 0.5 * (p2 - p0);
+                let value = |s: f64| ((a * s + b) * s + c) * s + p1;
+                let roots = match a.abs() > 1e-12 * (b.abs() + c.abs()) {
+                    true => {
+                        let disc = 4.0 * b * b - 12.0 * a * c;
+                        let r = disc.max(0.0).sqrt();
+                        vec![(-2.0 * b - r) / (6.0 * a), (-2.0 * b + r) / (6.0 * a)]
+                    }
+                    false if b != 0.0 => vec![-c / (2.0 * b)],
+                    false => vec![],
+                };
+                let scale = p0.abs().max(p1.abs()).max(p2.abs()).max(p3.abs());
+                for s in roots.into_iter().filter(|s| *s > 0.0 && *s < 1.0) {
+                    let v = value(s);
+                    if v < -1e-6 * scale || v > MAX_EMISSION as f64 {
+                        return Some((t0 + (t1 - t0) * s as f32, v as f32, (t0, t1)));
+                    }
+                }
+            }
+        }
+        None
     }
 }
 
@@ -301,6 +349,24 @@ pub struct CameraAnimation {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A Smooth emission curve that dips below 0 between its keys (the light switched off:
+    /// keys 5, 0, 0) is refused where it was clamped in silence; the same keys Linear, and
+    /// Smooth keys that do not overshoot, are read.
+    #[test]
+    fn smooth_emission_that_overshoots_is_refused() {
+        let read = |t: &str| ron::from_str::<RgbTrack>(t).map_err(|e| e.to_string());
+        let off = "Smooth([(0, (5, 5, 5)), (1, (0, 0, 0)), (2, (0, 0, 0))])";
+        let e = read(off).unwrap_err();
+        assert!(e.contains("between its keys at 1 and 2"), "{e}");
+        // -2.5 s (1 - s)^2 is least at s = 1/3: -0.370.
+        assert!(e.contains("reaches -0.370"), "{e}");
+        assert!(read(&off.replace("Smooth", "Linear")).is_ok());
+        assert!(read("Smooth([(0, (0, 0, 0)), (1, (5, 5, 5)), (2, (0, 0, 0))])").is_ok());
+        assert!(read("Smooth([(0, (1, 2, 3)), (1, (1, 2, 3))])").is_ok());
+        let high = "Smooth([(0, (0, 0, 0)), (1, (1e10, 0, 0)), (2, (1e10, 0, 0)), (3, (0, 0, 0))])";
+        assert!(read(high).unwrap_err().contains("outside [0, 1e10]"));
+    }
 
     fn lin(keys: &[(f32, f32)]) -> Track<f32> {
         Track { interpolation: Interpolation::Linear, keys: keys.to_vec() }

@@ -106,6 +106,7 @@ pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials
     let t = 0.5 * (time.open + time.close);
     let mut changed = false;
     for (id, track) in &keys.0 {
+        // Curves that leave [0, MAX_EMISSION] are refused at load: this is rounding.
         let new = track.at(t).max(Vec3::ZERO);
         let m = &mut materials.bypass_change_detection().0[*id as usize];
         if m.emission().is_some_and(|e| e.emit != new) {
