@@ -618,8 +618,8 @@ fn a_frame_checkpoint_of_another_shutter_is_refused() {
 /// A frame that is not the scene the file asks for fails, naming why, instead of rendering
 /// something else with exit code 0: an animated camera the loader would refuse (look_from
 /// reaching look_at, a Smooth vfov overshooting below zero between keys), an object animated
-/// beyond 1e15, a shutter that carries a moving object to infinity. Each rendered black or
-/// clamped in silence before.
+/// beyond 1e15 (an instanced mesh too), a shutter that carries a moving object to infinity.
+/// Each rendered black or clamped in silence before.
 #[test]
 fn frames_the_scene_does_not_describe_fail() {
     let dir = temp("bad-frames");
@@ -635,6 +635,7 @@ fn frames_the_scene_does_not_describe_fail() {
         )
     };
     let still = "look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40";
+    std::fs::write(dir.join("t.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     let cases = [
         (
             "look_from reaches look_at",
@@ -654,6 +655,13 @@ fn frames_the_scene_does_not_describe_fail() {
             scene(still, ", animate: (translate: Linear([(0, (0, 0, 0)), (1, (1e16, 0, 0))]))", ""),
             "1",
             "objects[0]",
+        ),
+        (
+            "instanced mesh animated away",
+            scene(still, ", animate: (translate: Linear([(0, (0, 0, 0)), (1, (1e16, 0, 0))]))", "")
+                .replace("Sphere(center: (0, 0, 0), radius: 1)", r#"Mesh(file: "t.obj")"#),
+            "1",
+            "objects[0]: its placement carries it beyond 1e15 units",
         ),
         (
             "moving object, endless shutter",

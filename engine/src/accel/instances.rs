@@ -123,6 +123,17 @@ impl ShutterMotion {
 }
 
 impl Instance {
+    /// World bounds over the `shutter` interval of the instance of a mesh whose object-space
+    /// bounds are `object`.
+    pub fn world_bounds(&self, object: &Aabb, shutter: (f32, f32)) -> Aabb {
+        if let Some(m) = &self.motion {
+            return m.bounds(object);
+        }
+        let b = transform_box(object, &self.world_from_object);
+        let (a, c) = (self.velocity * shutter.0, self.velocity * shutter.1);
+        Aabb { min: b.min + a.min(c), max: b.max + a.max(c) }
+    }
+
     /// True when the instance does not move while the shutter is open.
     fn is_still(&self) -> bool {
         self.motion.is_none() && self.velocity == Vec3A::ZERO
@@ -205,12 +216,7 @@ impl Instances {
     /// World bounds of instance `i` over the shutter interval.
     pub fn world_bounds(&self, i: usize) -> Aabb {
         let inst = &self.list[i];
-        if let Some(m) = &inst.motion {
-            return m.bounds(&self.blas[inst.blas as usize].bounds());
-        }
-        let b = transform_box(&self.blas[inst.blas as usize].bounds(), &inst.world_from_object);
-        let (a, c) = (inst.velocity * self.shutter.0, inst.velocity * self.shutter.1);
-        Aabb { min: b.min + a.min(c), max: b.max + a.max(c) }
+        inst.world_bounds(&self.blas[inst.blas as usize].bounds(), self.shutter)
     }
 
     /// Replaces the placement of instance `i` (call [`Self::refit`] after the last one).

@@ -143,6 +143,9 @@ pub struct SceneGeometry {
     /// For each primitive (in the geometry's order), the rank in `entities` of the object it
     /// belongs to.
     pub objects: Vec<u32>,
+    /// Why objects were left out of the last build: reported in [`FrameErrors`] by every
+    /// update until a build has them back, not only by the one that left them out.
+    pub left_out: Vec<String>,
 }
 
 /// The world-space media volumes, rebuilt by [`rebuild_media`](super::rebuild_media).
@@ -200,6 +203,8 @@ pub struct SceneInstances {
     pub builds: u64,
     /// How many times it was refitted instead.
     pub refits: u64,
+    /// Why instanced objects were left out of the last build (as [`SceneGeometry::left_out`]).
+    pub left_out: Vec<String>,
 }
 
 /// The latest extracted scene.

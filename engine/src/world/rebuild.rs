@@ -54,8 +54,10 @@ pub fn rebuild_geometry(
     // The shutter bounds the sweep of moving objects.
     let moving = out.geometry.velocity.is_some();
     if !(removed || !changed.is_empty() || (moving && camera.is_changed()) || out.rebuilds == 0) {
+        errors.0.extend(out.left_out.iter().cloned());
         return;
     }
+    out.left_out.clear();
     let _span = tracing::info_span!("rebuild_geometry").entered();
     let start = std::time::Instant::now();
     let mut objs: Vec<_> = objects.iter().collect();
@@ -84,15 +86,13 @@ pub fn rebuild_geometry(
         });
         if let Err(e) = placed {
             prims.truncate(start);
-            errors.0.push(match index {
-                Some(i) => format!("objects[{}]: {e}", i.0),
-                None => format!("an object: {e}"),
-            });
+            out.left_out.push(named(index, &e));
         }
         mats.resize(prims.len(), material.0);
         velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
         object.resize(prims.len(), k as u32);
     }
+    errors.0.extend(out.left_out.iter().cloned());
     let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
     out.objects = geometry.source.iter().map(|&i| object[i as usize]).collect();
     tracing::info!(
@@ -105,6 +105,14 @@ pub fn rebuild_geometry(
     out.rebuilds += 1;
 }
 
+/// Why the object `index` (of the scene file's `objects`, when it came from there) is left out.
+fn named(index: Option<&ObjectIndex>, why: &str) -> String {
+    match index {
+        Some(i) => format!("objects[{}]: {why}", i.0),
+        None => format!("an object: {why}"),
+    }
+}
+
 /// Keeps the instances: the TLAS is rebuilt when instances come or go or change mesh or
 /// material (building the BLAS of a mesh no instance used before), refitted when they only
 /// move (or rebuilt when refitting made it much worse), and left alone otherwise. A BLAS is
@@ -115,7 +123,7 @@ pub fn update_instances(
     mut out: ResMut<SceneInstances>,
     mut library: ResMut<MeshLibrary>,
     objects: Query<
-        (Entity, &Transform, &Shape, &MaterialId, Option<&Motion>, Option<&Animated>),
+        (Entity, &Transform, &Shape, &MaterialId, Option<&Motion>, Option<&Animated>, Option<&ObjectIndex>),
         With<Instanced>,
     >,
     reshaped: Query<(), (With<Instanced>, Or<(Added<Instanced>, Changed<Shape>, Changed<MaterialId>)>)>,
@@ -126,6 +134,7 @@ pub fn update_instances(
     mut stopped: RemovedComponents<Motion>,
     camera: Res<CameraParams>,
     time: Res<FrameTime>,
+    mut errors: ResMut<FrameErrors>,
 ) {
     // Keyframed instances that turn or scale while the shutter is open are placed per ray
     // time; translation alone is the exact linear motion of `Motion`.
@@ -141,38 +150,59 @@ pub fn update_instances(
         let a1 = Affine3A { translation: a1.translation + v * t1, ..a1 };
         ShutterMotion::new(a.base, a0, a1, (t0, t1))
     };
+    let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
+    // An instance as placed, or why it cannot be: a singular transform, or a placement that
+    // carries it beyond the world's bounds while the shutter is open.
+    let (t0, t1) = camera.0.shutter;
+    let place = |b: &MeshBlas, blas: u32, t: &Transform, m: &MaterialId, v: Option<&Motion>, a| {
+        let inst = Instance::new(blas, t.0, m.0, velocity(v))
+            .ok_or("its transform is singular or not finite")?
+            .with_motion(shutter_motion(a));
+        let w = inst.world_bounds(&b.bounds(), camera.0.shutter);
+        match w.min.abs().max(w.max.abs()).max_element() <= MAX_COORDINATE {
+            true => Ok(inst),
+            false => Err(format!(
+                "its placement carries it beyond {MAX_COORDINATE:e} units from the origin within the shutter ({t0}, {t1})"
+            )),
+        }
+    };
     let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
     let gone = removed_shape.read().chain(removed_material.read()).chain(removed.read()).any(was_built_from);
     let stopped: Vec<Entity> = stopped.read().filter(|e| was_built_from(*e)).collect();
     let moving = !out.instances.still();
-    let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
-    if gone || !reshaped.is_empty() || out.builds == 0 {
+    // An instance moved where it cannot be, or back from where it could not be: the TLAS is
+    // built again, leaving out (and reporting) what cannot be placed.
+    let misplaced = moved.iter().any(|e| {
+        let Ok((_, transform, shape, material, motion, anim, _)) = objects.get(e) else { return false };
+        let Form::Mesh(mesh) = &shape.0 else { return false };
+        !was_built_from(e) || place(&library.get(mesh), 0, transform, material, motion, anim).is_err()
+    });
+    if gone || !reshaped.is_empty() || out.builds == 0 || misplaced {
+        out.left_out.clear();
         let _span = tracing::info_span!("rebuild_instances").entered();
         let start = std::time::Instant::now();
         let mut objs: Vec<_> = objects.iter().collect();
         objs.sort_by_key(|(e, ..)| *e);
         let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
-        for (e, transform, shape, material, motion, anim) in objs {
+        for (e, transform, shape, material, motion, anim, object) in objs {
             let Form::Mesh(mesh) = &shape.0 else {
-                tracing::error!("instance skipped: only meshes are instanced");
+                out.left_out.push(named(object, "only meshes are instanced"));
                 continue;
             };
             let b = library.get(mesh);
-            let index = match blas.iter().position(|x| Arc::ptr_eq(x, &b)) {
-                Some(i) => i,
-                None => {
-                    blas.push(b);
-                    blas.len() - 1
-                }
-            };
-            match Instance::new(index as u32, transform.0, material.0, velocity(motion)) {
-                Some(inst) => {
-                    list.push(inst.with_motion(shutter_motion(anim)));
+            let index = blas.iter().position(|x| Arc::ptr_eq(x, &b)).unwrap_or(blas.len());
+            match place(&b, index as u32, transform, material, motion, anim) {
+                Ok(inst) => {
+                    if index == blas.len() {
+                        blas.push(b);
+                    }
+                    list.push(inst);
                     entities.push(e);
                 }
-                None => tracing::error!("instance skipped: its transform is singular"),
+                Err(why) => out.left_out.push(named(object, &why)),
             }
         }
+        errors.0.extend(out.left_out.iter().cloned());
         // Meshes no instance uses any more are dropped.
         library.blas.retain(|_, b| blas.iter().any(|x| Arc::ptr_eq(x, b)));
         out.instances = Arc::new(Instances::build(blas, list, camera.0.shutter));
@@ -188,6 +218,7 @@ pub fn update_instances(
         out.builds += 1;
         return;
     }
+    errors.0.extend(out.left_out.iter().cloned());
     // A new shutter changes the sweep of whatever moves: a refit covers it.
     let new_shutter = moving && camera.is_changed();
     if moved.is_empty() && stopped.is_empty() && !new_shutter {
@@ -200,10 +231,9 @@ pub fn update_instances(
     instances.shutter = camera.0.shutter;
     for e in moved.iter().chain(stopped) {
         let Ok(i) = out.entities.binary_search(&e) else { continue };
-        let Ok((_, transform, _, _, motion, anim)) = objects.get(e) else { continue };
-        if !instances.place(i, transform.0, velocity(motion), shutter_motion(anim)) {
-            tracing::error!("instance not moved: its new transform is singular");
-        }
+        let Ok((_, transform, _, _, motion, anim, _)) = objects.get(e) else { continue };
+        // Checked above: a placement that fails rebuilds instead.
+        instances.place(i, transform.0, velocity(motion), shutter_motion(anim));
     }
     let how = if instances.refit() {
         out.refits += 1;
