@@ -517,6 +517,18 @@ fn log_levels_follow_quiet_and_verbose() {
         assert!(loud.contains(what), "-v lacks {what:?}:\n{loud}");
     }
     assert!(!loud.contains("\u{1b}["), "no colour codes when stderr is not a terminal");
+    // The scene's count of lights is the light table's (it once counted emitting primitives
+    // only, and said lights=0 after "light table built lights=2").
+    let lights = root().join("scenes/lights.ron");
+    let log =
+        run(pathwave().env_remove("RUST_LOG").arg("render").arg(&lights).args(args).arg(&out).arg("-v"));
+    let count = |line: &str| {
+        let line = log.lines().find(|l| l.contains(line)).unwrap_or_else(|| panic!("no {line:?}:\n{log}"));
+        let at = line.find(" lights=").unwrap_or_else(|| panic!("{line}")) + 8;
+        line[at..].split(|c: char| !c.is_ascii_digit()).next().unwrap().parse::<usize>().unwrap()
+    };
+    assert_eq!(count("scene ready"), count("light table built"), "{log}");
+    assert!(count("scene ready") > 1, "{log}");
     // Into a file, progress is a line per pass (three passes of one sample), no bar.
     let passes = ["--spp", "3", "--width", "16", "--height", "16", "--checkpoint-every", "0", "-o"];
     let log = run(pathwave().env_remove("RUST_LOG").arg("render").arg(&scene).args(passes).arg(&out));
