@@ -73,8 +73,18 @@ fn save(path: &Path, text: &str) {
     std::fs::rename(&tmp, path).unwrap();
 }
 
-/// The R, G, B planes of the last image update tev got, and how many packets came.
+/// The R, G, B planes of the last image update tev got, and how many packets came, once they
+/// stopped coming: `watch` hands its images to a thread that sends them, so the last pass may
+/// still be on its way when "done" is printed (for at most tev's 3 s deadline a packet).
 fn shown(received: &Received) -> (Vec<Vec<f32>>, usize) {
+    let count = || received.lock().unwrap().len();
+    let (start, mut last, mut since) = (Instant::now(), count(), Instant::now());
+    while since.elapsed() < Duration::from_millis(300) && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(20));
+        if count() != last {
+            (last, since) = (count(), Instant::now());
+        }
+    }
     let packets = received.lock().unwrap();
     let last = packets.iter().rev().find_map(|p| match p {
         Packet::Update { planes, .. } => Some(planes[..3].to_vec()),
