@@ -1,6 +1,7 @@
 //! Image files: linear float EXR in and out, tone-clamped sRGB PNG out.
 
 use crate::engine::scene::SceneDesc;
+use crate::look::Look;
 use glam::Vec3;
 use image::{ImageBuffer, Rgb, Rgb32FImage, RgbImage};
 use std::path::{Path, PathBuf};
@@ -24,10 +25,11 @@ pub fn read_linear(path: &Path) -> Result<LinearImage, String> {
     Ok(LinearImage { width: img.width(), height: img.height(), pixels })
 }
 
-/// Writes `.exr` (linear float) or `.png` (clamped to [0, 1], sRGB); returns how many pixels a
-/// PNG clamped. The image is encoded in memory, then written with [`atomically`].
-pub fn write(path: &Path, img: &LinearImage) -> Result<usize, String> {
-    let (bytes, clamped) = encode(path, img)?;
+/// Writes `.exr` (linear float) or `.png` (through `look`: an exposure, a view transform, sRGB);
+/// returns how many pixels a PNG clipped. The image is encoded in memory, then written with
+/// [`atomically`].
+pub fn write(path: &Path, img: &LinearImage, look: &Look) -> Result<usize, String> {
+    let (bytes, clamped) = encode(path, img, look)?;
     atomically(path, &bytes)?;
     Ok(clamped)
 }
@@ -177,24 +179,7 @@ fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-/// sRGB 8-bit pixels (clamped to [0, 1]) and how many were clamped: the PNG output's tone
-/// mapping, which the preview window shares.
-pub fn srgb8(img: &LinearImage) -> (Vec<u8>, usize) {
-    let mut clamped = 0;
-    let data = img
-        .pixels
-        .iter()
-        .flat_map(|p| {
-            if p.max_element() > 1.0 {
-                clamped += 1;
-            }
-            p.to_array().map(|c| (srgb_oetf(c.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
-        })
-        .collect();
-    (data, clamped)
-}
-
-/// An animated GIF (sRGB, clamped, 256 colours per frame, played at `fps`, looping) written as
+/// An animated GIF (through a [`Look`], 256 colours per frame, played at `fps`, looping) written as
 /// its frames come: each frame is encoded and appended to a temporary file beside the output
 /// at once, so no frame stays in memory; [`GifWriter::finish`] renames it over the output.
 /// Dropped unfinished (an error, an interrupt), it leaves the output as it was.
@@ -206,6 +191,7 @@ pub struct GifWriter {
     enc: Option<image::codecs::gif::GifEncoder<Spool>>,
     fps: f64,
     frames: u64,
+    look: Look,
 }
 
 /// The encoder's output, appended to the file after each frame (so that a failed write is
@@ -223,15 +209,15 @@ impl std::io::Write for Spool {
 }
 
 impl GifWriter {
-    /// Starts the GIF at `path`, played at `fps` (> 0).
-    pub fn create(path: &Path, fps: f32) -> Result<Self, String> {
+    /// Starts the GIF at `path`, played at `fps` (> 0), its frames through `look`.
+    pub fn create(path: &Path, fps: f32, look: Look) -> Result<Self, String> {
         let fail = |e: std::io::Error| format!("{}: cannot write: {e}", path.display());
         let tmp = temp_beside(path).map_err(fail)?;
         let spool = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
         let mut enc = image::codecs::gif::GifEncoder::new_with_speed(Spool(spool.clone()), 10);
         enc.set_repeat(image::codecs::gif::Repeat::Infinite)
             .map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(Self { path: path.to_owned(), tmp, spool, enc: Some(enc), fps: fps as f64, frames: 0 })
+        Ok(Self { path: path.to_owned(), tmp, spool, enc: Some(enc), fps: fps as f64, frames: 0, look })
     }
 
     /// Appends a frame. GIF delays are whole hundredths of a second: frame i shows from
@@ -241,7 +227,7 @@ impl GifWriter {
         let at = |i: u64| (100.0 * i as f64 / self.fps).round() as u64;
         let hundredths = (at(self.frames + 1) - at(self.frames)).clamp(1, u16::MAX as u64) as u32;
         let delay = image::Delay::from_numer_denom_ms(10 * hundredths, 1);
-        let (rgb, _) = srgb8(img);
+        let (rgb, _) = self.look.srgb8(&img.pixels);
         let rgba: Vec<u8> = rgb.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect();
         let buf = image::RgbaImage::from_raw(img.width, img.height, rgba).expect("size");
         let enc = self.enc.as_mut().expect("frames are added before finish");
@@ -274,7 +260,7 @@ impl GifWriter {
 }
 
 /// The file's bytes for `path`'s format, and how many pixels a PNG clamped.
-fn encode(path: &Path, img: &LinearImage) -> Result<(Vec<u8>, usize), String> {
+fn encode(path: &Path, img: &LinearImage, look: &Look) -> Result<(Vec<u8>, usize), String> {
     let err = |e: image::ImageError| format!("{}: {e}", path.display());
     let mut bytes = std::io::Cursor::new(Vec::new());
     let clamped = match extension(path).as_str() {
@@ -285,7 +271,7 @@ fn encode(path: &Path, img: &LinearImage) -> Result<(Vec<u8>, usize), String> {
             0
         }
         "png" => {
-            let (data, clamped) = srgb8(img);
+            let (data, clamped) = look.srgb8(&img.pixels);
             let buf: RgbImage =
                 ImageBuffer::<Rgb<u8>, _>::from_raw(img.width, img.height, data).expect("size");
             buf.write_to(&mut bytes, image::ImageFormat::Png).map_err(err)?;
@@ -294,11 +280,6 @@ fn encode(path: &Path, img: &LinearImage) -> Result<(Vec<u8>, usize), String> {
         _ => return Err(format!("{}: unknown output format (use .png or .exr)", path.display())),
     };
     Ok((bytes.into_inner(), clamped))
-}
-
-/// The sRGB transfer function (linear to encoded).
-pub fn srgb_oetf(c: f32) -> f32 {
-    if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 }
 }
 
 /// An image as written: the beauty, the layers an EXR carries beside it (AOVs) and the header's
@@ -310,12 +291,14 @@ pub struct Output {
     pub layers: Vec<ExrLayer<'static>>,
     /// String attributes of an EXR's header.
     pub metadata: Vec<(&'static str, String)>,
+    /// How a PNG shows the beauty.
+    pub look: Look,
 }
 
 impl Output {
     /// The beauty alone.
     pub fn plain(img: LinearImage) -> Self {
-        Self { img, layers: Vec::new(), metadata: Vec::new() }
+        Self { img, layers: Vec::new(), metadata: Vec::new(), look: Look::default() }
     }
 }
 
@@ -325,7 +308,7 @@ impl Output {
 /// returns how many pixels a PNG clamped.
 pub fn write_output(path: &Path, out: &Output) -> Result<usize, String> {
     if extension(path) != "exr" || out.layers.is_empty() {
-        return write(path, &out.img);
+        return write(path, &out.img, &out.look);
     }
     let n = out.img.pixels.len();
     let beauty = out.img.pixels.iter().flat_map(|p| [p.x, p.y, p.z, 1.0]).collect();

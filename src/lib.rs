@@ -15,6 +15,7 @@ pub mod denoiser;
 pub mod farm;
 pub mod io;
 pub mod limits;
+pub mod look;
 pub mod merge;
 pub mod metrics;
 pub mod render;

@@ -2,6 +2,7 @@
 
 use crate::checkpoint::{self, Checkpoint};
 use crate::io::{self, LinearImage};
+use crate::look::{Look, LookArgs};
 use std::path::{Path, PathBuf};
 
 /// `pathwave merge`'s flags.
@@ -13,11 +14,14 @@ pub struct MergeCommand {
     /// The image; the extension picks the format.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// How a PNG shows the image.
+    #[command(flatten)]
+    pub look: LookArgs,
 }
 
 /// Merges the checkpoints `parts` (shares of one render's samples) into `output` and, when
 /// they make one run of samples, its checkpoint.
-pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
+pub fn merge(parts: &[PathBuf], output: &Path, look: &Look) -> Result<(), String> {
     let inputs: Vec<&Path> = parts.iter().map(PathBuf::as_path).collect();
     io::check_output(output, &inputs, false)?;
     let ckpt = checkpoint::path_for(output);
@@ -35,7 +39,7 @@ pub fn merge(parts: &[PathBuf], output: &Path) -> Result<(), String> {
     }
     let (merged, hi) = merger.finish()?;
     let f = &merged.film;
-    io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() })?;
+    io::write(output, &LinearImage { width: f.width, height: f.height, pixels: f.mean() }, look)?;
     let lo = merged.first_sample;
     if lo + f.spp == hi {
         merged.save(&ckpt)?;

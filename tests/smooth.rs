@@ -184,7 +184,7 @@ fn terminator(obj: &str, material: &str) -> Terminator {
         for (img, kind) in [(&exact, "sphere"), (&smooth, "mesh")] {
             let image = pathwave::io::LinearImage { width: w as u32, height: h as u32, pixels: img.clone() };
             let path = std::path::Path::new(&out).join(format!("{name}-{kind}.png"));
-            pathwave::io::write(&path, &image).unwrap();
+            pathwave::io::write(&path, &image, &Default::default()).unwrap();
         }
     }
     Terminator { rel_mse: rel_mse(&a, &b), black, dark, inside: a.len(), covered: n_covered }

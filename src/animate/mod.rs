@@ -122,7 +122,8 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     }
     let mut world = SceneWorld::new(&desc);
     let quiet = args.log.quiet;
-    let seq = sequence::Sequence { output, frames, shard, fps, shutter, overwrite: c.overwrite, quiet };
+    let look = args.look.look();
+    let seq = sequence::Sequence { output, frames, shard, fps, shutter, overwrite: c.overwrite, quiet, look };
     // Frames report one line each (from `animate::run`), not a bar or a line per pass.
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
@@ -172,7 +173,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
                 });
             }
         }
-        Ok(io::Output { img: r.img, layers: r.layers, metadata })
+        Ok(io::Output { img: r.img, layers: r.layers, metadata, look: how.look })
     })?;
     if let Some((st, secs, non_finite)) = &total {
         eprintln!("the sequence's frames together:");

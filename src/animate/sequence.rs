@@ -69,6 +69,8 @@ pub struct Sequence<'a> {
     pub overwrite: bool,
     /// No progress lines.
     pub quiet: bool,
+    /// How a GIF's frames look.
+    pub look: crate::look::Look,
 }
 
 /// One frame as `run` hands it to its renderer.
@@ -117,7 +119,7 @@ pub fn run(
     let start = Instant::now();
     let (mut times, mut skipped) = (Vec::new(), 0u32);
     let mut gif_out = match gif {
-        true => Some(io::GifWriter::create(Path::new(seq.output), seq.fps)?),
+        true => Some(io::GifWriter::create(Path::new(seq.output), seq.fps, seq.look)?),
         false => None,
     };
     for (i, frame) in frames.into_iter().enumerate() {

@@ -79,7 +79,7 @@ impl Command {
 pub fn run(command: Command, matches: &clap::ArgMatches) -> Result<(), String> {
     match command {
         Command::Render(c) => render::run(&c),
-        Command::Merge(c) => merge::merge(&c.parts, &c.output),
+        Command::Merge(c) => merge::merge(&c.parts, &c.output, &c.look.look()),
         Command::Watch(args) => watch::run(args),
         Command::Animate(c) => animate::run(&c),
         Command::Farm { farm } => match matches.subcommand_matches("farm") {

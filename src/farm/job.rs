@@ -72,6 +72,9 @@ pub struct MergeArgs {
     /// auto`): check that every one is there.
     #[arg(long, conflicts_with = "parts")]
     pub frames: Option<String>,
+    /// How a PNG of the merged samples shows the image (the render's flags, passed on).
+    #[command(flatten)]
+    pub look: crate::look::LookArgs,
 }
 
 /// What the tasks split.
@@ -311,7 +314,12 @@ impl Job {
         s += &match self.work {
             Work::Samples { spp } => {
                 let parts = sh(utf8(&self.parts())?);
-                format!("exec {exe} farm merge -o {out} --tasks {n} --spp {spp} --parts {parts}\n")
+                // The merged image looks as the render flags say.
+                let look: String = (self.render_args.iter())
+                    .filter(|a| a.starts_with("--exposure=") || a.starts_with("--view-transform="))
+                    .map(|a| format!(" {}", sh(a)))
+                    .collect();
+                format!("exec {exe} farm merge -o {out} --tasks {n} --spp {spp} --parts {parts}{look}\n")
             }
             Work::Frames { first, end } => {
                 format!("exec {exe} farm merge -o {out} --tasks {n} --frames {first}..{end}\n")

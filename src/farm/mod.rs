@@ -53,9 +53,8 @@ pub fn run(command: &FarmCommand, matches: &clap::ArgMatches) -> Result<(), Stri
             None => Err("farm slurm: its flags are not where clap puts them".into()),
         },
         FarmCommand::Merge(m) => match (m.spp, &m.parts, &m.frames) {
-            (Some(spp), Some(parts), _) => {
-                job::check_samples(parts, m.tasks, spp).and_then(|p| merge(&p, Path::new(&m.output)))
-            }
+            (Some(spp), Some(parts), _) => job::check_samples(parts, m.tasks, spp)
+                .and_then(|p| merge(&p, Path::new(&m.output), &m.look.look())),
             (_, _, Some(f)) => shard::parse_range(f, "--frames")
                 .and_then(|f| job::check_frames(&m.output, f, m.tasks))
                 .map(|()| eprintln!("{}: every frame is there", m.output)),

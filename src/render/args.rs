@@ -8,6 +8,7 @@ use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
 use crate::engine::render_scene::SamplerKind;
 use crate::engine::scene::FilterDesc;
+use crate::look::{Look, LookArgs};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
@@ -99,6 +100,9 @@ pub struct RenderArgs {
     /// checkpoint is kept at the end, to add samples later.
     #[arg(long, value_name = "SECS")]
     pub checkpoint_every: Option<f64>,
+    /// How 8-bit outputs show the image.
+    #[command(flatten)]
+    pub look: LookArgs,
     /// What is logged.
     #[command(flatten)]
     pub log: LogArgs,
@@ -120,6 +124,7 @@ impl RenderArgs {
             verbose: self.log.verbose > 0,
             denoise: self.denoise,
             aov: self.aov.clone().unwrap_or_default(),
+            look: self.look.look(),
         }
     }
 
@@ -296,6 +301,8 @@ pub struct How {
     pub threads: Option<usize>,
     /// `-q`: no progress bar or lines.
     pub quiet: bool,
+    /// `--exposure` and `--view-transform`: how 8-bit outputs show the image.
+    pub look: Look,
 }
 
 /// The side file NAME.TAG.EXT beside the output NAME.EXT.

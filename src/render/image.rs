@@ -244,6 +244,7 @@ pub fn render_image(
                     io::write(
                         output,
                         &LinearImage { width: film.width, height: film.height, pixels: film.mean() },
+                        &how.look,
                     )?;
                 }
                 let settings = id.settings.clone();

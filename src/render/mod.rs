@@ -82,7 +82,7 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     log_scene(&scene);
     let s = scene.settings;
     let id = render_id(&desc.inputs, &scene, &how, time, (time + shutter.0, time + shutter.1))?;
-    let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s);
+    let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s, how.look);
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
     if how.stats {
@@ -92,7 +92,8 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         }
     }
     let metadata = metadata(id.key, &scene, &r);
-    let clamped = io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata })?;
+    let clamped =
+        io::write_output(output, &io::Output { img: r.img, layers: r.layers, metadata, look: how.look })?;
     eprintln!(
         "{}: {}x{}{} {} spp in {:.2} s, {:.3} M samples/s, {} threads, {} NaN/Inf samples discarded{}{}",
         output.display(),

@@ -4,6 +4,7 @@ use super::args::{Aov, How};
 use crate::denoiser;
 use crate::integrator::{aov, film::Film};
 use crate::io::{self, LinearImage};
+use crate::look::Look;
 use std::path::Path;
 use std::time::Instant;
 
@@ -44,10 +45,13 @@ pub fn post_process(
                 channels: &["X", "Y", "Z"],
                 data: flat(&aovs.normal),
             }),
-            (Aov::Albedo, false) => io::write(&sibling("albedo"), &image(aovs.albedo.clone())).map(drop)?,
+            // Albedo and normals are data in [0, 1], shown as they are.
+            (Aov::Albedo, false) => {
+                io::write(&sibling("albedo"), &image(aovs.albedo.clone()), &Look::default()).map(drop)?
+            }
             (Aov::Normal, false) => {
                 let normal = aovs.normal.iter().map(|n| 0.5 + 0.5 * *n).collect();
-                io::write(&sibling("normal"), &image(normal)).map(drop)?
+                io::write(&sibling("normal"), &image(normal), &Look::default()).map(drop)?
             }
             (Aov::Depth, _) => {
                 let depth = pool.install(|| aov::depth(scene, samples.clone()));
@@ -72,7 +76,7 @@ pub fn post_process(
     };
     match exr && how.aov.contains(&Aov::Noisy) {
         true => layers.push(io::ExrLayer { name: "noisy", channels: rgb, data: flat(&img.pixels) }),
-        false => io::write(&sibling("noisy"), &img).map(drop)?,
+        false => io::write(&sibling("noisy"), &img, &how.look).map(drop)?,
     }
     let start = Instant::now();
     let variance = film.variance_of_mean();

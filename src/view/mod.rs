@@ -7,6 +7,7 @@
 
 use crate::engine::render_scene::RenderSettings;
 use crate::integrator::film::Film;
+use crate::look::Look;
 use std::time::Duration;
 
 pub mod preview;
@@ -77,10 +78,10 @@ impl Viewers {
     /// Opens what `args` asks for, for the image of `s` (the window shows its crop window, tev
     /// the whole image with the crop window filled in) called `name`. A viewer that cannot
     /// start says why on stderr and the render goes on without it (still in passes).
-    pub fn open(args: &ViewArgs, name: &str, s: &RenderSettings) -> Self {
+    pub fn open(args: &ViewArgs, name: &str, s: &RenderSettings, look: Look) -> Self {
         let mut list: Vec<Box<dyn Viewer>> = Vec::new();
         if args.preview {
-            match preview::Preview::open(name, s.window.w, s.window.h) {
+            match preview::Preview::open(name, s.window.w, s.window.h, look) {
                 Ok(p) => list.push(Box::new(p)),
                 Err(e) => eprintln!("--preview: {e}; rendering without a window"),
             }
@@ -133,10 +134,9 @@ pub fn next_pass(done: u32, left: u32, secs_per_sample: f64, max_pass: Duration)
     (done.max(1) as f64).min(fit).min(left as f64).max(1.0) as u32
 }
 
-/// 0RGB pixels (as minifb and most frame buffers take them) with the PNG output's tone mapping.
-pub fn srgb_0rgb(film: &Film) -> Vec<u32> {
-    let img = crate::io::LinearImage { width: film.width, height: film.height, pixels: film.mean() };
-    let (rgb, _) = crate::io::srgb8(&img);
+/// 0RGB pixels (as minifb and most frame buffers take them) through `look`, as a PNG output.
+pub fn srgb_0rgb(film: &Film, look: &Look) -> Vec<u32> {
+    let (rgb, _) = look.srgb8(&film.mean());
     rgb.chunks_exact(3).map(|c| u32::from_be_bytes([0, c[0], c[1], c[2]])).collect()
 }
 

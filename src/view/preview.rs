@@ -7,6 +7,7 @@
 
 use super::{Pass, Viewer, srgb_0rgb};
 use crate::integrator::film::Film;
+use crate::look::Look;
 use minifb::{Key, ScaleMode, Window, WindowOptions};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -32,6 +33,8 @@ enum Message {
 /// An open preview window.
 pub struct Preview {
     name: String,
+    /// How the image is shown (as the PNG output).
+    look: Look,
     to_window: Option<mpsc::Sender<Message>>,
     /// False once the window was closed or Esc pressed.
     open: Arc<AtomicBool>,
@@ -41,7 +44,7 @@ pub struct Preview {
 impl Preview {
     /// Opens a `width` x `height` window titled after `name`, black until the first pass; an
     /// error says why there is none (no display, no X11 libraries).
-    pub fn open(name: &str, width: u32, height: u32) -> Result<Self, String> {
+    pub fn open(name: &str, width: u32, height: u32, look: Look) -> Result<Self, String> {
         if std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty()) {
             return Err("no display (DISPLAY is not set)".into());
         }
@@ -102,9 +105,13 @@ impl Preview {
             })
             .map_err(|e| format!("cannot start the window's thread: {e}"))?;
         match started.recv_timeout(OPEN_WAIT) {
-            Ok(Ok(())) => {
-                Ok(Self { name: name.to_string(), to_window: Some(to_window), open, thread: Some(thread) })
-            }
+            Ok(Ok(())) => Ok(Self {
+                name: name.to_string(),
+                look,
+                to_window: Some(to_window),
+                open,
+                thread: Some(thread),
+            }),
             Ok(Err(e)) => {
                 let _ = thread.join();
                 Err(format!(
@@ -137,7 +144,10 @@ impl Preview {
 
 impl Viewer for Preview {
     fn show(&mut self, film: &Film, pass: &Pass) -> bool {
-        self.send(Message::Image(srgb_0rgb(film), format!("{} - {}", self.name, pass.describe())));
+        self.send(Message::Image(
+            srgb_0rgb(film, &self.look),
+            format!("{} - {}", self.name, pass.describe()),
+        ));
         !self.closed()
     }
 

@@ -10,6 +10,7 @@ use crate::engine::render_scene::{PixelWindow, RenderScene};
 use crate::engine::world::SceneWorld;
 use crate::integrator::{film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
+use crate::look::LookArgs;
 use crate::render::args::{EngineArgs, Integrator, LogArgs, SceneArgs, TimeArgs};
 use crate::render::load::load;
 use crate::terminal::safe;
@@ -44,6 +45,9 @@ pub struct WatchArgs {
     /// The moment shown, as `render --time`.
     #[command(flatten)]
     pub time: TimeArgs,
+    /// How the window and a PNG output show the image, as `render`'s.
+    #[command(flatten)]
+    pub look: LookArgs,
     /// What is logged, as `render`'s.
     #[command(flatten)]
     pub log: LogArgs,
@@ -107,8 +111,8 @@ fn passes(
 fn write(args: &WatchArgs, film: &Film) -> Result<(), String> {
     match &args.output {
         Some(out) => {
-            io::write(out, &LinearImage { width: film.width, height: film.height, pixels: film.mean() })
-                .map(drop)
+            let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
+            io::write(out, &img, &args.look.look()).map(drop)
         }
         None => Ok(()),
     }
@@ -206,7 +210,12 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
                             viewers = None;
                         }
                         let (v, ..) = viewers.get_or_insert_with(|| {
-                            (Viewers::open(&args.view, &name, &s), s.window, s.width, s.height)
+                            (
+                                Viewers::open(&args.view, &name, &s, args.look.look()),
+                                s.window,
+                                s.width,
+                                s.height,
+                            )
                         });
                         let f = film.insert(Film::new(s.window.w, s.window.h));
                         match passes(&scene, f, v, &events, args.engine, &pool) {
