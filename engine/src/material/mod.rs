@@ -16,6 +16,7 @@ pub mod diffuse_light;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
+pub mod plastic;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 #[cfg(feature = "test-material")]
@@ -33,6 +34,7 @@ registry! {
     Dielectric(dielectric::Dielectric),
     RoughConductor(rough_conductor::RoughConductor),
     RoughDielectric(rough_dielectric::RoughDielectric),
+    Plastic(plastic::Plastic),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
@@ -487,6 +489,7 @@ mod tests {
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.3 }),
             Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
             Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5), two_sided: true }),
+            Material::from(plastic::Plastic::new(Vec3::splat(0.5), Vec3::ONE, 1.5, false, false)),
         ];
         let n = Vec3A::Z;
         for m in mats {
