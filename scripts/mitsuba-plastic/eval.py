@@ -1,3 +1,7 @@
+# Mitsuba 3's eval_pdf of plastic and roughplastic (scalar_rgb) for pairs of directions given as
+# (theta, phi) in degrees about the normal z: the tables of the eval_and_pdf_match_mitsuba tests in
+# engine/src/material/plastic.rs and rough_plastic.rs. Mitsuba's si.wi is pathwave's wo.
+#   /opt/mitsuba-anchor/bin/python scripts/mitsuba-plastic/eval.py
 import mitsuba as mi, drjit as dr, math
 mi.set_variant('scalar_rgb')
 def si_for(wi):

@@ -19,6 +19,7 @@ pub mod microfacet;
 pub mod plastic;
 pub mod rough_conductor;
 pub mod rough_dielectric;
+pub mod rough_plastic;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 
@@ -35,6 +36,7 @@ registry! {
     RoughConductor(rough_conductor::RoughConductor),
     RoughDielectric(rough_dielectric::RoughDielectric),
     Plastic(plastic::Plastic),
+    RoughPlastic(rough_plastic::RoughPlastic),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
@@ -490,6 +492,14 @@ mod tests {
             Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
             Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5), two_sided: true }),
             Material::from(plastic::Plastic::new(Vec3::splat(0.5), Vec3::ONE, 1.5, false, false)),
+            Material::from(rough_plastic::RoughPlastic::new(
+                Vec3::splat(0.5),
+                Vec3::ONE,
+                1.5,
+                (0.2, microfacet::Distribution::Ggx),
+                false,
+                false,
+            )),
         ];
         let n = Vec3A::Z;
         for m in mats {
