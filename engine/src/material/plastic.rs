@@ -519,6 +519,34 @@ mod tests {
         Material::build(&parse(text).unwrap(), &mut |_| unreachable!("no textures")).0
     }
 
+    /// Textured colours: the albedo is slot 0 and the tint slot 1, as `set_color` sets them at
+    /// a hit; the sampling weight comes from the textures' means and stays.
+    #[test]
+    fn textured_colours_fill_their_slots() {
+        let means = |name: &str| match name {
+            "wood" => (3, Vec3::new(0.6, 0.4, 0.2)),
+            _ => (5, Vec3::splat(0.5)),
+        };
+        for text in [
+            r#"Plastic(albedo: "wood", tint: "grey")"#,
+            r#"RoughPlastic(albedo: "wood", tint: "grey", alpha: 0.2)"#,
+        ] {
+            let (mut m, slots) = Material::build(&parse(text).unwrap(), &mut |n| means(n));
+            assert_eq!(slots.0, [Some(3), Some(5)], "{text}");
+            let weight = |m: &Material| match m {
+                Material::Plastic(p) => (p.albedo, p.tint, p.specular_weight),
+                Material::RoughPlastic(p) => (p.albedo, p.tint, p.specular_weight),
+                _ => unreachable!(),
+            };
+            let (albedo, tint, w) = weight(&m);
+            assert_eq!((albedo, tint), (Vec3::new(0.6, 0.4, 0.2), Vec3::splat(0.5)), "{text}");
+            assert!((w - 0.5 / (0.5 + 0.4)).abs() < 1e-6, "{text}: {w}");
+            m.set_color(0, Vec3::new(0.1, 0.2, 0.3));
+            m.set_color(1, Vec3::new(0.9, 1.5, 0.7));
+            assert_eq!(weight(&m), (Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.9, 1.0, 0.7), w), "{text}");
+        }
+    }
+
     #[test]
     fn descriptions_parse_and_bad_values_are_refused() {
         let m = build("Plastic(albedo: (0.1, 0.27, 0.36))");
