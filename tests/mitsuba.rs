@@ -262,6 +262,31 @@ fn roughdielectric() {
     conformance("bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
 }
 
+/// Four OBJ spheres of rough plastic (GGX, alpha 0.01, 0.1, 0.4 and 1, BK7 in air over a green
+/// base: the coating's computed transmittance and inner reflectance, linear) under the area
+/// light, environment map and point light of `fragments/single_sphere.xml`.
+#[test]
+fn roughplastic_linear() {
+    conformance("bsdf_spheres", "test_roughplastic_linear_path.xml", "test_roughplastic_linear");
+}
+
+/// The same with `nonlinear` inner bounces.
+#[test]
+fn roughplastic_nonlinear() {
+    conformance("bsdf_spheres", "test_roughplastic_nonlinear_path.xml", "test_roughplastic_nonlinear");
+}
+
+/// Mitsuba's sphere grid under its constant emitter (diffuse, textured diffuse, smooth
+/// plastic of index 1.9, glass, rough glass, two Beckmann rough plastics, a conductor and a
+/// rough conductor), without its two masked leaves (Mitsuba's `mask`, not read yet), against
+/// Mitsuba 3.9.1 references of that scene (16,384 spp, `scripts/mitsuba-plastic/
+/// unmasked_refs.py`). Mitsuba's own test_constant, test_envmap, test_pointlight and
+/// test_arealight scenes need the leaves.
+#[test]
+fn sphere_grid_without_leaves() {
+    conformance("bsdf_spheres_unmasked", "test_constant_path.xml", "test_constant");
+}
+
 #[test]
 fn mesh_attributes_face() {
     conformance("mesh_attributes", "test_mesh_attributes_3_face_direct.xml", "test_mesh_attributes_3_face");
@@ -303,6 +328,7 @@ fn converted_ron_renders_the_same_bits() {
         ("various_emitters", "test_various_emitters_ptracer.xml"),
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
+        ("bsdf_spheres", "test_roughplastic_linear_path.xml"),
         ("various_shapes", "test_various_shapes_path.xml"),
     ] {
         let xml = suite().join(dir).join(file);

@@ -331,8 +331,13 @@ fn look_from_equals_look_at() {
 
 #[test]
 fn unknown_material_variant() {
-    let text = with_material(r#""plastic": Plastic(albedo: (0.5, 0.5, 0.5)),"#);
-    assert_err(&text, 5, 20, &["`Plastic`", "`Lambertian`", "`Metal`", "`Dielectric`", "`DiffuseLight`"]);
+    let text = with_material(r#""velvet": Velvet(albedo: (0.5, 0.5, 0.5)),"#);
+    assert_err(
+        &text,
+        5,
+        19,
+        &["`Velvet`", "`Lambertian`", "`Metal`", "`Dielectric`", "`Plastic`", "`DiffuseLight`"],
+    );
 }
 
 #[test]

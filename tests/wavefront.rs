@@ -64,8 +64,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
 /// Smooth-shaded meshes (vertex normals: adapted shading normals, lifted ray origins, and
 /// directions the two normals disagree about) take the same shared code in both integrators:
 /// a coarse sphere mesh in each material kind that shades (Lambertian, Metal, both rough ones
-/// with either distribution, glass), one of them sheared, under a lamp, a point light and the
-/// sky, gives the oracle's bits.
+/// with either distribution, glass, plastic and textured rough plastic), one of them sheared,
+/// under a lamp, a point light and the sky, gives the oracle's bits.
 #[test]
 fn reproduces_the_oracle_on_smooth_shaded_meshes() {
     let dir = tempfile::tempdir().unwrap();
@@ -85,10 +85,15 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
                 "copper": RoughConductor(tint: (1, 0.6, 0.4), alpha: 0.2, distribution: Beckmann),
                 "etched": RoughDielectric(ior: 1.5, alpha: 0.3, distribution: Beckmann),
                 "glass": Dielectric(ior: 1.5),
+                "plastic": Plastic(albedo: (0.1, 0.27, 0.36), ior: 1.9),
+                "rough_plastic": RoughPlastic(albedo: "checks", alpha: 0.2, distribution: Beckmann, nonlinear: true),
                 "lamp": DiffuseLight(emit: (30, 30, 30), two_sided: true),
             },
+            textures: {"checks": UvChecker(u: 8, v: 4, even: (0.8, 0.3, 0.1), odd: (0.1, 0.3, 0.8))},
             objects: [
                 (shape: Quad(q: (-6, -1, -6), u: (0, 0, 12), v: (12, 0, 0)), material: "white"),
+                (shape: Mesh(file: "ball.obj"), material: "plastic", transform: [UniformScale(0.7), Translate((-3.6, -0.3, 0.5))]),
+                (shape: Mesh(file: "ball.obj"), material: "rough_plastic", transform: [UniformScale(0.7), Translate((3.6, -0.3, 0.5))]),
                 (shape: Mesh(file: "ball.obj"), material: "white", transform: [Translate((-3, 0, 0))]),
                 (shape: Mesh(file: "ball.obj"), material: "metal", transform: [Shear(xy: 0.3), Translate((-1.2, 0, 0))]),
                 (shape: Mesh(file: "ball.obj"), material: "gold", transform: [Translate((0.6, 0, 0))]),

@@ -89,7 +89,7 @@ fn a_material_registered_in_one_line_renders_through_the_wavefront() {
 
 #[test]
 fn unknown_kinds_are_refused_with_the_registered_names() {
-    let err = parse(&scene("Plastic", 0.5), Path::new("<test>")).unwrap_err().to_string();
+    let err = parse(&scene("Velvet", 0.5), Path::new("<test>")).unwrap_err().to_string();
     for k in MaterialKind::ALL {
         assert!(err.contains(k.variant_name()), "{err}");
     }

@@ -70,7 +70,7 @@ pub enum Smith {
 }
 
 /// Which distribution of microfacet normals a rough material has.
-#[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Distribution {
     /// GGX (Trowbridge-Reitz): long tails (the default).
     #[default]

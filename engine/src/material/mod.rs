@@ -16,8 +16,10 @@ pub mod diffuse_light;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
+pub mod plastic;
 pub mod rough_conductor;
 pub mod rough_dielectric;
+pub mod rough_plastic;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 
@@ -33,6 +35,8 @@ registry! {
     Dielectric(dielectric::Dielectric),
     RoughConductor(rough_conductor::RoughConductor),
     RoughDielectric(rough_dielectric::RoughDielectric),
+    Plastic(plastic::Plastic),
+    RoughPlastic(rough_plastic::RoughPlastic),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
@@ -487,6 +491,15 @@ mod tests {
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.3 }),
             Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
             Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5), two_sided: true }),
+            Material::from(plastic::Plastic::new(Vec3::splat(0.5), Vec3::ONE, 1.5, false, false)),
+            Material::from(rough_plastic::RoughPlastic::new(
+                Vec3::splat(0.5),
+                Vec3::ONE,
+                1.5,
+                (0.2, microfacet::Distribution::Ggx),
+                false,
+                false,
+            )),
         ];
         let n = Vec3A::Z;
         for m in mats {

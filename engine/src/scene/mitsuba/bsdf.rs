@@ -2,8 +2,8 @@
 //!
 //! Mitsuba's BSDFs other than `twosided` are one-sided (black seen from behind): `diffuse`
 //! becomes a Lambertian with `two_sided: false`, and `twosided` around it the two-sided
-//! Lambertian. Its conductors are one-sided as pathwave's, and its dielectrics the same on
-//! both sides in both renderers.
+//! Lambertian. Its conductors and plastics are one-sided as pathwave's, and its dielectrics the
+//! same on both sides in both renderers.
 
 use super::convert::{Converter, num, num32, v3};
 use super::props::{Plugin, Value};
@@ -91,6 +91,60 @@ fn diffuse<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Resul
     })
 }
 
+/// Mitsuba's `plastic` and `roughplastic` (`src/bsdfs/plastic.cpp`, `roughplastic.cpp`) as
+/// `Plastic` and `RoughPlastic`: `diffuse_reflectance` (default 0.5) and
+/// `specular_reflectance` (default 1) as colours or textures, `int_ior` (default
+/// polypropylene) over `ext_ior` (default air) as `ior`, `nonlinear`, and the rough one's
+/// microfacet parameters (default Beckmann, alpha 0.1). As Mitsuba, the indices must be
+/// positive and, for `roughplastic`, differ; pathwave also wants their ratio in [0.1, 10].
+fn plastic<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let rough = match p.kind == "roughplastic" {
+        true => Some(microfacet(p)?),
+        false => None,
+    };
+    let int = Converter::ior(p, "int_ior", 1.49)?;
+    let ext = Converter::ior(p, "ext_ior", 1.000277)?;
+    let ior = int / ext;
+    if rough.is_some() && int == ext {
+        return Err(p.at.error(format!(
+            "{}: int_ior and ext_ior are both {int}: Mitsuba's roughplastic wants them to differ",
+            p.label()
+        )));
+    }
+    if !(0.1..=10.0).contains(&ior) {
+        let at = p.param("int_ior").or(p.param("ext_ior")).map_or(&p.at, |param| &param.at);
+        return Err(at.error(format!(
+            "{}: int_ior / ext_ior = {ior}: pathwave takes coating indices from 0.1 to 10",
+            p.label()
+        )));
+    }
+    let albedo = color(cx, p, "diffuse_reflectance", DVec3::splat(0.5))?;
+    let tint = color(cx, p, "specular_reflectance", DVec3::ONE)?;
+    let nonlinear = p.bool("nonlinear")?.unwrap_or(false);
+    p.finish(&[
+        "diffuse_reflectance",
+        "specular_reflectance",
+        "int_ior",
+        "ext_ior",
+        "nonlinear",
+        "alpha",
+        "alpha_u",
+        "alpha_v",
+        "distribution",
+        "sample_visible",
+    ])?;
+    let kind = if rough.is_some() { "RoughPlastic" } else { "Plastic" };
+    let mut s = format!("{kind}(albedo: {albedo}, ");
+    if let Some(rough) = rough {
+        s += &format!("{rough}, ");
+    }
+    s += &format!("tint: {tint}, ior: {}, nonlinear: {nonlinear}", num32(ior));
+    if two_sided {
+        s += ", two_sided: true";
+    }
+    Ok(s + ")")
+}
+
 /// The material a `<bsdf>` element becomes.
 pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
@@ -108,6 +162,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             let inner = Plugin::new(one)?;
             match inner.kind.as_str() {
                 "diffuse" => diffuse(cx, &inner, true)?,
+                "plastic" | "roughplastic" => plastic(cx, &inner, true)?,
                 // pathwave's conductors are one-sided as Mitsuba's; `two_sided` makes them
                 // what `twosided` makes Mitsuba's.
                 "conductor" | "roughconductor" => {
@@ -119,7 +174,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                 }
                 k => {
                     return Err(one.at.error(format!(
-                        "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor and roughconductor"
+                        "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor, roughconductor, plastic and roughplastic"
                     )));
                 }
             }
@@ -160,6 +215,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             }
             s + ")"
         }
+        "plastic" | "roughplastic" => plastic(cx, &p, false)?,
         "dielectric" | "roughdielectric" => {
             let rough = if p.kind == "roughdielectric" { Some(microfacet(&p)?) } else { None };
             let int = Converter::ior(&p, "int_ior", 1.5046)?;
@@ -183,7 +239,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric and roughdielectric"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, plastic and roughplastic"
             )));
         }
     };

@@ -104,8 +104,8 @@ fn what_is_not_supported_is_refused_where_it_is_written() {
     assert!(e.message.contains("teapot") && e.message.contains("rectangle, cube, sphere"), "{e}");
     let e = error("param", "<shape type=\"sphere\"><float name=\"radios\" value=\"1\"/></shape>");
     assert!(e.message.contains("`radios`") && e.message.contains("radius"), "{e}");
-    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"plastic\"/></shape>");
-    assert!(e.message.contains("plastic"), "{e}");
+    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"principled\"/></shape>");
+    assert!(e.message.contains("principled") && e.message.contains("roughplastic"), "{e}");
     let e = error("ref", "<shape type=\"sphere\"><ref id=\"nope\"/></shape>");
     assert!(e.message.contains("nope"), "{e}");
     let e = error("twice", "<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"diffuse\" id=\"a\"/>");
@@ -621,5 +621,73 @@ fn microfacets_keep_their_distribution() {
             &format!("<shape type=\"sphere\"><bsdf type=\"roughdielectric\">{body}</bsdf></shape>"),
         );
         assert!(e.message.contains(message), "{tag}: {e}");
+    }
+}
+
+/// `plastic` and `roughplastic` become `Plastic` and `RoughPlastic` with Mitsuba's defaults
+/// (polypropylene in air, diffuse 0.5, Beckmann alpha 0.1), named indices, textures and
+/// `twosided`; indices that Mitsuba or pathwave refuse are refused where written.
+#[test]
+fn plastics_become_plastic_kinds() {
+    let r = ron(
+        "plastic",
+        r#"<texture type="checkerboard" id="check"/>
+        <shape type="sphere"><bsdf type="plastic"/></shape>
+        <shape type="cube"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.1, 0.27, 0.36"/>
+            <float name="int_ior" value="1.9"/><boolean name="nonlinear" value="true"/></bsdf></shape>
+        <shape type="rectangle"><bsdf type="roughplastic"><string name="distribution" value="ggx"/>
+            <float name="alpha" value="0.4"/><string name="int_ior" value="bk7"/><string name="ext_ior" value="air"/>
+            <ref name="diffuse_reflectance" id="check"/><rgb name="specular_reflectance" value="0.5"/></bsdf></shape>
+        <shape type="disk"><bsdf type="twosided"><bsdf type="roughplastic"/></bsdf></shape>"#,
+    );
+    for want in [
+        "Plastic(albedo: (0.5, 0.5, 0.5), tint: (1, 1, 1), ior: 1.4895874, nonlinear: false)",
+        "Plastic(albedo: (0.1, 0.27, 0.36), tint: (1, 1, 1), ior: 1.8994738, nonlinear: true)",
+        r#"RoughPlastic(albedo: "check", alpha: 0.4, distribution: Ggx, tint: (0.5, 0.5, 0.5), ior: 1.5041833, nonlinear: false)"#,
+        "RoughPlastic(albedo: (0.5, 0.5, 0.5), alpha: 0.1, distribution: Beckmann, tint: (1, 1, 1), ior: 1.4895874, nonlinear: false, two_sided: true)",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    for (tag, body, at, message) in [
+        (
+            "same",
+            "<bsdf type=\"roughplastic\">\n<float name=\"int_ior\" value=\"1.2\"/><float name=\"ext_ior\" value=\"1.2\"/></bsdf>",
+            (5, 22),
+            "wants them to differ",
+        ),
+        (
+            "zero",
+            "<bsdf type=\"plastic\">\n<float name=\"int_ior\" value=\"0\"/></bsdf>",
+            (6, 1),
+            "positive number",
+        ),
+        (
+            "far",
+            "<bsdf type=\"plastic\">\n<float name=\"int_ior\" value=\"20\"/></bsdf>",
+            (6, 1),
+            "from 0.1 to 10",
+        ),
+        (
+            "name",
+            "<bsdf type=\"plastic\">\n<string name=\"int_ior\" value=\"jelly\"/></bsdf>",
+            (6, 1),
+            "named media",
+        ),
+        (
+            "phong",
+            "<bsdf type=\"roughplastic\">\n<string name=\"distribution\" value=\"phong\"/></bsdf>",
+            (6, 1),
+            "\"ggx\"",
+        ),
+        (
+            "banner",
+            "<bsdf type=\"plastic\">\n<float name=\"banner\" value=\"1\"/></bsdf>",
+            (6, 1),
+            "`banner`",
+        ),
+    ] {
+        let e = error(tag, &format!("<shape type=\"sphere\">{body}</shape>"));
+        assert!(e.message.contains(message), "{tag}: {e}");
+        assert_eq!((e.line, e.col), at, "{tag}: {e}");
     }
 }
