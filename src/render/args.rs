@@ -7,7 +7,7 @@
 use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
 use crate::engine::render_scene::SamplerKind;
-use crate::engine::scene::FilterDesc;
+use crate::engine::scene::{FilterDesc, SceneDesc};
 use crate::look::{Look, LookArgs};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -142,10 +142,22 @@ impl RenderArgs {
 /// `--time`: the moment `render` and `watch` show.
 #[derive(clap::Args, Clone, Copy, Debug)]
 pub struct TimeArgs {
-    /// Evaluate keyframes at this time (seconds); the camera's shutter opens and closes
-    /// relative to it.
+    /// Evaluate keyframes at this time (seconds). A scene whose `animation` sets a shutter
+    /// opens it here for that fraction of a frame, as `animate`'s frame at this time; else the
+    /// camera's shutter opens and closes relative to it.
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+}
+
+/// The shutter interval `render --time` and `watch` show at `time`: a scene whose `animation`
+/// sets a shutter opens it at `time` for that fraction of a frame, as `animate`'s frame at
+/// `time` does (so the two give the same image); else the camera's shutter, relative to `time`.
+pub fn shutter_at(desc: &SceneDesc, time: f32) -> (f32, f32) {
+    let a = &desc.animation;
+    match a.shutter.0 > 0.0 {
+        true => (time, time + a.shutter.0 / a.fps.0),
+        false => (time + desc.camera.shutter.0, time + desc.camera.shutter.1),
+    }
 }
 
 impl TimeArgs {

@@ -76,12 +76,12 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
     let mut world = SceneWorld::new(&desc);
-    let shutter = desc.camera.shutter;
-    world.set_time(time + shutter.0, time + shutter.1);
+    let shutter = args::shutter_at(&desc, time);
+    world.set_time(shutter.0, shutter.1);
     let scene = world.update_checked()?;
     log_scene(&scene);
     let s = scene.settings;
-    let id = render_id(&desc.inputs, &scene, &how, time, (time + shutter.0, time + shutter.1))?;
+    let id = render_id(&desc.inputs, &scene, &how, time, shutter)?;
     let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s, how.look);
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;

@@ -184,8 +184,8 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
                 };
                 let w = world.insert(w);
                 // As `render --time` (the shutter may have changed).
-                let shutter = desc.camera.shutter;
-                w.set_time(time + shutter.0, time + shutter.1);
+                let shutter = crate::render::args::shutter_at(&desc, time);
+                w.set_time(shutter.0, shutter.1);
                 match w.update_checked() {
                     Err(e) => show_error(&mut viewers, &e),
                     Ok(scene) => {
