@@ -290,11 +290,32 @@ fn collinear_triangle() {
     assert_err(&text, 8, 66, &["Triangle has no area", "collinear"]);
 }
 
+/// A number where a colour belongs says what was expected, not that a parenthesis is missing.
+#[test]
+fn a_number_for_a_colour_says_a_colour_was_expected() {
+    let text = scene(CAMERA, MATERIAL, OBJECT).replacen(
+        "objects: [",
+        "lights: [Point(position: (0, 5, 0), intensity: 30)],\n    objects: [",
+        1,
+    );
+    let e = err(&text);
+    assert!(
+        e.message.contains("Expected an emitted colour (r, g, b) but found the unsigned integer `30`"),
+        "{e}"
+    );
+}
+
 #[test]
 fn missing_mesh_file_is_named() {
-    let text = with_object(r#"(shape: Mesh(file: "assets/none.obj"), material: "white"),"#);
-    // 8:29 is the file name (relative to the scene's directory).
-    assert_err(&text, 8, 29, &["in objects[0]", "cannot read the mesh", "none.obj"]);
+    let text = with_object(r#"(shape: Mesh(file: "scenes/none.obj"), material: "white"),"#);
+    // 8:29 is the file name (relative to the scene's directory), and where it was looked for
+    // is said as an absolute path.
+    let folder = std::path::absolute("scenes").unwrap();
+    let there = format!("cannot read the mesh scenes/none.obj: there is no none.obj in {}", folder.display());
+    assert_err(&text, 8, 29, &["in objects[0]", &there]);
+    let text = with_object(r#"(shape: Mesh(file: "elsewhere/none.obj"), material: "white"),"#);
+    let folder = std::path::absolute("elsewhere").unwrap();
+    assert_err(&text, 8, 29, &[&format!("there is no folder {}", folder.display())]);
 }
 
 #[test]

@@ -16,7 +16,14 @@ pub const MAX_IMAGE_SIDE: u32 = 32768;
 
 /// The bytes of the regular file `path`, refused beyond `max` bytes; `what` names it in errors.
 pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String> {
-    let fail = |e: std::io::Error| format!("cannot read the {what} {}: {e}", path.display());
+    let fail = |e: std::io::Error| match e.kind() {
+        // Where it was looked for: a path relative to the scene's folder, or to one the
+        // scene file did not say.
+        std::io::ErrorKind::NotFound => {
+            format!("cannot read the {what} {}: {}", path.display(), missing(path))
+        }
+        _ => format!("cannot read the {what} {}: {e}", path.display()),
+    };
     // Inside `confined`, the file as resolved (links followed), which is then what is read.
     let real = CONFINED.with(|c| match &*c.borrow() {
         None => Ok(None),
@@ -52,6 +59,19 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
     }
     record(path, &bytes);
     Ok(bytes)
+}
+
+/// Why `path`, which is not there, is not: no such file in its (absolute) folder, or no such
+/// folder.
+fn missing(path: &Path) -> String {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+    match (abs.parent(), abs.file_name()) {
+        (Some(dir), Some(name)) if dir.is_dir() => {
+            format!("there is no {} in {}", name.to_string_lossy(), dir.display())
+        }
+        (Some(dir), _) => format!("there is no folder {}", dir.display()),
+        _ => format!("there is no {}", abs.display()),
+    }
 }
 
 /// A file a load read: its absolute path and a hash of the bytes read (XXH3, 64 bits), so that

@@ -8,8 +8,21 @@ fn check<'de, D: Deserializer<'de>, T>(ok: bool, value: T, what: &str) -> Result
     if ok { Ok(value) } else { Err(D::Error::custom(what)) }
 }
 
-fn vec3<'de, D: Deserializer<'de>>(d: D) -> Result<Vec3, D::Error> {
-    let (x, y, z) = <(f32, f32, f32)>::deserialize(d)?;
+fn vec3<'de, D: Deserializer<'de>>(d: D, what: &'static str) -> Result<Vec3, D::Error> {
+    // Through `deserialize_any`, so that a number or a name where three numbers belong is
+    // reported as that (`intensity: 30`: "expected an emitted colour (r, g, b)"), not as a
+    // missing parenthesis.
+    struct Three(&'static str);
+    impl<'de> serde::de::Visitor<'de> for Three {
+        type Value = (f32, f32, f32);
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str(self.0)
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            <(f32, f32, f32)>::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+        }
+    }
+    let (x, y, z) = d.deserialize_any(Three(what))?;
     let v = Vec3::new(x, y, z);
     check::<D, _>(v.is_finite(), v, &format!("expected three finite numbers, found ({x}, {y}, {z})"))
 }
@@ -20,7 +33,7 @@ pub struct V3(pub Vec3);
 
 impl<'de> Deserialize<'de> for V3 {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        vec3(d).map(V3)
+        vec3(d, "three numbers (x, y, z)").map(V3)
     }
 }
 
@@ -30,7 +43,7 @@ pub struct Direction(pub Vec3);
 
 impl<'de> Deserialize<'de> for Direction {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = vec3(d)?;
+        let v = vec3(d, "a direction (x, y, z)")?;
         // Scaled so that the largest component is 1: `normalize` neither overflows nor underflows.
         let m = v.abs().max_element();
         check::<D, _>(m > 0.0, Direction(v / m), "expected a non-zero direction, found (0, 0, 0)")
@@ -43,7 +56,7 @@ pub struct Rgb(pub Vec3);
 
 impl<'de> Deserialize<'de> for Rgb {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = vec3(d)?;
+        let v = vec3(d, "a colour (r, g, b)")?;
         check::<D, _>(
             v.min_element() >= 0.0,
             Rgb(v),
@@ -71,7 +84,7 @@ pub struct Radiance(pub Vec3);
 
 impl<'de> Deserialize<'de> for Radiance {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = vec3(d)?;
+        let v = vec3(d, "an emitted colour (r, g, b)")?;
         let ok = v.min_element() >= 0.0 && v.max_element() <= MAX_EMISSION;
         check::<D, _>(
             ok,
@@ -93,7 +106,7 @@ pub struct Albedo(pub Vec3);
 
 impl<'de> Deserialize<'de> for Albedo {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let v = vec3(d)?;
+        let v = vec3(d, "a reflectance (r, g, b)")?;
         let ok = v.min_element() >= 0.0 && v.max_element() <= 1.0;
         check::<D, _>(ok, Albedo(v), &format!("expected an albedo with components in [0, 1], found {v}"))
     }
