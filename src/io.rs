@@ -25,8 +25,8 @@ pub fn read_linear(path: &Path) -> Result<LinearImage, String> {
     Ok(LinearImage { width: img.width(), height: img.height(), pixels })
 }
 
-/// Writes `.exr` (linear float) or `.png` (through `look`: an exposure, a view transform, sRGB);
-/// returns how many pixels a PNG clipped. The image is encoded in memory, then written with
+/// Writes `.exr` (linear float) or `.png` or `.jpg` (through `look`: an exposure, a view
+/// transform, sRGB); returns how many pixels an 8-bit file clipped. The image is encoded in memory, then written with
 /// [`atomically`].
 pub fn write(path: &Path, img: &LinearImage, look: &Look) -> Result<usize, String> {
     let (bytes, clamped) = encode(path, img, look)?;
@@ -53,9 +53,9 @@ pub fn atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
 /// parts being merged), which it would replace.
 pub fn check_output(path: &Path, inputs: &[&Path], gif: bool) -> Result<(), String> {
     let ext = extension(path);
-    let known = ext == "png" || ext == "exr" || (gif && ext == "gif");
+    let known = ["png", "jpg", "jpeg", "exr"].contains(&ext.as_str()) || (gif && ext == "gif");
     if !known {
-        let formats = if gif { ".png, .exr or .gif" } else { ".png or .exr" };
+        let formats = if gif { ".png, .jpg, .exr or .gif" } else { ".png, .jpg or .exr" };
         return Err(format!("{}: unknown output format (use {formats})", path.display()));
     }
     if let Some(input) = inputs.iter().find(|i| same_file(path, i)) {
@@ -277,7 +277,16 @@ fn encode(path: &Path, img: &LinearImage, look: &Look) -> Result<(Vec<u8>, usize
             buf.write_to(&mut bytes, image::ImageFormat::Png).map_err(err)?;
             clamped
         }
-        _ => return Err(format!("{}: unknown output format (use .png or .exr)", path.display())),
+        "jpg" | "jpeg" => {
+            let (data, clamped) = look.srgb8(&img.pixels);
+            // Quality 95 of 100: what image editors call high (the crate's default is 75).
+            let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95);
+            let buf: RgbImage =
+                ImageBuffer::<Rgb<u8>, _>::from_raw(img.width, img.height, data).expect("size");
+            buf.write_with_encoder(enc).map_err(err)?;
+            clamped
+        }
+        _ => return Err(format!("{}: unknown output format (use .png, .jpg or .exr)", path.display())),
     };
     Ok((bytes.into_inner(), clamped))
 }

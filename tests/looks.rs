@@ -1,6 +1,6 @@
 //! `--exposure` and `--view-transform`: how 8-bit outputs show the image. They change the PNG
-//! (which is the look applied to the EXR of the same render, byte for byte), never the EXR, and
-//! `agx` and `filmic` roll off what `standard` clips.
+//! (which is the look applied to the EXR of the same render, byte for byte) and the JPEG, never
+//! the EXR, and `agx` and `filmic` roll off what `standard` clips.
 
 mod common;
 use common::*;
@@ -34,9 +34,20 @@ fn looks_change_the_png_and_leave_the_exr_as_rendered() {
         let (want, clipped) = LookArgs { exposure: ev, view_transform: view }.look().srgb8(&linear.pixels);
         assert_eq!(png, want, "{name}: the PNG is not the look of the render");
         // The light (and its reflections) clip under standard only.
-        assert_eq!(log.contains("clamped to 1 in the PNG"), view == ViewTransform::Standard, "{name}: {log}");
+        assert_eq!(
+            log.contains("clamped to 1 in the 8-bit image"),
+            view == ViewTransform::Standard,
+            "{name}: {log}"
+        );
         assert_eq!(clipped > 0, view == ViewTransform::Standard, "{name}");
     }
+    // JPEG: the same look, compressed (within a few codes of the PNG's).
+    let (_, log) = render("agx.jpg", &["--view-transform", "agx", "--exposure", "-1.5"]);
+    assert!(!log.contains("clamped"), "{log}");
+    let jpg = image::open(dir.join("agx.jpg")).unwrap().into_rgb8().into_raw();
+    let png = image::open(dir.join("agx.png")).unwrap().into_rgb8().into_raw();
+    let mean_diff = jpg.iter().zip(&png).map(|(a, b)| a.abs_diff(*b) as f64).sum::<f64>() / png.len() as f64;
+    assert!(mean_diff < 4.0, "JPEG off the PNG by {mean_diff} codes on average");
     let bad = render_cornell(&dir.join("x.png"), (8, 8), 1, &["--exposure", "1e9"]).output().unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("expected a number of stops within +-64"));

@@ -63,8 +63,8 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         return Err(format!("{output}: the output would replace the scene {}", path.display()));
     }
     let ext = first.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
-    if !["png", "exr", "gif"].contains(&ext.as_str()) {
-        return Err(format!("{output}: unknown output format (use .png, .exr or .gif)"));
+    if !["png", "jpg", "jpeg", "exr", "gif"].contains(&ext.as_str()) {
+        return Err(format!("{output}: unknown output format (use .png, .jpg, .exr or .gif)"));
     }
     let desc = load(path, &args.scene)?;
     let a = &desc.animation;

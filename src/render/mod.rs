@@ -108,7 +108,11 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         r.new_samples / r.secs.max(1e-9) / 1e6,
         pool.current_num_threads(),
         r.non_finite,
-        if clamped > 0 { format!(", {clamped} pixels clamped to 1 in the PNG") } else { String::new() },
+        if clamped > 0 {
+            format!(", {clamped} pixels clamped to 1 in the 8-bit image")
+        } else {
+            String::new()
+        },
         match checkpointing {
             Some(_) => format!("; checkpoint {}", checkpoint::path_for(output).display()),
             None => String::new(),
