@@ -78,7 +78,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                     tmax,
                     sampler.get_1d(path::medium_dim(st.depth)),
                 ) {
-                    if path::at_max_depth(scene, st.depth) {
+                    if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
@@ -98,7 +98,8 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
             if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
                 path::emit(scene, &mut st, &hit, wo, ray.time);
             }
-            if path::at_max_depth(scene, st.depth) {
+            // A surface with a null lobe is sampled at the limit too (only a null sample goes on).
+            if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
                 break 'path;
             }
             match mat.shading() {

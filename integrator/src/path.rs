@@ -29,8 +29,11 @@ pub struct PathState {
     pub prev_p: Vec3A,
     /// BSDF pdf of the last scattering.
     pub prev_pdf: f32,
-    /// Bounces so far.
+    /// Vertices so far: bounces and null crossings (each takes its sampler numbers).
     pub depth: u32,
+    /// Null crossings so far ([`BsdfSample::null`](pathwave_engine::material::BsdfSample::null)):
+    /// `depth - crossings` bounces count towards `max_depth`.
+    pub crossings: u32,
 }
 
 impl PathState {
@@ -45,7 +48,14 @@ impl PathState {
             prev_p: origin,
             prev_pdf: 0.0,
             depth: 0,
+            crossings: 0,
         }
+    }
+
+    /// Bounces so far, the null crossings left out.
+    #[inline(always)]
+    pub fn bounces(&self) -> u32 {
+        self.depth - self.crossings
     }
 }
 
@@ -183,11 +193,17 @@ pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -
     if scene.lights.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
 }
 
-/// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
-/// else [`media_transmittance`].
+/// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it
+/// (what surfaces with a null lobe let through, [`RenderScene::null_transmittance`], in
+/// scenes that have them), times [`media_transmittance`].
 #[inline]
 pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
-    if scene.occluded(ray, 1.0) { 0.0 } else { media_transmittance(scene, ray) }
+    let surfaces = match scene.occluded(ray, 1.0) {
+        false => 1.0,
+        true if scene.features.null_surfaces => scene.null_transmittance(ray),
+        true => 0.0,
+    };
+    if surfaces > 0.0 { surfaces * media_transmittance(scene, ray) } else { 0.0 }
 }
 
 /// What the media let through along a shadow ray that nothing blocks, from its origin to the
@@ -262,10 +278,11 @@ pub fn scatter_in_medium(
 
 /// The depth limit: a path that has made `max_depth` bounces ends where it meets a surface or
 /// scatters in a medium, without scattering again (an emitter or the background it reached
-/// still counts).
+/// still counts). Null crossings ([`PathState::crossings`]) are not bounces: a surface with a
+/// null lobe is sampled at the limit too, and only a null sample goes on ([`scatter_with`]).
 #[inline(always)]
-pub fn at_max_depth(scene: &RenderScene, depth: u32) -> bool {
-    depth == scene.settings.max_depth
+pub fn at_max_depth(scene: &RenderScene, bounces: u32) -> bool {
+    bounces == scene.settings.max_depth
 }
 
 /// A [`Shading::Diffuse`] material that is one-sided ([`Material::one_sided`]), met from behind
@@ -417,6 +434,16 @@ pub fn scatter_with(
 ) -> Option<Ray> {
     let bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
     let side = leaving_side(sp, wo, bs.wi)?;
+    if bs.null {
+        // Straight on, as if the surface were not there: the MIS state stays the last
+        // scattering's, and no roulette (the throughput is unchanged).
+        st.beta *= bs.weight;
+        (st.depth, st.crossings) = (st.depth + 1, st.crossings + 1);
+        return Some(Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time });
+    }
+    if at_max_depth(scene, st.bounces()) {
+        return None;
+    }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
     // Where no light was sampled (every kind but glossy ones) or the lobe is a delta, an
