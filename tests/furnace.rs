@@ -133,6 +133,33 @@ fn thin_panes_pass_one_minus_their_reflectance_without_a_bounce() {
     assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
 }
 
+/// A box of albedo-1 medium whose extinction differs by channel, (0.5, 4, 0.05), over a
+/// white ground under a uniform sky: nothing is absorbed, so every pixel is 1 in each channel.
+/// Spectral MIS must weigh each channel right whichever channel chose the distance; a weight
+/// off in one channel (an injected error: ignoring the weight of rays that get through, which
+/// is 1 only in grey media) makes that channel's pixels differ from 1 and fails here.
+#[test]
+fn a_coloured_medium_loses_nothing_in_any_channel() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 2, 6), look_at: (0, 0.6, 0), vfov: 40),
+            render: (width: 32, height: 24, spp: 64, max_depth: 200, rr_depth: 3),
+            background: Constant((1, 1, 1)),
+            materials: { "white": Lambertian(albedo: (1, 1, 1)) },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Box(a: (-1, 0, -1), b: (1, 1.5, 1)), medium: (density: (0.5, 4, 0.05), albedo: (1, 1, 1))),
+            ],
+        )"#,
+    );
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    assert!(scene.media.chromatic());
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(1.0));
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
+}
+
 /// The camera inside a two-sided spherical emitter of radiance 1 looking at a convex diffuse
 /// sphere of albedo 0.5: the sphere receives radiance 1 from every direction, so it shows
 /// exactly 0.5 and the emitter 1. Exercises light sampling of a sphere from inside it (area

@@ -43,6 +43,8 @@ pub struct Paths {
     pub depth: Vec<u32>,
     /// Null crossings so far.
     pub crossings: Vec<u32>,
+    /// Spectral MIS ratios in coloured media (see [`crate::path::chromatic_flight`]).
+    pub ratio: Vec<Vec3>,
     /// Random stream.
     pub sampler: Vec<Sampler>,
     /// Pixel (index within the worker's tile).
@@ -85,6 +87,7 @@ impl Paths {
             prev_pdf: vec![0.0; n],
             depth: vec![0; n],
             crossings: vec![0; n],
+            ratio: vec![Vec3::ONE; n],
             sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],

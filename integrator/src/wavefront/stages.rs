@@ -118,7 +118,10 @@ fn store_hit(dst: &mut Hit, h: &Hit) {
 fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32, u: f32) -> bool {
     let s = i as usize;
     let ray = p.ray(s);
-    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, u) else {
+    let sampler = &p.sampler[s];
+    let u0 = || sampler.get_1d(path::medium_dim(0));
+    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &mut p.ratio[s], &ray, tmax, u, p.depth[s], u0)
+    else {
         return false;
     };
     // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
