@@ -21,10 +21,12 @@ fn assert_all_pixels_near(film: &pathwave::integrator::film::Film, expected: imp
     assert!(dof < 1.0 + 5.0 * (2.0 / n as f64).sqrt(), "chi2/dof {dof} over {n} pixel channels");
 }
 
-/// Albedo-1 surfaces of every kind (diffuse, mirror, glass) under a uniform sky of radiance 1:
-/// nothing is absorbed, so every pixel is 1 whatever the paths do (Russian roulette, glass
-/// radiance scaling by 1/eta^2 and back, concave crevices that need many bounces).
-/// Albedo-1 diffuse, fuzzed-mirror and glass objects on a ground sphere under `BACKGROUND`.
+/// Albedo-1 surfaces of every kind (diffuse, mirror, glass, a thin pane around a diffuse ball)
+/// under a uniform sky of radiance 1: nothing is absorbed, so every pixel is 1 whatever the
+/// paths do (Russian roulette, glass radiance scaling by 1/eta^2 and back, concave crevices that
+/// need many bounces, shadow rays through the pane and the MIS of paths that cross it).
+/// Albedo-1 diffuse, fuzzed-mirror, glass and thin-glass objects on a ground sphere under
+/// `BACKGROUND`.
 const FURNACE: &str = r#"Scene(
     camera: (look_from: (0, 3, 8), look_at: (0, 0.6, 0), vfov: 40),
     render: (width: 40, height: 32, spp: 64, max_depth: 200, rr_depth: 3),
@@ -33,10 +35,13 @@ const FURNACE: &str = r#"Scene(
         "white": Lambertian(albedo: (1, 1, 1)),
         "mirror": Metal(albedo: (1, 1, 1), fuzz: 0.3),
         "glass": Dielectric(ior: 1.5),
+        "pane": ThinDielectric(ior: 1.5),
     },
     objects: [
         (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
         (shape: Sphere(center: (0, 1, 0), radius: 1), material: "glass"),
+        (shape: Sphere(center: (-1.3, 0.75, 1.8), radius: 0.7), material: "pane"),
+        (shape: Sphere(center: (-1.3, 0.75, 1.8), radius: 0.45), material: "white"),
         (shape: Sphere(center: (-1.6, 0.7, 0.3), radius: 0.7), material: "white"),
         (shape: Sphere(center: (1.6, 0.7, 0.3), radius: 0.7), material: "mirror"),
         (shape: Box(a: (-0.5, 0, 1.2), b: (0.5, 0.6, 2)), material: "white", transform: [RotateY(30)]),
@@ -51,6 +56,32 @@ fn white_furnace_is_one_everywhere() {
     let avg: f32 = mean.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / (3 * mean.len()) as f32;
     assert!((avg - 1.0).abs() < 0.01, "image mean {avg}");
     assert_all_pixels_near(&film, |_| Some(1.0));
+}
+
+/// A white ball inside a thin pane in the white furnace, close up: light sampling reaches the
+/// ball through the pane, attenuated by 1 - R', and BSDF sampling crosses it without changing
+/// the MIS state; nothing is absorbed, so every pixel is 1. Shadow rays that crossed the pane
+/// unattenuated (an injected error) make the ball 3% to 8% too bright, which fails here.
+#[test]
+fn a_ball_inside_a_thin_pane_in_the_furnace_is_one_everywhere() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 1.2, 2.4), look_at: (0, 0.7, 0), vfov: 40),
+            render: (width: 32, height: 32, spp: 256, max_depth: 200, rr_depth: 3),
+            background: Constant((1, 1, 1)),
+            materials: { "white": Lambertian(albedo: (1, 1, 1)), "pane": ThinDielectric(ior: 1.5) },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Sphere(center: (0, 0.75, 0), radius: 0.7), material: "pane"),
+                (shape: Sphere(center: (0, 0.75, 0), radius: 0.45), material: "white"),
+            ],
+        )"#,
+    );
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(1.0));
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
 }
 
 /// The same scene with albedo 0.95 must fail the test above: it can see energy loss.
@@ -71,6 +102,62 @@ fn white_furnace_detects_absorption() {
     let film = render(&desc);
     let result = std::panic::catch_unwind(|| assert_all_pixels_near(&film, |_| Some(1.0)));
     assert!(result.is_err());
+}
+
+/// A lamp seen through three thin panes at normal incidence (an orthographic camera) with
+/// `max_depth: 0`: each pane lets 1 - R' through, R' = 2R / (1 + R) with R = ((n - 1) /
+/// (n + 1))^2, and crossing one is no bounce, so every pixel is the lamp times (1 - R')^3. A
+/// pane that ended paths at the depth limit like a bounce would leave the image black.
+#[test]
+fn thin_panes_pass_one_minus_their_reflectance_without_a_bounce() {
+    let desc = inline(
+        r#"Scene(
+            camera: (to_world: [], projection: Orthographic),
+            render: (width: 16, height: 16, spp: 64, max_depth: 0),
+            materials: { "pane": ThinDielectric(ior: 1.5), "lamp": DiffuseLight(emit: (2, 2, 2)) },
+            objects: [
+                (shape: Quad(q: (-5, -5, 1), u: (10, 0, 0), v: (0, 10, 0)), material: "pane"),
+                (shape: Quad(q: (-5, -5, 2), u: (0, 10, 0), v: (10, 0, 0)), material: "pane"),
+                (shape: Quad(q: (-5, -5, 3), u: (10, 0, 0), v: (0, 10, 0)), material: "pane"),
+                (shape: Quad(q: (-5, -5, 5), u: (0, 10, 0), v: (10, 0, 0)), material: "lamp"),
+            ],
+        )"#,
+    );
+    let r = (0.5f32 / 2.5).powi(2);
+    let t = 1.0 - 2.0 * r / (1.0 + r);
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(2.0 * t * t * t));
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    assert!(scene.features.null_surfaces);
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
+}
+
+/// A box of albedo-1 medium whose extinction differs by channel, (0.5, 4, 0.05), over a
+/// white ground under a uniform sky: nothing is absorbed, so every pixel is 1 in each channel.
+/// Spectral MIS must weigh each channel right whichever channel chose the distance; a weight
+/// off in one channel (an injected error: ignoring the weight of rays that get through, which
+/// is 1 only in grey media) makes that channel's pixels differ from 1 and fails here.
+#[test]
+fn a_coloured_medium_loses_nothing_in_any_channel() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 2, 6), look_at: (0, 0.6, 0), vfov: 40),
+            render: (width: 32, height: 24, spp: 64, max_depth: 200, rr_depth: 3),
+            background: Constant((1, 1, 1)),
+            materials: { "white": Lambertian(albedo: (1, 1, 1)) },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (shape: Box(a: (-1, 0, -1), b: (1, 1.5, 1)), medium: (density: (0.5, 4, 0.05), albedo: (1, 1, 1))),
+            ],
+        )"#,
+    );
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    assert!(scene.media.chromatic());
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(1.0));
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
 }
 
 /// The camera inside a two-sided spherical emitter of radiance 1 looking at a convex diffuse

@@ -244,7 +244,15 @@ fn medium_needs_a_closed_shape_and_valid_numbers() {
     let quad = r#"(shape: Quad(q: (0, 0, 0), u: (1, 0, 0), v: (0, 1, 0)), medium: (density: 1, albedo: (1, 1, 1))),"#;
     assert_err(&with_object(quad), 8, 104, &["closed shape", "Sphere, Box or a closed Mesh"]);
     let zero = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 0, albedo: (1, 1, 1))),"#;
-    assert_err(&with_object(zero), 8, 73, &["finite number > 0", "found 0"]);
+    assert_err(&with_object(zero), 8, 73, &["density > 0", "found 0"]);
+    // Per channel: each >= 0 and one > 0.
+    for bad in ["(1, -1, 1)", "(0, 0, 0)"] {
+        let coloured = zero.replace("density: 0", &format!("density: {bad}"));
+        let e = err(&with_object(&coloured));
+        assert!(e.line == 8 && e.message.contains("components >= 0 and one > 0"), "{e}");
+    }
+    let short = zero.replace("density: 0", "density: (1, 1)");
+    assert!(err(&with_object(&short)).message.contains("density"), "(1, 1)");
     let bright = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 2, 1))),"#;
     assert_err(&with_object(bright), 8, 92, &["albedo with components in [0, 1]"]);
 }

@@ -200,6 +200,9 @@ impl Background {
     }
 }
 
+/// The most surfaces with a null lobe that [`RenderScene::null_transmittance`] looks past.
+pub const MAX_NULL_CROSSINGS: u32 = 256;
+
 /// What the scene contains, so that integrators pick code specialised for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Features {
@@ -222,6 +225,10 @@ pub struct Features {
     /// Some surface's material is one-sided ([`Material::one_sided`]): hits on it from behind
     /// end their paths. Off, the Lambertian stage looks at no side.
     pub one_sided: bool,
+    /// Some surface's material has a null lobe ([`Material::has_null_lobe`], a thin
+    /// dielectric): shadow rays that something blocks look past such surfaces
+    /// ([`RenderScene::null_transmittance`]). Off, any surface blocks them.
+    pub null_surfaces: bool,
 }
 
 impl Features {
@@ -235,10 +242,11 @@ impl Features {
             emitting_surfaces: false,
             instances: !instances.is_empty(),
             one_sided: false,
+            null_surfaces: false,
         }
     }
 
-    /// Sets `textures`, `emitting_surfaces` and `one_sided` from what the primitives' material ids use:
+    /// Sets `textures`, `emitting_surfaces`, `one_sided` and `null_surfaces` from what the primitives' material ids use:
     /// their materials, their textured colours (`per_material`) and their emission
     /// (`emission`, both indexed like `materials`).
     pub fn with_materials(
@@ -261,6 +269,7 @@ impl Features {
             .filter(used)
             .any(|id| emission[id].is_some() && !materials[id].is_emissive());
         self.one_sided = (0..materials.len()).filter(used).any(|id| materials[id].one_sided());
+        self.null_surfaces = (0..materials.len()).filter(used).any(|id| materials[id].has_null_lobe());
         self
     }
 }
@@ -312,6 +321,31 @@ impl RenderScene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmax: f32) -> bool {
         self.aggregate().occluded(ray, tmax)
+    }
+
+    /// The fraction of light that gets along the shadow ray `ray` (from its origin to `t = 1`)
+    /// through the surfaces on it, each letting through its [`Material::null_transmission`]
+    /// (most let nothing through, a thin dielectric 1 - R'), as Mitsuba's volumetric path
+    /// tracer looks past null lobes. A ray that crosses more than [`MAX_NULL_CROSSINGS`]
+    /// surfaces counts as blocked.
+    #[inline(never)]
+    pub fn null_transmittance(&self, ray: &Ray) -> f32 {
+        let target = ray.origin + ray.dir;
+        let mut tr = 1.0f32;
+        let mut r = *ray;
+        for _ in 0..MAX_NULL_CROSSINGS {
+            let Some(h) = self.intersect(&r, 1.0) else { return tr };
+            let sp = &h.surface;
+            let d = r.dir.normalize();
+            tr *= self.material_at(h.material, sp).null_transmission(d.dot(sp.ns));
+            if !(tr > 0.0) {
+                return 0.0;
+            }
+            let side = if d.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
+            let origin = crate::math::offset_ray_origin(sp.p, sp.err, side);
+            r = Ray { origin, dir: target - origin, time: r.time };
+        }
+        0.0
     }
 
     /// Material `id` with its textured colours evaluated at `sp`.

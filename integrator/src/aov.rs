@@ -169,7 +169,7 @@ fn first_surface(scene: &RenderScene, camera: &Ray, tmax: f32) -> [Vec3; 3] {
     let transmittance = if scene.features.media {
         scene.media.transmittance(camera.origin, camera.dir, first.map_or(f32::INFINITY, |h| h.t))
     } else {
-        1.0
+        Vec3::ONE
     };
     let emission = match &first {
         None => scene.background.radiance(camera.dir),

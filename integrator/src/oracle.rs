@@ -63,6 +63,8 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32, samples: Range<u32>) ->
 /// rays reach infinitely far.
 pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler) -> Vec3 {
     let mut st = PathState::new(ray.origin);
+    // Spectral MIS ratios in coloured media (see `path::chromatic_flight`).
+    let mut ratio = Vec3::ONE;
     let mut reach = tmax;
     'path: loop {
         let hit = scene.intersect(&ray, reach);
@@ -74,11 +76,14 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                 if let Some(p) = path::sample_medium(
                     scene,
                     &mut st.beta,
+                    &mut ratio,
                     &ray,
                     tmax,
                     sampler.get_1d(path::medium_dim(st.depth)),
+                    st.depth,
+                    || sampler.get_1d(path::medium_dim(0)),
                 ) {
-                    if path::at_max_depth(scene, st.depth) {
+                    if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
@@ -98,7 +103,8 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
             if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
                 path::emit(scene, &mut st, &hit, wo, ray.time);
             }
-            if path::at_max_depth(scene, st.depth) {
+            // A surface with a null lobe is sampled at the limit too (only a null sample goes on).
+            if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
                 break 'path;
             }
             match mat.shading() {

@@ -29,8 +29,11 @@ pub struct PathState {
     pub prev_p: Vec3A,
     /// BSDF pdf of the last scattering.
     pub prev_pdf: f32,
-    /// Bounces so far.
+    /// Vertices so far: bounces and null crossings (each takes its sampler numbers).
     pub depth: u32,
+    /// Null crossings so far ([`BsdfSample::null`](pathwave_engine::material::BsdfSample::null)):
+    /// `depth - crossings` bounces count towards `max_depth`.
+    pub crossings: u32,
 }
 
 impl PathState {
@@ -45,7 +48,14 @@ impl PathState {
             prev_p: origin,
             prev_pdf: 0.0,
             depth: 0,
+            crossings: 0,
         }
+    }
+
+    /// Bounces so far, the null crossings left out.
+    #[inline(always)]
+    pub fn bounces(&self) -> u32 {
+        self.depth - self.crossings
     }
 }
 
@@ -183,25 +193,34 @@ pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -
     if scene.lights.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
 }
 
-/// The fraction of a shadow ray's contribution that gets through: 0 when something blocks it,
-/// else [`media_transmittance`].
+/// The fraction of a shadow ray's contribution that gets through, per channel: `None` when
+/// something blocks it (what surfaces with a null lobe let through,
+/// [`RenderScene::null_transmittance`], in scenes that have them), times
+/// [`media_transmittance`].
 #[inline]
-pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
-    if scene.occluded(ray, 1.0) { 0.0 } else { media_transmittance(scene, ray) }
+pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> Option<Vec3> {
+    let surfaces = match scene.occluded(ray, 1.0) {
+        false => 1.0,
+        true if scene.features.null_surfaces => scene.null_transmittance(ray),
+        true => 0.0,
+    };
+    (surfaces > 0.0).then(|| media_transmittance(scene, ray) * surfaces)
 }
 
 /// What the media let through along a shadow ray that nothing blocks, from its origin to the
-/// light point at `t = 1` (1 without media).
+/// light point at `t = 1`, per channel (1 without media).
 #[inline]
-pub fn media_transmittance(scene: &RenderScene, ray: &Ray) -> f32 {
-    if scene.features.media { scene.media.transmittance(ray.origin, ray.dir, 1.0) } else { 1.0 }
+pub fn media_transmittance(scene: &RenderScene, ray: &Ray) -> Vec3 {
+    match scene.features.media {
+        true => scene.media.transmittance(ray.origin, ray.dir, 1.0),
+        false => Vec3::ONE,
+    }
 }
 
 /// Traces a shadow ray at once (one path at a time) and adds what gets through.
 #[inline]
 pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
-    let tr = shadow_transmittance(scene, &s.ray);
-    if tr > 0.0 {
+    if let Some(tr) = shadow_transmittance(scene, &s.ray) {
         st.l += s.contribution * tr;
     }
 }
@@ -209,12 +228,65 @@ pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
 /// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
 /// miss) with the number `u`, the path's [`medium_dim`] of its depth. When the ray scatters
 /// first, the throughput takes the medium's albedo and the scattering point is returned;
-/// otherwise nothing changes. Call only for scenes with media.
+/// otherwise nothing changes. In coloured media see [`chromatic_flight`] (`ratio`, the path's
+/// `depth` and its first number `u0` serve only there). Call only for scenes with media.
 #[inline]
-pub fn sample_medium(scene: &RenderScene, beta: &mut Vec3, ray: &Ray, tmax: f32, u: f32) -> Option<Vec3A> {
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the path's pieces a flight reads and writes, from the oracle and the wavefront alike"
+)]
+pub fn sample_medium(
+    scene: &RenderScene,
+    beta: &mut Vec3,
+    ratio: &mut Vec3,
+    ray: &Ray,
+    tmax: f32,
+    u: f32,
+    depth: u32,
+    u0: impl FnOnce() -> f32,
+) -> Option<Vec3A> {
+    if scene.media.chromatic() {
+        let u0 = if depth == 0 { None } else { Some(u0()) };
+        return chromatic_flight(scene, beta, ratio, ray, tmax, u, u0);
+    }
     let e = scene.media.sample(ray.origin, ray.dir, tmax, u)?;
     *beta *= e.albedo;
     Some(ray.at(e.t))
+}
+
+/// A free flight through coloured media ([`Media::sample_chromatic`]) with the number `u`: the
+/// path's hero channel is `floor(3 u0)`, `u0` the number of its first flight (the camera ray's,
+/// `None` on that flight, whose distance then takes `3 u - hero`, independent of the choice). `ratio` holds the path's density ratios
+/// (each channel as hero over the actual hero) over their mean, and `beta` the throughput over
+/// that mean, so that whatever the path gathers is already weighted by the spectral MIS over
+/// whole paths: nothing else in the integrators changes.
+///
+/// [`Media::sample_chromatic`]: pathwave_engine::media::Media::sample_chromatic
+#[inline(never)]
+pub fn chromatic_flight(
+    scene: &RenderScene,
+    beta: &mut Vec3,
+    ratio: &mut Vec3,
+    ray: &Ray,
+    tmax: f32,
+    u: f32,
+    u0: Option<f32>,
+) -> Option<Vec3A> {
+    let hero = ((u0.unwrap_or(u) * 3.0) as usize).min(2);
+    // On the camera ray its distance takes the rest of the number.
+    let u = match u0 {
+        None => (u * 3.0 - hero as f32).clamp(0.0, 1.0 - f32::EPSILON / 2.0),
+        Some(_) => u,
+    };
+    let f = scene.media.sample_chromatic(ray.origin, ray.dir, tmax, u, hero);
+    let r = *ratio * f.ratio;
+    let mean = r.element_sum() / 3.0;
+    if !(mean > 0.0) {
+        *beta = Vec3::ZERO;
+        return None;
+    }
+    (*beta, *ratio) = (*beta * f.weight / mean, r / mean);
+    f.t.map(|t| ray.at(t))
 }
 
 /// The dimension of the free-flight number on the segment that leads to the vertex after
@@ -262,10 +334,11 @@ pub fn scatter_in_medium(
 
 /// The depth limit: a path that has made `max_depth` bounces ends where it meets a surface or
 /// scatters in a medium, without scattering again (an emitter or the background it reached
-/// still counts).
+/// still counts). Null crossings ([`PathState::crossings`]) are not bounces: a surface with a
+/// null lobe is sampled at the limit too, and only a null sample goes on ([`scatter_with`]).
 #[inline(always)]
-pub fn at_max_depth(scene: &RenderScene, depth: u32) -> bool {
-    depth == scene.settings.max_depth
+pub fn at_max_depth(scene: &RenderScene, bounces: u32) -> bool {
+    bounces == scene.settings.max_depth
 }
 
 /// A [`Shading::Diffuse`] material that is one-sided ([`Material::one_sided`]), met from behind
@@ -417,6 +490,16 @@ pub fn scatter_with(
 ) -> Option<Ray> {
     let bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
     let side = leaving_side(sp, wo, bs.wi)?;
+    if bs.null {
+        // Straight on, as if the surface were not there: the MIS state stays the last
+        // scattering's, and no roulette (the throughput is unchanged).
+        st.beta *= bs.weight;
+        (st.depth, st.crossings) = (st.depth + 1, st.crossings + 1);
+        return Some(Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time });
+    }
+    if at_max_depth(scene, st.bounces()) {
+        return None;
+    }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
     // Where no light was sampled (every kind but glossy ones) or the lobe is a delta, an

@@ -117,10 +117,24 @@ pub fn sample(ior: f32, fresnel: Fresnel, wo: Vec3A, n: Vec3A, uc: f32) -> Optio
         Fresnel::Schlick => fresnel_schlick(cos_i, eta),
     };
     if uc < f {
-        return Some(BsdfSample { wi: reflect(wo, nf), weight: Vec3::ONE, pdf: f, eta: 1.0, delta: true });
+        return Some(BsdfSample {
+            wi: reflect(wo, nf),
+            weight: Vec3::ONE,
+            pdf: f,
+            eta: 1.0,
+            delta: true,
+            null: false,
+        });
     }
     let wi = refract(wo, nf, eta)?.normalize();
-    Some(BsdfSample { wi, weight: Vec3::splat(1.0 / (eta * eta)), pdf: 1.0 - f, eta, delta: true })
+    Some(BsdfSample {
+        wi,
+        weight: Vec3::splat(1.0 / (eta * eta)),
+        pdf: 1.0 - f,
+        eta,
+        delta: true,
+        null: false,
+    })
 }
 
 #[cfg(test)]

@@ -97,7 +97,7 @@ pub fn sample(albedo: Vec3, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> 
         return None;
     }
     let wi = Frame::from_normal(nf).to_world(local);
-    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0, delta: false })
+    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0, delta: false, null: false })
 }
 
 /// `f |cos|` and pdf.

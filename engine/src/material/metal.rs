@@ -85,7 +85,7 @@ pub fn sample(albedo: Vec3, fuzz: f32, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) ->
             return None;
         }
     }
-    Some(BsdfSample { wi, weight: albedo, pdf: 1.0, eta: 1.0, delta: true })
+    Some(BsdfSample { wi, weight: albedo, pdf: 1.0, eta: 1.0, delta: true, null: false })
 }
 
 /// Density in solid angle of the direction `normalize(r + fuzz * ball)` about the unit mirror

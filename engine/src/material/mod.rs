@@ -22,6 +22,7 @@ pub mod rough_dielectric;
 pub mod rough_plastic;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
+pub mod thin_dielectric;
 
 use crate::format::registry::{VariantName, fields};
 use crate::texture::{MAX_TEXTURED_COLORS, MaterialTextures, TextureId};
@@ -37,6 +38,7 @@ registry! {
     RoughDielectric(rough_dielectric::RoughDielectric),
     Plastic(plastic::Plastic),
     RoughPlastic(rough_plastic::RoughPlastic),
+    ThinDielectric(thin_dielectric::ThinDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
     TestDiffuse(test_diffuse::TestDiffuse),
@@ -104,6 +106,11 @@ pub struct BsdfSample {
     /// emitter the ray meets gets no MIS weight (it counts in full). False for lobes with a
     /// density that [`MaterialModel::eval`] reproduces.
     pub delta: bool,
+    /// A null lobe: the ray goes on unbent as if the surface were not there (a thin
+    /// dielectric's transmission, Mitsuba's `Null` flag). The path keeps its MIS state (an
+    /// emitter it meets is weighted as seen from the last scattering before), and the crossing
+    /// is not a bounce of `max_depth`, though it takes the sampler's numbers of one.
+    pub null: bool,
 }
 
 /// Which numbers [`MaterialModel::sample`] reads: `u` (the direction's two) and `uc` (the
@@ -186,6 +193,20 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     /// How the denoiser's guides see it.
     fn specular(&self) -> Specular {
         Specular::No
+    }
+
+    /// The fraction of light that passes straight through the surface at `cos` from its normal
+    /// (a null lobe's, [`BsdfSample::null`]): shadow rays cross such surfaces, attenuated by
+    /// it. 0 by default: the surface blocks them.
+    fn null_transmission(&self, cos: f32) -> f32 {
+        let _ = cos;
+        0.0
+    }
+
+    /// Some of its samples are null ([`BsdfSample::null`]): a path at `max_depth` that meets it
+    /// still samples it, and goes on if the sample is null.
+    fn has_null_lobe(&self) -> bool {
+        false
     }
 
     /// A [`Shading::Diffuse`] kind that reflects only on the side its shading normal faces: a
@@ -394,6 +415,22 @@ macro_rules! registry {
                 }
             }
 
+            /// See [`MaterialModel::null_transmission`].
+            #[inline]
+            pub fn null_transmission(&self, cos: f32) -> f32 {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.null_transmission(cos),)+
+                }
+            }
+
+            /// See [`MaterialModel::has_null_lobe`].
+            #[inline]
+            pub fn has_null_lobe(&self) -> bool {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.has_null_lobe(),)+
+                }
+            }
+
             /// See [`MaterialModel::one_sided`].
             #[inline]
             pub fn one_sided(&self) -> bool {
@@ -490,6 +527,7 @@ mod tests {
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.0 }),
             Material::from(metal::Metal { albedo: Vec3::splat(0.8), fuzz: 0.3 }),
             Material::from(dielectric::Dielectric { ior: 1.5, fresnel: Fresnel::Exact }),
+            Material::from(thin_dielectric::ThinDielectric { ior: 1.5 }),
             Material::from(lambertian::Lambertian { albedo: Vec3::splat(0.5), two_sided: true }),
             Material::from(plastic::Plastic::new(Vec3::splat(0.5), Vec3::ONE, 1.5, false, false)),
             Material::from(rough_plastic::RoughPlastic::new(

@@ -212,7 +212,14 @@ impl MaterialModel for Plastic {
         let p = self.mirror_probability(f_i)?;
         if uc < p {
             let weight = self.tint * (f_i / p);
-            return Some(BsdfSample { wi: reflect(wo, n), weight, pdf: p, eta: 1.0, delta: true });
+            return Some(BsdfSample {
+                wi: reflect(wo, n),
+                weight,
+                pdf: p,
+                eta: 1.0,
+                delta: true,
+                null: false,
+            });
         }
         let local = cosine_hemisphere(u);
         let pdf = (1.0 - p) * local.z * FRAC_1_PI;
@@ -221,7 +228,14 @@ impl MaterialModel for Plastic {
         }
         // f cos / pdf: the cosines and 1 / pi cancel.
         let weight = self.diffuse(f_i, local.z) * (std::f32::consts::PI / (1.0 - p));
-        Some(BsdfSample { wi: Frame::from_normal(n).to_world(local), weight, pdf, eta: 1.0, delta: false })
+        Some(BsdfSample {
+            wi: Frame::from_normal(n).to_world(local),
+            weight,
+            pdf,
+            eta: 1.0,
+            delta: false,
+            null: false,
+        })
     }
 
     /// The diffuse lobe (the mirror is a delta).

@@ -134,7 +134,7 @@ impl RoughConductor {
         // separable).
         let weight = self.tint * self.fresnel(cos_om.min(1.0)) * md.shadowing(self.smith, lo, li);
         let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight, pdf, eta: 1.0, delta: false })
+        Some(BsdfSample { wi, weight, pdf, eta: 1.0, delta: false, null: false })
     }
 
     /// [`MaterialModel::eval`] off the smooth limit, `n` facing `wo`, with the distribution `md`.
@@ -210,7 +210,14 @@ impl MaterialModel for RoughConductor {
         }
         if self.is_smooth() {
             let weight = self.tint * self.fresnel(cos_o.min(1.0));
-            return Some(BsdfSample { wi: reflect(wo, n), weight, pdf: 1.0, eta: 1.0, delta: true });
+            return Some(BsdfSample {
+                wi: reflect(wo, n),
+                weight,
+                pdf: 1.0,
+                eta: 1.0,
+                delta: true,
+                null: false,
+            });
         }
         match self.distribution {
             Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, n, u),

@@ -116,7 +116,7 @@ impl RoughDielectric {
             return None;
         }
         let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight: Vec3::splat(weight), pdf, eta, delta: false })
+        Some(BsdfSample { wi, weight: Vec3::splat(weight), pdf, eta, delta: false, null: false })
     }
 
     /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, the normal `nf`

@@ -321,7 +321,7 @@ impl RoughPlastic {
             return None;
         }
         let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf, eta: 1.0, delta: false })
+        Some(BsdfSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf, eta: 1.0, delta: false, null: false })
     }
 
     /// [`MaterialModel::sample`] with a mirror coating.
@@ -334,7 +334,14 @@ impl RoughPlastic {
         let p = lobe_probability(1.0 - t_i, self.specular_weight)?;
         if uc < p {
             let weight = self.tint * (fresnel_exact(cos_i.min(1.0), self.ior) / p);
-            return Some(BsdfSample { wi: reflect(wo, n), weight, pdf: p, eta: 1.0, delta: true });
+            return Some(BsdfSample {
+                wi: reflect(wo, n),
+                weight,
+                pdf: p,
+                eta: 1.0,
+                delta: true,
+                null: false,
+            });
         }
         let local = cosine_hemisphere(u);
         let pdf = (1.0 - p) * local.z * FRAC_1_PI;
@@ -342,7 +349,14 @@ impl RoughPlastic {
             return None;
         }
         let weight = self.diffuse_f_cos(t_i, local.z) / pdf;
-        Some(BsdfSample { wi: Frame::from_normal(n).to_world(local), weight, pdf, eta: 1.0, delta: false })
+        Some(BsdfSample {
+            wi: Frame::from_normal(n).to_world(local),
+            weight,
+            pdf,
+            eta: 1.0,
+            delta: false,
+            null: false,
+        })
     }
 
     /// [`MaterialModel::eval`] with a mirror coating: the diffuse lobe.

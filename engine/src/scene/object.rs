@@ -5,7 +5,7 @@ use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
-use crate::format::{Albedo, Color, Positive, Radiance, V3, context};
+use crate::format::{Albedo, Color, Radiance, V3, context};
 use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
@@ -60,7 +60,7 @@ pub enum Body {
     /// `material: "name"`: a surface with a material from `materials`.
     Surface(MaterialRef),
     /// `medium: (density: .., albedo: ..)`: an invisible, index-matched boundary (a closed
-    /// shape: sphere or box) filled with a homogeneous medium.
+    /// shape: sphere, box or closed mesh) filled with a homogeneous medium.
     Volume(MediumDesc),
 }
 
@@ -68,10 +68,57 @@ pub enum Body {
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
 #[serde(deny_unknown_fields, rename = "Medium")]
 pub struct MediumDesc {
-    /// Extinction coefficient sigma_t per unit length, the same in every channel (> 0).
-    pub density: Positive,
+    /// Extinction coefficient sigma_t per unit length: one number for every channel (> 0), or
+    /// `(r, g, b)` per channel (each >= 0, one > 0).
+    pub density: Density,
     /// Single-scattering albedo sigma_s / sigma_t, components in [0, 1].
     pub albedo: Albedo,
+}
+
+/// A medium's extinction: `0.5` (every channel) or `(0.1, 0.9, 0.1)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Density(pub glam::Vec3);
+
+impl<'de> Deserialize<'de> for Density {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = Density;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a density: a number > 0, or (r, g, b) with each >= 0 and one > 0")
+            }
+            fn visit_f64<E: Error>(self, x: f64) -> Result<Density, E> {
+                let x = x as f32;
+                match x.is_finite() && x > 0.0 {
+                    true => Ok(Density(glam::Vec3::splat(x))),
+                    false => Err(E::custom(format!("expected a density > 0, found {x}"))),
+                }
+            }
+            fn visit_i64<E: Error>(self, x: i64) -> Result<Density, E> {
+                self.visit_f64(x as f64)
+            }
+            fn visit_u64<E: Error>(self, x: u64) -> Result<Density, E> {
+                self.visit_f64(x as f64)
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Density, A::Error> {
+                let mut c = [0.0f32; 3];
+                for (i, c) in c.iter_mut().enumerate() {
+                    *c = seq.next_element()?.ok_or_else(|| A::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<f32>()?.is_some() {
+                    return Err(A::Error::invalid_length(4, &self));
+                }
+                let v = glam::Vec3::from(c);
+                match v.is_finite() && v.min_element() >= 0.0 && v.max_element() > 0.0 {
+                    true => Ok(Density(v)),
+                    false => Err(A::Error::custom(format!(
+                        "expected a density with components >= 0 and one > 0, found {v}"
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(Visit)
+    }
 }
 
 #[derive(Deserialize)]

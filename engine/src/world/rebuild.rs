@@ -291,7 +291,7 @@ pub fn rebuild_media(
             Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0 })
         })
         .collect();
-    out.media = Arc::new(Media { volumes });
+    out.media = Arc::new(Media::new(volumes));
     out.rebuilds += 1;
 }
 
@@ -475,11 +475,11 @@ mod tests {
             .spawn((
                 Transform(Affine3A::IDENTITY),
                 Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE, uv: Default::default() })),
-                Filling(Medium { sigma_t: 1.0, albedo: Vec3::ONE }),
+                Filling(Medium { sigma_t: Vec3::ONE, albedo: Vec3::ONE }),
             ))
             .id();
         let with = w.update();
-        assert_eq!((with.media.volumes.len(), rebuilds(&w)), (1, 1), "a volume is not geometry");
+        assert_eq!((with.media.volumes().len(), rebuilds(&w)), (1, 1), "a volume is not geometry");
         assert!(with.features.media);
         w.world.despawn(v);
         assert!(!w.update().features.media);

@@ -39,8 +39,12 @@ pub struct Paths {
     pub prev_p: Vec<Vec3A>,
     /// Last BSDF pdf.
     pub prev_pdf: Vec<f32>,
-    /// Bounces so far.
+    /// Vertices so far (bounces and null crossings).
     pub depth: Vec<u32>,
+    /// Null crossings so far.
+    pub crossings: Vec<u32>,
+    /// Spectral MIS ratios in coloured media (see [`crate::path::chromatic_flight`]).
+    pub ratio: Vec<Vec3>,
     /// Random stream.
     pub sampler: Vec<Sampler>,
     /// Pixel (index within the worker's tile).
@@ -82,6 +86,8 @@ impl Paths {
             prev_p: vec![Vec3A::ZERO; n],
             prev_pdf: vec![0.0; n],
             depth: vec![0; n],
+            crossings: vec![0; n],
+            ratio: vec![Vec3::ONE; n],
             sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
             hit: vec![hit0; n],
@@ -127,6 +133,7 @@ impl Paths {
             prev_p: self.prev_p[i],
             prev_pdf: self.prev_pdf[i],
             depth: self.depth[i],
+            crossings: self.crossings[i],
         }
     }
 
@@ -140,6 +147,7 @@ impl Paths {
         self.prev_p[i] = s.prev_p;
         self.prev_pdf[i] = s.prev_pdf;
         self.depth[i] = s.depth;
+        self.crossings[i] = s.crossings;
     }
 }
 

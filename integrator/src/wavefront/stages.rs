@@ -118,7 +118,10 @@ fn store_hit(dst: &mut Hit, h: &Hit) {
 fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, tmax: f32, u: f32) -> bool {
     let s = i as usize;
     let ray = p.ray(s);
-    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &ray, tmax, u) else {
+    let sampler = &p.sampler[s];
+    let u0 = || sampler.get_1d(path::medium_dim(0));
+    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &mut p.ratio[s], &ray, tmax, u, p.depth[s], u0)
+    else {
         return false;
     };
     // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
@@ -248,7 +251,7 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for k in 0..q.medium.len() {
         let (i, s) = (q.medium[k], q.medium[k] as usize);
         let mut st = p.state(s);
-        if path::at_max_depth(scene, st.depth) {
+        if path::at_max_depth(scene, st.bounces()) {
             q.finished.push(i);
             continue;
         }
@@ -276,13 +279,23 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
 }
 
 /// The paths of `queue` that may scatter again, in order (in the scratch list, to be handed
-/// back); those at [`path::at_max_depth`] end here.
+/// back); those at [`path::at_max_depth`] end here, but for hits on a material with a null lobe
+/// where `null_lobes` (whose null samples go on).
 #[inline]
-fn below_max_depth(scene: &RenderScene, p: &Paths, q: &mut Queues, queue: &[u32]) -> Vec<u32> {
+fn below_max_depth(
+    scene: &RenderScene,
+    p: &Paths,
+    q: &mut Queues,
+    queue: &[u32],
+    null_lobes: bool,
+) -> Vec<u32> {
     let mut live = std::mem::take(&mut q.scratch);
     live.clear();
     for &i in queue {
-        match path::at_max_depth(scene, p.depth[i as usize]) {
+        let s = i as usize;
+        let ends = path::at_max_depth(scene, p.depth[s] - p.crossings[s])
+            && !(null_lobes && scene.materials[p.hit[s].material as usize].has_null_lobe());
+        match ends {
             true => q.finished.push(i),
             false => live.push(i),
         }
@@ -294,7 +307,7 @@ fn below_max_depth(scene: &RenderScene, p: &Paths, q: &mut Queues, queue: &[u32]
 /// drawn at once, then BSDF sampling path by path.
 fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
-    let live = below_max_depth(scene, p, q, queue);
+    let live = below_max_depth(scene, p, q, queue, scene.features.null_surfaces);
     for chunk in live.chunks(LANES) {
         // The numbers of all lanes at once, those some lane's material reads.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
@@ -328,7 +341,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     for &i in queue {
         let s = i as usize;
         let mut st = p.state(s);
-        if path::at_max_depth(scene, st.depth) {
+        if path::at_max_depth(scene, st.bounces()) {
             q.finished.push(i);
             continue;
         }
@@ -350,7 +363,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     let mut ins = LambertInLanes::default();
     let mut outs = LambertOutLanes::default();
     let mut lights = light_lanes::LightSampler::new(scene);
-    let mut live = below_max_depth(scene, p, q, queue);
+    let mut live = below_max_depth(scene, p, q, queue, false);
     if scene.features.one_sided {
         end_behind(scene, p, q, &mut live);
     }
@@ -429,6 +442,17 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     // one light.
     let first_vertex = |k: usize| p.depth[sq.slot[k] as usize] <= 1;
     scene.aggregate().trace_occluded(&sq.rays, &sq.time, first_vertex, &mut sq.occluded);
+    if scene.features.null_surfaces {
+        // Blocked rays may cross surfaces with a null lobe: look past them.
+        for k in 0..n {
+            if sq.occluded[k] {
+                let tr = scene.null_transmittance(&sq.ray(k));
+                if tr > 0.0 {
+                    (sq.occluded[k], sq.contribution[k]) = (false, sq.contribution[k] * tr);
+                }
+            }
+        }
+    }
     if scene.features.media {
         for k in 0..n {
             if !sq.occluded[k] {

@@ -157,6 +157,7 @@ impl<'a> TileWork<'a> {
             }
             let guides = self.guide_sums.is_some();
             let far_clip = scene.camera.has_far_clip();
+            let chromatic = scene.features.media && scene.media.chromatic();
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
             let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
@@ -166,6 +167,9 @@ impl<'a> TileWork<'a> {
                 let s = slot as usize;
                 p.set_ray(s, ray);
                 p.set_state(s, &path::PathState::new(ray.origin));
+                if chromatic {
+                    p.ratio[s] = glam::Vec3::ONE;
+                }
                 p.sampler[s] = samplers[l];
                 p.pixel[s] = which[l].0;
                 if far_clip {

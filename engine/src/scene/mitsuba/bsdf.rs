@@ -237,9 +237,24 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                 Some(rough) => format!("RoughDielectric(ior: {ior}, {rough})"),
             }
         }
+        // Mitsuba's thindielectric (`src/bsdfs/thindielectric.cpp`): a pane whose reflectance
+        // sums the inter-reflections inside it, and which lets the rest straight through.
+        "thindielectric" => {
+            let int = Converter::ior(&p, "int_ior", 1.5046)?;
+            let ext = Converter::ior(&p, "ext_ior", 1.000277)?;
+            unit_scale(&p, "specular_reflectance")?;
+            unit_scale(&p, "specular_transmittance")?;
+            p.finish(&["int_ior", "ext_ior"])?;
+            format!("ThinDielectric(ior: {})", num32(int / ext))
+        }
+        "null" => {
+            return Err(p.at.error(
+                "<bsdf type=\"null\"> is a shape's invisible boundary: pathwave reads it directly inside a <shape>",
+            ));
+        }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, plastic and roughplastic"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic and null"
             )));
         }
     };

@@ -174,10 +174,10 @@ impl<'d> Converter<'d> {
                 "bsdf" | "texture" => {
                     e.need("id")?;
                 }
+                // Converted where shapes refer to them; read here too, so that a medium pathwave
+                // cannot render is refused where it is written.
                 "medium" => {
-                    return Err(e
-                        .at
-                        .error("<medium>: pathwave reads participating media from XML in a later version"));
+                    super::medium::convert(e)?;
                 }
                 t => return Err(e.at.error(format!("<{t}> does not belong at the top of a <scene>"))),
             }
@@ -339,7 +339,34 @@ impl<'d> Converter<'d> {
                 }
             }
         }
+        let interior = self.interior(&p)?;
+        // Mitsuba's `null` BSDF: no surface, only the boundary of the interior medium (if any).
+        let bsdf = match bsdf {
+            Some(b) if Plugin::new(b)?.kind == "null" => {
+                Plugin::new(b)?.finish(&[])?;
+                if let Some(em) = emitter {
+                    return Err(em.at.error(format!(
+                        "an area emitter on {} with a null BSDF: pathwave's emitters are surfaces; give it a BSDF",
+                        p.label()
+                    )));
+                }
+                None
+            }
+            Some(b) => Some(Some(b)),
+            None => Some(None),
+        };
         let (shape, to_world) = super::shape::convert(self, &p, outer)?;
+        if self.out.objects.len() + 2 > MAX_OBJECTS {
+            return Err(p.at.error(format!("the scene has more than {MAX_OBJECTS} shapes")));
+        }
+        let transform = match to_world.is_empty() {
+            true => String::new(),
+            false => format!(", transform: {}", ops(&to_world)),
+        };
+        if let Some(medium) = interior {
+            self.out.objects.push((format!("(shape: {shape}, medium: {medium}{transform})"), p.at.clone()));
+        }
+        let Some(bsdf) = bsdf else { return Ok(()) };
         // An area emitter on a shape with no BSDF or a black diffuse one (Mitsuba's default
         // for an emitter) is an emitter; on one that reflects, the object emits besides its
         // material.
@@ -378,19 +405,38 @@ impl<'d> Converter<'d> {
                 }
             }
         };
-        if self.out.objects.len() >= MAX_OBJECTS {
-            return Err(p.at.error(format!("the scene has more than {MAX_OBJECTS} shapes")));
-        }
         let mut text = format!("(shape: {shape}, material: {material:?}");
         if let Some(radiance) = emit {
             write!(text, ", emit: (radiance: {radiance})").unwrap();
         }
-        if !to_world.is_empty() {
-            write!(text, ", transform: {}", ops(&to_world)).unwrap();
-        }
+        text += &transform;
         text.push(')');
         self.out.objects.push((text, p.at.clone()));
         Ok(())
+    }
+
+    /// The medium inside a shape (its `interior`) as RON, refusing an `exterior` (see
+    /// [`super::medium`]).
+    fn interior(&self, p: &Plugin<'d>) -> Result<Option<String>, SceneError> {
+        if let Some(param) = p.param("exterior") {
+            return Err(param.at.error(format!(
+                "{}: an exterior medium: pathwave's media fill closed shapes, and outside a shape is whatever volumes surround it; give the medium as the interior of the shape that bounds it (and leave out an exterior that names the medium around this shape anyway)",
+                p.label()
+            )));
+        }
+        let Some(param) = p.param("interior") else { return Ok(None) };
+        let super::props::Value::Object(e) = param.value else {
+            return Err(param.at.error(format!("{}: `interior` is a <medium> or a <ref> to one", p.label())));
+        };
+        let e = self.referenced(e)?;
+        if e.tag != "medium" {
+            return Err(param.at.error(format!(
+                "{}: `interior` refers to a <{}>, not a <medium>",
+                p.label(),
+                e.tag
+            )));
+        }
+        super::medium::convert(e).map(Some)
     }
 
     fn emitter(&mut self, e: &'d Element) -> Result<(), SceneError> {

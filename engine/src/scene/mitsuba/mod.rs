@@ -7,12 +7,13 @@
 //!
 //! Layers: [`xml`] reads files into elements (includes, parameters, versions), [`props`] types
 //! a plugin's parameters and refuses the unread ones, and [`convert`] with [`sensor`],
-//! [`bsdf`], [`shape`] and [`emitter`] turn plugins into pathwave kinds. What pathwave has no
+//! [`bsdf`], [`shape`], [`medium`] and [`emitter`] turn plugins into pathwave kinds. What pathwave has no
 //! kind for is refused with the plugin's place and what pathwave reads instead.
 
 pub mod bsdf;
 pub mod convert;
 pub mod emitter;
+pub mod medium;
 pub mod props;
 pub mod sensor;
 pub mod shape;

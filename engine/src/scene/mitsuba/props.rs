@@ -105,8 +105,20 @@ pub struct Param<'d> {
 }
 
 /// The kinds of plugin element.
-pub const PLUGIN_TAGS: [&str; 10] =
-    ["bsdf", "shape", "emitter", "texture", "sensor", "film", "rfilter", "sampler", "integrator", "medium"];
+pub const PLUGIN_TAGS: [&str; 12] = [
+    "bsdf",
+    "shape",
+    "emitter",
+    "texture",
+    "sensor",
+    "film",
+    "rfilter",
+    "sampler",
+    "integrator",
+    "medium",
+    "phase",
+    "volume",
+];
 
 /// One plugin: `<shape type="sphere" id="..">` with its parameters and its unnamed children.
 #[derive(Debug)]

@@ -691,3 +691,70 @@ fn plastics_become_plastic_kinds() {
         assert_eq!((e.line, e.col), at, "{tag}: {e}");
     }
 }
+
+#[test]
+fn media_fill_the_interiors_of_their_shapes() {
+    let r = ron(
+        "media",
+        r#"<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1, 2, 3"/><rgb name="albedo" value="0.5"/><float name="scale" value="2"/><phase type="isotropic"/></medium>
+        <shape type="sphere"><bsdf type="null"/><ref id="fog" name="interior"/></shape>
+        <shape type="cube"><bsdf type="dielectric"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="0.5"/></medium></shape>
+        <shape type="sphere"><float name="radius" value="3"/><bsdf type="thindielectric"><string name="int_ior" value="water"/></bsdf></shape>
+        <shape type="sphere"><float name="radius" value="5"/><bsdf type="null"/></shape>"#,
+    );
+    for want in [
+        "(shape: Sphere(center: (0, 0, 0), radius: 1, poles: Z), medium: (density: (2, 4, 6), albedo: (0.5, 0.5, 0.5)))",
+        // Mitsuba's defaults: albedo 0.75; the cube's surface beside its volume.
+        "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), medium: (density: 0.5, albedo: (0.75, 0.75, 0.75)))",
+        "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), material: \"dielectric-",
+        "ThinDielectric(ior: 1.33263",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    // A null BSDF without a medium is nothing at all.
+    assert!(!r.contains("radius: 5"), "{r}");
+    // The converted scene loads: the volumes' shapes are closed.
+    let p = scene(
+        "media-load",
+        r#"<shape type="sphere"><bsdf type="null"/><medium type="homogeneous" name="interior"/></shape>"#,
+    );
+    super::load(&p, &[]).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn media_pathwave_cannot_render_are_refused_where_they_are_written() {
+    let e = error("hetero", "\n<medium type=\"heterogeneous\" id=\"m\"/>");
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("heterogeneous") && e.message.contains("homogeneous"), "{e}");
+    let e = error(
+        "hg",
+        "<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></medium>",
+    );
+    assert!(e.message.contains("\"hg\"") && e.message.contains("isotropic"), "{e}");
+    let e = error(
+        "exterior",
+        "<medium type=\"homogeneous\" id=\"m\"/><shape type=\"sphere\"><ref id=\"m\" name=\"exterior\"/></shape>",
+    );
+    assert!(e.message.contains("exterior") && e.message.contains("interior"), "{e}");
+    let e =
+        error("null-emitter", "<shape type=\"sphere\"><bsdf type=\"null\"/><emitter type=\"area\"/></shape>");
+    assert!(e.message.contains("null"), "{e}");
+    let e = error(
+        "not-a-medium",
+        "<bsdf type=\"diffuse\" id=\"b\"/><shape type=\"sphere\"><ref id=\"b\" name=\"interior\"/></shape>",
+    );
+    assert!(e.message.contains("not a <medium>"), "{e}");
+    let e = error(
+        "negative",
+        "<shape type=\"sphere\"><medium type=\"homogeneous\" name=\"interior\"><float name=\"sigma_t\" value=\"-1\"/></medium></shape>",
+    );
+    assert!(e.message.contains(">= 0"), "{e}");
+    // An open shape cannot hold a medium: the RON loader's refusal, at the XML shape.
+    let p = scene(
+        "open",
+        "\n<shape type=\"rectangle\"><bsdf type=\"null\"/><medium type=\"homogeneous\" name=\"interior\"/></shape>",
+    );
+    let Err(e) = super::load(&p, &[]) else { panic!("an open boundary is refused") };
+    assert_eq!(e.line, 6, "{e}");
+    assert!(e.message.contains("closed"), "{e}");
+}
