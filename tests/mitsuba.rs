@@ -359,6 +359,41 @@ fn homogeneous_media_roughdielectric_spot() {
     );
 }
 
+/// An area emitter inside a homogeneous medium, the medium bounded by a `thindielectric` pane,
+/// beside a rough plastic torus. The image mean shows the power, as in the other media scenes.
+#[test]
+fn homogeneous_media_emitter_inside() {
+    conformance_with(
+        "participating_media",
+        "test_homo_emitter_inside_medium_volpath.xml",
+        "test_homo_emitter_inside_medium",
+        Power::ImageMean,
+    );
+}
+
+/// A rough plastic torus inside a homogeneous medium behind a `thindielectric` pane.
+#[test]
+fn homogeneous_media_object_inside() {
+    conformance_with(
+        "participating_media",
+        "test_homo_obj_inside_medium_volpath.xml",
+        "test_homo_obj_inside_medium",
+        Power::ImageMean,
+    );
+}
+
+/// Plastic and rough plastic surfaces under an area light, rendered by Mitsuba's volpath
+/// without a medium.
+#[test]
+fn surfaces_under_an_area_light_with_volpath() {
+    conformance_with(
+        "participating_media",
+        "test_surf_area_light_volpath.xml",
+        "test_surf_area_light",
+        Power::ImageMean,
+    );
+}
+
 /// `pathwave convert`'s RON, written in another folder, renders the same bits as the XML.
 #[test]
 fn converted_ron_renders_the_same_bits() {
