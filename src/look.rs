@@ -114,6 +114,7 @@ pub fn srgb_oetf(c: f32) -> f32 {
 }
 
 /// AgX's inset matrix (rows: the output channels).
+#[expect(clippy::excessive_precision, reason = "the digits as published")]
 const AGX_INSET: [[f32; 3]; 3] = [
     [0.842_479_06, 0.078_433_6, 0.079_223_745],
     [0.042_328_242, 0.878_468_6, 0.079_166_13],

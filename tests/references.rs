@@ -25,7 +25,7 @@
 mod common;
 use common::*;
 use pathwave::engine::material::microfacet::{Roughness, Smith};
-use pathwave::engine::scene::{Body, MaterialDesc, Positive, SceneDesc};
+use pathwave::engine::scene::{Body, Density, MaterialDesc, SceneDesc};
 use pathwave::engine::world::SceneWorld;
 use pathwave::integrator::film::Film;
 use pathwave::integrator::wavefront;
@@ -180,7 +180,7 @@ fn cornell_smoke() {
             if let Body::Volume(m) = &mut o.body
                 && m.albedo.0.x == 1.0
             {
-                m.density = Positive(m.density.0 * 1.05);
+                m.density = Density(m.density.0 * 1.05);
             }
         }
     });
