@@ -116,7 +116,7 @@ fn outputs_are_checked_before_the_work() {
     std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
     let before = std::fs::read(&scene).unwrap();
     for (out, says) in [
-        (dir.join("late.jpg"), "unknown output format"),
+        (dir.join("late.tiff"), "unknown output format"),
         (dir.join("missing/c.png"), "cannot write there: no such folder"),
         (scene.clone(), "unknown output format"),
         (dir.join("s.ron.png"), ""),
