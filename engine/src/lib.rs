@@ -42,6 +42,20 @@ mod testing {
         move || u() * 2.0 - 1.0
     }
 
+    /// A material description written as a scene writes it (RON, implicit `Some`).
+    pub fn material_desc(text: &str) -> Result<crate::material::MaterialDesc, String> {
+        ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+            .from_str::<crate::material::MaterialDesc>(text)
+            .map_err(|e| e.to_string())
+    }
+
+    /// The material of a description that names no texture.
+    pub fn material(text: &str) -> crate::material::Material {
+        let desc = material_desc(text).unwrap();
+        crate::material::Material::build(&desc, &mut |_| unreachable!("no textures")).0
+    }
+
     /// Points about the plane z = 0 for light samplers of shapes in it, the `k`-th of a series:
     /// from 1e-5 to 1e3 across and away, a quarter exactly on the plane and a quarter within
     /// 1e-6 of it; the height is also returned (to place points above a vertex).

@@ -261,8 +261,9 @@ impl MaterialModel for Plastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::Material;
     use crate::material::microfacet::testing::assert_chi2;
-    use crate::material::{Material, MaterialDesc};
+    use crate::testing::{material as build, material_desc as parse};
 
     /// A normal that is not an axis, and the direction `deg` degrees from it.
     fn setup(deg: f32) -> (Vec3A, Vec3A) {
@@ -520,17 +521,6 @@ mod tests {
                 assert!((e.pdf - pdf).abs() <= 1e-4 * pdf, "{what}: pdf {} vs {pdf}", e.pdf);
             }
         }
-    }
-
-    fn parse(text: &str) -> Result<MaterialDesc, String> {
-        ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-            .from_str::<MaterialDesc>(text)
-            .map_err(|e| e.to_string())
-    }
-
-    fn build(text: &str) -> Material {
-        Material::build(&parse(text).unwrap(), &mut |_| unreachable!("no textures")).0
     }
 
     /// Textured colours: the albedo is slot 0 and the tint slot 1, as `set_color` sets them at

@@ -328,9 +328,10 @@ pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::Material;
     use crate::material::dielectric::fresnel_exact;
     use crate::material::microfacet::testing::assert_chi2;
-    use crate::material::{Material, MaterialDesc};
+    use crate::testing::{material as build, material_desc as parse};
 
     /// Gold (pbrt-v4's `metal-Au` at about 650, 550 and 450 nm).
     const GOLD: ComplexIor =
@@ -623,17 +624,6 @@ mod tests {
         let f = fresnel_conductor(0.5, GOLD.eta, GOLD.k);
         assert!(f.min_element() >= 0.0 && f.max_element() <= 1.0);
         assert!(f.x > f.z, "gold reflects red more than blue: {f}");
-    }
-
-    fn parse(text: &str) -> Result<MaterialDesc, String> {
-        ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-            .from_str::<MaterialDesc>(text)
-            .map_err(|e| e.to_string())
-    }
-
-    fn build(text: &str) -> Material {
-        Material::build(&parse(text).unwrap(), &mut |_| unreachable!("no textures")).0
     }
 
     #[test]

@@ -484,12 +484,7 @@ mod tests {
 
     #[test]
     fn descriptions_parse_and_bad_values_are_refused() {
-        let parse = |text: &str| {
-            ron::Options::default()
-                .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-                .from_str::<crate::material::MaterialDesc>(text)
-                .map_err(|e| e.to_string())
-        };
+        let parse = crate::testing::material_desc;
         let d = parse("RoughDielectric(ior: 1.5, alpha: 0.1)").unwrap();
         let (m, _) = crate::material::Material::build(&d, &mut |_| unreachable!());
         assert_eq!(m, crate::material::Material::RoughDielectric(glass(0.1, Distribution::Ggx)));

@@ -438,8 +438,9 @@ impl MaterialModel for RoughPlastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::Material;
     use crate::material::microfacet::testing::assert_chi2;
-    use crate::material::{Material, MaterialDesc};
+    use crate::testing::{material as build, material_desc as parse};
 
     const DISTRIBUTIONS: [Distribution; 2] = [Distribution::Ggx, Distribution::Beckmann];
 
@@ -799,17 +800,6 @@ mod tests {
             }
         }
         eprintln!("largest relative difference from Mitsuba: {worst}");
-    }
-
-    fn parse(text: &str) -> Result<MaterialDesc, String> {
-        ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-            .from_str::<MaterialDesc>(text)
-            .map_err(|e| e.to_string())
-    }
-
-    fn build(text: &str) -> Material {
-        Material::build(&parse(text).unwrap(), &mut |_| unreachable!("no textures")).0
     }
 
     #[test]
