@@ -414,11 +414,16 @@ fn converted_ron_renders_the_same_bits() {
         ("bsdf_spheres", "test_textured_diffuse_path.xml"),
         ("bsdf_spheres", "test_roughdielectric_path.xml"),
         ("bsdf_spheres", "test_roughplastic_linear_path.xml"),
+        ("bsdf_spheres", "test_roughplastic_nonlinear_path.xml"),
+        ("bsdf_spheres_unmasked", "test_constant_path.xml"),
         ("various_shapes", "test_various_shapes_path.xml"),
         ("participating_media", "test_homo_area_light_volpath.xml"),
         ("participating_media", "test_homo_dielectric_envmap_volpath.xml"),
         ("participating_media", "test_homo_null_envmap_volpath.xml"),
         ("participating_media", "test_homo_roughdielectric_spot_volpath.xml"),
+        ("participating_media", "test_homo_emitter_inside_medium_volpath.xml"),
+        ("participating_media", "test_homo_obj_inside_medium_volpath.xml"),
+        ("participating_media", "test_surf_area_light_volpath.xml"),
     ] {
         let xml = suite().join(dir).join(file);
         let ron_path = out.join(format!("{dir}-{file}.ron"));
