@@ -25,11 +25,20 @@ impl VoxelGrid {
     pub fn parse_vol(bytes: &[u8], path: &std::path::Path) -> Result<Self, String> {
         let h = VolHeader::parse(bytes, path, "grid")?;
         if h.channels != 1 && h.channels != 3 {
-            return Err(format!("the grid {}: {} channels: a medium's grid has 1 or 3", path.display(), h.channels));
+            return Err(format!(
+                "the grid {}: {} channels: a medium's grid has 1 or 3",
+                path.display(),
+                h.channels
+            ));
         }
         let data = h.values(bytes, path, "grid")?;
         if let Some(i) = data.iter().position(|v| *v < 0.0) {
-            return Err(format!("the grid {}: {} at {}: the values must be >= 0", path.display(), data[i], h.place(i)));
+            return Err(format!(
+                "the grid {}: {} at {}: the values must be >= 0",
+                path.display(),
+                data[i],
+                h.place(i)
+            ));
         }
         Ok(Self::new(h.size, h.channels, data))
     }
@@ -40,7 +49,8 @@ impl VoxelGrid {
         assert_eq!(data.len(), res.iter().product::<usize>() * channels);
         debug_assert!(data.iter().all(|v| v.is_finite() && *v >= 0.0));
         let max = data.iter().fold(0.0f32, |m, &v| m.max(v));
-        let mut g = Self { res, channels, data, max, majorants: MajorantGrid { res: [1; 3], max: vec![max] } };
+        let mut g =
+            Self { res, channels, data, max, majorants: MajorantGrid { res: [1; 3], max: vec![max] } };
         g.majorants = MajorantGrid::new(&g);
         g
     }
@@ -245,7 +255,10 @@ mod tests {
     #[test]
     fn negative_values_and_six_channels_are_refused() {
         let err = |b: &[u8]| VoxelGrid::parse_vol(b, Path::new("m.vol")).unwrap_err();
-        assert!(err(&vol_bytes([1, 1, 2], 1, &[0.0, -1.0])).contains("-1 at point (0, 0, 1): the values must be >= 0"));
+        assert!(
+            err(&vol_bytes([1, 1, 2], 1, &[0.0, -1.0]))
+                .contains("-1 at point (0, 0, 1): the values must be >= 0")
+        );
         assert!(err(&vol_bytes([1, 1, 1], 6, &[0.0; 6])).contains("6 channels: a medium's grid has 1 or 3"));
     }
 
@@ -268,7 +281,15 @@ mod tests {
             let d = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
             // From o to where the ray leaves the unit cube.
             let exit = (0..3)
-                .map(|a| if d[a] > 0.0 { (1.0 - o[a]) / d[a] } else if d[a] < 0.0 { -o[a] / d[a] } else { f32::INFINITY })
+                .map(|a| {
+                    if d[a] > 0.0 {
+                        (1.0 - o[a]) / d[a]
+                    } else if d[a] < 0.0 {
+                        -o[a] / d[a]
+                    } else {
+                        f32::INFINITY
+                    }
+                })
                 .fold(f32::INFINITY, f32::min);
             let (mut pieces, mut last) = (Vec::new(), 0.0f32);
             m.walk(o, d, 0.0, exit, |ta, tb, bound| {
@@ -285,11 +306,13 @@ mod tests {
             for k in 0..64 {
                 let t = exit * (k as f32 + 0.5) / 64.0;
                 if g.value(o + t * d) > 0.0 {
-                    assert!(pieces.iter().any(|&(a, b)| a <= t && t <= b), "a positive lookup at t = {t} outside {pieces:?}");
+                    assert!(
+                        pieces.iter().any(|&(a, b)| a <= t && t <= b),
+                        "a positive lookup at t = {t} outside {pieces:?}"
+                    );
                 }
             }
         }
         assert!(m.max.iter().filter(|&&v| v == 0.0).count() > m.max.len() / 4, "{:?}", m.max);
     }
 }
-

@@ -226,7 +226,8 @@ struct WorldGrid {
 
 impl WorldGrid {
     fn new(g: &Option<PlacedGrid>, object_from_world: Affine3A) -> Option<Self> {
-        g.as_ref().map(|g| Self { grid: g.grid.clone(), grid_from_world: g.grid_from_object * object_from_world })
+        g.as_ref()
+            .map(|g| Self { grid: g.grid.clone(), grid_from_world: g.grid_from_object * object_from_world })
     }
 
     /// The `t` interval of `o + t d` inside the grid's cube (unclipped), or `None`.
@@ -311,8 +312,10 @@ impl Media {
     /// coloured extinction is sampled analytically.
     pub fn new(volumes: Vec<Volume>) -> Self {
         let chromatic = volumes.iter().any(|v| !v.medium.grey());
-        let density: Vec<_> = volumes.iter().map(|v| WorldGrid::new(&v.medium.density_grid, v.object_from_world)).collect();
-        let albedo = volumes.iter().map(|v| WorldGrid::new(&v.medium.albedo_grid, v.object_from_world)).collect();
+        let density: Vec<_> =
+            volumes.iter().map(|v| WorldGrid::new(&v.medium.density_grid, v.object_from_world)).collect();
+        let albedo =
+            volumes.iter().map(|v| WorldGrid::new(&v.medium.albedo_grid, v.object_from_world)).collect();
         let heterogeneous = density.iter().any(Option::is_some);
         assert!(!(chromatic && heterogeneous), "grids with coloured extinction reached the renderer");
         Self { volumes, density, albedo, chromatic, heterogeneous }
@@ -351,7 +354,8 @@ impl Media {
                     // Rounded up a little, so that no interpolated value exceeds it.
                     let scale = v.medium.sigma_t.x * (1.0 + 4.0 * f32::EPSILON);
                     let Some((lo, hi)) = g.interval(o, d) else { continue };
-                    let (og, dg) = (g.grid_from_world.transform_point3a(o), g.grid_from_world.transform_vector3a(d));
+                    let (og, dg) =
+                        (g.grid_from_world.transform_point3a(o), g.grid_from_world.transform_vector3a(d));
                     v.intervals(o, d, tmax, |t0, t1| {
                         let (t0, t1) = (t0.max(lo), t1.min(hi));
                         if t0 < t1 {
@@ -493,7 +497,9 @@ impl Media {
             self.segments(o, d, tmax, segs);
             loop {
                 let mut sigma = Vec3::ZERO;
-                let next = sweep(segs, &mut first, t, tmax, |s| sigma += self.volumes[s.vol as usize].medium.sigma_t);
+                let next = sweep(segs, &mut first, t, tmax, |s| {
+                    sigma += self.volumes[s.vol as usize].medium.sigma_t
+                });
                 if sigma[h] > 0.0 && sigma[h] * (next - t) > left {
                     let ts = t + left / sigma[h];
                     // T / T_h from the difference of optical depths (neither underflows).
