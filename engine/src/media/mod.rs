@@ -10,8 +10,8 @@
 //! wrong: a boundary face coplanar with an opaque surface (the smoke boxes standing on the
 //! Cornell floor) cannot switch the medium off.
 //!
-//! Extinction `sigma_t` may differ per RGB channel; scattering is `sigma_s = albedo * sigma_t`
-//! and the phase function is isotropic. Where volumes overlap their coefficients add. Cost:
+//! Extinction `sigma_t` may differ per RGB channel; scattering is `sigma_s = albedo * sigma_t`.
+//! Where volumes overlap their coefficients add. Cost:
 //! every query visits every volume (scenes hold a handful).
 //!
 //! Free flights are sampled by inverting the optical depth. Where every medium is grey (the
@@ -21,6 +21,8 @@
 //! "Physically Based Rendering", 4th ed., 14.2.2; Mitsuba 3's `volpathmis`): the transmittance
 //! and coefficients of every channel over the mean of the channels' densities, so that each
 //! channel is estimated without bias.
+//!
+//! The phase function is Henyey-Greenstein's ([`phase`]; isotropic by default).
 //!
 //! A medium whose density follows a grid is sampled by delta tracking against a majorant, its
 //! largest extinction, and its transmittance estimated by ratio tracking (Novák et al.,
@@ -33,6 +35,7 @@
 //! Where every medium is homogeneous, the majorant is the extinction and nothing else is drawn.
 
 pub mod grid;
+pub mod phase;
 
 use crate::accel::mesh::MeshBlas;
 use crate::shape::Closed;
@@ -53,6 +56,9 @@ pub struct Medium {
     pub density_grid: Option<PlacedGrid>,
     /// The albedo's grid: `albedo` times its colour (taken from its edges outside its cube).
     pub albedo_grid: Option<PlacedGrid>,
+    /// The Henyey-Greenstein phase function's asymmetry `g`, in (-1, 1) ([`phase`]; 0:
+    /// isotropic).
+    pub g: f32,
 }
 
 /// A grid in an object's space: it fills the unit cube of `grid_from_object`'s image.
@@ -87,7 +93,7 @@ pub struct Volume {
 impl Medium {
     /// A homogeneous medium.
     pub fn homogeneous(sigma_t: Vec3, albedo: Vec3) -> Self {
-        Self { sigma_t, albedo, density_grid: None, albedo_grid: None }
+        Self { sigma_t, albedo, density_grid: None, albedo_grid: None, g: 0.0 }
     }
 
     /// The same extinction in every channel.
@@ -290,6 +296,8 @@ pub struct MediumEvent {
     pub t: f32,
     /// Throughput factor: `sigma_s / sigma_t` there (the albedo, blended where volumes overlap).
     pub albedo: Vec3,
+    /// The phase function's asymmetry there ([`phase`]; 0: isotropic).
+    pub g: f32,
 }
 
 /// A free flight through coloured media, sampled in the hero channel `h`
@@ -304,6 +312,8 @@ pub struct ChromaticFlight {
     /// The density of this flight had each channel been the hero, over the hero's:
     /// `sigma_t T / (sigma_t,h T_h)`, or `T / T_h` through.
     pub ratio: Vec3,
+    /// The phase function's asymmetry at the scattering point ([`phase`]; 0 through).
+    pub g: f32,
 }
 
 impl Media {
@@ -455,7 +465,7 @@ impl Media {
                 });
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e) = self.coefficients_at(segs, o, d, ts);
+                    let (s, e, g) = self.coefficients_at(segs, o, d, ts);
                     if tracked {
                         // A tentative collision: real with probability sigma_t / majorant.
                         let rng = rng.get_or_insert_with(|| Rng::seeded(o, d, u));
@@ -466,7 +476,7 @@ impl Media {
                         }
                     }
                     let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
-                    return Some(MediumEvent { t: ts, albedo });
+                    return Some(MediumEvent { t: ts, albedo, g });
                 }
                 left -= sigma * (next - t);
                 if !(next > t) || next >= tmax {
@@ -505,9 +515,9 @@ impl Media {
                     // T / T_h from the difference of optical depths (neither underflows).
                     let at = depth + sigma * (ts - t);
                     let tr = exp3((Vec3::splat(at[h]) - at) * len);
-                    let (sigma_s, sigma_t) = self.coefficients_at(segs, o, d, ts);
+                    let (sigma_s, sigma_t, g) = self.coefficients_at(segs, o, d, ts);
                     let over = tr / sigma_t[h];
-                    return ChromaticFlight { t: Some(ts), weight: sigma_s * over, ratio: sigma_t * over };
+                    return ChromaticFlight { t: Some(ts), weight: sigma_s * over, ratio: sigma_t * over, g };
                 }
                 // (Past the last volume `next` may be infinite, where sigma is zero.)
                 if sigma != Vec3::ZERO {
@@ -516,40 +526,69 @@ impl Media {
                 }
                 if !(next > t) || next >= tmax {
                     let tr = exp3((Vec3::splat(depth[h]) - depth) * len);
-                    return ChromaticFlight { t: None, weight: tr, ratio: tr };
+                    return ChromaticFlight { t: None, weight: tr, ratio: tr, g: 0.0 };
                 }
                 t = next;
             }
         })
     }
 
-    /// `(sum sigma_s, sum sigma_t)` over the stretches covering ray parameter `t` of
-    /// `o + t d`, with grids looked up there.
-    fn coefficients_at(&self, segs: &[Segment], o: Vec3A, d: Vec3A, t: f32) -> (Vec3, Vec3) {
+    /// `(sigma_s, sigma_t)` of volume `i` at ray parameter `t` of `o + t d`, with its grids
+    /// looked up there.
+    #[inline]
+    fn volume_coefficients(&self, i: usize, o: Vec3A, d: Vec3A, t: f32) -> (Vec3, Vec3) {
+        let m = &self.volumes[i].medium;
+        if self.density[i].is_none() && self.albedo[i].is_none() {
+            return (m.albedo * m.sigma_t, m.sigma_t);
+        }
+        let p = o + t * d;
+        let sigma_t = match self.density[i] {
+            Some(_) => Vec3::splat(self.density_at(i, p)),
+            None => m.sigma_t,
+        };
+        let albedo = match &self.albedo[i] {
+            None => m.albedo,
+            Some(g) => m.albedo * g.grid.color(g.grid_from_world.transform_point3a(p)),
+        };
+        (albedo * sigma_t, sigma_t)
+    }
+
+    /// What scatters at ray parameter `t` of `o + t d`: `(sigma_s, sigma_t, g)` summed over the
+    /// stretches covering it, and the phase function's asymmetry. Where overlapping media
+    /// differ in phase function, one of them is picked in proportion to its scattering (summed
+    /// over channels, by a number hashed from the point) and `sigma_s` is its own over the
+    /// probability of the pick, so that each channel's mixture of phase functions is
+    /// estimated without bias.
+    fn coefficients_at(&self, segs: &[Segment], o: Vec3A, d: Vec3A, t: f32) -> (Vec3, Vec3, f32) {
+        let covering =
+            || segs.iter().filter(move |seg| seg.t0 <= t && t <= seg.t1).map(|seg| seg.vol as usize);
         let (mut s, mut e) = (Vec3::ZERO, Vec3::ZERO);
-        for seg in segs {
-            if seg.t0 <= t && t <= seg.t1 {
-                let i = seg.vol as usize;
-                let m = &self.volumes[i].medium;
-                if self.density[i].is_none() && self.albedo[i].is_none() {
-                    s += m.albedo * m.sigma_t;
-                    e += m.sigma_t;
-                    continue;
+        let (mut g, mut mixed) = (None, false);
+        for i in covering() {
+            let (si, ei) = self.volume_coefficients(i, o, d, t);
+            (s, e) = (s + si, e + ei);
+            let gi = self.volumes[i].medium.g;
+            mixed |= g.is_some_and(|g| g != gi);
+            g = Some(gi);
+        }
+        let total = s.element_sum();
+        if !mixed || !(total > 0.0) {
+            return (s, e, g.unwrap_or(0.0));
+        }
+        let mut x = Rng::seeded(o, d, t).next() * total;
+        let mut picked = (s, 0.0);
+        for i in covering() {
+            let si = self.volume_coefficients(i, o, d, t).0;
+            let share = si.element_sum();
+            if share > 0.0 {
+                picked = (si * (total / share), self.volumes[i].medium.g);
+                if x < share {
+                    break;
                 }
-                let p = o + t * d;
-                let sigma_t = match self.density[i] {
-                    Some(_) => Vec3::splat(self.density_at(i, p)),
-                    None => m.sigma_t,
-                };
-                let albedo = match &self.albedo[i] {
-                    None => m.albedo,
-                    Some(g) => m.albedo * g.grid.color(g.grid_from_world.transform_point3a(p)),
-                };
-                s += albedo * sigma_t;
-                e += sigma_t;
+                x -= share;
             }
         }
-        (s, e)
+        (picked.0, e, picked.1)
     }
 }
 

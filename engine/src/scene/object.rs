@@ -82,6 +82,37 @@ pub struct MediumDesc {
     /// colour (its edge values outside its cube), whose values lie in [0, 1] (default none).
     #[serde(default)]
     pub albedo_grid: Option<GridDesc>,
+    /// The phase function (default `Isotropic`).
+    #[serde(default)]
+    pub phase: PhaseDesc,
+}
+
+/// A medium's phase function: `Isotropic` or `HenyeyGreenstein(g: 0.7)`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Default)]
+#[serde(deny_unknown_fields, rename = "Phase")]
+pub enum PhaseDesc {
+    /// Every direction alike.
+    #[default]
+    Isotropic,
+    /// Henyey-Greenstein's, of asymmetry `g` in (-1, 1): forwards for `g > 0`.
+    HenyeyGreenstein {
+        /// The mean cosine of the scattering angle.
+        g: Asymmetry,
+    },
+}
+
+/// A phase function's asymmetry, in (-1, 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Asymmetry(pub f32);
+
+impl<'de> Deserialize<'de> for Asymmetry {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let g = f32::deserialize(d)?;
+        match g.abs() < 1.0 {
+            true => Ok(Asymmetry(g)),
+            false => Err(D::Error::custom(format!("expected an asymmetry g in (-1, 1), found {g}"))),
+        }
+    }
 }
 
 /// A voxel grid placed in the object: `(file: "smoke.vol", transform: [..])`. The grid fills
@@ -115,6 +146,10 @@ impl MediumDesc {
             albedo: self.albedo.0,
             density_grid: self.grid.as_ref().map(GridDesc::placed),
             albedo_grid: self.albedo_grid.as_ref().map(GridDesc::placed),
+            g: match self.phase {
+                PhaseDesc::Isotropic => 0.0,
+                PhaseDesc::HenyeyGreenstein { g } => g.0,
+            },
         }
     }
 

@@ -10,7 +10,7 @@
 //!
 //! Mitsuba's `homogeneous` medium (`src/media/homogeneous.cpp`): extinction `sigma_t` (by
 //! default 1) times `scale` (by default 1), single-scattering `albedo` (by default 0.75), and
-//! an `isotropic` phase function (the default).
+//! an `isotropic` phase function (the default) or `hg` (Henyey-Greenstein's).
 //!
 //! Its `heterogeneous` medium (`src/media/heterogeneous.cpp`) takes `sigma_t` from a
 //! `gridvolume` (`src/volumes/grid.cpp`: a `.vol` file filling the unit cube of its `to_world`,
@@ -48,13 +48,25 @@ pub fn convert(cx: &Converter, e: &Element, to_world: &[Op]) -> Result<String, S
     // lights from media, and samples coloured extinction by spectral MIS.
     p.bool("sample_emitters")?;
     p.bool("has_spectral_extinction")?;
+    let mut phase_ron = String::new();
     for c in p.unnamed() {
         let phase = Plugin::new(c)?;
         match (c.tag.as_str(), phase.kind.as_str()) {
             ("phase", "isotropic") => phase.finish(&[])?,
+            // Mitsuba's `hg` (`src/phase/hg.cpp`): g by default 0.8.
+            ("phase", "hg") => {
+                let g = phase.float("g")?.unwrap_or(0.8);
+                if !(g.abs() < 1.0) {
+                    return Err(phase
+                        .at
+                        .error(format!("<phase type=\"hg\">: g {g}: expected a number in (-1, 1)")));
+                }
+                phase.finish(&["g"])?;
+                phase_ron = format!(", phase: HenyeyGreenstein(g: {})", num(g));
+            }
             ("phase", k) => {
                 return Err(phase.at.error(format!(
-                    "<phase type=\"{k}\">: pathwave's media scatter isotropically (it reads the isotropic phase function)"
+                    "<phase type=\"{k}\">: pathwave reads the isotropic and hg phase functions"
                 )));
             }
             (t, _) => return Err(c.at.error(format!("<{t}> inside a <medium>: it holds a <phase>"))),
@@ -78,7 +90,7 @@ pub fn convert(cx: &Converter, e: &Element, to_world: &[Op]) -> Result<String, S
         true => num(density.x),
         false => v3(density),
     };
-    Ok(format!("(density: {density}, albedo: {}{grids})", v3(albedo)))
+    Ok(format!("(density: {density}, albedo: {}{grids}{phase_ron})", v3(albedo)))
 }
 
 /// A heterogeneous medium's `sigma_t` (one, scaled by the grid), `albedo` and the RON of its

@@ -700,7 +700,9 @@ fn media_fill_the_interiors_of_their_shapes() {
         <shape type="sphere"><bsdf type="null"/><ref id="fog" name="interior"/></shape>
         <shape type="cube"><bsdf type="dielectric"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="0.5"/></medium></shape>
         <shape type="sphere"><float name="radius" value="3"/><bsdf type="thindielectric"><string name="int_ior" value="water"/></bsdf></shape>
-        <shape type="sphere"><float name="radius" value="5"/><bsdf type="null"/></shape>"#,
+        <shape type="sphere"><float name="radius" value="5"/><bsdf type="null"/></shape>
+        <shape type="sphere"><float name="radius" value="7"/><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="hg"/></medium></shape>
+        <shape type="sphere"><float name="radius" value="8"/><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="hg"><float name="g" value="-0.25"/></phase></medium></shape>"#,
     );
     for want in [
         "(shape: Sphere(center: (0, 0, 0), radius: 1, poles: Z), medium: (density: (2, 4, 6), albedo: (0.5, 0.5, 0.5)))",
@@ -708,6 +710,9 @@ fn media_fill_the_interiors_of_their_shapes() {
         "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), medium: (density: 0.5, albedo: (0.75, 0.75, 0.75)))",
         "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), material: \"dielectric-",
         "ThinDielectric(ior: 1.33263",
+        // Mitsuba's hg: g by default 0.8.
+        "radius: 7, poles: Z), medium: (density: 1, albedo: (0.75, 0.75, 0.75), phase: HenyeyGreenstein(g: 0.8)))",
+        "phase: HenyeyGreenstein(g: -0.25)))",
     ] {
         assert!(r.contains(want), "missing {want} in\n{r}");
     }
@@ -732,9 +737,11 @@ fn media_pathwave_cannot_render_are_refused_where_they_are_written() {
     assert!(e.message.contains("gridvolume") && e.message.contains("homogeneous medium"), "{e}");
     let e = error(
         "hg",
-        "<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></medium>",
+        "<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"><float name=\"g\" value=\"1\"/></phase></medium>",
     );
-    assert!(e.message.contains("\"hg\"") && e.message.contains("isotropic"), "{e}");
+    assert!(e.message.contains("\"hg\"") && e.message.contains("(-1, 1)"), "{e}");
+    let e = error("rayleigh", "<medium type=\"homogeneous\" id=\"m\"><phase type=\"rayleigh\"/></medium>");
+    assert!(e.message.contains("\"rayleigh\"") && e.message.contains("isotropic and hg"), "{e}");
     let e = error(
         "exterior",
         "<medium type=\"homogeneous\" id=\"m\"/><shape type=\"sphere\"><ref id=\"m\" name=\"exterior\"/></shape>",
