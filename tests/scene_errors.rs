@@ -294,6 +294,10 @@ fn grid_media_refuse_what_they_cannot_render() {
         ),
         (grid.replace("d.vol", "cut.vol"), &["cut.vol", "bytes of values for 2 x 2 x 2 points"][..]),
         (
+            grid.replace("density: 2", "density: 1e30"),
+            &["largest value is 1000000000000000000000000000000", "at most 10000000"][..],
+        ),
+        (
             format!(
                 "{grid}\n        (shape: Sphere(center: (3, 0, 0), radius: 1), medium: (density: (1, 2, 3), albedo: (1, 1, 1))),"
             ),

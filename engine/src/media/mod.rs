@@ -191,6 +191,12 @@ thread_local! {
     static SEGMENTS: RefCell<Vec<Segment>> = const { RefCell::new(Vec::new()) };
 }
 
+/// The most tentative collisions one free flight or transmittance estimate takes through
+/// grids: a ray that would take more (a majorant far above the density it meets, over a long
+/// stretch) is taken as absorbed, so that no input can stall a render. Delta tracking meets
+/// about `majorant x length` of them, a million only past an optical depth of a million.
+pub const MAX_TRACKING_STEPS: u32 = 1 << 20;
+
 /// A stretch `[t0, t1]` of a ray inside volume `vol`, whose extinction there is at most `maj`
 /// (its grey extinction, for a homogeneous volume).
 #[derive(Clone, Copy, Debug)]
@@ -418,6 +424,7 @@ impl Media {
     fn tracked_transmittance(&self, o: Vec3A, d: Vec3A, tmax: f32) -> f32 {
         let len = d.length();
         let mut rng = Rng::seeded(o, d, tmax);
+        let mut steps = 0u32;
         SEGMENTS.with_borrow_mut(|segs| {
             self.segments(o, d, tmax, segs);
             let mut depth = 0.0;
@@ -435,6 +442,18 @@ impl Media {
                         break;
                     }
                     tr *= 1.0 - self.density_at(i, o + t * d) / s.maj;
+                    steps += 1;
+                    if steps > MAX_TRACKING_STEPS {
+                        return 0.0;
+                    }
+                    // Russian roulette once little gets through (pbrt-v4's ratio tracking): the
+                    // steps end soon in dense media, and the estimate stays unbiased.
+                    if tr < 0.05 {
+                        if rng.next() < 0.75 {
+                            return 0.0;
+                        }
+                        tr /= 0.25;
+                    }
                 }
             }
             tr.max(0.0) * crate::math::exp(-depth * len)
@@ -451,7 +470,7 @@ impl Media {
         let len = d.length();
         // Optical depth to travel, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
-        let (mut t, mut first) = (0.0f32, 0);
+        let (mut t, mut first, mut nulls) = (0.0f32, 0, 0u32);
         let mut rng = None;
         SEGMENTS.with_borrow_mut(|segs| {
             self.segments(o, d, tmax, segs);
@@ -470,6 +489,11 @@ impl Media {
                         // A tentative collision: real with probability sigma_t / majorant.
                         let rng = rng.get_or_insert_with(|| Rng::seeded(o, d, u));
                         if !(rng.next() * sigma < e.x) {
+                            nulls += 1;
+                            if nulls > MAX_TRACKING_STEPS {
+                                // Absorbed (see MAX_TRACKING_STEPS).
+                                return Some(MediumEvent { t: ts, albedo: Vec3::ZERO, g });
+                            }
                             t = ts;
                             left = -crate::math::ln(1.0 - rng.next()) / len;
                             continue;

@@ -115,6 +115,9 @@ impl<'de> Deserialize<'de> for Asymmetry {
     }
 }
 
+/// The largest extinction a grid medium may reach (`density` times the grid's largest value).
+pub const MAX_GRID_EXTINCTION: f32 = 1e7;
+
 /// A voxel grid placed in the object: `(file: "smoke.vol", transform: [..])`. The grid fills
 /// the unit cube `[0, 1]^3`, which `transform` (default none) places in the object's space,
 /// before the object's own transform.
@@ -155,6 +158,15 @@ impl MediumDesc {
 
     /// Refuses a grid under coloured extinction and an albedo grid with values above 1.
     fn check(&self) -> Result<(), String> {
+        if let Some(g) = &self.grid {
+            let peak = self.density.0.x * g.file.grid.max();
+            if !(peak <= MAX_GRID_EXTINCTION) {
+                return Err(format!(
+                    "`density` times the grid {}'s largest value is {peak}: at most {MAX_GRID_EXTINCTION} (a medium that dense is opaque, and tracking through it would take that many steps per unit length)",
+                    g.file.path.display()
+                ));
+            }
+        }
         if self.grid.is_some() && self.chromatic() {
             return Err(format!(
                 "a medium with a `grid` takes one number for `density` (its extinction is the same in every channel), found {}",
