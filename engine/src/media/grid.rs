@@ -80,7 +80,9 @@ impl VoxelGrid {
     #[inline]
     fn corners(&self, p: Vec3A) -> ([usize; 3], [usize; 3], Vec3A) {
         let res = Vec3A::new(self.res[0] as f32, self.res[1] as f32, self.res[2] as f32);
-        let x = p * res - 0.5;
+        // Points beyond a voxel of the cube read the edge: clamped first, so that an infinite
+        // point gives finite weights.
+        let x = p.clamp(Vec3A::splat(-1.0), Vec3A::splat(2.0)) * res - 0.5;
         let lo = x.floor();
         let f = x - lo;
         let (mut i0, mut i1) = ([0usize; 3], [0usize; 3]);
@@ -146,11 +148,12 @@ impl MajorantGrid {
     pub fn new(grid: &VoxelGrid) -> Self {
         let res = grid.res.map(|n| n.div_ceil(VOXELS_PER_CELL).clamp(1, MAX_MAJORANT_CELLS));
         // The voxels a lookup in cell `c` of `cells` along an axis of `n` voxels reads: those
-        // around x = p n - 1/2 for p in [c / cells, (c + 1) / cells].
+        // around x = p n - 1/2 for p in [c / cells, (c + 1) / cells], and one more on each
+        // side: a point the walk puts in a cell may lie a rounding outside it.
         let span = |c: usize, cells: usize, n: usize| {
             let x = |p: f64| p * n as f64 - 0.5;
-            let lo = x(c as f64 / cells as f64).floor().max(0.0) as usize;
-            let hi = (x((c + 1) as f64 / cells as f64).floor() + 1.0).clamp(0.0, (n - 1) as f64) as usize;
+            let lo = (x(c as f64 / cells as f64).floor() - 1.0).max(0.0) as usize;
+            let hi = (x((c + 1) as f64 / cells as f64).floor() + 2.0).clamp(0.0, (n - 1) as f64) as usize;
             lo.min(n - 1)..=hi
         };
         let mut max = Vec::with_capacity(res.iter().product());
@@ -238,6 +241,7 @@ mod tests {
         assert_eq!(at(0.0), 1.0);
         assert_eq!(at(-7.0), 1.0);
         assert_eq!(at(1e30), 3.0);
+        assert_eq!(at(f32::INFINITY), 3.0);
         assert_eq!(g.max(), 3.0);
         // Along z with x fastest: a 1x1x2 grid holds 0 at z = 1/4 and 4 at z = 3/4.
         let g = VoxelGrid::parse_vol(&vol_bytes([1, 1, 2], 1, &[0.0, 4.0]), Path::new("t.vol")).unwrap();
@@ -314,5 +318,38 @@ mod tests {
             }
         }
         assert!(m.max.iter().filter(|&&v| v == 0.0).count() > m.max.len() / 4, "{:?}", m.max);
+    }
+
+    /// The fuzzer's find: in a 6x4x5 grid with 2.5e27 in voxel (0, 3, 1), a ray whose
+    /// crossing of the cell face z = 1/2 rounds to z = 0.49999997 reads that voxel's 1e-9
+    /// share in the cell above, whose bound (without the margin of a voxel) was 24.
+    #[test]
+    fn a_lookup_a_rounding_outside_its_cell_stays_within_the_bound() {
+        let mut data = vec![0.0f32; 6 * 4 * 5];
+        for (i, v) in [
+            (3, 12.0),
+            (6, 24.0),
+            (9, 8.0),
+            (12, 20.0),
+            (42, 2.4758801e27),
+            (76, 2.0),
+            (111, 24.0),
+            (114, 8.0),
+            (117, 20.0),
+        ] {
+            data[i] = v;
+        }
+        let g = VoxelGrid::new([6, 4, 5], 1, data);
+        let o = Vec3A::new(0.30188566, 0.41964608, 0.032498382);
+        let d = Vec3A::new(-0.02687031, 0.1517402, 0.23298919);
+        let mut walked = 0;
+        g.majorants().walk(o, d, 0.0, 3.82, |ta, tb, bound| {
+            for t in [ta, tb, 0.5 * (ta + tb)] {
+                let v = g.value(o + t * d);
+                assert!(v <= bound, "{v} above the cell's bound {bound} at t = {t}");
+            }
+            walked += 1;
+        });
+        assert!(walked >= 2, "the ray crosses the face z = 1/2");
     }
 }
