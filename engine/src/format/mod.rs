@@ -12,5 +12,6 @@ pub mod registry;
 mod values;
 
 pub use color::Color;
+pub(crate) use color::check_texture_name;
 pub(crate) use values::white;
 pub use values::*;

@@ -80,10 +80,13 @@ fn bin(scene: &RenderScene, p: &mut Paths, q: &mut Queues, k: usize, hit: Option
         }
         return;
     }
-    let Some(hit) = hit else {
+    let Some(mut hit) = hit else {
         q.escaped.push(i);
         return;
     };
+    if scene.features.wrappers && passes_through(scene, p, q, i, &mut hit) {
+        return;
+    }
     store_hit(&mut p.hit[i as usize], &hit);
     let kind = scene.materials[hit.material as usize].kind();
     match kind.shading() {
@@ -109,6 +112,22 @@ fn store_hit(dst: &mut Hit, h: &Hit) {
     (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
     let d = &mut dst.surface;
     (d.p, d.n, d.ns, d.uv, d.err, d.on) = (*p, *n, *ns, *uv, *err, *on);
+}
+
+/// Resolves the wrapper path `i` met ([`path::resolve`]): true (and the path queued for the
+/// next iteration) when it goes through a mask's hole; else `hit` now names the plain material
+/// that shades it. Kept out of line: scenes without wrappers never call it.
+#[inline(never)]
+fn passes_through(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32, hit: &mut Hit) -> bool {
+    let s = i as usize;
+    let mut st = p.state(s);
+    let Some(through) = path::resolve(scene, &mut st, hit, p.dir[s], p.time[s], &p.sampler[s]) else {
+        return false;
+    };
+    p.set_state(s, &st);
+    p.set_ray(s, through);
+    q.next.push(i);
+    true
 }
 
 /// Free-flight sampling for path `i` up to the surface at `tmax` with the number `u`: true (and

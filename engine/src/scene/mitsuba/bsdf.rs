@@ -29,6 +29,38 @@ fn color<'d>(
     }
 }
 
+/// A wrapper's opacity or weight as RON: a number in [0, 1] (`default` when absent, or an
+/// error naming the parameter when `None`) or a texture's name.
+fn amount<'d>(
+    cx: &mut Converter<'d>,
+    p: &Plugin<'d>,
+    name: &str,
+    default: Option<f64>,
+) -> Result<String, SceneError> {
+    let Some(param) = p.param(name) else {
+        return match default {
+            Some(d) => Ok(num(d)),
+            None => Err(p.at.error(format!("{}: `{name}` is required", p.label()))),
+        };
+    };
+    match &param.value {
+        Value::Object(e) => Ok(format!("{:?}", cx.texture(e)?)),
+        _ => match p.float(name)? {
+            Some(v) if (0.0..=1.0).contains(&v) => Ok(num(v)),
+            _ => Err(param.at.error(format!("{}: `{name}` is a number in [0, 1] or a texture", p.label()))),
+        },
+    }
+}
+
+/// The names of the materials that the BSDFs nested in a wrapper become (`count` of them).
+fn nested<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, count: usize) -> Result<Vec<String>, SceneError> {
+    let inner: Vec<&Element> = p.unnamed().collect();
+    if inner.len() != count {
+        return Err(p.at.error(format!("{} holds {count} BSDF(s), not {}", p.label(), inner.len())));
+    }
+    inner.into_iter().map(|e| cx.material(e)).collect()
+}
+
 /// The microfacet parameters of roughconductor and roughdielectric as RON fields,
 /// `alpha: A, distribution: D`, read as Mitsuba's `MicrofacetDistribution` reads them: the
 /// distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1) or both `alpha_u`
@@ -247,6 +279,20 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             p.finish(&["int_ior", "ext_ior"])?;
             format!("ThinDielectric(ior: {})", num32(int / ext))
         }
+        // Mitsuba's mask (`src/bsdfs/mask.cpp`): an opacity (default 0.5) around one BSDF.
+        "mask" => {
+            let opacity = amount(cx, &p, "opacity", Some(0.5))?;
+            let [inner] = nested(cx, &p, 1)?.try_into().expect("one");
+            p.finish(&["opacity"])?;
+            format!("Mask(opacity: {opacity}, material: {inner:?})")
+        }
+        // Mitsuba's blendbsdf (`src/bsdfs/blendbsdf.cpp`): `(1 - weight) first + weight second`.
+        "blendbsdf" => {
+            let weight = amount(cx, &p, "weight", None)?;
+            let [a, b] = nested(cx, &p, 2)?.try_into().expect("two");
+            p.finish(&["weight"])?;
+            format!("Blend(weight: {weight}, materials: ({a:?}, {b:?}))")
+        }
         "null" => {
             return Err(p.at.error(
                 "<bsdf type=\"null\"> is a shape's invisible boundary: pathwave reads it directly inside a <shape>",
@@ -254,7 +300,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, mask, blendbsdf and null"
             )));
         }
     };

@@ -238,7 +238,8 @@ impl<'d> Converter<'d> {
         }
     }
 
-    fn material(&mut self, e: &'d Element) -> Result<String, SceneError> {
+    /// The name of the material a `<bsdf>` element (or `<ref>`) becomes, converting it once.
+    pub fn material(&mut self, e: &'d Element) -> Result<String, SceneError> {
         let e = self.referenced(e)?;
         let key = match e.attr("id") {
             Some(id) => id.to_owned(),
