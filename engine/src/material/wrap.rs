@@ -243,10 +243,16 @@ pub fn mix_lambertian(a: &Material, b: &Material, w: f32) -> Option<Material> {
 impl Wrapper {
     /// The material its id's entry of the material list holds, so that what reads that list
     /// without resolving sees a material of the wrapper, and the wrapper as it is kept: a
-    /// blend of two Lambertians becomes their mix, a plain one (`None`) when neither its
+    /// blend of two plain Lambertians becomes their mix, a plain one (`None`) when neither its
     /// weight nor either albedo is textured (`textured(id)` says whether material `id`'s
-    /// colours are). `materials` are the materials before it.
-    pub fn settle(self, materials: &[Material], textured: impl Fn(u32) -> bool) -> (Material, Option<Self>) {
+    /// colours are). `materials` and `wrappers` are those of the ids before it (a blend of
+    /// wrappers stays a blend: their entries are not what they shade).
+    pub fn settle(
+        self,
+        materials: &[Material],
+        wrappers: &[Option<Wrapper>],
+        textured: impl Fn(u32) -> bool,
+    ) -> (Material, Option<Self>) {
         let (weight, [a, b]) = match self {
             Wrapper::Mask { material, .. } => return (materials[material as usize], Some(self)),
             Wrapper::Blend { weight, materials } | Wrapper::LambertianMix { weight, materials } => {
@@ -257,7 +263,9 @@ impl Wrapper {
             Amount::Value(v) => v,
             Amount::Texture(_) => 0.5,
         };
+        let plain = |id: u32| wrappers[id as usize].is_none();
         match mix_lambertian(&materials[a as usize], &materials[b as usize], mean) {
+            Some(_) if !(plain(a) && plain(b)) => (materials[a as usize], Some(self)),
             None => (materials[a as usize], Some(self)),
             Some(m) if matches!(weight, Amount::Value(_)) && !textured(a) && !textured(b) => (m, None),
             Some(m) => (m, Some(Wrapper::LambertianMix { weight, materials: [a, b] })),
@@ -456,15 +464,17 @@ mod tests {
     fn settle_mixes_lambertians_and_keeps_the_rest() {
         use crate::material::lambertian::Lambertian;
         let lambert = |a: f32, two_sided| Material::from(Lambertian { albedo: Vec3::splat(a), two_sided });
-        let mats = [lambert(0.2, true), lambert(0.6, true), lambert(0.6, false)];
+        let mats = [lambert(0.2, true), lambert(0.6, true), lambert(0.6, false), lambert(0.6, true)];
+        let mask = Wrapper::Mask { opacity: Amount::Value(0.5), material: 1 };
+        let wrappers = [None, None, None, Some(mask)];
         let blend = |weight, b| Wrapper::Blend { weight, materials: [0, b] };
         let untextured = |_| false;
-        let (m, w) = blend(Amount::Value(0.25), 1).settle(&mats, untextured);
+        let (m, w) = blend(Amount::Value(0.25), 1).settle(&mats, &wrappers, untextured);
         assert_eq!((m, w), (lambert(0.2 * 0.75 + 0.6 * 0.25, true), None));
-        let (m, w) = blend(Amount::Value(0.25), 1).settle(&mats, |id| id == 1);
+        let (m, w) = blend(Amount::Value(0.25), 1).settle(&mats, &wrappers, |id| id == 1);
         assert_eq!(m, lambert(0.2 * 0.75 + 0.6 * 0.25, true));
         assert_eq!(w, Some(Wrapper::LambertianMix { weight: Amount::Value(0.25), materials: [0, 1] }));
-        let (m, w) = blend(Amount::Texture(7), 1).settle(&mats, untextured);
+        let (m, w) = blend(Amount::Texture(7), 1).settle(&mats, &wrappers, untextured);
         assert_eq!(
             (m, w),
             (
@@ -473,10 +483,13 @@ mod tests {
             )
         );
         // One-sided and two-sided differ: picked.
-        let (m, w) = blend(Amount::Value(0.25), 2).settle(&mats, untextured);
+        let (m, w) = blend(Amount::Value(0.25), 2).settle(&mats, &wrappers, untextured);
         assert_eq!((m, w), (mats[0], Some(blend(Amount::Value(0.25), 2))));
-        let mask = Wrapper::Mask { opacity: Amount::Value(0.5), material: 1 };
-        assert_eq!(mask.settle(&mats, untextured), (mats[1], Some(mask)));
+        assert_eq!(mask.settle(&mats, &wrappers, untextured), (mats[1], Some(mask)));
+        // A blend of a Lambertian and a mask around one is picked: the mask's entry is not
+        // what it shades.
+        let (m, w) = blend(Amount::Value(0.25), 3).settle(&mats, &wrappers, untextured);
+        assert_eq!((m, w), (mats[0], Some(blend(Amount::Value(0.25), 3))));
         // A mix resolves to itself, without a number.
         let table = Wrappers(vec![
             None,

@@ -29,7 +29,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
                 let id =
                     |name: &str| names.iter().position(|n| *n == name).expect("validated at load") as u32;
                 let textured = |id: u32| per_material[id as usize].any();
-                let (m, w) = w.lower(id, |t| texture_id(desc, t)).settle(&mats, textured);
+                let (m, w) = w.lower(id, |t| texture_id(desc, t)).settle(&mats, &wrappers, textured);
                 mats.push(m);
                 per_material.push(MaterialTextures::default());
                 wrappers.push(w);
