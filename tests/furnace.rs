@@ -160,6 +160,47 @@ fn a_coloured_medium_loses_nothing_in_any_channel() {
     assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
 }
 
+/// Albedo-1 media under a uniform sky over a white ground: a grid medium (the plume of
+/// `scenes/smoke-plume.ron`, delta and ratio tracking) scattering forwards (Henyey-Greenstein,
+/// g = 0.7), overlapped by a sphere of homogeneous medium scattering backwards (g = -0.5).
+/// Nothing is absorbed, so every pixel is 1, whichever phase function each scattering uses and
+/// however light sampling and phase sampling share the work (MIS with the phase function's
+/// density). An injected error that fails here: the overlap's pick of a phase function
+/// without dividing by its probability. (Under uniform light any phase function integrates to
+/// the same: `tests/mitsuba.rs` checks the phase function's shape against Mitsuba.)
+#[test]
+fn media_scattering_forwards_and_backwards_lose_nothing() {
+    let desc = inline(
+        r#"Scene(
+            camera: (look_from: (0, 1.5, 4), look_at: (0, 1.1, 0), vfov: 30),
+            render: (width: 32, height: 24, spp: 64, max_depth: 200, rr_depth: 3),
+            background: Constant((1, 1, 1)),
+            materials: { "white": Lambertian(albedo: (1, 1, 1)) },
+            objects: [
+                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
+                (
+                    shape: Box(a: (-1, 0, -1), b: (1, 2, 1)),
+                    medium: (
+                        density: 20,
+                        albedo: (1, 1, 1),
+                        grid: (file: "scenes/assets/plume.vol", transform: [Scale((2, 2, 2)), Translate((-1, 0, -1))]),
+                        phase: HenyeyGreenstein(g: 0.7),
+                    ),
+                ),
+                (
+                    shape: Sphere(center: (0, 1.2, 0), radius: 0.5),
+                    medium: (density: 3, albedo: (1, 1, 1), phase: HenyeyGreenstein(g: -0.5)),
+                ),
+            ],
+        )"#,
+    );
+    let oracle = render(&desc);
+    assert_all_pixels_near(&oracle, |_| Some(1.0));
+    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
+    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
+}
+
 /// The camera inside a two-sided spherical emitter of radiance 1 looking at a convex diffuse
 /// sphere of albedo 0.5: the sphere receives radiance 1 from every direction, so it shows
 /// exactly 0.5 and the emitter 1. Exercises light sampling of a sphere from inside it (area

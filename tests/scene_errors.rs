@@ -257,6 +257,55 @@ fn medium_needs_a_closed_shape_and_valid_numbers() {
     assert_err(&with_object(bright), 8, 92, &["albedo with components in [0, 1]"]);
 }
 
+/// A `.vol` grid file of one value per point, `size` points, `channels` channels.
+fn vol(size: [i32; 3], channels: i32, data: &[f32]) -> Vec<u8> {
+    let mut b = b"VOL\x03".to_vec();
+    for n in [1, size[0], size[1], size[2], channels] {
+        b.extend(n.to_le_bytes());
+    }
+    for x in [0.0f32; 6].iter().chain(data) {
+        b.extend(x.to_le_bytes());
+    }
+    b
+}
+
+/// Grid media: a grid takes one density, an albedo grid values in [0, 1], a scene with a grid
+/// no coloured extinction elsewhere, and a bad file is named; each at the object.
+#[test]
+fn grid_media_refuse_what_they_cannot_render() {
+    let dir = std::env::temp_dir().join(format!("pathwave-grid-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("d.vol"), vol([2, 1, 1], 1, &[0.0, 1.0])).unwrap();
+    std::fs::write(dir.join("bright.vol"), vol([1, 1, 1], 3, &[0.5, 1.5, 0.5])).unwrap();
+    std::fs::write(dir.join("cut.vol"), &vol([2, 2, 2], 1, &[1.0; 8])[..60]).unwrap();
+    let load_object = |objects: &str| {
+        let path = dir.join("scene.ron");
+        std::fs::write(&path, scene(CAMERA, MATERIAL, objects)).unwrap();
+        load(&path)
+    };
+    let grid = r#"(shape: Box(a: (0, 0, 0), b: (1, 1, 1)), medium: (density: 2, albedo: (0.5, 0.5, 0.5), grid: (file: "d.vol"))),"#;
+    let ok = load_object(grid).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(ok.objects.len(), 1);
+    for (object, words) in [
+        (grid.replace("density: 2", "density: (1, 2, 3)"), &["takes one number for `density`"][..]),
+        (
+            grid.replace("grid: (file: \"d.vol\")", "albedo_grid: (file: \"bright.vol\")"),
+            &["bright.vol holds 1.5", "values lie in [0, 1]"][..],
+        ),
+        (grid.replace("d.vol", "cut.vol"), &["cut.vol", "bytes of values for 2 x 2 x 2 points"][..]),
+        (
+            format!(
+                "{grid}\n        (shape: Sphere(center: (3, 0, 0), radius: 1), medium: (density: (1, 2, 3), albedo: (1, 1, 1))),"
+            ),
+            &["density` is (r, g, b)"][..],
+        ),
+    ] {
+        let e = load_object(&object).expect_err(&object);
+        assert!(e.line >= 8 && words.iter().all(|w| e.message.contains(w)), "{object}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A scene with a `textures` map before the materials.
 fn with_textures(textures: &str, material: &str) -> String {
     scene(CAMERA, material, OBJECT).replacen(

@@ -73,7 +73,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
         let (shadow, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                if let Some(p) = path::sample_medium(
+                if let Some((p, g)) = path::sample_medium(
                     scene,
                     &mut st.beta,
                     &mut ratio,
@@ -86,7 +86,7 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                     if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }
-                    break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.time, sampler);
+                    break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.dir, g, ray.time, sampler);
                 }
             }
             let Some(mut hit) = hit else {

@@ -10,6 +10,7 @@ pub(crate) mod context;
 pub mod files;
 pub mod registry;
 mod values;
+pub mod vol;
 
 pub use color::Color;
 pub(crate) use color::check_texture_name;

@@ -5,6 +5,7 @@
 use super::serialized::SerializedFile;
 use crate::accel::mesh::{MeshAttribute, MeshData};
 use crate::format::context;
+use crate::media::grid::VoxelGrid;
 pub use crate::texture::image::ImageFile;
 use serde::{Deserialize, Deserializer, de::Error};
 use std::sync::Arc;
@@ -56,6 +57,34 @@ impl<'de> Deserialize<'de> for MeshPath {
         let source = read_mesh_file(&full).map_err(D::Error::custom)?;
         context::keep(full.clone(), Arc::new(source.clone()));
         Ok(MeshPath { path, full, source })
+    }
+}
+
+/// A voxel grid file (Mitsuba's `.vol`), read when the scene is loaded; objects naming the same
+/// file share the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridFile {
+    /// The path as written.
+    pub path: std::path::PathBuf,
+    /// The values.
+    pub grid: Arc<VoxelGrid>,
+}
+
+impl<'de> Deserialize<'de> for GridFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let path = std::path::PathBuf::from(String::deserialize(d)?);
+        let Some(dir) = context::scene_dir() else {
+            return Ok(GridFile { path, grid: Arc::new(VoxelGrid::new([1, 1, 1], 1, vec![0.0])) });
+        };
+        let full = dir.join(&path);
+        if let Some(grid) = context::read_before::<VoxelGrid>(&full) {
+            return Ok(GridFile { path, grid });
+        }
+        let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "grid")
+            .map_err(D::Error::custom)?;
+        let grid = Arc::new(VoxelGrid::parse_vol(&bytes, &full).map_err(D::Error::custom)?);
+        context::keep(full, grid.clone());
+        Ok(GridFile { path, grid })
     }
 }
 

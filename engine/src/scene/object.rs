@@ -64,8 +64,8 @@ pub enum Body {
     Volume(MediumDesc),
 }
 
-/// A homogeneous medium with an isotropic phase function.
-#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+/// A medium with an isotropic phase function: homogeneous, or scaled by voxel grids.
+#[derive(Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields, rename = "Medium")]
 pub struct MediumDesc {
     /// Extinction coefficient sigma_t per unit length: one number for every channel (> 0), or
@@ -73,6 +73,111 @@ pub struct MediumDesc {
     pub density: Density,
     /// Single-scattering albedo sigma_s / sigma_t, components in [0, 1].
     pub albedo: Albedo,
+    /// `grid: (file: "smoke.vol", transform: [..])`: the density is `density` times the grid's
+    /// value, inside the grid's cube only (default none: homogeneous). One number for
+    /// `density` then.
+    #[serde(default)]
+    pub grid: Option<GridDesc>,
+    /// `albedo_grid: (file: .., transform: [..])`: the albedo is `albedo` times the grid's
+    /// colour (its edge values outside its cube), whose values lie in [0, 1] (default none).
+    #[serde(default)]
+    pub albedo_grid: Option<GridDesc>,
+    /// The phase function (default `Isotropic`).
+    #[serde(default)]
+    pub phase: PhaseDesc,
+}
+
+/// A medium's phase function: `Isotropic` or `HenyeyGreenstein(g: 0.7)`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Default)]
+#[serde(deny_unknown_fields, rename = "Phase")]
+pub enum PhaseDesc {
+    /// Every direction alike.
+    #[default]
+    Isotropic,
+    /// Henyey-Greenstein's, of asymmetry `g` in (-1, 1): forwards for `g > 0`.
+    HenyeyGreenstein {
+        /// The mean cosine of the scattering angle.
+        g: Asymmetry,
+    },
+}
+
+/// A phase function's asymmetry, in (-1, 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Asymmetry(pub f32);
+
+impl<'de> Deserialize<'de> for Asymmetry {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let g = f32::deserialize(d)?;
+        match g.abs() < 1.0 {
+            true => Ok(Asymmetry(g)),
+            false => Err(D::Error::custom(format!("expected an asymmetry g in (-1, 1), found {g}"))),
+        }
+    }
+}
+
+/// A voxel grid placed in the object: `(file: "smoke.vol", transform: [..])`. The grid fills
+/// the unit cube `[0, 1]^3`, which `transform` (default none) places in the object's space,
+/// before the object's own transform.
+#[derive(Deserialize, Debug, Clone, PartialEq)]
+#[serde(deny_unknown_fields, rename = "Grid")]
+pub struct GridDesc {
+    /// A Mitsuba `.vol` file of 1 or 3 channels, relative to the scene file.
+    pub file: super::assets::GridFile,
+    /// Transforms applied in order, first to last.
+    #[serde(default)]
+    pub transform: Vec<TransformOp>,
+}
+
+impl GridDesc {
+    /// The grid, placed in the object.
+    pub fn placed(&self) -> crate::media::PlacedGrid {
+        crate::media::PlacedGrid {
+            grid: self.file.grid.clone(),
+            grid_from_object: compose(&self.transform).inverse(),
+        }
+    }
+}
+
+impl MediumDesc {
+    /// The medium it describes.
+    pub fn medium(&self) -> crate::media::Medium {
+        crate::media::Medium {
+            sigma_t: self.density.0,
+            albedo: self.albedo.0,
+            density_grid: self.grid.as_ref().map(GridDesc::placed),
+            albedo_grid: self.albedo_grid.as_ref().map(GridDesc::placed),
+            g: match self.phase {
+                PhaseDesc::Isotropic => 0.0,
+                PhaseDesc::HenyeyGreenstein { g } => g.0,
+            },
+        }
+    }
+
+    /// Refuses a grid under coloured extinction and an albedo grid with values above 1.
+    fn check(&self) -> Result<(), String> {
+        if self.grid.is_some() && self.chromatic() {
+            return Err(format!(
+                "a medium with a `grid` takes one number for `density` (its extinction is the same in every channel), found {}",
+                self.density.0
+            ));
+        }
+        if let Some(g) = &self.albedo_grid {
+            let max = g.file.grid.max();
+            if max > 1.0 {
+                return Err(format!(
+                    "the albedo grid {} holds {max}: an albedo grid's values lie in [0, 1]",
+                    g.file.path.display()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Its extinction differs between channels.
+    pub fn chromatic(&self) -> bool {
+        let d = self.density.0;
+        !(d.x == d.y && d.y == d.z)
+    }
 }
 
 /// A medium's extinction: `0.5` (every channel) or `(0.1, 0.9, 0.1)`.
@@ -159,7 +264,10 @@ impl TryFrom<RawObject> for ObjectDesc {
                     m.path.display()
                 ));
             }
-            (None, Some(m)) => Body::Volume(m),
+            (None, Some(m)) => {
+                m.check()?;
+                Body::Volume(m)
+            }
             (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),
             (None, None) => {
                 return Err("an object needs a `material` (a surface) or a `medium` (a volume)".into());

@@ -5,7 +5,7 @@ use glam::{Affine3A, Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
 /// One step of an object's transform.
-#[derive(Deserialize, Debug, Clone, Copy)]
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
 #[serde(try_from = "RawTransform")]
 pub struct TransformOp(pub Affine3A);
 

@@ -42,57 +42,24 @@ pub struct SdfGridData {
     pub values: Vec<f32>,
 }
 
-/// The largest grid read: 2^28 points (1 GiB of values).
-const MAX_POINTS: usize = 1 << 28;
 /// The most points along one axis.
-const MAX_SIDE: i32 = 1 << 16;
+const MAX_SIDE: usize = 1 << 16;
 
 impl SdfGridData {
-    /// Reads Mitsuba's grid-volume format; `path` names the file in errors.
+    /// Reads Mitsuba's grid-volume format ([`crate::format::vol`]): one channel, at least 2 and
+    /// at most [`MAX_SIDE`] points along each axis; `path` names the file in errors.
     pub fn parse_vol(bytes: &[u8], path: &std::path::Path) -> Result<Self, String> {
-        let fail = |what: String| format!("the SDF grid {}: {what}", path.display());
-        let int = |at: usize| -> Result<i32, String> {
-            let b = bytes.get(at..at + 4).ok_or_else(|| fail("the header is cut short".into()))?;
-            Ok(i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        };
-        if bytes.get(..3) != Some(b"VOL") {
-            return Err(fail("not a grid volume (Mitsuba's .vol starts with VOL)".into()));
+        let what = "SDF grid";
+        let h = crate::format::vol::VolHeader::parse(bytes, path, what)?;
+        let fail = |why: String| format!("the {what} {}: {why}", path.display());
+        if h.channels != 1 {
+            return Err(fail(format!("{} channels: an SDF grid has one", h.channels)));
         }
-        if bytes.get(3) != Some(&3) {
-            return Err(fail(format!("version {:?}: Mitsuba and pathwave read version 3", bytes.get(3))));
-        }
-        if int(4)? != 1 {
-            return Err(fail(format!("data type {}: Mitsuba and pathwave read type 1 (float32)", int(4)?)));
-        }
-        let (x, y, z, channels) = (int(8)?, int(12)?, int(16)?, int(20)?);
-        if channels != 1 {
-            return Err(fail(format!("{channels} channels: an SDF grid has one")));
-        }
-        let sizes = [x, y, z];
-        if sizes.iter().any(|&s| !(2..=MAX_SIDE).contains(&s)) {
+        let [x, y, z] = h.size;
+        if h.size.iter().any(|&s| !(2..=MAX_SIDE).contains(&s)) {
             return Err(fail(format!("size {x} x {y} x {z}: 2 to {MAX_SIDE} points along each axis")));
         }
-        let size = sizes.map(|s| s as usize);
-        let points = size.iter().try_fold(1usize, |a, &s| a.checked_mul(s)).filter(|&n| n <= MAX_POINTS);
-        let Some(points) = points else {
-            return Err(fail(format!("size {x} x {y} x {z}: more than {MAX_POINTS} points")));
-        };
-        const HEADER: usize = 48;
-        if bytes.len() < HEADER {
-            return Err(fail("the header is cut short".into()));
-        }
-        if bytes.len() != HEADER + 4 * points {
-            return Err(fail(format!(
-                "{} bytes of values for {x} x {y} x {z} points (4 bytes each)",
-                bytes.len().saturating_sub(HEADER)
-            )));
-        }
-        let values: Vec<f32> =
-            bytes[HEADER..].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(fail(format!("value {i} is {}: the distances must be finite", values[i])));
-        }
-        Ok(Self { size, values })
+        Ok(Self { size: h.size, values: h.values(bytes, path, what)? })
     }
 
     /// The value at grid point `(x, y, z)`, each index clamped to the grid (Mitsuba's texture

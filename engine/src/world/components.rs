@@ -24,9 +24,9 @@ pub struct Transform(pub Affine3A);
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct Shape(pub Form);
 
-/// A homogeneous medium filling the entity's (closed) shape; such entities have no
-/// [`MaterialId`] and are not surfaces.
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+/// A medium filling the entity's (closed) shape; such entities have no [`MaterialId`] and are
+/// not surfaces.
+#[derive(Component, Clone, Debug, PartialEq)]
 pub struct Filling(pub Medium);
 
 /// Linear motion: at time `t` the entity lies translated by `velocity * t`.

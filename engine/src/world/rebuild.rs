@@ -288,7 +288,7 @@ pub fn rebuild_media(
                     }
                 },
             };
-            Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0 })
+            Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0.clone() })
         })
         .collect();
     out.media = Arc::new(Media::new(volumes));
@@ -475,7 +475,7 @@ mod tests {
             .spawn((
                 Transform(Affine3A::IDENTITY),
                 Shape(Form::Box(BoxShape { min: Vec3A::ZERO, max: Vec3A::ONE, uv: Default::default() })),
-                Filling(Medium { sigma_t: Vec3::ONE, albedo: Vec3::ONE }),
+                Filling(Medium::homogeneous(Vec3::ONE, Vec3::ONE)),
             ))
             .id();
         let with = w.update();

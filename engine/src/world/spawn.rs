@@ -6,7 +6,6 @@ use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::EnvironmentMap;
 use crate::lighting::punctual::LightTextures;
 use crate::material::Material;
-use crate::media::Medium;
 use crate::placement::{Form, primitives};
 use crate::render_scene::{Background, PixelWindow, RenderSettings};
 use crate::scene::{BackgroundDesc, Body, Color, MaterialDesc, Rgb, SceneDesc, compose};
@@ -103,7 +102,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         // Objects without a material id are volumes.
         let Some(id) = id else {
             if let Body::Volume(m) = &obj.body {
-                world.spawn((placed, Filling(Medium { sigma_t: m.density.0, albedo: m.albedo.0 })));
+                world.spawn((placed, Filling(m.medium())));
             }
             continue;
         };

@@ -57,6 +57,9 @@ pub struct Paths {
     pub far: Vec<f32>,
     /// Denoiser guides of the path's sample (only with [`super::Options::guides`]).
     pub guide: Vec<Guide>,
+    /// The phase function's asymmetry where the path scatters in a medium, from free-flight
+    /// sampling to `shade_medium` (written and read only in scenes with media).
+    pub phase_g: Vec<f32>,
 }
 
 impl Paths {
@@ -93,6 +96,7 @@ impl Paths {
             hit: vec![hit0; n],
             far: vec![f32::INFINITY; n],
             guide: vec![Guide::NEW; n],
+            phase_g: vec![0.0; n],
         }
     }
 

@@ -165,12 +165,13 @@ fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32
     let ray = p.ray(s);
     let sampler = &p.sampler[s];
     let u0 = || sampler.get_1d(path::medium_dim(0));
-    let Some(at) = path::sample_medium(scene, &mut p.beta[s], &mut p.ratio[s], &ray, tmax, u, p.depth[s], u0)
+    let Some((at, g)) =
+        path::sample_medium(scene, &mut p.beta[s], &mut p.ratio[s], &ray, tmax, u, p.depth[s], u0)
     else {
         return false;
     };
-    // The path is now at the scattering point; `shade_medium` needs nothing else of the ray.
-    p.origin[s] = at;
+    // The path is now at the scattering point; `shade_medium` needs its direction and medium.
+    (p.origin[s], p.phase_g[s]) = (at, g);
     q.medium.push(i);
     true
 }
@@ -300,7 +301,15 @@ pub fn shade_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
             q.finished.push(i);
             continue;
         }
-        let (shadow, next) = path::scatter_in_medium(scene, &mut st, p.origin[s], p.time[s], &p.sampler[s]);
+        let (shadow, next) = path::scatter_in_medium(
+            scene,
+            &mut st,
+            p.origin[s],
+            p.dir[s],
+            p.phase_g[s],
+            p.time[s],
+            &p.sampler[s],
+        );
         route(p, q, i, shadow, next);
         p.set_state(s, &st);
     }

@@ -177,7 +177,7 @@ impl<'d> Converter<'d> {
                 // Converted where shapes refer to them; read here too, so that a medium pathwave
                 // cannot render is refused where it is written.
                 "medium" => {
-                    super::medium::convert(e)?;
+                    super::medium::convert(self, e, &[])?;
                 }
                 t => return Err(e.at.error(format!("<{t}> does not belong at the top of a <scene>"))),
             }
@@ -372,6 +372,7 @@ impl<'d> Converter<'d> {
             None => Some(None),
         };
         let (shape, to_world) = super::shape::convert(self, &p, outer)?;
+        let interior = interior.map(|e| super::medium::convert(self, e, &to_world)).transpose()?;
         if self.out.objects.len() + 2 > MAX_OBJECTS {
             return Err(p.at.error(format!("the scene has more than {MAX_OBJECTS} shapes")));
         }
@@ -431,9 +432,9 @@ impl<'d> Converter<'d> {
         Ok(())
     }
 
-    /// The medium inside a shape (its `interior`) as RON, refusing an `exterior` (see
+    /// The medium inside a shape (its `interior`), refusing an `exterior` (see
     /// [`super::medium`]).
-    fn interior(&self, p: &Plugin<'d>) -> Result<Option<String>, SceneError> {
+    fn interior(&self, p: &Plugin<'d>) -> Result<Option<&'d Element>, SceneError> {
         if let Some(param) = p.param("exterior") {
             return Err(param.at.error(format!(
                 "{}: an exterior medium: pathwave's media fill closed shapes, and outside a shape is whatever volumes surround it; give the medium as the interior of the shape that bounds it (and leave out an exterior that names the medium around this shape anyway)",
@@ -452,7 +453,7 @@ impl<'d> Converter<'d> {
                 e.tag
             )));
         }
-        super::medium::convert(e).map(Some)
+        Ok(Some(e))
     }
 
     fn emitter(&mut self, e: &'d Element) -> Result<(), SceneError> {
@@ -471,6 +472,11 @@ impl<'d> Converter<'d> {
     /// A file named in the scene, as the RON writes it.
     pub fn file(&self, name: &str, at: &At) -> Result<String, SceneError> {
         Ok(file(&self.doc.resolve(name, at)?, &self.base))
+    }
+
+    /// A file named in the scene, as a path to read.
+    pub fn resolve(&self, name: &str, at: &At) -> Result<PathBuf, SceneError> {
+        self.doc.resolve(name, at)
     }
 
     /// The scene's elements by id.

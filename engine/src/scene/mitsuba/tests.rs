@@ -700,7 +700,9 @@ fn media_fill_the_interiors_of_their_shapes() {
         <shape type="sphere"><bsdf type="null"/><ref id="fog" name="interior"/></shape>
         <shape type="cube"><bsdf type="dielectric"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="0.5"/></medium></shape>
         <shape type="sphere"><float name="radius" value="3"/><bsdf type="thindielectric"><string name="int_ior" value="water"/></bsdf></shape>
-        <shape type="sphere"><float name="radius" value="5"/><bsdf type="null"/></shape>"#,
+        <shape type="sphere"><float name="radius" value="5"/><bsdf type="null"/></shape>
+        <shape type="sphere"><float name="radius" value="7"/><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="hg"/></medium></shape>
+        <shape type="sphere"><float name="radius" value="8"/><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="hg"><float name="g" value="-0.25"/></phase></medium></shape>"#,
     );
     for want in [
         "(shape: Sphere(center: (0, 0, 0), radius: 1, poles: Z), medium: (density: (2, 4, 6), albedo: (0.5, 0.5, 0.5)))",
@@ -708,6 +710,9 @@ fn media_fill_the_interiors_of_their_shapes() {
         "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), medium: (density: 0.5, albedo: (0.75, 0.75, 0.75)))",
         "(shape: Box(a: (-1, -1, -1), b: (1, 1, 1), uv: Mitsuba), material: \"dielectric-",
         "ThinDielectric(ior: 1.33263",
+        // Mitsuba's hg: g by default 0.8.
+        "radius: 7, poles: Z), medium: (density: 1, albedo: (0.75, 0.75, 0.75), phase: HenyeyGreenstein(g: 0.8)))",
+        "phase: HenyeyGreenstein(g: -0.25)))",
     ] {
         assert!(r.contains(want), "missing {want} in\n{r}");
     }
@@ -723,14 +728,20 @@ fn media_fill_the_interiors_of_their_shapes() {
 
 #[test]
 fn media_pathwave_cannot_render_are_refused_where_they_are_written() {
-    let e = error("hetero", "\n<medium type=\"heterogeneous\" id=\"m\"/>");
+    let e = error("unknown-medium", "\n<medium type=\"fluid\" id=\"m\"/>");
     assert_eq!((e.line, e.col), (6, 1), "{e}");
     assert!(e.message.contains("heterogeneous") && e.message.contains("homogeneous"), "{e}");
+    // A heterogeneous medium of constant sigma_t lives in Mitsuba's unit cube only.
+    let e = error("hetero-constant", "\n<medium type=\"heterogeneous\" id=\"m\"/>");
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("gridvolume") && e.message.contains("homogeneous medium"), "{e}");
     let e = error(
         "hg",
-        "<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"><float name=\"g\" value=\"0.5\"/></phase></medium>",
+        "<medium type=\"homogeneous\" id=\"m\"><phase type=\"hg\"><float name=\"g\" value=\"1\"/></phase></medium>",
     );
-    assert!(e.message.contains("\"hg\"") && e.message.contains("isotropic"), "{e}");
+    assert!(e.message.contains("\"hg\"") && e.message.contains("(-1, 1)"), "{e}");
+    let e = error("rayleigh", "<medium type=\"homogeneous\" id=\"m\"><phase type=\"rayleigh\"/></medium>");
+    assert!(e.message.contains("\"rayleigh\"") && e.message.contains("isotropic and hg"), "{e}");
     let e = error(
         "exterior",
         "<medium type=\"homogeneous\" id=\"m\"/><shape type=\"sphere\"><ref id=\"m\" name=\"exterior\"/></shape>",
@@ -811,4 +822,76 @@ fn masks_and_blends_become_wrappers() {
         let e = error(tag, &format!("<shape type=\"sphere\">{body}</shape>"));
         assert!((e.line, e.col) == at && e.message.contains(message), "{tag}: {e}");
     }
+}
+
+/// Writes `name` in the folder of the scene `tag`: a `.vol` grid of `size` and `channels`.
+fn grid_file(tag: &str, name: &str, size: [i32; 3], channels: i32, bbox: [f32; 6]) {
+    let d = std::env::temp_dir().join(format!("pathwave-mitsuba-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let mut b = b"VOL\x03".to_vec();
+    for n in [1, size[0], size[1], size[2], channels] {
+        b.extend(n.to_le_bytes());
+    }
+    let n = (size[0] * size[1] * size[2] * channels) as usize;
+    for x in bbox.iter().chain(&vec![0.25f32; n]) {
+        b.extend(x.to_le_bytes());
+    }
+    std::fs::write(d.join(name), b).unwrap();
+}
+
+/// A heterogeneous medium's grids are placed in the object's space: the shape's `to_world`
+/// undone after the grid's, and the file's box with `use_grid_bbox`; the scene loads.
+#[test]
+fn grid_media_are_placed_in_their_objects() {
+    let tag = "grid-media";
+    grid_file(tag, "d.vol", [2, 3, 4], 1, [0.0; 6]);
+    grid_file(tag, "a.vol", [1, 1, 1], 3, [-1.0, -1.0, -1.0, 1.0, 3.0, 1.0]);
+    let body = r#"<shape type="cube"><bsdf type="null"/><transform name="to_world"><scale value="2"/><translate x="1"/></transform>
+        <medium type="heterogeneous" name="interior"><float name="scale" value="5"/>
+          <volume name="sigma_t" type="gridvolume"><string name="filename" value="d.vol"/><transform name="to_world"><translate x="3"/></transform></volume>
+          <volume name="albedo" type="gridvolume"><string name="filename" value="a.vol"/><boolean name="use_grid_bbox" value="true"/></volume>
+        </medium></shape>"#;
+    let r = ron(tag, body);
+    // The density grid: world = translate(3) p, object = (world - (1, 0, 0)) / 2.
+    let want = r#"medium: (density: 5, albedo: (1, 1, 1), grid: (file: "d.vol", transform: [Matrix([[0.5, 0, 0, 1], [0, 0.5, 0, 0], [0, 0, 0.5, 0], [0, 0, 0, 1]])]), albedo_grid: (file: "a.vol", transform: [Matrix([[1, 0, 0, -1], [0, 2, 0, -0.5], [0, 0, 1, -0.5], [0, 0, 0, 1]])]))"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    super::load(&scene(tag, body), &[]).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn grid_media_pathwave_cannot_render_are_refused() {
+    let tag = "grid-refused";
+    grid_file(tag, "rgb.vol", [2, 2, 2], 3, [0.0; 6]);
+    grid_file(tag, "one.vol", [2, 2, 2], 1, [0.0; 6]);
+    let medium = |inner: &str| {
+        format!(
+            "<shape type=\"sphere\"><bsdf type=\"null\"/><medium type=\"heterogeneous\" name=\"interior\">\n{inner}</medium></shape>"
+        )
+    };
+    let e = error(
+        tag,
+        &medium(
+            r#"<volume name="sigma_t" type="gridvolume"><string name="filename" value="rgb.vol"/></volume>"#,
+        ),
+    );
+    assert!(e.message.contains("3 channels") && e.message.contains("one density"), "{e}");
+    let e = error(
+        tag,
+        &medium(
+            r#"<volume name="sigma_t" type="gridvolume"><string name="filename" value="one.vol"/><string name="wrap_mode" value="repeat"/></volume>"#,
+        ),
+    );
+    assert!(e.message.contains("wrap_mode \"repeat\"") && e.message.contains("clamp"), "{e}");
+    let e = error(
+        tag,
+        &medium(
+            r#"<volume name="sigma_t" type="gridvolume"><string name="filename" value="none.vol"/></volume>"#,
+        ),
+    );
+    assert!(e.message.contains("none.vol"), "{e}");
+    let e = error(
+        tag,
+        &medium(r#"<volume name="sigma_t" type="constvolume"><float name="value" value="1"/></volume>"#),
+    );
+    assert!(e.message.contains("gridvolume"), "{e}");
 }
