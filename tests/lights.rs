@@ -42,7 +42,12 @@ fn check(light: &str, expected: impl Fn(Vec3) -> f32) {
 
 /// [`check`] with the `textures` map's entries.
 fn check_with(textures: &str, light: &str, expected: impl Fn(Vec3) -> f32) {
-    let desc = inline(&floor_scene_with(textures, light));
+    check_scene(&floor_scene_with(textures, light), expected)
+}
+
+/// [`check`] on the scene `text` (whose camera and floor are [`floor_scene`]'s).
+fn check_scene(text: &str, expected: impl Fn(Vec3) -> f32) {
+    let desc = inline(text);
     let scene = SceneWorld::render_scene(&desc);
     let films =
         [oracle::render(&scene, &|_, _| {}), wavefront::render(&scene, Default::default(), &|_, _| {}).0];
@@ -69,6 +74,32 @@ fn check_with(textures: &str, light: &str, expected: impl Fn(Vec3) -> f32) {
             }
         }
     }
+}
+
+/// A black veil under a `Mask` of opacity 0.3 between the camera, the point light and the floor:
+/// camera rays cross it with probability 0.7 (else they meet its black), and shadow rays get 0.7
+/// of the light through, so the floor shows 0.49 of its light. Shadow rays stopped by the veil
+/// (its opacity not let through, a deliberate error) fail it.
+#[test]
+fn a_mask_lets_through_one_minus_its_opacity() {
+    let text = floor_scene("Point(position: (0.5, 2, -0.3), intensity: (10, 10, 10))").replace(
+        r#"materials: { "white": Lambertian(albedo: (1, 1, 1)) },"#,
+        r#"materials: {
+                "white": Lambertian(albedo: (1, 1, 1)),
+                "black": Lambertian(albedo: (0, 0, 0)),
+                "veil": Mask(opacity: 0.3, material: "black"),
+            },"#,
+    );
+    let text = text.replace(
+        "objects: [",
+        r#"objects: [
+                (shape: Quad(q: (-5, 1, -5), u: (10, 0, 0), v: (0, 0, 10)), material: "veil"),"#,
+    );
+    let light = Vec3::new(0.5, 2.0, -0.3);
+    check_scene(&text, |p| {
+        let d = light - p;
+        0.49 * 10.0 * (d.y / d.length()) / d.length_squared() / PI
+    });
 }
 
 #[test]

@@ -653,3 +653,48 @@ fn metal_fuzz_beyond_one_is_refused() {
     assert_eq!(e.line, 5, "{e}");
     assert!(e.message.contains("expected a number in [0, 1], found 2"), "{e}");
 }
+
+/// Wrappers (`Mask`, `Blend`) refuse an opacity or weight outside [0, 1], a texture or
+/// material that is not defined, a material defined after them (so no cycle) or an emitter
+/// inside, each at the value (a quoted name at its first letter), and an `emit` on an object
+/// that uses one.
+#[test]
+fn wrappers_name_what_is_wrong_where() {
+    // The material line starts at column 9; `at` is where `token` begins in it.
+    let at = |m: &str, token: &str| 9 + m.find(token).unwrap();
+    for (m, token, words) in [
+        (
+            r#""m": Mask(opacity: 1.5, material: "white"),"#,
+            "1.5",
+            &["a number in [0, 1] or a texture", "1.5"][..],
+        ),
+        (r#""m": Blend(weight: -0.5, materials: ("white", "white")),"#, "-0.5", &["[0, 1]", "-0.5"]),
+        (r#""m": Mask(opacity: "nope", material: "white"),"#, "\"nope\"", &["unknown texture \"nope\""]),
+        (r#""m": Mask(opacity: 0.5, material: "nope"),"#, "\"nope\"", &["unknown material \"nope\""]),
+        (
+            r#""m": Blend(weight: 0.5, materials: ("white", "later")), "later": Lambertian(albedo: (1, 1, 1)),"#,
+            "\"later\"",
+            &["\"later\" must be defined before the wrapper"],
+        ),
+        (
+            r#""m": Blend(weight: 0.5, materials: ("white", "m")),"#,
+            "\"m\")",
+            &["\"m\" must be defined before"],
+        ),
+        (
+            r#""l": DiffuseLight(emit: (1, 1, 1)), "m": Mask(opacity: 0.5, material: "l"),"#,
+            "\"l\")",
+            &["\"l\" is a DiffuseLight: wrappers go around materials that reflect"],
+        ),
+    ] {
+        let col = at(m, token) + token.starts_with('"') as usize;
+        assert_err(&with_material(m), 5, col, words);
+    }
+    let masked = r#""m": Mask(opacity: 0.5, material: "white"),"#;
+    let glowing =
+        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "m", emit: (radiance: (1, 1, 1))),"#;
+    let e = err(&scene(CAMERA, masked, glowing));
+    assert!(e.line == 8 && e.message.contains("\"m\" is a wrapper (Mask, Blend): `emit`"), "{e}");
+    let misspelt = err(&with_material(r#""m": Masc(opacity: 0.5, material: "white"),"#));
+    assert!(misspelt.message.contains("`Mask`, or `Blend`"), "{misspelt}");
+}

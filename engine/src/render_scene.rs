@@ -9,6 +9,7 @@ use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::{EnvSample, EnvironmentMap};
 use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
+use crate::material::wrap::{Amount, Resolved, Wrapper, Wrappers, mix_lambertian};
 use crate::math::Ray;
 use crate::media::Media;
 pub use crate::scene::SamplerKind;
@@ -226,9 +227,13 @@ pub struct Features {
     /// end their paths. Off, the Lambertian stage looks at no side.
     pub one_sided: bool,
     /// Some surface's material has a null lobe ([`Material::has_null_lobe`], a thin
-    /// dielectric): shadow rays that something blocks look past such surfaces
+    /// dielectric, or a mask): shadow rays that something blocks look past such surfaces
     /// ([`RenderScene::null_transmittance`]). Off, any surface blocks them.
     pub null_surfaces: bool,
+    /// Some surface's material is a wrapper (a mask, a blend: [`crate::material::wrap`]): hits
+    /// are resolved to a plain material ([`RenderScene::resolve`]) before they are shaded.
+    /// Off, a hit's material id is its material's.
+    pub wrappers: bool,
 }
 
 impl Features {
@@ -243,12 +248,14 @@ impl Features {
             instances: !instances.is_empty(),
             one_sided: false,
             null_surfaces: false,
+            wrappers: false,
         }
     }
 
-    /// Sets `textures`, `emitting_surfaces`, `one_sided` and `null_surfaces` from what the primitives' material ids use:
-    /// their materials, their textured colours (`per_material`) and their emission
-    /// (`emission`, both indexed like `materials`).
+    /// Sets `textures`, `emitting_surfaces`, `one_sided`, `null_surfaces` and `wrappers` from
+    /// what the primitives' material ids use, and the materials the wrappers among them name:
+    /// their materials, their textured colours (`per_material`), their emission (`emission`)
+    /// and their wrappers (`wrappers`, all indexed like `materials`).
     pub fn with_materials(
         mut self,
         geometry: &Geometry,
@@ -256,20 +263,31 @@ impl Features {
         materials: &[Material],
         per_material: &[MaterialTextures],
         emission: &[Option<AreaEmission>],
+        wrappers: &Wrappers,
     ) -> Self {
         let mut used = vec![false; per_material.len()];
         for &m in geometry.material.iter().chain(instances.list.iter().map(|i| &i.material)) {
             used[m as usize] = true;
         }
+        wrappers.mark_wrapped(&mut used);
         let used = |id: &usize| used[*id];
-        let textured =
-            |id: usize| per_material[id].any() || emission[id].is_some_and(|e| e.texture.is_some());
+        let wrapper = |id: usize| wrappers.get(id as u32);
+        let textured = |id: usize| {
+            per_material[id].any()
+                || emission[id].is_some_and(|e| e.texture.is_some())
+                || wrapper(id).is_some_and(|w| matches!(w.amount(), Amount::Texture(_)))
+        };
         self.textures = (0..per_material.len()).filter(used).any(textured);
+        self.wrappers = (0..materials.len()).filter(used).any(|id| wrapper(id).is_some());
         self.emitting_surfaces = (0..materials.len())
             .filter(used)
             .any(|id| emission[id].is_some() && !materials[id].is_emissive());
         self.one_sided = (0..materials.len()).filter(used).any(|id| materials[id].one_sided());
-        self.null_surfaces = (0..materials.len()).filter(used).any(|id| materials[id].has_null_lobe());
+        // A wrapper's entry copies a material it names (used too), so only masks add to it.
+        let mask = |id: usize| matches!(wrapper(id), Some(crate::material::wrap::Wrapper::Mask { .. }));
+        self.null_surfaces = (0..materials.len())
+            .filter(used)
+            .any(|id| if wrapper(id).is_some() { mask(id) } else { materials[id].has_null_lobe() });
         self
     }
 }
@@ -298,6 +316,8 @@ pub struct RenderScene {
     pub textures: Arc<Textures>,
     /// Per material: which colours come from textures.
     pub material_textures: Vec<MaterialTextures>,
+    /// Per material: its wrapper, for the ids of wrappers (see [`Features::wrappers`]).
+    pub wrappers: Arc<Wrappers>,
 }
 
 impl RenderScene {
@@ -337,7 +357,10 @@ impl RenderScene {
             let Some(h) = self.intersect(&r, 1.0) else { return tr };
             let sp = &h.surface;
             let d = r.dir.normalize();
-            tr *= self.material_at(h.material, sp).null_transmission(d.dot(sp.ns));
+            tr *= match self.features.wrappers {
+                false => self.material_at(h.material, sp).null_transmission(d.dot(sp.ns)),
+                true => self.wrapped_transmission(h.material, sp, d.dot(sp.ns)),
+            };
             if !(tr > 0.0) {
                 return 0.0;
             }
@@ -346,6 +369,36 @@ impl RenderScene {
             r = Ray { origin, dir: target - origin, time: r.time };
         }
         0.0
+    }
+
+    /// [`Wrappers::transmission`] of material `id` at `sp` for a shadow ray at `cos` from the
+    /// shading normal (kept out of line: scenes without wrappers never call it).
+    #[inline(never)]
+    fn wrapped_transmission(&self, id: u32, sp: &SurfacePoint, cos: f32) -> f32 {
+        let amount = |a| self.amount(a, sp);
+        let plain = |id| self.material_at(id, sp).null_transmission(cos);
+        self.wrappers.transmission(id, &amount, &plain)
+    }
+
+    /// An opacity or a weight of a wrapper at `sp`: a texture's luminance (Mitsuba's float
+    /// read of an RGB texture), clamped to [0, 1].
+    #[inline]
+    pub fn amount(&self, a: Amount, sp: &SurfacePoint) -> f32 {
+        match a {
+            Amount::Value(v) => v,
+            Amount::Texture(t) => {
+                let c = self.textures.at(t, sp, &self.instances.blas);
+                (0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z).clamp(0.0, 1.0)
+            }
+        }
+    }
+
+    /// Follows the material of a hit at `sp` with id `id` through its wrappers
+    /// ([`Wrappers::resolve`], `u(level)` the number of the `level`-th wrapper met). Call only
+    /// when [`Features::wrappers`] is on.
+    #[inline(never)]
+    pub fn resolve(&self, id: u32, sp: &SurfacePoint, u: impl FnMut(u32) -> f32) -> Resolved {
+        self.wrappers.resolve(id, |a| self.amount(a, sp), u)
     }
 
     /// Material `id` with its textured colours evaluated at `sp`.
@@ -393,6 +446,12 @@ impl RenderScene {
     /// [`Self::material_at`] for scenes with textures (kept out of line).
     #[inline(never)]
     fn textured_material(&self, id: usize, sp: &SurfacePoint) -> Material {
+        if self.features.wrappers
+            && let Some(Wrapper::LambertianMix { weight, materials: [a, b] }) = self.wrappers.get(id as u32)
+        {
+            let (a, b) = (self.textured_material(a as usize, sp), self.textured_material(b as usize, sp));
+            return mix_lambertian(&a, &b, self.amount(weight, sp)).expect("a mix of Lambertians");
+        }
         let mut m = self.materials[id];
         for (slot, t) in self.material_textures[id].0.iter().enumerate() {
             if let Some(t) = *t {

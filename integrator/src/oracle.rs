@@ -89,10 +89,17 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.dir, g, ray.time, sampler);
                 }
             }
-            let Some(hit) = hit else {
+            let Some(mut hit) = hit else {
                 path::escape(scene, &mut st, ray.dir);
                 break 'path;
             };
+            // A wrapper: the plain material it stands for here, or the ray goes on through.
+            if scene.features.wrappers
+                && let Some(through) = path::resolve(scene, &mut st, &mut hit, ray.dir, ray.time, sampler)
+            {
+                ray = through;
+                continue 'path;
+            }
             let mat = &scene.material_at(hit.material, &hit.surface);
             let wo = -ray.dir;
             if mat.is_emissive() {

@@ -9,6 +9,7 @@ use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::camera::RayLanes;
 use pathwave_engine::filter::PixelFilter;
 use pathwave_engine::lighting::lights::OtherLight;
+use pathwave_engine::material::wrap::Resolved;
 use pathwave_engine::material::{Material, Reads, Shading};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::media::phase::{hg, sample_hg};
@@ -339,6 +340,39 @@ pub fn scatter_in_medium(
     let u_rr = || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE));
     let next = roulette(scene, st, u_rr).then_some(Ray { origin: p, dir: wi, time });
     (shadow, next)
+}
+
+/// A hit on a surface in a scene with wrappers ([`Features::wrappers`]): follows its material
+/// through them ([`RenderScene::resolve`]) with the numbers of the vertex after `st.depth`
+/// bounces ([`Dims::wrapper`]), and writes the plain material found into `hit` (`None`
+/// returned: it shades the hit). Through a mask's hole, the ray along `dir` goes on unbent
+/// from the far side: a null crossing as a null lobe's ([`scatter_with`]), the MIS state and
+/// the throughput kept, not a bounce of `max_depth`; that ray is returned. Out of line: scenes
+/// without wrappers never call it.
+///
+/// [`Features::wrappers`]: pathwave_engine::render_scene::Features::wrappers
+#[inline(never)]
+pub fn resolve(
+    scene: &RenderScene,
+    st: &mut PathState,
+    hit: &mut Hit,
+    dir: Vec3A,
+    time: f32,
+    sampler: &Sampler,
+) -> Option<Ray> {
+    let depth = st.depth;
+    match scene.resolve(hit.material, &hit.surface, |level| sampler.get_1d(Dims::wrapper(depth, level))) {
+        Resolved::Material(id) => {
+            hit.material = id;
+            None
+        }
+        Resolved::Pass => {
+            let sp = &hit.surface;
+            let side = if dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
+            (st.depth, st.crossings) = (st.depth + 1, st.crossings + 1);
+            Some(Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir, time })
+        }
+    }
 }
 
 /// The depth limit: a path that has made `max_depth` bounces ends where it meets a surface or

@@ -34,7 +34,7 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Color<T> {
 }
 
 /// Checks a texture name against the scene's textures (in the second parsing pass).
-fn check_texture_name(name: &str) -> Result<(), String> {
+pub(crate) fn check_texture_name(name: &str) -> Result<(), String> {
     let before = context::textures_before();
     context::names(|n| match n.map(|n| &n.textures) {
         None => Ok(()),

@@ -20,6 +20,8 @@ pub(crate) struct Names {
     pub materials: Vec<String>,
     /// The names of the emitting materials.
     pub lights: Vec<String>,
+    /// The names of the wrappers (`Mask`, `Blend`).
+    pub wrappers: Vec<String>,
     /// All texture names, in file order.
     pub textures: Vec<String>,
     /// The mesh attributes each material reads through its textures (materials that read
@@ -36,6 +38,9 @@ struct Context {
     names: Option<Names>,
     /// While a texture is parsed: how many textures precede it (only they may be named in it).
     textures_before: Option<usize>,
+    /// While a material is parsed: how many materials precede it (only they may be wrapped
+    /// in it).
+    materials_before: Option<usize>,
     /// The index of the object being parsed, while inside `objects` (errors name it).
     object: Option<usize>,
     /// Files read so far in this parse (meshes, images), by path and by the type they were
@@ -88,6 +93,16 @@ pub(crate) fn textures_before() -> Option<usize> {
 /// Sets [`textures_before`].
 pub(crate) fn set_textures_before(n: Option<usize>) {
     with(|c| c.textures_before = n);
+}
+
+/// How many materials precede the one being parsed (`None` outside the material list).
+pub(crate) fn materials_before() -> Option<usize> {
+    with(|c| c.materials_before)
+}
+
+/// Sets [`materials_before`].
+pub(crate) fn set_materials_before(n: Option<usize>) {
+    with(|c| c.materials_before = n);
 }
 
 /// Notes the index of the object being parsed (`None` when leaving the list).

@@ -13,5 +13,6 @@ mod values;
 pub mod vol;
 
 pub use color::Color;
+pub(crate) use color::check_texture_name;
 pub(crate) use values::white;
 pub use values::*;

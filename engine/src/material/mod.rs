@@ -23,6 +23,7 @@ pub mod rough_plastic;
 #[cfg(feature = "test-material")]
 pub mod test_diffuse;
 pub mod thin_dielectric;
+pub mod wrap;
 
 use crate::format::registry::{VariantName, fields};
 use crate::texture::{MAX_TEXTURED_COLORS, MaterialTextures, TextureId};
@@ -263,11 +264,14 @@ macro_rules! registry {
             $variant($module::$ty),)+
         }
 
-        /// A material as written in the scene: `Kind(field: value, ...)`.
+        /// A material as written in the scene: `Kind(field: value, ...)`, or a wrapper around
+        /// materials named before it ([`wrap`]).
         #[derive(Clone, Debug)]
         pub enum MaterialDesc {
             $($(#[$attr])* #[doc = concat!("`", stringify!($variant), "(...)`.")]
             $variant(<$module::$ty as MaterialModel>::Desc),)+
+            /// `Mask(...)`, `Blend(...)`: see [`wrap`].
+            Wrap(wrap::WrapDesc),
         }
 
         /// The registered kinds, in registry order.
@@ -339,6 +343,10 @@ macro_rules! registry {
 
             /// Builds the material of a description; `texture` resolves a texture name to its id
             /// and mean. Returns the material and which of its colours are textured.
+            ///
+            /// # Panics
+            /// On a wrapper ([`MaterialDesc::Wrap`]), which names other materials: the scene
+            /// lowers it into its table of wrappers ([`wrap::WrapDesc::lower`]).
             pub fn build(
                 desc: &MaterialDesc,
                 texture: &mut dyn FnMut(&str) -> (TextureId, Vec3),
@@ -348,6 +356,7 @@ macro_rules! registry {
                     $($(#[$attr])* MaterialDesc::$variant(d) => {
                         Material::$variant(<$module::$ty as MaterialModel>::build(d, &mut colors))
                     })+
+                    MaterialDesc::Wrap(_) => panic!("a wrapper is lowered by its scene, not built alone"),
                 };
                 (m, colors.textures())
             }
@@ -448,10 +457,11 @@ macro_rules! registry {
         })+
 
         impl MaterialDesc {
-            /// Its kind.
-            pub fn kind(&self) -> MaterialKind {
+            /// Its kind; `None` for a wrapper.
+            pub fn kind(&self) -> Option<MaterialKind> {
                 match self {
-                    $($(#[$attr])* MaterialDesc::$variant(_) => MaterialKind::$variant,)+
+                    $($(#[$attr])* MaterialDesc::$variant(_) => Some(MaterialKind::$variant),)+
+                    MaterialDesc::Wrap(_) => None,
                 }
             }
         }
@@ -470,6 +480,9 @@ macro_rules! registry {
                             return fields::<<$module::$ty as MaterialModel>::Desc, _>(variant)
                                 .map(MaterialDesc::$variant);
                         })+
+                        if let Some(w) = wrap::WrapDesc::from_variant(&name, variant) {
+                            return w.map(MaterialDesc::Wrap);
+                        }
                         Err(serde::de::Error::unknown_variant(&name, &VARIANT_NAMES))
                     }
                 }
@@ -480,12 +493,16 @@ macro_rules! registry {
 }
 use registry;
 
-/// The names a scene may write, for parser messages.
-static VARIANT_NAMES: [&str; MaterialKind::COUNT] = {
-    let mut names = [""; MaterialKind::COUNT];
+/// The names a scene may write (the kinds, then the wrappers), for parser messages.
+static VARIANT_NAMES: [&str; MaterialKind::COUNT + wrap::NAMES.len()] = {
+    let mut names = [""; MaterialKind::COUNT + wrap::NAMES.len()];
     let mut i = 0;
     while i < MaterialKind::COUNT {
         names[i] = MaterialKind::ALL[i].variant_name();
+        i += 1;
+    }
+    while i < names.len() {
+        names[i] = wrap::NAMES[i - MaterialKind::COUNT];
         i += 1;
     }
     names

@@ -1,7 +1,7 @@
 //! Reading and parsing scene files.
 
 use super::context::{Names, ParseScope, take_current_object};
-use super::{SceneDesc, SceneError};
+use super::{MaterialDesc, SceneDesc, SceneError};
 use ron::extensions::Extensions;
 use std::path::Path;
 
@@ -74,7 +74,13 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
         lights: names
             .materials
             .iter()
-            .filter(|(_, m)| m.kind().shading() == crate::material::Shading::Emitter)
+            .filter(|(_, m)| m.kind().is_some_and(|k| k.shading() == crate::material::Shading::Emitter))
+            .map(|(n, _)| n.clone())
+            .collect(),
+        wrappers: names
+            .materials
+            .iter()
+            .filter(|(_, m)| matches!(m, MaterialDesc::Wrap(_)))
             .map(|(n, _)| n.clone())
             .collect(),
         textures: names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
@@ -123,15 +129,32 @@ fn attributes_read(desc: &SceneDesc) -> Vec<(String, Vec<String>)> {
         });
         per_texture.push(read);
     }
-    let materials = desc.materials.iter().map(|(name, m)| {
+    // Per material in file order (a wrapper reads what its textures and the materials it
+    // names, all before it, read).
+    let mut per_material: Vec<(String, Vec<String>)> = Vec::new();
+    for (name, m) in desc.materials.iter() {
         let mut read: Vec<String> = Vec::new();
-        crate::material::Material::build(m, &mut |n| {
-            read.extend(index(n).and_then(|i| per_texture.get(i)).into_iter().flatten().cloned());
-            (0, glam::Vec3::ZERO)
-        });
+        let mut texture =
+            |n: &str| read.extend(index(n).and_then(|i| per_texture.get(i)).into_iter().flatten().cloned());
+        match m {
+            MaterialDesc::Wrap(w) => {
+                w.textures().into_iter().for_each(&mut texture);
+                for inner in w.wrapped() {
+                    let of = per_material.iter().find(|(n, _)| n == inner);
+                    read.extend(of.into_iter().flat_map(|(_, r)| r.iter().cloned()));
+                }
+            }
+            m => {
+                crate::material::Material::build(m, &mut |n| {
+                    texture(n);
+                    (0, glam::Vec3::ZERO)
+                });
+            }
+        }
         read.sort_unstable();
         read.dedup();
-        (name.clone(), read)
-    });
-    materials.filter(|(_, read)| !read.is_empty()).collect()
+        per_material.push((name.clone(), read));
+    }
+    per_material.retain(|(_, read)| !read.is_empty());
+    per_material
 }

@@ -30,8 +30,10 @@ impl<'de> Deserialize<'de> for NamedMaterials {
                     if out.iter().any(|(n, _)| *n == name) {
                         return Err(A::Error::custom(format!("material \"{name}\" is defined twice")));
                     }
-                    let m = map.next_value()?;
-                    out.push((name, m));
+                    context::set_materials_before(Some(out.len()));
+                    let m = map.next_value();
+                    context::set_materials_before(None);
+                    out.push((name, m?));
                 }
                 Ok(NamedMaterials(out))
             }

@@ -295,6 +295,14 @@ impl TryFrom<RawObject> for ObjectDesc {
                     name.0
                 ));
             }
+            (Body::Surface(name), Some(_))
+                if context::names(|n| n.is_some_and(|n| n.wrappers.contains(&name.0))) =>
+            {
+                return Err(format!(
+                    "material \"{}\" is a wrapper (Mask, Blend): `emit` is for surfaces of plain materials",
+                    name.0
+                ));
+            }
             _ => {}
         }
         if let (ShapeDesc::SdfGrid(_), Body::Surface(name)) = (&r.shape, &body) {

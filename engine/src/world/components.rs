@@ -99,6 +99,11 @@ pub struct MaterialId(pub u32);
 #[derive(Resource, Clone, Debug, Default, PartialEq)]
 pub struct Materials(pub Vec<Material>);
 
+/// The wrappers among the materials (indexed like [`Materials`]: see
+/// [`crate::material::wrap`]).
+#[derive(Resource, Clone, Debug, Default, PartialEq)]
+pub struct MaterialWrappers(pub Arc<crate::material::wrap::Wrappers>);
+
 /// The `emit` of objects, by the material id each was given (indexed like [`Materials`]; `None`
 /// for the ids of the named materials).
 #[derive(Resource, Clone, Debug, Default, PartialEq)]

@@ -17,6 +17,7 @@ pub fn extract_render_scene(
     media: Res<SceneMedia>,
     textures: Res<SceneTextures>,
     materials: Res<Materials>,
+    wrappers: Res<MaterialWrappers>,
     camera: Res<CameraParams>,
     settings: Res<Settings>,
     background: Res<BackgroundLight>,
@@ -28,6 +29,7 @@ pub fn extract_render_scene(
         || media.is_changed()
         || textures.is_changed()
         || materials.is_changed()
+        || wrappers.is_changed()
         || camera.is_changed()
         || settings.is_changed()
         || background.is_changed();
@@ -65,6 +67,7 @@ pub fn extract_render_scene(
                 &materials.0,
                 &textures.per_material,
                 &lights.lights.emission,
+                &wrappers.0,
             ),
         camera,
         settings: s,
@@ -76,5 +79,6 @@ pub fn extract_render_scene(
         media: media.media.clone(),
         textures: textures.textures.clone(),
         material_textures: textures.per_material.clone(),
+        wrappers: wrappers.0.clone(),
     }));
 }

@@ -5,9 +5,10 @@
 
 use crate::scene::SceneDesc;
 use crate::world::{
-    Animated, BackgroundLight, CameraKeys, EmitKeys, Filling, FrameTime, Instanced, MaterialId, Materials,
-    MeshLibrary, Motion, ObjectEmission, ObjectIndex, PunctualLights, SceneGeometry, SceneInstances,
-    SceneLights, SceneMedia, SceneTextures, SceneWorld, Settings, Shape, Transform,
+    Animated, BackgroundLight, CameraKeys, EmitKeys, Filling, FrameTime, Instanced, MaterialId,
+    MaterialWrappers, Materials, MeshLibrary, Motion, ObjectEmission, ObjectIndex, PunctualLights,
+    SceneGeometry, SceneInstances, SceneLights, SceneMedia, SceneTextures, SceneWorld, Settings, Shape,
+    Transform,
 };
 use bevy_ecs::component::Mutable;
 use bevy_ecs::prelude::*;
@@ -127,6 +128,7 @@ impl SceneWorld {
         let mut report = Reload::default();
         let named = [
             ("materials", sync_resource::<Materials>(world, &fresh)),
+            ("wrappers", sync_resource::<MaterialWrappers>(world, &fresh)),
             ("emission", sync_resource::<ObjectEmission>(world, &fresh)),
             ("textures", sync_resource::<SceneTextures>(world, &fresh)),
             ("settings", sync_resource::<Settings>(world, &fresh)),

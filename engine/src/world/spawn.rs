@@ -19,8 +19,28 @@ use std::sync::Arc;
 pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     let names: Vec<&str> = desc.materials.iter().map(|(n, _)| n.as_str()).collect();
     let textures = build_textures(desc);
-    let (mut mats, mut per_material): (Vec<Material>, Vec<MaterialTextures>) =
-        desc.materials.iter().map(|(_, m)| material(desc, m, &textures)).unzip();
+    let (mut mats, mut per_material, mut wrappers): (Vec<Material>, Vec<MaterialTextures>, Vec<_>) =
+        (Vec::new(), Vec::new(), Vec::new());
+    for (_, m) in desc.materials.iter() {
+        match m {
+            // A wrapper's entry holds a material it names (one before it), or their mix.
+            MaterialDesc::Wrap(w) => {
+                let id =
+                    |name: &str| names.iter().position(|n| *n == name).expect("validated at load") as u32;
+                let textured = |id: u32| per_material[id as usize].any();
+                let (m, w) = w.lower(id, |t| texture_id(desc, t)).settle(&mats, &wrappers, textured);
+                mats.push(m);
+                per_material.push(MaterialTextures::default());
+                wrappers.push(w);
+            }
+            m => {
+                let (m, t) = material(desc, m, &textures);
+                mats.push(m);
+                per_material.push(t);
+                wrappers.push(None);
+            }
+        }
+    }
     // Each object with an `emit` gets a material id of its own: its material's copy, with
     // the emission beside it (the ids of the named materials emit only if they are emitters).
     let mut emission = vec![None; mats.len()];
@@ -40,6 +60,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
             };
             mats.push(mats[id]);
             per_material.push(per_material[id]);
+            wrappers.push(wrappers[id]);
             emission.push(Some(AreaEmission { radiance, texture, two_sided: emit.two_sided }));
             Some(mats.len() as u32 - 1)
         })
@@ -70,6 +91,8 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     let lights =
         desc.lights.iter().map(|l| l.to_light(&LightTextures { textures: &textures, id: &id })).collect();
     world.insert_resource(Materials(mats));
+    let wrappers = crate::material::wrap::Wrappers(wrappers);
+    world.insert_resource(MaterialWrappers(Arc::new(wrappers)));
     world.insert_resource(SceneTextures { textures: Arc::new(textures), per_material });
     world.insert_resource(ObjectEmission(emission));
     for (i, (((obj, instanced), shape), id)) in

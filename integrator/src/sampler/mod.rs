@@ -76,6 +76,18 @@ impl Dims {
         Self::CAMERA + depth * Self::PER_VERTEX + slot
     }
 
+    /// The first of the wrappers' numbers ([`Self::wrapper`]), far above any vertex's (a
+    /// path of 2^28 vertices would reach it): scenes without wrappers keep their numbers.
+    const WRAPPERS: u32 = 1 << 31;
+
+    /// The number that resolves the `level`-th wrapper met at the vertex after `depth`
+    /// bounces (1D; see `pathwave_engine::material::wrap`); levels from 256 on share the
+    /// next vertex's numbers (no scene nests wrappers so deep).
+    #[inline]
+    pub const fn wrapper(depth: u32, level: u32) -> u32 {
+        Self::WRAPPERS.wrapping_add(depth.wrapping_mul(256)).wrapping_add(level)
+    }
+
     /// [`Self::vertex`] for `N` paths at once (a plain loop, which stays inline in a
     /// `simd::lanes` region where `std::array::from_fn`'s closure would not).
     #[inline(always)]

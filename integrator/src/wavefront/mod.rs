@@ -467,13 +467,18 @@ pub fn capture_stages<'a>(
     out
 }
 
-/// The material kinds that have a shading loop and that some primitive uses, in registry
-/// order: queues of kinds the scene does not use (even if it defines such materials) are never
-/// visited.
+/// The material kinds that have a shading loop and that some primitive uses (or a wrapper that
+/// one uses names), in registry order: queues of kinds the scene does not use (even if it
+/// defines such materials) are never visited.
 pub fn material_kinds(scene: &RenderScene) -> Vec<MaterialKind> {
-    let mut used = [false; MaterialKind::COUNT];
+    let mut ids = vec![false; scene.materials.len()];
     for &m in scene.geometry.material.iter().chain(scene.instances.list.iter().map(|i| &i.material)) {
-        used[scene.materials[m as usize].kind() as usize] = true;
+        ids[m as usize] = true;
+    }
+    scene.wrappers.mark_wrapped(&mut ids);
+    let mut used = [false; MaterialKind::COUNT];
+    for (id, _) in ids.iter().enumerate().filter(|(_, u)| **u) {
+        used[scene.materials[id].kind() as usize] = true;
     }
     MaterialKind::ALL.into_iter().filter(|&k| used[k as usize] && k.shading() != Shading::Emitter).collect()
 }

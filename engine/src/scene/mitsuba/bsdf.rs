@@ -29,6 +29,88 @@ fn color<'d>(
     }
 }
 
+/// A wrapper's opacity or weight as RON: a number in [0, 1] (`default` when absent, or an
+/// error naming the parameter when `None`) or a texture's name.
+fn amount<'d>(
+    cx: &mut Converter<'d>,
+    p: &Plugin<'d>,
+    name: &str,
+    default: Option<f64>,
+) -> Result<String, SceneError> {
+    let Some(param) = p.param(name) else {
+        return match default {
+            Some(d) => Ok(num(d)),
+            None => Err(p.at.error(format!("{}: `{name}` is required", p.label()))),
+        };
+    };
+    match &param.value {
+        Value::Object(e) => Ok(format!("{:?}", cx.texture(e)?)),
+        _ => match p.float(name)? {
+            Some(v) if (0.0..=1.0).contains(&v) => Ok(num(v)),
+            _ => Err(param.at.error(format!("{}: `{name}` is a number in [0, 1] or a texture", p.label()))),
+        },
+    }
+}
+
+/// The names of the materials that the BSDFs nested in a wrapper become (`count` of them),
+/// each made two-sided where `two_sided` (the wrapper is inside a `twosided`).
+fn nested<'d>(
+    cx: &mut Converter<'d>,
+    p: &Plugin<'d>,
+    count: usize,
+    two_sided: bool,
+) -> Result<Vec<String>, SceneError> {
+    let inner: Vec<&Element> = p.unnamed().collect();
+    if inner.len() != count {
+        return Err(p.at.error(format!("{} holds {count} BSDF(s), not {}", p.label(), inner.len())));
+    }
+    inner.into_iter().map(|e| if two_sided { cx.two_sided_material(e) } else { cx.material(e) }).collect()
+}
+
+/// Mitsuba's `mask` (`src/bsdfs/mask.cpp`): an opacity (default 0.5) around one BSDF, as
+/// `Mask`; its BSDF two-sided where `two_sided`.
+fn mask<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let opacity = amount(cx, p, "opacity", Some(0.5))?;
+    let [inner] = nested(cx, p, 1, two_sided)?.try_into().expect("one");
+    p.finish(&["opacity"])?;
+    Ok(format!("Mask(opacity: {opacity}, material: {inner:?})"))
+}
+
+/// Mitsuba's `blendbsdf` (`src/bsdfs/blendbsdf.cpp`): `(1 - weight) first + weight second`, as
+/// `Blend`; its BSDFs two-sided where `two_sided`.
+fn blend<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let weight = amount(cx, p, "weight", None)?;
+    let [a, b] = nested(cx, p, 2, two_sided)?.try_into().expect("two");
+    p.finish(&["weight"])?;
+    Ok(format!("Blend(weight: {weight}, materials: ({a:?}, {b:?}))"))
+}
+
+/// The material that the BSDF `one` becomes inside Mitsuba's `twosided` (the same on both
+/// sides): a two-sided Lambertian, plastic or conductor, and a mask or blend of such.
+pub fn two_sided<'d>(cx: &mut Converter<'d>, one: &'d Element) -> Result<String, SceneError> {
+    let one = cx.by_id(one)?;
+    let inner = Plugin::new(one)?;
+    match inner.kind.as_str() {
+        "diffuse" => diffuse(cx, &inner, true),
+        "plastic" | "roughplastic" => plastic(cx, &inner, true),
+        // pathwave's conductors are one-sided as Mitsuba's; `two_sided` makes them what
+        // `twosided` makes Mitsuba's.
+        "conductor" | "roughconductor" => {
+            let inner = convert(cx, one)?;
+            match inner.strip_suffix(')') {
+                Some(head) => Ok(format!("{head}, two_sided: true)")),
+                None => Err(one.at.error(format!("twosided: cannot extend {inner}"))),
+            }
+        }
+        // A wrapper the same on both sides wraps materials the same on both sides.
+        "mask" => mask(cx, &inner, true),
+        "blendbsdf" => blend(cx, &inner, true),
+        k => Err(one.at.error(format!(
+            "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor, roughconductor, plastic, roughplastic, mask and blendbsdf"
+        ))),
+    }
+}
+
 /// The microfacet parameters of roughconductor and roughdielectric as RON fields,
 /// `alpha: A, distribution: D`, read as Mitsuba's `MicrofacetDistribution` reads them: the
 /// distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1) or both `alpha_u`
@@ -158,26 +240,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
                     "<bsdf type=\"twosided\"> with two BSDFs: pathwave reads one, the same on both sides",
                 ));
             };
-            let one = cx.by_id(one)?;
-            let inner = Plugin::new(one)?;
-            match inner.kind.as_str() {
-                "diffuse" => diffuse(cx, &inner, true)?,
-                "plastic" | "roughplastic" => plastic(cx, &inner, true)?,
-                // pathwave's conductors are one-sided as Mitsuba's; `two_sided` makes them
-                // what `twosided` makes Mitsuba's.
-                "conductor" | "roughconductor" => {
-                    let inner = convert(cx, one)?;
-                    match inner.strip_suffix(')') {
-                        Some(head) => format!("{head}, two_sided: true)"),
-                        None => return Err(one.at.error(format!("twosided: cannot extend {inner}"))),
-                    }
-                }
-                k => {
-                    return Err(one.at.error(format!(
-                        "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor, roughconductor, plastic and roughplastic"
-                    )));
-                }
-            }
+            two_sided(cx, one)?
         }
         "conductor" | "roughconductor" => {
             let rough = if p.kind == "roughconductor" { microfacet(&p)? } else { "alpha: 0".to_owned() };
@@ -247,6 +310,8 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             p.finish(&["int_ior", "ext_ior"])?;
             format!("ThinDielectric(ior: {})", num32(int / ext))
         }
+        "mask" => mask(cx, &p, false)?,
+        "blendbsdf" => blend(cx, &p, false)?,
         "null" => {
             return Err(p.at.error(
                 "<bsdf type=\"null\"> is a shape's invisible boundary: pathwave reads it directly inside a <shape>",
@@ -254,7 +319,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, mask, blendbsdf and null"
             )));
         }
     };

@@ -238,17 +238,33 @@ impl<'d> Converter<'d> {
         }
     }
 
-    fn material(&mut self, e: &'d Element) -> Result<String, SceneError> {
+    /// The name of the material a `<bsdf>` element (or `<ref>`) becomes, converting it once.
+    pub fn material(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        self.material_as(e, false)
+    }
+
+    /// The name of the material a `<bsdf>` element (or `<ref>`) becomes inside a `twosided`:
+    /// the same on both sides ([`super::bsdf::two_sided`]), converted once.
+    pub fn two_sided_material(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        self.material_as(e, true)
+    }
+
+    fn material_as(&mut self, e: &'d Element, two_sided: bool) -> Result<String, SceneError> {
         let e = self.referenced(e)?;
+        let side = if two_sided { "twosided " } else { "" };
         let key = match e.attr("id") {
-            Some(id) => id.to_owned(),
-            None => format!("{}:{}:{}", e.at.file.display(), e.at.line, e.at.col),
+            Some(id) => format!("{side}{id}"),
+            None => format!("{side}{}:{}:{}", e.at.file.display(), e.at.line, e.at.col),
         };
         if let Some(name) = self.named.get(&key) {
             return Ok(name.clone());
         }
-        let ron = super::bsdf::convert(self, e)?;
+        let ron = match two_sided {
+            false => super::bsdf::convert(self, e)?,
+            true => super::bsdf::two_sided(self, e)?,
+        };
         let name = match e.attr("id") {
+            Some(id) if two_sided => format!("{id}-twosided"),
             Some(id) => id.to_owned(),
             // Anonymous BSDFs that say the same thing (one written inside each of many shapes)
             // become one material, as an author would write it.

@@ -770,6 +770,60 @@ fn media_pathwave_cannot_render_are_refused_where_they_are_written() {
     assert!(e.message.contains("closed"), "{e}");
 }
 
+/// `mask` and `blendbsdf` become `Mask` and `Blend` around the materials their BSDFs become
+/// (named before them), a float or a texture for the opacity (Mitsuba's default 0.5) and the
+/// weight; inside `twosided` their BSDFs are two-sided. Opacities outside [0, 1], a missing
+/// weight and a wrong number of BSDFs are refused where written.
+#[test]
+fn masks_and_blends_become_wrappers() {
+    let r = ron(
+        "wrappers",
+        r#"<texture type="checkerboard" id="check"/>
+        <shape type="sphere"><bsdf type="mask"><ref name="opacity" id="check"/><bsdf type="diffuse"/></bsdf></shape>
+        <shape type="cube"><bsdf type="blendbsdf"><float name="weight" value="0.25"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.2"/></bsdf><bsdf type="roughconductor"/></bsdf></shape>
+        <shape type="disk"><bsdf type="twosided"><bsdf type="mask"><bsdf type="blendbsdf"><float name="weight" value="1"/>
+            <bsdf type="diffuse"/><bsdf type="plastic"/></bsdf></bsdf></bsdf></shape>"#,
+    );
+    let line =
+        |name: &str| r.lines().find(|l| l.trim_start().starts_with(&format!("{name:?}"))).unwrap_or("");
+    assert!(line("mask-1").contains(r#"Mask(opacity: "check", material: "diffuse-0")"#), "{r}");
+    assert!(
+        line("blendbsdf-4").contains(r#"Blend(weight: 0.25, materials: ("diffuse-2", "roughconductor-3"))"#),
+        "{r}"
+    );
+    assert!(line("diffuse-5").contains("Lambertian(albedo: (0.5, 0.5, 0.5))"), "{r}");
+    assert!(line("plastic-6").contains("two_sided: true"), "{r}");
+    assert!(
+        line("blendbsdf-7").contains(r#"Blend(weight: 1, materials: ("diffuse-5", "plastic-6"))"#),
+        "{r}"
+    );
+    assert!(line("twosided-8").contains(r#"Mask(opacity: 0.5, material: "blendbsdf-7")"#), "{r}");
+    for (tag, body, at, message) in [
+        (
+            "opacity",
+            "<bsdf type=\"mask\">\n<float name=\"opacity\" value=\"1.5\"/><bsdf type=\"diffuse\"/></bsdf>",
+            (6, 1),
+            "`opacity` is a number in [0, 1] or a texture",
+        ),
+        (
+            "weight",
+            "<bsdf type=\"blendbsdf\"><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf>",
+            (5, 22),
+            "`weight` is required",
+        ),
+        (
+            "count",
+            "<bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.5\"/><bsdf type=\"diffuse\"/></bsdf>",
+            (5, 22),
+            "holds 2 BSDF(s), not 1",
+        ),
+    ] {
+        let e = error(tag, &format!("<shape type=\"sphere\">{body}</shape>"));
+        assert!((e.line, e.col) == at && e.message.contains(message), "{tag}: {e}");
+    }
+}
+
 /// Writes `name` in the folder of the scene `tag`: a `.vol` grid of `size` and `channels`.
 fn grid_file(tag: &str, name: &str, size: [i32; 3], channels: i32, bbox: [f32; 6]) {
     let d = std::env::temp_dir().join(format!("pathwave-mitsuba-{tag}-{}", std::process::id()));
