@@ -13,7 +13,7 @@ use crate::math::Ray;
 use crate::media::Media;
 pub use crate::scene::SamplerKind;
 use crate::shape::SurfacePoint;
-use crate::texture::{MaterialTextures, Textures};
+use crate::texture::{MaterialTextures, Textures, scalar};
 use glam::{Vec2, Vec3, Vec3A};
 use std::sync::Arc;
 
@@ -394,9 +394,15 @@ impl RenderScene {
     #[inline(never)]
     fn textured_material(&self, id: usize, sp: &SurfacePoint) -> Material {
         let mut m = self.materials[id];
-        for (slot, t) in self.material_textures[id].0.iter().enumerate() {
+        let slots = &self.material_textures[id];
+        for (slot, t) in slots.colors.iter().enumerate() {
             if let Some(t) = *t {
                 m.set_color(slot, self.textures.at(t, sp, &self.instances.blas));
+            }
+        }
+        for (slot, t) in slots.scalars.iter().enumerate() {
+            if let Some(t) = *t {
+                m.set_scalar(slot, scalar(self.textures.at(t, sp, &self.instances.blas)));
             }
         }
         m

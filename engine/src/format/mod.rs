@@ -11,6 +11,6 @@ pub mod files;
 pub mod registry;
 mod values;
 
-pub use color::Color;
+pub use color::{Color, Scalar};
 pub(crate) use values::white;
 pub use values::*;

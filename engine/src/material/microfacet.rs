@@ -45,6 +45,12 @@ impl<'de> serde::Deserialize<'de> for Roughness {
     }
 }
 
+impl From<Roughness> for f32 {
+    fn from(r: Roughness) -> f32 {
+        r.0
+    }
+}
+
 /// `v` in the frame `f`: (v.t, v.b, v.n).
 #[inline]
 pub fn to_local(f: &Frame, v: Vec3A) -> Vec3A {

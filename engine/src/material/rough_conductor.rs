@@ -12,7 +12,7 @@
 
 use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
-use crate::format::{Albedo, Color, Rgb};
+use crate::format::{Albedo, Color, Rgb, Scalar};
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -23,8 +23,9 @@ use glam::{Vec2, Vec3, Vec3A};
 pub struct RoughConductorDesc {
     /// Colour multiplying the reflectance, components in [0, 1], or a texture.
     pub tint: Color<Albedo>,
-    /// Roughness in [0, 1]; below 1e-3 a smooth mirror.
-    pub alpha: Roughness,
+    /// Roughness in [0, 1] or a texture (its luminance, limited to [0, 1]); below 1e-3 a smooth
+    /// mirror.
+    pub alpha: Scalar<Roughness>,
     /// `Ggx` (default) or `Beckmann`.
     #[serde(default)]
     pub distribution: Distribution,
@@ -187,7 +188,7 @@ impl MaterialModel for RoughConductor {
         };
         Self {
             tint: colors.get(&desc.tint).min(Vec3::ONE),
-            alpha: desc.alpha.0,
+            alpha: colors.scalar(&desc.alpha),
             distribution: desc.distribution,
             ior,
             smith: desc.smith,
@@ -198,6 +199,11 @@ impl MaterialModel for RoughConductor {
     #[inline]
     fn set_color(&mut self, _slot: usize, value: Vec3) {
         self.tint = value.clamp(Vec3::ZERO, Vec3::ONE);
+    }
+
+    #[inline]
+    fn set_scalar(&mut self, _slot: usize, value: f32) {
+        self.alpha = value.clamp(0.0, 1.0);
     }
 
     /// Visible-normal sampling and mirroring about the normal; `None` seen from below `n` or
@@ -624,6 +630,28 @@ mod tests {
         let f = fresnel_conductor(0.5, GOLD.eta, GOLD.k);
         assert!(f.min_element() >= 0.0 && f.max_element() <= 1.0);
         assert!(f.x > f.z, "gold reflects red more than blue: {f}");
+    }
+
+    /// A textured alpha takes a number slot (the tint the colour slot) and holds the texture's
+    /// mean until a hit sets it, limited to [0, 1].
+    #[test]
+    fn textured_alpha_fills_a_number_slot() {
+        let text = r#"RoughConductor(tint: "tint", alpha: "bumps")"#;
+        let (mut m, slots) = Material::build(&parse(text).unwrap(), &mut |n| match n {
+            "bumps" => (4, Vec3::new(0.1, 0.2, 0.3)),
+            _ => (2, Vec3::ONE),
+        });
+        assert_eq!(slots.colors, [Some(2), None]);
+        assert_eq!(&slots.scalars[..2], [Some(4), None]);
+        let alpha = |m: &Material| match m {
+            Material::RoughConductor(c) => c.alpha,
+            _ => unreachable!(),
+        };
+        assert_eq!(alpha(&m), crate::texture::scalar(Vec3::new(0.1, 0.2, 0.3)));
+        for (value, want) in [(0.25, 0.25), (1.5, 1.0), (-0.5, 0.0)] {
+            m.set_scalar(0, value);
+            assert_eq!(alpha(&m), want);
+        }
     }
 
     #[test]
