@@ -5,10 +5,11 @@
 //! Lambertian. Its conductors and plastics are one-sided as pathwave's, and its dielectrics the
 //! same on both sides in both renderers.
 
+use super::conductors::CONDUCTORS;
 use super::convert::{Converter, num, num32, v3};
 use super::props::{Plugin, Value};
 use super::spectrum::Use;
-use super::xml::Element;
+use super::xml::{At, Element};
 use crate::scene::SceneError;
 use glam::DVec3;
 
@@ -70,6 +71,25 @@ fn microfacet(p: &Plugin) -> Result<String, SceneError> {
         return Err(p.at.error(format!("alpha {a}: pathwave takes 0 to 1")));
     }
     Ok(format!("alpha: {}, distribution: {distribution}", num(a)))
+}
+
+/// The RGB `eta` and `k` of one of Mitsuba's named conductors ([`CONDUCTORS`]).
+fn named_conductor(name: &str, at: &At) -> Result<(Option<DVec3>, Option<DVec3>), SceneError> {
+    let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, ..)| *n == name) else {
+        let known: Vec<&str> = CONDUCTORS.iter().map(|(n, ..)| *n).collect();
+        return Err(at.error(format!(
+            "material \"{name}\" is not one of Mitsuba's named conductors ({}, or none)",
+            known.join(", ")
+        )));
+    };
+    let (eta, k) = (DVec3::from(eta.map(f64::from)), DVec3::from(k.map(f64::from)));
+    if eta.min_element() <= 0.0 {
+        return Err(at.error(format!(
+            "material \"{name}\": Mitsuba's RGB for its eta is ({}, {}, {}), and pathwave takes an eta > 0 in each channel",
+            eta.x, eta.y, eta.z
+        )));
+    }
+    Ok((Some(eta), Some(k)))
 }
 
 fn unit_scale(p: &Plugin, name: &str) -> Result<(), SceneError> {
@@ -181,15 +201,18 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         "conductor" | "roughconductor" => {
             let rough = if p.kind == "roughconductor" { microfacet(&p)? } else { "alpha: 0".to_owned() };
+            let (mut eta, mut k) = (p.rgb_as("eta", Use::Unbounded)?, p.rgb_as("k", Use::Unbounded)?);
             if let Some((m, at)) = p.string("material")?
                 && m != "none"
             {
-                return Err(at.error(format!(
-                    "material \"{m}\": pathwave's named metals come in a later version; give eta and k"
-                )));
+                (eta, k) = named_conductor(&m, &at)?;
+                if let Some(param) = p.param("eta").or(p.param("k")) {
+                    return Err(param.at.error(format!(
+                        "{}: give either eta and k or a material (\"{m}\"), as Mitsuba",
+                        p.label()
+                    )));
+                }
             }
-            let eta = p.rgb_as("eta", Use::Unbounded)?;
-            let k = p.rgb_as("k", Use::Unbounded)?;
             let tint = color(cx, &p, "specular_reflectance", DVec3::ONE)?;
             p.finish(&[
                 "alpha",

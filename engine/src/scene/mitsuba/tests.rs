@@ -758,3 +758,52 @@ fn media_pathwave_cannot_render_are_refused_where_they_are_written() {
     assert_eq!(e.line, 6, "{e}");
     assert!(e.message.contains("closed"), "{e}");
 }
+
+/// Named conductors take Mitsuba's RGB indices ([`super::conductors`]); unknown names, names
+/// beside `eta`, and the names whose RGB eta has a zero channel are refused where written. The
+/// table agrees with what [`super::spectrum`] makes of Mitsuba's spectral files (gold and
+/// amorphous carbon, copied into tests/mitsuba-data/ior).
+#[test]
+fn named_conductors_take_mitsubas_rgb_indices() {
+    use super::conductors::CONDUCTORS;
+    use super::spectrum::{Spectrum, Use};
+    let r = ron(
+        "named",
+        r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughconductor"><string name="material" value="a-C"/></bsdf></shape>"#,
+    );
+    for want in [
+        "RoughConductor(tint: (1, 1, 1), alpha: 0, eta: (0.14303597807884216, 0.3753070831298828, 1.4420453310012817), k: (3.982996940612793, 2.38555645942688, 1.6033592224121094))",
+        "alpha: 0.1, distribution: Beckmann, eta: (2.9440457820892334, 2.2271363735198975, 1.968161702156067), k: (0.8874648809432983, ",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/mitsuba-data/ior");
+    let at = super::xml::At { file: std::sync::Arc::new("t.spd".into()), line: 1, col: 1 };
+    for (name, eta, k) in CONDUCTORS.iter().filter(|(n, ..)| ["Au", "a-C"].contains(n)) {
+        for (part, want) in [("eta", eta), ("k", k)] {
+            let text = std::fs::read_to_string(data.join(format!("{name}.{part}.spd"))).unwrap();
+            // Not weighted by D65 (as emission is): `complex_ior_from_file` calls
+            // `spectrum_list_to_srgb` with its default, unlike a `<spectrum>` written in a scene.
+            // With D65 amorphous carbon's red eta is 2.45, not Mitsuba's 2.94.
+            let rgb = Spectrum::parse_file(&text, &at).unwrap().to_rgb(Use::Emission);
+            let want = glam::DVec3::from(want.map(f64::from));
+            assert!(
+                (rgb - want).abs().max_element() < 1e-4 * want.max_element(),
+                "{name} {part}: {rgb} vs {want}"
+            );
+        }
+    }
+    let bsdf =
+        |inner: &str| format!("<shape type=\"sphere\"><bsdf type=\"conductor\">\n{inner}</bsdf></shape>");
+    let e = error("unknown", &bsdf(r#"<string name="material" value="Gold"/>"#));
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(
+        e.message.contains("\"Gold\"") && e.message.contains("Au, Be") && e.message.contains("W, or none"),
+        "{e}"
+    );
+    let e = error("both", &bsdf(r#"<string name="material" value="Au"/><float name="eta" value="2"/>"#));
+    assert!(e.message.contains("either eta and k or a material"), "{e}");
+    let e = error("zero", &bsdf(r#"<string name="material" value="AlSb"/>"#));
+    assert!(e.message.contains("eta > 0"), "{e}");
+}
