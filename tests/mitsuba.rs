@@ -263,6 +263,16 @@ fn roughdielectric() {
     conformance("bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
 }
 
+/// An OBJ sphere of anisotropic rough amorphous carbon (Mitsuba's named conductor `a-C`,
+/// Beckmann), `alpha_u` and `alpha_v` two checkerboards of 0.05 and 0.3 the other way round:
+/// the tangent from the mesh's uvs, and Mitsuba's checkerboard read as a number. With `alpha_u`
+/// and `alpha_v` exchanged (or the checkerboard's colours read as its colour lookup reads
+/// them) only 74.5% of the channels passed.
+#[test]
+fn textured_roughconductor() {
+    conformance("bsdf_spheres", "test_textured_roughconductor_path.xml", "test_textured_roughconductor");
+}
+
 /// Four OBJ spheres of rough plastic (GGX, alpha 0.01, 0.1, 0.4 and 1, BK7 in air over a green
 /// base: the coating's computed transmittance and inner reflectance, linear) under the area
 /// light, environment map and point light of `fragments/single_sphere.xml`.

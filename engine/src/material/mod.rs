@@ -161,6 +161,12 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
         let _ = (slot, value);
     }
 
+    /// Sets the surface's tangent at a hit, `dpdu` (not unit, not orthogonal to the unit
+    /// shading normal `n`), for a material that asked for it ([`Colors::tangent`]).
+    fn set_tangent(&mut self, n: Vec3A, dpdu: Vec3A) {
+        let _ = (n, dpdu);
+    }
+
     /// Samples the next direction from numbers `u` and `uc` in [0, 1); `None` when the path is
     /// absorbed. Emitters do not scatter.
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
@@ -270,6 +276,11 @@ impl<'a> Colors<'a> {
                 crate::texture::scalar(mean)
             }
         }
+    }
+
+    /// The material needs the surface's tangent at each hit ([`MaterialModel::set_tangent`]).
+    pub fn tangent(&mut self) {
+        self.slots.tangent = true;
     }
 
     /// Which colour and number slots came from textures.
@@ -391,6 +402,14 @@ macro_rules! registry {
             pub fn set_scalar(&mut self, slot: usize, value: f32) {
                 match self {
                     $($(#[$attr])* Material::$variant(m) => m.set_scalar(slot, value),)+
+                }
+            }
+
+            /// See [`MaterialModel::set_tangent`].
+            #[inline]
+            pub fn set_tangent(&mut self, n: Vec3A, dpdu: Vec3A) {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.set_tangent(n, dpdu),)+
                 }
             }
 
@@ -596,5 +615,12 @@ mod tests {
             }
             assert_eq!((dir_matters, lobe_matters), (reads.dir, reads.lobe), "{m:?} says {reads:?}");
         }
+    }
+
+    /// The material is copied per hit and per path: a new kind or parameter must not make it
+    /// larger without a measurement (benches/RESULTS.md).
+    #[test]
+    fn materials_stay_56_bytes() {
+        assert_eq!(std::mem::size_of::<Material>(), 56);
     }
 }

@@ -505,12 +505,16 @@ pub struct MaterialTextures {
     pub colors: [Option<TextureId>; MAX_TEXTURED_COLORS],
     /// Per number slot: the texture's [`scalar`] stands for the number.
     pub scalars: [Option<TextureId>; MAX_TEXTURED_SCALARS],
+    /// The material takes the surface's tangent at each hit
+    /// ([`crate::material::MaterialModel::set_tangent`]).
+    pub tangent: bool,
 }
 
 impl MaterialTextures {
-    /// True when some colour or number comes from a texture.
+    /// True when a hit sets something of the material: a colour or number from a texture, or
+    /// the tangent.
     pub fn any(&self) -> bool {
-        self.colors.iter().chain(&self.scalars).any(Option::is_some)
+        self.tangent || self.colors.iter().chain(&self.scalars).any(Option::is_some)
     }
 }
 

@@ -30,11 +30,39 @@ fn color<'d>(
     }
 }
 
-/// The microfacet parameters of roughconductor and roughdielectric as RON fields,
-/// `alpha: A, distribution: D`, read as Mitsuba's `MicrofacetDistribution` reads them: the
-/// distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1) or both `alpha_u`
-/// and `alpha_v`, which pathwave's isotropic distributions take only when they are equal.
-fn microfacet(p: &Plugin) -> Result<String, SceneError> {
+/// A roughness parameter as RON: a number in [0, 1] or a texture's name (Mitsuba's float
+/// textures). `None` when not written.
+fn roughness<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, name: &str) -> Result<Option<String>, SceneError> {
+    let Some(param) = p.param(name) else { return Ok(None) };
+    match &param.value {
+        Value::Object(e) => Ok(Some(format!("{:?}", cx.float_texture(e)?))),
+        _ => {
+            let a = p.float(name)?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&a) {
+                return Err(param.at.error(format!("{}: {name} {a}: pathwave takes 0 to 1", p.label())));
+            }
+            Ok(Some(num(a)))
+        }
+    }
+}
+
+/// What a kind's RON takes of the microfacet parameters.
+#[derive(Clone, Copy, PartialEq)]
+enum Takes {
+    /// One number.
+    Number,
+    /// A number or a texture.
+    Textured,
+    /// A number or a texture, and `alpha_v` beside `alpha` (anisotropic).
+    Anisotropic,
+}
+
+/// The microfacet parameters of the rough BSDFs as RON fields, `alpha: A, distribution: D`
+/// or `alpha: U, alpha_v: V, distribution: D`, read as Mitsuba's `MicrofacetDistribution`
+/// reads them: the distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1)
+/// or both `alpha_u` and `alpha_v`. A kind that `takes` only a number refuses textures and
+/// unequal `alpha_u` and `alpha_v`.
+fn microfacet<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, takes: Takes) -> Result<String, SceneError> {
     let distribution = match p.string("distribution")? {
         None => "Beckmann",
         Some((d, at)) => match d.to_lowercase().as_str() {
@@ -49,28 +77,40 @@ fn microfacet(p: &Plugin) -> Result<String, SceneError> {
     };
     // Visible-normal sampling is how pathwave samples both; Mitsuba's switch changes only noise.
     p.bool("sample_visible")?;
-    let (alpha_u, alpha_v) = (p.float("alpha_u")?, p.float("alpha_v")?);
-    let a = match (p.float("alpha")?, alpha_u, alpha_v) {
-        (a, None, None) => a.unwrap_or(0.1),
+    if takes == Takes::Number {
+        for name in ["alpha", "alpha_u", "alpha_v"] {
+            if let Some(param) = p.param(name)
+                && matches!(param.value, Value::Object(_))
+            {
+                return Err(param.at.error(format!(
+                    "{}: a textured {name}: pathwave's {} takes a number",
+                    p.label(),
+                    p.kind
+                )));
+            }
+        }
+    }
+    let (alpha_u, alpha_v) = (roughness(cx, p, "alpha_u")?, roughness(cx, p, "alpha_v")?);
+    let fields = match (roughness(cx, p, "alpha")?, alpha_u, alpha_v) {
+        (a, None, None) => format!("alpha: {}", a.unwrap_or_else(|| num(0.1))),
         (Some(_), _, _) => {
             return Err(p.at.error(format!("{}: give either alpha or alpha_u and alpha_v", p.label())));
         }
-        (None, Some(u), Some(v)) if u == v => u,
+        (None, Some(u), Some(v)) if u == v => format!("alpha: {u}"),
+        (None, Some(u), Some(v)) if takes == Takes::Anisotropic => format!("alpha: {u}, alpha_v: {v}"),
         (None, Some(u), Some(v)) => {
             let at = p.param("alpha_v").map_or(&p.at, |param| &param.at);
             return Err(at.error(format!(
-                "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): pathwave's microfacets are isotropic; give one alpha",
-                p.label()
+                "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): pathwave's {} is isotropic; give one alpha",
+                p.label(),
+                p.kind
             )));
         }
         (None, _, _) => {
             return Err(p.at.error(format!("{}: alpha_u and alpha_v go together", p.label())));
         }
     };
-    if !(0.0..=1.0).contains(&a) {
-        return Err(p.at.error(format!("alpha {a}: pathwave takes 0 to 1")));
-    }
-    Ok(format!("alpha: {}, distribution: {distribution}", num(a)))
+    Ok(format!("{fields}, distribution: {distribution}"))
 }
 
 /// The RGB `eta` and `k` of one of Mitsuba's named conductors ([`CONDUCTORS`]).
@@ -119,7 +159,7 @@ fn diffuse<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Resul
 /// positive and, for `roughplastic`, differ; pathwave also wants their ratio in [0.1, 10].
 fn plastic<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
     let rough = match p.kind == "roughplastic" {
-        true => Some(microfacet(p)?),
+        true => Some(microfacet(cx, p, Takes::Number)?),
         false => None,
     };
     let int = Converter::ior(p, "int_ior", 1.49)?;
@@ -200,7 +240,10 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             }
         }
         "conductor" | "roughconductor" => {
-            let rough = if p.kind == "roughconductor" { microfacet(&p)? } else { "alpha: 0".to_owned() };
+            let rough = match p.kind == "roughconductor" {
+                true => microfacet(cx, &p, Takes::Anisotropic)?,
+                false => "alpha: 0".to_owned(),
+            };
             let (mut eta, mut k) = (p.rgb_as("eta", Use::Unbounded)?, p.rgb_as("k", Use::Unbounded)?);
             if let Some((m, at)) = p.string("material")?
                 && m != "none"
@@ -240,7 +283,10 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         "plastic" | "roughplastic" => plastic(cx, &p, false)?,
         "dielectric" | "roughdielectric" => {
-            let rough = if p.kind == "roughdielectric" { Some(microfacet(&p)?) } else { None };
+            let rough = match p.kind == "roughdielectric" {
+                true => Some(microfacet(cx, &p, Takes::Textured)?),
+                false => None,
+            };
             let int = Converter::ior(&p, "int_ior", 1.5046)?;
             let ext = Converter::ior(&p, "ext_ior", 1.000277)?;
             unit_scale(&p, "specular_reflectance")?;

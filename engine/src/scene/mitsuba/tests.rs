@@ -601,9 +601,36 @@ fn microfacets_keep_their_distribution() {
     ] {
         assert!(r.contains(want), "missing {want} in\n{r}");
     }
+    // Anisotropic and textured: roughconductor's alpha_u and alpha_v, roughdielectric's alpha.
+    let r = ron(
+        "aniso-ok",
+        r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/>
+            <texture name="alpha_v" type="checkerboard"><float name="color0" value="0.3"/></texture></bsdf></shape>
+        <shape type="cube"><bsdf type="roughdielectric"><texture name="alpha" type="checkerboard"/></bsdf></shape>"#,
+    );
+    for want in [
+        r#"RoughConductor(tint: (1, 1, 1), alpha: 0.1, alpha_v: "checkerboard-0", distribution: Beckmann)"#,
+        // Read as a number, Mitsuba's checkerboard has color0 (0.3) where its colour has color1.
+        r#""checkerboard-0": UvChecker(u: 2, v: 2, even: (0.2, 0.2, 0.2), odd: (0.3, 0.3, 0.3)"#,
+        r#"RoughDielectric(ior: 1.5041833, alpha: "checkerboard-1", distribution: Beckmann)"#,
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    let e = error(
+        "plastic-texture",
+        "<shape type=\"sphere\"><bsdf type=\"roughplastic\">\n<texture name=\"alpha\" type=\"checkerboard\"/></bsdf></shape>",
+    );
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("textured alpha"), "{e}");
+    let e = error(
+        "negative",
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\">\n<float name=\"alpha_u\" value=\"-0.1\"/><float name=\"alpha_v\" value=\"0.1\"/></bsdf></shape>",
+    );
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("alpha_u -0.1: pathwave takes 0 to 1"), "{e}");
     let e = error(
         "aniso",
-        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n<float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>",
+        "<shape type=\"sphere\"><bsdf type=\"roughdielectric\"><float name=\"alpha_u\" value=\"0.1\"/>\n<float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>",
     );
     assert_eq!((e.line, e.col), (6, 1), "{e}");
     assert!(e.message.contains("anisotropic") && e.message.contains("isotropic"), "{e}");
