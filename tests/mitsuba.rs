@@ -273,6 +273,19 @@ fn textured_roughconductor() {
     conformance("bsdf_spheres", "test_textured_roughconductor_path.xml", "test_textured_roughconductor");
 }
 
+/// An OBJ sphere of Mitsuba's `principled` (green base, roughness 0.15, specular 0.7) with
+/// checkerboards of anisotropy, metallic, clearcoat and sheen.
+#[test]
+fn texturedprincipled1() {
+    conformance("bsdf_spheres", "test_texturedprincipled1_path.xml", "test_texturedprincipled1");
+}
+
+/// The same with checkerboards of transmission (`spec_trans`) instead of metallic.
+#[test]
+fn texturedprincipled2() {
+    conformance("bsdf_spheres", "test_texturedprincipled2_path.xml", "test_texturedprincipled2");
+}
+
 /// Four OBJ spheres of rough plastic (GGX, alpha 0.01, 0.1, 0.4 and 1, BK7 in air over a green
 /// base: the coating's computed transmittance and inner reflectance, linear) under the area
 /// light, environment map and point light of `fragments/single_sphere.xml`.

@@ -17,6 +17,7 @@ pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
 pub mod plastic;
+pub mod principled;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
@@ -38,6 +39,7 @@ registry! {
     RoughDielectric(rough_dielectric::RoughDielectric),
     Plastic(plastic::Plastic),
     RoughPlastic(rough_plastic::RoughPlastic),
+    Principled(principled::Principled),
     ThinDielectric(thin_dielectric::ThinDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]

@@ -205,6 +205,83 @@ fn plastic<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Resul
     Ok(s + ")")
 }
 
+/// A weight of `principled` in [0, 1] as RON (a number or a texture read as a number), or
+/// nothing when not written.
+fn weight<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, name: &str) -> Result<Option<String>, SceneError> {
+    let Some(param) = p.param(name) else { return Ok(None) };
+    match &param.value {
+        Value::Object(e) => Ok(Some(format!("{name}: {:?}", cx.float_texture(e)?))),
+        _ => {
+            let v = p.float(name)?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&v) {
+                return Err(param.at.error(format!("{}: {name} {v}: expected 0 to 1", p.label())));
+            }
+            Ok(Some(format!("{name}: {}", num(v))))
+        }
+    }
+}
+
+/// Mitsuba's `principled` (`src/bsdfs/principled.cpp`) as `Principled`: `base_color` a colour
+/// or texture, every weight a number or texture, `eta` or `specular`, and the sampling rates.
+fn principled<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, SceneError> {
+    const WEIGHTS: [&str; 10] = [
+        "roughness",
+        "anisotropic",
+        "metallic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "flatness",
+        "clearcoat",
+        "clearcoat_gloss",
+    ];
+    let mut fields = vec![format!("base_color: {}", color(cx, p, "base_color", DVec3::splat(0.5))?)];
+    for name in WEIGHTS {
+        fields.extend(weight(cx, p, name)?);
+    }
+    match (p.param("eta"), p.param("specular")) {
+        (Some(_), Some(param)) => {
+            return Err(param.at.error(format!("{}: give either eta or specular, as Mitsuba", p.label())));
+        }
+        (Some(param), None) => {
+            let eta = p.float("eta")?.unwrap_or_default();
+            if !(eta > 0.0) {
+                return Err(param.at.error(format!("{}: eta {eta}: expected > 0", p.label())));
+            }
+            fields.push(format!("eta: {}", num(eta)));
+        }
+        (None, Some(param)) => {
+            let s = p.float("specular")?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&s) {
+                return Err(param.at.error(format!("{}: specular {s}: expected 0 to 1", p.label())));
+            }
+            fields.push(format!("specular: {}", num(s)));
+        }
+        (None, None) => {}
+    }
+    let rates =
+        ["main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"];
+    let mut r = [1.0; 3];
+    for (i, name) in rates.iter().enumerate() {
+        if let Some(v) = p.float(name)? {
+            if !(v >= 0.0 && v.is_finite()) {
+                let at = p.param(name).map_or(&p.at, |param| &param.at);
+                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
+            }
+            r[i] = v;
+        }
+    }
+    if r != [1.0; 3] {
+        fields.push(format!("sampling_rates: ({}, {}, {})", num(r[0]), num(r[1]), num(r[2])));
+    }
+    let mut known = vec!["base_color", "eta", "specular"];
+    known.extend(WEIGHTS);
+    known.extend(rates);
+    p.finish(&known)?;
+    Ok(format!("Principled({})", fields.join(", ")))
+}
+
 /// The material a `<bsdf>` element becomes.
 pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
@@ -282,6 +359,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             s + ")"
         }
         "plastic" | "roughplastic" => plastic(cx, &p, false)?,
+        "principled" => principled(cx, &p)?,
         "dielectric" | "roughdielectric" => {
             let rough = match p.kind == "roughdielectric" {
                 true => Some(microfacet(cx, &p, Takes::Textured)?),
@@ -323,7 +401,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled and null"
             )));
         }
     };

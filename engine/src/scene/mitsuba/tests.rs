@@ -104,8 +104,8 @@ fn what_is_not_supported_is_refused_where_it_is_written() {
     assert!(e.message.contains("teapot") && e.message.contains("rectangle, cube, sphere"), "{e}");
     let e = error("param", "<shape type=\"sphere\"><float name=\"radios\" value=\"1\"/></shape>");
     assert!(e.message.contains("`radios`") && e.message.contains("radius"), "{e}");
-    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"principled\"/></shape>");
-    assert!(e.message.contains("principled") && e.message.contains("roughplastic"), "{e}");
+    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"measured\"/></shape>");
+    assert!(e.message.contains("measured") && e.message.contains("roughplastic"), "{e}");
     let e = error("ref", "<shape type=\"sphere\"><ref id=\"nope\"/></shape>");
     assert!(e.message.contains("nope"), "{e}");
     let e = error("twice", "<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"diffuse\" id=\"a\"/>");
@@ -833,4 +833,33 @@ fn named_conductors_take_mitsubas_rgb_indices() {
     assert!(e.message.contains("either eta and k or a material"), "{e}");
     let e = error("zero", &bsdf(r#"<string name="material" value="AlSb"/>"#));
     assert!(e.message.contains("eta > 0"), "{e}");
+}
+
+/// `principled` becomes `Principled` with its weights as numbers or textures (checkerboards read
+/// as numbers), `specular` or `eta`, and the sampling rates; out-of-range weights and both
+/// `eta` and `specular` are refused where written.
+#[test]
+fn principled_becomes_principled() {
+    let r = ron(
+        "principled",
+        r#"<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.2, 0.8, 0.1"/>
+            <float name="roughness" value="0.15"/><texture name="metallic" type="checkerboard"/>
+            <float name="specular" value="0.7"/><float name="clearcoat_sampling_rate" value="0.5"/></bsdf></shape>"#,
+    );
+    let want = r#"Principled(base_color: (0.2, 0.8, 0.1), roughness: 0.15, metallic: "checkerboard-0", specular: 0.7, sampling_rates: (1, 0.5, 1))"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    for (tag, body, message) in [
+        ("sheen", r#"<float name="sheen" value="1.5"/>"#, "sheen 1.5: expected 0 to 1"),
+        (
+            "both",
+            r#"<float name="eta" value="1.5"/><float name="specular" value="0.5"/>"#,
+            "either eta or specular",
+        ),
+        ("eta", r#"<float name="eta" value="0"/>"#, "eta 0: expected > 0"),
+    ] {
+        let e =
+            error(tag, &format!("<shape type=\"sphere\"><bsdf type=\"principled\">\n{body}</bsdf></shape>"));
+        assert_eq!(e.line, 6, "{e}");
+        assert!(e.message.contains(message), "{tag}: {e}");
+    }
 }
