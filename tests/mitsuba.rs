@@ -286,6 +286,14 @@ fn texturedprincipled2() {
     conformance("bsdf_spheres", "test_texturedprincipled2_path.xml", "test_texturedprincipled2");
 }
 
+/// A rectangle of Mitsuba's `principledthin` (index 1.33) with checkerboards of anisotropy,
+/// specular and diffuse transmission (0.4 and 1.4) and sheen: the tangent from the rectangle's
+/// u edge.
+#[test]
+fn texturedprincipledthin() {
+    conformance("bsdf_spheres", "test_texturedprincipledthin_path.xml", "test_texturedprincipledthin");
+}
+
 /// Four OBJ spheres of rough plastic (GGX, alpha 0.01, 0.1, 0.4 and 1, BK7 in air over a green
 /// base: the coating's computed transmittance and inner reflectance, linear) under the area
 /// light, environment map and point light of `fragments/single_sphere.xml`.

@@ -18,6 +18,7 @@ pub mod metal;
 pub mod microfacet;
 pub mod plastic;
 pub mod principled;
+pub mod principled_thin;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
@@ -40,6 +41,7 @@ registry! {
     Plastic(plastic::Plastic),
     RoughPlastic(rough_plastic::RoughPlastic),
     Principled(principled::Principled),
+    PrincipledThin(principled_thin::PrincipledThin),
     ThinDielectric(thin_dielectric::ThinDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]

@@ -80,15 +80,15 @@ pub struct PrincipledDesc {
     pub sampling_rates: (f32, f32, f32),
 }
 
-fn grey() -> Color<Albedo> {
+pub(super) fn grey() -> Color<Albedo> {
     Color::Value(Albedo(Vec3::splat(0.5)))
 }
 
-fn half() -> Scalar<UnitInterval> {
+pub(super) fn half() -> Scalar<UnitInterval> {
     Scalar::Value(UnitInterval(0.5))
 }
 
-fn zero() -> Scalar<UnitInterval> {
+pub(super) fn zero() -> Scalar<UnitInterval> {
     Scalar::Value(UnitInterval(0.0))
 }
 
@@ -165,10 +165,7 @@ impl Principled {
     fn lobes(&self) -> Lobes {
         let (roughness, anisotropic) = (self.w(ROUGHNESS), self.w(ANISOTROPIC));
         let (metallic, spec_trans) = (self.w(METALLIC), self.w(SPEC_TRANS));
-        // Mitsuba's calc_dist_params.
-        let r2 = roughness * roughness;
-        let aspect = (1.0 - 0.9 * anisotropic).sqrt();
-        let ggx = GgxAniso { ax: (r2 / aspect).max(1e-3), ay: (r2 * aspect).max(1e-3) };
+        let ggx = ggx(roughness, anisotropic);
         Lobes {
             base: self.base_color,
             lum: crate::lighting::lights::luminance(self.base_color),
@@ -425,23 +422,32 @@ impl MaterialModel for Principled {
 }
 
 #[inline]
-fn lerp(a: f32, b: f32, t: f32) -> f32 {
+pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
 }
 
 /// `(1 - cos)^5`, `cos` limited to [0, 1].
 #[inline]
-fn schlick_weight(cos: f32) -> f32 {
+pub(super) fn schlick_weight(cos: f32) -> f32 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     let m2 = m * m;
     m2 * m2 * m
+}
+
+/// Mitsuba's `calc_dist_params`: GGX of width `roughness^2` stretched along the tangent by
+/// `1 / sqrt(1 - 0.9 anisotropic)` and narrowed across by as much, at least 0.001.
+#[inline]
+pub(super) fn ggx(roughness: f32, anisotropic: f32) -> GgxAniso {
+    let r2 = roughness * roughness;
+    let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+    GgxAniso { ax: (r2 / aspect).max(1e-3), ay: (r2 * aspect).max(1e-3) }
 }
 
 /// The weight `w` of Mitsuba's `calc_schlick`, whose Fresnel factor is `r0 + (1 - r0) w`:
 /// Schlick's at the cosine `cos_i` (signed: below 0 from inside), through the refracted angle
 /// where the light leaves the denser side.
 #[inline]
-fn schlick_w(cos_i: f32, eta: f32) -> f32 {
+pub(super) fn schlick_w(cos_i: f32, eta: f32) -> f32 {
     let (eta_it, eta_ti) = if cos_i >= 0.0 { (eta, 1.0 / eta) } else { (1.0 / eta, eta) };
     if eta_it > 1.0 {
         schlick_weight(cos_i.abs())
@@ -452,7 +458,7 @@ fn schlick_w(cos_i: f32, eta: f32) -> f32 {
 
 /// Schlick's Fresnel factor from `r0` (see [`schlick_w`]).
 #[inline]
-fn schlick(r0: f32, cos_i: f32, eta: f32) -> f32 {
+pub(super) fn schlick(r0: f32, cos_i: f32, eta: f32) -> f32 {
     let w = schlick_w(cos_i, eta);
     r0 + (1.0 - r0) * w
 }
@@ -479,7 +485,7 @@ fn principled_fresnel(l: &Lobes, f: f32, cos_ih: f32, front: bool, eta: f32) -> 
 /// Mitsuba's dielectric `fresnel(cos_theta_i, eta)`: the reflectance, the signed cosine of the
 /// refracted direction, and the relative indices `eta_it` and `eta_ti` seen from `cos_i`'s side.
 #[inline]
-fn fresnel(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
+pub(super) fn fresnel(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
     let (eta_it, eta_ti) = if cos_i >= 0.0 { (eta, 1.0 / eta) } else { (1.0 / eta, eta) };
     let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti;
     let (ci, ct) = (cos_i.abs(), cos_t2.max(0.0).sqrt());
@@ -498,7 +504,7 @@ fn fresnel(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 /// Mitsuba's `mac_mic_compatibility`: `wo` and `wi` on the sides of the microfacet normal `m`
 /// (turned to `wo`'s side of the surface) that a reflection or a refraction puts them.
 #[inline]
-fn compatible(m: Vec3A, lo: Vec3A, li: Vec3A, cos_i: f32, reflection: bool) -> bool {
+pub(super) fn compatible(m: Vec3A, lo: Vec3A, li: Vec3A, cos_i: f32, reflection: bool) -> bool {
     let m = if cos_i < 0.0 { -m } else { m };
     lo.dot(m) > 0.0 && if reflection { li.dot(m) > 0.0 } else { li.dot(m) < 0.0 }
 }
@@ -506,7 +512,7 @@ fn compatible(m: Vec3A, lo: Vec3A, li: Vec3A, cos_i: f32, reflection: bool) -> b
 /// Mitsuba's `smith_g1` of its GGX: [`Microfacet::g1`], and 0 where `v` sees the microfacet
 /// `m` from its back.
 #[inline]
-fn smith_g1(ggx: &GgxAniso, v: Vec3A, m: Vec3A) -> f32 {
+pub(super) fn smith_g1(ggx: &GgxAniso, v: Vec3A, m: Vec3A) -> f32 {
     if v.dot(m) * v.z <= 0.0 { 0.0 } else { ggx.g1(v) }
 }
 

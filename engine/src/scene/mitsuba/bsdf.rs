@@ -282,6 +282,61 @@ fn principled<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, Scen
     Ok(format!("Principled({})", fields.join(", ")))
 }
 
+/// Mitsuba's `principledthin` (`src/bsdfs/principledthin.cpp`) as `PrincipledThin`:
+/// `base_color` a colour or texture, the weights numbers or textures (`diff_trans` 0 to 2),
+/// `eta` a number, and the four sampling rates.
+fn principled_thin<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, SceneError> {
+    const WEIGHTS: [&str; 7] =
+        ["roughness", "anisotropic", "spec_trans", "spec_tint", "sheen", "sheen_tint", "flatness"];
+    let mut fields = vec![format!("base_color: {}", color(cx, p, "base_color", DVec3::splat(0.5))?)];
+    for name in WEIGHTS {
+        fields.extend(weight(cx, p, name)?);
+    }
+    if let Some(param) = p.param("diff_trans") {
+        match &param.value {
+            Value::Object(e) => fields.push(format!("diff_trans: {:?}", cx.float_texture(e)?)),
+            _ => {
+                let v = p.float("diff_trans")?.unwrap_or_default();
+                if !(0.0..=2.0).contains(&v) {
+                    return Err(param.at.error(format!("{}: diff_trans {v}: expected 0 to 2", p.label())));
+                }
+                fields.push(format!("diff_trans: {}", num(v)));
+            }
+        }
+    }
+    if let Some(param) = p.param("eta") {
+        let eta = p.float("eta")?.unwrap_or_default();
+        if !(eta > 0.0) {
+            return Err(param.at.error(format!("{}: eta {eta}: expected a number > 0", p.label())));
+        }
+        fields.push(format!("eta: {}", num(eta)));
+    }
+    let rates = [
+        "specular_reflectance_sampling_rate",
+        "specular_transmittance_sampling_rate",
+        "diffuse_reflectance_sampling_rate",
+        "diffuse_transmittance_sampling_rate",
+    ];
+    let mut r = [1.0; 4];
+    for (i, name) in rates.iter().enumerate() {
+        if let Some(v) = p.float(name)? {
+            if !(v >= 0.0 && v.is_finite()) {
+                let at = p.param(name).map_or(&p.at, |param| &param.at);
+                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
+            }
+            r[i] = v;
+        }
+    }
+    if r != [1.0; 4] {
+        fields.push(format!("sampling_rates: ({}, {}, {}, {})", num(r[0]), num(r[1]), num(r[2]), num(r[3])));
+    }
+    let mut known = vec!["base_color", "eta", "diff_trans"];
+    known.extend(WEIGHTS);
+    known.extend(rates);
+    p.finish(&known)?;
+    Ok(format!("PrincipledThin({})", fields.join(", ")))
+}
+
 /// The material a `<bsdf>` element becomes.
 pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
@@ -360,6 +415,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         "plastic" | "roughplastic" => plastic(cx, &p, false)?,
         "principled" => principled(cx, &p)?,
+        "principledthin" => principled_thin(cx, &p)?,
         "dielectric" | "roughdielectric" => {
             let rough = match p.kind == "roughdielectric" {
                 true => Some(microfacet(cx, &p, Takes::Textured)?),
@@ -401,7 +457,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled, principledthin and null"
             )));
         }
     };

@@ -863,3 +863,22 @@ fn principled_becomes_principled() {
         assert!(e.message.contains(message), "{tag}: {e}");
     }
 }
+
+/// `principledthin` becomes `PrincipledThin`, `diff_trans` up to 2.
+#[test]
+fn principledthin_becomes_principled_thin() {
+    let r = ron(
+        "thin",
+        r#"<shape type="rectangle"><bsdf type="principledthin"><float name="eta" value="1.33"/>
+            <texture name="diff_trans" type="checkerboard"><float name="color1" value="1.4"/></texture>
+            <float name="spec_trans" value="0.5"/></bsdf></shape>"#,
+    );
+    let want = r#"PrincipledThin(base_color: (0.5, 0.5, 0.5), spec_trans: 0.5, diff_trans: "checkerboard-0", eta: 1.33)"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    let e = error(
+        "thin-bad",
+        "<shape type=\"rectangle\"><bsdf type=\"principledthin\">\n<float name=\"diff_trans\" value=\"2.5\"/></bsdf></shape>",
+    );
+    assert_eq!(e.line, 6, "{e}");
+    assert!(e.message.contains("diff_trans 2.5: expected 0 to 2"), "{e}");
+}
