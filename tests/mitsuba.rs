@@ -266,6 +266,37 @@ fn roughdielectric() {
     conformance("bsdf_spheres", "test_roughdielectric_path.xml", "test_roughdielectric");
 }
 
+/// An OBJ sphere of anisotropic rough amorphous carbon (Mitsuba's named conductor `a-C`,
+/// Beckmann), `alpha_u` and `alpha_v` two checkerboards of 0.05 and 0.3 the other way round:
+/// the tangent from the mesh's uvs, and Mitsuba's checkerboard read as a number. With `alpha_u`
+/// and `alpha_v` exchanged (or the checkerboard's colours read as its colour lookup reads
+/// them) only 74.5% of the channels passed.
+#[test]
+fn textured_roughconductor() {
+    conformance("bsdf_spheres", "test_textured_roughconductor_path.xml", "test_textured_roughconductor");
+}
+
+/// An OBJ sphere of Mitsuba's `principled` (green base, roughness 0.15, specular 0.7) with
+/// checkerboards of anisotropy, metallic, clearcoat and sheen.
+#[test]
+fn texturedprincipled1() {
+    conformance("bsdf_spheres", "test_texturedprincipled1_path.xml", "test_texturedprincipled1");
+}
+
+/// The same with checkerboards of transmission (`spec_trans`) instead of metallic.
+#[test]
+fn texturedprincipled2() {
+    conformance("bsdf_spheres", "test_texturedprincipled2_path.xml", "test_texturedprincipled2");
+}
+
+/// A rectangle of Mitsuba's `principledthin` (index 1.33) with checkerboards of anisotropy,
+/// specular and diffuse transmission (0.4 and 1.4) and sheen: the tangent from the rectangle's
+/// u edge.
+#[test]
+fn texturedprincipledthin() {
+    conformance("bsdf_spheres", "test_texturedprincipledthin_path.xml", "test_texturedprincipledthin");
+}
+
 /// Four OBJ spheres of rough plastic (GGX, alpha 0.01, 0.1, 0.4 and 1, BK7 in air over a green
 /// base: the coating's computed transmittance and inner reflectance, linear) under the area
 /// light, environment map and point light of `fragments/single_sphere.xml`.

@@ -24,6 +24,7 @@
 
 mod common;
 use common::*;
+use pathwave::engine::format::Scalar;
 use pathwave::engine::material::microfacet::{Roughness, Smith};
 use pathwave::engine::scene::{Body, Density, MaterialDesc, SceneDesc};
 use pathwave::engine::world::SceneWorld;
@@ -215,12 +216,23 @@ fn mesh() {
     });
 }
 
-/// Sets every rough material's alpha to `f(alpha)` and its Smith term to `smith`.
+/// Sets every rough material's alpha (a number) to `f(alpha)` and its Smith term to `smith`.
 fn rough(d: &mut SceneDesc, f: fn(f32) -> f32, smith: Smith) {
+    let map = |a: &mut Scalar<Roughness>| {
+        if let Scalar::Value(r) = a {
+            *r = Roughness(f(r.0));
+        }
+    };
     for (_, m) in &mut d.materials.0 {
         match m {
-            MaterialDesc::RoughConductor(c) => (c.alpha, c.smith) = (Roughness(f(c.alpha.0)), smith),
-            MaterialDesc::RoughDielectric(g) => (g.alpha, g.smith) = (Roughness(f(g.alpha.0)), smith),
+            MaterialDesc::RoughConductor(c) => {
+                map(&mut c.alpha);
+                c.smith = smith;
+            }
+            MaterialDesc::RoughDielectric(g) => {
+                map(&mut g.alpha);
+                g.smith = smith;
+            }
             _ => {}
         }
     }

@@ -58,3 +58,19 @@ fn a_solid_emission_texture_agrees_with_its_colour() {
     let stats = block_z(&render(&dim), &reference, 8, 64);
     assert!(!stats.agrees(), "5% less emission went unnoticed: {stats:?}");
 }
+
+/// A number from a texture: a grey solid texture standing for a rough conductor's alpha
+/// renders exactly like the number, and a checker of 0.05 and 0.55, whose mean is that number,
+/// does not (so the texture is read at each hit, not only its mean at load: making
+/// `set_scalar` ignore the value made the second assert fail).
+#[test]
+fn a_solid_roughness_texture_renders_like_its_number() {
+    let metal = |alpha: &str| format!(r#""white": RoughConductor(tint: (0.73, 0.73, 0.73), alpha: {alpha})"#);
+    let light = r#""light": DiffuseLight(emit: (15, 15, 15))"#;
+    let plain = render(&cornell_with("", &metal("0.3"), light));
+    let textured = render(&cornell_with(r#""a": Solid((0.3, 0.3, 0.3))"#, &metal(r#""a""#), light));
+    assert!(plain == textured);
+    let checker = r#""a": UvChecker(u: 8, v: 8, even: (0.05, 0.05, 0.05), odd: (0.55, 0.55, 0.55))"#;
+    let varying = render(&cornell_with(checker, &metal(r#""a""#), light));
+    assert!(plain != varying);
+}

@@ -14,7 +14,7 @@ use crate::math::Ray;
 use crate::media::Media;
 pub use crate::scene::SamplerKind;
 use crate::shape::SurfacePoint;
-use crate::texture::{MaterialTextures, Textures};
+use crate::texture::{MaterialTextures, Textures, scalar};
 use glam::{Vec2, Vec3, Vec3A};
 use std::sync::Arc;
 
@@ -213,8 +213,9 @@ pub struct Features {
     /// Something (or the camera) moves while the shutter is open: camera rays sample a time.
     /// Off, every ray is at the shutter's opening and no time is drawn.
     pub motion: bool,
-    /// Some material that a primitive uses takes a colour from a texture, or some emitting
-    /// surface its radiance. Off, materials and emission are used as they are.
+    /// Some material that a primitive uses takes a colour or a number from a texture or the
+    /// surface's tangent (an anisotropic one), or some emitting surface its radiance. Off,
+    /// materials and emission are used as they are.
     pub textures: bool,
     /// Some surface both emits and reflects (an object's `emit` over a material that is not an
     /// emitter): its hits add the emission and shade. Off, only emitters emit, and their
@@ -453,12 +454,31 @@ impl RenderScene {
             return mix_lambertian(&a, &b, self.amount(weight, sp)).expect("a mix of Lambertians");
         }
         let mut m = self.materials[id];
-        for (slot, t) in self.material_textures[id].0.iter().enumerate() {
+        let slots = &self.material_textures[id];
+        for (slot, t) in slots.colors.iter().enumerate() {
             if let Some(t) = *t {
                 m.set_color(slot, self.textures.at(t, sp, &self.instances.blas));
             }
         }
+        for (slot, t) in slots.scalars.iter().enumerate() {
+            if let Some(t) = *t {
+                m.set_scalar(slot, scalar(self.textures.at(t, sp, &self.instances.blas)));
+            }
+        }
+        if slots.tangent
+            && let Some(dpdu) = self.dpdu(sp)
+        {
+            m.set_tangent(sp.ns, dpdu);
+        }
         m
+    }
+
+    /// The surface's `dp/du` at a hit: a placed mesh's, or a primitive's that gives one.
+    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+        match sp.on.instance {
+            u32::MAX => self.geometry.prims.get(sp.on.triangle as usize)?.dpdu(sp),
+            _ => self.instances.dpdu(sp),
+        }
     }
 }
 

@@ -303,24 +303,18 @@ impl Geometry {
         if self.velocity.is_none() {
             return self.static_hit(ray, t, prim, uv);
         }
-        Hit {
-            t,
-            prim,
-            material: self.material[prim as usize],
-            surface: self.moving_surface(prim, ray.at(t), ray.time, uv),
-        }
+        let mut surface = self.moving_surface(prim, ray.at(t), ray.time, uv);
+        surface.on.triangle = prim;
+        Hit { t, prim, material: self.material[prim as usize], surface }
     }
 
     /// [`Self::hit`] for geometry without motion (flat lists exist only then).
     #[inline(always)]
     pub fn static_hit(&self, ray: &Ray, t: f32, prim: u32, uv: bool) -> Hit {
         debug_assert!(self.velocity.is_none());
-        Hit {
-            t,
-            prim,
-            material: self.material[prim as usize],
-            surface: self.prims[prim as usize].surface(ray.at(t), uv),
-        }
+        let mut surface = self.prims[prim as usize].surface(ray.at(t), uv);
+        surface.on.triangle = prim;
+        Hit { t, prim, material: self.material[prim as usize], surface }
     }
 
     /// Surface data of primitive `prim` at the point `p` at `time`, with texture coordinates.

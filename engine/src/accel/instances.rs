@@ -297,7 +297,7 @@ impl Instances {
         });
         found.map(|(i, tri)| {
             let inst = &self.list[i as usize];
-            Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(inst, &tri, ray, t) }
+            Hit { t, prim: INSTANCE_PRIM, material: inst.material, surface: self.surface(i, &tri, ray, t) }
         })
     }
 
@@ -374,7 +374,8 @@ impl Instances {
     /// surface, and a ray on the other side exactly where it would have. This is done in world
     /// space, where the offset is applied (a transform that is not a similarity would break
     /// the cancellation in object space).
-    fn surface(&self, inst: &Instance, tri: &MeshHit, ray: &Ray, t: f32) -> SurfacePoint {
+    fn surface(&self, index: u32, tri: &MeshHit, ray: &Ray, t: f32) -> SurfacePoint {
+        let inst = &self.list[index as usize];
         let (o, d) = self.object_ray(inst, ray);
         let (local, lift) = self.blas[inst.blas as usize].surface(tri, o + t * d);
         let (m, normal_to_world, off) = match &inst.motion {
@@ -410,7 +411,38 @@ impl Instances {
                 err += 0.5 * h * (1.0 + gamma(4)) / n.abs().element_sum() + gamma(2) * p.abs().max_element();
             }
         }
-        SurfacePoint { p, n, ns, uv: local.uv, err, on: MeshPoint { mesh: inst.blas, ..local.on } }
+        SurfacePoint {
+            p,
+            n,
+            ns,
+            uv: local.uv,
+            err,
+            on: MeshPoint { mesh: inst.blas, instance: index, ..local.on },
+        }
+    }
+
+    /// `dp/du` in world space at a point of a placed mesh (`sp.on` names the instance and the
+    /// triangle), from the triangle's corners and texture coordinates as Mitsuba's meshes
+    /// compute it (with barycentric coordinates where the mesh has none); `None` off meshes
+    /// and where the uvs are degenerate. A moving instance's is taken at its pose at rest.
+    pub fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+        let inst = self.list.get(sp.on.instance as usize)?;
+        let mesh = &self.blas[inst.blas as usize].mesh;
+        let [p0, p1, p2] = mesh.triangle(sp.on.triangle);
+        let (dp0, dp1) = (p1 - p0, p2 - p0);
+        let local = match &mesh.uvs {
+            None => dp0,
+            Some(uvs) => {
+                let [a, b, c] = mesh.triangles[sp.on.triangle as usize].map(|v| uvs[v as usize]);
+                let (d0, d1) = (b - a, c - a);
+                let det = d0.x * d1.y - d0.y * d1.x;
+                if det == 0.0 || !det.is_finite() {
+                    return None;
+                }
+                (d1.y * dp0 - d0.y * dp1) / det
+            }
+        };
+        Some(inst.world_from_object.matrix3 * local)
     }
 }
 

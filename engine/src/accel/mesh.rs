@@ -522,7 +522,7 @@ impl MeshBlas {
         let [a, b, c] = hit.p;
         let mut sp = Triangle { p: [a, b, c], uv: None }.surface(p);
         // The triangle's uv are its barycentric weights.
-        sp.on = MeshPoint { mesh: u32::MAX, triangle: hit.id, b: sp.uv };
+        sp.on = MeshPoint { mesh: u32::MAX, triangle: hit.id, b: sp.uv, instance: u32::MAX };
         if self.mesh.normals.is_none() && self.mesh.uvs.is_none() {
             return (sp, 0.0);
         }

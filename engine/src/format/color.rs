@@ -1,5 +1,5 @@
-//! Colours that are either a value or the name of one of the scene's textures, checked where
-//! they are written.
+//! Colours and numbers that are either a value or the name of one of the scene's textures,
+//! checked where they are written.
 
 use super::context;
 use serde::{Deserialize, Deserializer, de::Error};
@@ -27,6 +27,43 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Color<T> {
             }
             fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
                 T::deserialize(serde::de::value::SeqAccessDeserializer::new(seq)).map(Color::Value)
+            }
+        }
+        d.deserialize_any(V(std::marker::PhantomData))
+    }
+}
+
+/// A number written out, or the name of a texture from `textures` whose value at a hit stands
+/// for it (its luminance, as Mitsuba's float textures read an RGB texture; see
+/// `crate::texture::scalar`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Scalar<T> {
+    /// `0.3`.
+    Value(T),
+    /// `"name"`.
+    Texture(String),
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Scalar<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V<T>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for V<T> {
+            type Value = Scalar<T>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or the name of a texture")
+            }
+            fn visit_str<E: Error>(self, name: &str) -> Result<Self::Value, E> {
+                check_texture_name(name).map_err(E::custom)?;
+                Ok(Scalar::Texture(name.to_owned()))
+            }
+            fn visit_f64<E: Error>(self, v: f64) -> Result<Self::Value, E> {
+                T::deserialize(serde::de::value::F64Deserializer::<E>::new(v)).map(Scalar::Value)
+            }
+            fn visit_i64<E: Error>(self, v: i64) -> Result<Self::Value, E> {
+                T::deserialize(serde::de::value::I64Deserializer::<E>::new(v)).map(Scalar::Value)
+            }
+            fn visit_u64<E: Error>(self, v: u64) -> Result<Self::Value, E> {
+                T::deserialize(serde::de::value::U64Deserializer::<E>::new(v)).map(Scalar::Value)
             }
         }
         d.deserialize_any(V(std::marker::PhantomData))

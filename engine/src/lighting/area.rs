@@ -50,7 +50,7 @@ pub fn emission_table(
             objects.get(id).copied().flatten().or_else(|| {
                 m.emission().map(|Emission { emit, two_sided, slot }| AreaEmission {
                     radiance: emit,
-                    texture: t.0[slot],
+                    texture: t.colors[slot],
                     two_sided,
                 })
             })
@@ -71,7 +71,7 @@ mod tests {
     fn the_table_holds_emitters_and_objects_that_emit() {
         let lamp = Material::from(DiffuseLight { emit: Vec3::splat(0.5), two_sided: false });
         let white = Material::from(Lambertian { albedo: Vec3::ONE, two_sided: true });
-        let textured = MaterialTextures([Some(1), None]);
+        let textured = MaterialTextures { colors: [Some(1), None], ..Default::default() };
         let own = AreaEmission { radiance: Vec3::X, texture: Some(0), two_sided: false };
         let table = emission_table(
             &[lamp, white, white],

@@ -17,6 +17,8 @@ pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
 pub mod plastic;
+pub mod principled;
+pub mod principled_thin;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
@@ -26,7 +28,7 @@ pub mod thin_dielectric;
 pub mod wrap;
 
 use crate::format::registry::{VariantName, fields};
-use crate::texture::{MAX_TEXTURED_COLORS, MaterialTextures, TextureId};
+use crate::texture::{MAX_TEXTURED_COLORS, MAX_TEXTURED_SCALARS, MaterialTextures, TextureId};
 use glam::{Vec2, Vec3, Vec3A};
 
 pub use dielectric::Fresnel;
@@ -39,6 +41,8 @@ registry! {
     RoughDielectric(rough_dielectric::RoughDielectric),
     Plastic(plastic::Plastic),
     RoughPlastic(rough_plastic::RoughPlastic),
+    Principled(principled::Principled),
+    PrincipledThin(principled_thin::PrincipledThin),
     ThinDielectric(thin_dielectric::ThinDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),
     #[cfg(feature = "test-material")]
@@ -156,6 +160,18 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
         let _ = (slot, value);
     }
 
+    /// Sets the `slot`-th number taken from `colors` in [`Self::build`] (a texture's luminance),
+    /// limiting it to the parameter's range.
+    fn set_scalar(&mut self, slot: usize, value: f32) {
+        let _ = (slot, value);
+    }
+
+    /// Sets the surface's tangent at a hit, `dpdu` (not unit, not orthogonal to the unit
+    /// shading normal `n`), for a material that asked for it ([`Colors::tangent`]).
+    fn set_tangent(&mut self, n: Vec3A, dpdu: Vec3A) {
+        let _ = (n, dpdu);
+    }
+
     /// Samples the next direction from numbers `u` and `uc` in [0, 1); `None` when the path is
     /// absorbed. Emitters do not scatter.
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
@@ -218,18 +234,19 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     }
 }
 
-/// The colours of one material being built: plain values, or textures whose mean stands in
-/// until a hit evaluates them.
+/// The colours and numbers of one material being built: plain values, or textures whose mean
+/// stands in until a hit evaluates them.
 pub struct Colors<'a> {
     texture: &'a mut dyn FnMut(&str) -> (TextureId, Vec3),
     slots: MaterialTextures,
     next: usize,
+    next_scalar: usize,
 }
 
 impl<'a> Colors<'a> {
     /// Colours resolved through `texture`, which returns a texture name's id and mean.
     pub fn new(texture: &'a mut dyn FnMut(&str) -> (TextureId, Vec3)) -> Self {
-        Self { texture, slots: MaterialTextures::default(), next: 0 }
+        Self { texture, slots: MaterialTextures::default(), next: 0, next_scalar: 0 }
     }
 
     /// The next colour slot's value: the colour written out, or the texture's mean.
@@ -241,13 +258,37 @@ impl<'a> Colors<'a> {
             crate::format::Color::Value(v) => (*v).into(),
             crate::format::Color::Texture(name) => {
                 let (id, mean) = (self.texture)(name);
-                self.slots.0[slot] = Some(id);
+                self.slots.colors[slot] = Some(id);
                 mean
             }
         }
     }
 
-    /// Which colour slots came from textures.
+    /// The next number slot's value: the number written out, or what the texture's mean stands
+    /// for ([`crate::texture::scalar`]).
+    pub fn scalar<T: Copy + Into<f32>>(&mut self, s: &crate::format::Scalar<T>) -> f32 {
+        let slot = self.next_scalar;
+        assert!(
+            slot < MAX_TEXTURED_SCALARS,
+            "a material has at most {MAX_TEXTURED_SCALARS} textured numbers"
+        );
+        self.next_scalar += 1;
+        match s {
+            crate::format::Scalar::Value(v) => (*v).into(),
+            crate::format::Scalar::Texture(name) => {
+                let (id, mean) = (self.texture)(name);
+                self.slots.scalars[slot] = Some(id);
+                crate::texture::scalar(mean)
+            }
+        }
+    }
+
+    /// The material needs the surface's tangent at each hit ([`MaterialModel::set_tangent`]).
+    pub fn tangent(&mut self) {
+        self.slots.tangent = true;
+    }
+
+    /// Which colour and number slots came from textures.
     pub fn textures(&self) -> MaterialTextures {
         self.slots
     }
@@ -366,6 +407,22 @@ macro_rules! registry {
             pub fn set_color(&mut self, slot: usize, value: Vec3) {
                 match self {
                     $($(#[$attr])* Material::$variant(m) => m.set_color(slot, value),)+
+                }
+            }
+
+            /// See [`MaterialModel::set_scalar`].
+            #[inline]
+            pub fn set_scalar(&mut self, slot: usize, value: f32) {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.set_scalar(slot, value),)+
+                }
+            }
+
+            /// See [`MaterialModel::set_tangent`].
+            #[inline]
+            pub fn set_tangent(&mut self, n: Vec3A, dpdu: Vec3A) {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.set_tangent(n, dpdu),)+
                 }
             }
 
@@ -579,5 +636,12 @@ mod tests {
             }
             assert_eq!((dir_matters, lobe_matters), (reads.dir, reads.lobe), "{m:?} says {reads:?}");
         }
+    }
+
+    /// The material is copied per hit and per path: a new kind or parameter must not make it
+    /// larger without a measurement (benches/RESULTS.md).
+    #[test]
+    fn materials_stay_56_bytes() {
+        assert_eq!(std::mem::size_of::<Material>(), 56);
     }
 }

@@ -536,7 +536,7 @@ mod tests {
             r#"RoughPlastic(albedo: "wood", tint: "grey", alpha: 0.2)"#,
         ] {
             let (mut m, slots) = Material::build(&parse(text).unwrap(), &mut |n| means(n));
-            assert_eq!(slots.0, [Some(3), Some(5)], "{text}");
+            assert_eq!(slots.colors, [Some(3), Some(5)], "{text}");
             let weight = |m: &Material| match m {
                 Material::Plastic(p) => (p.albedo, p.tint, p.specular_weight),
                 Material::RoughPlastic(p) => (p.albedo, p.tint, p.specular_weight),

@@ -9,22 +9,34 @@
 //! 4% of the normals beyond 45 degrees, and 69% at alpha 1 and normal incidence, 1 - ln 2
 //! being left; Beckmann's shorter tail loses less). Below [`SMOOTH_ALPHA`] it is a smooth
 //! mirror.
+//!
+//! Anisotropic with `alpha_v`: `alpha` is then the roughness along the surface's tangent (its
+//! `dp/du` made orthogonal to the shading normal, as Mitsuba's shading frame) and `alpha_v`
+//! along the bitangent. The hit sets the tangent ([`MaterialModel::set_tangent`]); where
+//! the two are equal the isotropic code runs.
 
-use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith, to_local};
+use super::microfacet::{
+    Beckmann, BeckmannAniso, Distribution, Ggx, GgxAniso, Microfacet, Roughness, SMOOTH_ALPHA, Smith,
+    to_local,
+};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
-use crate::format::{Albedo, Color, Rgb};
+use crate::format::{Albedo, Color, Rgb, Scalar};
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `RoughConductor(tint: (r, g, b), alpha: 0.15, distribution: Ggx, eta: (r, g, b), k: (r, g, b),
-/// two_sided: false)`.
+/// `RoughConductor(tint: (r, g, b), alpha: 0.15, alpha_v: 0.3, distribution: Ggx, eta: (r, g, b),
+/// k: (r, g, b), two_sided: false)`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RoughConductorDesc {
     /// Colour multiplying the reflectance, components in [0, 1], or a texture.
     pub tint: Color<Albedo>,
-    /// Roughness in [0, 1]; below 1e-3 a smooth mirror.
-    pub alpha: Roughness,
+    /// Roughness in [0, 1] or a texture (its luminance, limited to [0, 1]); below 1e-3 a smooth
+    /// mirror. With `alpha_v`: the roughness along the tangent (`u`).
+    pub alpha: Scalar<Roughness>,
+    /// Roughness along the bitangent (`v`), as `alpha`; by default `alpha` (isotropic).
+    #[serde(default)]
+    pub alpha_v: Option<Scalar<Roughness>>,
     /// `Ggx` (default) or `Beckmann`.
     #[serde(default)]
     pub distribution: Distribution,
@@ -72,23 +84,53 @@ pub struct ComplexIor {
 }
 
 /// A microfacet reflector tinted by `tint`, with Fresnel 1 or that of a complex IOR.
+///
+/// 52 bytes, which keeps [`super::Material`] at 56: the index is stored with a flag beside it,
+/// not as an `Option` (whose tag would take 4 more).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoughConductor {
     /// Colour multiplying the reflectance.
     pub tint: Vec3,
-    /// Roughness in [0, 1].
+    /// Roughness in [0, 1] (along the tangent when it differs from `alpha_v`).
     pub alpha: f32,
+    /// Roughness in [0, 1] along the bitangent.
+    pub alpha_v: f32,
+    /// The tangent's angle about the shading normal `n`, from [`Frame::from_normal`]`(n).t`
+    /// towards its `b` (set at each hit when anisotropic).
+    pub tangent: f32,
+    /// Complex index of refraction, used when `fresnel`.
+    pub ior: ComplexIor,
+    /// Fresnel of `ior`; false: Fresnel 1.
+    pub fresnel: bool,
     /// The distribution of microfacet normals.
     pub distribution: Distribution,
-    /// Complex index of refraction; `None`: Fresnel 1.
-    pub ior: Option<ComplexIor>,
     /// The shadowing-masking term's form.
     pub smith: Smith,
     /// Reflects on both sides.
     pub two_sided: bool,
 }
 
+/// A complex index of refraction whose Fresnel factor is never used (`fresnel: false`).
+pub const NO_IOR: ComplexIor = ComplexIor { eta: Vec3::ONE, k: Vec3::ZERO };
+
 impl RoughConductor {
+    /// Anisotropic roughness: `alpha` and `alpha_v` differ.
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        self.alpha != self.alpha_v
+    }
+
+    /// The shading frame of an anisotropic conductor at `n` (the normal the integrators gave)
+    /// facing `nf` (`n` or its opposite, see [`Self::facing`]): the tangent at its angle,
+    /// the bitangent completing a right-handed frame about `nf`.
+    #[inline]
+    fn tangent_frame(&self, n: Vec3A, nf: Vec3A) -> Frame {
+        let f = Frame::from_normal(n);
+        let (s, c) = self.tangent.sin_cos();
+        let t = c * f.t + s * f.b;
+        Frame { t, b: nf.cross(t), n: nf }
+    }
+
     /// The normal a two-sided conductor reflects about: `n` turned to `wo`'s side.
     #[inline]
     fn facing(&self, wo: Vec3A, n: Vec3A) -> Vec3A {
@@ -98,23 +140,22 @@ impl RoughConductor {
     /// A smooth mirror: alpha below [`SMOOTH_ALPHA`].
     #[inline]
     pub fn is_smooth(&self) -> bool {
-        self.alpha < SMOOTH_ALPHA
+        self.alpha.max(self.alpha_v) < SMOOTH_ALPHA
     }
 
     /// Fresnel reflectance at the cosine `cos_i` between the direction and the (micro) normal.
     #[inline]
     pub fn fresnel(&self, cos_i: f32) -> Vec3 {
-        match self.ior {
-            None => Vec3::ONE,
-            Some(c) => fresnel_conductor(cos_i, c.eta, c.k),
+        match self.fresnel {
+            false => Vec3::ONE,
+            true => fresnel_conductor(cos_i, self.ior.eta, self.ior.k),
         }
     }
 
-    /// [`MaterialModel::sample`] off the smooth limit, `n` facing `wo`, with the distribution
-    /// `md`: visible-normal sampling and mirroring about the normal.
+    /// [`MaterialModel::sample`] off the smooth limit in `frame` (its normal facing `wo`),
+    /// with the distribution `md`: visible-normal sampling and mirroring about the normal.
     #[inline(always)]
-    fn sample_rough<M: Microfacet>(&self, md: M, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> {
-        let frame = Frame::from_normal(n);
+    fn sample_rough<M: Microfacet>(&self, md: M, frame: Frame, wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
         let lo = to_local(&frame, wo);
         let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
@@ -137,10 +178,10 @@ impl RoughConductor {
         Some(BsdfSample { wi, weight, pdf, eta: 1.0, delta: false, null: false })
     }
 
-    /// [`MaterialModel::eval`] off the smooth limit, `n` facing `wo`, with the distribution `md`.
+    /// [`MaterialModel::eval`] off the smooth limit in `frame` (its normal facing `wo`), with
+    /// the distribution `md`.
     #[inline(always)]
-    fn eval_rough<M: Microfacet>(&self, md: M, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        let frame = Frame::from_normal(n);
+    fn eval_rough<M: Microfacet>(&self, md: M, frame: Frame, wo: Vec3A, wi: Vec3A) -> BsdfEval {
         let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
         if lo.z <= 0.0 || li.z <= 0.0 {
             return BsdfEval::ZERO;
@@ -164,13 +205,36 @@ impl RoughConductor {
     /// compiler lay out GGX's path less well (0.4% more instructions on materials-env).
     #[inline(never)]
     fn sample_beckmann(&self, wo: Vec3A, n: Vec3A, u: Vec2) -> Option<BsdfSample> {
-        self.sample_rough(Beckmann { alpha: self.alpha }, wo, n, u)
+        self.sample_rough(Beckmann { alpha: self.alpha }, Frame::from_normal(n), wo, u)
     }
 
     /// [`Self::eval_rough`] with Beckmann, out of line as [`Self::sample_beckmann`].
     #[inline(never)]
     fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, n)
+        self.eval_rough(Beckmann { alpha: self.alpha }, Frame::from_normal(n), wo, wi)
+    }
+
+    /// [`Self::sample_rough`] when anisotropic, out of line (`n` as the integrators gave it,
+    /// `nf` facing `wo`).
+    #[inline(never)]
+    fn sample_anisotropic(&self, wo: Vec3A, n: Vec3A, nf: Vec3A, u: Vec2) -> Option<BsdfSample> {
+        let frame = self.tangent_frame(n, nf);
+        let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
+        match self.distribution {
+            Distribution::Ggx => self.sample_rough(GgxAniso { ax, ay }, frame, wo, u),
+            Distribution::Beckmann => self.sample_rough(BeckmannAniso { ax, ay }, frame, wo, u),
+        }
+    }
+
+    /// [`Self::eval_rough`] when anisotropic, out of line as [`Self::sample_anisotropic`].
+    #[inline(never)]
+    fn eval_anisotropic(&self, wo: Vec3A, wi: Vec3A, n: Vec3A, nf: Vec3A) -> BsdfEval {
+        let frame = self.tangent_frame(n, nf);
+        let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
+        match self.distribution {
+            Distribution::Ggx => self.eval_rough(GgxAniso { ax, ay }, frame, wo, wi),
+            Distribution::Beckmann => self.eval_rough(BeckmannAniso { ax, ay }, frame, wo, wi),
+        }
     }
 }
 
@@ -179,17 +243,24 @@ impl MaterialModel for RoughConductor {
     const SHADING: Shading = Shading::Glossy;
 
     fn build(desc: &RoughConductorDesc, colors: &mut Colors) -> Self {
-        let ior = match (desc.eta, desc.k) {
-            (None, None) => None,
-            (eta, k) => {
-                Some(ComplexIor { eta: eta.map_or(Vec3::ONE, |e| e.0), k: k.map_or(Vec3::ZERO, |k| k.0) })
-            }
-        };
+        let ior =
+            ComplexIor { eta: desc.eta.map_or(Vec3::ONE, |e| e.0), k: desc.k.map_or(Vec3::ZERO, |k| k.0) };
+        let tint = colors.get(&desc.tint).min(Vec3::ONE);
+        let alpha = colors.scalar(&desc.alpha);
+        // Isotropic: slot 1 is `alpha` again (read twice where textured), so that the two are
+        // equal at every hit.
+        let alpha_v = colors.scalar(desc.alpha_v.as_ref().unwrap_or(&desc.alpha));
+        if desc.alpha_v.is_some() {
+            colors.tangent();
+        }
         Self {
-            tint: colors.get(&desc.tint).min(Vec3::ONE),
-            alpha: desc.alpha.0,
-            distribution: desc.distribution,
+            tint,
+            alpha,
+            alpha_v,
+            tangent: 0.0,
             ior,
+            fresnel: desc.eta.is_some() || desc.k.is_some(),
+            distribution: desc.distribution,
             smith: desc.smith,
             two_sided: desc.two_sided,
         }
@@ -200,10 +271,23 @@ impl MaterialModel for RoughConductor {
         self.tint = value.clamp(Vec3::ZERO, Vec3::ONE);
     }
 
+    #[inline]
+    fn set_scalar(&mut self, slot: usize, value: f32) {
+        match slot {
+            0 => self.alpha = value.clamp(0.0, 1.0),
+            _ => self.alpha_v = value.clamp(0.0, 1.0),
+        }
+    }
+
+    #[inline]
+    fn set_tangent(&mut self, n: Vec3A, dpdu: Vec3A) {
+        self.tangent = tangent_angle(n, dpdu);
+    }
+
     /// Visible-normal sampling and mirroring about the normal; `None` seen from below `n` or
     /// when the mirrored direction falls below the surface (single-scattering loss).
-    fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, _uc: f32) -> Option<BsdfSample> {
-        let n = self.facing(wo, n);
+    fn sample(&self, wo: Vec3A, n_given: Vec3A, u: Vec2, _uc: f32) -> Option<BsdfSample> {
+        let n = self.facing(wo, n_given);
         let cos_o = wo.dot(n);
         if cos_o <= 0.0 {
             return None;
@@ -219,19 +303,25 @@ impl MaterialModel for RoughConductor {
                 null: false,
             });
         }
+        if self.is_anisotropic() {
+            return self.sample_anisotropic(wo, n_given, n, u);
+        }
         match self.distribution {
-            Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, n, u),
+            Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, Frame::from_normal(n), wo, u),
             Distribution::Beckmann => self.sample_beckmann(wo, n, u),
         }
     }
 
-    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+    fn eval(&self, wo: Vec3A, wi: Vec3A, n_given: Vec3A) -> BsdfEval {
         if self.is_smooth() {
             return BsdfEval::ZERO;
         }
-        let n = self.facing(wo, n);
+        let n = self.facing(wo, n_given);
+        if self.is_anisotropic() {
+            return self.eval_anisotropic(wo, wi, n_given, n);
+        }
         match self.distribution {
-            Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, wo, wi, n),
+            Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, Frame::from_normal(n), wo, wi),
             Distribution::Beckmann => self.eval_beckmann(wo, wi, n),
         }
     }
@@ -244,6 +334,16 @@ impl MaterialModel for RoughConductor {
     fn specular(&self) -> Specular {
         if self.is_smooth() { Specular::Mirror } else { Specular::No }
     }
+}
+
+/// The angle about the unit normal `n` from [`Frame::from_normal`]`(n).t` to `dpdu` made
+/// orthogonal to `n` (0 where `dpdu` is along `n` or zero).
+#[inline]
+pub fn tangent_angle(n: Vec3A, dpdu: Vec3A) -> f32 {
+    let f = Frame::from_normal(n);
+    let s = dpdu - n * n.dot(dpdu);
+    let (x, y) = (s.dot(f.t), s.dot(f.b));
+    if (x == 0.0 && y == 0.0) || !(x.is_finite() && y.is_finite()) { 0.0 } else { y.atan2(x) }
 }
 
 /// A complex number, for the conductor Fresnel equations.
@@ -341,8 +441,11 @@ mod tests {
         RoughConductor {
             tint: Vec3::ONE,
             alpha,
+            alpha_v: alpha,
+            tangent: 0.0,
             distribution: Distribution::Ggx,
-            ior,
+            ior: ior.unwrap_or(NO_IOR),
+            fresnel: ior.is_some(),
             smith: Smith::Separable,
             two_sided: false,
         }
@@ -430,8 +533,11 @@ mod tests {
                     let m = RoughConductor {
                         tint: Vec3::new(0.9, 0.6, 0.3),
                         alpha,
+                        alpha_v: alpha,
+                        tangent: 0.0,
                         distribution,
-                        ior,
+                        ior: ior.unwrap_or(NO_IOR),
+                        fresnel: ior.is_some(),
                         smith,
                         two_sided: false,
                     };
@@ -537,6 +643,67 @@ mod tests {
         }
     }
 
+    /// Anisotropic conductors sample by their density (chi-square), their weights are `f cos /
+    /// pdf`, and their BRDF is reciprocal, for tangents at several angles about a tilted normal
+    /// and both sides of a two-sided one.
+    #[test]
+    fn anisotropic_sampling_matches_eval_and_is_reciprocal() {
+        let mut r = crate::testing::uniform(31);
+        for distribution in DISTRIBUTIONS {
+            for (alpha, alpha_v, turn) in [(0.05f32, 0.4f32, 0.3f32), (0.5, 0.1, 2.0)] {
+                let (n, wo) = setup(50.0);
+                let mut m = RoughConductor {
+                    alpha,
+                    alpha_v,
+                    distribution,
+                    two_sided: true,
+                    ..conductor(alpha, Some(GOLD))
+                };
+                let f = Frame::from_normal(n);
+                m.set_tangent(n, turn.cos() * f.t + turn.sin() * f.b + 0.3 * n);
+                assert!((m.tangent - turn).abs() < 1e-5, "{} {turn}", m.tangent);
+                for (wo, side) in [(wo, "front"), (-wo, "back")] {
+                    let what = format!("{distribution:?}, alpha {alpha}/{alpha_v}, {side}");
+                    assert_chi2(
+                        &what,
+                        |u, uc| m.sample(wo, n, u, uc).map(|s| s.wi),
+                        |wi| m.eval(wo, wi, n).pdf,
+                        (n, reflect(wo, n), alpha.max(alpha_v)),
+                        300_000,
+                    );
+                    for _ in 0..300 {
+                        let Some(s) = m.sample(wo, n, Vec2::new(r(), r()), r()) else { continue };
+                        let e = m.eval(wo, s.wi, n);
+                        let w = e.f_cos / e.pdf;
+                        assert!((s.weight - w).abs().max_element() <= 1e-3 * w.max_element(), "{what}");
+                        assert!((s.pdf - e.pdf).abs() <= 1e-3 * e.pdf, "{what}");
+                        let back = m.eval(s.wi, wo, n).f_cos / wo.dot(n).abs();
+                        let fwd = e.f_cos / s.wi.dot(n).abs();
+                        assert!((back - fwd).abs().max_element() <= 1e-3 * fwd.max_element(), "{what}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Anisotropic roughness as Mitsuba's: `alpha` along the tangent (`dp/du`), `alpha_v`
+    /// along the bitangent. Mitsuba 3.9.1's `roughconductor` (Beckmann, alpha_u 0.05, alpha_v
+    /// 0.3, shading frame s = x) evaluates `f cos` 1.97115 for `wi` tilted along x and 5.18625
+    /// along y, `wo` normal.
+    #[test]
+    fn anisotropic_lobes_lie_along_the_tangent_as_mitsubas() {
+        let mut m = RoughConductor {
+            alpha: 0.05,
+            alpha_v: 0.3,
+            distribution: Distribution::Beckmann,
+            ..conductor(0.05, None)
+        };
+        m.set_tangent(Vec3A::Z, Vec3A::new(2.0, 0.0, 0.5));
+        let along = |x: f32, y: f32| m.eval(Vec3A::Z, Vec3A::new(x, y, 1.0).normalize(), Vec3A::Z).f_cos.x;
+        assert!((along(0.1, 0.0) - 1.97115).abs() < 1e-3 * 1.97115, "{}", along(0.1, 0.0));
+        assert!((along(0.0, 0.1) - 5.18625).abs() < 1e-3 * 5.18625, "{}", along(0.0, 0.1));
+    }
+
     #[test]
     fn brdf_is_reciprocal() {
         let mut r = crate::testing::uniform(23);
@@ -551,8 +718,11 @@ mod tests {
             let m = RoughConductor {
                 tint: Vec3::new(0.9, 0.6, 0.3),
                 alpha,
+                alpha_v: alpha,
+                tangent: 0.0,
                 distribution,
-                ior: Some(GOLD),
+                ior: GOLD,
+                fresnel: true,
                 smith: Smith::Separable,
                 two_sided: false,
             };
@@ -585,8 +755,11 @@ mod tests {
             let m = RoughConductor {
                 tint: Vec3::new(0.9, 0.6, 0.3),
                 alpha,
+                alpha_v: alpha,
+                tangent: 0.0,
                 distribution: Distribution::Beckmann,
-                ior: Some(GOLD),
+                ior: GOLD,
+                fresnel: true,
                 smith: Smith::Separable,
                 two_sided: false,
             };
@@ -626,6 +799,30 @@ mod tests {
         assert!(f.x > f.z, "gold reflects red more than blue: {f}");
     }
 
+    /// A textured alpha takes a number slot (the tint the colour slot) and holds the texture's
+    /// mean until a hit sets it, limited to [0, 1].
+    #[test]
+    fn textured_alpha_fills_a_number_slot() {
+        let text = r#"RoughConductor(tint: "tint", alpha: "bumps")"#;
+        let (mut m, slots) = Material::build(&parse(text).unwrap(), &mut |n| match n {
+            "bumps" => (4, Vec3::new(0.1, 0.2, 0.3)),
+            _ => (2, Vec3::ONE),
+        });
+        assert_eq!(slots.colors, [Some(2), None]);
+        // alpha_v, not written, is alpha again.
+        assert_eq!(&slots.scalars[..3], [Some(4), Some(4), None]);
+        assert!(!slots.tangent);
+        let alpha = |m: &Material| match m {
+            Material::RoughConductor(c) => c.alpha,
+            _ => unreachable!(),
+        };
+        assert_eq!(alpha(&m), crate::texture::scalar(Vec3::new(0.1, 0.2, 0.3)));
+        for (value, want) in [(0.25, 0.25), (1.5, 1.0), (-0.5, 0.0)] {
+            m.set_scalar(0, value);
+            assert_eq!(alpha(&m), want);
+        }
+    }
+
     #[test]
     fn descriptions_parse_and_bad_values_are_refused() {
         let m = build("RoughConductor(tint: (0.9, 0.6, 0.3), alpha: 0.15)");
@@ -634,8 +831,11 @@ mod tests {
             Material::RoughConductor(RoughConductor {
                 tint: Vec3::new(0.9, 0.6, 0.3),
                 alpha: 0.15,
+                alpha_v: 0.15,
+                tangent: 0.0,
                 distribution: Distribution::Ggx,
-                ior: None,
+                ior: NO_IOR,
+                fresnel: false,
                 smith: Smith::Separable,
                 two_sided: false,
             })
@@ -649,8 +849,11 @@ mod tests {
             Material::RoughConductor(RoughConductor {
                 tint: Vec3::ONE,
                 alpha: 0.3,
+                alpha_v: 0.3,
+                tangent: 0.0,
                 distribution: Distribution::Beckmann,
-                ior: Some(GOLD),
+                ior: GOLD,
+                fresnel: true,
                 smith: Smith::Separable,
                 two_sided: false,
             })
@@ -659,7 +862,7 @@ mod tests {
         else {
             unreachable!()
         };
-        assert_eq!(c.ior, Some(ComplexIor { eta: Vec3::ONE, k: Vec3::new(3.0, 2.0, 1.0) }));
+        assert_eq!((c.ior, c.fresnel), (ComplexIor { eta: Vec3::ONE, k: Vec3::new(3.0, 2.0, 1.0) }, true));
         for (text, message) in [
             (
                 "RoughConductor(tint: (1, 1, 1), alpha: -0.1)",

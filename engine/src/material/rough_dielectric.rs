@@ -20,7 +20,7 @@
 use super::dielectric::{Fresnel, fresnel_exact, refract};
 use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith, to_local};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
-use crate::format::Positive;
+use crate::format::{Positive, Scalar};
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -30,8 +30,9 @@ use glam::{Vec2, Vec3, Vec3A};
 pub struct RoughDielectricDesc {
     /// Index of refraction inside (> 0; outside is 1).
     pub ior: Positive,
-    /// Roughness in [0, 1]; below 1e-3 smooth glass.
-    pub alpha: Roughness,
+    /// Roughness in [0, 1] or a texture (its luminance, limited to [0, 1]); below 1e-3 smooth
+    /// glass.
+    pub alpha: Scalar<Roughness>,
     /// `Ggx` (default) or `Beckmann`.
     #[serde(default)]
     pub distribution: Distribution,
@@ -173,8 +174,14 @@ impl MaterialModel for RoughDielectric {
     type Desc = RoughDielectricDesc;
     const SHADING: Shading = Shading::Glossy;
 
-    fn build(desc: &RoughDielectricDesc, _colors: &mut Colors) -> Self {
-        Self { ior: desc.ior.0, alpha: desc.alpha.0, distribution: desc.distribution, smith: desc.smith }
+    fn build(desc: &RoughDielectricDesc, colors: &mut Colors) -> Self {
+        let alpha = colors.scalar(&desc.alpha);
+        Self { ior: desc.ior.0, alpha, distribution: desc.distribution, smith: desc.smith }
+    }
+
+    #[inline]
+    fn set_scalar(&mut self, _slot: usize, value: f32) {
+        self.alpha = value.clamp(0.0, 1.0);
     }
 
     /// A visible normal from `u`, then reflection if `uc < F`, refraction otherwise; `None` when

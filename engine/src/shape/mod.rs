@@ -179,15 +179,19 @@ pub struct SurfacePoint {
 pub struct MeshPoint {
     /// Index of the mesh among the scene's meshes, or `u32::MAX` off meshes.
     pub mesh: u32,
-    /// Index of the triangle in the mesh.
+    /// Index of the triangle in the mesh; off meshes, the index of the primitive hit among the
+    /// scene's primitives (`accel::geometry::Geometry::prims`).
     pub triangle: u32,
     /// Barycentric weights of the triangle's second and third vertices.
     pub b: Vec2,
+    /// Index of the placed mesh among the scene's instances (`accel::instances::Instances::list`),
+    /// or `u32::MAX` off meshes. (It fills what was padding: [`SurfacePoint`] stays 80 bytes.)
+    pub instance: u32,
 }
 
 impl MeshPoint {
     /// Not on a mesh.
-    pub const NONE: MeshPoint = MeshPoint { mesh: u32::MAX, triangle: 0, b: Vec2::ZERO };
+    pub const NONE: MeshPoint = MeshPoint { mesh: u32::MAX, triangle: 0, b: Vec2::ZERO, instance: u32::MAX };
 }
 
 /// A point sampled on an emitter, with its density in solid angle as seen from the reference point.

@@ -23,6 +23,13 @@ pub trait PrimitiveShape: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'st
     /// The solid-angle density with which [`Self::sample_solid_angle`] from `from` gives the
     /// point `p` (unit normal `n`).
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32;
+    /// The derivative `dp/du` of the point along the first texture coordinate at `sp`, the
+    /// tangent of an anisotropic material; `None` where the kind does not give it (the
+    /// material then takes an arbitrary tangent about the normal).
+    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+        let _ = sp;
+        None
+    }
 }
 
 /// Generates [`Primitive`], one variant per kind, and its methods, each a `match` that calls
@@ -73,6 +80,13 @@ macro_rules! primitives {
             pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
                 match self {
                     $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::sample_solid_angle(s, from, u),)+
+                }
+            }
+
+            /// See [`PrimitiveShape::dpdu`].
+            pub fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::dpdu(s, sp),)+
                 }
             }
 

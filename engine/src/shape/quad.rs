@@ -377,6 +377,11 @@ impl PrimitiveShape for Quad {
         Quad::surface(self, p)
     }
 
+    /// The first edge: u runs along it.
+    fn dpdu(&self, _sp: &SurfacePoint) -> Option<Vec3A> {
+        Some(self.u)
+    }
+
     fn area(&self) -> f32 {
         self.area
     }

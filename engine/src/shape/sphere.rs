@@ -240,6 +240,16 @@ impl PrimitiveShape for Sphere {
         sphere_t_single(self.center.to_array(), self.radius, o.to_array(), d.to_array(), tmax)
     }
 
+    /// Along the parallel, the way u grows (zero at the poles): `(z, 0, -x)` about +y, and
+    /// `(-y, x, 0)` about +z (Mitsuba's sphere's `dp_du`), of the point seen from the centre.
+    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+        let d = sp.p - self.center;
+        Some(match self.poles {
+            Poles::Y => Vec3A::new(d.z, 0.0, -d.x),
+            Poles::Z => Vec3A::new(-d.y, d.x, 0.0),
+        })
+    }
+
     /// Surface data at the point `p` (re-projected onto the sphere), with the texture
     /// coordinates (an `atan2` and an `acos`) only if `uv` (else zero): scenes without textures
     /// never read them.
@@ -311,6 +321,26 @@ mod tests {
 
     fn unit() -> Sphere {
         Sphere::new(Vec3A::ZERO, 1.0)
+    }
+
+    /// `dp/du` is orthogonal to the normal and points where u grows, for both pole axes (the
+    /// opposite sign about +y failed).
+    #[test]
+    fn dpdu_points_where_u_grows() {
+        let mut r = crate::testing::signed(8);
+        for poles in [Poles::Y, Poles::Z] {
+            let s = Sphere { center: Vec3A::new(1.0, -2.0, 0.5), radius: 2.0, poles };
+            for _ in 0..200 {
+                let dir = Vec3A::new(r(), r(), r()).normalize();
+                let sp = s.surface(s.center + 2.0 * dir, true);
+                let t = s.dpdu(&sp).unwrap();
+                assert!(t.dot(sp.n).abs() < 1e-5 * t.length().max(1e-3), "{poles:?}");
+                let ahead = s.surface(sp.p + 1e-3 * t.normalize(), true);
+                let du = ahead.uv.x - sp.uv.x;
+                // Across the seam u wraps from 1 to 0.
+                assert!(du > 0.0 || du < -0.5, "{poles:?} {} {}", sp.uv.x, ahead.uv.x);
+            }
+        }
     }
 
     #[test]

@@ -486,15 +486,35 @@ impl Textures {
 /// The most colours one material may take from textures.
 pub const MAX_TEXTURED_COLORS: usize = 2;
 
-/// Which of a material's colours come from textures, by colour slot (see
-/// [`crate::material::Colors`]).
+/// The most numbers one material may take from textures (Principled's eleven).
+pub const MAX_TEXTURED_SCALARS: usize = 12;
+
+/// The number a colour texture's value stands for where a material takes a number: its Rec. 709
+/// luminance, as Mitsuba's `eval_1` reads an RGB texture, and exactly the value for a grey
+/// (where the luminance's rounding could move it by an ulp).
+#[inline]
+pub fn scalar(c: Vec3) -> f32 {
+    if c.x == c.y && c.y == c.z { c.x } else { c.dot(Vec3::new(0.2126, 0.7152, 0.0722)) }
+}
+
+/// Which of a material's colours and numbers come from textures, by colour slot and by number
+/// slot (see [`crate::material::Colors`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct MaterialTextures(pub [Option<TextureId>; MAX_TEXTURED_COLORS]);
+pub struct MaterialTextures {
+    /// Per colour slot.
+    pub colors: [Option<TextureId>; MAX_TEXTURED_COLORS],
+    /// Per number slot: the texture's [`scalar`] stands for the number.
+    pub scalars: [Option<TextureId>; MAX_TEXTURED_SCALARS],
+    /// The material takes the surface's tangent at each hit
+    /// ([`crate::material::MaterialModel::set_tangent`]).
+    pub tangent: bool,
+}
 
 impl MaterialTextures {
-    /// True when some colour comes from a texture.
+    /// True when a hit sets something of the material: a colour or number from a texture, or
+    /// the tangent.
     pub fn any(&self) -> bool {
-        self.0.iter().any(Option::is_some)
+        self.tangent || self.colors.iter().chain(&self.scalars).any(Option::is_some)
     }
 }
 

@@ -1,4 +1,4 @@
-//! The isotropic Beckmann distribution, as Mitsuba 3 defines it
+//! The Beckmann distribution, isotropic and anisotropic, as Mitsuba 3 defines it
 //! (`include/mitsuba/render/microfacet.h`, `MicrofacetDistribution` of type `Beckmann`).
 //!
 //! Sources:
@@ -79,15 +79,83 @@ impl Microfacet for Beckmann {
     /// `wo`'s azimuth and unstretch, as Mitsuba's `MicrofacetDistribution::sample`.
     #[inline]
     fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        let a = self.alpha;
-        // The view direction in the configuration of unit roughness.
-        let v = Vec3A::new(a * wo.x, a * wo.y, wo.z).normalize();
-        let sin = sin2(v).sqrt();
-        let (cos_phi, sin_phi) = if sin > 0.0 { (v.x / sin, v.y / sin) } else { (1.0, 0.0) };
-        let (sx, sy) = sample_slopes(sin, v.z, u);
-        let (tx, ty) = ((cos_phi * sx - sin_phi * sy) * a, (sin_phi * sx + cos_phi * sy) * a);
-        let m = Vec3A::new(-tx, -ty, 1.0).normalize_or_zero();
-        if m.is_finite() { m } else { Vec3A::ZERO }
+        sample_visible(self.alpha, self.alpha, wo, u)
+    }
+}
+
+/// [`Beckmann::sample_visible`] with widths `ax` along x and `ay` along y.
+#[inline(always)]
+fn sample_visible(ax: f32, ay: f32, wo: Vec3A, u: Vec2) -> Vec3A {
+    // The view direction in the configuration of unit roughness.
+    let v = Vec3A::new(ax * wo.x, ay * wo.y, wo.z).normalize();
+    let sin = sin2(v).sqrt();
+    let (cos_phi, sin_phi) = if sin > 0.0 { (v.x / sin, v.y / sin) } else { (1.0, 0.0) };
+    let (sx, sy) = sample_slopes(sin, v.z, u);
+    let (tx, ty) = ((cos_phi * sx - sin_phi * sy) * ax, (sin_phi * sx + cos_phi * sy) * ay);
+    let m = Vec3A::new(-tx, -ty, 1.0).normalize_or_zero();
+    if m.is_finite() { m } else { Vec3A::ZERO }
+}
+
+/// The anisotropic Beckmann distribution of widths `ax` along the local x axis (the tangent)
+/// and `ay` along y (both > 0), as Mitsuba's with `alpha_u` and `alpha_v`:
+/// `D(m) = exp(-((m.x / ax)^2 + (m.y / ay)^2) / cos^2) / (pi ax ay cos^4)`, and [`Beckmann`]'s
+/// `G1` with `alpha sin` replaced by `sqrt((ax w.x)^2 + (ay w.y)^2)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BeckmannAniso {
+    /// Width along x.
+    pub ax: f32,
+    /// Width along y.
+    pub ay: f32,
+}
+
+impl BeckmannAniso {
+    /// `alpha sin` of the isotropic forms: the projected width seen along `w`.
+    #[inline]
+    fn width(&self, w: Vec3A) -> f32 {
+        let (x, y) = (self.ax * w.x, self.ay * w.y);
+        (x * x + y * y).sqrt()
+    }
+}
+
+impl Microfacet for BeckmannAniso {
+    #[inline]
+    fn d(&self, m: Vec3A) -> f32 {
+        if m.z <= 0.0 {
+            return 0.0;
+        }
+        let (x, y) = (m.x / self.ax, m.y / self.ay);
+        let c2 = m.z * m.z;
+        let d = exp(-(x * x + y * y) / c2) / (PI * self.ax * self.ay * c2 * c2);
+        if d * m.z > 1e-20 { d } else { 0.0 }
+    }
+
+    #[inline]
+    fn g1(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        if c == 0.0 {
+            return 0.0;
+        }
+        let a = c / self.width(w);
+        if a >= 1.6 {
+            return 1.0;
+        }
+        (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
+    }
+
+    #[inline]
+    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+        let c = w.z.abs();
+        let s = self.width(w);
+        if c >= 1.6 * s {
+            return if c > 0.0 { 1.0 / c } else { 0.0 };
+        }
+        let a = c / s;
+        (3.535 + 2.181 * a) / (s * (1.0 + 2.276 * a + 2.577 * a * a))
+    }
+
+    #[inline]
+    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+        sample_visible(self.ax, self.ay, wo, u)
     }
 }
 

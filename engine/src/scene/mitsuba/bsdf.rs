@@ -5,10 +5,11 @@
 //! Lambertian. Its conductors and plastics are one-sided as pathwave's, and its dielectrics the
 //! same on both sides in both renderers.
 
+use super::conductors::CONDUCTORS;
 use super::convert::{Converter, num, num32, v3};
 use super::props::{Plugin, Value};
 use super::spectrum::Use;
-use super::xml::Element;
+use super::xml::{At, Element};
 use crate::scene::SceneError;
 use glam::DVec3;
 
@@ -111,11 +112,39 @@ pub fn two_sided<'d>(cx: &mut Converter<'d>, one: &'d Element) -> Result<String,
     }
 }
 
-/// The microfacet parameters of roughconductor and roughdielectric as RON fields,
-/// `alpha: A, distribution: D`, read as Mitsuba's `MicrofacetDistribution` reads them: the
-/// distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1) or both `alpha_u`
-/// and `alpha_v`, which pathwave's isotropic distributions take only when they are equal.
-fn microfacet(p: &Plugin) -> Result<String, SceneError> {
+/// A roughness parameter as RON: a number in [0, 1] or a texture's name (Mitsuba's float
+/// textures). `None` when not written.
+fn roughness<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, name: &str) -> Result<Option<String>, SceneError> {
+    let Some(param) = p.param(name) else { return Ok(None) };
+    match &param.value {
+        Value::Object(e) => Ok(Some(format!("{:?}", cx.float_texture(e)?))),
+        _ => {
+            let a = p.float(name)?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&a) {
+                return Err(param.at.error(format!("{}: {name} {a}: pathwave takes 0 to 1", p.label())));
+            }
+            Ok(Some(num(a)))
+        }
+    }
+}
+
+/// What a kind's RON takes of the microfacet parameters.
+#[derive(Clone, Copy, PartialEq)]
+enum Takes {
+    /// One number.
+    Number,
+    /// A number or a texture.
+    Textured,
+    /// A number or a texture, and `alpha_v` beside `alpha` (anisotropic).
+    Anisotropic,
+}
+
+/// The microfacet parameters of the rough BSDFs as RON fields, `alpha: A, distribution: D`
+/// or `alpha: U, alpha_v: V, distribution: D`, read as Mitsuba's `MicrofacetDistribution`
+/// reads them: the distribution `beckmann` (its default) or `ggx`, and `alpha` (default 0.1)
+/// or both `alpha_u` and `alpha_v`. A kind that `takes` only a number refuses textures and
+/// unequal `alpha_u` and `alpha_v`.
+fn microfacet<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, takes: Takes) -> Result<String, SceneError> {
     let distribution = match p.string("distribution")? {
         None => "Beckmann",
         Some((d, at)) => match d.to_lowercase().as_str() {
@@ -130,28 +159,59 @@ fn microfacet(p: &Plugin) -> Result<String, SceneError> {
     };
     // Visible-normal sampling is how pathwave samples both; Mitsuba's switch changes only noise.
     p.bool("sample_visible")?;
-    let (alpha_u, alpha_v) = (p.float("alpha_u")?, p.float("alpha_v")?);
-    let a = match (p.float("alpha")?, alpha_u, alpha_v) {
-        (a, None, None) => a.unwrap_or(0.1),
+    if takes == Takes::Number {
+        for name in ["alpha", "alpha_u", "alpha_v"] {
+            if let Some(param) = p.param(name)
+                && matches!(param.value, Value::Object(_))
+            {
+                return Err(param.at.error(format!(
+                    "{}: a textured {name}: pathwave's {} takes a number",
+                    p.label(),
+                    p.kind
+                )));
+            }
+        }
+    }
+    let (alpha_u, alpha_v) = (roughness(cx, p, "alpha_u")?, roughness(cx, p, "alpha_v")?);
+    let fields = match (roughness(cx, p, "alpha")?, alpha_u, alpha_v) {
+        (a, None, None) => format!("alpha: {}", a.unwrap_or_else(|| num(0.1))),
         (Some(_), _, _) => {
             return Err(p.at.error(format!("{}: give either alpha or alpha_u and alpha_v", p.label())));
         }
-        (None, Some(u), Some(v)) if u == v => u,
+        (None, Some(u), Some(v)) if u == v => format!("alpha: {u}"),
+        (None, Some(u), Some(v)) if takes == Takes::Anisotropic => format!("alpha: {u}, alpha_v: {v}"),
         (None, Some(u), Some(v)) => {
             let at = p.param("alpha_v").map_or(&p.at, |param| &param.at);
             return Err(at.error(format!(
-                "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): pathwave's microfacets are isotropic; give one alpha",
-                p.label()
+                "{}: anisotropic roughness (alpha_u {u}, alpha_v {v}): pathwave's {} is isotropic; give one alpha",
+                p.label(),
+                p.kind
             )));
         }
         (None, _, _) => {
             return Err(p.at.error(format!("{}: alpha_u and alpha_v go together", p.label())));
         }
     };
-    if !(0.0..=1.0).contains(&a) {
-        return Err(p.at.error(format!("alpha {a}: pathwave takes 0 to 1")));
+    Ok(format!("{fields}, distribution: {distribution}"))
+}
+
+/// The RGB `eta` and `k` of one of Mitsuba's named conductors ([`CONDUCTORS`]).
+fn named_conductor(name: &str, at: &At) -> Result<(Option<DVec3>, Option<DVec3>), SceneError> {
+    let Some((_, eta, k)) = CONDUCTORS.iter().find(|(n, ..)| *n == name) else {
+        let known: Vec<&str> = CONDUCTORS.iter().map(|(n, ..)| *n).collect();
+        return Err(at.error(format!(
+            "material \"{name}\" is not one of Mitsuba's named conductors ({}, or none)",
+            known.join(", ")
+        )));
+    };
+    let (eta, k) = (DVec3::from(eta.map(f64::from)), DVec3::from(k.map(f64::from)));
+    if eta.min_element() <= 0.0 {
+        return Err(at.error(format!(
+            "material \"{name}\": Mitsuba's RGB for its eta is ({}, {}, {}), and pathwave takes an eta > 0 in each channel",
+            eta.x, eta.y, eta.z
+        )));
     }
-    Ok(format!("alpha: {}, distribution: {distribution}", num(a)))
+    Ok((Some(eta), Some(k)))
 }
 
 fn unit_scale(p: &Plugin, name: &str) -> Result<(), SceneError> {
@@ -181,7 +241,7 @@ fn diffuse<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Resul
 /// positive and, for `roughplastic`, differ; pathwave also wants their ratio in [0.1, 10].
 fn plastic<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
     let rough = match p.kind == "roughplastic" {
-        true => Some(microfacet(p)?),
+        true => Some(microfacet(cx, p, Takes::Number)?),
         false => None,
     };
     let int = Converter::ior(p, "int_ior", 1.49)?;
@@ -227,6 +287,138 @@ fn plastic<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Resul
     Ok(s + ")")
 }
 
+/// A weight of `principled` in [0, 1] as RON (a number or a texture read as a number), or
+/// nothing when not written.
+fn weight<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, name: &str) -> Result<Option<String>, SceneError> {
+    let Some(param) = p.param(name) else { return Ok(None) };
+    match &param.value {
+        Value::Object(e) => Ok(Some(format!("{name}: {:?}", cx.float_texture(e)?))),
+        _ => {
+            let v = p.float(name)?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&v) {
+                return Err(param.at.error(format!("{}: {name} {v}: expected 0 to 1", p.label())));
+            }
+            Ok(Some(format!("{name}: {}", num(v))))
+        }
+    }
+}
+
+/// Mitsuba's `principled` (`src/bsdfs/principled.cpp`) as `Principled`: `base_color` a colour
+/// or texture, every weight a number or texture, `eta` or `specular`, and the sampling rates.
+fn principled<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, SceneError> {
+    const WEIGHTS: [&str; 10] = [
+        "roughness",
+        "anisotropic",
+        "metallic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "flatness",
+        "clearcoat",
+        "clearcoat_gloss",
+    ];
+    let mut fields = vec![format!("base_color: {}", color(cx, p, "base_color", DVec3::splat(0.5))?)];
+    for name in WEIGHTS {
+        fields.extend(weight(cx, p, name)?);
+    }
+    match (p.param("eta"), p.param("specular")) {
+        (Some(_), Some(param)) => {
+            return Err(param.at.error(format!("{}: give either eta or specular, as Mitsuba", p.label())));
+        }
+        (Some(param), None) => {
+            let eta = p.float("eta")?.unwrap_or_default();
+            if !(eta > 0.0) {
+                return Err(param.at.error(format!("{}: eta {eta}: expected > 0", p.label())));
+            }
+            fields.push(format!("eta: {}", num(eta)));
+        }
+        (None, Some(param)) => {
+            let s = p.float("specular")?.unwrap_or_default();
+            if !(0.0..=1.0).contains(&s) {
+                return Err(param.at.error(format!("{}: specular {s}: expected 0 to 1", p.label())));
+            }
+            fields.push(format!("specular: {}", num(s)));
+        }
+        (None, None) => {}
+    }
+    let rates =
+        ["main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"];
+    let mut r = [1.0; 3];
+    for (i, name) in rates.iter().enumerate() {
+        if let Some(v) = p.float(name)? {
+            if !(v >= 0.0 && v.is_finite()) {
+                let at = p.param(name).map_or(&p.at, |param| &param.at);
+                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
+            }
+            r[i] = v;
+        }
+    }
+    if r != [1.0; 3] {
+        fields.push(format!("sampling_rates: ({}, {}, {})", num(r[0]), num(r[1]), num(r[2])));
+    }
+    let mut known = vec!["base_color", "eta", "specular"];
+    known.extend(WEIGHTS);
+    known.extend(rates);
+    p.finish(&known)?;
+    Ok(format!("Principled({})", fields.join(", ")))
+}
+
+/// Mitsuba's `principledthin` (`src/bsdfs/principledthin.cpp`) as `PrincipledThin`:
+/// `base_color` a colour or texture, the weights numbers or textures (`diff_trans` 0 to 2),
+/// `eta` a number, and the four sampling rates.
+fn principled_thin<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, SceneError> {
+    const WEIGHTS: [&str; 7] =
+        ["roughness", "anisotropic", "spec_trans", "spec_tint", "sheen", "sheen_tint", "flatness"];
+    let mut fields = vec![format!("base_color: {}", color(cx, p, "base_color", DVec3::splat(0.5))?)];
+    for name in WEIGHTS {
+        fields.extend(weight(cx, p, name)?);
+    }
+    if let Some(param) = p.param("diff_trans") {
+        match &param.value {
+            Value::Object(e) => fields.push(format!("diff_trans: {:?}", cx.float_texture(e)?)),
+            _ => {
+                let v = p.float("diff_trans")?.unwrap_or_default();
+                if !(0.0..=2.0).contains(&v) {
+                    return Err(param.at.error(format!("{}: diff_trans {v}: expected 0 to 2", p.label())));
+                }
+                fields.push(format!("diff_trans: {}", num(v)));
+            }
+        }
+    }
+    if let Some(param) = p.param("eta") {
+        let eta = p.float("eta")?.unwrap_or_default();
+        if !(eta > 0.0) {
+            return Err(param.at.error(format!("{}: eta {eta}: expected a number > 0", p.label())));
+        }
+        fields.push(format!("eta: {}", num(eta)));
+    }
+    let rates = [
+        "specular_reflectance_sampling_rate",
+        "specular_transmittance_sampling_rate",
+        "diffuse_reflectance_sampling_rate",
+        "diffuse_transmittance_sampling_rate",
+    ];
+    let mut r = [1.0; 4];
+    for (i, name) in rates.iter().enumerate() {
+        if let Some(v) = p.float(name)? {
+            if !(v >= 0.0 && v.is_finite()) {
+                let at = p.param(name).map_or(&p.at, |param| &param.at);
+                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
+            }
+            r[i] = v;
+        }
+    }
+    if r != [1.0; 4] {
+        fields.push(format!("sampling_rates: ({}, {}, {}, {})", num(r[0]), num(r[1]), num(r[2]), num(r[3])));
+    }
+    let mut known = vec!["base_color", "eta", "diff_trans"];
+    known.extend(WEIGHTS);
+    known.extend(rates);
+    p.finish(&known)?;
+    Ok(format!("PrincipledThin({})", fields.join(", ")))
+}
+
 /// The material a `<bsdf>` element becomes.
 pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
@@ -243,16 +435,22 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             two_sided(cx, one)?
         }
         "conductor" | "roughconductor" => {
-            let rough = if p.kind == "roughconductor" { microfacet(&p)? } else { "alpha: 0".to_owned() };
+            let rough = match p.kind == "roughconductor" {
+                true => microfacet(cx, &p, Takes::Anisotropic)?,
+                false => "alpha: 0".to_owned(),
+            };
+            let (mut eta, mut k) = (p.rgb_as("eta", Use::Unbounded)?, p.rgb_as("k", Use::Unbounded)?);
             if let Some((m, at)) = p.string("material")?
                 && m != "none"
             {
-                return Err(at.error(format!(
-                    "material \"{m}\": pathwave's named metals come in a later version; give eta and k"
-                )));
+                (eta, k) = named_conductor(&m, &at)?;
+                if let Some(param) = p.param("eta").or(p.param("k")) {
+                    return Err(param.at.error(format!(
+                        "{}: give either eta and k or a material (\"{m}\"), as Mitsuba",
+                        p.label()
+                    )));
+                }
             }
-            let eta = p.rgb_as("eta", Use::Unbounded)?;
-            let k = p.rgb_as("k", Use::Unbounded)?;
             let tint = color(cx, &p, "specular_reflectance", DVec3::ONE)?;
             p.finish(&[
                 "alpha",
@@ -279,8 +477,13 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
             s + ")"
         }
         "plastic" | "roughplastic" => plastic(cx, &p, false)?,
+        "principled" => principled(cx, &p)?,
+        "principledthin" => principled_thin(cx, &p)?,
         "dielectric" | "roughdielectric" => {
-            let rough = if p.kind == "roughdielectric" { Some(microfacet(&p)?) } else { None };
+            let rough = match p.kind == "roughdielectric" {
+                true => Some(microfacet(cx, &p, Takes::Textured)?),
+                false => None,
+            };
             let int = Converter::ior(&p, "int_ior", 1.5046)?;
             let ext = Converter::ior(&p, "ext_ior", 1.000277)?;
             unit_scale(&p, "specular_reflectance")?;
@@ -319,7 +522,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, mask, blendbsdf and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled, principledthin, mask, blendbsdf and null"
             )));
         }
     };

@@ -288,19 +288,33 @@ impl<'d> Converter<'d> {
 
     /// The name of the texture an element (or `<ref>`) becomes, converting it once.
     pub fn texture(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        self.texture_as(e, Read::Color)
+    }
+
+    /// The name of the RON texture for a `<texture>` element read where a number belongs
+    /// (Mitsuba's `eval_1`), converted on first use.
+    pub fn float_texture(&mut self, e: &'d Element) -> Result<String, SceneError> {
+        self.texture_as(e, Read::Float)
+    }
+
+    fn texture_as(&mut self, e: &'d Element, read: Read) -> Result<String, SceneError> {
         let e = self.referenced(e)?;
         if e.tag != "texture" {
             return Err(e.at.error(format!("<{}> where a texture or colour belongs", e.tag)));
         }
+        // A checkerboard read as a number has its colours the other way round (see `texture`):
+        // another RON texture.
+        let float = read == Read::Float && Plugin::new(e)?.kind == "checkerboard";
         let key = match e.attr("id") {
             Some(id) => format!("texture {id}"),
             None => format!("texture {}:{}:{}", e.at.file.display(), e.at.line, e.at.col),
-        };
+        } + if float { " as float" } else { "" };
         if let Some(name) = self.named.get(&key) {
             return Ok(name.clone());
         }
-        let ron = texture(self, e)?;
+        let ron = texture(self, e, read)?;
         let name = match e.attr("id") {
+            Some(id) if float => format!("{id}-float"),
             Some(id) => id.to_owned(),
             None => format!("{}-{}", Plugin::new(e)?.kind, self.out.textures.len()),
         };
@@ -526,15 +540,27 @@ fn collect_ids<'d>(e: &'d Element, ids: &mut HashMap<String, &'d Element>) -> Re
 }
 
 /// A `<texture>` as a pathwave texture.
-fn texture(cx: &Converter, e: &Element) -> Result<String, SceneError> {
+/// How a material reads a texture: as a colour (Mitsuba's `eval`) or a number (`eval_1`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Read {
+    /// A colour.
+    Color,
+    /// A number.
+    Float,
+}
+
+fn texture(cx: &Converter, e: &Element, read: Read) -> Result<String, SceneError> {
     let p = Plugin::new(e)?;
     match p.kind.as_str() {
         // Mitsuba's checkerboard (`src/textures/checkerboard.cpp`): of the uv after `to_uv`,
         // color0 where the fractional parts of u and v are both below 1/2 or both above, i.e.
-        // where floor(2 u) + floor(2 v) is even: a 2 by 2 UvChecker of Mitsuba's uv.
+        // where floor(2 u) + floor(2 v) is even: a 2 by 2 UvChecker of Mitsuba's uv. Read as a
+        // number (`eval_1`, which tests `neq` where `eval` tests `eq`), color0 is where they
+        // differ: the colours swap.
         "checkerboard" => {
             let c0 = p.rgb("color0")?.unwrap_or(DVec3::splat(0.4));
             let c1 = p.rgb("color1")?.unwrap_or(DVec3::splat(0.2));
+            let (c0, c1) = if read == Read::Float { (c1, c0) } else { (c0, c1) };
             let to_uv = p.transform("to_uv")?.unwrap_or_default();
             p.finish(&["color0", "color1", "to_uv"])?;
             let [a, b] = to_uv_rows(&to_uv);

@@ -11,6 +11,7 @@
 //! kind for is refused with the plugin's place and what pathwave reads instead.
 
 pub mod bsdf;
+pub mod conductors;
 pub mod convert;
 pub mod emitter;
 pub mod medium;

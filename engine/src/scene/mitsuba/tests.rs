@@ -104,8 +104,8 @@ fn what_is_not_supported_is_refused_where_it_is_written() {
     assert!(e.message.contains("teapot") && e.message.contains("rectangle, cube, sphere"), "{e}");
     let e = error("param", "<shape type=\"sphere\"><float name=\"radios\" value=\"1\"/></shape>");
     assert!(e.message.contains("`radios`") && e.message.contains("radius"), "{e}");
-    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"principled\"/></shape>");
-    assert!(e.message.contains("principled") && e.message.contains("roughplastic"), "{e}");
+    let e = error("bsdf", "<shape type=\"sphere\"><bsdf type=\"measured\"/></shape>");
+    assert!(e.message.contains("measured") && e.message.contains("roughplastic"), "{e}");
     let e = error("ref", "<shape type=\"sphere\"><ref id=\"nope\"/></shape>");
     assert!(e.message.contains("nope"), "{e}");
     let e = error("twice", "<bsdf type=\"diffuse\" id=\"a\"/><bsdf type=\"diffuse\" id=\"a\"/>");
@@ -601,9 +601,36 @@ fn microfacets_keep_their_distribution() {
     ] {
         assert!(r.contains(want), "missing {want} in\n{r}");
     }
+    // Anisotropic and textured: roughconductor's alpha_u and alpha_v, roughdielectric's alpha.
+    let r = ron(
+        "aniso-ok",
+        r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/>
+            <texture name="alpha_v" type="checkerboard"><float name="color0" value="0.3"/></texture></bsdf></shape>
+        <shape type="cube"><bsdf type="roughdielectric"><texture name="alpha" type="checkerboard"/></bsdf></shape>"#,
+    );
+    for want in [
+        r#"RoughConductor(tint: (1, 1, 1), alpha: 0.1, alpha_v: "checkerboard-0", distribution: Beckmann)"#,
+        // Read as a number, Mitsuba's checkerboard has color0 (0.3) where its colour has color1.
+        r#""checkerboard-0": UvChecker(u: 2, v: 2, even: (0.2, 0.2, 0.2), odd: (0.3, 0.3, 0.3)"#,
+        r#"RoughDielectric(ior: 1.5041833, alpha: "checkerboard-1", distribution: Beckmann)"#,
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    let e = error(
+        "plastic-texture",
+        "<shape type=\"sphere\"><bsdf type=\"roughplastic\">\n<texture name=\"alpha\" type=\"checkerboard\"/></bsdf></shape>",
+    );
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("textured alpha"), "{e}");
+    let e = error(
+        "negative",
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\">\n<float name=\"alpha_u\" value=\"-0.1\"/><float name=\"alpha_v\" value=\"0.1\"/></bsdf></shape>",
+    );
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(e.message.contains("alpha_u -0.1: pathwave takes 0 to 1"), "{e}");
     let e = error(
         "aniso",
-        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n<float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>",
+        "<shape type=\"sphere\"><bsdf type=\"roughdielectric\"><float name=\"alpha_u\" value=\"0.1\"/>\n<float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>",
     );
     assert_eq!((e.line, e.col), (6, 1), "{e}");
     assert!(e.message.contains("anisotropic") && e.message.contains("isotropic"), "{e}");
@@ -894,4 +921,101 @@ fn grid_media_pathwave_cannot_render_are_refused() {
         &medium(r#"<volume name="sigma_t" type="constvolume"><float name="value" value="1"/></volume>"#),
     );
     assert!(e.message.contains("gridvolume"), "{e}");
+}
+
+/// Named conductors take Mitsuba's RGB indices ([`super::conductors`]); unknown names, names
+/// beside `eta`, and the names whose RGB eta has a zero channel are refused where written. The
+/// table agrees with what [`super::spectrum`] makes of Mitsuba's spectral files (gold and
+/// amorphous carbon, copied into tests/mitsuba-data/ior).
+#[test]
+fn named_conductors_take_mitsubas_rgb_indices() {
+    use super::conductors::CONDUCTORS;
+    use super::spectrum::{Spectrum, Use};
+    let r = ron(
+        "named",
+        r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughconductor"><string name="material" value="a-C"/></bsdf></shape>"#,
+    );
+    for want in [
+        "RoughConductor(tint: (1, 1, 1), alpha: 0, eta: (0.14303597807884216, 0.3753070831298828, 1.4420453310012817), k: (3.982996940612793, 2.38555645942688, 1.6033592224121094))",
+        "alpha: 0.1, distribution: Beckmann, eta: (2.9440457820892334, 2.2271363735198975, 1.968161702156067), k: (0.8874648809432983, ",
+    ] {
+        assert!(r.contains(want), "missing {want} in\n{r}");
+    }
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/mitsuba-data/ior");
+    let at = super::xml::At { file: std::sync::Arc::new("t.spd".into()), line: 1, col: 1 };
+    for (name, eta, k) in CONDUCTORS.iter().filter(|(n, ..)| ["Au", "a-C"].contains(n)) {
+        for (part, want) in [("eta", eta), ("k", k)] {
+            let text = std::fs::read_to_string(data.join(format!("{name}.{part}.spd"))).unwrap();
+            // Not weighted by D65 (as emission is): `complex_ior_from_file` calls
+            // `spectrum_list_to_srgb` with its default, unlike a `<spectrum>` written in a scene.
+            // With D65 amorphous carbon's red eta is 2.45, not Mitsuba's 2.94.
+            let rgb = Spectrum::parse_file(&text, &at).unwrap().to_rgb(Use::Emission);
+            let want = glam::DVec3::from(want.map(f64::from));
+            assert!(
+                (rgb - want).abs().max_element() < 1e-4 * want.max_element(),
+                "{name} {part}: {rgb} vs {want}"
+            );
+        }
+    }
+    let bsdf =
+        |inner: &str| format!("<shape type=\"sphere\"><bsdf type=\"conductor\">\n{inner}</bsdf></shape>");
+    let e = error("unknown", &bsdf(r#"<string name="material" value="Gold"/>"#));
+    assert_eq!((e.line, e.col), (6, 1), "{e}");
+    assert!(
+        e.message.contains("\"Gold\"") && e.message.contains("Au, Be") && e.message.contains("W, or none"),
+        "{e}"
+    );
+    let e = error("both", &bsdf(r#"<string name="material" value="Au"/><float name="eta" value="2"/>"#));
+    assert!(e.message.contains("either eta and k or a material"), "{e}");
+    let e = error("zero", &bsdf(r#"<string name="material" value="AlSb"/>"#));
+    assert!(e.message.contains("eta > 0"), "{e}");
+}
+
+/// `principled` becomes `Principled` with its weights as numbers or textures (checkerboards read
+/// as numbers), `specular` or `eta`, and the sampling rates; out-of-range weights and both
+/// `eta` and `specular` are refused where written.
+#[test]
+fn principled_becomes_principled() {
+    let r = ron(
+        "principled",
+        r#"<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.2, 0.8, 0.1"/>
+            <float name="roughness" value="0.15"/><texture name="metallic" type="checkerboard"/>
+            <float name="specular" value="0.7"/><float name="clearcoat_sampling_rate" value="0.5"/></bsdf></shape>"#,
+    );
+    let want = r#"Principled(base_color: (0.2, 0.8, 0.1), roughness: 0.15, metallic: "checkerboard-0", specular: 0.7, sampling_rates: (1, 0.5, 1))"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    for (tag, body, message) in [
+        ("sheen", r#"<float name="sheen" value="1.5"/>"#, "sheen 1.5: expected 0 to 1"),
+        (
+            "both",
+            r#"<float name="eta" value="1.5"/><float name="specular" value="0.5"/>"#,
+            "either eta or specular",
+        ),
+        ("eta", r#"<float name="eta" value="0"/>"#, "eta 0: expected > 0"),
+    ] {
+        let e =
+            error(tag, &format!("<shape type=\"sphere\"><bsdf type=\"principled\">\n{body}</bsdf></shape>"));
+        assert_eq!(e.line, 6, "{e}");
+        assert!(e.message.contains(message), "{tag}: {e}");
+    }
+}
+
+/// `principledthin` becomes `PrincipledThin`, `diff_trans` up to 2.
+#[test]
+fn principledthin_becomes_principled_thin() {
+    let r = ron(
+        "thin",
+        r#"<shape type="rectangle"><bsdf type="principledthin"><float name="eta" value="1.33"/>
+            <texture name="diff_trans" type="checkerboard"><float name="color1" value="1.4"/></texture>
+            <float name="spec_trans" value="0.5"/></bsdf></shape>"#,
+    );
+    let want = r#"PrincipledThin(base_color: (0.5, 0.5, 0.5), spec_trans: 0.5, diff_trans: "checkerboard-0", eta: 1.33)"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    let e = error(
+        "thin-bad",
+        "<shape type=\"rectangle\"><bsdf type=\"principledthin\">\n<float name=\"diff_trans\" value=\"2.5\"/></bsdf></shape>",
+    );
+    assert_eq!(e.line, 6, "{e}");
+    assert!(e.message.contains("diff_trans 2.5: expected 0 to 2"), "{e}");
 }
