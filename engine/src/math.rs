@@ -57,6 +57,12 @@ impl Frame {
     }
 }
 
+/// Rec. 709 (sRGB primaries) luminance of a linear RGB colour.
+#[inline]
+pub fn luminance(c: glam::Vec3) -> f32 {
+    c.dot(glam::Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
 /// The bound `n u / (1 - n u)` on the relative error of `n` chained f32 operations (pbrt-v4
 /// section 6.8.1), with u = 2^-24.
 pub const fn gamma(n: u32) -> f32 {

@@ -12,7 +12,7 @@ pub mod registry;
 mod values;
 pub mod vol;
 
-pub use color::{Color, Scalar};
 pub(crate) use color::check_texture_name;
+pub use color::{Color, Scalar};
 pub(crate) use values::white;
 pub use values::*;

@@ -231,3 +231,23 @@ impl FovAxis {
         }
     }
 }
+
+/// The name of a material defined in `materials`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MaterialRef(pub String);
+
+impl<'de> Deserialize<'de> for MaterialRef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        super::context::names(|n| match n.map(|n| &n.materials) {
+            Some(names) if names.is_empty() => {
+                Err(D::Error::custom(format!("unknown material \"{name}\"; no materials are defined")))
+            }
+            Some(names) if !names.contains(&name) => {
+                let list: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+                Err(D::Error::custom(format!("unknown material \"{name}\"; defined: {}", list.join(", "))))
+            }
+            _ => Ok(MaterialRef(name.clone())),
+        })
+    }
+}

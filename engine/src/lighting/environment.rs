@@ -39,11 +39,7 @@ use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::{PI, TAU};
 use std::path::Path;
 
-/// Rec. 709 (sRGB primaries) luminance of a linear RGB colour.
-#[inline]
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
+use crate::math::luminance;
 
 /// The (u, v) of the unit square that a direction looks up in an unrotated map (see the module
 /// documentation), and sin theta, the sine of its angle to +y. `dir` need not be unit length.

@@ -10,6 +10,7 @@
 
 use crate::accel::geometry::Geometry;
 use crate::lighting::area::AreaEmission;
+use crate::math::luminance;
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 use crate::texture::{TextureId, Textures};
 use glam::{Vec2, Vec3, Vec3A};
@@ -483,12 +484,6 @@ impl LightTable {
         let pdf = geometry.prims[prim as usize].pdf_solid_angle(from, p, n);
         pdf * self.pmf[light as usize]
     }
-}
-
-/// Rec. 709 luminance of a linear RGB colour.
-#[inline]
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 #[cfg(test)]

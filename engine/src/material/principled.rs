@@ -168,7 +168,7 @@ impl Principled {
         let ggx = ggx(roughness, anisotropic);
         Lobes {
             base: self.base_color,
-            lum: crate::lighting::lights::luminance(self.base_color),
+            lum: crate::math::luminance(self.base_color),
             roughness,
             metallic,
             spec_tint: self.w(SPEC_TINT),

@@ -179,7 +179,7 @@ impl PrincipledThin {
         if st > 0.0 && ok {
             let f = fresnel(lo.dot(wh), self.eta).0;
             if reflect {
-                let lum = crate::lighting::lights::luminance(base);
+                let lum = crate::math::luminance(base);
                 let tint = if lum > 0.0 { base / lum } else { Vec3::ONE };
                 let r0 = tint * ((self.eta - 1.0) / (self.eta + 1.0)).powi(2);
                 let w = schlick_w(lo.dot(wh), self.eta);
@@ -211,7 +211,7 @@ impl PrincipledThin {
             let sheen = self.w(SHEEN);
             if sheen > 0.0 {
                 let fd = schlick_weight(cos_d.abs());
-                let lum = crate::lighting::lights::luminance(base);
+                let lum = crate::math::luminance(base);
                 let tint = if lum > 0.0 { base / lum } else { Vec3::ONE };
                 let c = Vec3::ONE.lerp(tint, self.w(SHEEN_TINT));
                 value += c * (sheen * (1.0 - st) * fd * (1.0 - dt) * cos_o);

@@ -32,8 +32,8 @@
 //! as Mitsuba's float textures read an RGB image, clamped to [0, 1] as Mitsuba clamps them).
 
 use super::Material;
+use crate::format::MaterialRef;
 use crate::format::context;
-use crate::scene::MaterialRef;
 use crate::texture::TextureId;
 use serde::{Deserialize, Deserializer, de::Error};
 

@@ -494,7 +494,7 @@ pub const MAX_TEXTURED_SCALARS: usize = 12;
 /// (where the luminance's rounding could move it by an ulp).
 #[inline]
 pub fn scalar(c: Vec3) -> f32 {
-    if c.x == c.y && c.y == c.z { c.x } else { c.dot(Vec3::new(0.2126, 0.7152, 0.0722)) }
+    if c.x == c.y && c.y == c.z { c.x } else { crate::math::luminance(c) }
 }
 
 /// Which of a material's colours and numbers come from textures, by colour slot and by number
