@@ -344,19 +344,7 @@ fn principled<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String, Scen
     }
     let rates =
         ["main_specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_reflectance_sampling_rate"];
-    let mut r = [1.0; 3];
-    for (i, name) in rates.iter().enumerate() {
-        if let Some(v) = p.float(name)? {
-            if !(v >= 0.0 && v.is_finite()) {
-                let at = p.param(name).map_or(&p.at, |param| &param.at);
-                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
-            }
-            r[i] = v;
-        }
-    }
-    if r != [1.0; 3] {
-        fields.push(format!("sampling_rates: ({}, {}, {})", num(r[0]), num(r[1]), num(r[2])));
-    }
+    sampling_rates(p, rates, &mut fields)?;
     let mut known = vec!["base_color", "eta", "specular"];
     known.extend(WEIGHTS);
     known.extend(rates);
@@ -399,19 +387,7 @@ fn principled_thin<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>) -> Result<String,
         "diffuse_reflectance_sampling_rate",
         "diffuse_transmittance_sampling_rate",
     ];
-    let mut r = [1.0; 4];
-    for (i, name) in rates.iter().enumerate() {
-        if let Some(v) = p.float(name)? {
-            if !(v >= 0.0 && v.is_finite()) {
-                let at = p.param(name).map_or(&p.at, |param| &param.at);
-                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
-            }
-            r[i] = v;
-        }
-    }
-    if r != [1.0; 4] {
-        fields.push(format!("sampling_rates: ({}, {}, {}, {})", num(r[0]), num(r[1]), num(r[2]), num(r[3])));
-    }
+    sampling_rates(p, rates, &mut fields)?;
     let mut known = vec!["base_color", "eta", "diff_trans"];
     known.extend(WEIGHTS);
     known.extend(rates);
@@ -527,4 +503,27 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
     };
     Ok(out)
+}
+
+/// The principled BSDFs' sampling rates `names` (each >= 0, by default 1) as the RON field
+/// `sampling_rates: (..)` in `fields`, left out where all are 1.
+fn sampling_rates<const N: usize>(
+    p: &Plugin,
+    names: [&str; N],
+    fields: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let mut r = [1.0; N];
+    for (i, name) in names.iter().enumerate() {
+        if let Some(v) = p.float(name)? {
+            if !(v >= 0.0 && v.is_finite()) {
+                let at = p.param(name).map_or(&p.at, |param| &param.at);
+                return Err(at.error(format!("{}: {name} {v}: expected >= 0", p.label())));
+            }
+            r[i] = v;
+        }
+    }
+    if r != [1.0; N] {
+        fields.push(format!("sampling_rates: ({})", r.map(num).join(", ")));
+    }
+    Ok(())
 }
