@@ -313,10 +313,9 @@ fn roughplastic_nonlinear() {
 
 /// Mitsuba's sphere grid under its constant emitter (diffuse, textured diffuse, smooth
 /// plastic of index 1.9, glass, rough glass, two Beckmann rough plastics, a conductor and a
-/// rough conductor), without its two masked leaves (Mitsuba's `mask`, not read yet), against
-/// Mitsuba 3.9.1 references of that scene (16,384 spp, `scripts/mitsuba-plastic/
-/// unmasked_refs.py`). Mitsuba's own test_constant, test_envmap, test_pointlight and
-/// test_arealight scenes need the leaves.
+/// rough conductor), without its two masked leaves, against Mitsuba 3.9.1 references of that
+/// scene (16,384 spp, `scripts/mitsuba_refs.py`): the materials alone, where Mitsuba's own
+/// test_constant, test_envmap, test_pointlight and test_arealight (tested too) add the masks.
 #[test]
 fn sphere_grid_without_leaves() {
     conformance("bsdf_spheres_unmasked", "test_constant_path.xml", "test_constant");
@@ -483,7 +482,7 @@ fn grid_medium_with_albedo_grid() {
 /// Henyey-Greenstein media (`hg`, g = 0.7 in the base, -0.6 in the sphere) under the
 /// environment map: light sampling and phase sampling weighted by the phase function's
 /// density. Not in Mitsuba's suite: its reference was rendered with Mitsuba 3.9.1 by
-/// `scripts/mitsuba-media/hg_refs.py`. Injected error that fails here: the light sample's
+/// `scripts/mitsuba_refs.py`. Injected error that fails here: the light sample's
 /// phase value with the cosine's sign flipped (99.70% of the channels pass, the green and blue
 /// means 3-4% high).
 #[test]
