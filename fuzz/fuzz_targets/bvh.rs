@@ -83,13 +83,7 @@ fuzz_target!(|data: &[u8]| {
     assert!(leaves.iter().all(|(a, b)| b - a <= max_leaf as usize));
 
     // Rays from a hash of the input: from outside towards a box, or from inside one.
-    let mut s = data.iter().fold(0x9e37_79b9u32, |h, &b| (h ^ b as u32).wrapping_mul(0x0100_0193)) | 1;
-    let mut rnd = move || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        s as f32 / u32::MAX as f32
-    };
+    let mut rnd = pathwave_fuzz::numbers(data);
     let mut ray = |k: usize| {
         let b = &boxes[(rnd() * (boxes.len() - 1) as f32) as usize];
         let to = b.center() + (b.max - b.min) * (rnd() - 0.5);

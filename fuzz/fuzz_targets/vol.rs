@@ -23,13 +23,7 @@ fuzz_target!(|data: &[u8]| {
     assert!(max.is_finite() && max >= 0.0);
 
     // Points and rays from a hash of the input.
-    let mut s = data.iter().fold(0x9e37_79b9u32, |h, &b| (h ^ b as u32).wrapping_mul(0x0100_0193)) | 1;
-    let mut rnd = move || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        s as f32 / u32::MAX as f32
-    };
+    let mut rnd = pathwave_fuzz::numbers(data);
     for p in [Vec3A::splat(-1e30), Vec3A::splat(f32::INFINITY), Vec3A::new(0.5, -3.0, 7.0)] {
         let v = grid.value(p);
         assert!(v.is_finite() && (0.0..=max).contains(&v), "{v} at {p}");

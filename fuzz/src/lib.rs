@@ -65,3 +65,16 @@ pub fn check_mesh(mesh: MeshData) {
         }
     }
 }
+
+/// Numbers in [0, 1] from a hash of the input (FNV-1a, then xorshift32): the same input gives
+/// the same rays, so a crash replays.
+pub fn numbers(data: &[u8]) -> impl FnMut() -> f32 {
+    let mut s = data.iter().fold(0x9e37_79b9u32, |h, &b| (h ^ b as u32).wrapping_mul(0x0100_0193)) | 1;
+    move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s as f32 / u32::MAX as f32
+    }
+}
+
