@@ -694,7 +694,56 @@ fn wrappers_name_what_is_wrong_where() {
     let glowing =
         r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "m", emit: (radiance: (1, 1, 1))),"#;
     let e = err(&scene(CAMERA, masked, glowing));
-    assert!(e.line == 8 && e.message.contains("\"m\" is a wrapper (Mask, Blend): `emit`"), "{e}");
+    assert!(
+        e.line == 8 && e.message.contains("\"m\" is a wrapper (Mask, Blend, Bump, NormalMap): `emit`"),
+        "{e}"
+    );
     let misspelt = err(&with_material(r#""m": Masc(opacity: 0.5, material: "white"),"#));
-    assert!(misspelt.message.contains("`Mask`, or `Blend`"), "{misspelt}");
+    assert!(misspelt.message.contains("`Mask`, `Blend`, `Bump`, or `NormalMap`"), "{misspelt}");
+}
+
+/// Bump and normal maps refuse heights that are not an image (a bump map takes the image's
+/// slopes), a scale that is not finite, a texture or material that is not defined, and a map
+/// inside another (directly or through a mask), each at the value.
+#[test]
+fn maps_name_what_is_wrong_where() {
+    let dir = std::env::temp_dir().join(format!("pathwave-maps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    image::GrayImage::from_pixel(2, 2, image::Luma([100])).save(dir.join("h.png")).unwrap();
+    let path = dir.join("s.ron");
+    let textures = r#""h": Image(file: "h.png", raw: true), "n": Noise(scale: 2)"#;
+    // The material line starts at column 9 of line 6; `at` is where `token` begins in it.
+    let at = |m: &str, token: &str| 9 + m.find(token).unwrap() + token.starts_with('"') as usize;
+    for (m, token, words) in [
+        (
+            r#""m": Bump(texture: "n", material: "white"),"#,
+            "\"n\"",
+            &["texture \"n\" is not an Image: a bump map reads the heights of an image"][..],
+        ),
+        (r#""m": Bump(texture: "h", scale: inf, material: "white"),"#, "inf", &["finite", "inf"]),
+        (r#""m": NormalMap(texture: "x", material: "white"),"#, "\"x\"", &["unknown texture \"x\""]),
+        (r#""m": NormalMap(texture: "h", material: "y"),"#, "\"y\"", &["unknown material \"y\""]),
+        (
+            r#""b": Bump(texture: "h", material: "white"), "m": NormalMap(texture: "h", material: "b"),"#,
+            "\"b\")",
+            &["material \"b\" is or holds a bump or normal map: maps do not nest"],
+        ),
+        (
+            r#""b": Bump(texture: "h", material: "white"), "k": Mask(opacity: 0.5, material: "b"), "m": Bump(texture: "h", material: "k"),"#,
+            "\"k\")",
+            &["material \"k\" is or holds a bump or normal map"],
+        ),
+    ] {
+        let text = with_textures(textures, m);
+        let e = parse(&text, &path).expect_err(m);
+        let want = (6, at(m, token));
+        assert!(
+            (e.line, e.col) == want && words.iter().all(|w| e.message.contains(w)),
+            "{m}: expected {want:?} and {words:?}, got {e}"
+        );
+    }
+    // Both parse where all is well, and a mask may go inside a map.
+    let fine = r#""k": Mask(opacity: 0.5, material: "white"), "b": Bump(texture: "h", scale: 0.1, material: "k"), "m": NormalMap(texture: "h", material: "white", flip_invalid_normals: false),"#;
+    parse(&with_textures(textures, fine), &path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -45,6 +45,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
         ("materials-env.ron", 2),
         // Masks (camera, bounce and shadow rays through their holes) and blends.
         ("wrappers.ron", 2),
+        // Bump and normal maps (Lambertians under them shaded path by path).
+        ("maps.ron", 2),
     ] {
         let desc = small(name, 6);
         let oracle = render_threads(&desc, 2);

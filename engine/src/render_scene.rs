@@ -9,7 +9,7 @@ use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::{EnvSample, EnvironmentMap};
 use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
-use crate::material::wrap::{Amount, Resolved, Wrapper, Wrappers, mix_lambertian};
+use crate::material::wrap::{self, Amount, Resolved, Tilt, Wrapper, Wrappers, mix_lambertian};
 use crate::math::Ray;
 use crate::media::Media;
 pub use crate::scene::SamplerKind;
@@ -235,6 +235,11 @@ pub struct Features {
     /// are resolved to a plain material ([`RenderScene::resolve`]) before they are shaded.
     /// Off, a hit's material id is its material's.
     pub wrappers: bool,
+    /// Some wrapper is a bump or normal map: resolving may tilt a hit's shading normal
+    /// ([`SurfacePoint::ns`] apart from [`SurfacePoint::ns_base`]), and shading then judges
+    /// directions by both and weighs them by [`crate::material::wrap::terminator_shadowing`].
+    /// Off, the two normals are one.
+    pub tilts: bool,
 }
 
 impl Features {
@@ -250,10 +255,11 @@ impl Features {
             one_sided: false,
             null_surfaces: false,
             wrappers: false,
+            tilts: false,
         }
     }
 
-    /// Sets `textures`, `emitting_surfaces`, `one_sided`, `null_surfaces` and `wrappers` from
+    /// Sets `textures`, `emitting_surfaces`, `one_sided`, `null_surfaces`, `wrappers` and `tilts` from
     /// what the primitives' material ids use, and the materials the wrappers among them name:
     /// their materials, their textured colours (`per_material`), their emission (`emission`)
     /// and their wrappers (`wrappers`, all indexed like `materials`).
@@ -276,16 +282,18 @@ impl Features {
         let textured = |id: usize| {
             per_material[id].any()
                 || emission[id].is_some_and(|e| e.texture.is_some())
-                || wrapper(id).is_some_and(|w| matches!(w.amount(), Amount::Texture(_)))
+                || wrapper(id).is_some_and(|w| w.textured())
         };
         self.textures = (0..per_material.len()).filter(used).any(textured);
         self.wrappers = (0..materials.len()).filter(used).any(|id| wrapper(id).is_some());
+        self.tilts =
+            (0..materials.len()).filter(used).any(|id| matches!(wrapper(id), Some(Wrapper::Tilt { .. })));
         self.emitting_surfaces = (0..materials.len())
             .filter(used)
             .any(|id| emission[id].is_some() && !materials[id].is_emissive());
         self.one_sided = (0..materials.len()).filter(used).any(|id| materials[id].one_sided());
         // A wrapper's entry copies a material it names (used too), so only masks add to it.
-        let mask = |id: usize| matches!(wrapper(id), Some(crate::material::wrap::Wrapper::Mask { .. }));
+        let mask = |id: usize| matches!(wrapper(id), Some(Wrapper::Mask { .. }));
         self.null_surfaces = (0..materials.len())
             .filter(used)
             .any(|id| if wrapper(id).is_some() { mask(id) } else { materials[id].has_null_lobe() });
@@ -394,12 +402,45 @@ impl RenderScene {
         }
     }
 
-    /// Follows the material of a hit at `sp` with id `id` through its wrappers
-    /// ([`Wrappers::resolve`], `u(level)` the number of the `level`-th wrapper met). Call only
-    /// when [`Features::wrappers`] is on.
+    /// Follows the material of a hit at `sp` with id `id`, seen from the unit direction `wo`,
+    /// through its wrappers ([`Wrappers::resolve`], `u(level)` the number of the `level`-th
+    /// wrapper that draws one); a bump or normal map on the way tilts `sp.ns` ([`Self::tilt`]).
+    /// Call only when [`Features::wrappers`] is on.
     #[inline(never)]
-    pub fn resolve(&self, id: u32, sp: &SurfacePoint, u: impl FnMut(u32) -> f32) -> Resolved {
-        self.wrappers.resolve(id, |a| self.amount(a, sp), u)
+    pub fn resolve(&self, id: u32, sp: &mut SurfacePoint, wo: Vec3A, u: impl FnMut(u32) -> f32) -> Resolved {
+        let at = *sp;
+        let mut tilted = None;
+        let resolved = self.wrappers.resolve(
+            id,
+            |a| self.amount(a, &at),
+            u,
+            |map, flip| {
+                tilted = self.tilt(&at, map, flip, wo);
+            },
+        );
+        if let Some(ns) = tilted {
+            sp.ns = ns;
+        }
+        resolved
+    }
+
+    /// The shading normal that `map` gives at `sp` (seen from `wo`, turned towards it if
+    /// `flip`: [`wrap::flip_invalid`]), `None` where it gives none (a surface without
+    /// derivatives under a bump map, a degenerate value).
+    fn tilt(&self, sp: &SurfacePoint, map: Tilt, flip: bool, wo: Vec3A) -> Option<Vec3A> {
+        let derivatives = self.derivatives(sp);
+        let n = match map {
+            Tilt::Bump { heights, scale } => {
+                let (dpdu, dpdv) = derivatives?;
+                let dh = scale * self.textures.gradient(heights, sp);
+                wrap::bump_normal(sp.n, sp.ns, dpdu, dpdv, dh)?
+            }
+            Tilt::Normals { normals } => {
+                let code = self.textures.at(normals, sp, &self.instances.blas);
+                wrap::normal_map_normal(sp.ns, derivatives.map(|d| d.0), code)?
+            }
+        };
+        Some(if flip { wrap::flip_invalid(sp.ns, n, wo) } else { n })
     }
 
     /// Material `id` with its textured colours evaluated at `sp`.
@@ -466,18 +507,19 @@ impl RenderScene {
             }
         }
         if slots.tangent
-            && let Some(dpdu) = self.dpdu(sp)
+            && let Some((dpdu, _)) = self.derivatives(sp)
         {
-            m.set_tangent(sp.ns, dpdu);
+            m.set_tangent(sp.ns, crate::material::wrap::base_tangent(sp, dpdu));
         }
         m
     }
 
-    /// The surface's `dp/du` at a hit: a placed mesh's, or a primitive's that gives one.
-    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+    /// The surface's `(dp/du, dp/dv)` at a hit: a placed mesh's, or a primitive's that gives
+    /// them.
+    fn derivatives(&self, sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
         match sp.on.instance {
-            u32::MAX => self.geometry.prims.get(sp.on.triangle as usize)?.dpdu(sp),
-            _ => self.instances.dpdu(sp),
+            u32::MAX => self.geometry.prims.get(sp.on.triangle as usize)?.derivatives(sp),
+            _ => self.instances.derivatives(sp),
         }
     }
 }

@@ -115,6 +115,11 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                 break 'path;
             }
             match mat.shading() {
+                // A tilted normal: a Lambertian shaded as the glossy kinds are.
+                Shading::Diffuse if scene.features.tilts && path::tilted(&hit.surface) => {
+                    let u = path::GlossySamples::draw(scene, sampler, st.depth);
+                    path::shade_glossy(scene, &mut st, &hit.surface, wo, mat, ray.time, &u)
+                }
                 Shading::Diffuse => {
                     if path::black_behind(mat, &hit.surface, wo) {
                         break 'path;

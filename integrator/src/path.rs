@@ -9,8 +9,8 @@ use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::camera::RayLanes;
 use pathwave_engine::filter::PixelFilter;
 use pathwave_engine::lighting::lights::OtherLight;
-use pathwave_engine::material::wrap::Resolved;
-use pathwave_engine::material::{Material, Reads, Shading};
+use pathwave_engine::material::wrap::{Resolved, terminator_shadowing};
+use pathwave_engine::material::{Material, Reads};
 use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
 use pathwave_engine::media::phase::{hg, sample_hg};
 use pathwave_engine::render_scene::RenderScene;
@@ -344,8 +344,8 @@ pub fn scatter_in_medium(
 
 /// A hit on a surface in a scene with wrappers ([`Features::wrappers`]): follows its material
 /// through them ([`RenderScene::resolve`]) with the numbers of the vertex after `st.depth`
-/// bounces ([`Dims::wrapper`]), and writes the plain material found into `hit` (`None`
-/// returned: it shades the hit). Through a mask's hole, the ray along `dir` goes on unbent
+/// bounces ([`Dims::wrapper`]), and writes the plain material found into `hit`, its shading
+/// normal tilted where a bump or normal map says (`None` returned: it shades the hit). Through a mask's hole, the ray along `dir` goes on unbent
 /// from the far side: a null crossing as a null lobe's ([`scatter_with`]), the MIS state and
 /// the throughput kept, not a bounce of `max_depth`; that ray is returned. Out of line: scenes
 /// without wrappers never call it.
@@ -361,7 +361,9 @@ pub fn resolve(
     sampler: &Sampler,
 ) -> Option<Ray> {
     let depth = st.depth;
-    match scene.resolve(hit.material, &hit.surface, |level| sampler.get_1d(Dims::wrapper(depth, level))) {
+    match scene
+        .resolve(hit.material, &mut hit.surface, -dir, |level| sampler.get_1d(Dims::wrapper(depth, level)))
+    {
         Resolved::Material(id) => {
             hit.material = id;
             None
@@ -384,7 +386,7 @@ pub fn at_max_depth(scene: &RenderScene, bounces: u32) -> bool {
     bounces == scene.settings.max_depth
 }
 
-/// A [`Shading::Diffuse`] material that is one-sided ([`Material::one_sided`]), met from behind
+/// A [`Shading::Diffuse`](pathwave_engine::material::Shading::Diffuse) material that is one-sided ([`Material::one_sided`]), met from behind
 /// its shading normal (`wo` the unit direction back along the ray): it reflects nothing there
 /// (Mitsuba's `diffuse`: black where cos theta of `wo` or `wi` is not positive), so the path
 /// ends without a light sample or a next direction. The Lambertian kernel samples `wi` on
@@ -492,15 +494,41 @@ impl ScatterSamples {
 /// the tangent plane leaves, with the same operations as before (the second test is not
 /// reached), so flat surfaces pay nothing.
 ///
+/// Where a bump or normal map tilted the shading normal, these rules are the base normal's
+/// ([`SurfacePoint::ns_base`]), and a direction must also lie on the same side of the tilted
+/// normal (as Mitsuba's `bumpmap` and `normalmap` require); elsewhere the two normals are one
+/// and that test is implied by the first (`cs` is not zero).
+///
 /// Light sampling and BSDF sampling call it alike, so both estimate one integral and their
 /// MIS weights stay consistent.
 #[inline]
 pub fn leaving_side(sp: &SurfacePoint, wo: Vec3A, wi: Vec3A) -> Option<Vec3A> {
-    let (cg, cs) = (wi.dot(sp.n), wi.dot(sp.ns));
-    if cg * cs <= 0.0 && !(cs > 0.0 && wo.dot(sp.ns) > 0.0) {
+    let (cg, cs) = (wi.dot(sp.n), wi.dot(sp.ns_base));
+    if cg * cs <= 0.0 && !(cs > 0.0 && wo.dot(sp.ns_base) > 0.0) || !(cs * wi.dot(sp.ns) > 0.0) {
         return None;
     }
     Some(if cs > 0.0 { sp.n } else { -sp.n })
+}
+
+/// A hit whose shading normal a bump or normal map tilted: it is shaded path by path, the
+/// BSDF about the tilted normal (a Lambertian's by [`shade_glossy`], not the lane kernel),
+/// and the BSDF's value takes [`terminator_shadowing`]. Only in scenes with
+/// [`Features::tilts`].
+///
+/// [`Features::tilts`]: pathwave_engine::render_scene::Features::tilts
+#[inline(always)]
+pub fn tilted(sp: &SurfacePoint) -> bool {
+    sp.ns != sp.ns_base
+}
+
+/// `f` times the BSDF's factor for the direction `wi` leaving `sp`: [`terminator_shadowing`]
+/// in scenes with bump or normal maps; elsewhere `f` as it is.
+#[inline(always)]
+fn shadowed(scene: &RenderScene, sp: &SurfacePoint, wi: Vec3A, f: Vec3) -> Vec3 {
+    match scene.features.tilts {
+        true => f * terminator_shadowing(sp, wi),
+        false => f,
+    }
 }
 
 /// Samples the BSDF, updates the throughput, applies Russian roulette; returns the next ray, or
@@ -515,12 +543,15 @@ pub fn scatter(
     time: f32,
     sampler: &Sampler,
 ) -> Option<Ray> {
-    scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(scene, sampler, st.depth))
+    scatter_with(scene, st, sp, wo, mat, time, &ScatterSamples::draw(scene, sampler, st.depth), false)
 }
 
-/// [`scatter`] with the vertex's numbers `u` drawn already. Always inlined: as a call, `st`
+/// [`scatter`] with the vertex's numbers `u` drawn already; `nee` says whether a light was
+/// sampled at the vertex (then an emitter that the new ray meets is weighted by MIS, unless
+/// the lobe was a delta). Always inlined: as a call, `st`
 /// went through memory, written field by field and read back two fields per load (beta's z with
 /// the IOR scale), which no store forwards to (spheres-sky: a quarter of the function's time).
+#[expect(clippy::too_many_arguments, reason = "the vertex's pieces, as shade_glossy hands them on")]
 #[inline(always)]
 pub fn scatter_with(
     scene: &RenderScene,
@@ -530,9 +561,11 @@ pub fn scatter_with(
     mat: &Material,
     time: f32,
     u: &ScatterSamples,
+    nee: bool,
 ) -> Option<Ray> {
-    let bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
+    let mut bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
     let side = leaving_side(sp, wo, bs.wi)?;
+    bs.weight = shadowed(scene, sp, bs.wi, bs.weight);
     if bs.null {
         // Straight on, as if the surface were not there: the MIS state stays the last
         // scattering's, and no roulette (the throughput is unchanged).
@@ -545,9 +578,9 @@ pub fn scatter_with(
     }
     st.beta *= bs.weight;
     st.eta_scale *= bs.eta * bs.eta;
-    // Where no light was sampled (every kind but glossy ones) or the lobe is a delta, an
-    // emitter the new ray meets counts in full.
-    st.delta = bs.delta || mat.shading() != Shading::Glossy;
+    // Where no light was sampled or the lobe is a delta, an emitter the new ray meets counts
+    // in full.
+    st.delta = bs.delta || !nee;
     st.prev_pdf = bs.pdf;
     st.prev_p = sp.p;
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
@@ -555,7 +588,7 @@ pub fn scatter_with(
     roulette(scene, st, || u.roulette).then_some(ray)
 }
 
-/// The numbers a [`Shading::Glossy`] vertex reads: the light's choice and point, then the
+/// The numbers a [`Shading::Glossy`](pathwave_engine::material::Shading::Glossy) vertex reads: the light's choice and point, then the
 /// BSDF's (see [`ScatterSamples`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct GlossySamples {
@@ -580,10 +613,11 @@ impl GlossySamples {
     }
 }
 
-/// A vertex on a [`Shading::Glossy`] material: next-event estimation with the BSDF evaluated
+/// A vertex on a [`Shading::Glossy`](pathwave_engine::material::Shading::Glossy) material: next-event estimation with the BSDF evaluated
 /// towards the light sample and weighted against BSDF sampling by MIS (power heuristic; point,
 /// spot and directional lights in full), then BSDF sampling and Russian roulette as in
-/// [`scatter_with`]. Returns the shadow ray (if any) and the next ray (`None`: the path ends).
+/// [`scatter_with`]. Lambertian hits whose normal a map tilted ([`tilted`]) are shaded here
+/// too. Returns the shadow ray (if any) and the next ray (`None`: the path ends).
 #[inline]
 pub fn shade_glossy(
     scene: &RenderScene,
@@ -605,11 +639,12 @@ pub fn shade_glossy(
             }
             let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, e.pdf) };
             let origin = offset_ray_origin(sp.p, sp.err, side);
-            let contribution = st.beta * e.f_cos * lp.le * (w / lp.pdf);
+            let f_cos = shadowed(scene, sp, lp.wi, e.f_cos);
+            let contribution = st.beta * f_cos * lp.le * (w / lp.pdf);
             Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
         }),
     };
-    (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf))
+    (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
 }
 
 /// The first ray of sample `index` of pixel (x, y), how far it reaches (the far clip plane;

@@ -415,23 +415,25 @@ impl Instances {
             p,
             n,
             ns,
+            ns_base: ns,
             uv: local.uv,
             err,
             on: MeshPoint { mesh: inst.blas, instance: index, ..local.on },
         }
     }
 
-    /// `dp/du` in world space at a point of a placed mesh (`sp.on` names the instance and the
-    /// triangle), from the triangle's corners and texture coordinates as Mitsuba's meshes
-    /// compute it (with barycentric coordinates where the mesh has none); `None` off meshes
-    /// and where the uvs are degenerate. A moving instance's is taken at its pose at rest.
-    pub fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+    /// `(dp/du, dp/dv)` in world space at a point of a placed mesh (`sp.on` names the instance
+    /// and the triangle), from the triangle's corners and texture coordinates as Mitsuba's
+    /// meshes compute them (with barycentric coordinates where the mesh has none); `None` off
+    /// meshes and where the uvs are degenerate. A moving instance's are taken at its pose at
+    /// rest.
+    pub fn derivatives(&self, sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
         let inst = self.list.get(sp.on.instance as usize)?;
         let mesh = &self.blas[inst.blas as usize].mesh;
         let [p0, p1, p2] = mesh.triangle(sp.on.triangle);
         let (dp0, dp1) = (p1 - p0, p2 - p0);
-        let local = match &mesh.uvs {
-            None => dp0,
+        let (du, dv) = match &mesh.uvs {
+            None => (dp0, dp1),
             Some(uvs) => {
                 let [a, b, c] = mesh.triangles[sp.on.triangle as usize].map(|v| uvs[v as usize]);
                 let (d0, d1) = (b - a, c - a);
@@ -439,10 +441,11 @@ impl Instances {
                 if det == 0.0 || !det.is_finite() {
                     return None;
                 }
-                (d1.y * dp0 - d0.y * dp1) / det
+                ((d1.y * dp0 - d0.y * dp1) / det, (d0.x * dp1 - d1.x * dp0) / det)
             }
         };
-        Some(inst.world_from_object.matrix3 * local)
+        let m = inst.world_from_object.matrix3;
+        Some((m * du, m * dv))
     }
 }
 

@@ -533,7 +533,7 @@ impl MeshBlas {
         if let Some(n) = &self.mesh.normals
             && let Some(ns) = unit(b0 * n[i] + b1 * n[j] + b2 * n[k])
         {
-            sp.ns = ns;
+            (sp.ns, sp.ns_base) = (ns, ns);
             if sp.n.dot(sp.ns) < 0.0 {
                 sp.n = -sp.n;
             }

@@ -24,6 +24,10 @@ pub(crate) struct Names {
     pub wrappers: Vec<String>,
     /// All texture names, in file order.
     pub textures: Vec<String>,
+    /// The names of the `Image` textures.
+    pub images: Vec<String>,
+    /// The names of the bump and normal maps, and of the wrappers that hold one.
+    pub tilting: Vec<String>,
     /// The mesh attributes each material reads through its textures (materials that read
     /// none are left out).
     pub attributes: Vec<(String, Vec<String>)>,

@@ -88,6 +88,7 @@ mod tests {
             p: Vec3A::ZERO,
             n: Vec3A::Z,
             ns: Vec3A::Z,
+            ns_base: Vec3A::Z,
             uv: Vec2::ZERO,
             err: 0.0,
             on: crate::shape::MeshPoint::NONE,

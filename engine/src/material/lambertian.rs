@@ -4,7 +4,7 @@
 //! The integrators shade it with their Lambertian lane kernel (light sampling and MIS);
 //! [`sample`] and [`eval`] here are the reference that kernel is tested against.
 
-use super::{BsdfSample, Colors, MaterialModel, Reads, Shading};
+use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Reads, Shading};
 use crate::format::{Albedo, Color};
 use crate::math::{Frame, concentric_disk};
 use glam::{Vec2, Vec3, Vec3A};
@@ -54,6 +54,17 @@ impl MaterialModel for Lambertian {
             return None;
         }
         sample(self.albedo, wo, n, u)
+    }
+
+    /// The cosine lobe's value and density, for hits shaded path by path (a bump or normal
+    /// map tilts the normal: see [`crate::material::wrap`]); the lane kernel computes the same.
+    #[inline]
+    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        if self.black_behind(wo, n) {
+            return BsdfEval::ZERO;
+        }
+        let (f_cos, pdf) = eval(self.albedo, wo, wi, n);
+        BsdfEval { f_cos, pdf }
     }
 
     fn one_sided(&self) -> bool {

@@ -187,7 +187,8 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
 
     /// The BSDF's non-delta part for directions `wo` and `wi` about the unit shading normal `n`:
     /// `f |wi . n|` and the density of `wi` under [`Self::sample`]. Zero by default: kinds
-    /// shaded [`Shading::Glossy`] implement it.
+    /// shaded [`Shading::Glossy`] implement it, and [`Shading::Diffuse`] ones for the hits a
+    /// bump or normal map sends to the glossy shading.
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
         let _ = (wo, wi, n);
         BsdfEval::ZERO

@@ -30,15 +30,38 @@
 //!
 //! Opacities and weights are numbers in [0, 1] or the scene's textures (a texture's luminance,
 //! as Mitsuba's float textures read an RGB image, clamped to [0, 1] as Mitsuba clamps them).
+//!
+//! Bump and normal maps (Mitsuba's `bumpmap` and `normalmap`, `src/bsdfs/bumpmap.cpp` and
+//! `normalmap.cpp`) tilt the shading normal of the material they wrap, and draw no number: at
+//! the hit, [`Wrappers::resolve`] hands them to the scene, which writes the tilted normal into
+//! the hit's [`SurfacePoint::ns`] and keeps the one before in [`SurfacePoint::ns_base`].
+//! - A bump map displaces the surface along its normal by `scale` times an image's value:
+//!   the tilted normal is that of `dp/du + (d h / d u) n` and `dp/dv + (d h / d v) n` (Blinn
+//!   1978, "Simulation of Wrinkled Surfaces"; [`bump_normal`]), the height's derivatives those
+//!   of the image's bilinear lookup.
+//! - A normal map gives the normal in the frame of `dp/du` (projected onto the tangent plane),
+//!   its cross product and the normal, encoded as `(n + 1) / 2` ([`normal_map_normal`]).
+//!
+//! Both then turn the tilted normal to where the ray comes from when it faces away
+//! ([`flip_invalid`], Mitsuba's `flip_invalid_normals`, on by default). Shading uses the
+//! tilted normal for the BSDF and the base normal for the rest, as Mitsuba does: a direction
+//! must lie on the same side of both, and the ray leaves by the base normal's rules; the
+//! BSDF's value takes the microfacet shadowing of Estevez et al. 2019, "A Microfacet-Based
+//! Shadowing Function to Solve the Bump Terminator Problem" (Ray Tracing Gems, chapter 12;
+//! [`terminator_shadowing`]), which darkens the terminator smoothly instead of cutting it.
+//! A map may wrap masks and blends but no other map (the shadowing term is of one tilt).
 
 use super::Material;
-use crate::format::MaterialRef;
 use crate::format::context;
+use crate::format::{Finite, MaterialRef};
+use crate::math::Frame;
+use crate::shape::SurfacePoint;
 use crate::texture::TextureId;
+use glam::{Vec2, Vec3, Vec3A};
 use serde::{Deserialize, Deserializer, de::Error};
 
 /// The wrappers a scene may write, for parser messages.
-pub const NAMES: [&str; 2] = ["Mask", "Blend"];
+pub const NAMES: [&str; 4] = ["Mask", "Blend", "Bump", "NormalMap"];
 
 /// A number in [0, 1] written out, or the name of a texture of the scene (its luminance at
 /// the hit, clamped to [0, 1]).
@@ -109,6 +132,94 @@ impl<'de> Deserialize<'de> for Wrapped {
     }
 }
 
+/// The material that a bump or normal map tilts: a [`Wrapped`] material that is not a map and
+/// wraps none (the shadowing term is of one tilt).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tilted(pub Wrapped);
+
+impl<'de> Deserialize<'de> for Tilted {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Wrapped(name) = Wrapped::deserialize(d)?;
+        context::names(|n| match n.is_some_and(|n| n.tilting.contains(&name)) {
+            true => Err(D::Error::custom(format!(
+                "material \"{name}\" is or holds a bump or normal map: maps do not nest"
+            ))),
+            false => Ok(()),
+        })?;
+        Ok(Tilted(Wrapped(name)))
+    }
+}
+
+/// A texture that a bump map reads heights from: an `Image`, whose bilinear lookup has
+/// derivatives along u and v.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightMap(pub String);
+
+impl<'de> Deserialize<'de> for HeightMap {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        crate::format::check_texture_name(&name).map_err(D::Error::custom)?;
+        context::names(|n| match n.is_none_or(|n| n.images.contains(&name)) {
+            true => Ok(()),
+            false => Err(D::Error::custom(format!(
+                "texture \"{name}\" is not an Image: a bump map reads the heights of an image"
+            ))),
+        })?;
+        Ok(HeightMap(name))
+    }
+}
+
+/// A texture's name.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureName(pub String);
+
+impl<'de> Deserialize<'de> for TextureName {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        crate::format::check_texture_name(&name).map_err(D::Error::custom)?;
+        Ok(TextureName(name))
+    }
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn unit_scale() -> Finite {
+    Finite(1.0)
+}
+
+/// `Bump(texture: "tiles", scale: 0.02, material: "plaster")`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct BumpDesc {
+    /// The image of heights (its value; a colour image's luminance).
+    pub texture: HeightMap,
+    /// Height in world units per unit of the image's value (default 1): the derivatives
+    /// are taken along the surface's uv, so a mesh's uv scale matters too. Finite.
+    #[serde(default = "unit_scale")]
+    pub scale: Finite,
+    /// The material that the bumped surface is made of.
+    pub material: Tilted,
+    /// Turn a normal that faces away from the ray towards it (default true).
+    #[serde(default = "yes")]
+    pub flip_invalid_normals: bool,
+}
+
+/// `NormalMap(texture: "tiles_normals", material: "plaster")`.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct NormalMapDesc {
+    /// The normals, `(n + 1) / 2` in the frame of `dp/du`, its cross product and the normal
+    /// (an image read `raw: true`, as normal maps are stored).
+    pub texture: TextureName,
+    /// The material whose normal it tilts.
+    pub material: Tilted,
+    /// Turn a normal that faces away from the ray towards it (default true).
+    #[serde(default = "yes")]
+    pub flip_invalid_normals: bool,
+}
+
 /// `Mask(opacity: 0.5, material: "leaf")`.
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
@@ -136,6 +247,10 @@ pub enum WrapDesc {
     Mask(MaskDesc),
     /// `Blend(...)`.
     Blend(BlendDesc),
+    /// `Bump(...)`.
+    Bump(BumpDesc),
+    /// `NormalMap(...)`.
+    NormalMap(NormalMapDesc),
 }
 
 impl WrapDesc {
@@ -148,6 +263,8 @@ impl WrapDesc {
         match name {
             "Mask" => Some(fields::<MaskDesc, _>(variant).map(WrapDesc::Mask)),
             "Blend" => Some(fields::<BlendDesc, _>(variant).map(WrapDesc::Blend)),
+            "Bump" => Some(fields::<BumpDesc, _>(variant).map(WrapDesc::Bump)),
+            "NormalMap" => Some(fields::<NormalMapDesc, _>(variant).map(WrapDesc::NormalMap)),
             _ => None,
         }
     }
@@ -157,14 +274,23 @@ impl WrapDesc {
         match self {
             WrapDesc::Mask(m) => vec![&m.material.0],
             WrapDesc::Blend(b) => vec![&b.materials.0.0, &b.materials.1.0],
+            WrapDesc::Bump(b) => vec![&b.material.0.0],
+            WrapDesc::NormalMap(m) => vec![&m.material.0.0],
         }
     }
 
-    /// The textures its amounts read.
+    /// Whether it tilts the normal (a bump or normal map).
+    pub fn tilts(&self) -> bool {
+        matches!(self, WrapDesc::Bump(_) | WrapDesc::NormalMap(_))
+    }
+
+    /// The textures it reads.
     pub fn textures(&self) -> Vec<&str> {
         let amount = match self {
             WrapDesc::Mask(m) => &m.opacity,
             WrapDesc::Blend(b) => &b.weight,
+            WrapDesc::Bump(b) => return vec![&b.texture.0],
+            WrapDesc::NormalMap(m) => return vec![&m.texture.0],
         };
         match amount {
             AmountDesc::Texture(t) => vec![t],
@@ -187,8 +313,35 @@ impl WrapDesc {
                 weight: amount(&b.weight),
                 materials: [material(&b.materials.0.0), material(&b.materials.1.0)],
             },
+            WrapDesc::Bump(b) => Wrapper::Tilt {
+                map: Tilt::Bump { heights: texture(&b.texture.0), scale: b.scale.0 },
+                flip: b.flip_invalid_normals,
+                material: material(&b.material.0.0),
+            },
+            WrapDesc::NormalMap(m) => Wrapper::Tilt {
+                map: Tilt::Normals { normals: texture(&m.texture.0) },
+                flip: m.flip_invalid_normals,
+                material: material(&m.material.0.0),
+            },
         }
     }
+}
+
+/// How a bump or normal map tilts the normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tilt {
+    /// Heights: `scale` times texture `heights`' value.
+    Bump {
+        /// An image texture.
+        heights: TextureId,
+        /// World units per unit of value.
+        scale: f32,
+    },
+    /// Normals in the tangent frame, encoded as `(n + 1) / 2`.
+    Normals {
+        /// The texture.
+        normals: TextureId,
+    },
 }
 
 /// An opacity or a weight.
@@ -216,6 +369,16 @@ pub enum Wrapper {
         weight: Amount,
         /// The two materials.
         materials: [u32; 2],
+    },
+    /// Material `material` with its shading normal tilted by `map` (turned towards the ray
+    /// where it faces away, if `flip`).
+    Tilt {
+        /// The map.
+        map: Tilt,
+        /// Mitsuba's `flip_invalid_normals`.
+        flip: bool,
+        /// The material.
+        material: u32,
     },
     /// A blend of two Lambertians that reflect on the same sides, some of it textured: the
     /// Lambertian of the blended albedo ([`mix_lambertian`]), which the wrapper's own id
@@ -254,7 +417,9 @@ impl Wrapper {
         textured: impl Fn(u32) -> bool,
     ) -> (Material, Option<Self>) {
         let (weight, [a, b]) = match self {
-            Wrapper::Mask { material, .. } => return (materials[material as usize], Some(self)),
+            Wrapper::Mask { material, .. } | Wrapper::Tilt { material, .. } => {
+                return (materials[material as usize], Some(self));
+            }
             Wrapper::Blend { weight, materials } | Wrapper::LambertianMix { weight, materials } => {
                 (weight, materials)
             }
@@ -275,7 +440,7 @@ impl Wrapper {
     /// The materials it names.
     pub fn wrapped(&self) -> impl Iterator<Item = u32> {
         let (a, b) = match *self {
-            Wrapper::Mask { material, .. } => (material, None),
+            Wrapper::Mask { material, .. } | Wrapper::Tilt { material, .. } => (material, None),
             Wrapper::Blend { materials, .. } | Wrapper::LambertianMix { materials, .. } => {
                 (materials[0], Some(materials[1]))
             }
@@ -283,11 +448,20 @@ impl Wrapper {
         std::iter::once(a).chain(b)
     }
 
-    /// Its amount.
-    pub fn amount(&self) -> Amount {
+    /// Its amount (`None` for a map, which has none).
+    pub fn amount(&self) -> Option<Amount> {
         match *self {
-            Wrapper::Mask { opacity, .. } => opacity,
-            Wrapper::Blend { weight, .. } | Wrapper::LambertianMix { weight, .. } => weight,
+            Wrapper::Mask { opacity, .. } => Some(opacity),
+            Wrapper::Blend { weight, .. } | Wrapper::LambertianMix { weight, .. } => Some(weight),
+            Wrapper::Tilt { .. } => None,
+        }
+    }
+
+    /// Whether it reads a texture at the hit.
+    pub fn textured(&self) -> bool {
+        match *self {
+            Wrapper::Tilt { .. } => true,
+            w => matches!(w.amount(), Some(Amount::Texture(_))),
         }
     }
 }
@@ -314,8 +488,9 @@ impl Wrappers {
 
     /// Follows material `id` through its wrappers at a hit: `amount` evaluates an opacity or a
     /// weight there (in [0, 1]), and `u(level)` is the number in [0, 1) of the `level`-th
-    /// wrapper met (0 for the hit's own). A mask is opaque where its number is below the
+    /// wrapper that draws one (0 for the first). A mask is opaque where its number is below the
     /// opacity; a blend takes its second material where its number is below the weight. A
+    /// map draws none: `tilt` gets it (the hit's normal is tilted) on the way through. A
     /// Lambertian mix is its own material (shaded as the blended Lambertian).
     #[inline]
     pub fn resolve(
@@ -323,19 +498,25 @@ impl Wrappers {
         mut id: u32,
         amount: impl Fn(Amount) -> f32,
         mut u: impl FnMut(u32) -> f32,
+        mut tilt: impl FnMut(Tilt, bool),
     ) -> Resolved {
         let mut level = 0;
         while let Some(w) = self.get(id) {
-            if let Wrapper::LambertianMix { .. } = w {
-                break;
-            }
-            let a = amount(w.amount());
+            let a = match w {
+                Wrapper::LambertianMix { .. } => break,
+                Wrapper::Tilt { map, flip, material } => {
+                    tilt(map, flip);
+                    id = material;
+                    continue;
+                }
+                Wrapper::Mask { opacity: a, .. } | Wrapper::Blend { weight: a, .. } => amount(a),
+            };
             let below = u(level) < a;
             id = match w {
                 Wrapper::Mask { .. } if !below => return Resolved::Pass,
                 Wrapper::Mask { material, .. } => material,
                 Wrapper::Blend { materials, .. } => materials[below as usize],
-                Wrapper::LambertianMix { .. } => unreachable!("left above"),
+                Wrapper::LambertianMix { .. } | Wrapper::Tilt { .. } => unreachable!("left above"),
             };
             level += 1;
         }
@@ -349,14 +530,16 @@ impl Wrappers {
         match self.get(id) {
             // Lambertians let nothing through.
             None | Some(Wrapper::LambertianMix { .. }) => plain(id),
-            Some(w @ Wrapper::Mask { material, .. }) => {
-                let a = amount(w.amount());
+            Some(Wrapper::Mask { opacity, material }) => {
+                let a = amount(opacity);
                 (1.0 - a) + a * self.transmission(material, amount, plain)
             }
-            Some(w @ Wrapper::Blend { materials: [m0, m1], .. }) => {
-                let a = amount(w.amount());
+            Some(Wrapper::Blend { weight, materials: [m0, m1] }) => {
+                let a = amount(weight);
                 (1.0 - a) * self.transmission(m0, amount, plain) + a * self.transmission(m1, amount, plain)
             }
+            // A null lobe goes straight on, whatever the normal.
+            Some(Wrapper::Tilt { material, .. }) => self.transmission(material, amount, plain),
         }
     }
 
@@ -372,6 +555,77 @@ impl Wrappers {
             }
         }
     }
+}
+
+/// The normal of a bump-mapped surface, from the geometric normal `ng`, the shading normal
+/// `ns`, the derivatives `dpdu` and `dpdv` and the height's derivatives `dh` along u and v:
+/// the cross product of the tangents `dp/du` and `dp/dv` (their parts across `ns` replaced by
+/// the height's slopes along it), on `ng`'s side. `None` where they are parallel.
+pub fn bump_normal(ng: Vec3A, ns: Vec3A, dpdu: Vec3A, dpdv: Vec3A, dh: Vec2) -> Option<Vec3A> {
+    let du = dpdu - ns * ns.dot(dpdu) + ns * dh.x;
+    let dv = dpdv - ns * ns.dot(dpdv) + ns * dh.y;
+    let n = du.cross(dv).normalize_or_zero();
+    match n == Vec3A::ZERO {
+        true => None,
+        false => Some(if n.dot(ng) < 0.0 { -n } else { n }),
+    }
+}
+
+/// The unit tangent of the frame at a hit with shading normal `ns`: `dpdu` across it, or
+/// any tangent where there is none (or it lies along `ns`).
+fn tangent(ns: Vec3A, dpdu: Option<Vec3A>) -> Vec3A {
+    dpdu.map(|d| (d - ns * ns.dot(d)).normalize_or_zero())
+        .filter(|s| *s != Vec3A::ZERO)
+        .unwrap_or_else(|| Frame::from_normal(ns).t)
+}
+
+/// The normal that a normal map's value `code` gives at a hit with shading normal `ns` and
+/// `dpdu` (if the surface has one): `2 code - 1` in the frame of the tangent `s` along `dpdu`,
+/// `ns x s` and `ns`. `None` for a zero vector.
+pub fn normal_map_normal(ns: Vec3A, dpdu: Option<Vec3A>, code: Vec3) -> Option<Vec3A> {
+    let local = Vec3A::from(code) * 2.0 - Vec3A::ONE;
+    let s = tangent(ns, dpdu);
+    let n = (s * local.x + ns.cross(s) * local.y + ns * local.z).normalize_or_zero();
+    (n != Vec3A::ZERO).then_some(n)
+}
+
+/// The tilted normal `n` mirrored about the base normal `ns` (its part across `ns` negated)
+/// where it faces away from `wo` on the other side of `ns` than `wo` does (Mitsuba's
+/// `flip_invalid_normals`): a view that sees the base surface from the front sees the tilted
+/// one from the front too, where the mirror does.
+pub fn flip_invalid(ns: Vec3A, n: Vec3A, wo: Vec3A) -> Vec3A {
+    match wo.dot(ns) * wo.dot(n) <= 0.0 {
+        true => 2.0 * n.dot(ns) * ns - n,
+        false => n,
+    }
+}
+
+/// The tangent that an anisotropic material at `sp` takes from `dpdu`: across the base
+/// normal first where a map tilted the normal (the map's frame turns with it, as Mitsuba's
+/// `normalmap` turns the shading frame), `dpdu` itself elsewhere.
+pub fn base_tangent(sp: &SurfacePoint, dpdu: Vec3A) -> Vec3A {
+    match sp.ns == sp.ns_base {
+        true => dpdu,
+        false => dpdu - sp.ns_base * sp.ns_base.dot(dpdu),
+    }
+}
+
+/// The shadowing that a bump or normal map's tilt casts on the unit direction `wi` at `sp`
+/// (Estevez et al. 2019): Smith's GGX shadowing `2 / (1 + sqrt(1 + a^2 tan^2))` of `wi`'s
+/// angle to the base normal, the roughness `a^2 = min(tan^2(tilt) / 8, 1)` from the angle
+/// between the tilted and the base normal. 1 where nothing tilted the normal, towards 0 at
+/// the base surface's horizon.
+#[inline]
+pub fn terminator_shadowing(sp: &SurfacePoint, wi: Vec3A) -> f32 {
+    if sp.ns == sp.ns_base {
+        return 1.0;
+    }
+    let tan2 = |c: f32| (1.0 - c * c).max(0.0) / (c * c);
+    let a2 = (0.125 * tan2(sp.ns.dot(sp.ns_base))).min(1.0);
+    if a2 == 0.0 {
+        return 1.0;
+    }
+    2.0 / (1.0 + (1.0 + a2 * tan2(wi.dot(sp.ns_base))).sqrt())
 }
 
 #[cfg(test)]
@@ -391,6 +645,10 @@ mod tests {
         ])
     }
 
+    fn untilted(_: Tilt, _: bool) {
+        panic!("no map");
+    }
+
     fn amount(a: Amount) -> f32 {
         match a {
             Amount::Value(v) => v,
@@ -405,17 +663,17 @@ mod tests {
     fn resolve_follows_the_numbers() {
         let w = table();
         let never = |_| -> f32 { panic!("a plain material draws no number") };
-        assert_eq!(w.resolve(1, amount, never), Resolved::Material(1));
-        assert_eq!(w.resolve(2, amount, |_| 0.29), Resolved::Material(0));
-        assert_eq!(w.resolve(2, amount, |_| 0.3), Resolved::Pass);
+        assert_eq!(w.resolve(1, amount, never, untilted), Resolved::Material(1));
+        assert_eq!(w.resolve(2, amount, |_| 0.29, untilted), Resolved::Material(0));
+        assert_eq!(w.resolve(2, amount, |_| 0.3, untilted), Resolved::Pass);
         // Through the outer mask (0.4 < 0.5), the blend's first material (0.6 >= 0.25).
         let numbers = [0.4, 0.6];
-        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize]), Resolved::Material(1));
+        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize], untilted), Resolved::Material(1));
         // The blend's second material (0.1 < 0.25) is the inner mask: a hole (0.9 >= 0.3).
         let numbers = [0.4, 0.1, 0.9];
-        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize]), Resolved::Pass);
+        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize], untilted), Resolved::Pass);
         let numbers = [0.4, 0.1, 0.2];
-        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize]), Resolved::Material(0));
+        assert_eq!(w.resolve(4, amount, |l| numbers[l as usize], untilted), Resolved::Material(0));
     }
 
     /// Over evenly spread numbers, each outcome comes with its probability: the product of the
@@ -434,7 +692,7 @@ mod tests {
                         (j as f32 + 0.5) / n as f32,
                         (k as f32 + 0.5) / n as f32,
                     ];
-                    *counts.entry(w.resolve(4, amount, |l| u[l as usize])).or_insert(0usize) += 1;
+                    *counts.entry(w.resolve(4, amount, |l| u[l as usize], untilted)).or_insert(0usize) += 1;
                 }
             }
         }
@@ -497,7 +755,7 @@ mod tests {
             w,
             Some(Wrapper::LambertianMix { weight: Amount::Value(0.5), materials: [0, 1] }),
         ]);
-        assert_eq!(table.resolve(3, amount, |_| panic!("no number")), Resolved::Material(3));
+        assert_eq!(table.resolve(3, amount, |_| panic!("no number"), untilted), Resolved::Material(3));
     }
 
     #[test]
@@ -509,5 +767,126 @@ mod tests {
         let mut used = vec![false, false, true, false, false];
         w.mark_wrapped(&mut used);
         assert_eq!(used, vec![true, false, true, false, false]);
+    }
+
+    /// A map in the table draws no number and reports its tilt on the way to its material,
+    /// and a mask inside it still draws the first number.
+    #[test]
+    fn maps_tilt_on_the_way_without_a_number() {
+        let bump = Tilt::Bump { heights: 3, scale: 0.5 };
+        let table = Wrappers(vec![
+            None,
+            Some(Wrapper::Mask { opacity: Amount::Value(0.3), material: 0 }),
+            Some(Wrapper::Tilt { map: bump, flip: true, material: 1 }),
+        ]);
+        let mut seen = Vec::new();
+        let r = table.resolve(2, amount, |l| [0.1][l as usize], |m, f| seen.push((m, f)));
+        assert_eq!((r, seen), (Resolved::Material(0), vec![(bump, true)]));
+    }
+
+    fn unit(v: [f32; 3]) -> Vec3A {
+        Vec3A::from(v).normalize()
+    }
+
+    /// On a plane with heights `h = a u + b v` (dp/du, dp/dv the axes), the bumped normal is
+    /// that of the displaced plane, `(-a, -b, 1)` normalised, whatever the tangents' lengths
+    /// along the normal; it stays on the geometric normal's side. (Swapping the two slopes, or
+    /// keeping dp/du's part along the normal, fails.)
+    #[test]
+    fn bump_normals_are_the_displaced_surfaces() {
+        for (a, b) in [(0.3, -0.7), (0.0, 2.0), (-5.0, 0.1)] {
+            let want = unit([-a, -b, 1.0]);
+            let (du, dv) = (Vec3A::new(1.0, 0.0, 0.4), Vec3A::new(0.0, 1.0, -0.2));
+            let n = bump_normal(Vec3A::Z, Vec3A::Z, du, dv, Vec2::new(a, b)).unwrap();
+            assert!((n - want).length() < 1e-6, "{n} vs {want}");
+            // dp/dv the other way (a parameterisation with v flipped, and its slope with it):
+            // the same surface, the same normal.
+            let n = bump_normal(Vec3A::Z, Vec3A::Z, du, -dv, Vec2::new(a, -b)).unwrap();
+            assert!((n - want).length() < 1e-6, "flipped v: {n} vs {want}");
+            // Seen from the other side of the geometry, it turns with the geometric normal.
+            let n = bump_normal(-Vec3A::Z, Vec3A::Z, du, dv, Vec2::new(a, b)).unwrap();
+            assert!((n + want).length() < 1e-6);
+        }
+        // Parallel tangents give none.
+        assert_eq!(bump_normal(Vec3A::Z, Vec3A::Z, Vec3A::X, 2.0 * Vec3A::X, Vec2::ZERO), None);
+    }
+
+    /// A normal map's value is the normal in the frame (dp/du across the normal, n x that,
+    /// n): (0.5, 0.5, 1) is the normal itself, and the axes come out where they belong,
+    /// however dp/du leans out of the tangent plane. (Taking the second axis as s x n fails.)
+    #[test]
+    fn normal_maps_read_the_tangent_frame() {
+        let ns = unit([0.0, 0.0, 1.0]);
+        let dpdu = Some(Vec3A::new(2.0, 0.0, 0.7));
+        let at = |code: [f32; 3]| normal_map_normal(ns, dpdu, Vec3::from(code)).unwrap();
+        assert!((at([0.5, 0.5, 1.0]) - ns).length() < 1e-6);
+        assert!((at([1.0, 0.5, 0.5]) - Vec3A::X).length() < 1e-6);
+        assert!((at([0.5, 1.0, 0.5]) - Vec3A::Y).length() < 1e-6);
+        assert!((at([1.0, 1.0, 1.0]) - unit([1.0, 1.0, 1.0])).length() < 1e-6);
+        // Without dp/du any tangent serves, and the normal is still ns for the flat value.
+        let n = normal_map_normal(ns, None, Vec3::new(0.5, 0.5, 1.0)).unwrap();
+        assert!((n - ns).length() < 1e-6);
+        assert_eq!(normal_map_normal(ns, dpdu, Vec3::splat(0.5)), None);
+    }
+
+    /// A tilted normal that faces away from `wo` while the base faces it is mirrored about the
+    /// base; one that agrees with the base is kept.
+    #[test]
+    fn invalid_normals_flip_about_the_base() {
+        let ns = Vec3A::Z;
+        let wo = unit([1.0, 0.0, 0.2]);
+        let away = unit([-1.0, 0.3, 0.1]);
+        assert!(wo.dot(away) < 0.0);
+        let flipped = flip_invalid(ns, away, wo);
+        assert!((flipped - unit([1.0, -0.3, 0.1])).length() < 1e-6);
+        assert!(wo.dot(flipped) > 0.0);
+        let fine = unit([0.2, 0.1, 1.0]);
+        assert_eq!(flip_invalid(ns, fine, wo), fine);
+    }
+
+    /// Estevez et al.'s term: 1 without a tilt, Smith's GGX shadowing with a^2 = tan^2 / 8 of
+    /// the tilt (at most 1) elsewhere, falling to 0 at the base's horizon.
+    #[test]
+    fn terminator_shadowing_is_smiths_of_the_tilt() {
+        let mut sp = SurfacePoint {
+            p: Vec3A::ZERO,
+            n: Vec3A::Z,
+            ns: Vec3A::Z,
+            ns_base: Vec3A::Z,
+            uv: Vec2::ZERO,
+            err: 0.0,
+            on: crate::shape::MeshPoint::NONE,
+        };
+        let wi = unit([3f32.sqrt(), 0.0, 1.0]);
+        assert_eq!(terminator_shadowing(&sp, wi), 1.0);
+        // A tilt of 45 degrees (tan^2 1, a^2 1/8) and wi at 60 degrees (tan^2 3).
+        sp.ns = unit([1.0, 0.0, 1.0]);
+        let want = 2.0 / (1.0 + (1.0f32 + 3.0 / 8.0).sqrt());
+        assert!((terminator_shadowing(&sp, wi) - want).abs() < 1e-5);
+        assert!(terminator_shadowing(&sp, unit([1.0, 0.0, 1e-4])) < 0.01);
+        assert_eq!(terminator_shadowing(&sp, Vec3A::X), 0.0);
+        // Steep tilts saturate at a^2 = 1.
+        sp.ns = unit([10.0, 0.0, 1.0]);
+        let want = 2.0 / (1.0 + (1.0f32 + 3.0).sqrt());
+        assert!((terminator_shadowing(&sp, wi) - want).abs() < 1e-5);
+    }
+
+    /// Under a tilt, an anisotropic material's tangent is dp/du across the base normal (the
+    /// map's frame, which the material projects across the tilted one); elsewhere dp/du.
+    #[test]
+    fn tangents_turn_with_the_map() {
+        let mut sp = SurfacePoint {
+            p: Vec3A::ZERO,
+            n: Vec3A::Z,
+            ns: Vec3A::Z,
+            ns_base: Vec3A::Z,
+            uv: Vec2::ZERO,
+            err: 0.0,
+            on: crate::shape::MeshPoint::NONE,
+        };
+        let dpdu = Vec3A::new(1.0, 0.0, 0.5);
+        assert_eq!(base_tangent(&sp, dpdu), dpdu);
+        sp.ns = unit([0.3, 0.2, 1.0]);
+        assert_eq!(base_tangent(&sp, dpdu), Vec3A::X);
     }
 }

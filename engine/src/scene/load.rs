@@ -84,6 +84,14 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             .map(|(n, _)| n.clone())
             .collect(),
         textures: names.textures.0.iter().map(|(n, _)| n.clone()).collect(),
+        images: names
+            .textures
+            .0
+            .iter()
+            .filter(|(_, t)| matches!(t, crate::texture::TextureDesc::Image(_)))
+            .map(|(n, _)| n.clone())
+            .collect(),
+        tilting: tilting(&names),
         attributes: attributes_read(&names),
         dir,
     });
@@ -104,6 +112,20 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
         });
     }
     Ok(desc)
+}
+
+/// The names of the materials of `desc` that are bump or normal maps or hold one (a wrapper
+/// names only materials before it: one pass in file order finds them all).
+fn tilting(desc: &SceneDesc) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for (name, m) in desc.materials.iter() {
+        if let MaterialDesc::Wrap(w) = m
+            && (w.tilts() || w.wrapped().iter().any(|inner| out.iter().any(|o| o == inner)))
+        {
+            out.push(name.clone());
+        }
+    }
+    out
 }
 
 /// The mesh attributes each material of `desc` reads through its textures, directly or inside

@@ -299,8 +299,9 @@ impl TryFrom<RawObject> for ObjectDesc {
                 if context::names(|n| n.is_some_and(|n| n.wrappers.contains(&name.0))) =>
             {
                 return Err(format!(
-                    "material \"{}\" is a wrapper (Mask, Blend): `emit` is for surfaces of plain materials",
-                    name.0
+                    "material \"{}\" is a wrapper ({}): `emit` is for surfaces of plain materials",
+                    name.0,
+                    crate::material::wrap::NAMES.join(", ")
                 ));
             }
             _ => {}

@@ -151,7 +151,7 @@ impl PrimitiveShape for Cylinder {
             }
             false => Vec2::ZERO,
         };
-        SurfacePoint { p, n, ns: n, uv, err: self.error(z), on: MeshPoint::NONE }
+        SurfacePoint { p, n, ns: n, ns_base: n, uv, err: self.error(z), on: MeshPoint::NONE }
     }
 
     fn area(&self) -> f32 {

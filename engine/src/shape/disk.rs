@@ -109,7 +109,7 @@ impl PrimitiveShape for Disk {
             false => Vec2::ZERO,
         };
         let p = self.c + a * self.u + b * self.v;
-        SurfacePoint { p, n: self.n, ns: self.n, uv, err: self.err, on: MeshPoint::NONE }
+        SurfacePoint { p, n: self.n, ns: self.n, ns_base: self.n, uv, err: self.err, on: MeshPoint::NONE }
     }
 
     fn area(&self) -> f32 {

@@ -161,8 +161,13 @@ pub struct SurfacePoint {
     pub n: Vec3A,
     /// Unit shading normal, on the side of `n`: BSDFs are evaluated about it. It differs from
     /// `n` only on meshes with vertex normals, where it is adapted to the ray that hit
-    /// ([`adapt_shading_normal`]).
+    /// ([`adapt_shading_normal`]), and where a bump or normal map tilts it
+    /// ([`crate::material::wrap`]).
     pub ns: Vec3A,
+    /// The shading normal before a bump or normal map tilted `ns` (`ns` itself where none
+    /// did): the directions a ray may leave in are judged by it, as by the surface the map
+    /// decorates.
+    pub ns_base: Vec3A,
     /// Surface parameterisation (see each shape).
     pub uv: Vec2,
     /// Bound on the absolute error of each coordinate of `p` (for spawning rays off it).
@@ -185,7 +190,7 @@ pub struct MeshPoint {
     /// Barycentric weights of the triangle's second and third vertices.
     pub b: Vec2,
     /// Index of the placed mesh among the scene's instances (`accel::instances::Instances::list`),
-    /// or `u32::MAX` off meshes. (It fills what was padding: [`SurfacePoint`] stays 80 bytes.)
+    /// or `u32::MAX` off meshes.
     pub instance: u32,
 }
 

@@ -23,10 +23,11 @@ pub trait PrimitiveShape: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'st
     /// The solid-angle density with which [`Self::sample_solid_angle`] from `from` gives the
     /// point `p` (unit normal `n`).
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32;
-    /// The derivative `dp/du` of the point along the first texture coordinate at `sp`, the
-    /// tangent of an anisotropic material; `None` where the kind does not give it (the
-    /// material then takes an arbitrary tangent about the normal).
-    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+    /// The derivatives `(dp/du, dp/dv)` of the point along the texture coordinates at `sp`:
+    /// the tangent of an anisotropic material and the frame of bump and normal maps; `None`
+    /// where the kind does not give them (an anisotropic material then takes an arbitrary
+    /// tangent about the normal, and maps leave the normal as it is).
+    fn derivatives(&self, sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
         let _ = sp;
         None
     }
@@ -83,10 +84,10 @@ macro_rules! primitives {
                 }
             }
 
-            /// See [`PrimitiveShape::dpdu`].
-            pub fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+            /// See [`PrimitiveShape::derivatives`].
+            pub fn derivatives(&self, sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
                 match self {
-                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::dpdu(s, sp),)+
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::derivatives(s, sp),)+
                 }
             }
 

@@ -154,6 +154,7 @@ impl Quad {
             p: self.q + a * self.u + b * self.v,
             n: self.n,
             ns: self.n,
+            ns_base: self.n,
             uv: Vec2::new(a, b),
             err: self.point_error(),
             on: MeshPoint::NONE,
@@ -377,9 +378,9 @@ impl PrimitiveShape for Quad {
         Quad::surface(self, p)
     }
 
-    /// The first edge: u runs along it.
-    fn dpdu(&self, _sp: &SurfacePoint) -> Option<Vec3A> {
-        Some(self.u)
+    /// The edges: u runs along the first from 0 to 1, v along the second.
+    fn derivatives(&self, _sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
+        Some((self.u, self.v))
     }
 
     fn area(&self) -> f32 {

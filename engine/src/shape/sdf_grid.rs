@@ -481,7 +481,7 @@ impl PrimitiveShape for SdfVoxel {
             }
             false => n,
         };
-        SurfacePoint { p, n, ns, uv: Vec2::new(0.0, 1.0), err: self.err, on: MeshPoint::NONE }
+        SurfacePoint { p, n, ns, ns_base: ns, uv: Vec2::new(0.0, 1.0), err: self.err, on: MeshPoint::NONE }
     }
 
     /// No area: an SDF grid does not emit (scenes are refused where it would).

@@ -240,14 +240,20 @@ impl PrimitiveShape for Sphere {
         sphere_t_single(self.center.to_array(), self.radius, o.to_array(), d.to_array(), tmax)
     }
 
-    /// Along the parallel, the way u grows (zero at the poles): `(z, 0, -x)` about +y, and
-    /// `(-y, x, 0)` about +z (Mitsuba's sphere's `dp_du`), of the point seen from the centre.
-    fn dpdu(&self, sp: &SurfacePoint) -> Option<Vec3A> {
+    /// `dp/du` along the parallel, the way u grows: 2 pi times `(z, 0, -x)` about +y, and
+    /// times `(-y, x, 0)` about +z (Mitsuba's sphere's `dp_du`), of the point seen from the
+    /// centre; `dp/dv` along the meridian towards the pole where v is 1, pi r long. `None` at
+    /// the poles, where the parameterisation folds.
+    fn derivatives(&self, sp: &SurfacePoint) -> Option<(Vec3A, Vec3A)> {
         let d = sp.p - self.center;
-        Some(match self.poles {
-            Poles::Y => Vec3A::new(d.z, 0.0, -d.x),
-            Poles::Z => Vec3A::new(-d.y, d.x, 0.0),
-        })
+        let (dpdu, axis) = match self.poles {
+            Poles::Y => (Vec3A::new(d.z, 0.0, -d.x), Vec3A::Y),
+            Poles::Z => (Vec3A::new(-d.y, d.x, 0.0), Vec3A::Z),
+        };
+        let n = d / d.length();
+        let meridian = axis - n * n.dot(axis);
+        let sin = meridian.length();
+        (sin > 0.0).then(|| (2.0 * PI * dpdu, (PI * self.radius / sin) * meridian))
     }
 
     /// Surface data at the point `p` (re-projected onto the sphere), with the texture
@@ -274,7 +280,7 @@ impl PrimitiveShape for Sphere {
             }
             (false, _) => Vec2::ZERO,
         };
-        SurfacePoint { p, n, ns: n, uv, err: self.point_error(), on: MeshPoint::NONE }
+        SurfacePoint { p, n, ns: n, ns_base: n, uv, err: self.point_error(), on: MeshPoint::NONE }
     }
 
     /// Surface area.
@@ -333,7 +339,7 @@ mod tests {
             for _ in 0..200 {
                 let dir = Vec3A::new(r(), r(), r()).normalize();
                 let sp = s.surface(s.center + 2.0 * dir, true);
-                let t = s.dpdu(&sp).unwrap();
+                let (t, _) = s.derivatives(&sp).unwrap();
                 assert!(t.dot(sp.n).abs() < 1e-5 * t.length().max(1e-3), "{poles:?}");
                 let ahead = s.surface(sp.p + 1e-3 * t.normalize(), true);
                 let du = ahead.uv.x - sp.uv.x;

@@ -52,7 +52,15 @@ impl PrimitiveShape for TestDisk {
         let f = Frame::from_normal(self.n);
         let local = (p - self.center) / self.radius;
         let uv = Vec2::new(local.dot(f.t), local.dot(f.b)) * 0.5 + 0.5;
-        SurfacePoint { p, n: self.n, ns: self.n, uv, err: self.point_error(), on: MeshPoint::NONE }
+        SurfacePoint {
+            p,
+            n: self.n,
+            ns: self.n,
+            ns_base: self.n,
+            uv,
+            err: self.point_error(),
+            on: MeshPoint::NONE,
+        }
     }
 
     fn area(&self) -> f32 {

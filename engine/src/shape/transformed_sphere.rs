@@ -155,6 +155,7 @@ impl PrimitiveShape for TransformedSphere {
             p: m.transform_point3a(local.p),
             n,
             ns: n,
+            ns_base: n,
             uv: local.uv,
             err: scale * local.err + gamma(4) * magnitude,
             on: MeshPoint::NONE,

@@ -133,7 +133,7 @@ impl Triangle {
             None => Vec2::new(b1, b2),
             Some([t0, t1, t2]) => b0 * t0 + b1 * t1 + b2 * t2,
         };
-        SurfacePoint { p, n, ns: n, uv, err, on: MeshPoint::NONE }
+        SurfacePoint { p, n, ns: n, ns_base: n, uv, err, on: MeshPoint::NONE }
     }
 }
 

@@ -296,6 +296,29 @@ impl TextureImage {
         top.lerp(bottom, fy)
     }
 
+    /// The derivatives along u and v of the bilinear lookup's value ([`scalar`] of its colour)
+    /// at `uv`: those of the interpolation in the texel square `uv` falls in (Mitsuba's
+    /// bitmap's `eval_1_grad`), in value per unit of u and v.
+    pub fn bilinear_gradient(&self, uv: Vec2, wrap: Wrap) -> Vec2 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        // As in `bilinear`.
+        let x = (uv.x * w as f32 - 0.5).clamp(-2.1e9, 2.1e9);
+        let y = ((1.0 - uv.y) * h as f32 - 0.5).clamp(-2.1e9, 2.1e9);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let texel = |i: i64, j: i64| {
+            let (i, j) = (wrap_index(i, w, wrap), wrap_index(j, h, wrap));
+            self.texel((j * w + i) as usize)
+        };
+        let (c00, c10) = (texel(x0, y0), texel(x0 + 1, y0));
+        let (c01, c11) = (texel(x0, y0 + 1), texel(x0 + 1, y0 + 1));
+        // Per texel along x and y (rows run down, v up).
+        let dx = (c10 - c00) * (1.0 - fy) + (c11 - c01) * fy;
+        let dy = (c01 - c00) * (1.0 - fx) + (c11 - c10) * fx;
+        Vec2::new(scalar(dx) * w as f32, -scalar(dy) * h as f32)
+    }
+
     /// Mean texel.
     pub fn mean(&self) -> Vec3 {
         (0..self.len()).map(|i| self.texel(i)).sum::<Vec3>() / self.len() as f32
@@ -456,6 +479,25 @@ impl Textures {
     pub fn at(&self, id: TextureId, sp: &SurfacePoint, meshes: &[Arc<MeshBlas>]) -> Vec3 {
         let mesh = meshes.get(sp.on.mesh as usize).map(|b| (&*b.mesh, sp.on));
         self.eval_on(id, sp.uv, sp.p, mesh)
+    }
+
+    /// The derivatives along u and v of texture `id`'s value ([`scalar`] of its colour) at a
+    /// surface point: an image's bilinear lookup's ([`TextureImage::bilinear_gradient`],
+    /// through its uv transform); zero for a nearest lookup and for the other kinds (scenes
+    /// ask it of images: a bump map's heights).
+    pub fn gradient(&self, id: TextureId, sp: &SurfacePoint) -> Vec2 {
+        match &self.list[id as usize] {
+            Texture::Image { image, wrap, filter: Filter::Bilinear, transform } => {
+                let t = transform.map_or(sp.uv, |m| m.apply(sp.uv));
+                let g = image.bilinear_gradient(t, *wrap);
+                match transform {
+                    None => g,
+                    // d/duv = transposed Jacobian of uv -> t, times d/dt.
+                    Some(UvTransform([a, b])) => Vec2::new(a[0] * g.x + b[0] * g.y, a[1] * g.x + b[1] * g.y),
+                }
+            }
+            _ => Vec2::ZERO,
+        }
     }
 
     /// The width and height of texture `id`'s image, for one that is an image.
@@ -686,6 +728,59 @@ mod tests {
         assert_eq!(img.bilinear(Vec2::new(0.0, 0.75), Wrap::Clamp), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(-0.25, 0.75), Wrap::Mirror), Vec3::X);
         assert_eq!(img.bilinear(Vec2::new(1.25, 0.75), Wrap::Repeat), Vec3::X);
+    }
+
+    /// The gradient of the bilinear lookup is its finite difference inside each texel square,
+    /// along u and v (v up, rows down), through a uv transform and across a wrapped edge, for a
+    /// grey image and a coloured one (luminance). A gradient with v's sign flipped, or the
+    /// transform applied untransposed, fails.
+    #[test]
+    fn gradients_are_the_lookups_slopes() {
+        let mut r = crate::testing::signed(3);
+        let grey: Vec<Vec3> = (0..35).map(|_| Vec3::splat(0.5 + 0.5 * r())).collect();
+        let colour: Vec<Vec3> = (0..35).map(|_| Vec3::new(r(), r(), r()) * 0.5 + 0.5).collect();
+        let m = UvTransform([[1.5, 0.5, 0.1], [-0.25, 2.0, 0.3]]);
+        for texels in [grey, colour] {
+            let image = Arc::new(TextureImage::linear(7, 5, texels));
+            for (wrap, transform) in [(Wrap::Repeat, None), (Wrap::Mirror, Some(m)), (Wrap::Clamp, None)] {
+                let t = Textures {
+                    list: vec![Texture::Image {
+                        image: image.clone(),
+                        wrap,
+                        filter: Filter::Bilinear,
+                        transform,
+                    }],
+                };
+                let value = |uv: Vec2| scalar(t.eval(0, uv, Vec3A::ZERO)) as f64;
+                for k in 0..200 {
+                    let uv = Vec2::new(0.5 * r() + 0.45, 0.5 * r() + 0.45);
+                    let sp = SurfacePoint {
+                        p: Vec3A::ZERO,
+                        n: Vec3A::Z,
+                        ns: Vec3A::Z,
+                        ns_base: Vec3A::Z,
+                        uv,
+                        err: 0.0,
+                        on: MeshPoint::NONE,
+                    };
+                    let g = t.gradient(0, &sp);
+                    // One-sided slopes: where they disagree the step crossed a texel edge (a
+                    // kink of the interpolation); elsewhere their mean is the slope.
+                    let h = 1e-3f32;
+                    let slope = |d: Vec2| {
+                        let (f0, fp, fm) = (value(uv), value(uv + d), value(uv - d));
+                        let (fwd, bwd) = ((fp - f0) / h as f64, (f0 - fm) / h as f64);
+                        ((fwd - bwd).abs() < 1e-2 * (1.0 + fwd.abs())).then_some(0.5 * (fwd + bwd))
+                    };
+                    let (Some(du), Some(dv)) = (slope(Vec2::new(h, 0.0)), slope(Vec2::new(0.0, h))) else {
+                        continue;
+                    };
+                    let tol = 2e-2 * (1.0 + du.abs().max(dv.abs()));
+                    assert!((g.x as f64 - du).abs() < tol, "{k} {wrap:?}: d/du {} vs {du}", g.x);
+                    assert!((g.y as f64 - dv).abs() < tol, "{k} {wrap:?}: d/dv {} vs {dv}", g.y);
+                }
+            }
+        }
     }
 
     /// A 4 x 2 image whose texel in column i, row j (from the top) is (i, j, 0).

@@ -73,6 +73,7 @@ impl Paths {
                 p: Vec3A::ZERO,
                 n: Vec3A::Z,
                 ns: Vec3A::Z,
+                ns_base: Vec3A::Z,
                 uv: glam::Vec2::ZERO,
                 err: 0.0,
                 on: pathwave_engine::shape::MeshPoint::NONE,

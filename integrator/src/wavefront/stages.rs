@@ -134,10 +134,10 @@ fn bin<const WRAPPERS: bool>(scene: &RenderScene, p: &mut Paths, q: &mut Queues,
 #[inline(always)]
 fn store_hit(dst: &mut Hit, h: &Hit) {
     let Hit { t, prim, material, surface } = h;
-    let SurfacePoint { p, n, ns, uv, err, on } = surface;
+    let SurfacePoint { p, n, ns, ns_base, uv, err, on } = surface;
     (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
     let d = &mut dst.surface;
-    (d.p, d.n, d.ns, d.uv, d.err, d.on) = (*p, *n, *ns, *uv, *err, *on);
+    (d.p, d.n, d.ns, d.ns_base, d.uv, d.err, d.on) = (*p, *n, *ns, *ns_base, *uv, *err, *on);
 }
 
 /// Resolves the wrapper path `i` met ([`path::resolve`]): the hit with the plain material that
@@ -381,7 +381,9 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
                 hit.material,
                 &hit.surface,
                 #[inline(always)]
-                |mat| path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]),
+                |mat| {
+                    path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l], false)
+                },
             );
             route(p, q, i, None, next);
             p.set_state(s, &st);
@@ -420,6 +422,9 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
     let mut live = below_max_depth(scene, p, q, queue, false);
     if scene.features.one_sided {
         end_behind(scene, p, q, &mut live);
+    }
+    if scene.features.tilts {
+        shade_tilted(scene, p, q, &mut live);
     }
     for chunk in live.chunks(LANES) {
         // The vertex's numbers for all lanes at once.
@@ -469,6 +474,22 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         }
     }
     q.scratch = live;
+}
+
+/// Shades the hits of `live` whose normal a map tilted ([`path::tilted`]) path by path, as
+/// glossy kinds are, and leaves the others to the lane kernel. Out of line: scenes without
+/// maps never call it.
+#[inline(never)]
+fn shade_tilted(scene: &RenderScene, p: &mut Paths, q: &mut Queues, live: &mut Vec<u32>) {
+    let mut tilted = Vec::new();
+    live.retain(|&i| {
+        let t = path::tilted(&p.hit[i as usize].surface);
+        if t {
+            tilted.push(i);
+        }
+        !t
+    });
+    shade_glossy(scene, p, q, &tilted);
 }
 
 /// Ends the paths of `live` that meet a one-sided Lambertian from behind

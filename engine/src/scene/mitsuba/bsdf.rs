@@ -86,6 +86,56 @@ fn blend<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<
     Ok(format!("Blend(weight: {weight}, materials: ({a:?}, {b:?}))"))
 }
 
+/// Mitsuba's `bumpmap` (`src/bsdfs/bumpmap.cpp`): the one texture it is given, under
+/// whatever name, read as heights times `scale` (default 1), around one BSDF, as `Bump`.
+fn bump<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let textures: Vec<String> =
+        p.params.iter().filter(|q| matches!(q.value, Value::Object(_))).map(|q| q.name.clone()).collect();
+    let [name] = textures.as_slice() else {
+        return Err(p.at.error(format!("{} takes one texture, not {}", p.label(), textures.len())));
+    };
+    let Some(Value::Object(e)) = p.param(name).map(|q| &q.value) else { unreachable!("found above") };
+    let heights = cx.texture(e)?;
+    let scale = p.float("scale")?.unwrap_or(1.0);
+    if !scale.is_finite() {
+        let at = p.param("scale").map_or(&p.at, |q| &q.at);
+        return Err(at.error(format!("{}: scale {scale}: expected a finite number", p.label())));
+    }
+    let flip = map_options(p)?;
+    let [inner] = nested(cx, p, 1, two_sided)?.try_into().expect("one");
+    p.finish(&[name, "scale", "flip_invalid_normals", "use_shadowing_function"])?;
+    Ok(format!(
+        "Bump(texture: {heights:?}, scale: {}, material: {inner:?}, flip_invalid_normals: {flip})",
+        num(scale)
+    ))
+}
+
+/// Mitsuba's `normalmap` (`src/bsdfs/normalmap.cpp`): the texture `normalmap` around one
+/// BSDF, as `NormalMap`.
+fn normal_map<'d>(cx: &mut Converter<'d>, p: &Plugin<'d>, two_sided: bool) -> Result<String, SceneError> {
+    let Some(Value::Object(e)) = p.param("normalmap").map(|q| &q.value) else {
+        return Err(p.at.error(format!("{} needs a texture named normalmap", p.label())));
+    };
+    let normals = cx.texture(e)?;
+    let flip = map_options(p)?;
+    let [inner] = nested(cx, p, 1, two_sided)?.try_into().expect("one");
+    p.finish(&["normalmap", "flip_invalid_normals", "use_shadowing_function"])?;
+    Ok(format!("NormalMap(texture: {normals:?}, material: {inner:?}, flip_invalid_normals: {flip})"))
+}
+
+/// A map's `flip_invalid_normals` (default true); its `use_shadowing_function` must be true
+/// (pathwave always shadows the terminator).
+fn map_options(p: &Plugin) -> Result<bool, SceneError> {
+    if p.bool("use_shadowing_function")? == Some(false) {
+        let at = p.param("use_shadowing_function").map_or(&p.at, |q| &q.at);
+        return Err(at.error(format!(
+            "{}: use_shadowing_function false: pathwave's maps always shadow the terminator",
+            p.label()
+        )));
+    }
+    Ok(p.bool("flip_invalid_normals")?.unwrap_or(true))
+}
+
 /// The material that the BSDF `one` becomes inside Mitsuba's `twosided` (the same on both
 /// sides): a two-sided Lambertian, plastic or conductor, and a mask or blend of such.
 pub fn two_sided<'d>(cx: &mut Converter<'d>, one: &'d Element) -> Result<String, SceneError> {
@@ -106,8 +156,10 @@ pub fn two_sided<'d>(cx: &mut Converter<'d>, one: &'d Element) -> Result<String,
         // A wrapper the same on both sides wraps materials the same on both sides.
         "mask" => mask(cx, &inner, true),
         "blendbsdf" => blend(cx, &inner, true),
+        "bumpmap" => bump(cx, &inner, true),
+        "normalmap" => normal_map(cx, &inner, true),
         k => Err(one.at.error(format!(
-            "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor, roughconductor, plastic, roughplastic, mask and blendbsdf"
+            "twosided around \"{k}\": pathwave reads twosided around diffuse, conductor, roughconductor, plastic, roughplastic, mask, blendbsdf, bumpmap and normalmap"
         ))),
     }
 }
@@ -491,6 +543,8 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         "mask" => mask(cx, &p, false)?,
         "blendbsdf" => blend(cx, &p, false)?,
+        "bumpmap" => bump(cx, &p, false)?,
+        "normalmap" => normal_map(cx, &p, false)?,
         "null" => {
             return Err(p.at.error(
                 "<bsdf type=\"null\"> is a shape's invisible boundary: pathwave reads it directly inside a <shape>",
@@ -498,7 +552,7 @@ pub fn convert<'d>(cx: &mut Converter<'d>, e: &'d Element) -> Result<String, Sce
         }
         k => {
             return Err(p.at.error(format!(
-                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled, principledthin, mask, blendbsdf and null"
+                "<bsdf type=\"{k}\">: pathwave reads diffuse, twosided, conductor, roughconductor, dielectric, roughdielectric, thindielectric, plastic, roughplastic, principled, principledthin, mask, blendbsdf, bumpmap, normalmap and null"
             )));
         }
     };

@@ -574,6 +574,16 @@ fn texture(cx: &Converter, e: &Element, read: Read) -> Result<String, SceneError
             ))
         }
         "bitmap" => bitmap(cx, &p),
+        // Mitsuba's rawconstant (`src/textures/constant.cpp`'s raw twin): a value used as it
+        // is, as a normal map's normal.
+        "rawconstant" => {
+            let v = match p.param("value").map(|q| &q.value) {
+                Some(Value::Float(f)) => DVec3::splat(*f),
+                _ => p.vector("value")?.ok_or_else(|| p.at.error("<texture type=\"rawconstant\"> needs a value"))?,
+            };
+            p.finish(&["value"])?;
+            Ok(format!("Solid({})", v3(v)))
+        }
         "mesh_attribute" => {
             let (name, at) = p
                 .string("name")?
@@ -591,7 +601,7 @@ fn texture(cx: &Converter, e: &Element, read: Read) -> Result<String, SceneError
             Ok(format!("MeshAttribute(name: {name:?}, scale: {})", num(scale)))
         }
         k => Err(p.at.error(format!(
-            "<texture type=\"{k}\">: pathwave reads checkerboard, bitmap and mesh_attribute textures from XML so far"
+            "<texture type=\"{k}\">: pathwave reads checkerboard, bitmap, rawconstant and mesh_attribute textures from XML so far"
         ))),
     }
 }

@@ -1019,3 +1019,65 @@ fn principledthin_becomes_principled_thin() {
     assert_eq!(e.line, 6, "{e}");
     assert!(e.message.contains("diff_trans 2.5: expected 0 to 2"), "{e}");
 }
+
+/// `bumpmap` and `normalmap` become `Bump` and `NormalMap` around the material their BSDF
+/// becomes: the bump map's one texture under whatever name, its scale (default 1), the
+/// normal map's `normalmap` (here a `rawconstant`), and `flip_invalid_normals`. A bump map
+/// with two textures and `use_shadowing_function` off are refused where written.
+#[test]
+fn bump_and_normal_maps_become_maps() {
+    let dir = scene("maps", "").parent().unwrap().to_owned();
+    let png = texels_png(&dir);
+    let png = png.file_name().unwrap().to_str().unwrap();
+    let r = ron(
+        "maps",
+        &format!(
+            r#"<shape type="sphere"><bsdf type="bumpmap"><float name="scale" value="0.02"/>
+                <texture name="tiles" type="bitmap"><string name="filename" value="{png}"/><boolean name="raw" value="true"/></texture>
+                <bsdf type="diffuse"/></bsdf></shape>
+            <shape type="cube"><bsdf type="normalmap"><boolean name="flip_invalid_normals" value="false"/>
+                <texture name="normalmap" type="rawconstant"><vector name="value" value="0.5, 0.5, 1"/></texture>
+                <bsdf type="roughconductor"/></bsdf></shape>"#
+        ),
+    );
+    let line =
+        |name: &str| r.lines().find(|l| l.trim_start().starts_with(&format!("{name:?}"))).unwrap_or("");
+    assert!(line("bitmap-0").contains("raw: true"), "{r}");
+    assert!(
+        line("bumpmap-1").contains(
+            r#"Bump(texture: "bitmap-0", scale: 0.02, material: "diffuse-0", flip_invalid_normals: true)"#
+        ),
+        "{r}"
+    );
+    assert!(line("rawconstant-1").contains("Solid((0.5, 0.5, 1))"), "{r}");
+    assert!(
+        line("normalmap-3").contains(
+            r#"NormalMap(texture: "rawconstant-1", material: "roughconductor-2", flip_invalid_normals: false)"#
+        ),
+        "{r}"
+    );
+    let t = r#"<texture name="a" type="rawconstant"><float name="value" value="0.5"/></texture>"#;
+    for (tag, body, at, message) in [
+        (
+            "two",
+            format!(
+                "<bsdf type=\"bumpmap\">{t}\n{}<bsdf type=\"diffuse\"/></bsdf>",
+                t.replace("\"a\"", "\"b\"")
+            ),
+            (5, 22),
+            "takes one texture, not 2",
+        ),
+        (
+            "shadowing",
+            format!(
+                "<bsdf type=\"normalmap\">\n<boolean name=\"use_shadowing_function\" value=\"false\"/>{}<bsdf type=\"diffuse\"/></bsdf>",
+                t.replace("\"a\"", "\"normalmap\"")
+            ),
+            (6, 1),
+            "use_shadowing_function false: pathwave's maps always shadow the terminator",
+        ),
+    ] {
+        let e = error(tag, &format!("<shape type=\"sphere\">{body}</shape>"));
+        assert!((e.line, e.col) == at && e.message.contains(message), "{tag}: {e}");
+    }
+}
