@@ -601,15 +601,35 @@ pub struct GlossySamples {
 }
 
 impl GlossySamples {
-    /// The numbers of the vertex after `depth` bounces.
+    /// The numbers of the vertex after `depth` bounces ([`Self::draw_lanes`] on one lane).
     #[inline]
     pub fn draw(scene: &RenderScene, sampler: &Sampler, depth: u32) -> Self {
-        let lights = !scene.lights.is_empty();
-        Self {
-            light_pick: light_choice(scene, sampler, depth),
-            light: if lights { sampler.get_2d(Dims::vertex(depth, Dims::LIGHT)) } else { Vec2::ZERO },
-            bsdf: ScatterSamples::draw(scene, sampler, depth),
-        }
+        let all = Reads { dir: true, lobe: true };
+        Self::draw_lanes(scene, &SamplerLanes::from(&[*sampler]), &[depth], all)[0]
+    }
+
+    /// The numbers of `N` paths' vertices after `depths` bounces, computed across lanes: the
+    /// light's choice where there is more than one light, its point where there is one, and
+    /// the BSDF's as [`ScatterSamples::draw_lanes`] draws them (those no lane's material
+    /// `reads` left at zero).
+    #[inline(always)]
+    pub fn draw_lanes<const N: usize>(
+        scene: &RenderScene,
+        samplers: &SamplerLanes<N>,
+        depths: &[u32; N],
+        reads: Reads,
+    ) -> [Self; N] {
+        let dims = |slot| Dims::vertex_lanes(depths, slot);
+        let light_pick = match scene.lights.len() > 1 {
+            true => crate::sampler::get_1d_lanes(samplers, &dims(Dims::LIGHT_PICK)),
+            false => [0.0; N],
+        };
+        let light = match scene.lights.is_empty() {
+            false => crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT)),
+            true => [Vec2::ZERO; N],
+        };
+        let bsdf = ScatterSamples::draw_lanes(scene, samplers, depths, reads);
+        std::array::from_fn(|l| Self { light_pick: light_pick[l], light: light[l], bsdf: bsdf[l] })
     }
 }
 

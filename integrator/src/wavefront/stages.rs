@@ -392,22 +392,33 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
     q.scratch = live;
 }
 
-/// Hits on a [`Shading::Glossy`] kind: [`path::shade_glossy`] path by path.
+/// Hits on a [`Shading::Glossy`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
+/// drawn at once, then [`path::shade_glossy`] path by path.
 fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
-    for &i in queue {
-        let s = i as usize;
-        let mut st = p.state(s);
-        if path::at_max_depth(scene, st.bounces()) {
-            q.finished.push(i);
-            continue;
+    use lambert_vertex::LANES;
+    let live = below_max_depth(scene, p, q, queue, false);
+    for chunk in live.chunks(LANES) {
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let reads = chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
+            let m = scene.materials[p.hit[i as usize].material as usize].reads();
+            Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
+        });
+        let u = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
+        );
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let mut st = p.state(s);
+            let hit = p.hit[s];
+            let mat = &scene.material_at(hit.material, &hit.surface);
+            let (shadow, next) =
+                path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
+            route(p, q, i, shadow, next);
+            p.set_state(s, &st);
         }
-        let hit = p.hit[s];
-        let mat = &scene.material_at(hit.material, &hit.surface);
-        let u = path::GlossySamples::draw(scene, &p.sampler[s], st.depth);
-        let (shadow, next) = path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u);
-        route(p, q, i, shadow, next);
-        p.set_state(s, &st);
     }
+    q.scratch = live;
 }
 
 /// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
