@@ -102,6 +102,25 @@ fn a_mask_lets_through_one_minus_its_opacity() {
     });
 }
 
+/// A fuzzy `Metal` floor (fuzz 0.5) under the point light shows the highlight the fuzzed
+/// lobe gives: `I / d^2` times the ball's density towards the light about the mirror
+/// direction of the view. Found by trying pathwave as a new user: when Metal was only
+/// sampled, no path ever met the point and the floor was black.
+#[test]
+fn fuzzy_metal_shows_a_point_lights_highlight() {
+    use pathwave::engine::material::metal::fuzz_pdf;
+    let text = floor_scene("Point(position: (0.5, 2, -0.3), intensity: (10, 10, 10))").replace(
+        r#""white": Lambertian(albedo: (1, 1, 1))"#,
+        r#""white": Metal(albedo: (1, 1, 1), fuzz: 0.5)"#,
+    );
+    let (light, eye) = (Vec3::new(0.5, 2.0, -0.3), Vec3::new(0.0, 6.0, 0.0));
+    check_scene(&text, |p| {
+        let (d, wo) = (light - p, (eye - p).normalize());
+        let r = glam::Vec3A::from(2.0 * wo.y * Vec3::Y - wo);
+        10.0 * fuzz_pdf(r, 0.5, glam::Vec3A::from(d.normalize())) / d.length_squared()
+    });
+}
+
 #[test]
 fn point_light_gives_intensity_cos_over_distance_squared() {
     let light = Vec3::new(0.5, 2.0, -0.3);

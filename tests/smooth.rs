@@ -169,6 +169,12 @@ fn terminator(obj: &str, material: &str) -> Terminator {
                 continue;
             }
             n_covered += 1;
+            // The lamp's highlight follows the normals, which the coarse mesh interpolates
+            // (a narrower, shifted spot on Metal, whose light sampling resolves it): not the
+            // terminator, left out.
+            if sum(exact[i]).max(sum(smooth[i])) > 1.0 {
+                continue;
+            }
             let lit = sum(exact[i]) > 0.05;
             black += (lit && sum(smooth[i]) == 0.0) as usize;
             dark += (lit && sum(smooth[i]) < 0.5 * sum(exact[i])) as usize;
@@ -217,10 +223,11 @@ fn terminator_lambertian_mesh_shades_like_the_sphere() {
 fn terminator_metal_mesh_shades_like_the_sphere() {
     // The black rim is Metal's defect (the lamp's highlight, narrower on the mesh, makes the
     // rest): before, 27 and 131 dark pixels (relMSE 0.00085, 0.0028); after, 2 and 9 (0.00072,
-    // 0.0021). The icosphere's relMSE is mostly the two renders' noise: 0.0024-0.0026 over
-    // seeds 0-5 with the sampler of 2026-12-03 (dimensions paired at random), so there the
-    // dark pixels, not relMSE, tell the defect.
-    check_terminator("Metal(albedo: (0.9, 0.9, 0.9), fuzz: 0.2)", (0.0012, 6), (0.0029, 20));
+    // 0.0021), so the dark pixels, not relMSE, tell the defect. Since fuzzy Metal samples the
+    // lamp (2026-12-05), its highlight is resolved instead of clamped noise, and relMSE sees
+    // the highlight's halo on the coarse meshes' normals (the spot itself is left out): 0.0028
+    // and 0.0038, with 3 and 5 dark pixels.
+    check_terminator("Metal(albedo: (0.9, 0.9, 0.9), fuzz: 0.2)", (0.0035, 6), (0.0047, 20));
 }
 
 #[test]

@@ -1,9 +1,14 @@
 //! Metal: mirror reflection scaled by the albedo, optionally fuzzed by adding a point uniform in
 //! a ball of radius `fuzz` to the mirror direction (Shirley, "Ray Tracing in One Weekend",
-//! fuzzy reflection). Directions that end below the surface are absorbed. The lobe is only
-//! sampled, never evaluated.
+//! fuzzy reflection). Directions that end below the surface are absorbed.
+//!
+//! The fuzzed lobe is evaluated as well as sampled: its density in solid angle is the ball's
+//! volume seen along a direction ([`fuzz_pdf`]), so `f |cos|` is the albedo times that density
+//! above the surface, and the kind is shaded as the glossy ones are (a light sample weighted
+//! against the lobe by MIS): under a point or spot light a fuzzy metal shows its highlight,
+//! which BSDF sampling alone never finds. A perfect mirror (fuzz 0) is a delta lobe, as before.
 
-use super::{BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
+use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::{Albedo, Color, UnitInterval};
 use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
@@ -34,7 +39,7 @@ pub struct Metal {
 
 impl MaterialModel for Metal {
     type Desc = MetalDesc;
-    const SHADING: Shading = Shading::Sampled;
+    const SHADING: Shading = Shading::Glossy;
 
     fn build(desc: &MetalDesc, colors: &mut Colors) -> Self {
         Self { albedo: colors.get(&desc.albedo).min(Vec3::ONE), fuzz: desc.fuzz.0 }
@@ -48,6 +53,18 @@ impl MaterialModel for Metal {
     #[inline]
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
         sample(self.albedo, self.fuzz, wo, n, u, uc)
+    }
+
+    /// The fuzzed lobe: the albedo times the ball's density towards `wi` above the surface
+    /// (a mirror's delta lobe has none).
+    #[inline]
+    fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        let nf = if wo.dot(n) < 0.0 { -n } else { n };
+        if self.fuzz == 0.0 || wi.dot(nf) <= 0.0 {
+            return BsdfEval::ZERO;
+        }
+        let pdf = fuzz_pdf(reflect(wo, nf), self.fuzz, wi);
+        BsdfEval { f_cos: self.albedo * pdf, pdf }
     }
 
     #[inline]
@@ -74,32 +91,43 @@ pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3A {
     Vec3A::new(r * cos_phi, r * sin_phi, z) * crate::math::cbrt(uc)
 }
 
-/// Samples the reflected direction.
+/// Samples the reflected direction: the mirror's (a delta) or the fuzzed one with its density
+/// ([`fuzz_pdf`]; `f |cos| / pdf` is the albedo).
 #[inline]
 pub fn sample(albedo: Vec3, fuzz: f32, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
     let nf = if wo.dot(n) < 0.0 { -n } else { n };
-    let mut wi = reflect(wo, nf);
-    if fuzz > 0.0 {
-        wi = (wi + fuzz * uniform_ball(u, uc)).normalize_or_zero();
-        if wi.dot(nf) <= 0.0 {
-            return None;
-        }
+    let r = reflect(wo, nf);
+    if fuzz == 0.0 {
+        return Some(BsdfSample { wi: r, weight: albedo, pdf: 1.0, eta: 1.0, delta: true, null: false });
     }
-    Some(BsdfSample { wi, weight: albedo, pdf: 1.0, eta: 1.0, delta: true, null: false })
+    let wi = (r + fuzz * uniform_ball(u, uc)).normalize_or_zero();
+    let pdf = fuzz_pdf(r, fuzz, wi);
+    if wi.dot(nf) <= 0.0 || !(pdf > 0.0) {
+        return None;
+    }
+    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0, delta: false, null: false })
 }
 
 /// Density in solid angle of the direction `normalize(r + fuzz * ball)` about the unit mirror
-/// direction `r`, before absorption: the ball's volume along the ray `t w`, `(t1^3 - t0^3) / 3`,
-/// over its total volume.
+/// direction `r` (`w` unit), before absorption: the ball's volume along the ray `t w`,
+/// `(t1^3 - t0^3) / 3` between the ray's entry and exit, over its total volume. The entry and
+/// exit solve `t^2 - 2 c t + 1 - fuzz^2 = 0` (`c = w . r`), their gap `2 s` with
+/// `s^2 = fuzz^2 - |w x r|^2` (no cancellation near the mirror direction), and
+/// `t1^3 - t0^3 = (t1 - t0)(t1^2 + t1 t0 + t0^2)` where both are ahead.
 pub fn fuzz_pdf(r: Vec3A, fuzz: f32, w: Vec3A) -> f32 {
     let c = w.dot(r);
-    let disc = c * c - 1.0 + fuzz * fuzz;
-    if disc < 0.0 {
+    let disc = fuzz * fuzz - w.cross(r).length_squared();
+    if disc < 0.0 || c + disc.sqrt() <= 0.0 {
         return 0.0;
     }
     let s = disc.sqrt();
-    let (t0, t1) = ((c - s).max(0.0), (c + s).max(0.0));
-    (t1.powi(3) - t0.powi(3)) / (4.0 * std::f32::consts::PI * fuzz.powi(3))
+    let (t0, t1) = (c - s, c + s);
+    let volume = match t0 > 0.0 {
+        true => 2.0 * s * (t1 * t1 + t1 * t0 + t0 * t0),
+        // The origin is inside the ball (fuzz >= 1): from 0.
+        false => t1 * t1 * t1,
+    };
+    volume / (4.0 * std::f32::consts::PI * fuzz * fuzz * fuzz)
 }
 
 #[cfg(test)]
@@ -187,5 +215,50 @@ mod tests {
             (p - below).abs() < 4.0 * (below * (1.0 - below) / total as f64).sqrt() + 1e-3,
             "{p} vs {below}"
         );
+    }
+
+    /// Each fuzzed sample carries the density and weight that `eval` gives its direction
+    /// (`f |cos| / pdf` is the albedo), and `eval` integrated over the hemisphere is the albedo
+    /// times the share of the ball's directions that stay above the surface, so that light
+    /// sampling weighted by it and BSDF sampling estimate one integral. A mirror is a delta
+    /// that `eval` does not see. (The density left at 1 on samples, or `eval` without the
+    /// albedo, fails.)
+    #[test]
+    fn eval_agrees_with_sampling() {
+        let n = Vec3A::Z;
+        let albedo = Vec3::new(0.8, 0.6, 0.4);
+        let mut rng = crate::testing::uniform(5);
+        for (fuzz, wo) in [(0.2f32, Vec3A::new(0.3, 0.1, 1.0)), (1.0, Vec3A::new(1.0, 0.0, 0.3))] {
+            let m = Metal { albedo, fuzz };
+            let wo = wo.normalize();
+            let (mut kept, total) = (0, 100_000);
+            for _ in 0..total {
+                let Some(b) = m.sample(wo, n, Vec2::new(rng(), rng()), rng()) else { continue };
+                kept += 1;
+                let e = m.eval(wo, b.wi, n);
+                assert!(!b.delta && (b.pdf - e.pdf).abs() <= 1e-4 * e.pdf, "{} vs {}", b.pdf, e.pdf);
+                assert!((b.weight - e.f_cos / e.pdf).abs().max_element() < 1e-5);
+            }
+            // Quadrature of eval over the upper hemisphere (in cos theta and phi).
+            let (nt, np) = (2000, 400);
+            let mut integral = glam::DVec3::ZERO;
+            for i in 0..nt {
+                let z = (i as f32 + 0.5) / nt as f32;
+                for j in 0..np {
+                    let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
+                    let sz = (1.0 - z * z).sqrt();
+                    integral += m.eval(wo, Vec3A::new(sz * phi.cos(), sz * phi.sin(), z), n).f_cos.as_dvec3();
+                }
+            }
+            integral *= std::f64::consts::TAU / (nt * np) as f64;
+            let kept = kept as f64 / total as f64;
+            let want = albedo.as_dvec3() * kept;
+            assert!((integral - want).abs().max_element() < 0.01, "fuzz {fuzz}: {integral} vs {want}");
+        }
+        let mirror = Metal { albedo, fuzz: 0.0 };
+        let wo = Vec3A::new(0.3, 0.1, 1.0).normalize();
+        let b = mirror.sample(wo, n, Vec2::ZERO, 0.0).unwrap();
+        assert!(b.delta);
+        assert_eq!(mirror.eval(wo, b.wi, n), BsdfEval::ZERO);
     }
 }
