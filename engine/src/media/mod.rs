@@ -467,6 +467,9 @@ impl Media {
     /// transmittance over its probability is one.
     #[inline]
     pub fn sample(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32) -> Option<MediumEvent> {
+        if !self.heterogeneous {
+            return self.sample_homogeneous(o, d, tmax, u);
+        }
         let len = d.length();
         // Optical depth to travel, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
@@ -499,6 +502,48 @@ impl Media {
                             continue;
                         }
                     }
+                    let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
+                    return Some(MediumEvent { t: ts, albedo, g });
+                }
+                left -= sigma * (next - t);
+                if !(next > t) || next >= tmax {
+                    return None;
+                }
+                t = next;
+            }
+        })
+    }
+
+    /// [`Self::sample`] where every medium is homogeneous: the stretches of the volumes in the
+    /// order they are found, swept without sorting or majorant cells (no tentative
+    /// collisions). The general sweep's sort and stretch records made cornell-smoke's renders
+    /// 7.6% more instructions (callgrind, 96x96, 4 spp) than this, the sweep before grids.
+    fn sample_homogeneous(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32) -> Option<MediumEvent> {
+        let len = d.length();
+        // Optical depth to travel, in units of t.
+        let mut left = -crate::math::ln(1.0 - u) / len;
+        let mut t = 0.0f32;
+        SEGMENTS.with_borrow_mut(|segs| {
+            segs.clear();
+            for (i, v) in self.volumes.iter().enumerate() {
+                let (vol, maj) = (i as u32, v.medium.sigma_t.x);
+                v.intervals(o, d, tmax, |t0, t1| segs.push(Segment { t0, t1, vol, maj }));
+            }
+            // At `t`, the summed extinction of the stretches covering [t, next) and the next
+            // stretch end or start.
+            loop {
+                let (mut sigma, mut next) = (0.0f32, tmax);
+                for s in segs.iter() {
+                    if s.t0 <= t && t < s.t1 {
+                        sigma += s.maj;
+                        next = next.min(s.t1);
+                    } else if s.t0 > t {
+                        next = next.min(s.t0);
+                    }
+                }
+                if sigma > 0.0 && sigma * (next - t) > left {
+                    let ts = t + left / sigma;
+                    let (s, e, g) = self.coefficients_at(segs, o, d, ts);
                     let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
                     return Some(MediumEvent { t: ts, albedo, g });
                 }
