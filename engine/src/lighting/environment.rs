@@ -126,10 +126,16 @@ impl LatLongSampler {
     /// which is exactly [`Self::pdf`] of the direction. `None` in the rare case where the density
     /// there is 0 (a direction at a pole).
     pub fn sample(&self, u: Vec2) -> Option<(Vec3A, f32)> {
-        let (p, _) = self.dist.sample_continuous(u);
-        let dir = uv_to_direction(Vec2::new(p.x - self.u_offset, p.y));
+        let dir = self.sample_direction(u);
         let pdf = self.pdf(dir);
         (pdf > 0.0).then_some((dir, pdf))
+    }
+
+    /// The direction of [`Self::sample`], without its density.
+    #[inline]
+    fn sample_direction(&self, u: Vec2) -> Vec3A {
+        let (p, _) = self.dist.sample_continuous(u);
+        uv_to_direction(Vec2::new(p.x - self.u_offset, p.y))
     }
 
     /// The density in solid angle of sampling `dir` (any non-zero length): the grid density
@@ -301,8 +307,11 @@ impl EnvironmentMap {
     /// Samples a direction in proportion (roughly) to the map's luminance, for `u` in [0, 1)^2.
     /// `None` when the map is black, or, rarely, when the sampled direction has density 0.
     pub fn sample(&self, u: Vec2) -> Option<EnvSample> {
-        let (dir, pdf) = self.sampler.as_ref()?.sample(u)?;
-        Some(EnvSample { dir, radiance: self.radiance(dir), pdf })
+        // The radiance and the density from one (u, v) of the direction (the sampler's
+        // `sample` and `radiance` found it once each).
+        let dir = self.sampler.as_ref()?.sample_direction(u);
+        let (radiance, pdf) = self.radiance_pdf(dir);
+        (pdf > 0.0).then_some(EnvSample { dir, radiance, pdf })
     }
 
     /// The density in solid angle with which [`Self::sample`] returns `dir` (any non-zero
