@@ -84,15 +84,7 @@ mod tests {
         );
         assert_eq!((table[1], table[2]), (None, Some(own)));
         let textures = Textures { list: vec![Texture::Solid(Vec3::new(2.0, -1.0, 3.0))] };
-        let sp = SurfacePoint {
-            p: Vec3A::ZERO,
-            n: Vec3A::Z,
-            ns: Vec3A::Z,
-            ns_base: Vec3A::Z,
-            uv: Vec2::ZERO,
-            err: 0.0,
-            on: crate::shape::MeshPoint::NONE,
-        };
+        let sp = SurfacePoint::flat(Vec3A::Z, Vec2::ZERO);
         assert_eq!(own.emitted(&textures, 0.5, || sp), Vec3::new(2.0, 0.0, 3.0));
         assert_eq!(own.emitted(&textures, -0.5, || sp), Vec3::ZERO);
         let both = AreaEmission { texture: None, two_sided: true, ..own };

@@ -157,8 +157,7 @@ pub struct HeightMap(pub String);
 
 impl<'de> Deserialize<'de> for HeightMap {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let name = String::deserialize(d)?;
-        crate::format::check_texture_name(&name).map_err(D::Error::custom)?;
+        let TextureName(name) = TextureName::deserialize(d)?;
         context::names(|n| match n.is_none_or(|n| n.images.contains(&name)) {
             true => Ok(()),
             false => Err(D::Error::custom(format!(
@@ -848,15 +847,7 @@ mod tests {
     /// the tilt (at most 1) elsewhere, falling to 0 at the base's horizon.
     #[test]
     fn terminator_shadowing_is_smiths_of_the_tilt() {
-        let mut sp = SurfacePoint {
-            p: Vec3A::ZERO,
-            n: Vec3A::Z,
-            ns: Vec3A::Z,
-            ns_base: Vec3A::Z,
-            uv: Vec2::ZERO,
-            err: 0.0,
-            on: crate::shape::MeshPoint::NONE,
-        };
+        let mut sp = SurfacePoint::flat(Vec3A::Z, Vec2::ZERO);
         let wi = unit([3f32.sqrt(), 0.0, 1.0]);
         assert_eq!(terminator_shadowing(&sp, wi), 1.0);
         // A tilt of 45 degrees (tan^2 1, a^2 1/8) and wi at 60 degrees (tan^2 3).
@@ -875,15 +866,7 @@ mod tests {
     /// map's frame, which the material projects across the tilted one); elsewhere dp/du.
     #[test]
     fn tangents_turn_with_the_map() {
-        let mut sp = SurfacePoint {
-            p: Vec3A::ZERO,
-            n: Vec3A::Z,
-            ns: Vec3A::Z,
-            ns_base: Vec3A::Z,
-            uv: Vec2::ZERO,
-            err: 0.0,
-            on: crate::shape::MeshPoint::NONE,
-        };
+        let mut sp = SurfacePoint::flat(Vec3A::Z, Vec2::ZERO);
         let dpdu = Vec3A::new(1.0, 0.0, 0.5);
         assert_eq!(base_tangent(&sp, dpdu), dpdu);
         sp.ns = unit([0.3, 0.2, 1.0]);

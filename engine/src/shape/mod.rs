@@ -194,6 +194,15 @@ pub struct MeshPoint {
     pub instance: u32,
 }
 
+impl SurfacePoint {
+    /// A point at the origin of a flat surface with normal `n` (shading normal the same), for
+    /// tests.
+    #[cfg(test)]
+    pub(crate) fn flat(n: Vec3A, uv: Vec2) -> Self {
+        Self { p: Vec3A::ZERO, n, ns: n, ns_base: n, uv, err: 0.0, on: MeshPoint::NONE }
+    }
+}
+
 impl MeshPoint {
     /// Not on a mesh.
     pub const NONE: MeshPoint = MeshPoint { mesh: u32::MAX, triangle: 0, b: Vec2::ZERO, instance: u32::MAX };

@@ -279,6 +279,16 @@ impl TextureImage {
     /// Bilinear lookup at `uv` (texel centres at (i + 0.5) / size).
     #[inline]
     pub fn bilinear(&self, uv: Vec2, wrap: Wrap) -> Vec3 {
+        let ([c00, c10, c01, c11], fx, fy) = self.square(uv, wrap);
+        let top = c00.lerp(c10, fx);
+        let bottom = c01.lerp(c11, fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// The four texels around `uv` (top left, top right, bottom left, bottom right, wrapped
+    /// by `wrap`) and `uv`'s place between their centres.
+    #[inline]
+    fn square(&self, uv: Vec2, wrap: Wrap) -> ([Vec3; 4], f32, f32) {
         let (w, h) = (self.width as i64, self.height as i64);
         // Within +-2^31 texels, so that the indices below cannot overflow (a uv of 1e38 or
         // infinity from a mesh file); NaN stays NaN and reads texel 0.
@@ -291,32 +301,18 @@ impl TextureImage {
             let (i, j) = (wrap_index(i, w, wrap), wrap_index(j, h, wrap));
             self.texel((j * w + i) as usize)
         };
-        let top = texel(x0, y0).lerp(texel(x0 + 1, y0), fx);
-        let bottom = texel(x0, y0 + 1).lerp(texel(x0 + 1, y0 + 1), fx);
-        top.lerp(bottom, fy)
+        ([texel(x0, y0), texel(x0 + 1, y0), texel(x0, y0 + 1), texel(x0 + 1, y0 + 1)], fx, fy)
     }
 
     /// The derivatives along u and v of the bilinear lookup's value ([`scalar`] of its colour)
     /// at `uv`: those of the interpolation in the texel square `uv` falls in (Mitsuba's
     /// bitmap's `eval_1_grad`), in value per unit of u and v.
     pub fn bilinear_gradient(&self, uv: Vec2, wrap: Wrap) -> Vec2 {
-        let (w, h) = (self.width as i64, self.height as i64);
-        // As in `bilinear`.
-        let x = (uv.x * w as f32 - 0.5).clamp(-2.1e9, 2.1e9);
-        let y = ((1.0 - uv.y) * h as f32 - 0.5).clamp(-2.1e9, 2.1e9);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let texel = |i: i64, j: i64| {
-            let (i, j) = (wrap_index(i, w, wrap), wrap_index(j, h, wrap));
-            self.texel((j * w + i) as usize)
-        };
-        let (c00, c10) = (texel(x0, y0), texel(x0 + 1, y0));
-        let (c01, c11) = (texel(x0, y0 + 1), texel(x0 + 1, y0 + 1));
+        let ([c00, c10, c01, c11], fx, fy) = self.square(uv, wrap);
         // Per texel along x and y (rows run down, v up).
         let dx = (c10 - c00) * (1.0 - fy) + (c11 - c01) * fy;
         let dy = (c01 - c00) * (1.0 - fx) + (c11 - c10) * fx;
-        Vec2::new(scalar(dx) * w as f32, -scalar(dy) * h as f32)
+        Vec2::new(scalar(dx) * self.width as f32, -scalar(dy) * self.height as f32)
     }
 
     /// Mean texel.
@@ -754,15 +750,7 @@ mod tests {
                 let value = |uv: Vec2| scalar(t.eval(0, uv, Vec3A::ZERO)) as f64;
                 for k in 0..200 {
                     let uv = Vec2::new(0.5 * r() + 0.45, 0.5 * r() + 0.45);
-                    let sp = SurfacePoint {
-                        p: Vec3A::ZERO,
-                        n: Vec3A::Z,
-                        ns: Vec3A::Z,
-                        ns_base: Vec3A::Z,
-                        uv,
-                        err: 0.0,
-                        on: MeshPoint::NONE,
-                    };
+                    let sp = SurfacePoint::flat(Vec3A::Z, uv);
                     let g = t.gradient(0, &sp);
                     // One-sided slopes: where they disagree the step crossed a texel edge (a
                     // kink of the interpolation); elsewhere their mean is the slope.

@@ -357,18 +357,23 @@ fn below_max_depth(
     live
 }
 
+/// The numbers that some material of the hits of `chunk` reads: those of all lanes are drawn
+/// at once.
+fn reads_of(scene: &RenderScene, p: &Paths, chunk: &[u32]) -> Reads {
+    chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
+        let m = scene.materials[p.hit[i as usize].material as usize].reads();
+        Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
+    })
+}
+
 /// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
 /// drawn at once, then BSDF sampling path by path.
 fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
     let live = below_max_depth(scene, p, q, queue, scene.features.null_surfaces);
     for chunk in live.chunks(LANES) {
-        // The numbers of all lanes at once, those some lane's material reads.
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
-        let reads = chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
-            let m = scene.materials[p.hit[i as usize].material as usize].reads();
-            Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
-        });
+        let reads = reads_of(scene, p, chunk);
         let u = pathwave_engine::simd::lanes(
             #[inline(always)]
             || path::ScatterSamples::draw_lanes(scene, &samplers, &depths, reads),
@@ -399,10 +404,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     let live = below_max_depth(scene, p, q, queue, false);
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
-        let reads = chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
-            let m = scene.materials[p.hit[i as usize].material as usize].reads();
-            Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
-        });
+        let reads = reads_of(scene, p, chunk);
         let u = pathwave_engine::simd::lanes(
             #[inline(always)]
             || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
