@@ -1,0 +1,313 @@
+//! glTF files written by the tests: meshes read (every index type, `.gltf` with a data URI or a
+//! `.bin`, `.glb`), meshes picked, and malformed files refused with what is wrong.
+
+use super::{GltfFile, MeshRef};
+use crate::scene::{MeshFormat, mesh_format};
+use std::path::{Path, PathBuf};
+
+/// A glTF document under construction: one buffer, a view and an accessor per array, and the
+/// other top-level arrays as JSON text.
+#[derive(Default)]
+pub(super) struct Doc {
+    bin: Vec<u8>,
+    views: Vec<String>,
+    accessors: Vec<String>,
+    /// `"meshes": [..]` entries, and any other top-level member: `("nodes", "{..}")`.
+    pub members: Vec<(&'static str, String)>,
+}
+
+impl Doc {
+    /// An accessor over `bytes` (`count` elements of `ty` of component type `component`),
+    /// with `more` JSON members; its index.
+    pub fn accessor(&mut self, bytes: &[u8], component: u32, ty: &str, count: usize, more: &str) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{},"byteLength":{}}}"#,
+            self.bin.len(),
+            bytes.len()
+        ));
+        self.bin.extend_from_slice(bytes);
+        self.accessors.push(format!(
+            r#"{{"bufferView":{},"componentType":{component},"count":{count},"type":"{ty}"{more}}}"#,
+            self.views.len() - 1
+        ));
+        self.accessors.len() - 1
+    }
+
+    /// A POSITION accessor (with its min and max, as glTF requires).
+    pub fn positions(&mut self, p: &[[f32; 3]]) -> usize {
+        let lo = (0..3).map(|k| p.iter().map(|v| v[k]).fold(f32::INFINITY, f32::min));
+        let hi = (0..3).map(|k| p.iter().map(|v| v[k]).fold(f32::NEG_INFINITY, f32::max));
+        let num = |x: f32| if x.is_finite() { format!("{x:?}") } else { "0".into() };
+        let list = |v: Vec<f32>| v.into_iter().map(num).collect::<Vec<_>>().join(",");
+        let more = format!(r#","min":[{}],"max":[{}]"#, list(lo.collect()), list(hi.collect()));
+        self.accessor(&f32_bytes(p.as_flattened()), 5126, "VEC3", p.len(), &more)
+    }
+
+    /// A float accessor of `ty` over `v`.
+    pub fn floats(&mut self, v: &[f32], ty: &str, per: usize) -> usize {
+        self.accessor(&f32_bytes(v), 5126, ty, v.len() / per, "")
+    }
+
+    /// Indices as u8 (5121), u16 (5123) or u32 (5125).
+    pub fn indices(&mut self, i: &[u32], component: u32) -> usize {
+        let bytes: Vec<u8> = match component {
+            5121 => i.iter().map(|&x| x as u8).collect(),
+            5123 => i.iter().flat_map(|&x| (x as u16).to_le_bytes()).collect(),
+            _ => i.iter().flat_map(|&x| x.to_le_bytes()).collect(),
+        };
+        self.accessor(&bytes, component, "SCALAR", i.len(), "")
+    }
+
+    /// The JSON, its buffer at `uri` (`None`: a data URI; `Some("")`: a `.glb`'s chunk).
+    pub fn json(&self, uri: Option<&str>) -> String {
+        use base64::Engine;
+        let data;
+        let uri = match uri {
+            Some("") => String::new(),
+            Some(u) => format!(r#","uri":"{u}""#),
+            None => {
+                data = base64::engine::general_purpose::STANDARD.encode(&self.bin);
+                format!(r#","uri":"data:application/octet-stream;base64,{data}""#)
+            }
+        };
+        let mut out = format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{}{uri}}}],"bufferViews":[{}],"accessors":[{}]"#,
+            self.bin.len(),
+            self.views.join(","),
+            self.accessors.join(",")
+        );
+        let mut names: Vec<&str> = self.members.iter().map(|(n, _)| *n).collect();
+        names.dedup();
+        for n in names {
+            let items: Vec<&str> =
+                self.members.iter().filter(|(m, _)| *m == n).map(|(_, v)| v.as_str()).collect();
+            match n {
+                "scene" | "extensions" | "extensionsUsed" | "extensionsRequired" => {
+                    out += &format!(r#","{n}":{}"#, items.join(","))
+                }
+                _ => out += &format!(r#","{n}":[{}]"#, items.join(",")),
+            }
+        }
+        out + "}"
+    }
+
+    /// The document as a `.glb`.
+    pub fn glb(&self) -> Vec<u8> {
+        let mut json = self.json(Some("")).into_bytes();
+        while !json.len().is_multiple_of(4) {
+            json.push(b' ');
+        }
+        let mut bin = self.bin.clone();
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let total = 12 + 8 + json.len() + 8 + bin.len();
+        let mut out = b"glTF".to_vec();
+        out.extend(2u32.to_le_bytes());
+        out.extend((total as u32).to_le_bytes());
+        out.extend((json.len() as u32).to_le_bytes());
+        out.extend(b"JSON");
+        out.extend(json);
+        out.extend((bin.len() as u32).to_le_bytes());
+        out.extend(b"BIN\0");
+        out.extend(bin);
+        out
+    }
+}
+
+fn f32_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// A folder of its own for test `tag`.
+pub(super) fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-gltf-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const QUAD: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+const QUAD_TRIANGLES: [u32; 6] = [0, 1, 2, 0, 2, 3];
+
+/// A document with one mesh "quad" (normals, uv, indices of `component` type).
+fn quad(component: u32) -> Doc {
+    let mut d = Doc::default();
+    let p = d.positions(&QUAD);
+    let n = d.floats(&[0.0, 0.0, 1.0].repeat(4), "VEC3", 3);
+    let uv = d.floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.25], "VEC2", 2);
+    let i = d.indices(&QUAD_TRIANGLES, component);
+    d.members.push((
+        "meshes",
+        format!(
+            r#"{{"name":"quad","primitives":[{{"attributes":{{"POSITION":{p},"NORMAL":{n},"TEXCOORD_0":{uv}}},"indices":{i}}}]}}"#
+        ),
+    ));
+    d
+}
+
+fn read(json: &str) -> Result<GltfFile, String> {
+    GltfFile::new(json.as_bytes(), Path::new("t.gltf"))
+}
+
+fn mesh_of(
+    json: &str,
+    which: Option<MeshRef>,
+    primitive: Option<u32>,
+) -> Result<crate::accel::mesh::MeshData, String> {
+    read(json)?.mesh_data(which.as_ref(), primitive, Path::new("t.gltf"))
+}
+
+#[test]
+fn a_mesh_is_read_with_every_index_type() {
+    for component in [5121, 5123, 5125] {
+        let m = mesh_of(&quad(component).json(None), None, None).unwrap();
+        assert_eq!(m.positions.iter().map(|p| p.to_array()).collect::<Vec<_>>(), QUAD.to_vec());
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]], "component type {component}");
+        assert_eq!(m.normals.as_ref().unwrap()[3].to_array(), [0.0, 0.0, 1.0]);
+        // glTF's v runs down the image, pathwave's up: v is read as 1 - v.
+        let uvs: Vec<[f32; 2]> = m.uvs.unwrap().iter().map(|u| u.to_array()).collect();
+        assert_eq!(uvs, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 0.75]]);
+    }
+}
+
+#[test]
+fn a_glb_and_a_gltf_with_a_bin_file_read_as_the_data_uri_does() {
+    let d = quad(5123);
+    let want = mesh_of(&d.json(None), None, None).unwrap();
+    let glb = GltfFile::new(&d.glb(), Path::new("t.glb")).unwrap();
+    assert_eq!(glb.mesh_data(None, None, Path::new("t.glb")).unwrap(), want);
+    let dir = scratch("bin");
+    std::fs::write(dir.join("quad data.bin"), &d.bin).unwrap();
+    let path = dir.join("quad.gltf");
+    let file = GltfFile::new(d.json(Some("quad%20data.bin")).as_bytes(), &path).unwrap();
+    assert_eq!(file.mesh_data(None, None, &path).unwrap(), want);
+    // Without its .bin: the buffer and the file are named.
+    let err = GltfFile::new(d.json(Some("gone.bin")).as_bytes(), &path).unwrap_err();
+    assert!(err.contains("buffer 0") && err.contains("there is no gone.bin in"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_mesh_is_picked_by_name_or_index_and_a_primitive_alone() {
+    let mut d = quad(5123);
+    let p = d.positions(&[[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]]);
+    d.members.push(("meshes", format!(r#"{{"name":"tri","primitives":[{{"attributes":{{"POSITION":{p}}}}},{{"attributes":{{"POSITION":{p}}}}}]}}"#)));
+    let json = d.json(None);
+    let err = mesh_of(&json, None, None).unwrap_err();
+    assert!(err.contains("holds 2 meshes") && err.contains(r#""quad", "tri""#), "{err}");
+    let tri = mesh_of(&json, Some(MeshRef::Name("tri".into())), None).unwrap();
+    // Both primitives, the second's vertices after the first's.
+    assert_eq!(tri.triangles, vec![[0, 1, 2], [3, 4, 5]]);
+    assert_eq!(tri.positions[4].z, 5.0);
+    assert_eq!(mesh_of(&json, Some(MeshRef::Index(1)), Some(1)).unwrap().triangles, vec![[0, 1, 2]]);
+    // A primitive without normals: the mesh has none.
+    assert!(tri.normals.is_none());
+    let err = mesh_of(&json, Some(MeshRef::Name("box".into())), None).unwrap_err();
+    assert!(err.contains("no mesh \"box\""), "{err}");
+    let err = mesh_of(&json, Some(MeshRef::Index(1)), Some(2)).unwrap_err();
+    assert!(err.contains("mesh 1 \"tri\" has no primitive 2 (it has 2)"), "{err}");
+}
+
+/// `quad`'s JSON with `from` replaced by `to` (once, where it must be).
+fn broken(from: &str, to: &str) -> String {
+    let json = quad(5123).json(None);
+    assert!(json.contains(from), "{from} in {json}");
+    json.replacen(from, to, 1)
+}
+
+#[test]
+fn malformed_files_are_refused_saying_what_is_wrong() {
+    // Index 2 of the triangles (a u16 at byte 4 of its view) points past the 4 vertices.
+    let mut d = quad(5123);
+    let last = d.bin.len() - 12 + 4;
+    d.bin[last] = 7;
+    let err = mesh_of(&d.json(None), None, None).unwrap_err();
+    assert!(
+        err.contains("primitive 0: index 2 of its indices (accessor 3) is 7, beyond its 4 vertices"),
+        "{err}"
+    );
+    // A NaN position.
+    let mut d = quad(5123);
+    d.bin[12..16].copy_from_slice(&f32::NAN.to_le_bytes());
+    let err = mesh_of(&d.json(None), None, None).unwrap_err();
+    assert!(
+        err.contains(
+            "mesh 0 \"quad\", primitive 0: POSITION element 1 (accessor 0) is [NaN, 0, 0], not finite"
+        ),
+        "{err}"
+    );
+    let cases = [
+        // More elements than the view holds.
+        (r#""count":4,"type":"VEC3","min""#, r#""count":5,"type":"VEC3","min""#, "5 elements of 12 bytes"),
+        // A view past its buffer.
+        (r#""byteOffset":0,"byteLength":48"#, r#""byteOffset":0,"byteLength":4800"#, "overruns buffer 0"),
+        // Lines.
+        (r#""indices":3}"#, r#""indices":3,"mode":1}"#, "its mode is LINES: pathwave reads TRIANGLES only"),
+        // Indices as floats.
+        (r#""componentType":5123"#, r#""componentType":5126"#, "not scalar unsigned integers"),
+        // Normals of the wrong count.
+        (
+            r#""count":4,"type":"VEC3"}"#,
+            r#""count":3,"type":"VEC3"}"#,
+            "NORMAL (accessor 1) has 3 elements, POSITION 4",
+        ),
+        // An accessor that is not there.
+        (r#""NORMAL":1"#, r#""NORMAL":9"#, "not valid glTF 2.0"),
+        // A POSITION accessor that is not there.
+        (r#""POSITION":0"#, r#""POSITION":99"#, "POSITION is accessor 99, but there are 4"),
+        // A buffer shorter than it says.
+        (r#""buffers":[{"byteLength":"#, r#""buffers":[{"byteLength":9"#, "fewer than its byteLength"),
+        // An extension pathwave does not read, required.
+        (
+            r#""asset""#,
+            r#""extensionsRequired":["KHR_draco_mesh_compression"],"extensionsUsed":["KHR_draco_mesh_compression"],"asset""#,
+            "requires the extension KHR_draco_mesh_compression",
+        ),
+    ];
+    for (from, to, says) in cases {
+        let err = mesh_of(&broken(from, to), None, None).unwrap_err();
+        assert!(err.contains("t.gltf") && err.contains(says), "{says}: {err}");
+    }
+}
+
+#[test]
+fn the_format_is_told_by_content_then_extension() {
+    let json = quad(5123).json(None);
+    let format = |bytes: &[u8], name: &str| mesh_format(bytes, Path::new(name));
+    assert_eq!(format(json.as_bytes(), "x.obj"), Ok(MeshFormat::Gltf));
+    assert_eq!(format(&quad(5123).glb(), "x.mesh"), Ok(MeshFormat::Gltf));
+    assert_eq!(format(b"ply\nformat ascii 1.0\n", "x.gltf"), Ok(MeshFormat::Ply));
+    assert_eq!(format(b"v 0 0 0\n", "x.obj"), Ok(MeshFormat::Obj));
+    let err = format(b"v 0 0 0\n", "x.stl").unwrap_err();
+    assert!(err.contains("x.stl") && err.contains("OBJ (.obj), PLY (.ply), glTF 2.0 (.gltf, .glb)"), "{err}");
+}
+
+#[test]
+fn a_ron_scene_places_a_gltf_mesh() {
+    let dir = scratch("ron");
+    let mut d = quad(5121);
+    let p = d.positions(&[[0.0, 0.0, 5.0], [1.0, 0.0, 5.0], [0.0, 1.0, 5.0]]);
+    d.members
+        .push(("meshes", format!(r#"{{"name":"tri","primitives":[{{"attributes":{{"POSITION":{p}}}}}]}}"#)));
+    std::fs::write(dir.join("m.glb"), d.glb()).unwrap();
+    let scene = |mesh: &str| {
+        format!(
+            r#"Scene(camera: (look_from: (0, 0, 3), look_at: (0, 0, 0), vfov: 40),
+               materials: {{"grey": Lambertian(albedo: (0.5, 0.5, 0.5))}},
+               objects: [(shape: Mesh(file: "m.glb"{mesh}), material: "grey")])"#
+        )
+    };
+    let path = dir.join("s.ron");
+    let load = |mesh: &str| crate::scene::parse(&scene(mesh), &path);
+    let desc = load(r#", mesh: "tri""#).unwrap();
+    let crate::scene::ShapeDesc::Mesh(m) = &desc.objects[0].shape else { panic!() };
+    assert_eq!(m.mesh.triangles.len(), 1);
+    let err = load("").unwrap_err().to_string();
+    assert!(err.contains("holds 2 meshes") && err.contains("s.ron:3:"), "{err}");
+    let err = load(r#", mesh: "tri", shape_index: 1"#).unwrap_err().to_string();
+    assert!(err.contains("shape_index 1 picks a mesh of a .serialized file"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
