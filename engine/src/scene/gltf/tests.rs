@@ -79,8 +79,12 @@ impl Doc {
             self.views.join(","),
             self.accessors.join(",")
         );
-        let mut names: Vec<&str> = self.members.iter().map(|(n, _)| *n).collect();
-        names.dedup();
+        let mut names: Vec<&str> = Vec::new();
+        for (n, _) in &self.members {
+            if !names.contains(n) {
+                names.push(n);
+            }
+        }
         for n in names {
             let items: Vec<&str> =
                 self.members.iter().filter(|(m, _)| *m == n).map(|(_, v)| v.as_str()).collect();
@@ -309,5 +313,197 @@ fn a_ron_scene_places_a_gltf_mesh() {
     assert!(err.contains("holds 2 meshes") && err.contains("s.ron:3:"), "{err}");
     let err = load(r#", mesh: "tri", shape_index: 1"#).unwrap_err().to_string();
     assert!(err.contains("shape_index 1 picks a mesh of a .serialized file"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A `.gltf` scene in a folder of its own: `quad`'s mesh, and `members` added.
+fn scene_file(tag: &str, members: &[(&'static str, &str)]) -> (PathBuf, PathBuf) {
+    let dir = scratch(tag);
+    let mut d = quad(5123);
+    d.members.extend(members.iter().map(|(n, v)| (*n, v.to_string())));
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    (dir, path)
+}
+
+fn close(a: glam::Affine3A, b: glam::Affine3A) -> bool {
+    a.to_cols_array().iter().zip(b.to_cols_array()).all(|(x, y)| (x - y).abs() < 1e-5)
+}
+
+#[test]
+fn the_hierarchy_places_shared_meshes_as_a_hand_written_ron_scene_does() {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    // Node 0: T (1, 2, 3), a quarter turn about y, scale 2, holding node 1: a column-major
+    // matrix translating by (0, 0, -1), with the mesh. Node 2: the same mesh, at (5, 0, 0).
+    let nodes = [
+        format!(r#"{{"translation":[1,2,3],"rotation":[0,{h},0,{h}],"scale":[2,2,2],"children":[1]}}"#),
+        r#"{"matrix":[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,-1,1],"mesh":0,"name":"child"}"#.to_owned(),
+        r#"{"translation":[5,0,0],"mesh":0}"#.to_owned(),
+        r#"{"translation":[0,0,10],"camera":0}"#.to_owned(),
+    ];
+    let nodes: Vec<(&str, &str)> = nodes.iter().map(|n| ("nodes", n.as_str())).collect();
+    let mut members = nodes;
+    members.push(("scenes", r#"{"nodes":[0,2,3]}"#));
+    members.push((
+        "cameras",
+        r#"{"type":"perspective","perspective":{"yfov":0.5,"aspectRatio":1.5,"znear":0.1}}"#,
+    ));
+    let (dir, path) = scene_file("hierarchy", &members);
+    let desc = crate::scene::load(&path).unwrap();
+    let hand = r#"Scene(camera: (look_from: (0, 0, 1), look_at: (0, 0, 0), vfov: 40),
+        materials: {"m": Lambertian(albedo: (0.5, 0.5, 0.5))},
+        objects: [
+            (shape: Sphere(center: (0, 0, 0), radius: 1), material: "m",
+             transform: [Translate((0, 0, -1)), UniformScale(2), RotateY(90), Translate((1, 2, 3))]),
+            (shape: Sphere(center: (0, 0, 0), radius: 1), material: "m", transform: [Translate((5, 0, 0))]),
+        ])"#;
+    let hand = crate::scene::parse(hand, Path::new("hand.ron")).unwrap();
+    assert_eq!(desc.objects.len(), 2);
+    for (o, h) in desc.objects.iter().zip(&hand.objects) {
+        let (a, b) = (crate::scene::compose(&o.transform), crate::scene::compose(&h.transform));
+        assert!(close(a, b), "{a:?} != {b:?}");
+    }
+    // One mesh, two instances.
+    let mesh = |i: usize| match &desc.objects[i].shape {
+        crate::scene::ShapeDesc::Mesh(m) => m.mesh.clone(),
+        _ => panic!("not a mesh"),
+    };
+    assert!(std::sync::Arc::ptr_eq(&mesh(0), &mesh(1)));
+    // The camera at (0, 0, 10) looks along -z, the image's left at -x; 0.5 radians of the
+    // height; 1.5 times as wide as high.
+    let crate::scene::CameraView::ToWorld { to_world, projection, near_clip, .. } = desc.camera.view else {
+        panic!("not a to_world camera")
+    };
+    assert!(close(
+        to_world,
+        glam::Affine3A::from_cols(
+            -glam::Vec3A::X,
+            glam::Vec3A::Y,
+            -glam::Vec3A::Z,
+            glam::Vec3A::new(0.0, 0.0, 10.0)
+        )
+    ));
+    let crate::scene::Projection::Perspective { fov, fov_axis } = projection else { panic!() };
+    assert!((fov - 0.5f32.to_degrees()).abs() < 1e-4 && fov_axis == crate::format::FovAxis::Y);
+    assert_eq!((desc.render.width.get(), desc.render.height.get()), (768, 512));
+    assert_eq!(near_clip, Some(0.1));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn punctual_lights_are_converted_from_candela_and_lux() {
+    use crate::lighting::punctual::LightDesc;
+    let s = -std::f32::consts::FRAC_1_SQRT_2;
+    let c = std::f32::consts::FRAC_1_SQRT_2;
+    let nodes = [
+        r#"{"translation":[0,3,0],"extensions":{"KHR_lights_punctual":{"light":0}}}"#.to_owned(),
+        format!(r#"{{"rotation":[{s},0,0,{c}],"extensions":{{"KHR_lights_punctual":{{"light":1}}}}}}"#),
+        r#"{"translation":[1,0,0],"extensions":{"KHR_lights_punctual":{"light":2}}}"#.to_owned(),
+        r#"{"mesh":0}"#.to_owned(),
+    ];
+    let mut members: Vec<(&str, &str)> = nodes.iter().map(|n| ("nodes", n.as_str())).collect();
+    members.push(("scenes", r#"{"nodes":[0,1,2,3]}"#));
+    members.push(("extensionsUsed", r#"["KHR_lights_punctual"]"#));
+    let lights = r#"{"KHR_lights_punctual":{"lights":[
+        {"type":"point","color":[1,0.5,0.25],"intensity":1366},
+        {"type":"directional","intensity":683},
+        {"type":"spot","intensity":68.3,"spot":{"innerConeAngle":0.2,"outerConeAngle":0.4}}]}}"#;
+    members.push(("extensions", lights));
+    let (dir, path) = scene_file("lights", &members);
+    let desc = crate::scene::load(&path).unwrap();
+    // A point of I cd: I / 683 W/sr (times its colour); a directional light of E lux:
+    // E / 683 W/m^2, along the node's -z.
+    let LightDesc::Point(p) = &desc.lights[0] else { panic!() };
+    assert_eq!(
+        (p.position.0, p.intensity.0),
+        (glam::Vec3::new(0.0, 3.0, 0.0), glam::Vec3::new(2.0, 1.0, 0.5))
+    );
+    let LightDesc::Directional(d) = &desc.lights[1] else { panic!() };
+    assert!((d.direction.0 - glam::Vec3::NEG_Y).length() < 1e-6, "{}", d.direction.0);
+    assert_eq!(d.irradiance.0, glam::Vec3::ONE);
+    let LightDesc::Spot(sp) = &desc.lights[2] else { panic!() };
+    assert!((sp.intensity.0 - glam::Vec3::splat(0.1)).abs().max_element() < 1e-7);
+    assert_eq!(sp.look_at.0, glam::Vec3::new(1.0, 0.0, -1.0));
+    assert!((sp.cone_angle.0 - 0.4f32.to_degrees()).abs() < 1e-4);
+    assert!((sp.falloff_start.0 - 0.2f32.to_degrees()).abs() < 1e-4);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn materials_become_principled_masked_and_emitting() {
+    let materials = [
+        r#"{"name":"paint","pbrMetallicRoughness":{"baseColorFactor":[0.8,0.2,0.1,1],"metallicFactor":0.3,"roughnessFactor":0.6}}"#,
+        r#"{"name":"cut","alphaMode":"MASK","alphaCutoff":0.5,"pbrMetallicRoughness":{"baseColorFactor":[1,1,1,0.3]}}"#,
+        r#"{"name":"veil","alphaMode":"BLEND","pbrMetallicRoughness":{"baseColorFactor":[1,1,1,0.25]}}"#,
+        r#"{"name":"lamp","emissiveFactor":[1,0.5,0],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":4}}}"#,
+    ];
+    let mut members: Vec<(&str, &str)> = materials.iter().map(|m| ("materials", *m)).collect();
+    let meshes: Vec<String> = (0..4)
+        .map(|m| {
+            format!(r#"{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":3,"material":{m}}}]}}"#)
+        })
+        .collect();
+    members.extend(meshes.iter().map(|m| ("meshes", m.as_str())));
+    let nodes: Vec<String> = (1..5).map(|m| format!(r#"{{"mesh":{m}}}"#)).collect();
+    members.extend(nodes.iter().map(|n| ("nodes", n.as_str())));
+    members.push(("scenes", r#"{"nodes":[0,1,2,3]}"#));
+    members.push(("extensionsUsed", r#"["KHR_materials_emissive_strength"]"#));
+    let (dir, path) = scene_file("materials", &members);
+    let ron = super::to_ron(&path, &dir).unwrap().ron;
+    for want in [
+        r#""paint": Principled(base_color: (0.8, 0.2, 0.1), metallic: 0.3, roughness: 0.6),"#,
+        r#""cut": Mask(opacity: 0, material: "cut (opaque)"),"#,
+        r#""veil": Mask(opacity: 0.25, material: "veil (opaque)"),"#,
+        r#"material: "lamp", emit: (radiance: (4, 2, 0), two_sided: false)"#,
+    ] {
+        assert!(ron.contains(want), "{want} in\n{ron}");
+    }
+    let desc = crate::scene::load(&path).unwrap();
+    assert_eq!(desc.objects.len(), 4);
+    let emit = desc.objects[3].emit.as_ref().unwrap();
+    assert_eq!(
+        emit.radiance,
+        crate::format::Color::Value(crate::format::Radiance(glam::Vec3::new(4.0, 2.0, 0.0)))
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_texture_transform_maps_to_pathwave_uv() {
+    let dir = scratch("texture");
+    ::image::RgbImage::from_pixel(2, 2, ::image::Rgb([200, 100, 50])).save(dir.join("t.png")).unwrap();
+    let mut d = quad(5123);
+    d.members.push(("images", r#"{"uri":"t.png"}"#.into()));
+    d.members.push(("textures", r#"{"source":0}"#.into()));
+    d.members.push((
+        "materials",
+        r#"{"pbrMetallicRoughness":{"baseColorTexture":{"index":0,"extensions":{"KHR_texture_transform":{"offset":[0.5,0],"scale":[2,2]}}}}}"#.into(),
+    ));
+    d.members[0].1 = d.members[0].1.replace(r#""indices":3}"#, r#""indices":3,"material":0}"#);
+    d.members.push(("nodes", r#"{"mesh":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0]}"#.into()));
+    d.members.push(("extensionsUsed", r#"["KHR_texture_transform"]"#.into()));
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    let ron = super::to_ron(&path, &dir).unwrap().ron;
+    // glTF's (u, v) -> (2 u + 0.5, 2 v) with v = 1 - pathwave's v: pathwave's (u, v) ->
+    // (2 u + 0.5, 2 v - 1).
+    let want =
+        r#"Image(file: "t.png", wrap: Repeat, filter: Bilinear, uv_transform: ((2, 0, 0.5), (0, 2, -1)))"#;
+    assert!(ron.contains(want), "{want} in\n{ron}");
+    crate::scene::load(&path).unwrap();
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_broken_hierarchy_is_refused() {
+    let members = [
+        ("nodes", r#"{"children":[1]}"#),
+        ("nodes", r#"{"children":[0],"mesh":0}"#),
+        ("scenes", r#"{"nodes":[0]}"#),
+    ];
+    let (dir, path) = scene_file("cycle", &members);
+    let err = crate::scene::load(&path).unwrap_err().to_string();
+    assert!(err.contains("s.gltf") && err.contains("nodes[0] is met twice"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -1,0 +1,607 @@
+//! A glTF file as a whole scene, written as RON: the scene's node hierarchy walked with each
+//! node's matrix or translation, rotation and scale; each primitive of a node's mesh an object
+//! `Mesh(file, mesh, primitive)` under the node's world transform (nodes sharing a mesh share
+//! its triangles: instances of one BLAS); the first camera met; `KHR_lights_punctual` lights;
+//! metallic-roughness materials as `Principled`, with `Mask` for the alpha modes MASK and
+//! BLEND and `emit` for emissive ones.
+//!
+//! Units of `KHR_lights_punctual`: point and spot intensities are luminous intensities in
+//! candela (lm/sr), directional ones illuminances in lux (lm/m^2). pathwave's lights are
+//! radiometric (W/sr, W/m^2), so each is divided by 683 lm/W, the luminous efficacy of light
+//! at 555 nm that defines the candela: a point or spot of `I` cd has the radiant intensity
+//! `I / 683` W/sr, a directional light of `E` lux the irradiance `E / 683` W/m^2, times the
+//! light's colour. This is what Blender's glTF importer does in its default ("Standard")
+//! lighting mode (`io_scene_gltf2/blender/imp/light.py`: a point or spot of `I / 683 * 4 pi` W,
+//! which Cycles spreads over 4 pi sr, and a sun of `E / 683` W/m^2). A spot's cone is its
+//! outer angle, its falloff starting at the inner one, with pathwave's smoothstep falloff (the
+//! glTF spec suggests the square of a linear ramp in the cosine; Blender maps the two angles to
+//! Cycles' spot size and blend, also a smoothstep). `range` is a cut-off for real-time
+//! renderers: lights here fall off by the inverse square law alone (it is warned about).
+//!
+//! Emission: `emissiveFactor` times `KHR_materials_emissive_strength` is the emitted radiance,
+//! as Blender's importer sets its emission colour and strength, on the front side (both for
+//! `doubleSided` materials).
+//!
+//! glTF cameras look along -z with +y up and +x to the right; pathwave's `to_world` cameras
+//! (Mitsuba's) look along +z with +x to the left: the camera's `to_world` is its node's
+//! rotation and translation (a scale in it is dropped) after `Scale((-1, 1, -1))`, a half turn
+//! about y.
+
+use super::file::{GltfFile, name, uri_path};
+use super::mesh::mesh_name;
+use crate::scene::{SceneDesc, SceneError};
+use glam::{Mat4, Quat, Vec3};
+use gltf::material::AlphaMode;
+use std::collections::HashMap;
+use std::fmt::Write;
+use std::path::Path;
+
+/// The luminous efficacy (lm/W) that turns the photometric units of `KHR_lights_punctual` into
+/// radiometric ones.
+pub const LUMENS_PER_WATT: f32 = 683.0;
+
+/// The extensions whose meaning the conversion keeps; others a file uses are warned about.
+const READ: [&str; 5] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_texture_transform",
+];
+
+/// A glTF scene as RON text, with the glTF place of each line that came from an item.
+pub struct Converted {
+    /// The RON.
+    pub ron: String,
+    /// `(first line, place)`, ascending: lines from `first line` on came from `place`.
+    pub origins: Vec<(usize, String)>,
+}
+
+/// A RON item and the glTF item it came from (`nodes[2] "Lamp"`).
+type Item = (String, String);
+
+struct Converter<'a> {
+    file: &'a GltfFile,
+    /// The glTF file as the RON names it.
+    file_name: String,
+    /// The RON's folder.
+    base: &'a Path,
+    textures: Vec<(String, Item)>,
+    texture_names: HashMap<(usize, String), Option<String>>,
+    materials: Vec<(String, Item)>,
+    /// By glTF material index (`None`: the default material): the RON material's name and
+    /// the `emit` its objects get.
+    material_names: HashMap<Option<usize>, (String, Option<String>)>,
+    objects: Vec<Item>,
+    lights: Vec<Item>,
+    camera: Option<(String, String, Item)>,
+}
+
+fn fail(path: &Path, message: String) -> SceneError {
+    SceneError { path: path.to_owned(), line: 0, col: 0, message }
+}
+
+/// Reads the glTF scene `path` as RON whose file names are relative to the folder `base`.
+pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
+    let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_ASSET_BYTES, "scene")
+        .map_err(|m| fail(path, m))?;
+    let file = GltfFile::new(&bytes, path).map_err(|m| fail(path, m))?;
+    let mut cx = Converter {
+        file: &file,
+        file_name: file_name(path, base),
+        base,
+        textures: Vec::new(),
+        texture_names: HashMap::new(),
+        materials: Vec::new(),
+        material_names: HashMap::new(),
+        objects: Vec::new(),
+        lights: Vec::new(),
+        camera: None,
+    };
+    cx.scene(path)?;
+    let mut out = Converted { ron: String::new(), origins: Vec::new() };
+    let line = |out: &mut Converted, text: &str, at: Option<&str>| {
+        if let Some(at) = at {
+            let n = out.ron.matches('\n').count() + 1;
+            out.origins.push((n, at.to_owned()));
+        }
+        out.ron.push_str(text);
+        out.ron.push('\n');
+    };
+    line(&mut out, &format!("// Converted by pathwave from the glTF file {}.", path.display()), None);
+    line(&mut out, "#![enable(implicit_some)]", None);
+    line(&mut out, "Scene(", None);
+    let (camera, render, at) = match cx.camera.take() {
+        Some((c, r, (_, at))) => (c, r, Some(at)),
+        None => {
+            let (c, r) = default_camera(&file);
+            tracing::warn!(
+                "{}: no node holds a camera: a default one looks at the scene along -z",
+                path.display()
+            );
+            (c, r, None)
+        }
+    };
+    line(&mut out, &format!("    camera: {camera},"), at.as_deref());
+    line(&mut out, &format!("    render: ({render}),"), at.as_deref());
+    if !cx.textures.is_empty() {
+        line(&mut out, "    textures: {", None);
+        for (name, (t, at)) in &cx.textures {
+            line(&mut out, &format!("        {name:?}: {t},"), Some(at));
+        }
+        line(&mut out, "    },", None);
+    }
+    line(&mut out, "    materials: {", None);
+    for (name, (m, at)) in &cx.materials {
+        line(&mut out, &format!("        {name:?}: {m},"), Some(at));
+    }
+    line(&mut out, "    },", None);
+    line(&mut out, "    objects: [", None);
+    for (o, at) in &cx.objects {
+        line(&mut out, &format!("        {o},"), Some(at));
+    }
+    line(&mut out, "    ],", None);
+    if !cx.lights.is_empty() {
+        line(&mut out, "    lights: [", None);
+        for (l, at) in &cx.lights {
+            line(&mut out, &format!("        {l},"), Some(at));
+        }
+        line(&mut out, "    ],", None);
+    }
+    line(&mut out, ")", None);
+    Ok(out)
+}
+
+/// Reads the glTF scene `path`.
+pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let converted = to_ron(path, dir)?;
+    crate::scene::parse(&converted.ron, path).map_err(|e| {
+        let i = converted.origins.partition_point(|(l, _)| *l <= e.line);
+        match i.checked_sub(1).map(|i| &converted.origins[i].1) {
+            Some(at) => fail(path, format!("{at}: {} (in the RON pathwave made of it)", e.message)),
+            None => e,
+        }
+    })
+}
+
+impl Converter<'_> {
+    /// Walks the file's default scene (else its first).
+    fn scene(&mut self, path: &Path) -> Result<(), SceneError> {
+        let doc = &self.file.doc;
+        for e in doc.extensions_used().filter(|e| !READ.contains(e)) {
+            tracing::warn!("{}: it uses the extension {e}, which pathwave does not read", path.display());
+        }
+        if doc.animations().len() > 0 {
+            tracing::warn!(
+                "{}: its {} animations are not read (the scene is rendered as it stands)",
+                path.display(),
+                doc.animations().len()
+            );
+        }
+        let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+            return Err(fail(path, "the glTF file has no scene: pathwave renders a scene's nodes".into()));
+        };
+        if doc.scenes().len() > 1 {
+            tracing::warn!(
+                "{}: of its {} scenes, scene {}{} alone is rendered",
+                path.display(),
+                doc.scenes().len(),
+                scene.index(),
+                name(scene.name())
+            );
+        }
+        let mut seen = vec![false; doc.nodes().len()];
+        let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        stack.reverse();
+        while let Some((node, parent)) = stack.pop() {
+            let at = format!("nodes[{}]{}", node.index(), name(node.name()));
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(fail(
+                    path,
+                    format!("{at} is met twice in the hierarchy (a node has one parent at most)"),
+                ));
+            }
+            let world = parent * local(&node).map_err(|m| fail(path, format!("{at}: {m}")))?;
+            if !world.is_finite() {
+                return Err(fail(path, format!("{at}: its world transform is not finite")));
+            }
+            self.node(&node, world, &at, path)?;
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        }
+        Ok(())
+    }
+
+    /// What node `node` holds, at `world`.
+    fn node(&mut self, node: &gltf::Node, world: Mat4, at: &str, path: &Path) -> Result<(), SceneError> {
+        if node.skin().is_some() {
+            tracing::warn!("{}: {at}: its skin is not read (its mesh is drawn as it stands)", path.display());
+        }
+        if let Some(mesh) = node.mesh() {
+            let size =
+                (world.x_axis.abs() + world.y_axis.abs() + world.z_axis.abs()).truncate().max_element();
+            let m3 = glam::Mat3::from_mat4(world) * size.recip();
+            if !(m3.determinant().abs() > f32::EPSILON) {
+                tracing::warn!(
+                    "{}: {at}: its transform is singular (a scale of 0 hides it): its {} is left out",
+                    path.display(),
+                    mesh_name(&mesh)
+                );
+            } else {
+                let transform = matrix(world);
+                let single = mesh.primitives().len() == 1;
+                for p in mesh.primitives() {
+                    let (material, emit) = self.material(p.material(), path);
+                    let mut o = format!("(shape: Mesh(file: {}, mesh: {}", self.file_name, mesh.index());
+                    if !single {
+                        write!(o, ", primitive: {}", p.index()).unwrap();
+                    }
+                    write!(o, "), material: {material:?}").unwrap();
+                    if let Some(e) = emit {
+                        write!(o, ", emit: {e}").unwrap();
+                    }
+                    write!(o, ", transform: [{transform}])").unwrap();
+                    self.objects.push((o, at.to_owned()));
+                }
+            }
+        }
+        if let Some(camera) = node.camera()
+            && self.camera.is_none()
+        {
+            let (c, r) = camera_ron(&camera, world);
+            let at = format!("{at}, cameras[{}]{}", camera.index(), name(camera.name()));
+            self.camera = Some((c, r, (String::new(), at)));
+        }
+        if let Some(light) = node.light() {
+            let at = format!("{at}, lights[{}]{}", light.index(), name(light.name()));
+            if light.range().is_some() {
+                tracing::warn!(
+                    "{}: {at}: its range is not read (pathwave's lights fall off by the inverse square law alone)",
+                    path.display()
+                );
+            }
+            self.lights.push((light_ron(&light, world), at));
+        }
+        Ok(())
+    }
+
+    /// The RON material of glTF material `m` (made on its first use) and the `emit` of the
+    /// objects that have it.
+    fn material(&mut self, m: gltf::Material, path: &Path) -> (String, Option<String>) {
+        if let Some(done) = self.material_names.get(&m.index()) {
+            return done.clone();
+        }
+        let at = match m.index() {
+            Some(i) => format!("materials[{i}]{}", name(m.name())),
+            None => "the default material".to_owned(),
+        };
+        let warn = |what: String| tracing::warn!("{}: {at}: {what}", path.display());
+        let base_name = match (m.index(), m.name()) {
+            (None, _) => "glTF default".to_owned(),
+            (Some(_), Some(n)) if self.file.doc.materials().filter(|o| o.name() == Some(n)).count() == 1 => {
+                n.to_owned()
+            }
+            (Some(i), n) => format!("{} {i}", n.unwrap_or("material")),
+        };
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, alpha] = pbr.base_color_factor();
+        let mut fields = String::new();
+        let base_texture =
+            pbr.base_color_texture().and_then(|t| self.texture(&t, "baseColorTexture", &at, path));
+        match &base_texture {
+            Some(t) => {
+                if [r, g, b] != [1.0; 3] {
+                    warn(format!(
+                        "its baseColorFactor ({r}, {g}, {b}) times its texture: pathwave takes the texture alone"
+                    ));
+                }
+                write!(fields, "base_color: {t:?}").unwrap();
+            }
+            None => write!(fields, "base_color: {}", rgb([r, g, b])).unwrap(),
+        }
+        write!(
+            fields,
+            ", metallic: {}, roughness: {}",
+            num(pbr.metallic_factor()),
+            num(pbr.roughness_factor())
+        )
+        .unwrap();
+        if pbr.metallic_roughness_texture().is_some() {
+            warn("its metallicRoughnessTexture is not read (pathwave's textured numbers take no channel): its factors are".into());
+        }
+        if let Some(ior) = m.ior().filter(|i| *i != 1.5) {
+            write!(fields, ", eta: {}", num(ior)).unwrap();
+        }
+        if let Some(t) = m.transmission() {
+            write!(fields, ", spec_trans: {}", num(t.transmission_factor())).unwrap();
+            if t.transmission_texture().is_some() {
+                warn("its transmissionTexture is not read: its transmissionFactor is".into());
+            }
+        }
+        let mut unread = Vec::new();
+        if m.normal_texture().is_some() {
+            unread.push("normalTexture");
+        }
+        if m.occlusion_texture().is_some() {
+            unread.push("occlusionTexture (the path tracer finds occlusion)");
+        }
+        if !unread.is_empty() {
+            warn(format!("not read: {}", unread.join(", ")));
+        }
+        let plain = format!("Principled({fields})");
+        let opacity = match m.alpha_mode() {
+            AlphaMode::Opaque => 1.0,
+            AlphaMode::Mask => {
+                let cutoff = m.alpha_cutoff().unwrap_or(0.5);
+                if base_texture.is_some() {
+                    warn("alpha mode MASK: its texture's alpha is not read (pathwave's textures are RGB): the factor's is".into());
+                }
+                if alpha >= cutoff { 1.0 } else { 0.0 }
+            }
+            AlphaMode::Blend => {
+                if base_texture.is_some() {
+                    warn("alpha mode BLEND: its texture's alpha is not read (pathwave's textures are RGB): the factor's is".into());
+                }
+                alpha
+            }
+        };
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let factor = Vec3::from(m.emissive_factor()) * strength;
+        let emissive_texture =
+            m.emissive_texture().and_then(|t| self.texture(&t, "emissiveTexture", &at, path));
+        let radiance = match emissive_texture {
+            Some(t) if factor == Vec3::ONE => Some(format!("{t:?}")),
+            Some(_) if factor == Vec3::ZERO => None,
+            Some(_) => {
+                warn(format!(
+                    "its emissive factor times strength {factor} times its texture: pathwave takes the factor alone"
+                ));
+                Some(rgb(factor.to_array()))
+            }
+            None if factor == Vec3::ZERO => None,
+            None => Some(rgb(factor.to_array())),
+        };
+        let emit = radiance.map(|r| format!("(radiance: {r}, two_sided: {})", m.double_sided()));
+        let (ron_name, emit) = if opacity < 1.0 {
+            let inner = format!("{base_name} (opaque)");
+            self.materials.push((inner.clone(), (plain, at.clone())));
+            let mask = format!("Mask(opacity: {}, material: {inner:?})", num(opacity));
+            self.materials.push((base_name.clone(), (mask, at.clone())));
+            if emit.is_some() {
+                warn("it emits and is not opaque: pathwave's `emit` is for opaque materials, so it does not emit".into());
+            }
+            (base_name, None)
+        } else {
+            self.materials.push((base_name.clone(), (plain, at.clone())));
+            (base_name, emit)
+        };
+        self.material_names.insert(m.index(), (ron_name.clone(), emit.clone()));
+        (ron_name, emit)
+    }
+
+    /// The name of the RON texture for texture `info` (`what` of material `at`), made on its
+    /// first use; `None` (warned about) for one pathwave cannot read.
+    fn texture(&mut self, info: &gltf::texture::Info, what: &str, at: &str, path: &Path) -> Option<String> {
+        let t = info.texture();
+        let warn =
+            |m: String| tracing::warn!("{}: {at}: {what} (textures[{}]): {m}", path.display(), t.index());
+        let transform = info.texture_transform();
+        let set = transform.as_ref().and_then(|x| x.tex_coord()).unwrap_or(info.tex_coord());
+        if set != 0 {
+            warn(format!("it reads TEXCOORD_{set}, which pathwave does not read: TEXCOORD_0 is used"));
+        }
+        let uv = transform.map(|x| uv_transform(x.offset(), x.rotation(), x.scale())).unwrap_or_default();
+        let key = (t.index(), uv.clone());
+        if let Some(done) = self.texture_names.get(&key) {
+            return done.clone();
+        }
+        let image = t.source();
+        let file = match image.source() {
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => uri_path(uri)
+                .map(|p| file_name(&self.file.dir.join(p), self.base))
+                .map_err(|m| warn(format!("{m}: it is not read"))),
+            _ => {
+                warn(format!(
+                    "its image {} is embedded in the file, which pathwave does not read yet: the factor alone is used",
+                    image.index()
+                ));
+                Err(())
+            }
+        };
+        let named = file.ok().map(|file| {
+            let sampler = t.sampler();
+            use gltf::texture::{MagFilter, WrappingMode};
+            let wrap = |w: WrappingMode| match w {
+                WrappingMode::Repeat => "Repeat",
+                WrappingMode::ClampToEdge => "Clamp",
+                WrappingMode::MirroredRepeat => "Mirror",
+            };
+            if sampler.wrap_s() != sampler.wrap_t() {
+                warn(format!(
+                    "it wraps s ({}) and t ({}) differently: pathwave wraps both as s",
+                    wrap(sampler.wrap_s()),
+                    wrap(sampler.wrap_t())
+                ));
+            }
+            let filter = match sampler.mag_filter() {
+                Some(MagFilter::Nearest) => "Nearest",
+                _ => "Bilinear",
+            };
+            let mut ron = format!("Image(file: {file}, wrap: {}, filter: {filter}", wrap(sampler.wrap_s()));
+            if !uv.is_empty() {
+                write!(ron, ", uv_transform: {uv}").unwrap();
+            }
+            ron.push(')');
+            let name = format!(
+                "texture {}{}",
+                t.index(),
+                if uv.is_empty() { String::new() } else { format!(" {}", self.textures.len()) }
+            );
+            self.textures.push((name.clone(), (ron, format!("{at}, textures[{}]", t.index()))));
+            name
+        });
+        self.texture_names.insert(key, named.clone());
+        named
+    }
+}
+
+/// A node's own transform: its matrix, or translation * rotation * scale (the rotation a unit
+/// quaternion; one that is not is normalised).
+fn local(node: &gltf::Node) -> Result<Mat4, String> {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => Ok(Mat4::from_cols_array_2d(&matrix)),
+        gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            let q = Quat::from_array(rotation);
+            if !(q.is_finite() && q.length() > 0.0) {
+                return Err(format!("its rotation {rotation:?} is not a rotation"));
+            }
+            Ok(Mat4::from_scale_rotation_translation(scale.into(), q.normalize(), translation.into()))
+        }
+    }
+}
+
+/// `Matrix([[..], [..], [..], [0, 0, 0, 1]])` of an affine `m` (rows).
+fn matrix(m: Mat4) -> String {
+    let rows = m.transpose().to_cols_array_2d();
+    let rows: Vec<String> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| match i {
+            3 => "[0, 0, 0, 1]".to_owned(),
+            _ => format!("[{}]", r.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ")),
+        })
+        .collect();
+    format!("Matrix([{}])", rows.join(", "))
+}
+
+/// The shortest text that reads back as `x`.
+fn num(x: f32) -> String {
+    let s = format!("{x:?}");
+    s.strip_suffix(".0").map(str::to_owned).unwrap_or(s)
+}
+
+fn rgb(c: [f32; 3]) -> String {
+    format!("({}, {}, {})", num(c[0]), num(c[1]), num(c[2]))
+}
+
+/// The glTF file as a RON file at `base` names it.
+fn file_name(path: &Path, base: &Path) -> String {
+    let abs = |p: &Path| {
+        std::fs::canonicalize(p).unwrap_or_else(|_| std::path::absolute(p).unwrap_or(p.to_owned()))
+    };
+    let rel = pathdiff::diff_paths(abs(path), abs(base)).unwrap_or_else(|| abs(path));
+    format!("{:?}", rel.to_string_lossy().replace('\\', "/"))
+}
+
+/// `KHR_texture_transform` as pathwave's `uv_transform` (empty for none): glTF's uv' = T R S uv
+/// (the spec's matrices) in glTF's uv, whose v is pathwave's 1 - v, so pathwave's map is
+/// F (T R S) F with F: (u, v) -> (u, 1 - v).
+fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> String {
+    if offset == [0.0; 2] && rotation == 0.0 && scale == [1.0; 2] {
+        return String::new();
+    }
+    let (s, c) = (rotation.sin(), rotation.cos());
+    let t = glam::Mat3::from_cols_array_2d(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [offset[0], offset[1], 1.0]]);
+    let r = glam::Mat3::from_cols_array_2d(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]);
+    let sc = glam::Mat3::from_diagonal(Vec3::new(scale[0], scale[1], 1.0));
+    let f = glam::Mat3::from_cols_array_2d(&[[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 1.0, 1.0]]);
+    let m = (f * t * r * sc * f).transpose().to_cols_array_2d();
+    format!(
+        "(({}, {}, {}), ({}, {}, {}))",
+        num(m[0][0]),
+        num(m[0][1]),
+        num(m[0][2]),
+        num(m[1][0]),
+        num(m[1][1]),
+        num(m[1][2])
+    )
+}
+
+/// The camera of a node at `world`, and the render settings its aspect ratio gives.
+fn camera_ron(camera: &gltf::Camera, world: Mat4) -> (String, String) {
+    let (_, rotation, translation) = world.to_scale_rotation_translation();
+    let rigid = Mat4::from_rotation_translation(rotation.normalize(), translation);
+    let place = format!("Scale((-1, 1, -1)), {}", matrix(rigid));
+    let size = |aspect: f32| {
+        let width = (512.0 * aspect).round().clamp(1.0, 16384.0);
+        format!("width: {}, height: 512", width as u32)
+    };
+    let clip = |near: f32, far: Option<f32>| {
+        let mut s = String::new();
+        if near > 0.0 {
+            write!(s, ", near_clip: {}", num(near)).unwrap();
+        }
+        if let Some(f) = far.filter(|f| *f > near) {
+            write!(s, ", far_clip: {}", num(f)).unwrap();
+        }
+        s
+    };
+    match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => (
+            format!(
+                "(to_world: [{place}], projection: Perspective(fov: {}, fov_axis: Y){})",
+                num(p.yfov().to_degrees()),
+                clip(p.znear(), p.zfar())
+            ),
+            p.aspect_ratio().map(size).unwrap_or_default(),
+        ),
+        gltf::camera::Projection::Orthographic(o) => (
+            format!(
+                "(to_world: [Scale(({}, {}, 1)), {place}], projection: Orthographic{})",
+                num(o.xmag()),
+                num(o.xmag()),
+                clip(o.znear(), Some(o.zfar()))
+            ),
+            size(o.xmag() / o.ymag()),
+        ),
+    }
+}
+
+/// A camera looking along -z at the box of the file's meshes' bounds (their accessors' `min`
+/// and `max`, which glTF requires), placed by the nodes, framing it in a vertical field of 40
+/// degrees.
+fn default_camera(file: &GltfFile) -> (String, String) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for m in file.doc.meshes() {
+        for p in m.primitives() {
+            let b = p.bounding_box();
+            lo = lo.min(Vec3::from(b.min));
+            hi = hi.max(Vec3::from(b.max));
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        (lo, hi) = (Vec3::splat(-1.0), Vec3::ONE);
+    }
+    let center = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-3);
+    let from = center + Vec3::Z * (radius / 20f32.to_radians().sin());
+    (
+        format!("(look_from: {}, look_at: {}, vfov: 40)", rgb(from.to_array()), rgb(center.to_array())),
+        String::new(),
+    )
+}
+
+/// A `KHR_lights_punctual` light at `world`, in radiometric units.
+fn light_ron(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> String {
+    use gltf::khr_lights_punctual::Kind;
+    let power = Vec3::from(light.color()) * (light.intensity() / LUMENS_PER_WATT);
+    let position = world.transform_point3(Vec3::ZERO);
+    let axis = world.transform_vector3(Vec3::NEG_Z).normalize();
+    match light.kind() {
+        Kind::Point => {
+            format!("Point(position: {}, intensity: {})", rgb(position.to_array()), rgb(power.to_array()))
+        }
+        Kind::Directional => {
+            format!("Directional(direction: {}, irradiance: {})", rgb(axis.to_array()), rgb(power.to_array()))
+        }
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => format!(
+            "Spot(position: {}, look_at: {}, intensity: {}, cone_angle: {}, falloff_start: {})",
+            rgb(position.to_array()),
+            rgb((position + axis).to_array()),
+            rgb(power.to_array()),
+            num(outer_cone_angle.to_degrees()),
+            num(inner_cone_angle.to_degrees().min(outer_cone_angle.to_degrees()))
+        ),
+    }
+}
