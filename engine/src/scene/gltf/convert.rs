@@ -67,7 +67,7 @@ struct Converter<'a> {
     /// The RON's folder.
     base: &'a Path,
     textures: Vec<(String, Item)>,
-    texture_names: HashMap<(usize, String), Option<String>>,
+    texture_names: HashMap<(usize, String, bool), Option<String>>,
     materials: Vec<(String, Item)>,
     /// By glTF material index (`None`: the default material): the RON material's name and
     /// the `emit` its objects get.
@@ -319,16 +319,18 @@ impl Converter<'_> {
                 warn("its transmissionTexture is not read: its transmissionFactor is".into());
             }
         }
-        let mut unread = Vec::new();
-        if m.normal_texture().is_some() {
-            unread.push("normalTexture");
-        }
         if m.occlusion_texture().is_some() {
-            unread.push("occlusionTexture (the path tracer finds occlusion)");
+            warn("its occlusionTexture is not read (the path tracer finds occlusion)".into());
         }
-        if !unread.is_empty() {
-            warn(format!("not read: {}", unread.join(", ")));
-        }
+        let normal_map = m.normal_texture().and_then(|n| {
+            if n.scale() != 1.0 {
+                warn(format!(
+                    "its normalTexture's scale {} is not read: the map's normals are used",
+                    n.scale()
+                ));
+            }
+            self.image_texture(n.texture(), n.tex_coord(), String::new(), true, "normalTexture", &at, path)
+        });
         let plain = format!("Principled({fields})");
         let opacity = match m.alpha_mode() {
             AlphaMode::Opaque => 1.0,
@@ -363,6 +365,22 @@ impl Converter<'_> {
             None => Some(rgb(factor.to_array())),
         };
         let emit = radiance.map(|r| format!("(radiance: {r}, two_sided: {})", m.double_sided()));
+        // A normal map wraps the material, as Mask does: a wrapper does not emit.
+        let plain = match normal_map {
+            Some(_) if emit.is_some() => {
+                warn(
+                    "it emits: its normalTexture is not read (pathwave's `emit` is for plain materials)"
+                        .into(),
+                );
+                plain
+            }
+            Some(t) => {
+                let surface = format!("{base_name} (surface)");
+                self.materials.push((surface.clone(), (plain, at.clone())));
+                format!("NormalMap(texture: {t:?}, material: {surface:?})")
+            }
+            None => plain,
+        };
         let (ron_name, emit) = if opacity < 1.0 {
             let inner = format!("{base_name} (opaque)");
             self.materials.push((inner.clone(), (plain, at.clone())));
@@ -380,19 +398,34 @@ impl Converter<'_> {
         (ron_name, emit)
     }
 
-    /// The name of the RON texture for texture `info` (`what` of material `at`), made on its
-    /// first use; `None` (warned about) for one pathwave cannot read.
+    /// The name of the RON texture for texture `info` (`what` of material `at`; sRGB), made
+    /// on its first use; `None` (warned about) for one pathwave cannot read.
     fn texture(&mut self, info: &gltf::texture::Info, what: &str, at: &str, path: &Path) -> Option<String> {
-        let t = info.texture();
-        let warn =
-            |m: String| tracing::warn!("{}: {at}: {what} (textures[{}]): {m}", path.display(), t.index());
         let transform = info.texture_transform();
         let set = transform.as_ref().and_then(|x| x.tex_coord()).unwrap_or(info.tex_coord());
+        let uv = transform.map(|x| uv_transform(x.offset(), x.rotation(), x.scale())).unwrap_or_default();
+        self.image_texture(info.texture(), set, uv, false, what, at, path)
+    }
+
+    /// [`Self::texture`] of texture `t` read through uv set `set` and the `uv_transform` `uv`
+    /// (empty for none), its 8-bit values raw (a normal map) or sRGB.
+    #[expect(clippy::too_many_arguments, reason = "what it reads, and where it is for messages")]
+    fn image_texture(
+        &mut self,
+        t: gltf::Texture,
+        set: u32,
+        uv: String,
+        raw: bool,
+        what: &str,
+        at: &str,
+        path: &Path,
+    ) -> Option<String> {
+        let warn =
+            |m: String| tracing::warn!("{}: {at}: {what} (textures[{}]): {m}", path.display(), t.index());
         if set != 0 {
             warn(format!("it reads TEXCOORD_{set}, which pathwave does not read: TEXCOORD_0 is used"));
         }
-        let uv = transform.map(|x| uv_transform(x.offset(), x.rotation(), x.scale())).unwrap_or_default();
-        let key = (t.index(), uv.clone());
+        let key = (t.index(), uv.clone(), raw);
         if let Some(done) = self.texture_names.get(&key) {
             return done.clone();
         }
@@ -429,13 +462,17 @@ impl Converter<'_> {
                 _ => "Bilinear",
             };
             let mut ron = format!("Image(file: {file}, wrap: {}, filter: {filter}", wrap(sampler.wrap_s()));
+            if raw {
+                ron.push_str(", raw: true");
+            }
             if !uv.is_empty() {
                 write!(ron, ", uv_transform: {uv}").unwrap();
             }
             ron.push(')');
             let name = format!(
-                "texture {}{}",
+                "texture {}{}{}",
                 t.index(),
+                if raw { " raw" } else { "" },
                 if uv.is_empty() { String::new() } else { format!(" {}", self.textures.len()) }
             );
             self.textures.push((name.clone(), (ron, format!("{at}, textures[{}]", t.index()))));

@@ -469,7 +469,7 @@ fn materials_become_principled_masked_and_emitting() {
 }
 
 #[test]
-fn a_texture_transform_maps_to_pathwave_uv() {
+fn textures_map_with_their_transform_and_normal_maps_wrap() {
     let dir = scratch("texture");
     ::image::RgbImage::from_pixel(2, 2, ::image::Rgb([200, 100, 50])).save(dir.join("t.png")).unwrap();
     let mut d = quad(5123);
@@ -477,7 +477,7 @@ fn a_texture_transform_maps_to_pathwave_uv() {
     d.members.push(("textures", r#"{"source":0}"#.into()));
     d.members.push((
         "materials",
-        r#"{"pbrMetallicRoughness":{"baseColorTexture":{"index":0,"extensions":{"KHR_texture_transform":{"offset":[0.5,0],"scale":[2,2]}}}}}"#.into(),
+        r#"{"normalTexture":{"index":0},"pbrMetallicRoughness":{"baseColorTexture":{"index":0,"extensions":{"KHR_texture_transform":{"offset":[0.5,0],"scale":[2,2]}}}}}"#.into(),
     ));
     d.members[0].1 = d.members[0].1.replace(r#""indices":3}"#, r#""indices":3,"material":0}"#);
     d.members.push(("nodes", r#"{"mesh":0}"#.into()));
@@ -491,6 +491,13 @@ fn a_texture_transform_maps_to_pathwave_uv() {
     let want =
         r#"Image(file: "t.png", wrap: Repeat, filter: Bilinear, uv_transform: ((2, 0, 0.5), (0, 2, -1)))"#;
     assert!(ron.contains(want), "{want} in\n{ron}");
+    // The normal map: the same image, raw, around the material.
+    for want in [
+        r#""texture 0 raw": Image(file: "t.png", wrap: Repeat, filter: Bilinear, raw: true),"#,
+        r#""material 0": NormalMap(texture: "texture 0 raw", material: "material 0 (surface)"),"#,
+    ] {
+        assert!(ron.contains(want), "{want} in\n{ron}");
+    }
     crate::scene::load(&path).unwrap();
     std::fs::remove_dir_all(dir).unwrap();
 }
