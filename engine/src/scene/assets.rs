@@ -139,7 +139,14 @@ fn read_mesh_file(path: &std::path::Path) -> Result<MeshSource, String> {
     Ok(match mesh_format(&bytes, path)? {
         MeshFormat::Ply => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
         MeshFormat::Serialized => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
-        MeshFormat::Gltf => MeshSource::Gltf(Arc::new(super::gltf::GltfFile::new(&bytes, path)?)),
+        MeshFormat::Gltf => MeshSource::Gltf(match context::read_before::<super::gltf::GltfFile>(path) {
+            Some(file) => file,
+            None => {
+                let file = Arc::new(super::gltf::GltfFile::new(&bytes, path)?);
+                context::keep(path.to_owned(), file.clone());
+                file
+            }
+        }),
         MeshFormat::Obj => MeshSource::Mesh(Arc::new(parse_obj(&bytes, path)?)),
     })
 }

@@ -96,7 +96,9 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             .textures
             .0
             .iter()
-            .filter(|(_, t)| matches!(t, crate::texture::TextureDesc::Image(_)))
+            .filter(|(_, t)| {
+                matches!(t, crate::texture::TextureDesc::Image(_) | crate::texture::TextureDesc::GltfImage(_))
+            })
             .map(|(n, _)| n.clone())
             .collect(),
         tilting: tilting(&names),

@@ -3,7 +3,8 @@
 //! `Mesh(file, mesh, primitive)` under the node's world transform (nodes sharing a mesh share
 //! its triangles: instances of one BLAS); the first camera met; `KHR_lights_punctual` lights;
 //! metallic-roughness materials as `Principled`, with `Mask` for the alpha modes MASK and
-//! BLEND and `emit` for emissive ones.
+//! BLEND, `NormalMap` for normal textures and `emit` for emissive ones; textures as `Image`
+//! (an image file beside the glTF) or `GltfImage` (one inside it).
 //!
 //! Units of `KHR_lights_punctual`: point and spot intensities are luminous intensities in
 //! candela (lm/sr), directional ones illuminances in lux (lm/m^2). pathwave's lights are
@@ -27,8 +28,8 @@
 //! rotation and translation (a scale in it is dropped) after `Scale((-1, 1, -1))`, a half turn
 //! about y.
 
-use super::file::{GltfFile, name, uri_path};
 use super::mesh::mesh_name;
+use crate::format::gltf::{GltfFile, name, uri_path};
 use crate::scene::{SceneDesc, SceneError};
 use glam::{Mat4, Quat, Vec3};
 use gltf::material::AlphaMode;
@@ -430,19 +431,14 @@ impl Converter<'_> {
             return done.clone();
         }
         let image = t.source();
-        let file = match image.source() {
+        // An image file beside the glTF is an `Image`; one inside it a `GltfImage`.
+        let source = match image.source() {
             gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => uri_path(uri)
-                .map(|p| file_name(&self.file.dir.join(p), self.base))
+                .map(|p| format!("Image(file: {}", file_name(&self.file.dir.join(p), self.base)))
                 .map_err(|m| warn(format!("{m}: it is not read"))),
-            _ => {
-                warn(format!(
-                    "its image {} is embedded in the file, which pathwave does not read yet: the factor alone is used",
-                    image.index()
-                ));
-                Err(())
-            }
+            _ => Ok(format!("GltfImage(file: {}, image: {}", self.file_name, image.index())),
         };
-        let named = file.ok().map(|file| {
+        let named = source.ok().map(|source| {
             let sampler = t.sampler();
             use gltf::texture::{MagFilter, WrappingMode};
             let wrap = |w: WrappingMode| match w {
@@ -461,7 +457,7 @@ impl Converter<'_> {
                 Some(MagFilter::Nearest) => "Nearest",
                 _ => "Bilinear",
             };
-            let mut ron = format!("Image(file: {file}, wrap: {}, filter: {filter}", wrap(sampler.wrap_s()));
+            let mut ron = format!("{source}, wrap: {}, filter: {filter}", wrap(sampler.wrap_s()));
             if raw {
                 ron.push_str(", raw: true");
             }

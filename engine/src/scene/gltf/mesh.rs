@@ -8,8 +8,8 @@
 //! glTF's uv has v running down an image (its origin is the image's top left), pathwave's v
 //! runs up (an image's row 0 is v = 1): v is read as 1 - v.
 
-use super::file::{GltfFile, name};
 use crate::accel::mesh::MeshData;
+use crate::format::gltf::{GltfFile, name};
 use glam::{Vec2, Vec3A};
 use gltf::Semantic;
 use gltf::accessor::Dimensions;

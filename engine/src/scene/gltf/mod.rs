@@ -1,20 +1,19 @@
 //! glTF 2.0 (`.gltf` with its `.bin` and images, and `.glb`): meshes for `Mesh(file: ..)`, and
 //! whole scenes read into the same [`crate::scene::SceneDesc`] as RON scenes.
 //!
-//! The `gltf` crate parses and validates the document; [`file`] resolves its buffers and reads
+//! The `gltf` crate parses and validates the document; `format::gltf` resolves its buffers and reads
 //! accessors within bounds, [`mesh`] turns a mesh's primitives into pathwave's mesh, and
 //! [`convert`] writes a scene as RON text (which the RON loader then reads, as Mitsuba scenes
 //! are: `pathwave convert` is the first half of loading), its meshes named by file and index.
 
 pub mod convert;
-pub mod file;
 pub mod mesh;
 
 #[cfg(test)]
 mod tests;
 
+pub use crate::format::gltf::GltfFile;
 pub use convert::{load, to_ron};
-pub use file::GltfFile;
 pub use mesh::MeshRef;
 
 /// Whether `bytes` start as a glTF file does: the `.glb` magic `glTF`, or (after white space)

@@ -36,6 +36,20 @@ impl Doc {
         self.accessors.len() - 1
     }
 
+    /// A buffer view over `bytes` (an image's); its index.
+    pub fn view(&mut self, bytes: &[u8]) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{},"byteLength":{}}}"#,
+            self.bin.len(),
+            bytes.len()
+        ));
+        self.bin.extend_from_slice(bytes);
+        self.views.len() - 1
+    }
+
     /// A POSITION accessor (with its min and max, as glTF requires).
     pub fn positions(&mut self, p: &[[f32; 3]]) -> usize {
         let lo = (0..3).map(|k| p.iter().map(|v| v[k]).fold(f32::INFINITY, f32::min));
@@ -512,5 +526,68 @@ fn a_broken_hierarchy_is_refused() {
     let (dir, path) = scene_file("cycle", &members);
     let err = crate::scene::load(&path).unwrap_err().to_string();
     assert!(err.contains("s.gltf") && err.contains("nodes[0] is met twice"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn images_inside_a_glb_or_a_data_uri_are_read() {
+    use base64::Engine;
+    let png = |rgb: [u8; 3]| {
+        let mut out = std::io::Cursor::new(Vec::new());
+        let img =
+            ::image::RgbImage::from_fn(2, 1, |x, _| ::image::Rgb(if x == 0 { rgb } else { [0, 0, 255] }));
+        img.write_to(&mut out, ::image::ImageFormat::Png).unwrap();
+        out.into_inner()
+    };
+    let (red, green) = (png([255, 0, 0]), png([0, 255, 0]));
+    let mut d = quad(5123);
+    let v = d.view(&red);
+    d.members.push(("images", format!(r#"{{"bufferView":{v},"mimeType":"image/png"}}"#)));
+    let uri = base64::engine::general_purpose::STANDARD.encode(&green);
+    d.members.push(("images", format!(r#"{{"uri":"data:image/png;base64,{uri}"}}"#)));
+    d.members.push(("textures", r#"{"source":0}"#.into()));
+    d.members.push(("textures", r#"{"source":1}"#.into()));
+    d.members.push((
+        "materials",
+        r#"{"normalTexture":{"index":1},"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}"#.into(),
+    ));
+    d.members[0].1 = d.members[0].1.replace(r#""indices":3}"#, r#""indices":3,"material":0}"#);
+    d.members.push(("nodes", r#"{"mesh":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0]}"#.into()));
+    let dir = scratch("embedded");
+    let path = dir.join("s.glb");
+    std::fs::write(&path, d.glb()).unwrap();
+    let ron = super::to_ron(&path, &dir).unwrap().ron;
+    for want in [
+        r#""texture 0": GltfImage(file: "s.glb", image: 0, wrap: Repeat, filter: Bilinear),"#,
+        r#""texture 1 raw": GltfImage(file: "s.glb", image: 1, wrap: Repeat, filter: Bilinear, raw: true),"#,
+    ] {
+        assert!(ron.contains(want), "{want} in\n{ron}");
+    }
+    let desc = crate::scene::load(&path).unwrap();
+    let decoded = |bytes: Vec<u8>, raw: bool| {
+        let t = crate::texture::TextureImage::from_image(
+            ::image::load_from_memory(&bytes).unwrap(),
+            Path::new("x"),
+        )
+        .unwrap();
+        if raw { t.undecoded() } else { t }
+    };
+    let textures: Vec<_> = desc.textures.0.iter().map(|(_, t)| t.clone()).collect();
+    let [crate::texture::TextureDesc::GltfImage(a), crate::texture::TextureDesc::GltfImage(b)] =
+        &textures[..]
+    else {
+        panic!("{textures:?}")
+    };
+    assert_eq!(*a.texels, decoded(red, false));
+    assert_eq!(*b.texels, decoded(green, true));
+    // An image that is not there.
+    let err = crate::scene::parse(
+        r#"Scene(camera: (look_from: (0, 0, 1), look_at: (0, 0, 0), vfov: 40), textures: {"t": GltfImage(file: "s.glb", image: 5)}, materials: {}, objects: [])"#,
+        &dir.join("x.ron"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("image 5: there is no such image (it has 2)"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -1,11 +1,12 @@
-//! A glTF file read whole: its document (parsed and validated by the `gltf` crate, which also
+//! A glTF 2.0 file read whole (for its meshes, `scene::gltf`, and its images, the `GltfImage`
+//! texture): its document (parsed and validated by the `gltf` crate, which also
 //! splits a `.glb` into its JSON and binary chunks) and its buffers, each resolved here: the
 //! `.glb`'s own chunk, a `data:` URI (base64) or a file beside the document, read within the
 //! bounds of [`crate::format::files`]. Accessors are read here too, every range checked
 //! against its view and buffer, so that no count, offset or stride in a file can read past
 //! its data.
 
-use gltf::accessor::{DataType, Dimensions};
+use ::gltf::accessor::{DataType, Dimensions};
 use std::path::{Path, PathBuf};
 
 /// The extensions a file may require: pathwave reads what they change (lights, emission
@@ -18,7 +19,7 @@ pub const REQUIRED_READ: [&str; 3] =
 #[derive(Debug)]
 pub struct GltfFile {
     /// The document.
-    pub doc: gltf::Document,
+    pub doc: ::gltf::Document,
     /// Each buffer's bytes (exactly its `byteLength`), by index.
     buffers: Vec<Vec<u8>>,
     /// The folder its relative URIs (buffers, images) are in.
@@ -30,7 +31,7 @@ impl GltfFile {
     /// files its URIs name.
     pub fn new(bytes: &[u8], path: &Path) -> Result<Self, String> {
         let fail = |m: String| format!("cannot read the glTF file {}: {m}", path.display());
-        let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| fail(describe(e)))?;
+        let gltf = ::gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| fail(describe(e)))?;
         if let Some(e) = gltf.extensions_required().find(|e| !REQUIRED_READ.contains(e)) {
             return Err(fail(format!(
                 "it requires the extension {e}, which pathwave does not read (it reads {})",
@@ -44,8 +45,9 @@ impl GltfFile {
         let count = json.accessors.len();
         for (m, mesh) in json.meshes.iter().enumerate() {
             for (p, prim) in mesh.primitives.iter().enumerate() {
-                let position =
-                    prim.attributes.get(&gltf::json::validation::Checked::Valid(gltf::Semantic::Positions));
+                let position = prim
+                    .attributes
+                    .get(&::gltf::json::validation::Checked::Valid(::gltf::Semantic::Positions));
                 if let Some(i) = position.filter(|i| i.value() >= count) {
                     return Err(fail(format!(
                         "meshes[{m}].primitives[{p}].attributes.POSITION is accessor {}, but there are {count}",
@@ -54,16 +56,16 @@ impl GltfFile {
                 }
             }
         }
-        let doc = gltf::Document::from_json(json).map_err(|e| fail(describe(e)))?;
+        let doc = ::gltf::Document::from_json(json).map_err(|e| fail(describe(e)))?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let mut buffers = Vec::new();
         for b in doc.buffers() {
             let at = || format!("buffer {}{}", b.index(), name(b.name()));
             let mut data = match b.source() {
-                gltf::buffer::Source::Bin => blob
+                ::gltf::buffer::Source::Bin => blob
                     .take()
                     .ok_or_else(|| fail(format!("{} is the GLB's binary chunk, which it lacks", at())))?,
-                gltf::buffer::Source::Uri(uri) => {
+                ::gltf::buffer::Source::Uri(uri) => {
                     uri_bytes(uri, &dir, "buffer").map_err(|m| fail(format!("{}: {m}", at())))?
                 }
             };
@@ -81,13 +83,58 @@ impl GltfFile {
         Ok(Self { doc, buffers, dir })
     }
 
+    /// The glTF file at `path` as read before in this parse (by a mesh or a texture), else read
+    /// now and kept for the parse's later uses.
+    pub fn read(path: &Path) -> Result<std::sync::Arc<Self>, String> {
+        if let Some(file) = super::context::read_before::<Self>(path) {
+            return Ok(file);
+        }
+        let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "glTF file")?;
+        let file = std::sync::Arc::new(Self::new(&bytes, path)?);
+        super::context::keep(path.to_owned(), file.clone());
+        Ok(file)
+    }
+
+    /// The encoded bytes (PNG, JPEG) of image `index`: its buffer view, its `data:` URI or its
+    /// file beside the document. `path` names the glTF file in errors.
+    pub fn image_bytes(&self, index: usize, path: &Path) -> Result<Vec<u8>, String> {
+        let fail = |m: String| format!("the glTF file {}: image {index}: {m}", path.display());
+        let Some(image) = self.doc.images().nth(index) else {
+            return Err(fail(format!("there is no such image (it has {})", self.doc.images().len())));
+        };
+        match image.source() {
+            ::gltf::image::Source::View { view, .. } => {
+                self.view_bytes(&view).map(<[u8]>::to_vec).map_err(fail)
+            }
+            ::gltf::image::Source::Uri { uri, .. } => uri_bytes(uri, &self.dir, "image").map_err(fail),
+        }
+    }
+
+    /// The bytes of buffer view `view`, checked against its buffer.
+    fn view_bytes(&self, view: &::gltf::buffer::View) -> Result<&[u8], String> {
+        let data = &self.buffers[view.buffer().index()];
+        view.offset().checked_add(view.length()).and_then(|end| data.get(view.offset()..end)).ok_or_else(
+            || {
+                format!(
+                    "bufferView {} (bytes {} to {} + {}) overruns buffer {} of {} bytes",
+                    view.index(),
+                    view.offset(),
+                    view.offset(),
+                    view.length(),
+                    view.buffer().index(),
+                    data.len()
+                )
+            },
+        )
+    }
+
     /// The components of accessor `a` as numbers, `dims` of them per element: floats as
     /// written, integer types only if `normalized` is allowed and the accessor is normalised
     /// (mapped to [0, 1] or [-1, 1] as the glTF spec's "Animations" and "Meshes" sections say).
     /// `what` names the accessor's use in errors.
     pub fn floats(
         &self,
-        a: &gltf::Accessor,
+        a: &::gltf::Accessor,
         dims: Dimensions,
         normalized: bool,
         what: &str,
@@ -124,7 +171,7 @@ impl GltfFile {
     }
 
     /// The values of the scalar accessor `a` of unsigned integers (vertex indices).
-    pub fn indices(&self, a: &gltf::Accessor, what: &str) -> Result<Vec<u32>, String> {
+    pub fn indices(&self, a: &::gltf::Accessor, what: &str) -> Result<Vec<u32>, String> {
         let t = a.data_type();
         if a.dimensions() != Dimensions::Scalar || !matches!(t, DataType::U8 | DataType::U16 | DataType::U32)
         {
@@ -147,7 +194,7 @@ impl GltfFile {
     /// The bytes of each element of accessor `a`, every range checked.
     fn elements<'s>(
         &'s self,
-        a: &gltf::Accessor,
+        a: &::gltf::Accessor,
         what: &str,
     ) -> Result<impl Iterator<Item = &'s [u8]>, String> {
         let fail = |m: String| format!("{what}: accessor {}{}: {m}", a.index(), name(a.name()));
@@ -168,22 +215,7 @@ impl GltfFile {
         if count == 0 {
             return Err(fail("it has no elements".into()));
         }
-        let data = &self.buffers[view.buffer().index()];
-        let view_bytes = view
-            .offset()
-            .checked_add(view.length())
-            .and_then(|end| data.get(view.offset()..end))
-            .ok_or_else(|| {
-                fail(format!(
-                    "its bufferView {} (bytes {} to {} + {}) overruns buffer {} of {} bytes",
-                    view.index(),
-                    view.offset(),
-                    view.offset(),
-                    view.length(),
-                    view.buffer().index(),
-                    data.len()
-                ))
-            })?;
+        let view_bytes = self.view_bytes(&view).map_err(|m| fail(format!("its {m}")))?;
         let end = count
             .checked_sub(1)
             .and_then(|last| last.checked_mul(stride))
@@ -221,9 +253,9 @@ pub fn name(n: Option<&str>) -> String {
 }
 
 /// The `gltf` crate's error, with at most the first three validation errors.
-fn describe(e: gltf::Error) -> String {
+fn describe(e: ::gltf::Error) -> String {
     match e {
-        gltf::Error::Validation(errors) => {
+        ::gltf::Error::Validation(errors) => {
             let first: Vec<String> = errors.iter().take(3).map(|(p, e)| format!("{p}: {e}")).collect();
             let more = errors.len().saturating_sub(3);
             let more = if more > 0 { format!(" (and {more} more)") } else { String::new() };
