@@ -99,14 +99,27 @@ impl GltfFile {
     /// file beside the document. `path` names the glTF file in errors.
     pub fn image_bytes(&self, index: usize, path: &Path) -> Result<Vec<u8>, String> {
         let fail = |m: String| format!("the glTF file {}: image {index}: {m}", path.display());
-        let Some(image) = self.doc.images().nth(index) else {
-            return Err(fail(format!("there is no such image (it has {})", self.doc.images().len())));
+        match self.image_at(index).map_err(fail)? {
+            ImageAt::View(view) => self.view_bytes(&view).map(<[u8]>::to_vec).map_err(fail),
+            ImageAt::Uri(uri) => uri_bytes(uri, &self.dir, "image").map_err(fail),
+        }
+    }
+
+    /// Where image `index` is, read from the JSON: the `gltf` crate's `Image::source` (1.4.1)
+    /// panicked on an image with a bufferView and no mimeType, or with neither a bufferView nor
+    /// a uri (found by the `gltf` fuzz target).
+    pub fn image_at(&self, index: usize) -> Result<ImageAt<'_>, String> {
+        let images = &self.doc.as_json().images;
+        let Some(json) = images.get(index) else {
+            return Err(format!("there is no such image (it has {})", images.len()));
         };
-        match image.source() {
-            ::gltf::image::Source::View { view, .. } => {
-                self.view_bytes(&view).map(<[u8]>::to_vec).map_err(fail)
+        match (&json.buffer_view, &json.uri) {
+            // The index was validated with the document.
+            (Some(v), _) => {
+                self.doc.views().nth(v.value()).map(ImageAt::View).ok_or_else(|| "no bufferView".into())
             }
-            ::gltf::image::Source::Uri { uri, .. } => uri_bytes(uri, &self.dir, "image").map_err(fail),
+            (None, Some(uri)) => Ok(ImageAt::Uri(uri)),
+            (None, None) => Err("it has neither a bufferView nor a uri".into()),
         }
     }
 
@@ -234,6 +247,14 @@ impl GltfFile {
         };
         Ok((0..count).map(move |i| &bytes[i * stride..i * stride + size]))
     }
+}
+
+/// Where an image's bytes are.
+pub enum ImageAt<'a> {
+    /// In a buffer view.
+    View(::gltf::buffer::View<'a>),
+    /// At a URI: a `data:` URI or a file beside the glTF.
+    Uri(&'a str),
 }
 
 /// How many numbers an element of `dims` has (vectors and scalars only).

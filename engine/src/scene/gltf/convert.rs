@@ -29,7 +29,7 @@
 //! about y.
 
 use super::mesh::mesh_name;
-use crate::format::gltf::{GltfFile, name, uri_path};
+use crate::format::gltf::{GltfFile, ImageAt, name, uri_path};
 use crate::scene::{SceneDesc, SceneError};
 use glam::{Mat4, Quat, Vec3};
 use gltf::material::AlphaMode;
@@ -250,8 +250,9 @@ impl Converter<'_> {
         if let Some(camera) = node.camera()
             && self.camera.is_none()
         {
-            let (c, r) = camera_ron(&camera, world);
             let at = format!("{at}, cameras[{}]{}", camera.index(), name(camera.name()));
+            let (c, r) =
+                camera_ron(&self.file.doc, &camera, world).map_err(|m| fail(path, format!("{at}: {m}")))?;
             self.camera = Some((c, r, (String::new(), at)));
         }
         if let Some(light) = node.light() {
@@ -430,13 +431,18 @@ impl Converter<'_> {
         if let Some(done) = self.texture_names.get(&key) {
             return done.clone();
         }
-        let image = t.source();
+        // The texture's source (validated as an index of the document's images).
+        let image = t.source().index();
         // An image file beside the glTF is an `Image`; one inside it a `GltfImage`.
-        let source = match image.source() {
-            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => uri_path(uri)
+        let source = match self.file.image_at(image) {
+            Ok(ImageAt::Uri(uri)) if !uri.starts_with("data:") => uri_path(uri)
                 .map(|p| format!("Image(file: {}", file_name(&self.file.dir.join(p), self.base)))
                 .map_err(|m| warn(format!("{m}: it is not read"))),
-            _ => Ok(format!("GltfImage(file: {}, image: {}", self.file_name, image.index())),
+            Ok(_) => Ok(format!("GltfImage(file: {}, image: {image}", self.file_name)),
+            Err(m) => {
+                warn(format!("image {image}: {m}: it is not read"));
+                Err(())
+            }
         };
         let named = source.ok().map(|source| {
             let sampler = t.sampler();
@@ -552,7 +558,7 @@ fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> String {
 }
 
 /// The camera of a node at `world`, and the render settings its aspect ratio gives.
-fn camera_ron(camera: &gltf::Camera, world: Mat4) -> (String, String) {
+fn camera_ron(doc: &gltf::Document, camera: &gltf::Camera, world: Mat4) -> Result<(String, String), String> {
     let (_, rotation, translation) = world.to_scale_rotation_translation();
     let rigid = Mat4::from_rotation_translation(rotation.normalize(), translation);
     let place = format!("Scale((-1, 1, -1)), {}", matrix(rigid));
@@ -570,7 +576,23 @@ fn camera_ron(camera: &gltf::Camera, world: Mat4) -> (String, String) {
         }
         s
     };
-    match camera.projection() {
+    // The `gltf` crate's `projection` (1.4.1) panics where the type's object is missing and
+    // the other's is there, which its validation lets through: checked on the JSON first.
+    let json = &doc.as_json().cameras[camera.index()];
+    let has_object = match json.type_ {
+        gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Perspective) => {
+            json.perspective.is_some()
+        }
+        gltf::json::validation::Checked::Valid(gltf::json::camera::Type::Orthographic) => {
+            json.orthographic.is_some()
+        }
+        gltf::json::validation::Checked::Invalid => false,
+    };
+    if !has_object {
+        return Err("its `type` names a projection whose object it lacks".into());
+    }
+    let projection = camera.projection();
+    Ok(match projection {
         gltf::camera::Projection::Perspective(p) => (
             format!(
                 "(to_world: [{place}], projection: Perspective(fov: {}, fov_axis: Y){})",
@@ -588,7 +610,7 @@ fn camera_ron(camera: &gltf::Camera, world: Mat4) -> (String, String) {
             ),
             size(o.xmag() / o.ymag()),
         ),
-    }
+    })
 }
 
 /// A camera looking along -z at the box of the file's meshes' bounds (their accessors' `min`

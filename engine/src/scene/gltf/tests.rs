@@ -591,3 +591,26 @@ fn images_inside_a_glb_or_a_data_uri_are_read() {
     assert!(err.contains("image 5: there is no such image (it has 2)"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Found by the `gltf` fuzz target: the `gltf` crate's `Image::source` and `Camera::projection`
+/// panicked on an image with a bufferView and no mimeType or with no source at all, and on a
+/// camera whose type's object is missing.
+#[test]
+fn images_without_a_source_and_cameras_without_their_projection_do_not_panic() {
+    let mut d = quad(5123);
+    d.members.push(("images", r#"{"bufferView":0}"#.into()));
+    d.members.push(("images", r#"{"name":"nothing"}"#.into()));
+    let file = GltfFile::new(d.json(None).as_bytes(), Path::new("t.gltf")).unwrap();
+    assert_eq!(file.image_bytes(0, Path::new("t.gltf")).unwrap().len(), 48);
+    let err = file.image_bytes(1, Path::new("t.gltf")).unwrap_err();
+    assert!(err.contains("image 1: it has neither a bufferView nor a uri"), "{err}");
+    let members = [
+        ("cameras", r#"{"type":"perspective","orthographic":{"xmag":1,"ymag":1,"znear":0,"zfar":1}}"#),
+        ("nodes", r#"{"camera":0}"#),
+        ("scenes", r#"{"nodes":[0]}"#),
+    ];
+    let (dir, path) = scene_file("camera", &members);
+    let err = crate::scene::load(&path).unwrap_err().to_string();
+    assert!(err.contains("cameras[0]: its `type` names a projection whose object it lacks"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
