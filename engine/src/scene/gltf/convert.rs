@@ -4,7 +4,8 @@
 //! its triangles: instances of one BLAS); the first camera met; `KHR_lights_punctual` lights;
 //! metallic-roughness materials as `Principled`, with `Mask` for the alpha modes MASK and
 //! BLEND, `NormalMap` for normal textures and `emit` for emissive ones; textures as `Image`
-//! (an image file beside the glTF) or `GltfImage` (one inside it).
+//! (an image file beside the glTF) or `GltfImage` (one inside it); the first animation's node
+//! channels as objects' keyframe tracks.
 //!
 //! Units of `KHR_lights_punctual`: point and spot intensities are luminous intensities in
 //! candela (lm/sr), directional ones illuminances in lux (lm/m^2). pathwave's lights are
@@ -76,6 +77,30 @@ struct Converter<'a> {
     objects: Vec<Item>,
     lights: Vec<Item>,
     camera: Option<(String, String, Item)>,
+    /// The keyframes of the nodes the file's first animation moves, by node index.
+    keys: HashMap<usize, NodeKeys>,
+    /// The time of the animation's last key.
+    end: f32,
+}
+
+/// A node's keyframed translation, rotation and scale as RON tracks (`None`: not animated).
+#[derive(Default)]
+struct NodeKeys {
+    translate: Option<String>,
+    rotate: Option<String>,
+    scale: Option<String>,
+}
+
+/// Where a node stands below the one animated node above it (or itself) on its path.
+#[derive(Clone, Copy)]
+enum Moved {
+    /// No node on its path is animated.
+    Still,
+    /// Node `.0` is animated (a root, or under nodes of identity transforms); `.1` is the
+    /// transform from the node to it.
+    By(usize, Mat4),
+    /// Two animated nodes, or one under a transformed parent: not read (warned about).
+    Unread,
 }
 
 fn fail(path: &Path, message: String) -> SceneError {
@@ -98,7 +123,10 @@ pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
         objects: Vec::new(),
         lights: Vec::new(),
         camera: None,
+        keys: HashMap::new(),
+        end: 0.0,
     };
+    cx.animation(path)?;
     cx.scene(path)?;
     let mut out = Converted { ron: String::new(), origins: Vec::new() };
     let line = |out: &mut Converted, text: &str, at: Option<&str>| {
@@ -149,6 +177,11 @@ pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
         }
         line(&mut out, "    ],", None);
     }
+    if !cx.keys.is_empty() {
+        // Frames at 24 a second up to the last key, with a half-frame shutter (motion blur).
+        let frames = (cx.end * 24.0).floor() as u32 + 1;
+        line(&mut out, &format!("    animation: (frames: {frames}, fps: 24, shutter: 0.5),"), None);
+    }
     line(&mut out, ")", None);
     Ok(out)
 }
@@ -173,13 +206,6 @@ impl Converter<'_> {
         for e in doc.extensions_used().filter(|e| !READ.contains(e)) {
             tracing::warn!("{}: it uses the extension {e}, which pathwave does not read", path.display());
         }
-        if doc.animations().len() > 0 {
-            tracing::warn!(
-                "{}: its {} animations are not read (the scene is rendered as it stands)",
-                path.display(),
-                doc.animations().len()
-            );
-        }
         let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
             return Err(fail(path, "the glTF file has no scene: pathwave renders a scene's nodes".into()));
         };
@@ -193,9 +219,10 @@ impl Converter<'_> {
             );
         }
         let mut seen = vec![false; doc.nodes().len()];
-        let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+        let mut stack: Vec<(gltf::Node, Mat4, Moved)> =
+            scene.nodes().map(|n| (n, Mat4::IDENTITY, Moved::Still)).collect();
         stack.reverse();
-        while let Some((node, parent)) = stack.pop() {
+        while let Some((node, parent, moved)) = stack.pop() {
             let at = format!("nodes[{}]{}", node.index(), name(node.name()));
             if std::mem::replace(&mut seen[node.index()], true) {
                 return Err(fail(
@@ -203,19 +230,195 @@ impl Converter<'_> {
                     format!("{at} is met twice in the hierarchy (a node has one parent at most)"),
                 ));
             }
-            let world = parent * local(&node).map_err(|m| fail(path, format!("{at}: {m}")))?;
+            let own = local(&node).map_err(|m| fail(path, format!("{at}: {m}")))?;
+            let world = parent * own;
             if !world.is_finite() {
                 return Err(fail(path, format!("{at}: its world transform is not finite")));
             }
-            self.node(&node, world, &at, path)?;
+            let animated = self.keys.contains_key(&node.index());
+            let moved = match moved {
+                Moved::Still if animated && parent == Mat4::IDENTITY => {
+                    Moved::By(node.index(), Mat4::IDENTITY)
+                }
+                Moved::Still if animated => {
+                    tracing::warn!(
+                        "{}: {at}: its animation is not read: pathwave keys an object's placement after its transform, and this node has a transformed parent",
+                        path.display()
+                    );
+                    Moved::Unread
+                }
+                Moved::By(..) if animated => {
+                    tracing::warn!(
+                        "{}: {at}: its animation is not read: a node above it is animated too",
+                        path.display()
+                    );
+                    Moved::Unread
+                }
+                Moved::By(a, below) => Moved::By(a, below * own),
+                m => m,
+            };
+            self.node(&node, world, moved, &at, path)?;
             let children: Vec<_> = node.children().collect();
-            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+            stack.extend(children.into_iter().rev().map(|c| (c, world, moved)));
         }
         Ok(())
     }
 
+    /// Reads the file's first animation: each channel's keys as a RON track of its node.
+    /// Linear keys become `Linear` tracks (rotations as axis-angle keys, each the shorter
+    /// way from the one before, so that pathwave's interpolation is glTF's slerp), step keys
+    /// `Linear` tracks holding each value up to the float before the next key's time, and
+    /// cubic-spline keys `Smooth` tracks through their values (their tangents are not read:
+    /// warned). Morph target weights are warned about.
+    fn animation(&mut self, path: &Path) -> Result<(), SceneError> {
+        let doc = &self.file.doc;
+        let Some(anim) = doc.animations().next() else { return Ok(()) };
+        if doc.animations().len() > 1 {
+            tracing::warn!(
+                "{}: of its {} animations the first alone is read",
+                path.display(),
+                doc.animations().len()
+            );
+        }
+        use gltf::animation::{Interpolation, Property};
+        for channel in anim.channels() {
+            let at = format!("animations[{}] channel {}", anim.index(), channel.index());
+            let err = |m: String| fail(path, format!("{at}: {m}"));
+            let target = channel.target();
+            let sampler = channel.sampler();
+            let property = target.property();
+            if property == Property::MorphTargetWeights {
+                tracing::warn!("{}: {at}: morph target weights are not read", path.display());
+                continue;
+            }
+            let times = self
+                .file
+                .floats(&sampler.input(), gltf::accessor::Dimensions::Scalar, false, &at)
+                .map_err(err)?;
+            if let Some(w) = times.windows(2).find(|w| !(w[0] < w[1])) {
+                return Err(err(format!("its key times must increase: {} comes after {}", w[1], w[0])));
+            }
+            if let Some(t) = times.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
+                return Err(err(format!("a key time is {t}, not a finite number >= 0")));
+            }
+            let dims = match property {
+                Property::Rotation => gltf::accessor::Dimensions::Vec4,
+                _ => gltf::accessor::Dimensions::Vec3,
+            };
+            let n = if dims == gltf::accessor::Dimensions::Vec4 { 4 } else { 3 };
+            let values = self
+                .file
+                .floats(&sampler.output(), dims, property == Property::Rotation, &at)
+                .map_err(err)?;
+            let per_key = match sampler.interpolation() {
+                Interpolation::CubicSpline => 3,
+                _ => 1,
+            };
+            if values.len() != times.len() * n * per_key {
+                return Err(err(format!(
+                    "it has {} output values for {} key times",
+                    values.len() / n,
+                    times.len()
+                )));
+            }
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(err(format!("an output value is {v}, not finite")));
+            }
+            // The values (a cubic spline's middle one of each key's three).
+            let value = |k: usize| &values[(k * per_key + per_key / 2) * n..][..n];
+            let mut keys: Vec<(f32, Vec<f32>)> = Vec::new();
+            for (k, &t) in times.iter().enumerate() {
+                if sampler.interpolation() == Interpolation::Step && k > 0 {
+                    let before = f32::from_bits(t.to_bits() - 1);
+                    if before > times[k - 1] {
+                        keys.push((before, value(k - 1).to_vec()));
+                    }
+                }
+                keys.push((t, value(k).to_vec()));
+            }
+            if sampler.interpolation() == Interpolation::CubicSpline {
+                tracing::warn!(
+                    "{}: {at}: its cubic-spline tangents are not read: a Catmull-Rom spline passes through its keys",
+                    path.display()
+                );
+            }
+            self.end = self.end.max(*times.last().unwrap_or(&0.0));
+            let text: Vec<String> = match property {
+                Property::Rotation => {
+                    let mut last = Quat::IDENTITY;
+                    keys.iter()
+                        .map(|(t, v)| {
+                            let mut q = Quat::from_array([v[0], v[1], v[2], v[3]]).normalize();
+                            if !q.is_finite() {
+                                q = Quat::IDENTITY;
+                            }
+                            if q.dot(last) < 0.0 {
+                                q = -q;
+                            }
+                            last = q;
+                            let (axis, angle) = q.to_axis_angle();
+                            let axis = if angle.abs() > 0.0 && axis.is_finite() { axis } else { Vec3::Y };
+                            format!(
+                                "({}, AxisAngle(axis: {}, degrees: {}))",
+                                num(*t),
+                                rgb(axis.to_array()),
+                                num(angle.to_degrees())
+                            )
+                        })
+                        .collect()
+                }
+                _ => {
+                    keys.iter().map(|(t, v)| format!("({}, {})", num(*t), rgb([v[0], v[1], v[2]]))).collect()
+                }
+            };
+            let kind = match sampler.interpolation() {
+                Interpolation::CubicSpline => "Smooth",
+                _ => "Linear",
+            };
+            let track = format!("{kind}([{}])", text.join(", "));
+            let entry = self.keys.entry(target.node().index()).or_default();
+            match property {
+                Property::Translation => entry.translate = Some(track),
+                Property::Rotation => entry.rotate = Some(track),
+                _ => entry.scale = Some(track),
+            }
+        }
+        Ok(())
+    }
+
+    /// The `animate` of an object under (or on) the animated node `a`: its keyed channels,
+    /// and its rest translation, rotation or scale as one key where a channel has none.
+    fn animate(&self, a: usize) -> String {
+        let keys = &self.keys[&a];
+        let node = self.file.doc.nodes().nth(a).expect("an animated node is a node of the file");
+        let (t, r, sc) = node.transform().decomposed();
+        let rest_r = {
+            let q = Quat::from_array(r).normalize();
+            let (axis, angle) = q.to_axis_angle();
+            let axis = if angle.abs() > 0.0 && axis.is_finite() { axis } else { Vec3::Y };
+            format!(
+                "Linear([(0, AxisAngle(axis: {}, degrees: {}))])",
+                rgb(axis.to_array()),
+                num(angle.to_degrees())
+            )
+        };
+        format!(
+            "(translate: {}, rotate: {}, scale: {})",
+            keys.translate.clone().unwrap_or_else(|| format!("Linear([(0, {})])", rgb(t))),
+            keys.rotate.clone().unwrap_or(rest_r),
+            keys.scale.clone().unwrap_or_else(|| format!("Linear([(0, {})])", rgb(sc))),
+        )
+    }
+
     /// What node `node` holds, at `world`.
-    fn node(&mut self, node: &gltf::Node, world: Mat4, at: &str, path: &Path) -> Result<(), SceneError> {
+    fn node(
+        &mut self,
+        node: &gltf::Node,
+        world: Mat4,
+        moved: Moved,
+        at: &str,
+        path: &Path,
+    ) -> Result<(), SceneError> {
         if node.skin().is_some() {
             tracing::warn!("{}: {at}: its skin is not read (its mesh is drawn as it stands)", path.display());
         }
@@ -230,7 +433,13 @@ impl Converter<'_> {
                     mesh_name(&mesh)
                 );
             } else {
-                let transform = matrix(world);
+                // A moving object: its transform up to the animated node, then the node's
+                // keyed translation, rotation and scale (rest values where a channel has no
+                // keys).
+                let (transform, animate) = match moved {
+                    Moved::By(a, below) => (matrix(below), Some(self.animate(a))),
+                    _ => (matrix(world), None),
+                };
                 let single = mesh.primitives().len() == 1;
                 for p in mesh.primitives() {
                     let (material, emit) = self.material(p.material(), path);
@@ -242,10 +451,20 @@ impl Converter<'_> {
                     if let Some(e) = emit {
                         write!(o, ", emit: {e}").unwrap();
                     }
-                    write!(o, ", transform: [{transform}])").unwrap();
+                    write!(o, ", transform: [{transform}]").unwrap();
+                    if let Some(a) = &animate {
+                        write!(o, ", animate: {a}").unwrap();
+                    }
+                    o.push(')');
                     self.objects.push((o, at.to_owned()));
                 }
             }
+        }
+        if !matches!(moved, Moved::Still) && (node.camera().is_some() || node.light().is_some()) {
+            tracing::warn!(
+                "{}: {at}: its camera or light does not move: pathwave keys objects only",
+                path.display()
+            );
         }
         if let Some(camera) = node.camera()
             && self.camera.is_none()

@@ -614,3 +614,40 @@ fn images_without_a_source_and_cameras_without_their_projection_do_not_panic() {
     assert!(err.contains("cameras[0]: its `type` names a projection whose object it lacks"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn node_animations_become_keyframe_tracks() {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let mut d = quad(5123);
+    // Node 0 (a root) moves from (0, 0, 0) to (2, 0, 0) over a second, linearly, and turns a
+    // quarter about y at 1 s (a step); node 1, its child at (1, 0, 0), holds the mesh.
+    let times = d.floats(&[0.0, 1.0], "SCALAR", 1);
+    let moves = d.floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0], "VEC3", 3);
+    let turns = d.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, h, 0.0, h], "VEC4", 4);
+    d.members.push((
+        "animations",
+        format!(
+            r#"{{"channels":[{{"sampler":0,"target":{{"node":0,"path":"translation"}}}},{{"sampler":1,"target":{{"node":0,"path":"rotation"}}}}],
+               "samplers":[{{"input":{times},"output":{moves}}},{{"input":{times},"output":{turns},"interpolation":"STEP"}}]}}"#
+        ),
+    ));
+    // Its rest translation, which the keys replace.
+    d.members.push(("nodes", r#"{"translation":[5,5,5],"children":[1]}"#.into()));
+    d.members.push(("nodes", r#"{"translation":[1,0,0],"mesh":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0]}"#.into()));
+    let dir = scratch("animation");
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    let desc = crate::scene::load(&path).unwrap();
+    assert_eq!(desc.animation.frames.get(), 25);
+    let o = &desc.objects[0];
+    let at = |t: f32| o.animate.as_ref().unwrap().at(t) * crate::scene::compose(&o.transform);
+    let origin = |t: f32| at(t).transform_point3(glam::Vec3::ZERO);
+    // Half way: moved by (1, 0, 0), not turned; just before 1 s, still not turned; at 1 s the
+    // child's (1, 0, 0) turned to (0, 0, -1).
+    for (t, want) in [(0.5, (2.0, 0.0, 0.0)), (0.999, (2.998, 0.0, 0.0)), (1.0, (2.0, 0.0, -1.0))] {
+        let got = origin(t);
+        assert!((got - glam::Vec3::from(want)).length() < 1e-5, "at {t}: {got}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
