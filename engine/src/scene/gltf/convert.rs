@@ -281,12 +281,26 @@ impl Converter<'_> {
             );
         }
         use gltf::animation::{Interpolation, Property};
+        use gltf::json::validation::Checked;
         for channel in anim.channels() {
             let at = format!("animations[{}] channel {}", anim.index(), channel.index());
             let err = |m: String| fail(path, format!("{at}: {m}"));
             let target = channel.target();
             let sampler = channel.sampler();
-            let property = target.property();
+            // The path (and the interpolation) from the JSON: the `gltf` crate's `property`
+            // (1.4.1) unwraps it, and its validation lets a path it does not know through
+            // (found by the `gltf` fuzz target).
+            let json = &doc.as_json().animations[anim.index()];
+            let (path_json, interpolation_json) =
+                (&json.channels[channel.index()].target.path, &json.samplers[sampler.index()].interpolation);
+            let (Checked::Valid(property), Checked::Valid(interpolation)) = (*path_json, *interpolation_json)
+            else {
+                tracing::warn!(
+                    "{}: {at}: its path or interpolation is not one glTF defines: not read",
+                    path.display()
+                );
+                continue;
+            };
             if property == Property::MorphTargetWeights {
                 tracing::warn!("{}: {at}: morph target weights are not read", path.display());
                 continue;
@@ -310,7 +324,7 @@ impl Converter<'_> {
                 .file
                 .floats(&sampler.output(), dims, property == Property::Rotation, &at)
                 .map_err(err)?;
-            let per_key = match sampler.interpolation() {
+            let per_key = match interpolation {
                 Interpolation::CubicSpline => 3,
                 _ => 1,
             };
@@ -328,7 +342,7 @@ impl Converter<'_> {
             let value = |k: usize| &values[(k * per_key + per_key / 2) * n..][..n];
             let mut keys: Vec<(f32, Vec<f32>)> = Vec::new();
             for (k, &t) in times.iter().enumerate() {
-                if sampler.interpolation() == Interpolation::Step && k > 0 {
+                if interpolation == Interpolation::Step && k > 0 {
                     let before = f32::from_bits(t.to_bits() - 1);
                     if before > times[k - 1] {
                         keys.push((before, value(k - 1).to_vec()));
@@ -336,7 +350,7 @@ impl Converter<'_> {
                 }
                 keys.push((t, value(k).to_vec()));
             }
-            if sampler.interpolation() == Interpolation::CubicSpline {
+            if interpolation == Interpolation::CubicSpline {
                 tracing::warn!(
                     "{}: {at}: its cubic-spline tangents are not read: a Catmull-Rom spline passes through its keys",
                     path.display()
@@ -371,7 +385,7 @@ impl Converter<'_> {
                     keys.iter().map(|(t, v)| format!("({}, {})", num(*t), rgb([v[0], v[1], v[2]]))).collect()
                 }
             };
-            let kind = match sampler.interpolation() {
+            let kind = match interpolation {
                 Interpolation::CubicSpline => "Smooth",
                 _ => "Linear",
             };

@@ -651,3 +651,26 @@ fn node_animations_become_keyframe_tracks() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Found by the `gltf` fuzz target: the `gltf` crate unwraps a channel's path, which its
+/// validation lets through when it does not know the name.
+#[test]
+fn a_channel_of_an_unknown_path_is_passed_over() {
+    let mut d = quad(5123);
+    let times = d.floats(&[0.0, 1.0], "SCALAR", 1);
+    let moves = d.floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0], "VEC3", 3);
+    d.members.push((
+        "animations",
+        format!(
+            r#"{{"channels":[{{"sampler":0,"target":{{"node":0,"path":"rtanslation"}}}}],"samplers":[{{"input":{times},"output":{moves}}}]}}"#
+        ),
+    ));
+    d.members.push(("nodes", r#"{"mesh":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0]}"#.into()));
+    let dir = scratch("bad-channel");
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    let desc = crate::scene::load(&path).unwrap();
+    assert!(desc.objects[0].animate.is_none());
+    std::fs::remove_dir_all(dir).unwrap();
+}
