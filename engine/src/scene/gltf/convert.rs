@@ -178,8 +178,9 @@ pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
         line(&mut out, "    ],", None);
     }
     if !cx.keys.is_empty() {
-        // Frames at 24 a second up to the last key, with a half-frame shutter (motion blur).
-        let frames = (cx.end * 24.0).floor() as u32 + 1;
+        // Frames at 24 a second up to the last key (as many as a u32 holds: the `gltf` fuzz
+        // target's key at 3e38 s overflowed), with a half-frame shutter (motion blur).
+        let frames = ((cx.end * 24.0).floor() as u32).saturating_add(1);
         line(&mut out, &format!("    animation: (frames: {frames}, fps: 24, shutter: 0.5),"), None);
     }
     line(&mut out, ")", None);

@@ -674,3 +674,24 @@ fn a_channel_of_an_unknown_path_is_passed_over() {
     assert!(desc.objects[0].animate.is_none());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Found by the `gltf` fuzz target: a key at 3e38 s overflowed the frame count.
+#[test]
+fn a_key_at_the_end_of_time_gives_as_many_frames_as_there_can_be() {
+    let mut d = quad(5123);
+    let times = d.floats(&[0.0, 3e38], "SCALAR", 1);
+    let moves = d.floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0], "VEC3", 3);
+    d.members.push((
+        "animations",
+        format!(
+            r#"{{"channels":[{{"sampler":0,"target":{{"node":0,"path":"translation"}}}}],"samplers":[{{"input":{times},"output":{moves}}}]}}"#
+        ),
+    ));
+    d.members.push(("nodes", r#"{"mesh":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0]}"#.into()));
+    let dir = scratch("end-of-time");
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    assert_eq!(crate::scene::load(&path).unwrap().animation.frames.get(), u32::MAX);
+    std::fs::remove_dir_all(dir).unwrap();
+}
