@@ -286,12 +286,16 @@ impl Converter<'_> {
         for channel in anim.channels() {
             let at = format!("animations[{}] channel {}", anim.index(), channel.index());
             let err = |m: String| fail(path, format!("{at}: {m}"));
-            let target = channel.target();
             let sampler = channel.sampler();
-            // The path (and the interpolation) from the JSON: the `gltf` crate's `property`
-            // (1.4.1) unwraps it, and its validation lets a path it does not know through
-            // (found by the `gltf` fuzz target).
+            // The target's node and path (and the interpolation) from the JSON: the `gltf`
+            // crate's `node` and `property` (1.4.1) unwrap them, and its validation lets a
+            // node past the last and a path it does not know through (found by the `gltf`
+            // fuzz target).
             let json = &doc.as_json().animations[anim.index()];
+            let node = json.channels[channel.index()].target.node.value();
+            if node >= doc.nodes().len() {
+                return Err(err(format!("its target is node {node}, but there are {}", doc.nodes().len())));
+            }
             let (path_json, interpolation_json) =
                 (&json.channels[channel.index()].target.path, &json.samplers[sampler.index()].interpolation);
             let (Checked::Valid(property), Checked::Valid(interpolation)) = (*path_json, *interpolation_json)
@@ -391,7 +395,7 @@ impl Converter<'_> {
                 _ => "Linear",
             };
             let track = format!("{kind}([{}])", text.join(", "));
-            let entry = self.keys.entry(target.node().index()).or_default();
+            let entry = self.keys.entry(node).or_default();
             match property {
                 Property::Translation => entry.translate = Some(track),
                 Property::Rotation => entry.rotate = Some(track),

@@ -653,9 +653,10 @@ fn node_animations_become_keyframe_tracks() {
 }
 
 /// Found by the `gltf` fuzz target: the `gltf` crate unwraps a channel's path, which its
-/// validation lets through when it does not know the name.
+/// validation lets through when it does not know the name, and its node, which it lets through
+/// past the last.
 #[test]
-fn a_channel_of_an_unknown_path_is_passed_over() {
+fn a_channel_of_an_unknown_path_is_passed_over_and_one_of_no_node_refused() {
     let mut d = quad(5123);
     let times = d.floats(&[0.0, 1.0], "SCALAR", 1);
     let moves = d.floats(&[0.0, 0.0, 0.0, 2.0, 0.0, 0.0], "VEC3", 3);
@@ -672,6 +673,10 @@ fn a_channel_of_an_unknown_path_is_passed_over() {
     std::fs::write(&path, d.json(None)).unwrap();
     let desc = crate::scene::load(&path).unwrap();
     assert!(desc.objects[0].animate.is_none());
+    let json = d.json(None).replace(r#""node":0,"path":"rtanslation""#, r#""node":7,"path":"translation""#);
+    std::fs::write(&path, json).unwrap();
+    let err = crate::scene::load(&path).unwrap_err().to_string();
+    assert!(err.contains("animations[0] channel 0: its target is node 7, but there are 1"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
