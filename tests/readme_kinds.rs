@@ -57,7 +57,10 @@ fn the_probe_finds_the_users_kinds_and_their_parameters() {
     let quad = all.iter().find(|k| k.name == "Quad").unwrap();
     assert_eq!(quad.params, ["q", "u", "v", "flip_normal"]);
     let mesh = all.iter().find(|k| k.name == "Mesh").unwrap();
-    assert_eq!(mesh.params, ["file", "shape_index", "face_normals", "flip_normals", "flip_tex_coords"]);
+    assert_eq!(
+        mesh.params,
+        ["file", "shape_index", "mesh", "primitive", "face_normals", "flip_normals", "flip_tex_coords"]
+    );
     let spot = all.iter().find(|k| k.name == "Spot").unwrap();
     assert_eq!(
         spot.params,

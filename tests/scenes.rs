@@ -1,4 +1,5 @@
-//! Every scene in `scenes/` loads and renders (small and fast) without NaN and not black.
+//! Every scene in `scenes/` (RON and glTF) loads and renders (small and fast) without NaN and
+//! not black.
 
 mod common;
 use common::*;
@@ -8,7 +9,7 @@ fn every_scene_renders() {
     let mut names: Vec<String> = std::fs::read_dir(root().join("scenes"))
         .unwrap()
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter(|n| n.ends_with(".ron"))
+        .filter(|n| n.ends_with(".ron") || n.ends_with(".gltf"))
         .collect();
     names.sort();
     assert!(names.len() >= 3, "{names:?}");

@@ -56,8 +56,8 @@ pub enum Command {
     /// files are linear (an EXR's beauty: R, G, B); an 8-bit file (PNG, JPEG) is sRGB-encoded,
     /// so comparing one with a linear file needs `--encoded` to say how to read it.
     Compare(CompareCommand),
-    /// Write a Mitsuba 3 XML scene as a RON scene that renders the same image (every command
-    /// that takes a scene also reads .xml directly).
+    /// Write a Mitsuba 3 XML or glTF 2.0 scene as a RON scene that renders the same image
+    /// (every command that takes a scene also reads .xml, .gltf and .glb directly).
     Convert(ConvertCommand),
 }
 

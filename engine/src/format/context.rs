@@ -24,7 +24,7 @@ pub(crate) struct Names {
     pub wrappers: Vec<String>,
     /// All texture names, in file order.
     pub textures: Vec<String>,
-    /// The names of the `Image` textures.
+    /// The names of the `Image` and `GltfImage` textures.
     pub images: Vec<String>,
     /// The names of the bump and normal maps, and of the wrappers that hold one.
     pub tilting: Vec<String>,

@@ -1,6 +1,6 @@
-//! Files a scene names: meshes (OBJ, PLY and Mitsuba's `.serialized`) and images (textures,
-//! environment maps; [`ImageFile`] lives with the image texture kind, `texture/image.rs`), read
-//! in the second parsing pass relative to the scene file.
+//! Files a scene names: meshes (OBJ, PLY, glTF 2.0 and Mitsuba's `.serialized`) and images
+//! (textures, environment maps; [`ImageFile`] lives with the image texture kind,
+//! `texture/image.rs`), read in the second parsing pass relative to the scene file.
 
 use super::serialized::SerializedFile;
 use crate::accel::mesh::{MeshAttribute, MeshData};
@@ -20,9 +20,9 @@ pub struct MeshFile {
     pub mesh: Arc<MeshData>,
 }
 
-/// A mesh file as `Mesh(file: ..)` names it, read when the name is: an OBJ or PLY file decoded
-/// whole, a `.serialized` file (by its extension) kept whole until the shape says which of its
-/// meshes it is. Other extensions are read as OBJ.
+/// A mesh file as `Mesh(file: ..)` names it, read when the name is (its format told by
+/// [`mesh_format`]): an OBJ or PLY file decoded whole, a `.serialized` or glTF file kept whole
+/// until the shape says which of its meshes it is.
 #[derive(Debug, Clone)]
 pub struct MeshPath {
     /// The path as written.
@@ -40,8 +40,10 @@ pub enum MeshSource {
     Unread,
     /// One mesh (OBJ, PLY).
     Mesh(Arc<MeshData>),
-    /// Meshes to pick from.
+    /// Meshes to pick from, by index.
     Serialized(Arc<SerializedFile>),
+    /// Meshes to pick from, by name or index.
+    Gltf(Arc<super::gltf::GltfFile>),
 }
 
 impl<'de> Deserialize<'de> for MeshPath {
@@ -88,14 +90,64 @@ impl<'de> Deserialize<'de> for GridFile {
     }
 }
 
-/// Reads the mesh file at `path` by its extension.
+/// The mesh formats `Mesh(file: ..)` reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (`.obj`).
+    Obj,
+    /// PLY, ASCII or binary (`.ply`).
+    Ply,
+    /// glTF 2.0 (`.gltf` JSON or `.glb`).
+    Gltf,
+    /// Mitsuba's `.serialized`.
+    Serialized,
+}
+
+/// The formats, as an error lists them.
+const FORMATS: &str = "OBJ (.obj), PLY (.ply), glTF 2.0 (.gltf, .glb) and Mitsuba's .serialized";
+
+/// The format of the mesh file `bytes` read from `path`: by its first bytes where they say
+/// (`ply`, the `.glb` magic `glTF` or a JSON `{`, the `.serialized` format code 0x041C), else by
+/// its extension; a file that is neither is refused, naming the formats there are.
+pub fn mesh_format(bytes: &[u8], path: &std::path::Path) -> Result<MeshFormat, String> {
+    let ply = bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n");
+    if ply {
+        return Ok(MeshFormat::Ply);
+    }
+    if super::gltf::is_gltf(bytes) {
+        return Ok(MeshFormat::Gltf);
+    }
+    if bytes.starts_with(&[0x1C, 0x04]) {
+        return Ok(MeshFormat::Serialized);
+    }
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("obj") => Ok(MeshFormat::Obj),
+        Some("ply") => Ok(MeshFormat::Ply),
+        Some("gltf" | "glb") => Ok(MeshFormat::Gltf),
+        Some("serialized") => Ok(MeshFormat::Serialized),
+        _ => Err(format!(
+            "the mesh {} is in no format pathwave reads: neither its extension nor its first bytes are those of {FORMATS}",
+            path.display()
+        )),
+    }
+}
+
+/// Reads the mesh file at `path` in its format ([`mesh_format`]).
 fn read_mesh_file(path: &std::path::Path) -> Result<MeshSource, String> {
     let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
-    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
-    Ok(match ext.as_deref() {
-        Some("ply") => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
-        Some("serialized") => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
-        _ => MeshSource::Mesh(Arc::new(parse_obj(&bytes, path)?)),
+    Ok(match mesh_format(&bytes, path)? {
+        MeshFormat::Ply => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
+        MeshFormat::Serialized => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
+        MeshFormat::Gltf => MeshSource::Gltf(match context::read_before::<super::gltf::GltfFile>(path) {
+            Some(file) => file,
+            None => {
+                let file = Arc::new(super::gltf::GltfFile::new(&bytes, path)?);
+                context::keep(path.to_owned(), file.clone());
+                file
+            }
+        }),
+        MeshFormat::Obj => MeshSource::Mesh(Arc::new(parse_obj(&bytes, path)?)),
     })
 }
 

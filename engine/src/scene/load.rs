@@ -23,12 +23,20 @@ pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, String
 
 /// [`load`] with `(name, value)` overrides of the scene's declared parameters (`-D`).
 ///
-/// A `.xml` file is a Mitsuba 3 scene (see the `mitsuba` module); anything else is RON.
+/// A `.xml` file is a Mitsuba 3 scene (see the `mitsuba` module), a `.gltf` or `.glb` file a
+/// glTF 2.0 one (see the `gltf` module, which takes no overrides); anything else is RON.
 /// The files it read are the description's `inputs`.
 pub fn load_with(path: &Path, overrides: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let (desc, inputs) = crate::format::files::recording(|| {
         if super::mitsuba::is_xml(path) {
             return super::mitsuba::load(path, overrides);
+        }
+        if super::gltf::is_gltf_scene(path) {
+            if let Some((name, _)) = overrides.first() {
+                let message = format!("-D {name}: a glTF scene declares no parameters");
+                return Err(SceneError { path: path.to_owned(), line: 0, col: 0, message });
+            }
+            return super::gltf::load(path);
         }
         let fail = |message: String| SceneError { path: path.to_owned(), line: 0, col: 0, message };
         let bytes = crate::format::files::read_bounded(path, crate::format::files::MAX_SCENE_BYTES, "scene")
@@ -88,7 +96,9 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             .textures
             .0
             .iter()
-            .filter(|(_, t)| matches!(t, crate::texture::TextureDesc::Image(_)))
+            .filter(|(_, t)| {
+                matches!(t, crate::texture::TextureDesc::Image(_) | crate::texture::TextureDesc::GltfImage(_))
+            })
             .map(|(n, _)| n.clone())
             .collect(),
         tilting: tilting(&names),

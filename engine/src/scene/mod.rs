@@ -5,6 +5,7 @@ mod assets;
 mod camera;
 mod desc;
 mod error;
+pub mod gltf;
 mod light;
 mod load;
 mod material;

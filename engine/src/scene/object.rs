@@ -387,8 +387,9 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
 }
 
 /// `Mesh(file: "assets/knot.obj")`: the triangles of a mesh file (relative to the scene
-/// file: OBJ, PLY, or Mitsuba's `.serialized`, whose mesh `shape_index` it is, default 0), read
-/// as the scene is parsed, smooth-shaded where the file gives vertex normals; `face_normals:
+/// file: OBJ, PLY, glTF 2.0, whose mesh `mesh` it is, by name or index (default: the file's
+/// only mesh), all its primitives or only `primitive`, or Mitsuba's `.serialized`, whose mesh
+/// `shape_index` it is, default 0), read as the scene is parsed, smooth-shaded where the file gives vertex normals; `face_normals:
 /// true` shades it flat all the same (Mitsuba's `face_normals`), `flip_normals: true` turns it
 /// inside out (its faces wound the other way, its normals reversed), `flip_tex_coords: true`
 /// reads each uv's v as 1 - v. Meshes are not in the shape registry: their runtime form is the
@@ -400,6 +401,10 @@ struct MeshDesc {
     #[serde(default)]
     shape_index: u32,
     #[serde(default)]
+    mesh: Option<super::gltf::MeshRef>,
+    #[serde(default)]
+    primitive: Option<u32>,
+    #[serde(default)]
     face_normals: bool,
     #[serde(default)]
     flip_normals: bool,
@@ -410,12 +415,33 @@ struct MeshDesc {
 fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Error> {
     let d = fields::<MeshDesc, A>(variant)?;
     let MeshPath { path, full, source } = d.file;
+    let gltf_only = match (&d.mesh, d.primitive) {
+        (Some(_), _) => Some("mesh"),
+        (None, Some(_)) => Some("primitive"),
+        (None, None) => None,
+    };
     let mesh = match source {
         MeshSource::Unread => return Ok(MeshFile { path, mesh: Default::default() }),
-        MeshSource::Mesh(m) if d.shape_index == 0 => m,
-        MeshSource::Mesh(_) => {
+        MeshSource::Mesh(_) | MeshSource::Serialized(_) if gltf_only.is_some() => {
+            let message = format!("`{}` picks a mesh of a glTF file", gltf_only.unwrap());
+            return Err(A::Error::custom(message));
+        }
+        MeshSource::Mesh(_) | MeshSource::Gltf(_) if d.shape_index != 0 => {
             let message = format!("shape_index {} picks a mesh of a .serialized file", d.shape_index);
             return Err(A::Error::custom(message));
+        }
+        MeshSource::Mesh(m) => m,
+        MeshSource::Gltf(file) => {
+            let key = full.join(format!("#{:?}#{:?}", d.mesh, d.primitive));
+            match crate::format::context::read_before(&key) {
+                Some(m) => m,
+                None => {
+                    let m = file.mesh_data(d.mesh.as_ref(), d.primitive, &full).map_err(A::Error::custom)?;
+                    let m = Arc::new(m);
+                    crate::format::context::keep(key, m.clone());
+                    m
+                }
+            }
         }
         MeshSource::Serialized(file) => {
             let key = full.join(format!("#{}", d.shape_index));
@@ -436,7 +462,10 @@ fn read_mesh<'de, A: VariantAccess<'de>>(variant: A) -> Result<MeshFile, A::Erro
     }
     // One changed copy per file, mesh and options, shared by the objects that ask for it (one
     // BLAS).
-    let key = full.join(format!("#{}#{face_normals}#{}#{flip_v}", d.shape_index, d.flip_normals));
+    let key = full.join(format!(
+        "#{}#{:?}#{:?}#{face_normals}#{}#{flip_v}",
+        d.shape_index, d.mesh, d.primitive, d.flip_normals
+    ));
     let cached = crate::format::context::read_before(&key);
     let mesh = cached.unwrap_or_else(|| {
         let mut m = (*mesh).clone();

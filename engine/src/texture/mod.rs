@@ -17,6 +17,7 @@
 
 pub mod blocky_noise;
 pub mod checker;
+pub mod gltf_image;
 pub mod image;
 pub mod marble;
 pub mod mesh_attribute;
@@ -44,6 +45,7 @@ registry! {
         Checker(checker::Checker),
         UvChecker(uv_checker::UvChecker),
         Image(image::Image),
+        GltfImage(gltf_image::GltfImage),
         Noise(noise::Noise),
         BlockyNoise(blocky_noise::BlockyNoise),
         Turbulence(turbulence::Turbulence),
