@@ -569,6 +569,12 @@ impl Converter<'_> {
                     n.scale()
                 ));
             }
+            if n.extension_value("KHR_texture_transform").is_some() {
+                warn(
+                    "its normalTexture's KHR_texture_transform is not read: the map is read untransformed"
+                        .into(),
+                );
+            }
             self.image_texture(n.texture(), n.tex_coord(), String::new(), true, "normalTexture", &at, path)
         });
         let plain = format!("Principled({fields})");
