@@ -74,10 +74,12 @@ fn a_display_that_never_answers_does_not_hold_up_the_render() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// An X server of its own (Xvfb, black root, 320x240), killed when dropped.
-/// An X server of a test's own, with the lock that keeps the tests' servers one at a time: two
-/// started at once were seen to hand out a display on which one client connected (xwd) and
-/// the next did not (XOpenDisplay failed).
+/// An X server of a test's own (Xvfb, black root, 320x240), killed when dropped, with the lock
+/// that keeps the tests' servers one at a time: two started at once were seen to hand out a
+/// display on which one client connected (xwd) and the next did not (XOpenDisplay failed).
+/// `-noreset`: by default an X server resets when its last client leaves, and a client that
+/// connects during the reset is refused; here every xwd and xdotool is such a last client, and
+/// CI saw the window refused right after a screenshot.
 struct Xvfb(
     Child,
     String,
@@ -93,7 +95,7 @@ impl Xvfb {
         let lock = ONE_SERVER.lock().unwrap_or_else(|e| e.into_inner());
         // -displayfd: Xvfb picks a free display and writes its number once it accepts clients.
         let mut child = Command::new("Xvfb")
-            .args(["-displayfd", "1", "-screen", "0", "320x240x24", "-br", "-nolisten", "tcp"])
+            .args(["-displayfd", "1", "-screen", "0", "320x240x24", "-br", "-nolisten", "tcp", "-noreset"])
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
