@@ -108,4 +108,32 @@ pub fn log_scene(scene: &crate::engine::render_scene::RenderScene) {
         s.spp,
         s.max_depth
     );
+    if tracing::enabled!(tracing::Level::DEBUG) {
+        let geo = &scene.geometry;
+        let traversal = match (geo.flat().is_some(), geo.is_static_bvh()) {
+            (true, _) => "flat streams (few primitives: every ray tests every one)",
+            (false, true) => "BVH, camera and shadow rays in packets",
+            (false, false) => "BVH over moving primitives, one ray at a time",
+        };
+        let instances = match (scene.instances.list.is_empty(), scene.instances.still()) {
+            (true, _) => "none",
+            (false, true) => "still (shadow rays in packets)",
+            (false, false) => "moving (one ray at a time)",
+        };
+        let f = scene.features;
+        let on = |b: bool| if b { "on" } else { "skipped" };
+        tracing::debug!(
+            traversal,
+            instances,
+            instance_bytes = scene.instances.bytes(),
+            media = on(f.media),
+            motion = on(f.motion),
+            textures = on(f.textures),
+            texel_bytes = scene.textures.texel_bytes(),
+            wrappers = on(f.wrappers),
+            normal_maps = on(f.tilts),
+            shading_loops = ?crate::integrator::wavefront::material_kinds(scene),
+            "code paths"
+        );
+    }
 }

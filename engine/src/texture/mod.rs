@@ -422,6 +422,21 @@ pub struct Textures {
 }
 
 impl Textures {
+    /// The bytes the images' texels take (an image two textures share counted once).
+    pub fn texel_bytes(&self) -> usize {
+        let mut seen: Vec<*const TextureImage> = Vec::new();
+        let mut bytes = 0;
+        for t in &self.list {
+            if let Texture::Image { image, .. } = t
+                && !seen.contains(&Arc::as_ptr(image))
+            {
+                seen.push(Arc::as_ptr(image));
+                bytes += image.texel_bytes();
+            }
+        }
+        bytes
+    }
+
     /// The colour of texture `id` at a surface point that is not on a mesh (mesh attributes
     /// read black).
     pub fn eval(&self, id: TextureId, uv: Vec2, p: Vec3A) -> Vec3 {

@@ -136,6 +136,15 @@ impl Bvh8 {
         // The build bounds the binary tree's height; the traversal stacks rely on it.
         let depth = bvh.depth();
         assert!(depth <= MAX_DEPTH, "BVH depth {depth} beyond {MAX_DEPTH} (binary height {})", stats.height);
+        if tracing::enabled!(tracing::Level::DEBUG) {
+            tracing::debug!(
+                primitives = aabbs.len(),
+                nodes = bvh.nodes.len(),
+                depth,
+                sah_cost = bvh.sah_cost(),
+                "BVH built"
+            );
+        }
         (bvh, stats)
     }
 
