@@ -2,6 +2,7 @@
 //! variance), and the count of discarded non-finite samples (and absurdly large ones).
 
 use crate::aov::Aovs;
+use crate::costs::PixelCosts;
 use glam::Vec3;
 
 /// Accumulated samples of an image.
@@ -17,6 +18,9 @@ pub struct Film {
     pub pixels: Vec<PixelAccumulator>,
     /// The denoiser's guides over the same samples, when the integrator recorded them.
     pub guides: Option<Aovs>,
+    /// What the pixels cost, when the integrator measured it: over the samples it rendered
+    /// (a film resumed from a checkpoint has costs of the samples rendered since).
+    pub costs: Option<PixelCosts>,
 }
 
 impl Film {
@@ -25,7 +29,7 @@ impl Film {
     /// 256x256 film is 6.8 MB, and `vec![PixelAccumulator::default(); n]` wrote every byte.
     pub fn new(width: u32, height: u32) -> Self {
         let pixels = bytemuck::zeroed_vec(width as usize * height as usize);
-        Self { width, height, spp: 0, pixels, guides: None }
+        Self { width, height, spp: 0, pixels, guides: None, costs: None }
     }
 
     /// Per-pixel mean.
@@ -62,16 +66,21 @@ impl Film {
             (a, _) if o.spp == 0 => a,
             _ => None,
         };
+        match (&mut self.costs, &o.costs) {
+            (Some(a), Some(b)) => a.merge(b),
+            (a @ None, Some(b)) => *a = Some(b.clone()),
+            _ => {}
+        }
         self.spp += o.spp;
         self.pixels.iter_mut().zip(&o.pixels).for_each(|(a, b)| a.merge(b));
     }
 
-    /// [`Self::merge`] of a film this one may keep: an empty film (no samples, no guides)
+    /// [`Self::merge`] of a film this one may keep: an empty film (no samples, guides or costs)
     /// takes `o` as it is, so the first pass of a render costs no second image's memory
     /// (zeroed pages faulted in, then a pass adding every pixel: 3-5 ms of a 256x256 render).
     pub fn absorb(&mut self, o: Film) {
         assert_eq!((self.width, self.height), (o.width, o.height), "films of different sizes");
-        match self.spp == 0 && self.guides.is_none() {
+        match self.spp == 0 && self.guides.is_none() && self.costs.is_none() {
             true => *self = o,
             false => self.merge(&o),
         }

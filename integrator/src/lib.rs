@@ -4,7 +4,9 @@
 #![warn(missing_docs)]
 
 pub mod aov;
+pub mod costs;
 pub mod denoise;
+pub mod diagnose;
 pub mod film;
 pub mod lambert_vertex;
 pub mod light_lanes;

@@ -61,7 +61,56 @@ pub fn render_pixel(scene: &RenderScene, x: u32, y: u32, samples: Range<u32>) ->
 /// Radiance arriving at the ray origin along the ray (unit direction), which sees surfaces
 /// closer than `tmax` (the camera's far clip plane; beyond it the ray misses); the path's later
 /// rays reach infinitely far.
-pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler) -> Vec3 {
+pub fn radiance(scene: &RenderScene, ray: Ray, tmax: f32, sampler: &Sampler) -> Vec3 {
+    radiance_witnessed(scene, ray, tmax, sampler, &mut ())
+}
+
+/// Where radiance a path adds comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Source {
+    /// A surface of material `material` (its id) that the path's ray met.
+    Emitter(u32),
+    /// The light sampled at the path's last vertex ([`sampled_light`] says which).
+    LightSample,
+    /// The background, met by the path's ray.
+    Background,
+}
+
+/// The light (its index in the scene's light table) that a path's vertex `depth` samples with
+/// `sampler`'s numbers.
+pub fn sampled_light(scene: &RenderScene, sampler: &Sampler, depth: u32) -> usize {
+    scene.lights.pick(path::light_choice(scene, sampler, depth)).0
+}
+
+/// What a path tells an observer as it goes ([`radiance_witnessed`]): where it scatters, and
+/// each radiance it adds with where that came from. `()` listens to nothing.
+pub trait Witness {
+    /// The path scattered at its vertex `depth` (its vertices before it): off a surface whose
+    /// material is `material` (the id the surface names, before a wrapper resolves it), or in
+    /// a medium (`None`), by a delta lobe if `delta`. Told before what light sampling there
+    /// adds.
+    fn scatters(&mut self, depth: u32, material: Option<u32>, delta: bool);
+    /// The path adds `l` (its throughput included) from `source`; met along its ray, it came
+    /// by a delta lobe (or is the camera's ray) if `delta`.
+    fn adds(&mut self, l: Vec3, source: Source, delta: bool);
+}
+
+impl Witness for () {
+    #[inline(always)]
+    fn scatters(&mut self, _: u32, _: Option<u32>, _: bool) {}
+    #[inline(always)]
+    fn adds(&mut self, _: Vec3, _: Source, _: bool) {}
+}
+
+/// [`radiance`], telling `witness` where the path scatters and what it adds.
+#[inline]
+pub fn radiance_witnessed(
+    scene: &RenderScene,
+    mut ray: Ray,
+    tmax: f32,
+    sampler: &Sampler,
+    witness: &mut impl Witness,
+) -> Vec3 {
     let mut st = PathState::new(ray.origin);
     // Spectral MIS ratios in coloured media (see `path::chromatic_flight`).
     let mut ratio = Vec3::ONE;
@@ -70,6 +119,8 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
         let hit = scene.intersect(&ray, reach);
         reach = f32::INFINITY;
         // Each vertex yields an optional shadow ray and the next ray (None: the path ends).
+        // The vertex's depth and material (None: a medium), for the witness.
+        let vertex;
         let (shadow, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
@@ -86,13 +137,17 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                     if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }
+                    vertex = (st.depth, None);
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.dir, g, ray.time, sampler);
                 }
             }
             let Some(mut hit) = hit else {
+                let before = st.l;
                 path::escape(scene, &mut st, ray.dir);
+                witness.adds(st.l - before, Source::Background, st.delta);
                 break 'path;
             };
+            let named = hit.material;
             // A wrapper: the plain material it stands for here, or the ray goes on through.
             if scene.features.wrappers
                 && let Some(through) = path::resolve(scene, &mut st, &mut hit, ray.dir, ray.time, sampler)
@@ -103,17 +158,22 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
             let mat = &scene.material_at(hit.material, &hit.surface);
             let wo = -ray.dir;
             if mat.is_emissive() {
+                let before = st.l;
                 path::emit(scene, &mut st, &hit, wo, ray.time);
+                witness.adds(st.l - before, Source::Emitter(named), st.delta);
                 break 'path;
             }
             // A surface that emits and reflects: its emission, then it scatters.
             if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
+                let before = st.l;
                 path::emit(scene, &mut st, &hit, wo, ray.time);
+                witness.adds(st.l - before, Source::Emitter(named), st.delta);
             }
             // A surface with a null lobe is sampled at the limit too (only a null sample goes on).
             if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
                 break 'path;
             }
+            vertex = (st.depth, Some(named));
             match mat.shading() {
                 // A tilted normal: a Lambertian shaded as the glossy kinds are.
                 Shading::Diffuse if scene.features.tilts && path::tilted(&hit.surface) => {
@@ -147,8 +207,11 @@ pub fn radiance(scene: &RenderScene, mut ray: Ray, tmax: f32, sampler: &Sampler)
                 Shading::Emitter => unreachable!("emitters end the path above"),
             }
         };
+        witness.scatters(vertex.0, vertex.1, st.delta);
         if let Some(s) = shadow {
+            let before = st.l;
             path::trace_shadow(scene, &mut st, &s);
+            witness.adds(st.l - before, Source::LightSample, false);
         }
         match next {
             Some(r) => ray = r,

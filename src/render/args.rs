@@ -81,11 +81,12 @@ pub struct RenderArgs {
     #[arg(long, value_name = "oidn|atrous", num_args = 0..=1,
           default_missing_value = Denoiser::DEFAULT_NAME, value_parser = Denoiser::parse)]
     pub denoise: Option<Denoiser>,
-    /// Also write AOVs, a comma-separated list of albedo, normal, depth, variance, noisy (a bare
-    /// `--aov`: albedo,normal). An EXR output holds them as layers of the same file (`albedo.R`,
-    /// `normal.X`, `depth.Z`, `variance.R`, `noisy.R`, ...); beside a PNG, albedo and normal go
-    /// to NAME.albedo.png and NAME.normal.png (normals mapped to 0.5 + 0.5 n), and depth and
-    /// variance need an EXR. `noisy` (the render before denoising) needs --denoise.
+    /// Also write AOVs, a comma-separated list of albedo, normal, depth, variance, noisy, and
+    /// what each pixel cost: time, paths, bounces, rays (a bare `--aov`: albedo,normal). An EXR
+    /// output holds them as layers of the same file (`albedo.R`, `normal.X`, `depth.Z`,
+    /// `variance.R`, `noisy.R`, `time.Y`, ...); beside a PNG, albedo and normal go to
+    /// NAME.albedo.png and NAME.normal.png (normals mapped to 0.5 + 0.5 n), and the others need
+    /// an EXR. `noisy` (the render before denoising) needs --denoise; the costs, the wavefront.
     #[arg(
         long,
         value_enum,
@@ -244,12 +245,35 @@ pub enum Aov {
     Variance,
     /// The render before denoising.
     Noisy,
+    /// Seconds the pixel's samples cost: each stage's time shared out evenly among the rays or
+    /// paths it took (as pbrt-v4's `--pixelstats` time).
+    Time,
+    /// Samples (paths) the pixel's costs cover: those this run rendered.
+    Paths,
+    /// Mean bounces of the pixel's paths.
+    Bounces,
+    /// Rays cast for the pixel: closest-hit and shadow rays.
+    Rays,
+}
+
+impl Aov {
+    /// Its name on the command line.
+    pub fn name(self) -> String {
+        use clap::ValueEnum;
+        self.to_possible_value().map(|v| v.get_name().to_owned()).unwrap_or_default()
+    }
+
+    /// Whether the AOV is a cost the wavefront measures (`time`, `paths`, `bounces`, `rays`).
+    pub fn is_cost(self) -> bool {
+        matches!(self, Aov::Time | Aov::Paths | Aov::Bounces | Aov::Rays)
+    }
 }
 
 impl How {
     /// Every file a render to `output` writes: the image; beside a PNG, NAME.albedo.png and
     /// NAME.normal.png for those AOVs; with `--denoise`, NAME.noisy.EXT unless the noisy image
-    /// is a layer of the EXR. (The checkpoint and the trace are the caller's to add.)
+    /// is a layer of the EXR; with `--stats`, the heat map of time per pixel NAME.time.png.
+    /// (The checkpoint and the trace are the caller's to add.)
     pub fn files(&self, output: &Path) -> Vec<PathBuf> {
         let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
         let mut files = vec![output.to_owned()];
@@ -263,7 +287,15 @@ impl How {
         if self.denoise.is_some() && !(exr && self.aov.contains(&Aov::Noisy)) {
             files.push(sibling(output, "noisy"));
         }
+        if self.stats {
+            files.push(heat_map(output));
+        }
         files
+    }
+
+    /// Whether the wavefront measures what each pixel costs: for `--stats` and the cost AOVs.
+    pub fn costs(&self) -> bool {
+        self.stats || self.aov.iter().any(|a| a.is_cost())
     }
 
     /// Whether the denoiser's guides are needed.
@@ -271,22 +303,25 @@ impl How {
         self.denoise.is_some() || self.aov.iter().any(|a| matches!(a, Aov::Albedo | Aov::Normal))
     }
 
-    /// Refuses, before any work, AOVs that `output` cannot hold, that need `--denoise`, or
-    /// that come twice.
+    /// Refuses, before any work, AOVs that `output` cannot hold, that need `--denoise` or the
+    /// wavefront, or that come twice.
     pub fn check_aovs(&self, output: &Path) -> Result<(), String> {
         let exr = output.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        for (i, a) in self.aov.iter().enumerate() {
-            if self.aov[..i].contains(a) {
-                return Err(format!("--aov {a:?} is named twice").to_lowercase());
+        for (i, &a) in self.aov.iter().enumerate() {
+            let name = a.name();
+            if self.aov[..i].contains(&a) {
+                return Err(format!("--aov {name} is named twice"));
             }
             match a {
-                Aov::Depth | Aov::Variance if !exr => {
-                    return Err(
-                        format!("{}: --aov {a:?} needs an .exr output", output.display()).to_lowercase()
-                    );
-                }
-                Aov::Noisy if self.denoise.is_none() => return Err("--aov noisy needs --denoise".into()),
+                Aov::Albedo | Aov::Normal | Aov::Noisy => {}
+                _ if !exr => return Err(format!("{}: --aov {name} needs an .exr output", output.display())),
                 _ => {}
+            }
+            if a == Aov::Noisy && self.denoise.is_none() {
+                return Err("--aov noisy needs --denoise".into());
+            }
+            if a.is_cost() && self.integrator != Integrator::Wavefront {
+                return Err(format!("--aov {name}: the wavefront integrator measures costs, not the oracle"));
             }
         }
         Ok(())
@@ -307,7 +342,8 @@ pub struct How {
     pub integrator: Integrator,
     /// `--batch`.
     pub batch: usize,
-    /// `--stats`: time the wavefront's stages.
+    /// `--stats`: time the wavefront's stages, measure what each pixel costs and find the
+    /// causes of the noise.
     pub stats: bool,
     /// `--threads`.
     pub threads: Option<usize>,
@@ -315,6 +351,13 @@ pub struct How {
     pub quiet: bool,
     /// `--exposure` and `--view-transform`: how 8-bit outputs show the image.
     pub look: Look,
+}
+
+/// The heat map of time per pixel that `--stats` writes beside the output NAME.EXT:
+/// NAME.time.png.
+pub fn heat_map(output: &Path) -> PathBuf {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{stem}.time.png"))
 }
 
 /// The side file NAME.TAG.EXT beside the output NAME.EXT.

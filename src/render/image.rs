@@ -7,7 +7,7 @@ use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
 use crate::engine::scene::files::InputFile;
-use crate::integrator::{film::Film, oracle, wavefront};
+use crate::integrator::{costs::PixelCosts, diagnose, film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::view::{self, Viewers};
 use std::path::Path;
@@ -91,10 +91,15 @@ pub struct Rendered {
     pub new_samples: f64,
     /// Per-stage statistics (wavefront).
     pub stats: Option<wavefront::Stats>,
+    /// What each pixel cost (wavefront, with `--stats` or the cost AOVs), over the samples
+    /// this run rendered.
+    pub costs: Option<PixelCosts>,
     /// Seconds, from the start of rendering to the image.
     pub secs: f64,
     /// NaN/Inf samples discarded.
     pub non_finite: u64,
+    /// With `--stats`, each pixel's mean luminance as rendered (before denoising).
+    pub luminance: Vec<f32>,
 }
 
 /// Renders `scene` into the image meant for `output`, as `render` and each frame of `animate`
@@ -209,7 +214,12 @@ pub fn render_image(
         let (part, st) = pool.install(|| match how.integrator {
             Integrator::Oracle => (oracle::render_samples(scene, range.clone(), &progress), None),
             Integrator::Wavefront => {
-                let opts = wavefront::Options { batch: how.batch, guides: how.guides(), timing: how.stats };
+                let opts = wavefront::Options {
+                    batch: how.batch,
+                    guides: how.guides(),
+                    timing: how.stats,
+                    costs: how.costs(),
+                };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))
             }
@@ -271,6 +281,10 @@ pub fn render_image(
         }
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
+    let luminance = match how.stats {
+        true => img.pixels.iter().map(|&c| diagnose::luminance(c) as f32).collect(),
+        false => Vec::new(),
+    };
     let (img, layers) = match how.guides() || !how.aov.is_empty() {
         true => post_process(scene, &film, lo..lo + film.spp, img, output, how, pool)?,
         false => (img, Vec::new()),
@@ -281,8 +295,10 @@ pub fn render_image(
         spp: film.spp,
         new_samples: s.window.len() as f64 * (film.spp - first_spp) as f64,
         stats,
-        secs,
         non_finite: film.non_finite(),
+        costs: film.costs,
+        secs,
+        luminance,
     })
 }
 

@@ -86,10 +86,19 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
     if how.stats {
-        match &r.stats {
-            Some(st) => stats::print_stats(st, r.secs, r.non_finite),
-            None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+        let names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
+        match (&r.stats, &r.costs) {
+            (Some(st), costs) => {
+                stats::print_stats(st, r.secs, r.non_finite);
+                if let Some(costs) = costs {
+                    stats::report_costs(costs, &s, st, &names, &args::heat_map(output))?;
+                }
+            }
+            (None, _) => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
         }
+        let first = samples.map_or(0, |(lo, _)| lo);
+        let n = stats::diagnosed(r.spp);
+        pool.install(|| stats::report_noise(&scene, first..first + n, (&r.luminance, r.spp), &names));
     }
     let metadata = metadata(id.key, &scene, &r);
     let clamped =

@@ -2,7 +2,7 @@
 
 use super::args::{Aov, How};
 use crate::denoiser;
-use crate::integrator::{aov, film::Film};
+use crate::integrator::{aov, costs::PixelCosts, film::Film};
 use crate::io::{self, LinearImage};
 use crate::look::Look;
 use std::path::Path;
@@ -63,6 +63,20 @@ pub fn post_process(
                 data: flat(&film.variance_of_mean()),
             }),
             (Aov::Noisy, _) => {}
+            (cost @ (Aov::Time | Aov::Paths | Aov::Bounces | Aov::Rays), _) => {
+                let costs = film.costs.clone().unwrap_or_else(|| {
+                    tracing::warn!("--aov {}: this run rendered no samples to measure", cost.name());
+                    PixelCosts::new(film.pixels.len())
+                });
+                let (name, data) = match cost {
+                    Aov::Time => ("time", costs.time.iter().map(|&t| t as f32).collect()),
+                    Aov::Paths => ("paths", costs.paths.iter().map(|&n| n as f32).collect()),
+                    Aov::Bounces => ("bounces", costs.mean_bounces()),
+                    Aov::Rays => ("rays", costs.rays.iter().map(|&n| n as f32).collect()),
+                    other => unreachable!("{other:?} is not a cost"),
+                };
+                layers.push(io::ExrLayer { name, channels: &["Y"], data })
+            }
         }
     }
     if how.guides() {

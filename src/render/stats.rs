@@ -1,6 +1,13 @@
-//! The `--stats` report: per-stage time shares, items and rates.
+//! The `--stats` report: per-stage time shares, items and rates; where the time went (a heat
+//! map of time per pixel, the slowest tiles, time by material); where the noise comes from.
 
+use crate::engine::render_scene::{PixelWindow, RenderScene, RenderSettings};
+use crate::integrator::costs::PixelCosts;
+use crate::integrator::diagnose::{self, Cause, Event, Light, Vertex};
+use crate::integrator::tile::Tile;
 use crate::integrator::wavefront;
+use crate::io;
+use std::path::Path;
 
 /// Each stage's share of the time, `name 12.3%`, largest first.
 pub fn stage_shares(st: &wavefront::Stats) -> String {
@@ -49,4 +56,215 @@ pub fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
         non_finite,
         crate::engine::simd::isa_name()
     );
+}
+
+/// How many of the slowest tiles and costliest materials `--stats` lists.
+const LISTED: usize = 5;
+
+/// `--stats`' places: writes the heat map of time per pixel to `heat_map` (the inferno colour
+/// map, from black at no time to yellow at the 99.5th percentile of the pixels' times and
+/// above), then prints the slowest tiles (their pixels and `--crop` fractions, against the
+/// median tile) and the shading time of each material (`names`, by material id).
+pub fn report_costs(
+    costs: &PixelCosts,
+    s: &RenderSettings,
+    st: &wavefront::Stats,
+    names: &[String],
+    heat_map: &Path,
+) -> Result<(), String> {
+    let window = &s.window;
+    let (w, h) = (window.w, window.h);
+    let mut sorted: Vec<f64> = costs.time.clone();
+    sorted.sort_by(f64::total_cmp);
+    let top = sorted[((sorted.len() - 1) as f64 * 0.995) as usize].max(1e-12);
+    let mut png = image::RgbImage::new(w, h);
+    for (px, &t) in png.pixels_mut().zip(&costs.time) {
+        let c = colorous::INFERNO.eval_continuous((t / top).clamp(0.0, 1.0));
+        *px = image::Rgb([c.r, c.g, c.b]);
+    }
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    png.write_to(&mut bytes, image::ImageFormat::Png).map_err(|e| format!("{}: {e}", heat_map.display()))?;
+    io::atomically(heat_map, bytes.get_ref())?;
+    eprintln!(
+        "{}: time per pixel, black 0 to yellow {:.1} us and above (the 99.5th percentile); {:.1} us per pixel on average",
+        heat_map.display(),
+        top * 1e6,
+        costs.total_time() / costs.len() as f64 * 1e6
+    );
+    let mut tiles = tile_times(costs, window);
+    let median = {
+        let mut t: Vec<f64> = tiles.iter().map(|(_, t)| *t).collect();
+        t.sort_by(f64::total_cmp);
+        t[t.len() / 2]
+    };
+    tiles.sort_by(|a, b| b.1.total_cmp(&a.1));
+    eprintln!("slowest tiles (of {}, median {:.2} ms):", tiles.len(), median * 1e3);
+    for (tile, t) in tiles.iter().take(LISTED) {
+        let [a, b, c, d] = crop_of(tile, s.width, s.height);
+        eprintln!(
+            "  x {}..{}, y {}..{} {:>9.2} ms {:>5.1}x the median  (--crop {a},{b},{c},{d})",
+            tile.x0,
+            tile.x0 + tile.w,
+            tile.y0,
+            tile.y0 + tile.h,
+            t * 1e3,
+            t / median.max(1e-12),
+        );
+    }
+    let shading: f64 = st.material_time.iter().map(|t| t.as_secs_f64()).sum();
+    let mut by_material: Vec<(usize, f64)> =
+        st.material_time.iter().map(|t| t.as_secs_f64()).enumerate().filter(|(_, t)| *t > 0.0).collect();
+    by_material.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
+    eprintln!("shading time by material ({:.1}% of the stages' time):", 100.0 * shading / total.max(1e-12));
+    for &(id, t) in by_material.iter().take(LISTED) {
+        let name = names.get(id).map_or_else(|| format!("#{id}"), |n| format!("{n:?}"));
+        eprintln!("  {name:<24} {:>5.1}%", 100.0 * t / shading.max(1e-12));
+    }
+    Ok(())
+}
+
+/// The `--crop` fractions of `tile` in an image `width` x `height`: half a pixel before each
+/// edge, which [`PixelWindow::crop`]'s `ceil` takes to the edge.
+fn crop_of(tile: &Tile, width: u32, height: u32) -> [f32; 4] {
+    let f = |p: u32, n: u32| if p == 0 { 0.0 } else { (p as f32 - 0.5) / n as f32 };
+    [f(tile.x0, width), f(tile.x0 + tile.w, width), f(tile.y0, height), f(tile.y0 + tile.h, height)]
+}
+
+/// Each tile's time (in image coordinates) from the pixels' times over `window`.
+fn tile_times(costs: &PixelCosts, window: &PixelWindow) -> Vec<(Tile, f64)> {
+    let (nx, ny) = Tile::grid_of(window);
+    (0..nx * ny)
+        .map(|t| {
+            let tile = Tile::in_window(t, window);
+            let time = tile.window_indices(window).map(|(_, k)| costs.time[k]).sum();
+            (tile, time)
+        })
+        .collect()
+}
+
+/// The samples of each pixel that `--stats` diagnoses out of `spp`: one in 16, at least 2
+/// (none with fewer).
+pub fn diagnosed(spp: u32) -> u32 {
+    if spp < 2 { 0 } else { (spp / 16).max(2) }
+}
+
+/// The `--stats` tables of where the noise comes from: `samples` of every pixel re-run by the
+/// reference path tracer with a witness ([`diagnose`], `luminance` the render's mean of each
+/// pixel over its `spp` samples), each light's and each material's share of the variance, and the outliers by light,
+/// material, bounce and event. `names` are the material names by id.
+pub fn report_noise(
+    scene: &RenderScene,
+    samples: std::ops::Range<u32>,
+    (luminance, spp): (&[f32], u32),
+    names: &[String],
+) {
+    if samples.len() < 2 {
+        eprintln!("noise by cause: needs 2 samples per pixel or more");
+        return;
+    }
+    let start = std::time::Instant::now();
+    let d = diagnose::diagnose(scene, samples.clone(), luminance, spp);
+    let material =
+        |id: u32| names.get(id as usize).map_or_else(|| format!("material #{id}"), |n| format!("{n:?}"));
+    let light = |l: Light| match l {
+        Light::Emitter(id) => material(id),
+        Light::Punctual(k) => format!("point light #{k}"),
+        Light::Background => "the background".into(),
+    };
+    let vertex = |v: Vertex| match v {
+        Vertex::Camera => "the camera".into(),
+        Vertex::Material(id) => material(id),
+        Vertex::Medium => "a medium".into(),
+    };
+    eprintln!(
+        "noise by cause ({} samples of each pixel as rendered, again by the reference path tracer in {:.2} s): \
+         a sample's relative variance {:.4} on average",
+        samples.len(),
+        start.elapsed().as_secs_f64(),
+        d.variance / d.pixels.max(1) as f64
+    );
+    if !(d.variance > 0.0) {
+        eprintln!("  no noise: every diagnosed pixel's samples agree");
+        return;
+    }
+    let shares = |parts: Vec<(String, f64)>, total: f64| -> String {
+        let mut parts = parts;
+        parts.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        let list: Vec<String> =
+            parts.iter().take(LISTED).map(|(n, v)| format!("{n} {:.1}%", 100.0 * v / total)).collect();
+        list.join(", ")
+    };
+    let by = |f: &dyn Fn(&Cause) -> String| {
+        let mut m: std::collections::HashMap<String, f64> = std::collections::HashMap::new();
+        for o in &d.outliers {
+            *m.entry(f(&o.cause)).or_default() += o.excess;
+        }
+        m.into_iter().collect::<Vec<_>>()
+    };
+    eprintln!(
+        "  share of the variance by light: {}",
+        shares(d.by_light.iter().map(|(&l, &v)| (light(l), v)).collect(), d.variance)
+    );
+    eprintln!(
+        "  share of the variance by material: {}",
+        shares(d.by_vertex.iter().map(|(&v, &x)| (vertex(v), x)).collect(), d.variance)
+    );
+    let excess: f64 = d.outliers.iter().map(|o| o.excess).sum();
+    eprintln!(
+        "  outliers, the {} samples ({}%) furthest above their pixel's mean, {:.1}% of the variance; their largest parts came",
+        d.outliers.len(),
+        100.0 * diagnose::OUTLIER_FRACTION,
+        100.0 * d.outliers.iter().map(|o| o.variance).sum::<f64>() / d.variance
+    );
+    eprintln!("    from light: {}", shares(by(&|c| light(c.light)), excess));
+    eprintln!("    at material: {}", shares(by(&|c| vertex(c.vertex)), excess));
+    eprintln!("    after bounces: {}", shares(by(&|c| c.bounces.to_string()), excess));
+    eprintln!("    by: {}", shares(by(&|c| c.event.describe().to_string()), excess));
+    // The outliers' commonest cause (by excess): event, material and light together.
+    let mut causes: Vec<((Event, Vertex, Light), f64)> = Vec::new();
+    for o in &d.outliers {
+        let key = (o.cause.event, o.cause.vertex, o.cause.light);
+        match causes.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, e)) => *e += o.excess,
+            None => causes.push((key, o.excess)),
+        }
+    }
+    if let Some(&((event, at, from), e)) = causes.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let (at, from) = (vertex(at), light(from));
+        let lever = match event {
+            Event::Caustic => format!(
+                "light reaches the eye through {at} after a rough bounce, where light sampling cannot find it: \
+                 more samples, a rougher {at}, or --clamp"
+            ),
+            Event::BsdfSampling => format!(
+                "directions sampled at {at} met {from}, small or bright for them: more samples, a rougher \
+                 material, or --clamp"
+            ),
+            Event::LightSampling => format!(
+                "light sampling of {from} at {at} (a light close to the surface, or a sharp lobe): more samples, \
+                 or --clamp"
+            ),
+            Event::Direct => format!("{from} seen at pixel edges: more samples, or a wider pixel filter"),
+        };
+        eprintln!("  most of the outliers ({:.0}%): {lever}", 100.0 * e / excess);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_crop_printed_for_a_tile_is_that_tile() {
+        for (width, height) in [(384, 256), (1920, 1080), (37, 5000), (9999, 3)] {
+            let all = PixelWindow { x0: 0, y0: 0, w: width, h: height };
+            let (nx, ny) = Tile::grid_of(&all);
+            for t in 0..nx * ny {
+                let tile = Tile::in_window(t, &all);
+                let w = PixelWindow::crop(width, height, crop_of(&tile, width, height)).unwrap();
+                assert_eq!((w.x0, w.y0, w.w, w.h), (tile.x0, tile.y0, tile.w, tile.h), "{width}x{height}");
+            }
+        }
+    }
 }

@@ -20,6 +20,7 @@ mod stages;
 mod tile_work;
 
 use crate::aov::Aovs;
+use crate::costs::PixelCosts;
 use crate::film::{Film, PixelAccumulator};
 use crate::tile::{self, Tile};
 use glam::Vec3;
@@ -41,22 +42,26 @@ pub struct Options {
     /// level turn it on too. Off, the stages are only counted: reading the clock twice per
     /// stage and iteration was 0.8-1.4% of cornell's profile (`__vdso_clock_gettime`).
     pub timing: bool,
+    /// Measure what each pixel costs ([`Film::costs`]) and what shading each material took
+    /// ([`Stats::material_time`]), in the thread's CPU time; times the stages too.
+    pub costs: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 256, guides: false, timing: false }
+        Self { batch: 256, guides: false, timing: false, costs: false }
     }
 }
 
 /// The wavefront's stages, each once, in pipeline order: its variant (with its doc), its name
-/// (also its tracing span's), when a tile runs it (`when`, from the tile's [`Setup`]), the items
-/// it takes from the queues (`items`) and what runs it (`run`, on the tile's [`TileWork`] and its
+/// (also its tracing span's), when a tile runs it (`when`, from the tile's [`Setup`]), the path
+/// slots whose items (rays or paths) it takes from the queues (`slots`) and what runs it (`run`,
+/// on the tile's [`TileWork`] and its
 /// paths and queues). A stage with a field (`Shade(kind: T in LIST)`) is one stage per value
 /// of `LIST` (a const array of `T`, whose `T::COUNT` values each get a statistics slot), bound
 /// as `kind` in its expressions. The table generates [`Stage`], [`Stage::ALL`],
 /// [`Stage::index`], [`Stage::SLOTS`], [`Stage::name`], and the tile's pipeline, item counts and
-/// dispatch ([`TileWork::new`], [`TileWork::items`], [`TileWork::stage`]); the first stage must
+/// dispatch ([`TileWork::new`], [`TileWork::slots`], [`TileWork::stage`]); the first stage must
 /// be one without a field (it refills the slots, and the tile ends when it leaves none active).
 macro_rules! stages {
     (@first $(#[$doc:meta])* $v:ident : $($rest:tt)*) => { Stage::$v };
@@ -65,7 +70,7 @@ macro_rules! stages {
     (@gen [$first:expr] $(
         $(#[$doc:meta])*
         $v:ident $(($kind:ident : $t:ident in $list:expr))? :
-            $name:expr, when $when:expr, items $items:expr, run $run:expr;
+            $name:expr, when $when:expr, slots $slots:expr, run $run:expr;
     )*) => {
         /// The stages (see `stages!` in `wavefront/mod.rs`, which lists them).
         #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,10 +131,11 @@ macro_rules! stages {
         }
 
         impl TileWork<'_> {
-            /// How many items (rays or paths) `stage` would take from the queues now.
-            pub(super) fn items(&self, stage: Stage, q: &Queues) -> usize {
+            /// The path slots of the items (rays or paths) `stage` would take from the queues
+            /// now, one per item.
+            pub(super) fn slots<'q>(&self, stage: Stage, q: &'q Queues) -> &'q [u32] {
                 match stage {
-                    $(Stage::$v $(($kind))? => items(self, q, $items),)*
+                    $(Stage::$v $(($kind))? => slots(self, q, $slots),)*
                 }
             }
 
@@ -159,31 +165,31 @@ macro_rules! stages {
 stages! {
     /// New camera rays.
     GenerateCameraRays: "generate_camera_rays", when |_| true,
-        items |w, q| w.fresh(q), run |w, p, q| w.generate_camera_rays(p, q);
+        slots |w, q| &q.free[q.free.len() - w.fresh(q)..], run |w, p, q| w.generate_camera_rays(p, q);
     /// Closest-hit traversal.
     IntersectClosest: "intersect_closest", when |_| true,
-        items |_, q| q.active.len(), run |w, p, q| stages::intersect_closest(w.scene, p, q);
+        slots |_, q| &q.active, run |w, p, q| stages::intersect_closest(w.scene, p, q);
     /// The denoiser's guides.
     RecordGuides: "record_guides", when |s| s.guides,
-        items |_, q| q.active.len(), run |w, p, q| stages::record_guides(w.scene, p, q);
+        slots |_, q| &q.active, run |w, p, q| stages::record_guides(w.scene, p, q);
     /// Background for rays that left.
     HandleEscaped: "handle_escaped", when |_| true,
-        items |_, q| q.escaped.len(), run |w, p, q| stages::handle_escaped(w.scene, p, q);
+        slots |_, q| &q.escaped, run |w, p, q| stages::handle_escaped(w.scene, p, q);
     /// Emitter hits.
     HandleEmissive: "handle_emissive", when |_| true,
-        items |_, q| q.emissive.len(), run |w, p, q| stages::handle_emissive(w.scene, p, q);
+        slots |_, q| &q.emissive, run |w, p, q| stages::handle_emissive(w.scene, p, q);
     /// Scattering in media.
     ShadeMedium: "shade_medium", when |_| true,
-        items |_, q| q.medium.len(), run |w, p, q| stages::shade_medium(w.scene, p, q);
+        slots |_, q| &q.medium, run |w, p, q| stages::shade_medium(w.scene, p, q);
     /// The shading loop of one material kind (not an emitter).
     Shade(kind: MaterialKind in SHADED_KINDS): kind.stage_name(), when |s| s.kinds.contains(&kind),
-        items |_, q| q.shade[kind as usize].len(), run |w, p, q| stages::shade(w.scene, p, q, kind);
+        slots |_, q| &q.shade[kind as usize], run |w, p, q| stages::shade(w.scene, p, q, kind);
     /// Occlusion tests.
     TraceShadowRays: "trace_shadow_rays", when |_| true,
-        items |_, q| q.shadow.len(), run |w, p, q| stages::trace_shadow_rays(w.scene, p, q);
+        slots |_, q| &q.shadow.slot, run |w, p, q| stages::trace_shadow_rays(w.scene, p, q);
     /// Finished paths into the film.
     AccumulateFilm: "accumulate_film", when |_| true,
-        items |_, q| q.finished.len(), run |w, p, q| w.accumulate_film(p, q);
+        slots |_, q| &q.finished, run |w, p, q| w.accumulate_film(p, q);
 }
 
 /// How many material kinds have a shading loop.
@@ -224,9 +230,13 @@ fn when(setup: &Setup, f: impl FnOnce(&Setup) -> bool) -> bool {
     f(setup)
 }
 
-/// Calls a table row's `items` (typing its closure).
+/// Calls a table row's `slots` (typing its closure).
 #[inline(always)]
-fn items<'a>(w: &TileWork<'a>, q: &Queues, f: impl FnOnce(&TileWork<'a>, &Queues) -> usize) -> usize {
+fn slots<'a, 'q>(
+    w: &TileWork<'a>,
+    q: &'q Queues,
+    f: impl FnOnce(&TileWork<'a>, &'q Queues) -> &'q [u32],
+) -> &'q [u32] {
     f(w, q)
 }
 
@@ -264,6 +274,9 @@ pub struct Stats {
     pub occupancy_sum: f64,
     /// Samples (paths) completed.
     pub paths: u64,
+    /// Time the shading stages spent on each material id (their time shared out evenly among
+    /// the paths they shaded), only with [`Options::costs`].
+    pub material_time: Vec<Duration>,
 }
 
 impl Stats {
@@ -277,6 +290,10 @@ impl Stats {
         self.iterations += o.iterations;
         self.occupancy_sum += o.occupancy_sum;
         self.paths += o.paths;
+        if self.material_time.len() < o.material_time.len() {
+            self.material_time.resize(o.material_time.len(), Duration::ZERO);
+        }
+        self.material_time.iter_mut().zip(o.material_time).for_each(|(a, b)| *a += b);
         self
     }
 }
@@ -309,14 +326,14 @@ pub fn render_samples(
             let span =
                 tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
             let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
-            let clock = opts.timing || tracing;
-            let out = render_tile(scene, tile, samples.clone(), batch, opts.guides, clock, paths, queues);
+            let clock = opts.timing || opts.costs || tracing;
+            let out = render_tile(scene, tile, samples.clone(), opts, clock, paths, queues);
             if tracing {
                 trace_tile(&out.stats, batch);
             }
             drop(span);
             rows.copy_from(&out.film);
-            (out.guides, out.stats)
+            (out.guides, out.costs, out.stats)
         },
     );
     let n = s.window.len();
@@ -328,17 +345,24 @@ pub fn render_samples(
         emission: vec![Vec3::ZERO; n],
     });
     let per_sample = 1.0 / samples.len().max(1) as f32;
+    let mut costs = opts.costs.then(|| PixelCosts::new(n));
     let mut stats = Stats::default();
-    for (tile, (tile_guides, tile_stats)) in results {
+    for (tile, (tile_guides, tile_costs, tile_stats)) in results {
         if let (Some(g), Some(sums)) = (&mut guides, &tile_guides) {
             for (i, k) in tile.window_indices(&s.window) {
                 let [a, n, e] = sums[i];
                 (g.albedo[k], g.normal[k], g.emission[k]) = (a * per_sample, n * per_sample, e * per_sample);
             }
         }
+        if let (Some(c), Some(tc)) = (&mut costs, &tile_costs) {
+            for (i, k) in tile.window_indices(&s.window) {
+                c.set(k, tc, i);
+            }
+        }
         stats = stats.merge(tile_stats);
     }
     film.guides = guides;
+    film.costs = costs;
     (film, stats)
 }
 
@@ -373,33 +397,29 @@ fn trace_tile(st: &Stats, batch: usize) {
     counter("Mrays/s (one thread)", rays as f64 / total.max(1e-9));
 }
 
-/// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
-/// emission) when asked for, and statistics.
-struct TileResult {
-    film: Vec<PixelAccumulator>,
-    guides: Option<Vec<[Vec3; 3]>>,
-    stats: Stats,
-}
-
 /// Runs the wavefront over samples `samples` of every pixel of one tile (timing the stages if
 /// `clock`).
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the tile's scene, samples, slots and per-worker state, each borrowed separately"
-)]
 fn render_tile(
     scene: &RenderScene,
     tile: &Tile,
     samples: Range<u32>,
-    batch: usize,
-    guides: bool,
+    opts: Options,
     clock: bool,
     p: &mut Paths,
     q: &mut Queues,
 ) -> TileResult {
-    let mut work = TileWork::new(scene, tile, samples, guides);
-    work.run(batch, clock, p, q, &mut |_, _, _, _, _| {});
-    TileResult { film: work.film, guides: work.guide_sums, stats: work.stats }
+    let mut work = TileWork::new(scene, tile, samples, opts.guides, opts.costs);
+    work.run(opts.batch.max(1), clock, p, q, &mut |_, _, _, _, _| {});
+    work.result()
+}
+
+/// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
+/// emission) and the pixels' costs when asked for, and statistics.
+struct TileResult {
+    film: Vec<PixelAccumulator>,
+    guides: Option<Vec<[Vec3; 3]>>,
+    costs: Option<PixelCosts>,
+    stats: Stats,
 }
 
 /// One stage's input as the wavefront met it: the paths and queues of one tile just before
@@ -439,7 +459,7 @@ impl StageInput<'_> {
     /// The items `stage` would take from these queues now: after [`Self::run`], what the
     /// stages after this one get from it.
     pub fn items_of(&self, stage: Stage) -> usize {
-        self.work.items(stage, &self.queues)
+        self.work.slots(stage, &self.queues).len()
     }
 }
 
@@ -456,11 +476,11 @@ pub fn capture_stages<'a>(
     let tile = Tile::in_window(tile, &s.window);
     let batch = opts.batch.max(1);
     let (mut p, mut q) = (Paths::with_slots(batch), Queues::default());
-    let mut work = TileWork::new(scene, &tile, 0..s.spp, opts.guides);
+    let mut work = TileWork::new(scene, &tile, 0..s.spp, opts.guides, opts.costs);
     let mut out = Vec::new();
     work.run(batch, false, &mut p, &mut q, &mut |i, work, stage, p, q| {
         if i == iteration {
-            let (work, items) = (work.clone(), work.items(stage, q));
+            let (work, items) = (work.clone(), work.slots(stage, q).len());
             out.push(StageInput { stage, items, work, paths: p.clone(), queues: q.clone() });
         }
     });

@@ -142,8 +142,9 @@ impl Paths {
         }
     }
 
-    /// Scatters the path state of slot `i` back.
-    #[inline]
+    /// Scatters the path state of slot `i` back. Always inlined: `generate_camera_rays` once
+    /// called it out of line, a call per new path (1.2% more instructions on cornell-diffuse).
+    #[inline(always)]
     pub fn set_state(&mut self, i: usize, s: &PathState) {
         self.l[i] = s.l;
         self.beta[i] = s.beta;

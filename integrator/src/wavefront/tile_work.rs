@@ -5,6 +5,7 @@
 use super::queues::{Paths, Queues};
 use super::{Stage, Stats};
 use crate::aov::Guide;
+use crate::costs::PixelCosts;
 use crate::film::{PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::path;
@@ -14,7 +15,7 @@ use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
 use pathwave_engine::render_scene::RenderScene;
 use std::ops::Range;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What [`TileWork::run`] calls before each stage: `(iteration, work, stage, paths, queues)`.
 pub(super) type Observer<'o, 'a> = dyn FnMut(u64, &TileWork<'a>, Stage, &Paths, &Queues) + 'o;
@@ -31,6 +32,8 @@ pub(super) struct TileWork<'a> {
     next_sample: u64,
     pub(super) film: Vec<PixelAccumulator>,
     pub(super) guide_sums: Option<Vec<[Vec3; 3]>>,
+    /// What the tile's pixels and materials cost (with [`super::Options::costs`]).
+    charges: Option<Charges>,
     pub(super) stats: Stats,
     /// The stages each iteration runs, in order (`stages!` in `wavefront/mod.rs`): the
     /// scene's shading kinds only, guides only when asked for.
@@ -38,7 +41,13 @@ pub(super) struct TileWork<'a> {
 }
 
 impl<'a> TileWork<'a> {
-    pub(super) fn new(scene: &'a RenderScene, tile: &Tile, samples: Range<u32>, guides: bool) -> Self {
+    pub(super) fn new(
+        scene: &'a RenderScene,
+        tile: &Tile,
+        samples: Range<u32>,
+        guides: bool,
+        costs: bool,
+    ) -> Self {
         let pixels = (tile.w * tile.h) as usize;
         let pipeline = super::pipeline(scene, guides);
         Self {
@@ -49,6 +58,7 @@ impl<'a> TileWork<'a> {
             next_sample: 0,
             film: vec![PixelAccumulator::default(); pixels],
             guide_sums: guides.then(|| vec![[Vec3::ZERO; 3]; pixels]),
+            charges: costs.then(|| Charges::new(pixels, scene.materials.len(), &pipeline)),
             stats: Stats::default(),
             pipeline,
         }
@@ -64,6 +74,7 @@ impl<'a> TileWork<'a> {
         q: &mut Queues,
         observe: &mut Observer<'_, 'a>,
     ) {
+        let cpu = self.charges.is_some().then(cpu_time::ThreadTime::now);
         q.free.clear();
         q.free.extend((0..batch as u32).rev());
         q.active.clear();
@@ -92,6 +103,9 @@ impl<'a> TileWork<'a> {
             q.next.clear();
         }
         self.pipeline = pipeline;
+        if let (Some(c), Some(start)) = (&mut self.charges, cpu) {
+            c.cpu += start.elapsed();
+        }
     }
 
     /// How many new paths `generate_camera_rays` would start now: a free slot each, while the
@@ -100,8 +114,15 @@ impl<'a> TileWork<'a> {
         q.free.len().min((self.work - self.next_sample) as usize)
     }
 
+    /// The tile's results.
+    pub(super) fn result(mut self) -> super::TileResult {
+        let costs = self.charges.map(|c| c.settle(&mut self.stats));
+        super::TileResult { film: self.film, guides: self.guide_sums, costs, stats: self.stats }
+    }
+
     /// Runs `stage` if it has work (after `observe` has seen its input), recording its item
-    /// count and, if `clock`, its time (traces get them once per tile, from [`trace_tile`]).
+    /// count and, if `clock`, its time (traces get them once per tile, from [`trace_tile`]);
+    /// with costs, counts its items by pixel and material (then `clock` must be on).
     #[inline]
     fn timed(
         &mut self,
@@ -111,9 +132,13 @@ impl<'a> TileWork<'a> {
         q: &mut Queues,
         observe: &mut dyn FnMut(&TileWork<'a>, Stage, &Paths, &Queues),
     ) {
-        let items = self.items(stage, q);
+        let slots = self.slots(stage, q);
+        let items = slots.len();
         if items == 0 {
             return;
+        }
+        if let Some(charges) = &mut self.charges {
+            charges.count(stage, self.stats.iterations, slots, p);
         }
         observe(self, stage, p, q);
         let k = stage.index();
@@ -202,6 +227,150 @@ impl<'a> TileWork<'a> {
             }
         }
         q.free.extend_from_slice(&q.finished);
+    }
+}
+
+/// What a tile's pixels and materials cost. The items each stage takes are counted by the
+/// pixel of their path (and, for shading, by material) as the stage takes them; at the end,
+/// each item is charged its stage's mean time per item over the tile, the stages' times
+/// scaled to the thread's CPU time over the tile (what the tile cost, less the pauses of a
+/// preempted thread, which a wall clock charged to the tile it was in). Charging each call's
+/// time to its own items instead made single pixels look a thousand times costlier than their
+/// neighbours: the few paths a tile has left at its end share a call's fixed cost. The CPU
+/// clock is read per tile, not per stage call (a system call each).
+#[derive(Clone)]
+struct Charges {
+    /// Rays, paths and bounces as counted; time once settled.
+    costs: PixelCosts,
+    /// Items per pixel and stage slot ([`Stage::index`]): `[pixel * SLOTS + slot]`.
+    pixel_items: Vec<u32>,
+    /// Items per stage slot and path slot, `[slot * paths + path]`, added to the path's pixel
+    /// when it finishes. Counted by path, the items of a queue go to different counters;
+    /// counted by pixel, a pixel's samples in neighbouring path slots made each increment wait
+    /// on the one before.
+    path_items: Vec<u32>,
+    /// Items per stage slot and material id in [`MATERIAL_LANES`] interleaved copies (for the
+    /// same reason): `[(lane * SLOTS + slot) * materials + material]`.
+    material_items: Vec<u32>,
+    /// The stage slots of the tile's pipeline whose items are counted one by one (a path's
+    /// counts may be in these).
+    stages: Vec<usize>,
+    /// The iteration each path slot's path started in: a path takes one item of
+    /// `intersect_closest` (and `record_guides`) per iteration, counted when it finishes.
+    born: Vec<u64>,
+    /// Whether the pipeline records the denoiser's guides.
+    guides: bool,
+    /// The thread's CPU time in the tile's stages and between them.
+    cpu: Duration,
+}
+
+/// Copies of the material counters, taken in turn by a queue's items.
+const MATERIAL_LANES: usize = 4;
+
+impl Charges {
+    fn new(pixels: usize, materials: usize, pipeline: &[Stage]) -> Self {
+        Self {
+            costs: PixelCosts::new(pixels),
+            pixel_items: vec![0; pixels * Stage::SLOTS],
+            path_items: Vec::new(),
+            material_items: vec![0; MATERIAL_LANES * Stage::SLOTS * materials],
+            stages: pipeline.iter().filter(|s| !Self::per_path(**s)).map(|s| s.index()).collect(),
+            born: Vec::new(),
+            guides: pipeline.contains(&Stage::RecordGuides),
+            cpu: Duration::ZERO,
+        }
+    }
+
+    /// Whether a path's items of `stage` are counted when it finishes rather than one by one:
+    /// one each of its first and last stage, and one of the closest hits (and the guides) for
+    /// every iteration it lived.
+    fn per_path(stage: Stage) -> bool {
+        matches!(
+            stage,
+            Stage::GenerateCameraRays | Stage::IntersectClosest | Stage::RecordGuides | Stage::AccumulateFilm
+        )
+    }
+
+    /// Counts the items `stage` takes in wavefront iteration `iteration`, those of the paths in
+    /// `slots`: by path, by material for a shading stage; the paths that finish add theirs to
+    /// their pixel, with their bounces.
+    fn count(&mut self, stage: Stage, iteration: u64, slots: &[u32], p: &Paths) {
+        const S: usize = Stage::SLOTS;
+        let (k, paths) = (stage.index(), p.pixel.len());
+        self.path_items.resize(paths * S, 0);
+        self.born.resize(paths, 0);
+        if !Self::per_path(stage) {
+            let counts = &mut self.path_items[k * paths..(k + 1) * paths];
+            for &s in slots {
+                counts[s as usize] += 1;
+            }
+        }
+        match stage {
+            Stage::GenerateCameraRays => {
+                for &s in slots {
+                    self.born[s as usize] = iteration;
+                }
+            }
+            Stage::AccumulateFilm => {
+                // The iteration count moved on after the refill of the paths' first iteration.
+                let guides = self.guides;
+                let (ic, rg) = (Stage::IntersectClosest.index(), Stage::RecordGuides.index());
+                let (gc, af) = (Stage::GenerateCameraRays.index(), Stage::AccumulateFilm.index());
+                for &s in slots {
+                    let (s, px) = (s as usize, p.pixel[s as usize] as usize);
+                    let to = &mut self.pixel_items[px * S..][..S];
+                    for &j in &self.stages {
+                        to[j] += std::mem::take(&mut self.path_items[j * paths + s]);
+                    }
+                    let lived = (iteration - self.born[s]) as u32;
+                    to[ic] += lived;
+                    to[rg] += lived * guides as u32;
+                    to[gc] += 1;
+                    to[af] += 1;
+                    self.costs.bounces[px] += u64::from(p.depth[s] - p.crossings[s]);
+                }
+            }
+            Stage::Shade(_) => {
+                let m = self.material_items.len() / (MATERIAL_LANES * S);
+                for (j, &s) in slots.iter().enumerate() {
+                    let id = p.hit[s as usize].material as usize;
+                    if id < m {
+                        self.material_items[((j % MATERIAL_LANES) * S + k) * m + id] += 1;
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The pixels' costs, each item charged its stage's mean time per item in `st` (the
+    /// tile's statistics, whose shading time by material this fills in), scaled to the CPU time.
+    fn settle(mut self, st: &mut Stats) -> PixelCosts {
+        const S: usize = Stage::SLOTS;
+        let m = self.material_items.len() / (MATERIAL_LANES * S);
+        let wall: f64 = st.time.iter().map(Duration::as_secs_f64).sum();
+        let scale = if wall > 0.0 { self.cpu.as_secs_f64() / wall } else { 0.0 };
+        let per_item: Vec<f64> = (0..S)
+            .map(
+                |k| if st.items[k] > 0 { st.time[k].as_secs_f64() * scale / st.items[k] as f64 } else { 0.0 },
+            )
+            .collect();
+        let (ic, sr, af) =
+            (Stage::IntersectClosest.index(), Stage::TraceShadowRays.index(), Stage::AccumulateFilm.index());
+        for (px, items) in self.pixel_items.chunks_exact(S).enumerate() {
+            self.costs.time[px] = items.iter().zip(&per_item).map(|(&n, t)| n as f64 * t).sum();
+            // Rays cast: closest hits and shadow rays; paths: those that finished.
+            self.costs.rays[px] = u64::from(items[ic] + items[sr]);
+            self.costs.paths[px] = items[af];
+        }
+        st.material_time = vec![Duration::ZERO; m];
+        for (j, counts) in self.material_items.chunks_exact(m.max(1)).enumerate() {
+            let k = j % S;
+            for (t, &n) in st.material_time.iter_mut().zip(counts) {
+                *t += Duration::from_secs_f64(n as f64 * per_item[k]);
+            }
+        }
+        self.costs
     }
 }
 

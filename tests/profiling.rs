@@ -1,0 +1,200 @@
+//! Profiling that answers "why is this slow, and where is this noise from", on a scene built so
+//! that the answers are known (`scenes/still-life.ron`): a white room, one small bright lamp and
+//! a small glass ball, whose pixels cost the most and which focuses the lamp into a caustic.
+//! - The costs per pixel (`--aov time,paths,bounces,rays`, `--stats`' heat map and slowest
+//!   tiles) put the time on the ball and change nothing in the image.
+//! - The noise by cause (`diagnose`, `--stats`' tables) names the ball's glass and the lamp as
+//!   the outliers' source, and the shares of the variance add up.
+
+mod common;
+use common::root;
+use pathwave::engine::render_scene::RenderScene;
+use pathwave::engine::scene::load_with;
+use pathwave::engine::world::SceneWorld;
+use pathwave::integrator::diagnose::{self, Event, Light, Vertex};
+use pathwave::integrator::{oracle, path};
+use pathwave::io::read_exr_channels;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-profiling-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The still life at `size` x `size` with `spp` samples, its ball of material `ball`.
+fn still_life(size: u32, spp: u32, ball: &str) -> (Arc<RenderScene>, Vec<String>) {
+    let overrides = [("ball".to_string(), format!("{ball:?}"))];
+    let mut desc = load_with(&root().join("scenes/still-life.ron"), &overrides).unwrap();
+    desc.render.width = size.try_into().unwrap();
+    desc.render.height = size.try_into().unwrap();
+    desc.render.spp = spp.try_into().unwrap();
+    let names = desc.materials.iter().map(|(n, _)| n.clone()).collect();
+    (SceneWorld::render_scene(&desc), names)
+}
+
+/// Which pixels see the ball first (their centre's camera ray).
+fn ball_pixels(scene: &RenderScene, ball: u32) -> Vec<bool> {
+    let s = scene.settings;
+    (0..s.height)
+        .flat_map(|y| (0..s.width).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let (ray, tmax, _) = path::camera_ray(scene, x, y, 0);
+            scene.intersect(&ray, tmax).is_some_and(|h| h.material == ball)
+        })
+        .collect()
+}
+
+fn pathwave() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"));
+    c.current_dir(root());
+    c
+}
+
+#[test]
+fn the_time_goes_to_the_glass_ball_and_the_image_stays_the_same() {
+    let dir = temp("costs");
+    let (size, spp) = (64, 16);
+    let render = |out: &PathBuf, extra: &[&str]| {
+        let run = pathwave()
+            .args(["render", "scenes/still-life.ron", "--width", "64", "--height", "64", "--spp", "16", "-o"])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        let log = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert!(run.status.success(), "{log}");
+        log
+    };
+    let (plain, measured) = (dir.join("plain.exr"), dir.join("measured.exr"));
+    render(&plain, &["-q"]);
+    let log = render(&measured, &["--stats", "--aov", "time,paths,bounces,rays"]);
+    let (a, b) = (read_exr_channels(&plain).unwrap(), read_exr_channels(&measured).unwrap());
+    let channel = |c: &pathwave::io::ExrChannels, name: &str| {
+        c.channels.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no {name}")).1.clone()
+    };
+    for rgb in ["R", "G", "B"] {
+        assert_eq!(channel(&a, rgb), channel(&b, rgb), "measuring changed the image ({rgb})");
+    }
+    let (time, paths, bounces, rays) =
+        (channel(&b, "time.Y"), channel(&b, "paths.Y"), channel(&b, "bounces.Y"), channel(&b, "rays.Y"));
+    assert!(paths.iter().all(|&n| n == spp as f32), "every pixel's samples counted");
+    // A path casts a closest-hit ray per vertex and at most one shadow ray per bounce.
+    for k in 0..time.len() {
+        assert!(rays[k] >= paths[k] * (1.0 + bounces[k]) - 0.5, "pixel {k}: {} rays", rays[k]);
+        assert!(rays[k] <= paths[k] * (1.0 + 2.0 * bounces[k]) + 0.5, "pixel {k}: {} rays", rays[k]);
+    }
+    // The ball's pixels cost more than the room's, and their paths go on longer.
+    let (scene, names) = still_life(size, spp, "glass");
+    let glass = names.iter().position(|n| n == "glass").unwrap() as u32;
+    let ball = ball_pixels(&scene, glass);
+    let mean = |v: &[f32], on: bool| {
+        let picked: Vec<f32> = v.iter().zip(&ball).filter(|(_, b)| **b == on).map(|(x, _)| *x).collect();
+        picked.iter().sum::<f32>() / picked.len() as f32
+    };
+    println!(
+        "time per pixel: ball {:.1} us, room {:.1} us",
+        mean(&time, true) * 1e6,
+        mean(&time, false) * 1e6
+    );
+    println!("bounces: ball {:.2}, room {:.2}", mean(&bounces, true), mean(&bounces, false));
+    assert!(mean(&time, true) > 1.3 * mean(&time, false), "the ball's pixels are not the costly ones");
+    assert!(mean(&bounces, true) > mean(&bounces, false));
+    // `--stats` lists the slowest tiles: one of the three slowest lies on the ball (tiles
+    // of the room near it take about as long; which one comes first is up to the clock).
+    let slowest: Vec<&str> =
+        log.lines().skip_while(|l| !l.starts_with("slowest tiles")).skip(1).take(3).collect();
+    let on_ball = |line: &str| {
+        let numbers: Vec<u32> = line
+            .split(|c: char| !c.is_ascii_digit())
+            .filter(|s| !s.is_empty())
+            .take(4)
+            .map(|s| s.parse().unwrap())
+            .collect();
+        let [x0, x1, y0, y1] = numbers[..] else { panic!("{line}") };
+        (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y))).any(|(x, y)| ball[(y * size + x) as usize])
+    };
+    assert!(slowest.iter().any(|l| on_ball(l)), "the slowest tiles miss the ball: {slowest:#?}");
+    let heat = image::open(dir.join("measured.time.png")).unwrap().to_rgb8();
+    assert_eq!(heat.dimensions(), (size, size));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The diagnosis of all the samples of a render of `scene`.
+fn diagnosis(scene: &RenderScene) -> diagnose::Diagnosis {
+    let film = oracle::render(scene, &|_, _| {});
+    let mean: Vec<f32> = film.mean().iter().map(|&c| diagnose::luminance(c) as f32).collect();
+    diagnose::diagnose(scene, 0..film.spp, &mean, film.spp)
+}
+
+#[test]
+fn the_noise_comes_from_the_lamp_through_the_glass() {
+    let (scene, names) = still_life(48, 64, "glass");
+    let id = |name: &str| names.iter().position(|n| n == name).unwrap() as u32;
+    let d = diagnosis(&scene);
+    assert_eq!((d.pixels, d.samples), (48 * 48, 48 * 48 * 64));
+    // The parts of a sample add up to it, so the shares add up to the variance.
+    let light_sum: f64 = d.by_light.values().sum();
+    let vertex_sum: f64 = d.by_vertex.values().sum();
+    assert!((light_sum / d.variance - 1.0).abs() < 1e-6, "{light_sum} vs {}", d.variance);
+    assert!((vertex_sum / d.variance - 1.0).abs() < 1e-6, "{vertex_sum} vs {}", d.variance);
+    assert_eq!(d.by_light.keys().collect::<Vec<_>>(), [&Light::Emitter(id("lamp"))]);
+    let glass = d.by_vertex[&Vertex::Material(id("glass"))] / d.variance;
+    println!("the glass's share of the variance: {:.1}%", 100.0 * glass);
+    assert!(glass > 0.05, "{:?}", d.by_vertex);
+    // The outliers: mostly caustics through the glass.
+    let share = |f: &dyn Fn(&diagnose::Cause) -> bool| {
+        d.outliers.iter().filter(|o| f(&o.cause)).map(|o| o.excess).sum::<f64>()
+            / d.outliers.iter().map(|o| o.excess).sum::<f64>()
+    };
+    let through_glass = share(&|c| c.vertex == Vertex::Material(id("glass")));
+    let caustics = share(&|c| c.event == Event::Caustic);
+    println!(
+        "outliers: {} at the glass {:.1}%, caustics {:.1}%",
+        d.outliers.len(),
+        100.0 * through_glass,
+        100.0 * caustics
+    );
+    assert!(d.outliers.len() >= 30);
+    assert!(through_glass > 0.5 && caustics > 0.5);
+    // Rough glass: no caustic, the lamp found by light sampling.
+    let (scene, names) = still_life(48, 64, "frosted");
+    let d = diagnosis(&scene);
+    assert!(d.outliers.iter().all(|o| o.cause.event != Event::Caustic));
+    let frosted = names.iter().position(|n| n == "frosted").unwrap() as u32;
+    assert!(d.by_vertex.contains_key(&Vertex::Material(frosted)));
+}
+
+#[test]
+fn stats_name_the_glass_and_the_lamp() {
+    let dir = temp("stats");
+    let run = pathwave()
+        .args([
+            "render",
+            "scenes/still-life.ron",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "512",
+            "--stats",
+            "-o",
+        ])
+        .arg(dir.join("s.png"))
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{log}");
+    let line = |start: &str| {
+        log.lines().find(|l| l.trim_start().starts_with(start)).unwrap_or_else(|| panic!("{log}"))
+    };
+    assert!(line("from light:").contains("\"lamp\" 100.0%"), "{log}");
+    assert!(line("at material:").trim_start().starts_with("at material: \"glass\""), "{log}");
+    assert!(line("by:").trim_start().starts_with("by: a caustic"), "{log}");
+    assert!(line("most of the outliers").contains("through \"glass\""), "{log}");
+    assert!(line("shading time by material").contains('%'), "{log}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
