@@ -26,7 +26,7 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     let _ = tex.mean();
-    let env = EnvironmentMap::new(tex.width, tex.height, tex.texels, 1.0, 30.0);
+    let env = EnvironmentMap::new(tex.width, tex.height, tex.texels(), 1.0, 30.0);
     assert!(env.power_estimate().is_finite() && env.power_estimate() >= 0.0);
     for (i, d) in [Vec3A::X, Vec3A::NEG_Y, Vec3A::new(-0.48, 0.6, 0.64)].into_iter().enumerate() {
         let (c, pdf) = env.radiance_pdf(d);
