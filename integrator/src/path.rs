@@ -81,6 +81,11 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 }
 
 /// A ray left the scene: add the background (MIS-weighted where it is sampled as a light).
+///
+/// The weight takes the density [`pick_light`] samples the background with
+/// ([`Background::pdf`](pathwave_engine::render_scene::Background::pdf): a map's MIS-compensated
+/// one), so that the two techniques' weights sum to 1 wherever either can reach; where light
+/// sampling cannot (a map's directions dimmer than its mean) BSDF sampling counts in full.
 #[inline]
 pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
     let pmf = scene.lights.environment_pmf();
@@ -172,6 +177,9 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
             Some(LightPick { wi, le, pdf: pmf, target, delta: true })
         }
         OtherLight::Environment => {
+            // The MIS-compensated density of a map (`Background::sample`): every caller, at
+            // surfaces of every shading kind and in media, weighs this sample by MIS against
+            // BSDF or phase sampling, which reaches the directions it leaves out.
             let s = scene.background.sample(u)?;
             let pdf = s.pdf * pmf;
             if s.radiance == Vec3::ZERO || !(pdf > 0.0) {
