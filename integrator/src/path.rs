@@ -82,7 +82,7 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
 
 /// A ray left the scene: add the background (MIS-weighted where it is sampled as a light).
 ///
-/// The weight takes the density [`pick_light`] samples the background with
+/// The weight takes the density that next-event estimation samples the background with
 /// ([`Background::pdf`](pathwave_engine::render_scene::Background::pdf): a map's MIS-compensated
 /// one), so that the two techniques' weights sum to 1 wherever either can reach; where light
 /// sampling cannot (a map's directions dimmer than its mean) BSDF sampling counts in full.
