@@ -6,7 +6,7 @@ use crate::accel::instances::Instances;
 use crate::accel::queue::Aggregate;
 use crate::camera::Camera;
 use crate::lighting::area::AreaEmission;
-use crate::lighting::environment::{EnvSample, EnvironmentMap};
+use crate::lighting::environment::{EnvPdf, EnvSample, EnvironmentMap};
 use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
 use crate::material::wrap::{self, Amount, Resolved, Tilt, Wrapper, Wrappers, mix_lambertian};
@@ -135,18 +135,26 @@ impl Background {
                 BackgroundSampling::Alone
             }
             Background::Constant(_) | Background::Sky { .. } => BackgroundSampling::Never,
-            Background::Environment(ref map) if map.sampler().is_some() => BackgroundSampling::Always,
+            Background::Environment(ref map) if map.sampler(EnvPdf::Complete).is_some() => {
+                BackgroundSampling::Always
+            }
             Background::Environment(_) => BackgroundSampling::Never,
         }
     }
 
     /// A direction sampled from `u` (see [`Self::sampling`]), its radiance and density.
+    ///
+    /// The density is for next-event estimation weighted by MIS against BSDF or phase sampling,
+    /// which every caller does (the integrators' surface and medium vertices): it leaves some
+    /// directions with radiance to that sampling, a sky's lower half ([`Self::smooth_sample`])
+    /// and a map's directions no brighter than its mean ([`EnvPdf::Compensated`]). An estimator
+    /// that sampled the background alone would need the map's [`EnvPdf::Complete`] density.
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<EnvSample> {
         match self {
             Background::Constant(c) => Self::smooth_sample(*c, *c, [u.x, u.y]),
             Background::Sky { bottom, top } => Self::smooth_sample(*bottom, *top, [u.x, u.y]),
-            Background::Environment(map) => map.sample(u),
+            Background::Environment(map) => map.sample(u, EnvPdf::Compensated),
         }
     }
 
@@ -154,19 +162,20 @@ impl Background {
     #[inline]
     pub fn radiance_pdf(&self, dir: Vec3A) -> (Vec3, f32) {
         match self {
-            Background::Environment(map) => map.radiance_pdf(dir),
+            Background::Environment(map) => map.radiance_pdf(dir, EnvPdf::Compensated),
             _ => (self.radiance(dir), self.pdf(dir)),
         }
     }
 
-    /// The solid-angle density with which [`Self::sample`] gives `dir`.
+    /// The solid-angle density with which [`Self::sample`] gives `dir` (for MIS only, as
+    /// there).
     #[inline]
     pub fn pdf(&self, dir: Vec3A) -> f32 {
         match self {
             Background::Constant(_) | Background::Sky { .. } => {
                 (dir.y / dir.length()).max(0.0) * std::f32::consts::FRAC_1_PI
             }
-            Background::Environment(map) => map.pdf(dir),
+            Background::Environment(map) => map.pdf(dir, EnvPdf::Compensated),
         }
     }
 

@@ -7,7 +7,7 @@
 
 use glam::{Vec2, Vec3A};
 use libfuzzer_sys::fuzz_target;
-use pathwave_engine::lighting::environment::EnvironmentMap;
+use pathwave_engine::lighting::environment::{EnvPdf, EnvironmentMap};
 use pathwave_engine::scene::files::decode_image_bytes;
 use pathwave_engine::texture::{TextureImage, Wrap};
 use std::path::Path;
@@ -26,14 +26,17 @@ fuzz_target!(|data: &[u8]| {
         }
     }
     let _ = tex.mean();
-    let env = EnvironmentMap::new(tex.width, tex.height, tex.texels, 1.0, 30.0);
+    let env = EnvironmentMap::new(tex.width, tex.height, tex.texels(), 1.0, 30.0);
     assert!(env.power_estimate().is_finite() && env.power_estimate() >= 0.0);
-    for (i, d) in [Vec3A::X, Vec3A::NEG_Y, Vec3A::new(-0.48, 0.6, 0.64)].into_iter().enumerate() {
-        let (c, pdf) = env.radiance_pdf(d);
-        assert!(ok(c) && pdf.is_finite() && pdf >= 0.0, "{c} pdf {pdf} towards {d}");
-        let u = Vec2::new(0.37 * i as f32, 0.91 - 0.4 * i as f32);
-        if let Some(s) = env.sample(u) {
-            assert!(ok(s.radiance) && s.pdf.is_finite() && s.pdf > 0.0, "{s:?} for {u}");
+    let dirs = [Vec3A::X, Vec3A::NEG_Y, Vec3A::new(-0.48, 0.6, 0.64)];
+    for (i, d) in dirs.into_iter().enumerate() {
+        for kind in [EnvPdf::Complete, EnvPdf::Compensated] {
+            let (c, pdf) = env.radiance_pdf(d, kind);
+            assert!(ok(c) && pdf.is_finite() && pdf >= 0.0, "{c} pdf {pdf} towards {d} ({kind:?})");
+            let u = Vec2::new(0.37 * i as f32, 0.91 - 0.4 * i as f32);
+            if let Some(s) = env.sample(u, kind) {
+                assert!(ok(s.radiance) && s.pdf.is_finite() && s.pdf > 0.0, "{s:?} for {u} ({kind:?})");
+            }
         }
     }
 });

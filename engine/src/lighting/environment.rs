@@ -32,6 +32,21 @@
 //! weight is the largest Rec. 709 luminance among those nine texels (a bound of the interpolated
 //! luminance, which is a convex combination of theirs), times sin theta at the cell centre. The
 //! bound is conservative: a small sun's density spreads over the ring of cells around it.
+//!
+//! # MIS compensation
+//!
+//! A map has two densities ([`EnvPdf`]). The complete one is the one above, positive wherever
+//! there is radiance. The compensated one (Karlik, Šik, Vévoda, Skřivan and Křivánek 2019, "MIS
+//! Compensation: Optimizing Sampling Techniques in Multiple Importance Sampling", ACM TOG
+//! 38(6); pbrt-v4's `ImageInfiniteLight::compensatedDistribution`) is built from the cells'
+//! weights less their mean, max(0, w - mean): where light sampling is combined by MIS with
+//! BSDF or phase sampling, which covers every direction, the light technique need not cover the
+//! directions dimmer than the mean (BSDF sampling takes them with MIS weight 1) and spends its
+//! samples on the bright ones. pbrt's map is equal-area, so its mean is one over solid angle;
+//! a lat-long grid's cells are not, and the mean here is the solid-angle one too (each row's
+//! weights counted by sin theta at its centre), the level that a BSDF technique spread evenly
+//! over the sphere would cover. A map whose compensated weights are all 0 (every cell's weight
+//! the same) falls back to the complete density, as pbrt's does.
 
 use crate::lighting::distribution::{Distribution2D, clean};
 use crate::texture::{TextureError, TextureImage};
@@ -80,6 +95,13 @@ fn u_offset(rotate_degrees: f32) -> f32 {
     if rotate_degrees.is_finite() { wrap01(rotate_degrees / 360.0) } else { 0.0 }
 }
 
+/// sin theta at the centre of row `j` of `h` (the area a cell of that row covers on the sphere,
+/// up to a constant): in f64, rounded, as a C library's last bits reach the f32 only at a
+/// rounding tie.
+fn row_sin_theta(j: usize, h: usize) -> f32 {
+    (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin() as f32
+}
+
 /// Samples directions over the sphere in proportion to a lat-long grid of weights (with the
 /// mapping of the module documentation), and gives their density in solid angle.
 ///
@@ -108,12 +130,37 @@ impl LatLongSampler {
         assert_eq!(weights.len(), w * h, "LatLongSampler: {width} x {height} cells need as many weights");
         let mut area_weighted = Vec::with_capacity(weights.len());
         for (j, row) in weights.chunks_exact(w.max(1)).enumerate() {
-            // In f64, rounded: a C library's last bits reach the f32 only at a rounding tie.
-            let sin_theta = (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin() as f32;
+            let sin_theta = row_sin_theta(j, h);
             area_weighted.extend(row.iter().map(|&x| clean(x) * sin_theta));
         }
         let dist = Distribution2D::new(w, h, &area_weighted)?;
         Some(Self { dist, u_offset: u_offset(rotate_degrees) })
+    }
+
+    /// The MIS-compensated sampler of the same grid (see the module documentation): [`Self::new`]
+    /// of the weights less their mean over solid angle, max(0, w - mean), so that cells no
+    /// brighter than the mean are never sampled. Only for estimators that also sample the BSDF
+    /// or phase function and weigh both by MIS with this density. `None` when no weight
+    /// exceeds the mean (all equal, or all 0).
+    ///
+    /// # Panics
+    /// If `weights.len() != width * height`.
+    pub fn compensated(width: u32, height: u32, weights: &[f32], rotate_degrees: f32) -> Option<Self> {
+        let (w, h) = (width as usize, height as usize);
+        assert_eq!(weights.len(), w * h, "LatLongSampler: {width} x {height} cells need as many weights");
+        // The mean over solid angle: each row's weights counted by the area of its cells.
+        let (mut sum, mut area) = (0f64, 0f64);
+        for (j, row) in weights.chunks_exact(w.max(1)).enumerate() {
+            let sin_theta = row_sin_theta(j, h) as f64;
+            sum += sin_theta * row.iter().map(|&x| clean(x) as f64).sum::<f64>();
+            area += sin_theta * w as f64;
+        }
+        if !(area > 0.0) {
+            return None;
+        }
+        let mean = (sum / area) as f32;
+        let excess: Vec<f32> = weights.iter().map(|&x| (clean(x) - mean).max(0.0)).collect();
+        Self::new(width, height, &excess, rotate_degrees)
     }
 
     /// The (u, v) of the grid that `dir` looks up (rotation included), and sin theta.
@@ -159,6 +206,20 @@ fn map_uv(dir: Vec3A, u_offset: f32) -> Option<(Vec2, f32)> {
     Some((Vec2::new(wrap01(uv.x + u_offset), uv.y), sin_theta))
 }
 
+/// Which of an [`EnvironmentMap`]'s two densities a caller samples and weighs with (pbrt-v4's
+/// `allowIncompletePDF`; see the module documentation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EnvPdf {
+    /// In proportion to the cells' luminance bounds: positive wherever there is radiance. For
+    /// estimators that sample the map alone.
+    Complete,
+    /// MIS compensation: 0 for the directions whose cells are no brighter than the mean. Only
+    /// for estimators that also sample the BSDF or phase function (reaching every direction the
+    /// map is sampled for) and weigh the two by MIS with this density: alone it misses the dim
+    /// directions' light.
+    Compensated,
+}
+
 /// A direction sampled from an [`EnvironmentMap`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EnvSample {
@@ -166,7 +227,8 @@ pub struct EnvSample {
     pub dir: Vec3A,
     /// The radiance arriving from `dir` ([`EnvironmentMap::radiance`]).
     pub radiance: Vec3,
-    /// The density in solid angle of having sampled `dir`, equal to [`EnvironmentMap::pdf`].
+    /// The density in solid angle of having sampled `dir`, equal to [`EnvironmentMap::pdf`]
+    /// (of the same [`EnvPdf`]).
     pub pdf: f32,
 }
 
@@ -187,6 +249,9 @@ pub struct EnvironmentMap {
     u_offset: f32,
     /// `None` when the map is black.
     sampler: Option<LatLongSampler>,
+    /// The MIS-compensated sampler ([`EnvPdf::Compensated`]); `None` where `sampler` serves
+    /// instead (no cell brighter than the mean, or a black map).
+    compensated: Option<LatLongSampler>,
     power: f32,
 }
 
@@ -239,7 +304,16 @@ impl EnvironmentMap {
         }
 
         let sampler = LatLongSampler::new(width, height, &bound, rotate_degrees);
-        Self { width, height, texels, u_offset: u_offset(rotate_degrees), sampler, power: power as f32 }
+        let compensated = LatLongSampler::compensated(width, height, &bound, rotate_degrees);
+        Self {
+            width,
+            height,
+            texels,
+            u_offset: u_offset(rotate_degrees),
+            sampler,
+            compensated,
+            power: power as f32,
+        }
     }
 
     /// Reads a lat-long map (EXR or HDR, linear float; 8-bit images are decoded from sRGB) with
@@ -259,9 +333,13 @@ impl EnvironmentMap {
         self.height
     }
 
-    /// The sampler of the map's directions; `None` when the map is black.
-    pub fn sampler(&self) -> Option<&LatLongSampler> {
-        self.sampler.as_ref()
+    /// The sampler of the map's directions for `pdf`; `None` when the map is black.
+    #[inline]
+    pub fn sampler(&self, pdf: EnvPdf) -> Option<&LatLongSampler> {
+        match pdf {
+            EnvPdf::Complete => self.sampler.as_ref(),
+            EnvPdf::Compensated => self.compensated.as_ref().or(self.sampler.as_ref()),
+        }
     }
 
     /// The radiance arriving from direction `dir` (any non-zero length; it is normalised
@@ -274,9 +352,9 @@ impl EnvironmentMap {
     /// [`Self::radiance`] and [`Self::pdf`] of one direction, its (u, v) found once (the
     /// sampler's grid and the map share the rotation).
     #[inline]
-    pub fn radiance_pdf(&self, dir: Vec3A) -> (Vec3, f32) {
+    pub fn radiance_pdf(&self, dir: Vec3A, pdf: EnvPdf) -> (Vec3, f32) {
         match map_uv(dir, self.u_offset) {
-            Some(at) => (self.radiance_at(at.0), self.sampler.as_ref().map_or(0.0, |s| s.pdf_at(at))),
+            Some(at) => (self.radiance_at(at.0), self.sampler(pdf).map_or(0.0, |s| s.pdf_at(at))),
             None => (Vec3::ZERO, 0.0),
         }
     }
@@ -304,21 +382,23 @@ impl EnvironmentMap {
         top.lerp(bottom, fy)
     }
 
-    /// Samples a direction in proportion (roughly) to the map's luminance, for `u` in [0, 1)^2.
-    /// `None` when the map is black, or, rarely, when the sampled direction has density 0.
-    pub fn sample(&self, u: Vec2) -> Option<EnvSample> {
+    /// Samples a direction for `u` in [0, 1)^2 from the density `pdf`: in proportion (roughly)
+    /// to the map's luminance, or to its excess over the mean. `None` when the map is black, or,
+    /// rarely, when the sampled direction has density 0.
+    pub fn sample(&self, u: Vec2, pdf: EnvPdf) -> Option<EnvSample> {
         // The radiance and the density from one (u, v) of the direction (the sampler's
         // `sample` and `radiance` found it once each).
-        let dir = self.sampler.as_ref()?.sample_direction(u);
-        let (radiance, pdf) = self.radiance_pdf(dir);
-        (pdf > 0.0).then_some(EnvSample { dir, radiance, pdf })
+        let dir = self.sampler(pdf)?.sample_direction(u);
+        let (radiance, density) = self.radiance_pdf(dir, pdf);
+        (density > 0.0).then_some(EnvSample { dir, radiance, pdf: density })
     }
 
-    /// The density in solid angle with which [`Self::sample`] returns `dir` (any non-zero
-    /// length); 0 for a black map. Positive wherever [`Self::radiance`] is not black (unless
-    /// the map's luminances span more than about 1e38 to 1).
-    pub fn pdf(&self, dir: Vec3A) -> f32 {
-        self.sampler.as_ref().map_or(0.0, |s| s.pdf(dir))
+    /// The density in solid angle with which [`Self::sample`] of the same `pdf` returns `dir`
+    /// (any non-zero length); 0 for a black map. [`EnvPdf::Complete`]'s is positive wherever
+    /// [`Self::radiance`] is not black (unless the map's luminances span more than about 1e38
+    /// to 1); [`EnvPdf::Compensated`]'s only where the cell's bound exceeds the mean.
+    pub fn pdf(&self, dir: Vec3A, pdf: EnvPdf) -> f32 {
+        self.sampler(pdf).map_or(0.0, |s| s.pdf(dir))
     }
 
     /// The integral over the sphere of the luminance of the (scaled) radiance, in radiance
@@ -338,6 +418,7 @@ mod tests {
     use crate::material::chi2::{chi2, chi2_critical};
     use crate::math::uniform_sphere;
     use crate::testing::uniform;
+    use EnvPdf::Complete as C;
     use glam::Quat;
 
     /// The direction of the texel centre (i, j) of a `w` x `h` unrotated map.
@@ -451,9 +532,9 @@ mod tests {
         assert!(best.1.dot(Vec3A::X) > 0.99, "{:?}", best);
         assert!(best_turned.1.dot(Vec3A::NEG_Z) > 0.99, "{:?}", best_turned);
         // The density moves with the light: at the equator it is highest there.
-        assert_eq!(plain.pdf(Vec3A::X), turned.pdf(Vec3A::NEG_Z));
-        assert!(plain.pdf(Vec3A::X) > 50.0 * plain.pdf(Vec3A::NEG_X));
-        assert!(turned.pdf(Vec3A::NEG_Z) > 50.0 * turned.pdf(Vec3A::Z));
+        assert_eq!(plain.pdf(Vec3A::X, C), turned.pdf(Vec3A::NEG_Z, C));
+        assert!(plain.pdf(Vec3A::X, C) > 50.0 * plain.pdf(Vec3A::NEG_X, C));
+        assert!(turned.pdf(Vec3A::NEG_Z, C) > 50.0 * turned.pdf(Vec3A::Z, C));
 
         // Any angle: the turned map shows in R_y(a) d what the plain one shows in d (glam's
         // rotation is right-handed), and its density moves with it.
@@ -467,7 +548,7 @@ mod tests {
                 let d = uniform_sphere(Vec2::new(r(), r()));
                 let e = rot * d;
                 assert!(close(turned.radiance(e), plain.radiance(d), 1e-3), "{a} {d}");
-                let (p, q) = (turned.pdf(e), plain.pdf(d));
+                let (p, q) = (turned.pdf(e, C), plain.pdf(d, C));
                 // Equal but where a cell boundary falls between the two roundings.
                 differ += ((p - q).abs() > 1e-3 * q) as usize;
             }
@@ -527,35 +608,31 @@ mod tests {
     #[test]
     fn sample_pdf_equals_pdf_exactly() {
         for m in [sun_map(0.0), sun_map(-33.0), smooth_map(), sparse_map(71.0)] {
-            let mut r = uniform(13);
-            for _ in 0..20000 {
-                let s = m.sample(Vec2::new(r(), r())).unwrap();
-                assert!(s.pdf > 0.0 && s.pdf == m.pdf(s.dir), "{s:?}");
-                assert!((s.dir.length() - 1.0).abs() < 1e-5);
-                assert_eq!(s.radiance, m.radiance(s.dir));
+            for pdf in [C, EnvPdf::Compensated] {
+                let mut r = uniform(13);
+                for _ in 0..20000 {
+                    let s = m.sample(Vec2::new(r(), r()), pdf).unwrap();
+                    assert!(s.pdf > 0.0 && s.pdf == m.pdf(s.dir, pdf), "{s:?} {pdf:?}");
+                    assert_eq!((s.radiance, s.pdf), m.radiance_pdf(s.dir, pdf));
+                    assert!((s.dir.length() - 1.0).abs() < 1e-5);
+                    assert_eq!(s.radiance, m.radiance(s.dir));
+                }
             }
         }
     }
 
-    /// Chi-square of `n` of the map's samples against its pdf about `axis`, on the cap
-    /// z >= z_min (samples outside it are dropped: the expected counts integrate the pdf over
-    /// the cap only).
-    fn chi2_ok(
-        m: &EnvironmentMap,
-        pdf: impl Fn(Vec3A) -> f32,
-        axis: Vec3A,
-        z_min: f32,
-        n: usize,
-        what: &str,
-    ) {
+    /// Chi-square of `n` of the map's samples from its density `pdf` against that density about
+    /// `axis`, on the cap z >= z_min (samples outside it are dropped: the expected counts
+    /// integrate the pdf over the cap only).
+    fn chi2_ok(m: &EnvironmentMap, pdf: EnvPdf, axis: Vec3A, z_min: f32, n: usize, what: &str) {
         let (stat, dof) = chi2(
-            |u, _| m.sample(u).map(|s| s.dir).filter(|d| d.dot(axis) >= z_min),
-            pdf,
+            |u, _| m.sample(u, pdf).map(|s| s.dir).filter(|d| d.dot(axis) >= z_min),
+            |d| m.pdf(d, pdf),
             axis,
             z_min as f64,
             n,
         );
-        assert!(stat < chi2_critical(dof), "{what}: chi2 {stat} dof {dof}");
+        assert!(stat < chi2_critical(dof), "{what}, {pdf:?}: chi2 {stat} dof {dof}");
     }
 
     #[test]
@@ -570,18 +647,25 @@ mod tests {
         // sampling. The axis is tilted off +y so that the cells' edges do not line up with
         // the map's (aligned, the rule's error is systematic).
         let near_y = Vec3A::new(0.1, 1.0, 0.05).normalize();
-        chi2_ok(&m, |d| m.pdf(d), near_y, -1.0, 200_000, "sun, about +y");
-        chi2_ok(&m, |d| m.pdf(d), sun, -1.0, 200_000, "sun, about the sun");
+        chi2_ok(&m, C, near_y, -1.0, 200_000, "sun, about +y");
+        chi2_ok(&m, C, sun, -1.0, 200_000, "sun, about the sun");
         // A cap of 20 degrees about the sun: cells of about 0.2 x 9 degrees, quadrature points
-        // 0.02 degrees apart, many samples: the sun's texels and their edges are resolved.
-        chi2_ok(&m, |d| m.pdf(d), sun, 20f32.to_radians().cos(), 1_000_000, "sun, cap about the sun");
+        // 0.02 degrees apart, many samples: the sun's texels and their edges are resolved. The
+        // compensated density lies wholly in that cap (the sun and the ring of cells its bound
+        // reaches; the sky is below the mean), where it steps from its highest to 0: only there
+        // does the rule resolve it (over the sphere, chi2 56 for 18 degrees of freedom).
+        for pdf in [C, EnvPdf::Compensated] {
+            chi2_ok(&m, pdf, sun, 20f32.to_radians().cos(), 1_000_000, "sun, cap about the sun");
+        }
     }
 
     #[test]
     fn sampling_matches_pdf_chi2_smooth() {
         let m = smooth_map();
-        chi2_ok(&m, |d| m.pdf(d), Vec3A::Y, -1.0, 1_000_000, "smooth, about +y");
-        chi2_ok(&m, |d| m.pdf(d), Vec3A::new(0.3, -0.2, 0.9).normalize(), -1.0, 1_000_000, "smooth, tilted");
+        for pdf in [C, EnvPdf::Compensated] {
+            chi2_ok(&m, pdf, Vec3A::Y, -1.0, 1_000_000, "smooth, about +y");
+            chi2_ok(&m, pdf, Vec3A::new(0.3, -0.2, 0.9).normalize(), -1.0, 1_000_000, "smooth, tilted");
+        }
     }
 
     /// The integral of `f` over the sphere, midpoint rule on an equal-area (cos theta, phi) grid
@@ -601,9 +685,10 @@ mod tests {
 
     #[test]
     fn pdf_integrates_to_one() {
-        for (name, m) in [("sun", sun_map(10.0)), ("smooth", smooth_map()), ("sparse", sparse_map(0.0))] {
-            let total = sphere_quadrature(|d| m.pdf(d) as f64, 1200, 2400);
-            assert!((total - 1.0).abs() < 2e-3, "{name}: {total}");
+        let maps = [("sun", sun_map(10.0)), ("smooth", smooth_map()), ("sparse", sparse_map(0.0))];
+        for ((name, m), pdf) in maps.iter().flat_map(|m| [(m, C), (m, EnvPdf::Compensated)]) {
+            let total = sphere_quadrature(|d| m.pdf(d, pdf) as f64, 1200, 2400);
+            assert!((total - 1.0).abs() < 2e-3, "{name} {pdf:?}: {total}");
             // In (u, v), where d omega = 2 pi^2 sin theta du dv, on a grid finer than the cells.
             let (nu, nv) = (m.width() as usize * 8, m.height() as usize * 8);
             let mut sum = 0.0;
@@ -611,11 +696,11 @@ mod tests {
                 let v = (j as f32 + 0.5) / nv as f32;
                 for i in 0..nu {
                     let d = uv_to_direction(Vec2::new((i as f32 + 0.5) / nu as f32, v));
-                    sum += (m.pdf(d) * 2.0 * PI * PI * (PI * v).sin()) as f64;
+                    sum += (m.pdf(d, pdf) * 2.0 * PI * PI * (PI * v).sin()) as f64;
                 }
             }
             let total = sum / (nu * nv) as f64;
-            assert!((total - 1.0).abs() < 1e-4, "{name}: {total} in uv");
+            assert!((total - 1.0).abs() < 1e-4, "{name} {pdf:?}: {total} in uv");
         }
     }
 
@@ -629,7 +714,7 @@ mod tests {
                 let d = uniform_sphere(Vec2::new(r(), r()));
                 if m.radiance(d).max_element() > 0.0 {
                     lit += 1;
-                    assert!(m.pdf(d) > 0.0, "{d}");
+                    assert!(m.pdf(d, C) > 0.0, "{d}");
                 }
             }
             assert!(lit > 1000);
@@ -651,7 +736,7 @@ mod tests {
                         let uv = Vec2::new((i as f32 + f(a)) / w as f32, (j as f32 + f(b)) / h as f32);
                         let d = uv_to_direction(uv);
                         let light = m.radiance(d).max_element() > 0.0;
-                        let p = m.pdf(d);
+                        let p = m.pdf(d, C);
                         assert!(!light || p > 0.0, "cell {i} {j} at {uv}");
                         any_light |= light;
                         any_density |= p > 0.0;
@@ -667,7 +752,7 @@ mod tests {
         // And the bound is tight: exactly those cells have density.
         assert_eq!(dense_cells, 30);
         // Two cells away from every lit texel: no density.
-        assert_eq!(m.pdf(centre(10, 1, 16, 8)), 0.0);
+        assert_eq!(m.pdf(centre(10, 1, 16, 8), C), 0.0);
     }
 
     #[test]
@@ -685,7 +770,7 @@ mod tests {
             (mean, (s2 / n as f64 - mean * mean) / (mean * mean))
         };
         let mut r = uniform(31);
-        let (mean_is, relvar_is) = stats(Box::new(|| match m.sample(Vec2::new(r(), r())) {
+        let (mean_is, relvar_is) = stats(Box::new(|| match m.sample(Vec2::new(r(), r()), C) {
             Some(s) => luminance(s.radiance) as f64 / s.pdf as f64,
             None => 0.0,
         }));
@@ -702,6 +787,150 @@ mod tests {
         assert!((m.power_estimate() as f64 / exact - 1.0).abs() < 0.05, "{} {exact}", m.power_estimate());
     }
 
+    /// The compensated density is the complete one's excess over the mean: 0 on the sun map's
+    /// sky (all of it dimmer than the mean, which the sun raises), higher than the complete
+    /// density on the sun; on the smooth map 0 exactly where the cell's bound is at most the
+    /// solid-angle mean of the bounds.
+    #[test]
+    fn compensated_density_leaves_cells_below_the_mean_to_bsdf_sampling() {
+        let m = sun_map(0.0);
+        let comp = EnvPdf::Compensated;
+        // The sky holds about 6% of the complete density's cells' weight: that moves to the sun.
+        assert!(m.pdf(sun_dir(), comp) > 1.05 * m.pdf(sun_dir(), C));
+        for d in [Vec3A::X, Vec3A::NEG_X, Vec3A::new(0.2, 0.9, 0.3), Vec3A::new(0.1, -0.7, 0.4)] {
+            assert!(m.pdf(d, C) > 0.0 && m.pdf(d, comp) == 0.0, "{d}");
+        }
+        // The smooth map's bounds, recomputed as `EnvironmentMap::new` does (the 3 x 3 maximum
+        // of the texels' luminance), against their mean over solid angle.
+        let (w, h) = (48u32, 24u32);
+        let m = smooth_map();
+        let lum =
+            |i: i64, j: i64| {
+                let (i, j) = (i.rem_euclid(w as i64) as u32, j.clamp(0, h as i64 - 1) as u32);
+                luminance(m.radiance(uv_to_direction(Vec2::new(
+                    (i as f32 + 0.5) / w as f32,
+                    j as f32 / (h - 1) as f32,
+                ))))
+            };
+        let mut bound = vec![0f32; (w * h) as usize];
+        for j in 0..h as i64 {
+            for i in 0..w as i64 {
+                let mut b = 0f32;
+                for (di, dj) in (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))) {
+                    b = b.max(lum(i + di, j + dj));
+                }
+                bound[(j * w as i64 + i) as usize] = b;
+            }
+        }
+        let (mut sum, mut area) = (0f64, 0f64);
+        for j in 0..h as usize {
+            let s = row_sin_theta(j, h as usize) as f64;
+            sum += s * bound[j * w as usize..(j + 1) * w as usize].iter().map(|&b| b as f64).sum::<f64>();
+            area += s * w as f64;
+        }
+        let mean = sum / area;
+        let (mut above, mut below) = (0, 0);
+        for j in 0..h {
+            for i in 0..w {
+                let b = bound[(j * w + i) as usize] as f64;
+                // Cells within rounding of the mean say nothing.
+                if (b - mean).abs() < 1e-4 * mean {
+                    continue;
+                }
+                let p = m.pdf(centre(i, j, w, h), comp);
+                match b > mean {
+                    true => above += (p > 0.0) as usize,
+                    false => below += (p == 0.0) as usize,
+                }
+                assert_eq!(p > 0.0, b > mean, "cell {i} {j}: bound {b}, mean {mean}, density {p}");
+            }
+        }
+        assert!(above > 200 && below > 200, "{above} cells above the mean, {below} below");
+    }
+
+    /// A constant map has no cell above its mean: the compensated density falls back to the
+    /// complete one (pbrt-v4 does the same), which stays uniform over the sphere. A map that is
+    /// black but for equal texels everywhere they are lit is compensated as usual.
+    #[test]
+    fn constant_map_falls_back_to_the_complete_density() {
+        for (w, h, c) in [(7, 5, 1.0), (64, 32, 0.37), (1, 1, 2.0), (3, 200, 1e30)] {
+            let m = EnvironmentMap::new(w, h, vec![Vec3::splat(c); (w * h) as usize], 1.0, 20.0);
+            assert!(m.compensated.is_none(), "{w} x {h}");
+            assert_eq!(m.sampler(EnvPdf::Compensated), m.sampler(C));
+            let mut r = uniform(5);
+            for _ in 0..1000 {
+                let u = Vec2::new(r(), r());
+                let (a, b) = (m.sample(u, C).unwrap(), m.sample(u, EnvPdf::Compensated).unwrap());
+                assert!(a == b && b.pdf.is_finite() && b.pdf > 0.0, "{a:?} {b:?}");
+            }
+        }
+        assert!(LatLongSampler::compensated(4, 2, &[1.5; 8], 0.0).is_none());
+        assert!(LatLongSampler::compensated(4, 2, &[0.0; 8], 0.0).is_none());
+        assert!(LatLongSampler::compensated(0, 0, &[], 0.0).is_none());
+        // NaN, infinite and negative weights count as 0, as in `new`; what is left is compensated.
+        let weights = [f32::NAN, 1.0, f32::INFINITY, -3.0, 1.0, 0.0, 5.0, 0.0];
+        let s = LatLongSampler::compensated(4, 2, &weights, 0.0).unwrap();
+        let mut r = uniform(6);
+        for _ in 0..1000 {
+            let (d, pdf) = s.sample(Vec2::new(r(), r())).unwrap();
+            assert!(pdf.is_finite() && pdf == s.pdf(d));
+            // The mean is 7 / 8: the cells of weight 1 and 5 exceed it.
+            let (uv, _) = direction_to_uv(d).unwrap();
+            let cell = ((uv.x * 4.0) as u32, (uv.y * 2.0) as u32);
+            assert!([(1, 0), (0, 1), (2, 1)].contains(&cell), "{d} in {cell:?}");
+        }
+    }
+
+    /// What the compensated density is for, and where it must not go: the sun map's integral
+    /// of luminance estimated by (a) light sampling alone with the complete density, (b) the
+    /// compensated density combined by the power heuristic with uniform sphere sampling (a
+    /// stand-in for BSDF sampling, which reaches every direction), and (c) light sampling alone
+    /// with the compensated density. (a) and (b) are unbiased, and (b) is less noisy than the
+    /// same MIS with the complete density; (c) misses the sky and must fail (by more than 10%):
+    /// the deliberate error of using the compensated density where no MIS happens.
+    #[test]
+    fn compensated_density_is_unbiased_with_mis_only() {
+        let m = sun_map(0.0);
+        let exact = sphere_quadrature(|d| luminance(m.radiance(d)) as f64, 1200, 2400);
+        let n = 200_000;
+        let power = |a: f32, b: f32| (a * a / (a * a + b * b)) as f64;
+        let uniform_pdf = 1.0 / (4.0 * PI);
+        // One light sample and one uniform sample, each weighted against the other technique.
+        let mis = |pdf: EnvPdf, seed| {
+            let mut r = uniform(seed);
+            let (mut s, mut s2) = (0.0, 0.0);
+            for _ in 0..n {
+                let mut x = 0.0;
+                if let Some(l) = m.sample(Vec2::new(r(), r()), pdf) {
+                    x += luminance(l.radiance) as f64 / l.pdf as f64 * power(l.pdf, uniform_pdf);
+                }
+                let d = uniform_sphere(Vec2::new(r(), r()));
+                let (le, p) = m.radiance_pdf(d, pdf);
+                x += luminance(le) as f64 / uniform_pdf as f64 * power(uniform_pdf, p);
+                (s, s2) = (s + x, s2 + x * x);
+            }
+            let mean = s / n as f64;
+            (mean, s2 / n as f64 - mean * mean)
+        };
+        let alone = |pdf: EnvPdf, seed| {
+            let mut r = uniform(seed);
+            let sum: f64 = (0..n)
+                .filter_map(|_| m.sample(Vec2::new(r(), r()), pdf))
+                .map(|l| luminance(l.radiance) as f64 / l.pdf as f64)
+                .sum();
+            sum / n as f64
+        };
+        let complete_alone = alone(C, 51);
+        assert!((complete_alone / exact - 1.0).abs() < 0.01, "{complete_alone} {exact}");
+        let (comp_mis, comp_var) = mis(EnvPdf::Compensated, 53);
+        assert!((comp_mis / exact - 1.0).abs() < 0.01, "{comp_mis} {exact}");
+        let (complete_mis, complete_var) = mis(C, 53);
+        assert!((complete_mis / exact - 1.0).abs() < 0.01, "{complete_mis} {exact}");
+        assert!(comp_var < 0.9 * complete_var, "variance {comp_var} compensated, {complete_var} complete");
+        let comp_alone = alone(EnvPdf::Compensated, 55);
+        assert!(comp_alone / exact - 1.0 < -0.1, "{comp_alone} {exact}: the sky is not missed");
+    }
+
     #[test]
     fn power_estimate_scale_and_black_maps() {
         let m = EnvironmentMap::new(7, 5, vec![Vec3::ONE; 35], 1.0, 0.0);
@@ -711,18 +940,18 @@ mod tests {
         assert_eq!(m3.radiance(Vec3A::new(0.3, 0.2, 0.1)), Vec3::splat(3.0));
         // The scale does not change the density.
         let d = Vec3A::new(0.3, -0.4, 0.5);
-        assert_eq!(m.pdf(d), m3.pdf(d));
+        assert_eq!(m.pdf(d, C), m3.pdf(d, C));
         let (a, b) = (sun_map(0.0), EnvironmentMap::new(64, 32, sun_texels(), 0.01, 0.0));
-        assert!((a.pdf(sun_dir()) - b.pdf(sun_dir())).abs() < 1e-5 * a.pdf(sun_dir()));
+        assert!((a.pdf(sun_dir(), C) - b.pdf(sun_dir(), C)).abs() < 1e-5 * a.pdf(sun_dir(), C));
 
         // Black (and negative or NaN) maps: nothing to sample, no density, no light.
         let t = vec![Vec3::ZERO, Vec3::splat(-1.0), Vec3::NAN, Vec3::new(0.0, f32::INFINITY, 0.0)];
         for m in
             [EnvironmentMap::new(2, 2, t, 1.0, 0.0), EnvironmentMap::new(2, 2, vec![Vec3::ONE; 4], 0.0, 0.0)]
         {
-            assert!(m.sampler().is_none());
-            assert!(m.sample(Vec2::new(0.3, 0.7)).is_none());
-            assert_eq!(m.pdf(Vec3A::X), 0.0);
+            assert!(m.sampler(C).is_none() && m.sampler(EnvPdf::Compensated).is_none());
+            assert!(m.sample(Vec2::new(0.3, 0.7), C).is_none());
+            assert_eq!(m.pdf(Vec3A::X, C), 0.0);
             assert_eq!(m.radiance(Vec3A::X), Vec3::ZERO);
             assert_eq!(m.power_estimate(), 0.0);
         }
@@ -730,16 +959,16 @@ mod tests {
         let m = smooth_map();
         for d in [Vec3A::ZERO, Vec3A::NAN, Vec3A::new(f32::INFINITY, 0.0, 0.0)] {
             assert_eq!(m.radiance(d), Vec3::ZERO);
-            assert_eq!(m.pdf(d), 0.0);
+            assert_eq!(m.pdf(d, C), 0.0);
         }
         // The poles have no density (sin theta = 0) but radiance.
-        assert_eq!(m.pdf(Vec3A::Y), 0.0);
+        assert_eq!(m.pdf(Vec3A::Y, C), 0.0);
         assert!(m.radiance(Vec3A::Y).max_element() > 0.0);
         // A 1 x 1 map is uniform in (u, v), so 1 / (2 pi^2 sin theta) in solid angle.
         let one = EnvironmentMap::new(1, 1, vec![Vec3::splat(2.0)], 1.0, 0.0);
         let d = Vec3A::new(0.2, 0.5, -0.3);
         let want = 1.0 / (2.0 * PI * PI * direction_to_uv(d).unwrap().1);
-        assert!((one.pdf(d) - want).abs() < 1e-6 * want);
+        assert!((one.pdf(d, C) - want).abs() < 1e-6 * want);
         assert_eq!(one.radiance(Vec3A::Z), Vec3::splat(2.0));
     }
 
@@ -803,7 +1032,7 @@ mod tests {
         // sphere (a 3-degree disk is 0.07% of it).
         let mut r = uniform(43);
         let near = (0..20000)
-            .filter(|_| m.sample(Vec2::new(r(), r())).unwrap().dir.dot(sun) > 5f32.to_radians().cos())
+            .filter(|_| m.sample(Vec2::new(r(), r()), C).unwrap().dir.dot(sun) > 5f32.to_radians().cos())
             .count();
         assert!(near > 4000, "{near} of 20000 samples near the sun");
     }
@@ -814,7 +1043,7 @@ mod tests {
     fn texels_brighter_than_the_bound_are_clamped_to_it() {
         let m = EnvironmentMap::new(2, 1, vec![Vec3::splat(3e38), Vec3::ONE], 1.0, 0.0);
         assert!(m.power_estimate().is_finite() && m.power_estimate() > 0.0, "{}", m.power_estimate());
-        let s = m.sample(Vec2::new(0.1, 0.5)).unwrap();
+        let s = m.sample(Vec2::new(0.1, 0.5), C).unwrap();
         assert!(s.radiance.max_element() <= MAX_RADIANCE && s.radiance.min_element() > 0.0, "{s:?}");
         assert!(s.pdf.is_finite() && s.pdf > 0.0, "{s:?}");
     }
