@@ -333,7 +333,7 @@ pub fn render_samples(
             }
             drop(span);
             rows.copy_from(&out.film);
-            (out.guides, out.costs, out.stats)
+            (out.guides, out.charges, out.stats)
         },
     );
     let n = s.window.len();
@@ -345,24 +345,39 @@ pub fn render_samples(
         emission: vec![Vec3::ZERO; n],
     });
     let per_sample = 1.0 / samples.len().max(1) as f32;
-    let mut costs = opts.costs.then(|| PixelCosts::new(n));
     let mut stats = Stats::default();
-    for (tile, (tile_guides, tile_costs, tile_stats)) in results {
+    let mut charges = Vec::new();
+    for (tile, (tile_guides, tile_charges, tile_stats)) in results {
         if let (Some(g), Some(sums)) = (&mut guides, &tile_guides) {
             for (i, k) in tile.window_indices(&s.window) {
                 let [a, n, e] = sums[i];
                 (g.albedo[k], g.normal[k], g.emission[k]) = (a * per_sample, n * per_sample, e * per_sample);
             }
         }
-        if let (Some(c), Some(tc)) = (&mut costs, &tile_costs) {
-            for (i, k) in tile.window_indices(&s.window) {
-                c.set(k, tc, i);
-            }
-        }
+        charges.extend(tile_charges.map(|c| (tile, c)));
         stats = stats.merge(tile_stats);
     }
     film.guides = guides;
-    film.costs = costs;
+    if opts.costs {
+        // Each stage's mean time per item over the render, in CPU time.
+        let cpu: f64 = charges.iter().map(|(_, c)| c.cpu.as_secs_f64()).sum();
+        let wall: f64 = stats.time.iter().map(Duration::as_secs_f64).sum();
+        let scale = if wall > 0.0 { cpu / wall } else { 0.0 };
+        let per_item: Vec<f64> = (0..Stage::SLOTS)
+            .map(|k| match stats.items[k] {
+                0 => 0.0,
+                items => stats.time[k].as_secs_f64() * scale / items as f64,
+            })
+            .collect();
+        let mut costs = PixelCosts::new(n);
+        for (tile, c) in charges {
+            let tile_costs = c.settle(&per_item, &mut stats.material_time);
+            for (i, k) in tile.window_indices(&s.window) {
+                costs.set(k, &tile_costs, i);
+            }
+        }
+        film.costs = Some(costs);
+    }
     (film, stats)
 }
 
@@ -414,11 +429,11 @@ fn render_tile(
 }
 
 /// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
-/// emission) and the pixels' costs when asked for, and statistics.
+/// emission) and what its pixels cost when asked for, and statistics.
 struct TileResult {
     film: Vec<PixelAccumulator>,
     guides: Option<Vec<[Vec3; 3]>>,
-    costs: Option<PixelCosts>,
+    charges: Option<tile_work::Charges>,
     stats: Stats,
 }
 

@@ -116,8 +116,15 @@ impl<'a> TileWork<'a> {
 
     /// The tile's results.
     pub(super) fn result(mut self) -> super::TileResult {
-        let costs = self.charges.map(|c| c.settle(&mut self.stats));
-        super::TileResult { film: self.film, guides: self.guide_sums, costs, stats: self.stats }
+        if let Some(c) = &mut self.charges {
+            c.finish();
+        }
+        super::TileResult {
+            film: self.film,
+            guides: self.guide_sums,
+            charges: self.charges,
+            stats: self.stats,
+        }
     }
 
     /// Runs `stage` if it has work (after `observe` has seen its input), recording its item
@@ -231,37 +238,43 @@ impl<'a> TileWork<'a> {
 }
 
 /// What a tile's pixels and materials cost. The items each stage takes are counted by the
-/// pixel of their path (and, for shading, by material) as the stage takes them; at the end,
-/// each item is charged its stage's mean time per item over the tile, the stages' times
-/// scaled to the thread's CPU time over the tile (what the tile cost, less the pauses of a
-/// preempted thread, which a wall clock charged to the tile it was in). Charging each call's
-/// time to its own items instead made single pixels look a thousand times costlier than their
-/// neighbours: the few paths a tile has left at its end share a call's fixed cost. The CPU
-/// clock is read per tile, not per stage call (a system call each).
+/// pixel of their path (and, for shading, by material) as the stage takes them; once every
+/// tile is done, each item is charged its stage's mean time per item over the render
+/// ([`Charges::settle`]), the stages' times scaled to the threads' CPU time (what the tiles
+/// cost, less the pauses of a preempted thread, which a wall clock charges to the tile it was
+/// in). Charging each call's time to its own items made single pixels look a thousand times
+/// costlier than their neighbours (the few paths a tile has left at its end share a call's
+/// fixed cost); charging each tile's own means made tiles stand out for no reason in the scene
+/// (a thread's first tile, a cache disturbed). The CPU clock is read per tile, not per stage
+/// call (a system call each).
 #[derive(Clone)]
-struct Charges {
-    /// Rays, paths and bounces as counted; time once settled.
+pub(super) struct Charges {
+    /// Bounces as counted; the rest once settled.
     costs: PixelCosts,
-    /// Items per pixel and stage slot ([`Stage::index`]): `[pixel * SLOTS + slot]`.
+    /// The stage slots ([`Stage::index`]) of the tile's pipeline, in order: the columns of
+    /// [`Self::pixel_items`].
+    columns: Vec<usize>,
+    /// Each stage slot's column (`usize::MAX` for a stage the tile does not run).
+    column: [usize; Stage::SLOTS],
+    /// The column and stage slot of each stage whose items are counted one by one.
+    counted: Vec<(usize, usize)>,
+    /// Items per pixel and column: `[pixel * columns + column]`.
     pixel_items: Vec<u32>,
     /// Items per stage slot and path slot, `[slot * paths + path]`, added to the path's pixel
-    /// when it finishes. Counted by path, the items of a queue go to different counters;
-    /// counted by pixel, a pixel's samples in neighbouring path slots made each increment wait
-    /// on the one before.
+    /// when it finishes (for the stages counted item by item). Counted by path, the items of a
+    /// queue go to different counters; counted by pixel, a pixel's samples in neighbouring
+    /// path slots made each increment wait on the one before.
     path_items: Vec<u32>,
     /// Items per stage slot and material id in [`MATERIAL_LANES`] interleaved copies (for the
     /// same reason): `[(lane * SLOTS + slot) * materials + material]`.
     material_items: Vec<u32>,
-    /// The stage slots of the tile's pipeline whose items are counted one by one (a path's
-    /// counts may be in these).
-    stages: Vec<usize>,
+    /// Once the tile is done, the counts that are not zero, as `(stage slot, material, items)`.
+    material_counts: Vec<(usize, usize, u32)>,
     /// The iteration each path slot's path started in: a path takes one item of
     /// `intersect_closest` (and `record_guides`) per iteration, counted when it finishes.
     born: Vec<u64>,
-    /// Whether the pipeline records the denoiser's guides.
-    guides: bool,
     /// The thread's CPU time in the tile's stages and between them.
-    cpu: Duration,
+    pub(super) cpu: Duration,
 }
 
 /// Copies of the material counters, taken in turn by a queue's items.
@@ -269,14 +282,25 @@ const MATERIAL_LANES: usize = 4;
 
 impl Charges {
     fn new(pixels: usize, materials: usize, pipeline: &[Stage]) -> Self {
+        let columns: Vec<usize> = pipeline.iter().map(|s| s.index()).collect();
+        let mut column = [usize::MAX; Stage::SLOTS];
+        for (c, &k) in columns.iter().enumerate() {
+            column[k] = c;
+        }
+        let counted = (pipeline.iter().enumerate())
+            .filter(|(_, s)| !Self::per_path(**s))
+            .map(|(c, s)| (c, s.index()))
+            .collect();
         Self {
             costs: PixelCosts::new(pixels),
-            pixel_items: vec![0; pixels * Stage::SLOTS],
+            pixel_items: vec![0; pixels * columns.len()],
+            counted,
+            columns,
+            column,
             path_items: Vec::new(),
             material_items: vec![0; MATERIAL_LANES * Stage::SLOTS * materials],
-            stages: pipeline.iter().filter(|s| !Self::per_path(**s)).map(|s| s.index()).collect(),
+            material_counts: Vec::new(),
             born: Vec::new(),
-            guides: pipeline.contains(&Stage::RecordGuides),
             cpu: Duration::ZERO,
         }
     }
@@ -295,9 +319,8 @@ impl Charges {
     /// `slots`: by path, by material for a shading stage; the paths that finish add theirs to
     /// their pixel, with their bounces.
     fn count(&mut self, stage: Stage, iteration: u64, slots: &[u32], p: &Paths) {
-        const S: usize = Stage::SLOTS;
-        let (k, paths) = (stage.index(), p.pixel.len());
-        self.path_items.resize(paths * S, 0);
+        let (k, paths, width) = (stage.index(), p.pixel.len(), self.columns.len());
+        self.path_items.resize(paths * Stage::SLOTS, 0);
         self.born.resize(paths, 0);
         if !Self::per_path(stage) {
             let counts = &mut self.path_items[k * paths..(k + 1) * paths];
@@ -313,64 +336,74 @@ impl Charges {
             }
             Stage::AccumulateFilm => {
                 // The iteration count moved on after the refill of the paths' first iteration.
-                let guides = self.guides;
-                let (ic, rg) = (Stage::IntersectClosest.index(), Stage::RecordGuides.index());
-                let (gc, af) = (Stage::GenerateCameraRays.index(), Stage::AccumulateFilm.index());
+                let column = |s: Stage| self.column[s.index()];
+                let per_path = [Stage::IntersectClosest, Stage::RecordGuides].map(column);
+                let once = [Stage::GenerateCameraRays, Stage::AccumulateFilm].map(column);
                 for &s in slots {
                     let (s, px) = (s as usize, p.pixel[s as usize] as usize);
-                    let to = &mut self.pixel_items[px * S..][..S];
-                    for &j in &self.stages {
-                        to[j] += std::mem::take(&mut self.path_items[j * paths + s]);
+                    let to = &mut self.pixel_items[px * width..][..width];
+                    for &(c, j) in &self.counted {
+                        to[c] += std::mem::take(&mut self.path_items[j * paths + s]);
                     }
                     let lived = (iteration - self.born[s]) as u32;
-                    to[ic] += lived;
-                    to[rg] += lived * guides as u32;
-                    to[gc] += 1;
-                    to[af] += 1;
+                    for c in per_path.into_iter().filter(|&c| c != usize::MAX) {
+                        to[c] += lived;
+                    }
+                    for c in once {
+                        to[c] += 1;
+                    }
                     self.costs.bounces[px] += u64::from(p.depth[s] - p.crossings[s]);
                 }
             }
             Stage::Shade(_) => {
-                let m = self.material_items.len() / (MATERIAL_LANES * S);
+                let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
                 for (j, &s) in slots.iter().enumerate() {
                     let id = p.hit[s as usize].material as usize;
                     if id < m {
-                        self.material_items[((j % MATERIAL_LANES) * S + k) * m + id] += 1;
+                        self.material_items[((j % MATERIAL_LANES) * Stage::SLOTS + k) * m + id] += 1;
                     }
                 }
             }
             _ => {}
         }
     }
-
-    /// The pixels' costs, each item charged its stage's mean time per item in `st` (the
-    /// tile's statistics, whose shading time by material this fills in), scaled to the CPU time.
-    fn settle(mut self, st: &mut Stats) -> PixelCosts {
-        const S: usize = Stage::SLOTS;
-        let m = self.material_items.len() / (MATERIAL_LANES * S);
-        let wall: f64 = st.time.iter().map(Duration::as_secs_f64).sum();
-        let scale = if wall > 0.0 { self.cpu.as_secs_f64() / wall } else { 0.0 };
-        let per_item: Vec<f64> = (0..S)
-            .map(
-                |k| if st.items[k] > 0 { st.time[k].as_secs_f64() * scale / st.items[k] as f64 } else { 0.0 },
-            )
-            .collect();
+    /// The pixels' costs, each item charged its stage's `per_item` time (by
+    /// [`Stage::index`]), and the shading time of each material id added to `materials`.
+    pub(super) fn settle(mut self, per_item: &[f64], materials: &mut Vec<Duration>) -> PixelCosts {
+        let width = self.columns.len();
+        let column = |s: Stage| self.column[s.index()];
         let (ic, sr, af) =
-            (Stage::IntersectClosest.index(), Stage::TraceShadowRays.index(), Stage::AccumulateFilm.index());
-        for (px, items) in self.pixel_items.chunks_exact(S).enumerate() {
-            self.costs.time[px] = items.iter().zip(&per_item).map(|(&n, t)| n as f64 * t).sum();
+            (column(Stage::IntersectClosest), column(Stage::TraceShadowRays), column(Stage::AccumulateFilm));
+        for (px, items) in self.pixel_items.chunks_exact(width).enumerate() {
+            self.costs.time[px] =
+                items.iter().zip(&self.columns).map(|(&n, &k)| n as f64 * per_item[k]).sum();
             // Rays cast: closest hits and shadow rays; paths: those that finished.
             self.costs.rays[px] = u64::from(items[ic] + items[sr]);
             self.costs.paths[px] = items[af];
         }
-        st.material_time = vec![Duration::ZERO; m];
-        for (j, counts) in self.material_items.chunks_exact(m.max(1)).enumerate() {
-            let k = j % S;
-            for (t, &n) in st.material_time.iter_mut().zip(counts) {
-                *t += Duration::from_secs_f64(n as f64 * per_item[k]);
+        for &(k, id, n) in &self.material_counts {
+            if materials.len() <= id {
+                materials.resize(id + 1, Duration::ZERO);
             }
+            materials[id] += Duration::from_secs_f64(n as f64 * per_item[k]);
         }
         self.costs
+    }
+
+    /// Drops what only the tile's run needed (the counts by path, the material counters),
+    /// keeping the counts by pixel and the material counts that are not zero.
+    fn finish(&mut self) {
+        let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
+        for k in 0..Stage::SLOTS {
+            for id in 0..m {
+                let n =
+                    (0..MATERIAL_LANES).map(|l| self.material_items[(l * Stage::SLOTS + k) * m + id]).sum();
+                if n > 0 {
+                    self.material_counts.push((k, id, n));
+                }
+            }
+        }
+        (self.path_items, self.born, self.material_items) = (Vec::new(), Vec::new(), Vec::new());
     }
 }
 
