@@ -198,3 +198,34 @@ fn stats_name_the_glass_and_the_lamp() {
     assert!(line("shading time by material").contains('%'), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn animate_stats_say_what_each_frame_built_and_which_were_slow() {
+    let dir = temp("animate");
+    let run = pathwave()
+        .args(["animate", "scenes/animation-bounce.ron", "--frames", "0..3", "--spp", "2", "--width", "32"])
+        .args(["--height", "32", "--stats", "-o"])
+        .arg(dir.join("f{frame}.png"))
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{log}");
+    for f in 0..3 {
+        let line = log
+            .lines()
+            .find(|l| l.starts_with(&format!("frame {f}: scene update")))
+            .unwrap_or_else(|| panic!("{log}"));
+        assert!(line.contains("us per sample"), "{line}");
+        // The first frame builds everything; the bouncing ball's frames after it rebuild the
+        // primitives' BVH and keep the rest.
+        match f {
+            0 => assert!(line.contains("(BVH rebuilt, TLAS rebuilt, BLAS built"), "{line}"),
+            _ => assert!(line.contains("BVH rebuilt") && line.contains("BLAS, media kept"), "{line}"),
+        }
+        let heat = image::open(dir.join(format!("f{f}.time.png"))).unwrap();
+        assert_eq!((heat.width(), heat.height()), (32, 32));
+    }
+    let slowest = log.lines().skip_while(|l| !l.starts_with("slowest frames")).skip(1).count();
+    assert_eq!(slowest, 3, "{log}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

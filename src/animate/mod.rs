@@ -8,10 +8,10 @@ use crate::denoiser;
 use crate::engine::world::SceneWorld;
 use crate::integrator::wavefront;
 use crate::io;
-use crate::render::args::{Checkpointing, How, RenderArgs};
+use crate::render::args::{Checkpointing, How, RenderArgs, heat_map};
 use crate::render::image::{RenderId, metadata, render_id, render_image};
 use crate::render::load::{load, log_scene};
-use crate::render::stats::{print_stats, stage_shares};
+use crate::render::stats::{print_stats, stage_shares, write_heat_map};
 use crate::shard;
 use crate::view::Viewers;
 use std::path::{Path, PathBuf};
@@ -127,6 +127,9 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     // Frames report one line each (from `animate::run`), not a bar or a line per pass.
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
+    // With --stats, each frame's number, render seconds, update time, what the update built and
+    // microseconds per sample.
+    let mut frames: Vec<FrameCost> = Vec::new();
     let mut logged = false;
     // Frames are not shown while they render.
     let nv = &mut Viewers::default();
@@ -156,15 +159,21 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         };
         let (r, metadata) = r;
         if args.profile.stats {
+            let per_sample = r.secs / r.new_samples.max(1.0) * 1e6;
             match &r.stats {
                 Some(st) => eprintln!(
-                    "frame {}: scene update {:.2} ms, render {:.2} s, {}",
+                    "frame {}: scene update {:.2} ms ({}), render {:.2} s ({per_sample:.3} us per sample), {}",
                     info.frame,
                     info.update.as_secs_f64() * 1e3,
+                    info.built,
                     r.secs,
                     stage_shares(st)
                 ),
                 None => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),
+            }
+            frames.push((info.frame, r.secs, info.update, info.built.clone(), per_sample));
+            if let (Some(out), Some(costs)) = (&info.path, &r.costs) {
+                write_heat_map(costs, (scene.settings.window.w, scene.settings.window.h), &heat_map(out))?;
             }
             if let Some(st) = r.stats.clone() {
                 total = Some(match total.take() {
@@ -179,5 +188,30 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         eprintln!("the sequence's frames together:");
         print_stats(st, *secs, *non_finite);
     }
+    slowest_frames(&mut frames);
     Ok(())
+}
+
+/// A frame's number, render seconds, update time, what the update built and microseconds per
+/// sample.
+type FrameCost = (u32, f64, std::time::Duration, String, f64);
+
+/// The `--stats` summary of a sequence: its slowest frames against the median, with what their
+/// update built and their time per sample (a frame slow for its rebuilds, or for its samples).
+fn slowest_frames(frames: &mut [FrameCost]) {
+    if frames.len() < 2 {
+        return;
+    }
+    let mut secs: Vec<f64> = frames.iter().map(|f| f.1).collect();
+    secs.sort_by(f64::total_cmp);
+    let median = secs[secs.len() / 2];
+    frames.sort_by(|a, b| b.1.total_cmp(&a.1));
+    eprintln!("slowest frames (median render {median:.2} s):");
+    for (frame, secs, update, built, per_sample) in frames.iter().take(3) {
+        eprintln!(
+            "  frame {frame}: render {secs:.2} s ({:.1}x the median, {per_sample:.3} us per sample), scene update {:.2} ms ({built})",
+            secs / median.max(1e-12),
+            update.as_secs_f64() * 1e3
+        );
+    }
 }

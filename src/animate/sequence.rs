@@ -86,6 +86,8 @@ pub struct FrameInfo {
     pub path: Option<PathBuf>,
     /// How long the ECS update took (keyframes, BVH rebuilds and refits, extraction).
     pub update: std::time::Duration,
+    /// What the update built ([`Builds::since`](crate::engine::world::Builds::since)).
+    pub built: String,
 }
 
 /// Whether a frame's file is there: a regular file that is not empty (versions before atomic
@@ -139,13 +141,15 @@ pub fn run(
         }
         let _span = tracing::info_span!("frame", frame).entered();
         let t0 = Instant::now();
+        let before = world.builds();
         let scene = {
             let _span = tracing::info_span!("scene_update", frame).entered();
             scene_at(world, frame, seq.fps, seq.shutter)?
         };
         let update = t0.elapsed();
+        let built = world.builds().since(&before);
         let (open, close) = frame_time(frame, seq.fps, seq.shutter);
-        let out = render(&scene, &FrameInfo { frame, open, close, path: path.clone(), update })?;
+        let out = render(&scene, &FrameInfo { frame, open, close, path: path.clone(), update, built })?;
         match &path {
             Some(p) => {
                 io::write_output(p, &out)?;

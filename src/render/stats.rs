@@ -61,9 +61,8 @@ pub fn print_stats(st: &wavefront::Stats, wall: f64, non_finite: u64) {
 /// How many of the slowest tiles and costliest materials `--stats` lists.
 const LISTED: usize = 5;
 
-/// `--stats`' places: writes the heat map of time per pixel to `heat_map` (the inferno colour
-/// map, from black at no time to yellow at the 99.5th percentile of the pixels' times and
-/// above), then prints the slowest tiles (their pixels and `--crop` fractions, against the
+/// `--stats`' places: writes the heat map of time per pixel to `heat_map`
+/// ([`write_heat_map`]), then prints the slowest tiles (their pixels and `--crop` fractions, against the
 /// median tile) and the shading time of each material (`names`, by material id).
 pub fn report_costs(
     costs: &PixelCosts,
@@ -73,18 +72,7 @@ pub fn report_costs(
     heat_map: &Path,
 ) -> Result<(), String> {
     let window = &s.window;
-    let (w, h) = (window.w, window.h);
-    let mut sorted: Vec<f64> = costs.time.clone();
-    sorted.sort_by(f64::total_cmp);
-    let top = sorted[((sorted.len() - 1) as f64 * 0.995) as usize].max(1e-12);
-    let mut png = image::RgbImage::new(w, h);
-    for (px, &t) in png.pixels_mut().zip(&costs.time) {
-        let c = colorous::INFERNO.eval_continuous((t / top).clamp(0.0, 1.0));
-        *px = image::Rgb([c.r, c.g, c.b]);
-    }
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    png.write_to(&mut bytes, image::ImageFormat::Png).map_err(|e| format!("{}: {e}", heat_map.display()))?;
-    io::atomically(heat_map, bytes.get_ref())?;
+    let top = write_heat_map(costs, (window.w, window.h), heat_map)?;
     eprintln!(
         "{}: time per pixel, black 0 to yellow {:.1} us and above (the 99.5th percentile); {:.1} us per pixel on average",
         heat_map.display(),
@@ -129,6 +117,24 @@ pub fn report_costs(
 fn crop_of(tile: &Tile, width: u32, height: u32) -> [f32; 4] {
     let f = |p: u32, n: u32| if p == 0 { 0.0 } else { (p as f32 - 0.5) / n as f32 };
     [f(tile.x0, width), f(tile.x0 + tile.w, width), f(tile.y0, height), f(tile.y0 + tile.h, height)]
+}
+
+/// Writes the heat map of time per pixel of an image `w` x `h` to `path` (the inferno colour
+/// map, from black at no time to yellow at the 99.5th percentile of the pixels' times and
+/// above); returns that percentile.
+pub fn write_heat_map(costs: &PixelCosts, (w, h): (u32, u32), path: &Path) -> Result<f64, String> {
+    let mut sorted: Vec<f64> = costs.time.clone();
+    sorted.sort_by(f64::total_cmp);
+    let top = sorted[((sorted.len() - 1) as f64 * 0.995) as usize].max(1e-12);
+    let mut png = image::RgbImage::new(w, h);
+    for (px, &t) in png.pixels_mut().zip(&costs.time) {
+        let c = colorous::INFERNO.eval_continuous((t / top).clamp(0.0, 1.0));
+        *px = image::Rgb([c.r, c.g, c.b]);
+    }
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    png.write_to(&mut bytes, image::ImageFormat::Png).map_err(|e| format!("{}: {e}", path.display()))?;
+    io::atomically(path, bytes.get_ref())?;
+    Ok(top)
 }
 
 /// Each tile's time (in image coordinates) from the pixels' times over `window`.
