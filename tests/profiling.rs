@@ -251,3 +251,37 @@ fn animate_stats_say_what_each_frame_built_and_which_were_slow() {
     assert_eq!(slowest, 3, "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// materials-env: its noise comes from the map's sun, and mostly through the frosted glass.
+#[test]
+fn materials_env_noise_comes_from_the_sun_through_the_frosted_glass() {
+    let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());
+    let mut desc = common::scene("materials-env.ron");
+    (desc.render.width, desc.render.height, desc.render.spp) =
+        (96.try_into().unwrap(), 64.try_into().unwrap(), 32.try_into().unwrap());
+    let names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
+    let scene = SceneWorld::render_scene(&desc);
+    let d = diagnosis(&scene);
+    let top = |f: &dyn Fn(&diagnose::Cause) -> String| {
+        let mut by: Vec<(String, f64)> = Vec::new();
+        for o in &d.outliers {
+            let k = f(&o.cause);
+            match by.iter_mut().find(|(n, _)| *n == k) {
+                Some((_, e)) => *e += o.excess,
+                None => by.push((k, o.excess)),
+            }
+        }
+        by.sort_by(|a, b| b.1.total_cmp(&a.1));
+        println!("{by:?}");
+        by[0].0.clone()
+    };
+    assert_eq!(top(&|c| format!("{:?}", c.light)), "BackgroundPeak");
+    let material = |v: Vertex| match v {
+        Vertex::Material(id) => names[id as usize].clone(),
+        other => format!("{other:?}"),
+    };
+    assert_eq!(top(&|c| material(c.vertex)), "frosted");
+    // The sun's share of the variance is the largest of the lights'.
+    let sun = d.by_light[&Light::BackgroundPeak];
+    assert!(d.by_light.values().all(|&v| v <= sun), "{:?}", d.by_light);
+}

@@ -17,9 +17,9 @@ use crate::film::clamp_sample;
 use crate::oracle::{self, Source, Witness};
 use crate::path;
 use crate::sampler::Sampler;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use pathwave_engine::lighting::lights::OtherLight;
-use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::render_scene::{Background, RenderScene};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -36,7 +36,13 @@ pub enum Light {
     Punctual(u32),
     /// The background (an environment map or a sky).
     Background,
+    /// The directions of an environment map at least [`PEAK`] times its mean radiance: a sun.
+    BackgroundPeak,
 }
+
+/// How much brighter than the map's mean a direction of an environment map must be to count
+/// as its peak ([`Light::BackgroundPeak`]).
+pub const PEAK: f32 = 100.0;
 
 /// Where the path was when it found the light: at a surface of material `id`, in a medium, or
 /// still on the camera's ray.
@@ -272,12 +278,21 @@ impl Witness for Recorder<'_> {
         self.rough |= !delta;
     }
 
-    fn adds(&mut self, l: Vec3, source: Source, delta: bool) {
+    fn adds(&mut self, l: Vec3, source: Source, dir: Vec3A, delta: bool) {
         let part = luminance(l);
         if part == 0.0 {
             return;
         }
         let (bounces, vertex) = self.last.map_or((0, Vertex::Camera), |(d, v)| (d + 1, v));
+        let peak = |light: Light| match (light, &self.scene.background) {
+            (Light::Background, Background::Environment(map))
+                if luminance(map.radiance(dir)) as f32
+                    >= PEAK * map.power_estimate() / (4.0 * std::f32::consts::PI) =>
+            {
+                Light::BackgroundPeak
+            }
+            _ => light,
+        };
         let (light, event) = match (source, delta, self.rough) {
             (Source::LightSample, _, _) => {
                 (self.sampled(self.last.map_or(0, |(d, _)| d)), Event::LightSampling)
@@ -294,7 +309,7 @@ impl Witness for Recorder<'_> {
                 },
             ),
         };
-        let cause = Cause { light, vertex, bounces, event };
+        let cause = Cause { light: peak(light), vertex, bounces, event };
         self.parts.push((part, cause));
     }
 }

@@ -10,7 +10,7 @@ use crate::lambert_vertex;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
 use crate::tile;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use pathwave_engine::material::Shading;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
@@ -90,16 +90,16 @@ pub trait Witness {
     /// a medium (`None`), by a delta lobe if `delta`. Told before what light sampling there
     /// adds.
     fn scatters(&mut self, depth: u32, material: Option<u32>, delta: bool);
-    /// The path adds `l` (its throughput included) from `source`; met along its ray, it came
-    /// by a delta lobe (or is the camera's ray) if `delta`.
-    fn adds(&mut self, l: Vec3, source: Source, delta: bool);
+    /// The path adds `l` (its throughput included) from `source`, arriving along `-dir` (any
+    /// length); met along its ray, it came by a delta lobe (or is the camera's ray) if `delta`.
+    fn adds(&mut self, l: Vec3, source: Source, dir: Vec3A, delta: bool);
 }
 
 impl Witness for () {
     #[inline(always)]
     fn scatters(&mut self, _: u32, _: Option<u32>, _: bool) {}
     #[inline(always)]
-    fn adds(&mut self, _: Vec3, _: Source, _: bool) {}
+    fn adds(&mut self, _: Vec3, _: Source, _: Vec3A, _: bool) {}
 }
 
 /// [`radiance`], telling `witness` where the path scatters and what it adds.
@@ -144,7 +144,7 @@ pub fn radiance_witnessed(
             let Some(mut hit) = hit else {
                 let before = st.l;
                 path::escape(scene, &mut st, ray.dir);
-                witness.adds(st.l - before, Source::Background, st.delta);
+                witness.adds(st.l - before, Source::Background, ray.dir, st.delta);
                 break 'path;
             };
             let named = hit.material;
@@ -160,14 +160,14 @@ pub fn radiance_witnessed(
             if mat.is_emissive() {
                 let before = st.l;
                 path::emit(scene, &mut st, &hit, wo, ray.time);
-                witness.adds(st.l - before, Source::Emitter(named), st.delta);
+                witness.adds(st.l - before, Source::Emitter(named), ray.dir, st.delta);
                 break 'path;
             }
             // A surface that emits and reflects: its emission, then it scatters.
             if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
                 let before = st.l;
                 path::emit(scene, &mut st, &hit, wo, ray.time);
-                witness.adds(st.l - before, Source::Emitter(named), st.delta);
+                witness.adds(st.l - before, Source::Emitter(named), ray.dir, st.delta);
             }
             // A surface with a null lobe is sampled at the limit too (only a null sample goes on).
             if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
@@ -211,7 +211,7 @@ pub fn radiance_witnessed(
         if let Some(s) = shadow {
             let before = st.l;
             path::trace_shadow(scene, &mut st, &s);
-            witness.adds(st.l - before, Source::LightSample, false);
+            witness.adds(st.l - before, Source::LightSample, s.ray.dir, false);
         }
         match next {
             Some(r) => ray = r,

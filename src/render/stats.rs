@@ -177,6 +177,9 @@ pub fn report_noise(
         Light::Emitter(id) => material(id),
         Light::Punctual(k) => format!("point light #{k}"),
         Light::Background => "the background".into(),
+        Light::BackgroundPeak => {
+            format!("the background's sun (its directions {}x its mean or more)", diagnose::PEAK)
+        }
     };
     let vertex = |v: Vertex| match v {
         Vertex::Camera => "the camera".into(),
