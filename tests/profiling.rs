@@ -217,6 +217,8 @@ fn stats_name_the_glass_and_the_lamp() {
     assert!(line("by:").trim_start().starts_with("by: a caustic"), "{log}");
     assert!(line("most of the outliers").contains("through \"glass\""), "{log}");
     assert!(line("shading time by material").contains('%'), "{log}");
+    // The ball is the scene file's objects[7].
+    assert!(line("the costliest per pixel:").contains("objects[7] (\"glass\")"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

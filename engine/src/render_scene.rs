@@ -324,6 +324,9 @@ pub struct RenderScene {
     pub materials: Vec<Material>,
     /// Primitives and BVH.
     pub geometry: Arc<Geometry>,
+    /// For each primitive of [`Self::geometry`], its object's place in the scene file's
+    /// `objects` (`u32::MAX` for one spawned without a place), for what a user reads.
+    pub objects: Arc<Vec<u32>>,
     /// Mesh instances and their TLAS.
     pub instances: Arc<Instances>,
     /// Emitters for next-event estimation.

@@ -91,7 +91,7 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
             (Some(st), costs) => {
                 stats::print_stats(st, r.secs, r.non_finite);
                 if let Some(costs) = costs {
-                    stats::report_costs(costs, &s, st, &names, &args::heat_map(output))?;
+                    stats::report_costs(&scene, costs, st, &names, &args::heat_map(output))?;
                 }
             }
             (None, _) => eprintln!("--stats: per-stage statistics exist for the wavefront integrator only"),

@@ -1,7 +1,7 @@
 //! The `--stats` report: per-stage time shares, items and rates; where the time went (a heat
 //! map of time per pixel, the slowest tiles, time by material); where the noise comes from.
 
-use crate::engine::render_scene::{PixelWindow, RenderScene, RenderSettings};
+use crate::engine::render_scene::{PixelWindow, RenderScene};
 use crate::integrator::costs::PixelCosts;
 use crate::integrator::diagnose::{self, Cause, Event, Light, Vertex};
 use crate::integrator::tile::Tile;
@@ -65,12 +65,13 @@ const LISTED: usize = 5;
 /// ([`write_heat_map`]), then prints the slowest tiles (their pixels and `--crop` fractions, against the
 /// median tile) and the shading time of each material (`names`, by material id).
 pub fn report_costs(
+    scene: &RenderScene,
     costs: &PixelCosts,
-    s: &RenderSettings,
     st: &wavefront::Stats,
     names: &[String],
     heat_map: &Path,
 ) -> Result<(), String> {
+    let s = &scene.settings;
     let window = &s.window;
     let top = write_heat_map(costs, (window.w, window.h), heat_map)?;
     eprintln!(
@@ -99,6 +100,7 @@ pub fn report_costs(
             t / median.max(1e-12),
         );
     }
+    by_object(scene, costs, names);
     let shading: f64 = st.material_time.iter().map(|t| t.as_secs_f64()).sum();
     let mut by_material: Vec<(usize, f64)> =
         st.material_time.iter().map(|t| t.as_secs_f64()).enumerate().filter(|(_, t)| *t > 0.0).collect();
@@ -117,6 +119,50 @@ pub fn report_costs(
 fn crop_of(tile: &Tile, width: u32, height: u32) -> [f32; 4] {
     let f = |p: u32, n: u32| if p == 0 { 0.0 } else { (p as f32 - 0.5) / n as f32 };
     [f(tile.x0, width), f(tile.x0 + tile.w, width), f(tile.y0, height), f(tile.y0 + tile.h, height)]
+}
+
+/// Prints the pixels' time by the object their centre sees first (the scene file's
+/// `objects[i]`, with its material; instanced meshes together; the background), largest first.
+fn by_object(scene: &RenderScene, costs: &PixelCosts, names: &[String]) {
+    let w = scene.settings.window;
+    // Each object's time and pixels.
+    let mut time: Vec<(String, f64, usize)> = Vec::new();
+    for (k, &t) in costs.time.iter().enumerate() {
+        let (x, y) = (w.x0 + k as u32 % w.w, w.y0 + k as u32 / w.w);
+        let (ray, tmax, _) = crate::integrator::path::camera_ray(scene, x, y, 0);
+        let seen = match scene.intersect(&ray, tmax) {
+            None => "the background".to_string(),
+            Some(h) => {
+                let material = names
+                    .get(h.material as usize)
+                    .map_or_else(|| format!("#{}", h.material), |n| format!("{n:?}"));
+                match scene.objects.get(h.prim as usize) {
+                    Some(&i) if i != u32::MAX => format!("objects[{i}] ({material})"),
+                    Some(_) => format!("an object without a place in the file ({material})"),
+                    None => format!("instanced meshes ({material})"),
+                }
+            }
+        };
+        match time.iter_mut().find(|(n, ..)| *n == seen) {
+            Some((_, s, n)) => (*s, *n) = (*s + t, *n + 1),
+            None => time.push((seen, t, 1)),
+        }
+    }
+    time.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let total = costs.total_time().max(1e-12);
+    eprintln!("time by the object each pixel sees first:");
+    for (what, t, n) in time.iter().take(LISTED) {
+        let share = 100.0 * *n as f64 / costs.len() as f64;
+        eprintln!("  {what:<40} {:>5.1}% of the time on {share:>5.1}% of the pixels", 100.0 * t / total);
+    }
+    // The hot spot: the costliest per pixel, of those that cover some pixels (one in a thousand).
+    let mean = total / costs.len() as f64;
+    let covers = |n: usize| n * 1000 >= costs.len();
+    let hot =
+        time.iter().filter(|o| covers(o.2)).max_by(|a, b| (a.1 / a.2 as f64).total_cmp(&(b.1 / b.2 as f64)));
+    if let Some((what, t, n)) = hot {
+        eprintln!("  the costliest per pixel: {what}, {:.2}x the image's mean", t / *n as f64 / mean);
+    }
 }
 
 /// Writes the heat map of time per pixel of an image `w` x `h` to `path` (the inferno colour

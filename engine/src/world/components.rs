@@ -148,6 +148,9 @@ pub struct SceneGeometry {
     /// For each primitive (in the geometry's order), the rank in `entities` of the object it
     /// belongs to.
     pub objects: Vec<u32>,
+    /// For each primitive, its object's place in the scene file's `objects` ([`ObjectIndex`];
+    /// `u32::MAX` for an object spawned without one).
+    pub file_objects: Arc<Vec<u32>>,
     /// Why objects were left out of the last build: reported in [`FrameErrors`] by every
     /// update until a build has them back, not only by the one that left them out.
     pub left_out: Vec<String>,

@@ -74,6 +74,7 @@ pub fn extract_render_scene(
         background: background.0.clone(),
         materials: materials.0.clone(),
         geometry: geometry.geometry.clone(),
+        objects: geometry.file_objects.clone(),
         instances: instances.instances.clone(),
         lights: lights.lights.clone(),
         media: media.media.clone(),

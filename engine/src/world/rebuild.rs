@@ -64,6 +64,7 @@ pub fn rebuild_geometry(
     objs.sort_by_key(|(e, ..)| *e);
     out.entities = objs.iter().map(|(e, ..)| *e).collect();
     let (mut prims, mut mats, mut velocity, mut object) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut file_object = Vec::new();
     let (t0, t1) = camera.0.shutter;
     for (k, (_, transform, shape, material, motion, index)) in objs.into_iter().enumerate() {
         // Scene files are validated at load, but an animation or a shutter may carry an object
@@ -91,10 +92,12 @@ pub fn rebuild_geometry(
         mats.resize(prims.len(), material.0);
         velocity.resize(prims.len(), motion.map_or(Vec3A::ZERO, |m| m.velocity.into()));
         object.resize(prims.len(), k as u32);
+        file_object.resize(prims.len(), index.map_or(u32::MAX, |i| i.0));
     }
     errors.0.extend(out.left_out.iter().cloned());
     let geometry = Geometry::build_moving(prims, mats, velocity, camera.0.shutter);
     out.objects = geometry.source.iter().map(|&i| object[i as usize]).collect();
+    out.file_objects = Arc::new(geometry.source.iter().map(|&i| file_object[i as usize]).collect());
     tracing::info!(
         primitives = geometry.prims.len(),
         moving = geometry.velocity.is_some(),
