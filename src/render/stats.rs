@@ -124,30 +124,45 @@ fn crop_of(tile: &Tile, width: u32, height: u32) -> [f32; 4] {
 /// Prints the pixels' time by the object their centre sees first (the scene file's
 /// `objects[i]`, with its material; instanced meshes together; the background), largest first.
 fn by_object(scene: &RenderScene, costs: &PixelCosts, names: &[String]) {
+    /// What a pixel's centre sees first: an object of the file (its place and material), one
+    /// without a place or an instanced mesh (their material), or the background.
+    #[derive(Clone, Copy, PartialEq, Eq, Hash)]
+    enum Seen {
+        Object(u32, u32),
+        Unplaced(u32),
+        Instanced(u32),
+        Background,
+    }
     let w = scene.settings.window;
-    // Each object's time and pixels.
-    let mut time: Vec<(String, f64, usize)> = Vec::new();
+    // Each one's time and pixels.
+    let mut by: std::collections::HashMap<Seen, (f64, usize)> = std::collections::HashMap::new();
     for (k, &t) in costs.time.iter().enumerate() {
         let (x, y) = (w.x0 + k as u32 % w.w, w.y0 + k as u32 / w.w);
         let (ray, tmax, _) = crate::integrator::path::camera_ray(scene, x, y, 0);
         let seen = match scene.intersect(&ray, tmax) {
-            None => "the background".to_string(),
-            Some(h) => {
-                let material = names
-                    .get(h.material as usize)
-                    .map_or_else(|| format!("#{}", h.material), |n| format!("{n:?}"));
-                match scene.objects.get(h.prim as usize) {
-                    Some(&i) if i != u32::MAX => format!("objects[{i}] ({material})"),
-                    Some(_) => format!("an object without a place in the file ({material})"),
-                    None => format!("instanced meshes ({material})"),
-                }
-            }
+            None => Seen::Background,
+            Some(h) => match scene.objects.get(h.prim as usize) {
+                Some(&i) if i != u32::MAX => Seen::Object(i, h.material),
+                Some(_) => Seen::Unplaced(h.material),
+                None => Seen::Instanced(h.material),
+            },
         };
-        match time.iter_mut().find(|(n, ..)| *n == seen) {
-            Some((_, s, n)) => (*s, *n) = (*s + t, *n + 1),
-            None => time.push((seen, t, 1)),
-        }
+        let e = by.entry(seen).or_default();
+        (e.0, e.1) = (e.0 + t, e.1 + 1);
     }
+    let material = |id: u32| names.get(id as usize).map_or_else(|| format!("#{id}"), |n| format!("{n:?}"));
+    let mut time: Vec<(String, f64, usize)> = by
+        .into_iter()
+        .map(|(seen, (t, n))| {
+            let name = match seen {
+                Seen::Object(i, m) => format!("objects[{i}] ({})", material(m)),
+                Seen::Unplaced(m) => format!("an object without a place in the file ({})", material(m)),
+                Seen::Instanced(m) => format!("instanced meshes ({})", material(m)),
+                Seen::Background => "the background".into(),
+            };
+            (name, t, n)
+        })
+        .collect();
     time.sort_by(|a, b| b.1.total_cmp(&a.1));
     let total = costs.total_time().max(1e-12);
     eprintln!("time by the object each pixel sees first:");
@@ -203,8 +218,8 @@ pub fn diagnosed(spp: u32) -> u32 {
 
 /// The `--stats` tables of where the noise comes from: `samples` of every pixel re-run by the
 /// reference path tracer with a witness ([`diagnose`], `luminance` the render's mean of each
-/// pixel over its `spp` samples), each light's and each material's share of the variance, and the outliers by light,
-/// material, bounce and event. `names` are the material names by id.
+/// pixel over its `spp` samples), each light's and each material's share of the variance, and
+/// the outliers by light, material, bounce and event. `names` are the material names by id.
 pub fn report_noise(
     scene: &RenderScene,
     samples: std::ops::Range<u32>,
