@@ -144,7 +144,7 @@ fn the_time_goes_to_the_glass_ball_and_the_image_stays_the_same() {
 /// The diagnosis of all the samples of a render of `scene`.
 fn diagnosis(scene: &RenderScene) -> diagnose::Diagnosis {
     let film = oracle::render(scene, &|_, _| {});
-    let mean: Vec<f32> = film.mean().iter().map(|&c| diagnose::luminance(c) as f32).collect();
+    let mean: Vec<f32> = film.mean().iter().map(|&c| pathwave::engine::math::luminance(c)).collect();
     diagnose::diagnose(scene, 0..film.spp, &mean, film.spp)
 }
 

@@ -19,6 +19,7 @@ use crate::path;
 use crate::sampler::Sampler;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::lighting::lights::OtherLight;
+use pathwave_engine::math::luminance;
 use pathwave_engine::render_scene::{Background, RenderScene};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -169,11 +170,6 @@ fn prune(outliers: &mut Vec<Outlier>, keep: usize) {
     }
 }
 
-/// Luminance (Rec. 709).
-pub fn luminance(c: Vec3) -> f64 {
-    f64::from(c.dot(Vec3::new(0.2126, 0.7152, 0.0722)))
-}
-
 /// One pixel's samples into `d`; `mean` is the render's mean there over `spp` samples.
 fn pixel(
     scene: &RenderScene,
@@ -193,12 +189,12 @@ fn pixel(
         let mut rec = Recorder::new(scene, &sampler);
         let l = oracle::radiance_witnessed(scene, ray, tmax, &sampler, &mut rec);
         let kept = clamp_sample(l, scene.settings.clamp);
-        let value = luminance(kept);
+        let value = f64::from(luminance(kept));
         if !value.is_finite() {
             continue;
         }
         // The clamp scales every part alike.
-        let clamped = if luminance(l) > 0.0 { value / luminance(l) } else { 1.0 };
+        let clamped = if luminance(l) > 0.0 { value / f64::from(luminance(l)) } else { 1.0 };
         let mut largest: Option<(f64, Cause)> = None;
         for &(part, cause) in &rec.parts {
             let part = part * clamped;
@@ -279,14 +275,14 @@ impl Witness for Recorder<'_> {
     }
 
     fn adds(&mut self, l: Vec3, source: Source, dir: Vec3A, delta: bool) {
-        let part = luminance(l);
+        let part = f64::from(luminance(l));
         if part == 0.0 {
             return;
         }
         let (bounces, vertex) = self.last.map_or((0, Vertex::Camera), |(d, v)| (d + 1, v));
         let peak = |light: Light| match (light, &self.scene.background) {
             (Light::Background, Background::Environment(map))
-                if luminance(map.radiance(dir)) as f32
+                if luminance(map.radiance(dir))
                     >= PEAK * map.power_estimate() / (4.0 * std::f32::consts::PI) =>
             {
                 Light::BackgroundPeak

@@ -7,7 +7,7 @@ use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
 use crate::engine::scene::files::InputFile;
-use crate::integrator::{costs::PixelCosts, diagnose, film::Film, oracle, wavefront};
+use crate::integrator::{costs::PixelCosts, film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::view::{self, Viewers};
 use std::path::Path;
@@ -282,7 +282,7 @@ pub fn render_image(
     }
     let img = LinearImage { width: film.width, height: film.height, pixels: film.mean() };
     let luminance = match how.stats {
-        true => img.pixels.iter().map(|&c| diagnose::luminance(c) as f32).collect(),
+        true => img.pixels.iter().map(|&c| crate::engine::math::luminance(c)).collect(),
         false => Vec::new(),
     };
     let (img, layers) = match how.guides() || !how.aov.is_empty() {
