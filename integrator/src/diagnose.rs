@@ -289,21 +289,16 @@ impl Witness for Recorder<'_> {
             }
             _ => light,
         };
-        let (light, event) = match (source, delta, self.rough) {
-            (Source::LightSample, _, _) => {
-                (self.sampled(self.last.map_or(0, |(d, _)| d)), Event::LightSampling)
-            }
-            (met, delta, rough) => (
-                match met {
-                    Source::Emitter(m) => Light::Emitter(m),
-                    _ => Light::Background,
-                },
-                match (delta, rough) {
-                    (false, _) => Event::BsdfSampling,
-                    (true, true) => Event::Caustic,
-                    (true, false) => Event::Direct,
-                },
-            ),
+        // How a light met along the ray was found.
+        let met = match (delta, self.rough) {
+            (false, _) => Event::BsdfSampling,
+            (true, true) => Event::Caustic,
+            (true, false) => Event::Direct,
+        };
+        let (light, event) = match source {
+            Source::LightSample => (self.sampled(self.last.map_or(0, |(d, _)| d)), Event::LightSampling),
+            Source::Emitter(m) => (Light::Emitter(m), met),
+            Source::Background => (Light::Background, met),
         };
         let cause = Cause { light: peak(light), vertex, bounces, event };
         self.parts.push((part, cause));
