@@ -356,8 +356,7 @@ pub struct How {
 /// The heat map of time per pixel that `--stats` writes beside the output NAME.EXT:
 /// NAME.time.png.
 pub fn heat_map(output: &Path) -> PathBuf {
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    output.with_file_name(format!("{stem}.time.png"))
+    sibling(output, "time").with_extension("png")
 }
 
 /// The side file NAME.TAG.EXT beside the output NAME.EXT.
