@@ -12,7 +12,7 @@ use pathwave::engine::render_scene::RenderScene;
 use pathwave::engine::scene::load_with;
 use pathwave::engine::world::SceneWorld;
 use pathwave::integrator::diagnose::{self, Event, Light, Vertex};
-use pathwave::integrator::{oracle, path};
+use pathwave::integrator::{oracle, path, wavefront};
 use pathwave::io::read_exr_channels;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -217,6 +217,8 @@ fn stats_name_the_glass_and_the_lamp() {
     assert!(line("by:").trim_start().starts_with("by: a caustic"), "{log}");
     assert!(line("most of the outliers").contains("through \"glass\""), "{log}");
     assert!(line("shading time by material").contains('%'), "{log}");
+    let by_light = log.lines().skip_while(|l| !l.starts_with("shadow rays' time by the light")).nth(1);
+    assert!(by_light.is_some_and(|l| l.trim_start().starts_with("\"lamp\"")), "{log}");
     // The ball is the scene file's objects[7].
     assert!(line("the costliest per pixel:").contains("objects[7] (\"glass\")"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -286,4 +288,43 @@ fn materials_env_noise_comes_from_the_sun_through_the_frosted_glass() {
     // The sun's share of the variance is the largest of the lights'.
     let sun = d.by_light[&Light::BackgroundPeak];
     assert!(d.by_light.values().all(|&v| v <= sun), "{:?}", d.by_light);
+}
+
+/// The shadow rays' time goes to the light each was aimed at. Of two equal lamps, the one
+/// above a floor lights what the camera sees (the floor's top) and the one below it lights
+/// nothing there (no shadow ray is cast through the floor), though light sampling picks each
+/// half the time: every shadow ray, and so its time, is the upper lamp's. The lower lamp comes
+/// first in the light table (charging every ray to the first entry fails), and a light read at
+/// another depth than the vertex's (tried) splits the time evenly.
+#[test]
+fn shadow_rays_time_goes_to_the_lamp_they_aim_at() {
+    let desc = common::inline(
+        r#"Scene(
+            camera: (look_from: (0, 3, 3), look_at: (0, 0, 0), vfov: 40),
+            render: (width: 32, height: 32, spp: 16, max_depth: 4),
+            materials: {
+                "floor": Lambertian(albedo: (0.5, 0.5, 0.5)),
+                "below": DiffuseLight(emit: (4, 4, 4)),
+                "above": DiffuseLight(emit: (4, 4, 4)),
+            },
+            objects: [
+                (shape: Quad(q: (-0.5, -1, -0.5), u: (1, 0, 0), v: (0, 0, 1)), material: "below"),
+                (shape: Quad(q: (-5, 0, -5), u: (10, 0, 0), v: (0, 0, 10)), material: "floor"),
+                (shape: Quad(q: (-0.5, 2, -0.5), u: (1, 0, 0), v: (0, 0, 1)), material: "above"),
+            ],
+        )"#,
+    );
+    let names: Vec<String> = desc.materials.iter().map(|(n, _)| n.clone()).collect();
+    let scene = SceneWorld::render_scene(&desc);
+    let opts = wavefront::Options { costs: true, ..Default::default() };
+    let (_, stats) = wavefront::render(&scene, opts, &|_, _| {});
+    let mut by = std::collections::HashMap::<Light, f64>::new();
+    for (k, t) in stats.light_time.iter().enumerate() {
+        *by.entry(Light::of(&scene, k)).or_default() += t.as_secs_f64();
+    }
+    let lamp = |name: &str| Light::Emitter(names.iter().position(|n| n == name).unwrap() as u32);
+    let (above, below) = (by[&lamp("above")], by.get(&lamp("below")).copied().unwrap_or(0.0));
+    println!("shadow rays' time: above {above:.2e} s, below {below:.2e} s");
+    assert!(above > 0.0 && below <= 1e-3 * above, "above {above}, below {below}");
+    assert!(Light::of(&scene, 0) == lamp("below"), "the lower lamp is the table's first");
 }

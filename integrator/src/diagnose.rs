@@ -41,6 +41,19 @@ pub enum Light {
     BackgroundPeak,
 }
 
+impl Light {
+    /// The light that entry `k` of the scene's light table belongs to (an environment map as a
+    /// whole: its peak is told by direction).
+    pub fn of(scene: &RenderScene, k: usize) -> Light {
+        let lights = &scene.lights;
+        match lights.other(k) {
+            None => Light::Emitter(scene.geometry.material[lights.prims[k] as usize]),
+            Some(OtherLight::Environment) => Light::Background,
+            Some(OtherLight::Punctual(_)) => Light::Punctual((k - lights.prims.len()) as u32),
+        }
+    }
+}
+
 /// How much brighter than the map's mean a direction of an environment map must be to count
 /// as its peak ([`Light::BackgroundPeak`]).
 pub const PEAK: f32 = 100.0;
@@ -258,13 +271,7 @@ impl<'a> Recorder<'a> {
 
     /// The light a vertex at `depth` sampled.
     fn sampled(&self, depth: u32) -> Light {
-        let lights = &self.scene.lights;
-        let k = oracle::sampled_light(self.scene, self.sampler, depth);
-        match lights.other(k) {
-            None => Light::Emitter(self.scene.geometry.material[lights.prims[k] as usize]),
-            Some(OtherLight::Environment) => Light::Background,
-            Some(OtherLight::Punctual(_)) => Light::Punctual((k - lights.prims.len()) as u32),
-        }
+        Light::of(self.scene, oracle::sampled_light(self.scene, self.sampler, depth))
     }
 }
 

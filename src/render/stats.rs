@@ -108,10 +108,51 @@ pub fn report_costs(
     let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
     eprintln!("shading time by material ({:.1}% of the stages' time):", 100.0 * shading / total.max(1e-12));
     for &(id, t) in by_material.iter().take(LISTED) {
-        let name = names.get(id).map_or_else(|| format!("#{id}"), |n| format!("{n:?}"));
+        let name = material_name(names, id as u32);
         eprintln!("  {name:<24} {:>5.1}%", 100.0 * t / shading.max(1e-12));
     }
+    by_light(scene, st, names);
     Ok(())
+}
+
+/// Prints the shadow rays' time by the light they were aimed at (sampling a light is part of
+/// the shading time), largest first.
+fn by_light(scene: &RenderScene, st: &wavefront::Stats, names: &[String]) {
+    let mut by: Vec<(Light, f64)> = Vec::new();
+    for (k, t) in st.light_time.iter().enumerate().filter(|(_, t)| !t.is_zero()) {
+        let light = Light::of(scene, k);
+        match by.iter_mut().find(|(l, _)| *l == light) {
+            Some((_, sum)) => *sum += t.as_secs_f64(),
+            None => by.push((light, t.as_secs_f64())),
+        }
+    }
+    by.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let shadow: f64 = by.iter().map(|(_, t)| t).sum();
+    let total: f64 = st.time.iter().map(|t| t.as_secs_f64()).sum();
+    eprintln!(
+        "shadow rays' time by the light they were aimed at ({:.1}% of the stages' time; sampling a light is in the shading time above):",
+        100.0 * shadow / total.max(1e-12)
+    );
+    for (light, t) in by.iter().take(LISTED) {
+        eprintln!("  {:<40} {:>5.1}%", light_name(names, *light), 100.0 * t / shadow.max(1e-12));
+    }
+}
+
+/// A material's name (its id where it has none).
+fn material_name(names: &[String], id: u32) -> String {
+    names.get(id as usize).map_or_else(|| format!("material #{id}"), |n| format!("{n:?}"))
+}
+
+/// A light's name: its emitting material's, or what it is.
+fn light_name(names: &[String], light: Light) -> String {
+    match light {
+        Light::Emitter(id) => material_name(names, id),
+        Light::Punctual(k) => format!("point light #{k}"),
+        Light::Background => "the background".into(),
+        Light::BackgroundPeak => {
+            format!("the background's sun (its directions {}x its mean or more)", diagnose::PEAK)
+        }
+    }
 }
 
 /// The `--crop` fractions of `tile` in an image `width` x `height`: half a pixel before each
@@ -150,7 +191,7 @@ fn by_object(scene: &RenderScene, costs: &PixelCosts, names: &[String]) {
         let e = by.entry(seen).or_default();
         (e.0, e.1) = (e.0 + t, e.1 + 1);
     }
-    let material = |id: u32| names.get(id as usize).map_or_else(|| format!("#{id}"), |n| format!("{n:?}"));
+    let material = |id: u32| material_name(names, id);
     let mut time: Vec<(String, f64, usize)> = by
         .into_iter()
         .map(|(seen, (t, n))| {
@@ -232,16 +273,8 @@ pub fn report_noise(
     }
     let start = std::time::Instant::now();
     let d = diagnose::diagnose(scene, samples.clone(), luminance, spp);
-    let material =
-        |id: u32| names.get(id as usize).map_or_else(|| format!("material #{id}"), |n| format!("{n:?}"));
-    let light = |l: Light| match l {
-        Light::Emitter(id) => material(id),
-        Light::Punctual(k) => format!("point light #{k}"),
-        Light::Background => "the background".into(),
-        Light::BackgroundPeak => {
-            format!("the background's sun (its directions {}x its mean or more)", diagnose::PEAK)
-        }
-    };
+    let material = |id: u32| material_name(names, id);
+    let light = |l: Light| light_name(names, l);
     let vertex = |v: Vertex| match v {
         Vertex::Camera => "the camera".into(),
         Vertex::Material(id) => material(id),

@@ -277,6 +277,10 @@ pub struct Stats {
     /// Time the shading stages spent on each material id (their time shared out evenly among
     /// the paths they shaded), only with [`Options::costs`].
     pub material_time: Vec<Duration>,
+    /// Time the shadow rays aimed at each entry of the scene's light table took (the occlusion
+    /// stage's time shared out evenly among its rays), only with [`Options::costs`]. Sampling
+    /// a light is part of the shading stages' time.
+    pub light_time: Vec<Duration>,
 }
 
 impl Stats {
@@ -290,10 +294,8 @@ impl Stats {
         self.iterations += o.iterations;
         self.occupancy_sum += o.occupancy_sum;
         self.paths += o.paths;
-        if self.material_time.len() < o.material_time.len() {
-            self.material_time.resize(o.material_time.len(), Duration::ZERO);
-        }
-        self.material_time.iter_mut().zip(o.material_time).for_each(|(a, b)| *a += b);
+        add_up(&mut self.material_time, o.material_time);
+        add_up(&mut self.light_time, o.light_time);
         self
     }
 }
@@ -371,7 +373,7 @@ pub fn render_samples(
             .collect();
         let mut costs = PixelCosts::new(n);
         for (tile, c) in charges {
-            let tile_costs = c.settle(&per_item, &mut stats.material_time);
+            let tile_costs = c.settle(&per_item, &mut stats);
             for (i, k) in tile.window_indices(&s.window) {
                 costs.set(k, &tile_costs, i);
             }
@@ -379,6 +381,14 @@ pub fn render_samples(
         film.costs = Some(costs);
     }
     (film, stats)
+}
+
+/// Adds `b` to `a` entry by entry, `a` lengthened as needed.
+fn add_up(a: &mut Vec<Duration>, b: Vec<Duration>) {
+    if a.len() < b.len() {
+        a.resize(b.len(), Duration::ZERO);
+    }
+    a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
 }
 
 /// Reports a tile's stages to the trace: each stage's time summed over the tile's iterations,

@@ -8,6 +8,7 @@ use crate::aov::Guide;
 use crate::costs::PixelCosts;
 use crate::film::{PixelAccumulator, clamp_sample};
 use crate::lambert_vertex::LANES;
+use crate::oracle;
 use crate::path;
 use crate::sampler::{Sampler, SamplerLanes};
 use crate::tile::Tile;
@@ -58,7 +59,8 @@ impl<'a> TileWork<'a> {
             next_sample: 0,
             film: vec![PixelAccumulator::default(); pixels],
             guide_sums: guides.then(|| vec![[Vec3::ZERO; 3]; pixels]),
-            charges: costs.then(|| Charges::new(pixels, scene.materials.len(), &pipeline)),
+            charges: costs
+                .then(|| Charges::new(pixels, scene.materials.len(), scene.lights.len(), &pipeline)),
             stats: Stats::default(),
             pipeline,
         }
@@ -145,7 +147,7 @@ impl<'a> TileWork<'a> {
             return;
         }
         if let Some(charges) = &mut self.charges {
-            charges.count(stage, self.stats.iterations, slots, p);
+            charges.count(self.scene, stage, self.stats.iterations, slots, p);
         }
         observe(self, stage, p, q);
         let k = stage.index();
@@ -270,6 +272,11 @@ pub(super) struct Charges {
     material_items: Vec<u32>,
     /// Once the tile is done, the counts that are not zero, as `(stage slot, material, items)`.
     material_counts: Vec<(usize, usize, u32)>,
+    /// The entry of the scene's light table each path slot's last vertex sampled (kept only
+    /// where there is more than one).
+    path_light: Vec<u32>,
+    /// Shadow rays by the light table entry they were aimed at.
+    light_items: Vec<u32>,
     /// The iteration each path slot's path started in: a path takes one item of
     /// `intersect_closest` (and `record_guides`) per iteration, counted when it finishes.
     born: Vec<u64>,
@@ -281,7 +288,7 @@ pub(super) struct Charges {
 const MATERIAL_LANES: usize = 4;
 
 impl Charges {
-    fn new(pixels: usize, materials: usize, pipeline: &[Stage]) -> Self {
+    fn new(pixels: usize, materials: usize, lights: usize, pipeline: &[Stage]) -> Self {
         let columns: Vec<usize> = pipeline.iter().map(|s| s.index()).collect();
         let mut column = [usize::MAX; Stage::SLOTS];
         for (c, &k) in columns.iter().enumerate() {
@@ -300,6 +307,8 @@ impl Charges {
             path_items: Vec::new(),
             material_items: vec![0; MATERIAL_LANES * Stage::SLOTS * materials],
             material_counts: Vec::new(),
+            path_light: Vec::new(),
+            light_items: vec![0; lights],
             born: Vec::new(),
             cpu: Duration::ZERO,
         }
@@ -316,12 +325,22 @@ impl Charges {
     }
 
     /// Counts the items `stage` takes in wavefront iteration `iteration`, those of the paths in
-    /// `slots`: by path, by material for a shading stage; the paths that finish add theirs to
-    /// their pixel, with their bounces.
-    fn count(&mut self, stage: Stage, iteration: u64, slots: &[u32], p: &Paths) {
+    /// `slots`: by path, by material for a shading stage, by light for the shadow rays; the
+    /// paths that finish add theirs to their pixel, with their bounces.
+    fn count(&mut self, scene: &RenderScene, stage: Stage, iteration: u64, slots: &[u32], p: &Paths) {
         let (k, paths, width) = (stage.index(), p.pixel.len(), self.columns.len());
         self.path_items.resize(paths * Stage::SLOTS, 0);
         self.born.resize(paths, 0);
+        let many_lights = self.light_items.len() > 1;
+        if many_lights && matches!(stage, Stage::Shade(_) | Stage::ShadeMedium) {
+            // The light each vertex samples, as the stage is about to pick it: its shadow ray,
+            // if it makes one, is traced later in the same iteration.
+            self.path_light.resize(paths, 0);
+            for &s in slots {
+                let s = s as usize;
+                self.path_light[s] = oracle::sampled_light(scene, &p.sampler[s], p.depth[s]) as u32;
+            }
+        }
         if !Self::per_path(stage) {
             let counts = &mut self.path_items[k * paths..(k + 1) * paths];
             for &s in slots {
@@ -355,6 +374,16 @@ impl Charges {
                     self.costs.bounces[px] += u64::from(p.depth[s] - p.crossings[s]);
                 }
             }
+            Stage::TraceShadowRays if many_lights => {
+                for &s in slots {
+                    self.light_items[self.path_light[s as usize] as usize] += 1;
+                }
+            }
+            Stage::TraceShadowRays => {
+                if let Some(n) = self.light_items.first_mut() {
+                    *n += slots.len() as u32;
+                }
+            }
             Stage::Shade(_) => {
                 let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
                 for (j, &s) in slots.iter().enumerate() {
@@ -368,8 +397,9 @@ impl Charges {
         }
     }
     /// The pixels' costs, each item charged its stage's `per_item` time (by
-    /// [`Stage::index`]), and the shading time of each material id added to `materials`.
-    pub(super) fn settle(mut self, per_item: &[f64], materials: &mut Vec<Duration>) -> PixelCosts {
+    /// [`Stage::index`]); the shading time of each material id and the shadow rays' time of
+    /// each light added to `stats`.
+    pub(super) fn settle(mut self, per_item: &[f64], stats: &mut Stats) -> PixelCosts {
         let width = self.columns.len();
         let column = |s: Stage| self.column[s.index()];
         let (ic, sr, af) =
@@ -381,11 +411,17 @@ impl Charges {
             self.costs.rays[px] = u64::from(items[ic] + items[sr]);
             self.costs.paths[px] = items[af];
         }
-        for &(k, id, n) in &self.material_counts {
-            if materials.len() <= id {
-                materials.resize(id + 1, Duration::ZERO);
+        let charge = |to: &mut Vec<Duration>, id: usize, n: u32, k: usize| {
+            if to.len() <= id {
+                to.resize(id + 1, Duration::ZERO);
             }
-            materials[id] += Duration::from_secs_f64(n as f64 * per_item[k]);
+            to[id] += Duration::from_secs_f64(n as f64 * per_item[k]);
+        };
+        for &(k, id, n) in &self.material_counts {
+            charge(&mut stats.material_time, id, n, k);
+        }
+        for (light, &n) in self.light_items.iter().enumerate() {
+            charge(&mut stats.light_time, light, n, Stage::TraceShadowRays.index());
         }
         self.costs
     }
@@ -403,7 +439,8 @@ impl Charges {
                 }
             }
         }
-        (self.path_items, self.born, self.material_items) = (Vec::new(), Vec::new(), Vec::new());
+        (self.path_items, self.born, self.material_items, self.path_light) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     }
 }
 
