@@ -119,7 +119,7 @@ impl<'a> TileWork<'a> {
     /// The tile's results.
     pub(super) fn result(mut self) -> super::TileResult {
         if let Some(c) = &mut self.charges {
-            c.finish();
+            c.finish(&self.stats.items);
         }
         super::TileResult {
             film: self.film,
@@ -253,25 +253,32 @@ impl<'a> TileWork<'a> {
 pub(super) struct Charges {
     /// Bounces as counted; the rest once settled.
     costs: PixelCosts,
-    /// The stage slots ([`Stage::index`]) of the tile's pipeline, in order: the columns of
-    /// [`Self::pixel_items`].
+    /// The stage slots ([`Stage::index`]) of the tile's pipeline: the columns of
+    /// [`Self::pixel_items`], first the [`Self::counted`] stages whose items are counted one
+    /// by one, then those counted per path, each in pipeline order.
     columns: Vec<usize>,
     /// Each stage slot's column (`usize::MAX` for a stage the tile does not run).
     column: [usize; Stage::SLOTS],
-    /// The column and stage slot of each stage whose items are counted one by one.
-    counted: Vec<(usize, usize)>,
-    /// Items per pixel and column: `[pixel * columns + column]`.
+    /// The columns of the stages whose items are counted one by one, rounded up to a whole
+    /// number of [`FOLD`]s: the width of [`Self::path_items`].
+    counted: usize,
+    /// Items per pixel and column: `[pixel * width + column]`, `width` the columns or
+    /// [`Self::counted`] if more (the columns past the stages' stay zero).
     pixel_items: Vec<u32>,
-    /// Items per stage slot and path slot, `[slot * paths + path]`, added to the path's pixel
-    /// when it finishes (for the stages counted item by item). Counted by path, the items of a
-    /// queue go to different counters; counted by pixel, a pixel's samples in neighbouring
+    /// Items per path slot and column of the stages counted item by item,
+    /// `[path * counted + column]`, added to the path's pixel when it finishes (the path's
+    /// counts side by side, as its pixel's, [`FOLD`] at a time). Counted by path, the items of
+    /// a queue go to different counters; counted by pixel, a pixel's samples in neighbouring
     /// path slots made each increment wait on the one before.
     path_items: Vec<u32>,
-    /// Items per stage slot and material id in [`MATERIAL_LANES`] interleaved copies (for the
-    /// same reason): `[(lane * SLOTS + slot) * materials + material]`.
+    /// Items per stage slot and material id, of one item in [`MATERIAL_STRIDE`] of each
+    /// shading queue, in [`MATERIAL_LANES`] interleaved copies (for the same reason):
+    /// `[(lane * SLOTS + slot) * materials + material]`.
     material_items: Vec<u32>,
-    /// Once the tile is done, the counts that are not zero, as `(stage slot, material, items)`.
-    material_counts: Vec<(usize, usize, u32)>,
+    /// Once the tile is done, each material's estimated items of a shading stage where they are
+    /// not zero, as `(stage slot, material, items)`: the stage's items shared in proportion to
+    /// the counted ones.
+    material_counts: Vec<(usize, usize, f64)>,
     /// The entry of the scene's light table each path slot's last vertex sampled (kept only
     /// where there is more than one).
     path_light: Vec<u32>,
@@ -284,24 +291,30 @@ pub(super) struct Charges {
     pub(super) cpu: Duration,
 }
 
+/// Counts a finished path adds to its pixel's at once (a vector register of them).
+const FOLD: usize = 8;
+
 /// Copies of the material counters, taken in turn by a queue's items.
 const MATERIAL_LANES: usize = 4;
 
+/// One item in this many of a shading queue is counted by material (reading its hit's
+/// material was a third of the counting's cost on cornell): the shares of a stage's time by
+/// material are estimates, from millions of items on most renders.
+const MATERIAL_STRIDE: usize = 8;
+
 impl Charges {
     fn new(pixels: usize, materials: usize, lights: usize, pipeline: &[Stage]) -> Self {
-        let columns: Vec<usize> = pipeline.iter().map(|s| s.index()).collect();
+        let (counted, per_path): (Vec<Stage>, Vec<Stage>) =
+            pipeline.iter().partition(|s| !Self::per_path(**s));
+        let columns: Vec<usize> = counted.iter().chain(&per_path).map(|s| s.index()).collect();
         let mut column = [usize::MAX; Stage::SLOTS];
         for (c, &k) in columns.iter().enumerate() {
             column[k] = c;
         }
-        let counted = (pipeline.iter().enumerate())
-            .filter(|(_, s)| !Self::per_path(**s))
-            .map(|(c, s)| (c, s.index()))
-            .collect();
         Self {
             costs: PixelCosts::new(pixels),
-            pixel_items: vec![0; pixels * columns.len()],
-            counted,
+            pixel_items: vec![0; pixels * columns.len().max(counted.len().next_multiple_of(FOLD))],
+            counted: counted.len().next_multiple_of(FOLD),
             columns,
             column,
             path_items: Vec::new(),
@@ -328,8 +341,9 @@ impl Charges {
     /// `slots`: by path, by material for a shading stage, by light for the shadow rays; the
     /// paths that finish add theirs to their pixel, with their bounces.
     fn count(&mut self, scene: &RenderScene, stage: Stage, iteration: u64, slots: &[u32], p: &Paths) {
-        let (k, paths, width) = (stage.index(), p.pixel.len(), self.columns.len());
-        self.path_items.resize(paths * Stage::SLOTS, 0);
+        let (paths, counted) = (p.pixel.len(), self.counted);
+        let width = self.columns.len().max(counted);
+        self.path_items.resize(paths * counted, 0);
         self.born.resize(paths, 0);
         let many_lights = self.light_items.len() > 1;
         if many_lights && matches!(stage, Stage::Shade(_) | Stage::ShadeMedium) {
@@ -342,9 +356,9 @@ impl Charges {
             }
         }
         if !Self::per_path(stage) {
-            let counts = &mut self.path_items[k * paths..(k + 1) * paths];
+            let (counts, c) = (&mut self.path_items, self.column[stage.index()]);
             for &s in slots {
-                counts[s as usize] += 1;
+                counts[s as usize * counted + c] += 1;
             }
         }
         match stage {
@@ -361,8 +375,11 @@ impl Charges {
                 for &s in slots {
                     let (s, px) = (s as usize, p.pixel[s as usize] as usize);
                     let to = &mut self.pixel_items[px * width..][..width];
-                    for &(c, j) in &self.counted {
-                        to[c] += std::mem::take(&mut self.path_items[j * paths + s]);
+                    let from = &mut self.path_items[s * counted..][..counted];
+                    for (to, from) in to.chunks_exact_mut(FOLD).zip(from.chunks_exact_mut(FOLD)) {
+                        for (to, from) in to.iter_mut().zip(from) {
+                            *to += std::mem::take(from);
+                        }
                     }
                     let lived = (iteration - self.born[s]) as u32;
                     for c in per_path.into_iter().filter(|&c| c != usize::MAX) {
@@ -385,8 +402,10 @@ impl Charges {
                 }
             }
             Stage::Shade(_) => {
-                let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
-                for (j, &s) in slots.iter().enumerate() {
+                // One item in MATERIAL_STRIDE, starting at a place that turns with the iteration.
+                let (k, m) = (stage.index(), self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS));
+                let start = (iteration % MATERIAL_STRIDE as u64) as usize;
+                for (j, &s) in slots.iter().skip(start).step_by(MATERIAL_STRIDE).enumerate() {
                     let id = p.hit[s as usize].material as usize;
                     if id < m {
                         self.material_items[((j % MATERIAL_LANES) * Stage::SLOTS + k) * m + id] += 1;
@@ -400,7 +419,7 @@ impl Charges {
     /// [`Stage::index`]); the shading time of each material id and the shadow rays' time of
     /// each light added to `stats`.
     pub(super) fn settle(mut self, per_item: &[f64], stats: &mut Stats) -> PixelCosts {
-        let width = self.columns.len();
+        let width = self.columns.len().max(self.counted);
         let column = |s: Stage| self.column[s.index()];
         let (ic, sr, af) =
             (column(Stage::IntersectClosest), column(Stage::TraceShadowRays), column(Stage::AccumulateFilm));
@@ -411,32 +430,33 @@ impl Charges {
             self.costs.rays[px] = u64::from(items[ic] + items[sr]);
             self.costs.paths[px] = items[af];
         }
-        let charge = |to: &mut Vec<Duration>, id: usize, n: u32, k: usize| {
+        let charge = |to: &mut Vec<Duration>, id: usize, n: f64, k: usize| {
             if to.len() <= id {
                 to.resize(id + 1, Duration::ZERO);
             }
-            to[id] += Duration::from_secs_f64(n as f64 * per_item[k]);
+            to[id] += Duration::from_secs_f64(n * per_item[k]);
         };
         for &(k, id, n) in &self.material_counts {
             charge(&mut stats.material_time, id, n, k);
         }
         for (light, &n) in self.light_items.iter().enumerate() {
-            charge(&mut stats.light_time, light, n, Stage::TraceShadowRays.index());
+            charge(&mut stats.light_time, light, f64::from(n), Stage::TraceShadowRays.index());
         }
         self.costs
     }
 
     /// Drops what only the tile's run needed (the counts by path, the material counters),
-    /// keeping the counts by pixel and the material counts that are not zero.
-    fn finish(&mut self) {
+    /// keeping the counts by pixel and the material counts that are not zero, those of each
+    /// stage scaled to its `items` in the tile (by stage slot).
+    fn finish(&mut self, items: &[u64; Stage::SLOTS]) {
         let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
         for k in 0..Stage::SLOTS {
-            for id in 0..m {
-                let n =
-                    (0..MATERIAL_LANES).map(|l| self.material_items[(l * Stage::SLOTS + k) * m + id]).sum();
-                if n > 0 {
-                    self.material_counts.push((k, id, n));
-                }
+            let counted = |id: usize| -> u32 {
+                (0..MATERIAL_LANES).map(|l| self.material_items[(l * Stage::SLOTS + k) * m + id]).sum()
+            };
+            let sum: u32 = (0..m).map(counted).sum();
+            for id in (0..m).filter(|&id| counted(id) > 0) {
+                self.material_counts.push((k, id, items[k] as f64 * f64::from(counted(id)) / f64::from(sum)));
             }
         }
         (self.path_items, self.born, self.material_items, self.path_light) =
