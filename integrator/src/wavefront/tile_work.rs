@@ -251,8 +251,9 @@ impl<'a> TileWork<'a> {
 /// call (a system call each).
 #[derive(Clone)]
 pub(super) struct Charges {
-    /// Bounces as counted; the rest once settled.
-    costs: PixelCosts,
+    /// Bounces of each pixel's finished paths (the pixels' [`PixelCosts`] are made when the
+    /// tile is settled: until then, a tile holds only its counts).
+    bounces: Vec<u64>,
     /// The stage slots ([`Stage::index`]) of the tile's pipeline: the columns of
     /// [`Self::pixel_items`], first the [`Self::counted`] stages whose items are counted one
     /// by one, then those counted per path, each in pipeline order.
@@ -312,7 +313,7 @@ impl Charges {
             column[k] = c;
         }
         Self {
-            costs: PixelCosts::new(pixels),
+            bounces: vec![0; pixels],
             pixel_items: vec![0; pixels * columns.len().max(counted.len().next_multiple_of(FOLD))],
             counted: counted.len().next_multiple_of(FOLD),
             columns,
@@ -388,7 +389,7 @@ impl Charges {
                     for c in once {
                         to[c] += 1;
                     }
-                    self.costs.bounces[px] += u64::from(p.depth[s] - p.crossings[s]);
+                    self.bounces[px] += u64::from(p.depth[s] - p.crossings[s]);
                 }
             }
             Stage::TraceShadowRays if many_lights => {
@@ -418,17 +419,18 @@ impl Charges {
     /// The pixels' costs, each item charged its stage's `per_item` time (by
     /// [`Stage::index`]); the shading time of each material id and the shadow rays' time of
     /// each light added to `stats`.
-    pub(super) fn settle(mut self, per_item: &[f64], stats: &mut Stats) -> PixelCosts {
+    pub(super) fn settle(self, per_item: &[f64], stats: &mut Stats) -> PixelCosts {
         let width = self.columns.len().max(self.counted);
+        let mut costs =
+            PixelCosts { bounces: self.bounces, ..PixelCosts::new(self.pixel_items.len() / width) };
         let column = |s: Stage| self.column[s.index()];
         let (ic, sr, af) =
             (column(Stage::IntersectClosest), column(Stage::TraceShadowRays), column(Stage::AccumulateFilm));
         for (px, items) in self.pixel_items.chunks_exact(width).enumerate() {
-            self.costs.time[px] =
-                items.iter().zip(&self.columns).map(|(&n, &k)| n as f64 * per_item[k]).sum();
+            costs.time[px] = items.iter().zip(&self.columns).map(|(&n, &k)| n as f64 * per_item[k]).sum();
             // Rays cast: closest hits and shadow rays; paths: those that finished.
-            self.costs.rays[px] = u64::from(items[ic] + items[sr]);
-            self.costs.paths[px] = items[af];
+            costs.rays[px] = u64::from(items[ic] + items[sr]);
+            costs.paths[px] = items[af];
         }
         let charge = |to: &mut Vec<Duration>, id: usize, n: f64, k: usize| {
             if to.len() <= id {
@@ -442,7 +444,7 @@ impl Charges {
         for (light, &n) in self.light_items.iter().enumerate() {
             charge(&mut stats.light_time, light, f64::from(n), Stage::TraceShadowRays.index());
         }
-        self.costs
+        costs
     }
 
     /// Drops what only the tile's run needed (the counts by path, the material counters),
