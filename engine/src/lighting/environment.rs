@@ -76,10 +76,16 @@ pub fn direction_to_uv(dir: Vec3A) -> Option<(Vec2, f32)> {
 /// 2 pi u measured from -z towards +x. The inverse of [`direction_to_uv`].
 #[inline]
 pub fn uv_to_direction(uv: Vec2) -> Vec3A {
+    uv_to_direction_sin(uv).0
+}
+
+/// [`uv_to_direction`] and sin theta there.
+#[inline]
+fn uv_to_direction_sin(uv: Vec2) -> (Vec3A, f32) {
     // Half a turn for theta, a turn (wrapped) for phi: polynomials, not the C library's.
     let (cos_theta, sin_theta) = crate::math::cos_sin_turn(wrap01(0.5 * uv.y));
     let (cos_phi, sin_phi) = crate::math::cos_sin_turn(wrap01(uv.x));
-    Vec3A::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi)
+    (Vec3A::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi), sin_theta)
 }
 
 /// `x` wrapped to [0, 1) (1 - tiny rounds to 1 after `x - floor(x)`: that is 0 again).
@@ -170,19 +176,22 @@ impl LatLongSampler {
     }
 
     /// Samples a unit direction for `u` in [0, 1)^2; returns it with its density in solid angle,
-    /// which is exactly [`Self::pdf`] of the direction. `None` in the rare case where the density
-    /// there is 0 (a direction at a pole).
+    /// taken from the sampled (u, v) as pbrt-v4's `ImageInfiniteLight` does: [`Self::pdf`] of
+    /// the direction up to round-off (the direction's (u, v) found again can land an ulp into
+    /// the next cell). Sampling from the direction found again (its (u, v) by two `atan2`s, the
+    /// density looked up again) cost materials-env 11% of its time. `None` in the rare case
+    /// where the density there is 0 (a direction at a pole).
     pub fn sample(&self, u: Vec2) -> Option<(Vec3A, f32)> {
-        let dir = self.sample_direction(u);
-        let pdf = self.pdf(dir);
-        (pdf > 0.0).then_some((dir, pdf))
+        self.sample_at(u).map(|(dir, _, pdf)| (dir, pdf))
     }
 
-    /// The direction of [`Self::sample`], without its density.
+    /// [`Self::sample`] with the grid's (u, v) of the direction.
     #[inline]
-    fn sample_direction(&self, u: Vec2) -> Vec3A {
-        let (p, _) = self.dist.sample_continuous(u);
-        uv_to_direction(Vec2::new(p.x - self.u_offset, p.y))
+    fn sample_at(&self, u: Vec2) -> Option<(Vec3A, Vec2, f32)> {
+        let (p, grid_pdf) = self.dist.sample_continuous(u);
+        let (dir, sin_theta) = uv_to_direction_sin(Vec2::new(p.x - self.u_offset, p.y));
+        let pdf = if sin_theta > 0.0 { grid_pdf / (2.0 * PI * PI * sin_theta) } else { 0.0 };
+        (pdf > 0.0).then_some((dir, p, pdf))
     }
 
     /// The density in solid angle of sampling `dir` (any non-zero length): the grid density
@@ -386,11 +395,9 @@ impl EnvironmentMap {
     /// to the map's luminance, or to its excess over the mean. `None` when the map is black, or,
     /// rarely, when the sampled direction has density 0.
     pub fn sample(&self, u: Vec2, pdf: EnvPdf) -> Option<EnvSample> {
-        // The radiance and the density from one (u, v) of the direction (the sampler's
-        // `sample` and `radiance` found it once each).
-        let dir = self.sampler(pdf)?.sample_direction(u);
-        let (radiance, density) = self.radiance_pdf(dir, pdf);
-        (density > 0.0).then_some(EnvSample { dir, radiance, pdf: density })
+        // The radiance at the sampled (u, v): `radiance` of the direction up to round-off.
+        let (dir, at, density) = self.sampler(pdf)?.sample_at(u)?;
+        Some(EnvSample { dir, radiance: self.radiance_at(at), pdf: density })
     }
 
     /// The density in solid angle with which [`Self::sample`] of the same `pdf` returns `dir`
@@ -605,18 +612,36 @@ mod tests {
         assert!(close(look(u, v), want, 1e-4));
     }
 
+    /// Whether `a` and `b` agree up to round-off.
+    fn agree(a: f32, b: f32) -> bool {
+        (a - b).abs() <= 1e-4 * a.abs().max(b.abs())
+    }
+
+    /// A sample's density and radiance are those of its direction, up to round-off: the
+    /// direction's (u, v) found again may land an ulp into the next cell (at most 1 in 2000
+    /// samples here), where the density can be another cell's.
     #[test]
-    fn sample_pdf_equals_pdf_exactly() {
+    fn sample_pdf_agrees_with_pdf() {
         for m in [sun_map(0.0), sun_map(-33.0), smooth_map(), sparse_map(71.0)] {
             for pdf in [C, EnvPdf::Compensated] {
                 let mut r = uniform(13);
-                for _ in 0..20000 {
+                let n = 20000;
+                let mut other_cell = 0;
+                for _ in 0..n {
                     let s = m.sample(Vec2::new(r(), r()), pdf).unwrap();
-                    assert!(s.pdf > 0.0 && s.pdf == m.pdf(s.dir, pdf), "{s:?} {pdf:?}");
-                    assert_eq!((s.radiance, s.pdf), m.radiance_pdf(s.dir, pdf));
+                    assert!(s.pdf > 0.0 && s.pdf.is_finite(), "{s:?} {pdf:?}");
                     assert!((s.dir.length() - 1.0).abs() < 1e-5);
-                    assert_eq!(s.radiance, m.radiance(s.dir));
+                    let (radiance, density) = m.radiance_pdf(s.dir, pdf);
+                    if !agree(s.pdf, density) {
+                        other_cell += 1;
+                        continue;
+                    }
+                    // The bilinear lookup an ulp or two of (u, v) away: beside a sun texel 1e5
+                    // times its neighbours, that moves it by up to about 1e-3.
+                    let near = |a: f32, b: f32| (a - b).abs() <= 1e-2 * a.abs().max(b.abs());
+                    assert!((0..3).all(|c| near(s.radiance[c], radiance[c])), "{s:?} {radiance}");
                 }
+                assert!(other_cell * 2000 <= n, "{other_cell} of {n} samples' densities disagree");
             }
         }
     }
@@ -873,7 +898,7 @@ mod tests {
         let mut r = uniform(6);
         for _ in 0..1000 {
             let (d, pdf) = s.sample(Vec2::new(r(), r())).unwrap();
-            assert!(pdf.is_finite() && pdf == s.pdf(d));
+            assert!(pdf.is_finite() && agree(pdf, s.pdf(d)));
             // The mean is 7 / 8: the cells of weight 1 and 5 exceed it.
             let (uv, _) = direction_to_uv(d).unwrap();
             let cell = ((uv.x * 4.0) as u32, (uv.y * 2.0) as u32);
@@ -986,7 +1011,7 @@ mod tests {
         let mut sum = 0.0;
         for _ in 0..n {
             let (d, pdf) = s.sample(Vec2::new(r(), r())).unwrap();
-            assert_eq!(pdf, s.pdf(d));
+            assert!(agree(pdf, s.pdf(d)), "{pdf} {}", s.pdf(d));
             sum += (sky(d) / pdf) as f64;
         }
         // The integral of the sky: 2 pi (0.2 + 2 / 3) above, 2 pi 0.05 below.
