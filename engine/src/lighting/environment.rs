@@ -383,7 +383,10 @@ impl EnvironmentMap {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (i0, j0) = (x0 as i64, y0 as i64);
-        let (i0, i1) = (i0.rem_euclid(w), (i0 + 1).rem_euclid(w));
+        // Columns wrap: u in [0, 1) gives i0 in -1 ..= W - 1 (others wrap as rem_euclid
+        // would, without its division).
+        let wrap = |i: i64| if (0..w).contains(&i) { i } else { i.rem_euclid(w) };
+        let (i0, i1) = (wrap(i0), wrap(i0 + 1));
         let (j0, j1) = (j0.clamp(0, h - 1), (j0 + 1).clamp(0, h - 1));
         let t = |i: i64, j: i64| self.texels[(j * w + i) as usize];
         let top = t(i0, j0).lerp(t(i1, j0), fx);
