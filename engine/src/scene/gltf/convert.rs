@@ -2,7 +2,8 @@
 //! node's matrix or translation, rotation and scale; each primitive of a node's mesh an object
 //! `Mesh(file, mesh, primitive)` under the node's world transform (nodes sharing a mesh share
 //! its triangles: instances of one BLAS); the first camera met; `KHR_lights_punctual` lights;
-//! metallic-roughness materials as `Principled`, with `Mask` for the alpha modes MASK and
+//! metallic-roughness materials as `MetallicRoughness` (the specification's BRDF; `Principled`
+//! where they transmit), with `Mask` for the alpha modes MASK and
 //! BLEND, `NormalMap` for normal textures and `emit` for emissive ones; textures as `Image`
 //! (an image file beside the glTF) or `GltfImage` (one inside it); the first animation's node
 //! channels as objects' keyframe tracks, and a moving perspective camera's path as
@@ -49,8 +50,9 @@ use std::path::Path;
 pub const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The extensions whose meaning the conversion keeps; others a file uses are warned about.
-const READ: [&str; 5] = [
+const READ: [&str; 6] = [
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
@@ -676,15 +678,46 @@ impl Converter<'_> {
         if pbr.metallic_roughness_texture().is_some() {
             warn("its metallicRoughnessTexture is not read (pathwave's textured numbers take no channel): its factors are".into());
         }
-        if let Some(ior) = m.ior().filter(|i| *i != 1.5) {
-            write!(fields, ", eta: {}", num(ior)).unwrap();
-        }
-        if let Some(t) = m.transmission() {
+        // Opaque: the glTF BRDF itself; transmitting: the principled BSDF's refraction.
+        let transmission = m.transmission().filter(|t| t.transmission_factor() > 0.0);
+        let ior = m.ior().filter(|i| *i != 1.5);
+        let coat = m.extension_value("KHR_materials_clearcoat");
+        let kind = if let Some(t) = transmission {
+            if let Some(ior) = ior {
+                write!(fields, ", eta: {}", num(ior)).unwrap();
+            }
             write!(fields, ", spec_trans: {}", num(t.transmission_factor())).unwrap();
             if t.transmission_texture().is_some() {
                 warn("its transmissionTexture is not read: its transmissionFactor is".into());
             }
-        }
+            if coat.is_some() {
+                warn("it transmits: its KHR_materials_clearcoat is not read".into());
+            }
+            "Principled"
+        } else {
+            if let Some(ior) = ior {
+                write!(fields, ", ior: {}", num(ior)).unwrap();
+            }
+            if let Some(coat) = coat {
+                for (key, field) in
+                    [("clearcoatFactor", "clearcoat"), ("clearcoatRoughnessFactor", "clearcoat_roughness")]
+                {
+                    let Some(v) = coat.get(key).and_then(|v| v.as_f64()) else { continue };
+                    let clamped = v.clamp(0.0, 1.0);
+                    if clamped != v {
+                        warn(format!("its {key} {v} is not in [0, 1]: {clamped} is used"));
+                    }
+                    write!(fields, ", {field}: {}", num(clamped as f32)).unwrap();
+                }
+                if ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"]
+                    .iter()
+                    .any(|k| coat.get(*k).is_some())
+                {
+                    warn("its clear coat's textures are not read: its factors are".into());
+                }
+            }
+            "MetallicRoughness"
+        };
         if m.occlusion_texture().is_some() {
             warn("its occlusionTexture is not read (the path tracer finds occlusion)".into());
         }
@@ -703,7 +736,7 @@ impl Converter<'_> {
             }
             self.image_texture(n.texture(), n.tex_coord(), String::new(), true, "normalTexture", &at, path)
         });
-        let plain = format!("Principled({fields})");
+        let plain = format!("{kind}({fields})");
         let opacity = match m.alpha_mode() {
             AlphaMode::Opaque => 1.0,
             AlphaMode::Mask => {
