@@ -8,10 +8,14 @@ scenes/cycles/make.py): both render the same .glb file, Cycles through Blender's
   beside_cycles.py bench [--scenes sampler,interior,shot] [--spp 16,64] [--ref-spp 1024] [--reps 2]
       [--json OUT] [--png DIR]
       (run with a python that has numpy and mitsuba, /opt/mitsuba-anchor/bin/python): for each
-      scene a converged Cycles reference (cached in $CYCLES_REFS, /tmp/cycles-refs by default),
-      then pathwave and Cycles alternately at each spp; prints per-channel means, relMSE
-      against the reference and the equal-error time ratio (pathwave's relMSE x time over
-      Cycles'; both errors fall as 1/spp, so below 1 pathwave reaches Cycles' error sooner)
+      scene a converged render by each renderer (cached in $CYCLES_REFS, /tmp/cycles-refs by
+      default), then pathwave and Cycles alternately at each spp; prints the per-channel
+      means of the converged renders (pathwave's against Cycles'), each renderer's relMSE
+      against its own converged render (its noise: the two differ by their models too, which
+      would otherwise dominate) and the equal-error time ratio (pathwave's relMSE x time over
+      Cycles'; both errors fall as 1/spp, so below 1 pathwave reaches Cycles' error sooner).
+      --png DIR writes the converged renders side by side as DIR/cycles-SCENE.png (Cycles left;
+      the README's images: --png docs)
 
 Settings, the same for both: 320 x 240 pixels, a one-pixel box filter, 2 threads, no denoiser,
 no clamping, linear EXR. Cycles: CPU path tracing, Standard view transform, light tree,
@@ -158,8 +162,7 @@ def bench(argv):
     ap.add_argument('--ref-spp', type=int, default=1024)
     ap.add_argument('--reps', type=int, default=2)
     ap.add_argument('--json', default=None)
-    ap.add_argument('--png', default=None, help='write SCENE-cycles.png and SCENE-pathwave.png here')
-    ap.add_argument('--png-spp', type=int, default=1024)
+    ap.add_argument('--png', default=None, help='write cycles-SCENE.png (Cycles | pathwave) here')
     a = ap.parse_args(argv)
     sys.path.insert(0, '/work/shared/anchors/mitsuba')
     import numpy as np
@@ -172,46 +175,47 @@ def bench(argv):
         if not os.path.exists(ref_path):
             s = run_cycles(scene, ref_path, a.ref_spp, 1)
             print('%s: Cycles reference, %d spp in %.1f s' % (scene, a.ref_spp, s), file=sys.stderr, flush=True)
-        ref = metrics.load(ref_path)
+        pw_ref_path = os.path.join(REFS, '%s-pathwave-%d.exr' % (scene, a.ref_spp))
+        if not os.path.exists(pw_ref_path):
+            s = run_pathwave(scene, pw_ref_path, a.ref_spp, 1)
+            print('%s: pathwave reference, %d spp in %.1f s' % (scene, a.ref_spp, s), file=sys.stderr, flush=True)
+        ref, pw_ref = metrics.load(ref_path), metrics.load(pw_ref_path)
+        between = metrics.metrics(pw_ref, ref)
         for spp in [int(x) for x in a.spp.split(',')]:
             pw, cy = [], []
             for r in range(a.reps):
                 out = os.path.join(tmp, 'pw.exr')
                 t = run_pathwave(scene, out, spp, 100 + r)
-                pw.append((t, metrics.metrics(metrics.load(out), ref)))
+                pw.append((t, metrics.metrics(metrics.load(out), pw_ref)))
                 out = os.path.join(tmp, 'cy.exr')
                 t = run_cycles(scene, out, spp, 100 + r)
                 cy.append((t, metrics.metrics(metrics.load(out), ref)))
             tp, tc = min(x[0] for x in pw), min(x[0] for x in cy)
             ep = sum(x[1]['relmse'] for x in pw) / a.reps
             ec = sum(x[1]['relmse'] for x in cy) / a.reps
-            mp = np.mean([x[1]['mean_test'] for x in pw], 0)
-            mc = np.mean([x[1]['mean_test'] for x in cy], 0)
-            mr = np.array(pw[0][1]['mean_ref'])
+            mp, mr = between['mean_test'], between['mean_ref']
             row = dict(scene=scene, spp=spp, pathwave_s=round(tp, 3), cycles_s=round(tc, 3),
                        pathwave_relmse=round(ep, 6), cycles_relmse=round(ec, 6),
                        equal_error_time_ratio=round(ep * tp / (ec * tc), 3),
-                       mean_ref=[round(v, 5) for v in mr], mean_pathwave=[round(v, 5) for v in mp],
-                       mean_cycles=[round(v, 5) for v in mc],
-                       mean_diff_pct=[round(100 * (p / q - 1), 2) for p, q in zip(mp, mr)])
+                       mean_cycles=[round(v, 5) for v in mr], mean_pathwave=[round(v, 5) for v in mp],
+                       mean_diff_pct=[round(100 * (p / q - 1), 2) for p, q in zip(mp, mr)],
+                       relmse_between=round(between['relmse'], 5), ref_spp=a.ref_spp)
             rows.append(row)
             print(json.dumps(row), flush=True)
         if a.png:
             os.makedirs(a.png, exist_ok=True)
-            out = os.path.join(tmp, 'pw-png.exr')
-            run_pathwave(scene, out, a.png_spp, 7)
-            for img, name in ((metrics.load(ref_path), 'cycles'), (metrics.load(out), 'pathwave')):
-                write_png(img, os.path.join(a.png, '%s-%s.png' % (scene, name)))
+            gap = np.ones((ref.shape[0], 4, 3))
+            write_png(np.concatenate([ref, gap, pw_ref], 1), os.path.join(a.png, 'cycles-%s.png' % scene))
     if a.json:
         with open(a.json, 'w') as f:
             for r in rows:
                 f.write(json.dumps(r) + '\n')
-    print('\n| scene | spp | mean R G B Cycles ref | pathwave vs ref % | pathwave s | Cycles s '
+    print('\n| scene | spp | mean R G B Cycles | pathwave vs Cycles % | pathwave s | Cycles s '
           '| relMSE pathwave | relMSE Cycles | equal-error time pathwave/Cycles |')
     print('|---|---|---|---|---|---|---|---|---|')
     for r in rows:
         print('| %s | %d | %s | %s | %.2f | %.2f | %.4g | %.4g | %.2f |' % (
-            r['scene'], r['spp'], ' '.join('%.4f' % v for v in r['mean_ref']),
+            r['scene'], r['spp'], ' '.join('%.4f' % v for v in r['mean_cycles']),
             ' '.join('%+.1f' % v for v in r['mean_diff_pct']), r['pathwave_s'], r['cycles_s'],
             r['pathwave_relmse'], r['cycles_relmse'], r['equal_error_time_ratio']))
 

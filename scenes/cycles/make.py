@@ -12,7 +12,9 @@
             scale channels); lit by a sun and a spot light
 
 Built with Blender's Python module and written by its glTF exporter, so the materials are
-the exporter's reading of Principled BSDFs. Deterministic (no random numbers).
+the exporter's reading of Principled BSDFs. No random numbers, but the exporter does not write
+the same bytes twice (the sampler's buffer layout and the meshes' bytes vary from run to run):
+the committed files are the ones benches/results/beside-cycles.md measured.
 Run: /opt/vdbvenv/bin/python scenes/cycles/make.py   (bpy 5.0.1)
 """
 import math
@@ -113,16 +115,15 @@ def light(kind, name, energy, at, rot_deg=(0, 0, 0), rgb=(1, 1, 1), **extra):
 
 
 def normal_map(name, n=128, bumps=6, depth=0.6):
-    """A tangent-space normal map (linear, 'Non-Color') of a grid of round bumps: the normals of
-    the height field h = depth * sum of cos^2 bumps, encoded as 0.5 + 0.5 n."""
+    """A tangent-space normal map (linear, 'Non-Color') of a grid of `bumps` x `bumps` round
+    bumps: the normals of a height field, encoded as 0.5 + 0.5 n."""
     u = (np.arange(n) + 0.5) / n
     x, y = np.meshgrid(u, u)
-    h = np.cos(math.pi * bumps * x) ** 2 * np.cos(math.pi * bumps * y) ** 2
+    # The slopes of h = depth cos^2(pi b x) cos^2(pi b y) / (2 pi b) per unit of uv.
     dx = -depth * 2 * math.pi * bumps * np.cos(math.pi * bumps * x) * np.sin(math.pi * bumps * x) \
         * np.cos(math.pi * bumps * y) ** 2 / (2 * math.pi * bumps)
     dy = -depth * 2 * math.pi * bumps * np.cos(math.pi * bumps * y) * np.sin(math.pi * bumps * y) \
         * np.cos(math.pi * bumps * x) ** 2 / (2 * math.pi * bumps)
-    del h
     nz = 1.0 / np.sqrt(1 + dx * dx + dy * dy)
     rgba = np.stack([0.5 + 0.5 * dx * nz, 0.5 + 0.5 * dy * nz, 0.5 + 0.5 * nz, np.ones_like(nz)], -1)
     img = bpy.data.images.new(name, n, n, alpha=False)
