@@ -20,7 +20,8 @@
 //! shade alike (the normal is turned towards `wo`), as glTF's `doubleSided` materials do.
 //!
 //! Sampling picks the diffuse cosine lobe, the specular lobe or the clear coat's (visible
-//! normals, Heitz 2018) in proportion to rough estimates of their reflectance, and weighs the
+//! normals, Heitz 2018) in proportion to their weights seen from `wo` (Fresnel factors at the
+//! normal), and weighs the
 //! direction by the mixture's density: `eval`'s `pdf` is that mixture, so MIS sees one lobe.
 
 use super::microfacet::{Ggx, Microfacet, SMOOTH_ALPHA, to_local};
@@ -96,12 +97,17 @@ fn width(roughness: f32) -> f32 {
 }
 
 impl MetallicRoughness {
-    /// The probabilities of sampling the diffuse, the specular and the clear coat lobe.
+    /// The probabilities of sampling the diffuse, the specular and the clear coat lobe seen
+    /// at `cos_o` from the normal: the lobes' weights there, the Fresnel factors taken at the
+    /// normal instead of the half vector (a dielectric's specular share at least 0.05).
     #[inline]
-    fn lobe_weights(&self) -> [f32; 3] {
-        let diffuse = (1.0 - self.metallic) * (1.0 - self.f0) * luminance(self.base_color);
-        let specular = self.metallic * luminance(self.base_color).max(0.1) + (1.0 - self.metallic) * 0.25;
-        let coat = 0.25 * self.clearcoat;
+    fn lobe_weights(&self, cos_o: f32) -> [f32; 3] {
+        let fw = schlick(cos_o);
+        let f = self.f0 + (1.0 - self.f0) * fw;
+        let diffuse = (1.0 - self.metallic) * (1.0 - f) * luminance(self.base_color);
+        let specular =
+            self.metallic * luminance(self.base_color).max(0.1) + (1.0 - self.metallic) * f.max(0.05);
+        let coat = self.clearcoat * (0.04 + 0.96 * fw);
         let sum = diffuse + specular + coat;
         [diffuse / sum, specular / sum, coat / sum]
     }
@@ -125,7 +131,7 @@ impl MetallicRoughness {
             Vec3::splat(f_dielectric * specular) + (1.0 - f_dielectric) * FRAC_1_PI * self.base_color;
         let metal = (self.base_color + (Vec3::ONE - self.base_color) * fw) * specular;
         let mut f = dielectric.lerp(metal, self.metallic);
-        let [p_diffuse, p_specular, p_coat] = self.lobe_weights();
+        let [p_diffuse, p_specular, p_coat] = self.lobe_weights(lo.z);
         let mut pdf = p_diffuse * li.z * FRAC_1_PI + p_specular * base.pdf_visible(lo, h) / (4.0 * vh);
         if self.clearcoat > 0.0 {
             let coat = Ggx { alpha: self.alpha_coat };
@@ -175,7 +181,7 @@ impl MaterialModel for MetallicRoughness {
         if lo.z <= 0.0 {
             return None;
         }
-        let [p_diffuse, p_specular, _] = self.lobe_weights();
+        let [p_diffuse, p_specular, _] = self.lobe_weights(lo.z);
         let li = if uc < p_diffuse {
             super::lambertian::cosine_hemisphere(u)
         } else {
