@@ -15,6 +15,7 @@ pub mod dielectric;
 pub mod diffuse_light;
 pub mod lambertian;
 pub mod metal;
+pub mod metallic_roughness;
 pub mod microfacet;
 pub mod plastic;
 pub mod principled;
@@ -42,6 +43,7 @@ registry! {
     Plastic(plastic::Plastic),
     RoughPlastic(rough_plastic::RoughPlastic),
     Principled(principled::Principled),
+    MetallicRoughness(metallic_roughness::MetallicRoughness),
     PrincipledThin(principled_thin::PrincipledThin),
     ThinDielectric(thin_dielectric::ThinDielectric),
     DiffuseLight(diffuse_light::DiffuseLight),

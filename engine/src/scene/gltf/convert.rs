@@ -2,10 +2,12 @@
 //! node's matrix or translation, rotation and scale; each primitive of a node's mesh an object
 //! `Mesh(file, mesh, primitive)` under the node's world transform (nodes sharing a mesh share
 //! its triangles: instances of one BLAS); the first camera met; `KHR_lights_punctual` lights;
-//! metallic-roughness materials as `Principled`, with `Mask` for the alpha modes MASK and
+//! metallic-roughness materials as `MetallicRoughness` (the specification's BRDF; `Principled`
+//! where they transmit), with `Mask` for the alpha modes MASK and
 //! BLEND, `NormalMap` for normal textures and `emit` for emissive ones; textures as `Image`
 //! (an image file beside the glTF) or `GltfImage` (one inside it); the first animation's node
-//! channels as objects' keyframe tracks.
+//! channels as objects' keyframe tracks, and a moving perspective camera's path as
+//! `look_from`/`look_at` keys.
 //!
 //! Units of `KHR_lights_punctual`: point and spot intensities are luminous intensities in
 //! candela (lm/sr), directional ones illuminances in lux (lm/m^2). pathwave's lights are
@@ -27,12 +29,17 @@
 //! glTF cameras look along -z with +y up and +x to the right; pathwave's `to_world` cameras
 //! (Mitsuba's) look along +z with +x to the left: the camera's `to_world` is its node's
 //! rotation and translation (a scale in it is dropped) after `Scale((-1, 1, -1))`, a half turn
-//! about y.
+//! about y. A camera whose node the animation moves becomes a `look_from`/`look_at` camera
+//! instead (pathwave keys cameras by those points): its node's path is evaluated as glTF
+//! interpolates it (linear, slerp, step, cubic Hermite) at every key and every frame at 24 a
+//! second, the eye at the node's origin, the target a unit along its -z, `vup` +y. That is the
+//! node's frame where the camera does not roll (its +x stays level); a roll is warned about.
 
 use super::mesh::mesh_name;
 use crate::format::gltf::{GltfFile, ImageAt, name, uri_path};
 use crate::scene::{SceneDesc, SceneError};
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec3, Vec4};
+use gltf::animation::{Interpolation, Property};
 use gltf::material::AlphaMode;
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -43,8 +50,9 @@ use std::path::Path;
 pub const LUMENS_PER_WATT: f32 = 683.0;
 
 /// The extensions whose meaning the conversion keeps; others a file uses are warned about.
-const READ: [&str; 5] = [
+const READ: [&str; 6] = [
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
@@ -79,6 +87,8 @@ struct Converter<'a> {
     camera: Option<(String, String, Item)>,
     /// The keyframes of the nodes the file's first animation moves, by node index.
     keys: HashMap<usize, NodeKeys>,
+    /// The `look_from` and `look_at` keys of a moving camera (`camera: (..)` of the animation).
+    camera_keys: Option<String>,
     /// The time of the animation's last key.
     end: f32,
 }
@@ -89,6 +99,56 @@ struct NodeKeys {
     translate: Option<String>,
     rotate: Option<String>,
     scale: Option<String>,
+    /// The channels' keys as numbers (a camera's path is evaluated from them).
+    channels: Vec<Channel>,
+}
+
+/// One channel's keys: times and output values (a cubic spline's in-tangent, value and
+/// out-tangent per key).
+struct Channel {
+    property: Property,
+    interpolation: Interpolation,
+    times: Vec<f32>,
+    values: Vec<f32>,
+}
+
+impl Channel {
+    /// The value at `t` as glTF interpolates it (held before the first key and after the last;
+    /// a rotation as xyzw, not yet normalised).
+    fn at(&self, t: f32) -> Vec4 {
+        let n = if self.property == Property::Rotation { 4 } else { 3 };
+        let per = if self.interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        let v = |k: usize, which: usize| {
+            let s = &self.values[(k * per + which) * n..][..n];
+            Vec4::new(s[0], s[1], s[2], if n == 4 { s[3] } else { 0.0 })
+        };
+        let mid = per / 2;
+        let k = self.times.partition_point(|x| *x <= t);
+        if k == 0 {
+            return v(0, mid);
+        }
+        if k == self.times.len() {
+            return v(k - 1, mid);
+        }
+        let (t0, t1) = (self.times[k - 1], self.times[k]);
+        let s = (t - t0) / (t1 - t0);
+        match self.interpolation {
+            Interpolation::Step => v(k - 1, mid),
+            Interpolation::Linear if n == 4 => {
+                let q = |v: Vec4| Quat::from_vec4(v).normalize();
+                Vec4::from(q(v(k - 1, 0)).slerp(q(v(k, 0)), s))
+            }
+            Interpolation::Linear => v(k - 1, 0).lerp(v(k, 0), s),
+            Interpolation::CubicSpline => {
+                let (s2, d) = (s * s, t1 - t0);
+                let s3 = s2 * s;
+                v(k - 1, 1) * (2.0 * s3 - 3.0 * s2 + 1.0)
+                    + v(k - 1, 2) * (d * (s3 - 2.0 * s2 + s))
+                    + v(k, 1) * (3.0 * s2 - 2.0 * s3)
+                    + v(k, 0) * (d * (s3 - s2))
+            }
+        }
+    }
 }
 
 /// Where a node stands below the one animated node above it (or itself) on its path.
@@ -124,6 +184,7 @@ pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
         lights: Vec::new(),
         camera: None,
         keys: HashMap::new(),
+        camera_keys: None,
         end: 0.0,
     };
     cx.animation(path)?;
@@ -181,7 +242,8 @@ pub fn to_ron(path: &Path, base: &Path) -> Result<Converted, SceneError> {
         // Frames at 24 a second up to the last key (as many as a u32 holds: the `gltf` fuzz
         // target's key at 3e38 s overflowed), with a half-frame shutter (motion blur).
         let frames = ((cx.end * 24.0).floor() as u32).saturating_add(1);
-        line(&mut out, &format!("    animation: (frames: {frames}, fps: 24, shutter: 0.5),"), None);
+        let camera = cx.camera_keys.map(|k| format!(", camera: {k}")).unwrap_or_default();
+        line(&mut out, &format!("    animation: (frames: {frames}, fps: 24, shutter: 0.5{camera}),"), None);
     }
     line(&mut out, ")", None);
     Ok(out)
@@ -281,7 +343,6 @@ impl Converter<'_> {
                 doc.animations().len()
             );
         }
-        use gltf::animation::{Interpolation, Property};
         use gltf::json::validation::Checked;
         for channel in anim.channels() {
             let at = format!("animations[{}] channel {}", anim.index(), channel.index());
@@ -396,6 +457,7 @@ impl Converter<'_> {
             };
             let track = format!("{kind}([{}])", text.join(", "));
             let entry = self.keys.entry(node).or_default();
+            entry.channels.push(Channel { property, interpolation, times, values });
             match property {
                 Property::Translation => entry.translate = Some(track),
                 Property::Rotation => entry.rotate = Some(track),
@@ -426,6 +488,63 @@ impl Converter<'_> {
             keys.translate.clone().unwrap_or_else(|| format!("Linear([(0, {})])", rgb(t))),
             keys.rotate.clone().unwrap_or(rest_r),
             keys.scale.clone().unwrap_or_else(|| format!("Linear([(0, {})])", rgb(sc))),
+        )
+    }
+
+    /// The `look_from`/`look_at` camera of a camera node at `below` under the animated node `a`
+    /// (a root), its keys stored for the animation block: the path evaluated at every key time
+    /// of `a`'s channels and at every frame (24 a second, up to 100,000 frames), so that the
+    /// frames see the glTF camera wherever pathwave's linear keys and glTF's interpolation
+    /// part between keys.
+    fn keyed_camera(&mut self, a: usize, below: Mat4, vfov: f32, at: &str, path: &Path) -> String {
+        let keys = &self.keys[&a];
+        let node = self.file.doc.nodes().nth(a).expect("an animated node is a node of the file");
+        let (t0, r0, s0) = node.transform().decomposed();
+        let world = |t: f32| {
+            let (mut tr, mut r, mut sc) = (Vec3::from(t0), Quat::from_array(r0), Vec3::from(s0));
+            for c in &keys.channels {
+                let v = c.at(t);
+                match c.property {
+                    Property::Translation => tr = v.truncate(),
+                    Property::Rotation => r = Quat::from_vec4(v),
+                    _ => sc = v.truncate(),
+                }
+            }
+            Mat4::from_scale_rotation_translation(sc, r.normalize(), tr) * below
+        };
+        let mut times: Vec<f32> = keys.channels.iter().flat_map(|c| c.times.iter().copied()).collect();
+        let frames = (self.end * 24.0).floor();
+        if frames < 100_000.0 {
+            times.extend((0..=frames as u32).map(|f| f as f32 / 24.0));
+        }
+        times.sort_by(f32::total_cmp);
+        times.dedup();
+        let (mut from, mut to, mut rolls) = (Vec::new(), Vec::new(), false);
+        for &t in &times {
+            let m = world(t);
+            let eye = m.transform_point3(Vec3::ZERO);
+            let ahead = m.transform_vector3(Vec3::NEG_Z).normalize();
+            let right = m.transform_vector3(Vec3::X).normalize();
+            rolls |= right.y.abs() > 1e-3 || m.transform_vector3(Vec3::Y).y <= 0.0 || !ahead.is_finite();
+            from.push(format!("({}, {})", num(t), rgb(eye.to_array())));
+            to.push(format!("({}, {})", num(t), rgb((eye + ahead).to_array())));
+        }
+        if rolls {
+            tracing::warn!(
+                "{}: {at}: the camera rolls (its +x leaves the level) or degenerates on its path: pathwave's keys hold its eye and target, with +y up",
+                path.display()
+            );
+        }
+        self.camera_keys =
+            Some(format!("(look_from: Linear([{}]), look_at: Linear([{}]))", from.join(", "), to.join(", ")));
+        let m = world(0.0);
+        let eye = m.transform_point3(Vec3::ZERO);
+        let target = eye + m.transform_vector3(Vec3::NEG_Z).normalize();
+        format!(
+            "(look_from: {}, look_at: {}, vup: (0, 1, 0), vfov: {})",
+            rgb(eye.to_array()),
+            rgb(target.to_array()),
+            num(vfov)
         )
     }
 
@@ -479,19 +598,28 @@ impl Converter<'_> {
                 }
             }
         }
-        if !matches!(moved, Moved::Still) && (node.camera().is_some() || node.light().is_some()) {
-            tracing::warn!(
-                "{}: {at}: its camera or light does not move: pathwave keys objects only",
-                path.display()
-            );
-        }
+        let mut keyed_camera = false;
         if let Some(camera) = node.camera()
             && self.camera.is_none()
         {
             let at = format!("{at}, cameras[{}]{}", camera.index(), name(camera.name()));
-            let (c, r) =
+            let (mut c, r) =
                 camera_ron(&self.file.doc, &camera, world).map_err(|m| fail(path, format!("{at}: {m}")))?;
+            if let (Moved::By(a, below), gltf::camera::Projection::Perspective(p)) =
+                (moved, camera.projection())
+            {
+                c = self.keyed_camera(a, below, p.yfov().to_degrees(), &at, path);
+                keyed_camera = true;
+            }
             self.camera = Some((c, r, (String::new(), at)));
+        }
+        if !matches!(moved, Moved::Still)
+            && ((node.camera().is_some() && !keyed_camera) || node.light().is_some())
+        {
+            tracing::warn!(
+                "{}: {at}: its camera or light does not move: pathwave keys objects and perspective cameras only",
+                path.display()
+            );
         }
         if let Some(light) = node.light() {
             let at = format!("{at}, lights[{}]{}", light.index(), name(light.name()));
@@ -550,15 +678,46 @@ impl Converter<'_> {
         if pbr.metallic_roughness_texture().is_some() {
             warn("its metallicRoughnessTexture is not read (pathwave's textured numbers take no channel): its factors are".into());
         }
-        if let Some(ior) = m.ior().filter(|i| *i != 1.5) {
-            write!(fields, ", eta: {}", num(ior)).unwrap();
-        }
-        if let Some(t) = m.transmission() {
+        // Opaque: the glTF BRDF itself; transmitting: the principled BSDF's refraction.
+        let transmission = m.transmission().filter(|t| t.transmission_factor() > 0.0);
+        let ior = m.ior().filter(|i| *i != 1.5);
+        let coat = m.extension_value("KHR_materials_clearcoat");
+        let kind = if let Some(t) = transmission {
+            if let Some(ior) = ior {
+                write!(fields, ", eta: {}", num(ior)).unwrap();
+            }
             write!(fields, ", spec_trans: {}", num(t.transmission_factor())).unwrap();
             if t.transmission_texture().is_some() {
                 warn("its transmissionTexture is not read: its transmissionFactor is".into());
             }
-        }
+            if coat.is_some() {
+                warn("it transmits: its KHR_materials_clearcoat is not read".into());
+            }
+            "Principled"
+        } else {
+            if let Some(ior) = ior {
+                write!(fields, ", ior: {}", num(ior)).unwrap();
+            }
+            if let Some(coat) = coat {
+                for (key, field) in
+                    [("clearcoatFactor", "clearcoat"), ("clearcoatRoughnessFactor", "clearcoat_roughness")]
+                {
+                    let Some(v) = coat.get(key).and_then(|v| v.as_f64()) else { continue };
+                    let clamped = v.clamp(0.0, 1.0);
+                    if clamped != v {
+                        warn(format!("its {key} {v} is not in [0, 1]: {clamped} is used"));
+                    }
+                    write!(fields, ", {field}: {}", num(clamped as f32)).unwrap();
+                }
+                if ["clearcoatTexture", "clearcoatRoughnessTexture", "clearcoatNormalTexture"]
+                    .iter()
+                    .any(|k| coat.get(*k).is_some())
+                {
+                    warn("its clear coat's textures are not read: its factors are".into());
+                }
+            }
+            "MetallicRoughness"
+        };
         if m.occlusion_texture().is_some() {
             warn("its occlusionTexture is not read (the path tracer finds occlusion)".into());
         }
@@ -577,7 +736,7 @@ impl Converter<'_> {
             }
             self.image_texture(n.texture(), n.tex_coord(), String::new(), true, "normalTexture", &at, path)
         });
-        let plain = format!("Principled({fields})");
+        let plain = format!("{kind}({fields})");
         let opacity = match m.alpha_mode() {
             AlphaMode::Opaque => 1.0,
             AlphaMode::Mask => {

@@ -444,28 +444,35 @@ fn punctual_lights_are_converted_from_candela_and_lux() {
 }
 
 #[test]
-fn materials_become_principled_masked_and_emitting() {
+fn materials_become_the_gltf_brdf_masked_and_emitting() {
     let materials = [
         r#"{"name":"paint","pbrMetallicRoughness":{"baseColorFactor":[0.8,0.2,0.1,1],"metallicFactor":0.3,"roughnessFactor":0.6}}"#,
         r#"{"name":"cut","alphaMode":"MASK","alphaCutoff":0.5,"pbrMetallicRoughness":{"baseColorFactor":[1,1,1,0.3]}}"#,
         r#"{"name":"veil","alphaMode":"BLEND","pbrMetallicRoughness":{"baseColorFactor":[1,1,1,0.25]}}"#,
         r#"{"name":"lamp","emissiveFactor":[1,0.5,0],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":4}}}"#,
+        r#"{"name":"varnish","pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":0.5},"extensions":{"KHR_materials_ior":{"ior":1.4},"KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatRoughnessFactor":0.1}}}"#,
+        r#"{"name":"glass","pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":0},"extensions":{"KHR_materials_transmission":{"transmissionFactor":1}}}"#,
     ];
     let mut members: Vec<(&str, &str)> = materials.iter().map(|m| ("materials", *m)).collect();
-    let meshes: Vec<String> = (0..4)
+    let meshes: Vec<String> = (0..6)
         .map(|m| {
             format!(r#"{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":3,"material":{m}}}]}}"#)
         })
         .collect();
     members.extend(meshes.iter().map(|m| ("meshes", m.as_str())));
-    let nodes: Vec<String> = (1..5).map(|m| format!(r#"{{"mesh":{m}}}"#)).collect();
+    let nodes: Vec<String> = (1..7).map(|m| format!(r#"{{"mesh":{m}}}"#)).collect();
     members.extend(nodes.iter().map(|n| ("nodes", n.as_str())));
-    members.push(("scenes", r#"{"nodes":[0,1,2,3]}"#));
-    members.push(("extensionsUsed", r#"["KHR_materials_emissive_strength"]"#));
+    members.push(("scenes", r#"{"nodes":[0,1,2,3,4,5]}"#));
+    members.push((
+        "extensionsUsed",
+        r#"["KHR_materials_emissive_strength","KHR_materials_ior","KHR_materials_clearcoat","KHR_materials_transmission"]"#,
+    ));
     let (dir, path) = scene_file("materials", &members);
     let ron = super::to_ron(&path, &dir).unwrap().ron;
     for want in [
-        r#""paint": Principled(base_color: (0.8, 0.2, 0.1), metallic: 0.3, roughness: 0.6),"#,
+        r#""paint": MetallicRoughness(base_color: (0.8, 0.2, 0.1), metallic: 0.3, roughness: 0.6),"#,
+        r#""varnish": MetallicRoughness(base_color: (1, 1, 1), metallic: 0, roughness: 0.5, ior: 1.4, clearcoat: 1, clearcoat_roughness: 0.1),"#,
+        r#""glass": Principled(base_color: (1, 1, 1), metallic: 0, roughness: 0, spec_trans: 1),"#,
         r#""cut": Mask(opacity: 0, material: "cut (opaque)"),"#,
         r#""veil": Mask(opacity: 0.25, material: "veil (opaque)"),"#,
         r#"material: "lamp", emit: (radiance: (4, 2, 0), two_sided: false)"#,
@@ -473,7 +480,7 @@ fn materials_become_principled_masked_and_emitting() {
         assert!(ron.contains(want), "{want} in\n{ron}");
     }
     let desc = crate::scene::load(&path).unwrap();
-    assert_eq!(desc.objects.len(), 4);
+    assert_eq!(desc.objects.len(), 6);
     let emit = desc.objects[3].emit.as_ref().unwrap();
     assert_eq!(
         emit.radiance,
@@ -648,6 +655,74 @@ fn node_animations_become_keyframe_tracks() {
     for (t, want) in [(0.5, (2.0, 0.0, 0.0)), (0.999, (2.998, 0.0, 0.0)), (1.0, (2.0, 0.0, -1.0))] {
         let got = origin(t);
         assert!((got - glam::Vec3::from(want)).length() < 1e-5, "at {t}: {got}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A camera node that a translation and a rotation channel move: its eye and its view at each
+/// frame are the node's as glTF interpolates it (linear and slerp; a cubic-spline channel
+/// through its tangents). Checked against the path in closed form. (Keyed at the two key times
+/// alone, the target's linear keys miss the slerp at 0.25 s by 0.22; reading the cubic
+/// spline's values without its tangents misses by 1 at 0.5 s: both fail.)
+#[test]
+fn a_moving_camera_follows_its_node() {
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    let mut d = quad(5123);
+    // Node 0 holds the camera: from (0, 0, 5) to (2, 0, 5) in a second, turning a quarter
+    // about y (from looking along -z to looking along -x); then its position a cubic spline
+    // from 0 (out-tangent (0, 4, 0)) to 0 (in-tangent (0, -4, 0)): y(s) = 4 s (1 - s).
+    let times = d.floats(&[0.0, 1.0], "SCALAR", 1);
+    let moves = d.floats(&[0.0, 0.0, 5.0, 2.0, 0.0, 5.0], "VEC3", 3);
+    let turns = d.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, h, 0.0, h], "VEC4", 4);
+    d.members.push((
+        "animations",
+        format!(
+            r#"{{"channels":[{{"sampler":0,"target":{{"node":1,"path":"translation"}}}},{{"sampler":1,"target":{{"node":1,"path":"rotation"}}}}],
+               "samplers":[{{"input":{times},"output":{moves}}},{{"input":{times},"output":{turns}}}]}}"#
+        ),
+    ));
+    d.members.push(("nodes", r#"{"mesh":0}"#.into()));
+    d.members.push(("nodes", r#"{"translation":[9,9,9],"camera":0}"#.into()));
+    d.members.push(("scenes", r#"{"nodes":[0,1]}"#.into()));
+    d.members.push(("cameras", r#"{"type":"perspective","perspective":{"yfov":0.5,"znear":0.1}}"#.into()));
+    let dir = scratch("moving-camera");
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, d.json(None)).unwrap();
+    let desc = crate::scene::load(&path).unwrap();
+    let crate::scene::CameraView::LookAt { look_from, look_at, vup, vfov } = desc.camera.view else {
+        panic!("not a look_at camera")
+    };
+    assert_eq!(
+        (look_from, look_at, vup),
+        (glam::Vec3::new(0.0, 0.0, 5.0), glam::Vec3::new(0.0, 0.0, 4.0), glam::Vec3::Y)
+    );
+    assert!((vfov - 0.5f32.to_degrees()).abs() < 1e-4);
+    let keys = &desc.animation.camera;
+    let (from, to) = (keys.look_from.as_ref().unwrap(), keys.look_at.as_ref().unwrap());
+    for frame in [0, 6, 12, 18, 24] {
+        let t = frame as f32 / 24.0;
+        let angle = std::f32::consts::FRAC_PI_2 * t;
+        let eye = glam::Vec3::new(2.0 * t, 0.0, 5.0);
+        let ahead = glam::Vec3::new(-angle.sin(), 0.0, -angle.cos());
+        assert!((from.at(t) - eye).length() < 1e-5, "frame {frame}: eye {}", from.at(t));
+        assert!((to.at(t) - (eye + ahead)).length() < 1e-5, "frame {frame}: target {}", to.at(t));
+    }
+    // The height as a cubic spline (in-tangent, value, out-tangent per key).
+    let spline = d.floats(
+        &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0, 0.0, 0.0, -4.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        "VEC3",
+        3,
+    );
+    let json = d.json(None).replace(
+        &format!(r#"{{"input":{times},"output":{moves}}}"#),
+        &format!(r#"{{"input":{times},"output":{spline},"interpolation":"CUBICSPLINE"}}"#),
+    );
+    std::fs::write(&path, json).unwrap();
+    let desc = crate::scene::load(&path).unwrap();
+    let from = desc.animation.camera.look_from.unwrap();
+    for s in [0.25f32, 0.5, 0.75] {
+        let y = 4.0 * s * (1.0 - s);
+        assert!((from.at(s) - glam::Vec3::new(0.0, y, 0.0)).length() < 1e-5, "at {s}: {}", from.at(s));
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
