@@ -123,7 +123,7 @@ impl VdbFile {
         let version = c.u32("the file format version")?;
         if version < OLDEST_VERSION {
             return Err(c.fail(&format!(
-                "file format version {version}: pathwave reads versions {OLDEST_VERSION} to {NEWEST_VERSION} (OpenVDB 3 and later)"
+                "file format version {version}: pathwave reads versions {OLDEST_VERSION} to {NEWEST_VERSION}"
             )));
         }
         if version > NEWEST_VERSION {
@@ -899,6 +899,78 @@ mod tests {
             let first = g.world_from_unit().transform_point3(0.5 / DVec3::new(19.0, 24.0, 19.0));
             assert!((first - DVec3::new(-0.4, 0.0, -0.15)).abs().max_element() < 1e-12, "{name}: {first}");
         }
+    }
+
+    /// Blosc's byte shuffle, which [`unshuffle`] undoes.
+    fn shuffle(typesize: usize, src: &[u8]) -> Vec<u8> {
+        let n = src.len() / typesize;
+        let mut dst = src.to_vec();
+        for i in 0..n {
+            for j in 0..typesize {
+                dst[j * n + i] = src[i * typesize + j];
+            }
+        }
+        dst
+    }
+
+    /// A Blosc chunk of `data` in blocks of `blocksize` as c-blosc 1 lays it out: whole blocks
+    /// of 128 or more elements split into one LZ4 stream per byte of the type, the last block
+    /// (shorter) in one stream, each block byte-shuffled.
+    fn blosc(data: &[u8], typesize: usize, blocksize: usize) -> Vec<u8> {
+        let blocks: Vec<&[u8]> = data.chunks(blocksize).collect();
+        let mut body = Vec::new();
+        let mut starts = Vec::new();
+        let first = 16 + 4 * blocks.len();
+        for b in &blocks {
+            starts.push((first + body.len()) as u32);
+            let shuffled = shuffle(typesize, b);
+            let whole = b.len() == blocksize && b.len() / typesize >= 128;
+            for stream in shuffled.chunks(if whole { b.len() / typesize } else { b.len() }) {
+                let packed = lz4_flex::block::compress(stream);
+                body.extend((packed.len() as i32).to_le_bytes());
+                body.extend(packed);
+            }
+        }
+        let mut chunk = vec![2, 1, 0x01 | 1 << 5, typesize as u8];
+        for n in [data.len(), blocksize, first + body.len()] {
+            chunk.extend((n as u32).to_le_bytes());
+        }
+        chunk.extend(starts.iter().flat_map(|s| s.to_le_bytes()));
+        chunk.extend(body);
+        chunk
+    }
+
+    #[test]
+    fn blosc_chunks_of_several_blocks_split_and_not() {
+        // Two blocks: 1024 bytes in four streams, then the last 601 in one (though long
+        // enough to split), with a tail of one byte past the last whole element.
+        let data: Vec<u8> = (0..1625u32).map(|i| (i * 7 % 251) as u8 ^ (i / 13) as u8).collect();
+        let chunk = blosc(&data, 4, 1024);
+        let mut out = vec![0; data.len()];
+        unblosc(&chunk, &mut out).unwrap();
+        assert!(out == data);
+        // The same bytes stored as they are (the flag 0x2).
+        let mut stored = vec![2, 1, 0x03 | 1 << 5, 4];
+        for n in [data.len(), data.len(), 16 + data.len()] {
+            stored.extend((n as u32).to_le_bytes());
+        }
+        stored.extend(&data);
+        unblosc(&stored, &mut out).unwrap();
+        assert!(out == data);
+        // A chunk that is not what it should be.
+        let e = |c: &[u8], n: usize| unblosc(c, &mut vec![0; n]).unwrap_err();
+        assert!(e(&chunk, 1000).contains("says 1625 bytes"), "{}", e(&chunk, 1000));
+        let mut zstd = chunk.clone();
+        zstd[2] = 0x01 | 4 << 5;
+        assert!(e(&zstd, 1625).contains("codec 4"), "{}", e(&zstd, 1625));
+        assert!(
+            e(&chunk[..chunk.len() - 1], 1625).contains("in at most"),
+            "{}",
+            e(&chunk[..chunk.len() - 1], 1625)
+        );
+        let mut lost = chunk.clone();
+        lost[16] = 0xff;
+        assert!(e(&lost, 1625).contains("block 0's stream 0"), "{}", e(&lost, 1625));
     }
 
     #[test]
