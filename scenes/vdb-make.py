@@ -6,13 +6,15 @@ OpenVDB itself writes the .vdb files: the `openvdb` module (OpenVDB 12.0, file f
 Blender's `bpy` 5.0.1 bundles. Run with the Python of the environment holding bpy:
     /opt/vdbvenv/bin/python scenes/vdb-make.py
 
-The grid ("density", a fog volume) is a small plume of 24 x 24 x 24 voxels at index
-(-12, 0, -4) .. (11, 23, 19), so that the tree has two children at its root (x < 0 and x >= 0),
-several internal nodes and leaves, an active tile (a constant 8^3 core), an inactive tile of
-faint haze, and leaves whose inactive voxels hold zero, one or more haze values (every kind of
-OpenVDB's active-mask compression). Densities are multiples of 1/1024 in [0, 1], which IEEE
-half floats hold exactly, so the half-float file has the same values as the others. Its
-transform: voxels of 0.05 with the index origin at (0.1, 0, -0.2) in world space
+The grid ("density", a fog volume) is a small plume drawn in the 24^3 voxels from index
+(-12, 0, 0) to (11, 23, 23); its active voxels span (-10, 0, 1) to (8, 23, 19), 19 x 24 x 19.
+It crosses x = 0, so that the tree has two children at its root (x < 0 and x >= 0; each takes
+8 KB of masks, hence files of 30 to 64 KB), and it has internal nodes, 30 leaves, an active
+tile (a constant 8^3 core), an inactive tile of faint haze, and leaves whose inactive voxels
+hold zero, one or more haze values (OpenVDB's active-mask kinds 0, 2, 4, 5 and 6; 1 and 3
+need a background other than 0). Densities are multiples of 1/1024 in [0, 1], which IEEE half
+floats hold exactly, so the half-float file has the same values as the others. Its transform:
+voxels of 0.05 with the index origin at (0.1, 0, -0.2) in world space
 (UniformScaleTranslateMap).
 
 Files (the compression flags that OpenVDB writes for each grid: io/Compression.h):
