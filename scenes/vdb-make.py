@@ -19,8 +19,9 @@ voxels of 0.05 with the index origin at (0.1, 0, -0.2) in world space
 
 Files (the compression flags that OpenVDB writes for each grid: io/Compression.h):
     smoke-blosc.vdb       Blosc (LZ4, byte shuffle) + active mask: OpenVDB's default. Also holds
-                          "temperature" (float, 2 at one voxel), "velocity" (vec3s) and
-                          "id" (int32), for grid selection and the errors of other types.
+                          "temperature" (float, 2 at one voxel), "velocity" (vec3s),
+                          "id" (int32), for grid selection and the errors of other types,
+                          and "instance", the density's tree under voxels of 0.1.
     smoke-zip.vdb         zlib + active mask.
     smoke-zip-nomask.vdb  zlib, no active-mask compression (every value written).
     smoke-none.vdb        active mask only, values uncompressed.
@@ -134,7 +135,12 @@ def build(vdb):
     ids = vdb.Int32Grid()
     ids.name = "id"
     ids.getAccessor().setValueOn((0, 4, 0), 7)
-    return grid, [temperature, velocity, ids]
+    # A grid sharing the density's tree (OpenVDB writes it as an instance: no tree of its own)
+    # under voxels twice the size.
+    instance = grid.copy()
+    instance.name = "instance"
+    instance.transform = vdb.createLinearTransform(0.1)
+    return grid, [temperature, velocity, ids, instance]
 
 
 def dense(grid, box):

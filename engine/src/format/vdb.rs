@@ -978,6 +978,12 @@ mod tests {
         let file = open("smoke-blosc.vdb");
         let t = file.grid("temperature").unwrap();
         assert_eq!((t.size, t.index_min, t.values), ([1, 1, 1], [0, 4, 0], vec![2.0]));
+        // An instance: the density's tree (its parent's) under its own transform.
+        let i = file.grids.iter().find(|g| g.name == "instance").unwrap();
+        assert_eq!(i.parent, "density");
+        let (instance, density) = (file.grid("instance").unwrap(), file.grid("density").unwrap());
+        assert!(instance.values == density.values && instance.size == density.size);
+        assert_eq!(instance.world_from_index, DAffine3::from_scale(DVec3::splat(0.1)));
         let e = file.grid("dens").unwrap_err();
         assert!(e.contains("smoke-blosc.vdb") && e.contains("no grid named \"dens\""), "{e}");
         assert!(
