@@ -11,6 +11,7 @@ pub mod files;
 pub mod gltf;
 pub mod registry;
 mod values;
+pub mod vdb;
 pub mod vol;
 
 pub(crate) use color::check_texture_name;

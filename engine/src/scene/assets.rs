@@ -5,8 +5,10 @@
 use super::serialized::SerializedFile;
 use crate::accel::mesh::{MeshAttribute, MeshData};
 use crate::format::context;
+use crate::format::vdb::{VdbFile, is_vdb};
 use crate::media::grid::VoxelGrid;
 pub use crate::texture::image::ImageFile;
+use glam::Affine3A;
 use serde::{Deserialize, Deserializer, de::Error};
 use std::sync::Arc;
 
@@ -62,31 +64,88 @@ impl<'de> Deserialize<'de> for MeshPath {
     }
 }
 
-/// A voxel grid file (Mitsuba's `.vol`), read when the scene is loaded; objects naming the same
-/// file share the grid.
-#[derive(Debug, Clone, PartialEq)]
+/// A voxel grid file, read when the scene is loaded: Mitsuba's `.vol`, or an OpenVDB file
+/// (told by its first bytes, or by the extension `.vdb` for a damaged one) whose grid the
+/// medium picks by name ([`GridFile::pick`]). Objects naming the same `.vol` share its grid.
+#[derive(Debug, Clone)]
 pub struct GridFile {
     /// The path as written.
     pub path: std::path::PathBuf,
-    /// The values.
-    pub grid: Arc<VoxelGrid>,
+    /// What the file holds.
+    source: GridSource,
+}
+
+/// What a grid file holds.
+#[derive(Debug, Clone)]
+enum GridSource {
+    /// Not read: the first parsing pass reads no files.
+    Unread,
+    /// A `.vol` file's grid.
+    Vol(Arc<VoxelGrid>),
+    /// An OpenVDB file's grids, to pick from by name.
+    Vdb(Arc<VdbFile>),
+}
+
+/// The grid a medium's `name` picks of the file's: OpenVDB's default.
+pub const DEFAULT_VDB_GRID: &str = "density";
+
+impl GridFile {
+    /// The grid that `name` picks (an OpenVDB file's grid of that name, by default
+    /// [`DEFAULT_VDB_GRID`]; a `.vol` file takes no name) and where its unit cube lies in the
+    /// medium's space: `None` for a `.vol` (the unit cube itself), an OpenVDB grid's transform
+    /// (its world space is the medium's space) for its dense box over the active voxels.
+    pub fn pick(&self, name: Option<&str>) -> Result<(Arc<VoxelGrid>, Option<Affine3A>), String> {
+        match &self.source {
+            GridSource::Unread => Ok((Arc::new(VoxelGrid::new([1, 1, 1], 1, vec![0.0])), None)),
+            GridSource::Vol(grid) => match name {
+                None => Ok((grid.clone(), None)),
+                Some(n) => Err(format!(
+                    "`name: \"{n}\"` picks a grid of an OpenVDB file: the .vol file {} holds one grid",
+                    self.path.display()
+                )),
+            },
+            GridSource::Vdb(file) => {
+                let g = file.grid(name.unwrap_or(DEFAULT_VDB_GRID))?;
+                let unit = g.world_from_unit().as_affine3a();
+                let det = unit.matrix3.determinant();
+                if !(unit.is_finite() && det.is_normal()) {
+                    return Err(format!(
+                        "the OpenVDB file {}: the grid's box maps to {unit:?} in single precision, which is not finite and invertible",
+                        self.path.display()
+                    ));
+                }
+                Ok((Arc::new(VoxelGrid::new(g.size, 1, g.values)), Some(unit)))
+            }
+        }
+    }
 }
 
 impl<'de> Deserialize<'de> for GridFile {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
         let Some(dir) = context::scene_dir() else {
-            return Ok(GridFile { path, grid: Arc::new(VoxelGrid::new([1, 1, 1], 1, vec![0.0])) });
+            return Ok(GridFile { path, source: GridSource::Unread });
         };
         let full = dir.join(&path);
         if let Some(grid) = context::read_before::<VoxelGrid>(&full) {
-            return Ok(GridFile { path, grid });
+            return Ok(GridFile { path, source: GridSource::Vol(grid) });
+        }
+        if let Some(file) = context::read_before::<VdbFile>(&full) {
+            return Ok(GridFile { path, source: GridSource::Vdb(file) });
         }
         let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "grid")
             .map_err(D::Error::custom)?;
-        let grid = Arc::new(VoxelGrid::parse_vol(&bytes, &full).map_err(D::Error::custom)?);
-        context::keep(full, grid.clone());
-        Ok(GridFile { path, grid })
+        let vdb = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
+        let source = if is_vdb(&bytes) || vdb {
+            let file = Arc::new(VdbFile::parse(bytes, &full).map_err(D::Error::custom)?);
+            context::keep(full, file.clone());
+            GridSource::Vdb(file)
+        } else {
+            let grid = Arc::new(VoxelGrid::parse_vol(&bytes, &full).map_err(D::Error::custom)?);
+            context::keep(full, grid.clone());
+            GridSource::Vol(grid)
+        };
+        Ok(GridFile { path, source })
     }
 }
 

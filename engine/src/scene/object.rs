@@ -6,6 +6,7 @@ use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
 use crate::format::registry::{fields, registry};
 use crate::format::{Albedo, Color, Radiance, V3, context};
+use crate::media::grid::VoxelGrid;
 use crate::placement::{Form, primitives};
 use crate::shape::ShapeModel;
 use serde::Deserialize;
@@ -121,21 +122,52 @@ pub const MAX_GRID_EXTINCTION: f32 = 1e7;
 /// A voxel grid placed in the object: `(file: "smoke.vol", transform: [..])`. The grid fills
 /// the unit cube `[0, 1]^3`, which `transform` (default none) places in the object's space,
 /// before the object's own transform.
-#[derive(Deserialize, Debug, Clone, PartialEq)]
-#[serde(deny_unknown_fields, rename = "Grid")]
+///
+/// An OpenVDB file's grid (`(file: "smoke.vdb", name: "density", transform: [..])`, `name`
+/// by default "density") is the dense box over its active voxels, each a cell centred on its
+/// index as OpenVDB samples them, placed by the grid's own transform: the grid's world space
+/// is the medium's space before `transform`, which places it in the object.
+#[derive(Debug, Clone, PartialEq)]
 pub struct GridDesc {
-    /// A Mitsuba `.vol` file of 1 or 3 channels, relative to the scene file.
-    pub file: super::assets::GridFile,
+    /// The file as written.
+    pub file: std::path::PathBuf,
+    /// The grid's name in an OpenVDB file.
+    pub name: Option<String>,
+    /// The values.
+    pub grid: Arc<VoxelGrid>,
+    /// Transforms applied in order, first to last: for an OpenVDB grid, where its own
+    /// transform puts the unit cube, then those written.
+    pub transform: Vec<TransformOp>,
+}
+
+/// A grid as written, before its file's grid is picked.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename = "Grid")]
+struct GridFields {
+    /// A Mitsuba `.vol` file of 1 or 3 channels or an OpenVDB file, relative to the scene file.
+    file: super::assets::GridFile,
+    /// The grid of an OpenVDB file (default "density").
+    #[serde(default)]
+    name: Option<String>,
     /// Transforms applied in order, first to last.
     #[serde(default)]
-    pub transform: Vec<TransformOp>,
+    transform: Vec<TransformOp>,
+}
+
+impl<'de> Deserialize<'de> for GridDesc {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let f = GridFields::deserialize(d)?;
+        let (grid, unit) = f.file.pick(f.name.as_deref()).map_err(D::Error::custom)?;
+        let transform = unit.map(TransformOp).into_iter().chain(f.transform).collect();
+        Ok(GridDesc { file: f.file.path, name: f.name, grid, transform })
+    }
 }
 
 impl GridDesc {
     /// The grid, placed in the object.
     pub fn placed(&self) -> crate::media::PlacedGrid {
         crate::media::PlacedGrid {
-            grid: self.file.grid.clone(),
+            grid: self.grid.clone(),
             grid_from_object: compose(&self.transform).inverse(),
         }
     }
@@ -159,11 +191,11 @@ impl MediumDesc {
     /// Refuses a grid under coloured extinction and an albedo grid with values above 1.
     fn check(&self) -> Result<(), String> {
         if let Some(g) = &self.grid {
-            let peak = self.density.0.x * g.file.grid.max();
+            let peak = self.density.0.x * g.grid.max();
             if !(peak <= MAX_GRID_EXTINCTION) {
                 return Err(format!(
                     "`density` times the grid {}'s largest value is {peak}: at most {MAX_GRID_EXTINCTION} (a medium that dense is opaque, and tracking through it would take that many steps per unit length)",
-                    g.file.path.display()
+                    g.file.display()
                 ));
             }
         }
@@ -174,11 +206,11 @@ impl MediumDesc {
             ));
         }
         if let Some(g) = &self.albedo_grid {
-            let max = g.file.grid.max();
+            let max = g.grid.max();
             if max > 1.0 {
                 return Err(format!(
                     "the albedo grid {} holds {max}: an albedo grid's values lie in [0, 1]",
-                    g.file.path.display()
+                    g.file.display()
                 ));
             }
         }
