@@ -218,6 +218,7 @@ impl MaterialModel for MetallicRoughness {
 mod tests {
     use super::*;
     use crate::material::chi2::{chi2, chi2_critical};
+    use crate::material::microfacet::testing::hemisphere;
 
     fn material(base: f32, metallic: f32, roughness: f32, clearcoat: f32) -> MetallicRoughness {
         MetallicRoughness {
@@ -325,21 +326,6 @@ mod tests {
                 }
             }
         }
-    }
-
-    /// Integral of `g` over the hemisphere about +z, midpoint rule in theta and phi.
-    fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
-        let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
-        let mut sum = 0.0;
-        for i in 0..nt {
-            let t = (i as f64 + 0.5) * dt;
-            for j in 0..np {
-                let p = (j as f64 + 0.5) * dp;
-                let w = Vec3A::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
-                sum += g(w) * t.sin() * dt * dp;
-            }
-        }
-        sum
     }
 
     /// White: the sampler's estimate of the directional albedo is the quadrature's. (The

@@ -268,6 +268,22 @@ pub(crate) mod testing {
     use crate::material::chi2::{chi2, chi2_critical};
     use std::f64::consts::PI as PI64;
 
+    /// Integral over the hemisphere of `g(theta, phi)` in spherical coordinates, midpoint rule
+    /// in theta (fine, for narrow lobes) and phi, in f64.
+    pub(crate) fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
+        let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
+        let mut sum = 0.0;
+        for i in 0..nt {
+            let t = (i as f64 + 0.5) * dt;
+            for j in 0..np {
+                let p = (j as f64 + 0.5) * dp;
+                let m = Vec3A::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
+                sum += g(m) * t.sin();
+            }
+        }
+        sum * dt * dp
+    }
+
     /// A monotone map of [a, b] onto [0, 1] that spends its resolution near `c` (scale `s`):
     /// `x' = (asinh((x - c) / s) - A) / (B - A)`, with A and B its values at a and b.
     #[derive(Clone, Copy, Debug)]
@@ -414,23 +430,8 @@ pub(crate) mod testing {
 
 #[cfg(test)]
 mod tests {
+    use super::testing::hemisphere;
     use super::*;
-
-    /// Integral over the hemisphere of `g(theta, phi)` in spherical coordinates, midpoint rule
-    /// in theta (fine, for narrow lobes) and phi, in f64.
-    pub(super) fn hemisphere(nt: usize, np: usize, g: impl Fn(Vec3A) -> f64) -> f64 {
-        let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
-        let mut sum = 0.0;
-        for i in 0..nt {
-            let t = (i as f64 + 0.5) * dt;
-            for j in 0..np {
-                let p = (j as f64 + 0.5) * dp;
-                let m = Vec3A::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32);
-                sum += g(m) * t.sin();
-            }
-        }
-        sum * dt * dp
-    }
 
     #[test]
     fn d_cos_integrates_to_one() {

@@ -233,7 +233,7 @@ fn erf_inv(x: f32) -> f32 {
 mod tests {
     use super::*;
     use crate::material::microfacet::testing::assert_chi2;
-    use crate::material::microfacet::tests::hemisphere;
+    use crate::material::microfacet::testing::hemisphere;
 
     /// `erf` in f64 by its Taylor series (Abramowitz and Stegun 7.1.5), for |z| <= 4 (error
     /// below 1e-9).
