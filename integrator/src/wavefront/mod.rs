@@ -16,6 +16,7 @@
 //! edge), which the two may break differently: `tests/wavefront.rs` allows 2 differing pixels.
 
 mod queues;
+mod stage_clock;
 mod stages;
 mod tile_work;
 

@@ -3,6 +3,7 @@
 //! stages that live here (camera rays and film accumulation) rather than in `stages`.
 
 use super::queues::{Paths, Queues};
+use super::stage_clock::StageClock;
 use super::{Stage, Stats};
 use crate::aov::Guide;
 use crate::costs::PixelCosts;
@@ -16,7 +17,7 @@ use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
 use pathwave_engine::render_scene::RenderScene;
 use std::ops::Range;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// What [`TileWork::run`] calls before each stage: `(iteration, work, stage, paths, queues)`.
 pub(super) type Observer<'o, 'a> = dyn FnMut(u64, &TileWork<'a>, Stage, &Paths, &Queues) + 'o;
@@ -36,6 +37,9 @@ pub(super) struct TileWork<'a> {
     /// What the tile's pixels and materials cost (with [`super::Options::costs`]).
     charges: Option<Charges>,
     pub(super) stats: Stats,
+    /// Each stage's time in [`StageClock`] ticks while the tile runs (then added to
+    /// [`Stats::time`]).
+    ticks: [u64; Stage::SLOTS],
     /// The stages each iteration runs, in order (`stages!` in `wavefront/mod.rs`): the
     /// scene's shading kinds only, guides only when asked for.
     pipeline: Vec<Stage>,
@@ -62,6 +66,7 @@ impl<'a> TileWork<'a> {
             charges: costs
                 .then(|| Charges::new(pixels, scene.materials.len(), scene.lights.len(), &pipeline)),
             stats: Stats::default(),
+            ticks: [0; Stage::SLOTS],
             pipeline,
         }
     }
@@ -77,6 +82,8 @@ impl<'a> TileWork<'a> {
         observe: &mut Observer<'_, 'a>,
     ) {
         let cpu = self.charges.is_some().then(cpu_time::ThreadTime::now);
+        let clock = clock.then(StageClock::get);
+        let span = clock.map(StageClock::span);
         q.free.clear();
         q.free.extend((0..batch as u32).rev());
         q.active.clear();
@@ -105,6 +112,12 @@ impl<'a> TileWork<'a> {
             q.next.clear();
         }
         self.pipeline = pipeline;
+        if let Some(span) = span {
+            let time = span.to_duration();
+            for (t, ticks) in self.stats.time.iter_mut().zip(std::mem::take(&mut self.ticks)) {
+                *t += time(ticks);
+            }
+        }
         if let (Some(c), Some(start)) = (&mut self.charges, cpu) {
             c.cpu += start.elapsed();
         }
@@ -130,12 +143,12 @@ impl<'a> TileWork<'a> {
     }
 
     /// Runs `stage` if it has work (after `observe` has seen its input), recording its item
-    /// count and, if `clock`, its time (traces get them once per tile, from [`trace_tile`]);
+    /// count and, with a `clock`, its time in ticks (traces get them once per tile, from [`trace_tile`]);
     /// with costs, counts its items by pixel and material (then `clock` must be on).
     #[inline]
     fn timed(
         &mut self,
-        clock: bool,
+        clock: Option<StageClock>,
         stage: Stage,
         p: &mut Paths,
         q: &mut Queues,
@@ -151,10 +164,10 @@ impl<'a> TileWork<'a> {
         }
         observe(self, stage, p, q);
         let k = stage.index();
-        if clock {
-            let start = Instant::now();
+        if let Some(clock) = clock {
+            let start = clock.now();
             self.stage(stage, p, q);
-            self.stats.time[k] += start.elapsed();
+            self.ticks[k] += clock.now().wrapping_sub(start);
         } else {
             self.stage(stage, p, q);
         }
