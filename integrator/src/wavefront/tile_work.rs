@@ -293,11 +293,17 @@ pub(super) struct Charges {
     /// not zero, as `(stage slot, material, items)`: the stage's items shared in proportion to
     /// the counted ones.
     material_counts: Vec<(usize, usize, f64)>,
-    /// The entry of the scene's light table each path slot's last vertex sampled (kept only
-    /// where there is more than one).
-    path_light: Vec<u32>,
-    /// Shadow rays by the light table entry they were aimed at.
+    /// The entry of the scene's light table a path slot's vertex sampled, and the iteration it
+    /// was shaded in, for one shading item in [`MATERIAL_STRIDE`] (kept only where the table
+    /// has more than one entry; finding the entry again draws the light sampler's number, 6%
+    /// of materials-env's time when done for every vertex).
+    path_light: Vec<(u64, u32)>,
+    /// Shadow rays by the light table entry they were aimed at: all of them with one entry,
+    /// else those of the vertices in `path_light`.
     light_items: Vec<u32>,
+    /// Once the tile is done, each light table entry's estimated shadow rays: the tile's
+    /// shadow rays shared in proportion to `light_items`.
+    light_counts: Vec<f64>,
     /// The iteration each path slot's path started in: a path takes one item of
     /// `intersect_closest` (and `record_guides`) per iteration, counted when it finishes.
     born: Vec<u64>,
@@ -336,6 +342,7 @@ impl Charges {
             material_counts: Vec::new(),
             path_light: Vec::new(),
             light_items: vec![0; lights],
+            light_counts: Vec::new(),
             born: Vec::new(),
             cpu: Duration::ZERO,
         }
@@ -361,12 +368,15 @@ impl Charges {
         self.born.resize(paths, 0);
         let many_lights = self.light_items.len() > 1;
         if many_lights && matches!(stage, Stage::Shade(_) | Stage::ShadeMedium) {
-            // The light each vertex samples, as the stage is about to pick it: its shadow ray,
-            // if it makes one, is traced later in the same iteration.
-            self.path_light.resize(paths, 0);
-            for &s in slots {
+            // The light a vertex samples, as the stage is about to pick it, for one item in
+            // MATERIAL_STRIDE (the start turning with the iteration): its shadow ray, if it
+            // makes one, is traced later in the same iteration.
+            self.path_light.resize(paths, (u64::MAX, 0));
+            let start = (iteration % MATERIAL_STRIDE as u64) as usize;
+            for &s in slots.iter().skip(start).step_by(MATERIAL_STRIDE) {
                 let s = s as usize;
-                self.path_light[s] = oracle::sampled_light(scene, &p.sampler[s], p.depth[s]) as u32;
+                let light = oracle::sampled_light(scene, &p.sampler[s], p.depth[s]) as u32;
+                self.path_light[s] = (iteration, light);
             }
         }
         if !Self::per_path(stage) {
@@ -407,7 +417,10 @@ impl Charges {
             }
             Stage::TraceShadowRays if many_lights => {
                 for &s in slots {
-                    self.light_items[self.path_light[s as usize] as usize] += 1;
+                    let (shaded, light) = self.path_light[s as usize];
+                    if shaded == iteration {
+                        self.light_items[light as usize] += 1;
+                    }
                 }
             }
             Stage::TraceShadowRays => {
@@ -454,15 +467,16 @@ impl Charges {
         for &(k, id, n) in &self.material_counts {
             charge(&mut stats.material_time, id, n, k);
         }
-        for (light, &n) in self.light_items.iter().enumerate() {
-            charge(&mut stats.light_time, light, f64::from(n), Stage::TraceShadowRays.index());
+        for (light, &n) in self.light_counts.iter().enumerate() {
+            charge(&mut stats.light_time, light, n, Stage::TraceShadowRays.index());
         }
         costs
     }
 
-    /// Drops what only the tile's run needed (the counts by path, the material counters),
-    /// keeping the counts by pixel and the material counts that are not zero, those of each
-    /// stage scaled to its `items` in the tile (by stage slot).
+    /// Drops what only the tile's run needed (the counts by path, the material and light
+    /// counters), keeping the counts by pixel, the material counts that are not zero, those of
+    /// each stage scaled to its `items` in the tile (by stage slot), and the lights' counts
+    /// scaled to the shadow rays.
     fn finish(&mut self, items: &[u64; Stage::SLOTS]) {
         let m = self.material_items.len() / (MATERIAL_LANES * Stage::SLOTS);
         for k in 0..Stage::SLOTS {
@@ -474,8 +488,14 @@ impl Charges {
                 self.material_counts.push((k, id, items[k] as f64 * f64::from(counted(id)) / f64::from(sum)));
             }
         }
-        (self.path_items, self.born, self.material_items, self.path_light) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let shadow_rays = items[Stage::TraceShadowRays.index()] as f64;
+        let sum: u32 = self.light_items.iter().sum();
+        if sum > 0 {
+            self.light_counts =
+                self.light_items.iter().map(|&n| shadow_rays * f64::from(n) / f64::from(sum)).collect();
+        }
+        (self.path_items, self.born, self.material_items, self.path_light, self.light_items) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     }
 }
 
