@@ -380,7 +380,7 @@ impl Charges {
             }
         }
         if !Self::per_path(stage) {
-            let (counts, c) = (&mut self.path_items, self.column[stage.index()]);
+            let (counts, c) = (self.path_items.as_mut_slice(), self.column[stage.index()]);
             for &s in slots {
                 counts[s as usize * counted + c] += 1;
             }
@@ -400,10 +400,11 @@ impl Charges {
                     let (s, px) = (s as usize, p.pixel[s as usize] as usize);
                     let to = &mut self.pixel_items[px * width..][..width];
                     let from = &mut self.path_items[s * counted..][..counted];
-                    for (to, from) in to.chunks_exact_mut(FOLD).zip(from.chunks_exact_mut(FOLD)) {
-                        for (to, from) in to.iter_mut().zip(from) {
-                            *to += std::mem::take(from);
+                    for (to, from) in to.as_chunks_mut::<FOLD>().0.iter_mut().zip(from.as_chunks_mut().0) {
+                        for (to, from) in to.iter_mut().zip(*from) {
+                            *to += from;
                         }
+                        *from = [0; FOLD];
                     }
                     let lived = (iteration - self.born[s]) as u32;
                     for c in per_path.into_iter().filter(|&c| c != usize::MAX) {
