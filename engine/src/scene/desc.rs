@@ -7,7 +7,7 @@
 use super::camera::{CameraDesc, RenderDesc};
 use super::light::{BackgroundDesc, LightDesc};
 use super::material::{LightRef, NamedMaterials};
-use super::object::{Body, ObjectDesc};
+use super::object::ObjectDesc;
 use super::texture::NamedTextures;
 use crate::format::{Positive, UnitInterval, context};
 use serde::{Deserialize, Deserializer, de::Error};
@@ -101,21 +101,6 @@ fn lights<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<LightDesc>, D::Error> {
 }
 
 /// `objects: [..]`, noting the index of each element while it is parsed.
-/// Refuses media with grids beside media of coloured extinction: coloured extinction is
-/// sampled analytically, grids by delta tracking of one (grey) majorant.
-fn mixed_media(objects: &[ObjectDesc]) -> Result<(), String> {
-    let media = || {
-        objects.iter().filter_map(|o| match &o.body {
-            Body::Volume(m) => Some(m),
-            _ => None,
-        })
-    };
-    match (media().any(|m| m.grid.is_some()), media().any(|m| m.chromatic())) {
-        (true, true) => Err("a scene with a medium on a grid has media of one density in every channel: this object's or an earlier one's `density` is (r, g, b)".into()),
-        _ => Ok(()),
-    }
-}
-
 fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<ObjectDesc>, D::Error> {
     struct V;
     impl<'de> serde::de::Visitor<'de> for V {
@@ -128,10 +113,7 @@ fn objects<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<ObjectDesc>, D::Error>
             loop {
                 context::set_current_object(Some(out.len()));
                 match seq.next_element::<ObjectDesc>()? {
-                    Some(o) => {
-                        out.push(o);
-                        mixed_media(&out).map_err(A::Error::custom)?;
-                    }
+                    Some(o) => out.push(o),
                     None => break,
                 }
             }

@@ -188,22 +188,16 @@ impl MediumDesc {
         }
     }
 
-    /// Refuses a grid under coloured extinction and an albedo grid with values above 1.
+    /// Refuses a grid too dense to track through and an albedo grid with values above 1.
     fn check(&self) -> Result<(), String> {
         if let Some(g) = &self.grid {
-            let peak = self.density.0.x * g.grid.max();
+            let peak = self.density.0.max_element() * g.grid.max();
             if !(peak <= MAX_GRID_EXTINCTION) {
                 return Err(format!(
                     "`density` times the grid {}'s largest value is {peak}: at most {MAX_GRID_EXTINCTION} (a medium that dense is opaque, and tracking through it would take that many steps per unit length)",
                     g.file.display()
                 ));
             }
-        }
-        if self.grid.is_some() && self.chromatic() {
-            return Err(format!(
-                "a medium with a `grid` takes one number for `density` (its extinction is the same in every channel), found {}",
-                self.density.0
-            ));
         }
         if let Some(g) = &self.albedo_grid {
             let max = g.grid.max();
@@ -215,12 +209,6 @@ impl MediumDesc {
             }
         }
         Ok(())
-    }
-
-    /// Its extinction differs between channels.
-    pub fn chromatic(&self) -> bool {
-        let d = self.density.0;
-        !(d.x == d.y && d.y == d.z)
     }
 }
 
