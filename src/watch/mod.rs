@@ -180,13 +180,17 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
                         let r = w.reload(&desc);
                         (w, Some((r, before)))
                     }
-                    None => (SceneWorld::new(&desc), None),
+                    None => (crate::render::load::world(&desc, &args.scene, &args.settings), None),
                 };
                 let w = world.insert(w);
                 // As `render --time` (the shutter may have changed).
                 let shutter = crate::render::args::shutter_at(&desc, time);
                 w.set_time(shutter.0, shutter.1);
-                match w.update_checked() {
+                let frame = crate::render::args::frame_at(&desc, time);
+                if let Ok(frame) = frame {
+                    w.set_frame(frame);
+                }
+                match frame.and_then(|_| w.update_checked()) {
                     Err(e) => show_error(&mut viewers, &e),
                     Ok(scene) => {
                         let s = scene.settings;
