@@ -150,7 +150,8 @@ fn render_at_a_time_reads_the_frame_animate_renders_then() {
 
 /// A grid file is read when a frame names a file other than the one its medium holds: a grid
 /// that is one file for every frame is read once, with the scene; a frame rendered again reads
-/// nothing. Read through the engine's record of the files it reads.
+/// nothing; a reload reads the frame's file again, and rebuilds the media only if it changed.
+/// Read through the engine's record of the files it reads.
 #[test]
 fn a_file_is_read_only_when_the_frame_names_another() {
     let dir = temp("reads");
@@ -198,6 +199,18 @@ fn a_file_is_read_only_when_the_frame_names_another() {
     assert!(std::sync::Arc::ptr_eq(&held, &still_grid(&mut w)));
     let inputs = w.frame_inputs();
     assert!(inputs.len() == 1 && inputs[0].path.ends_with("d1.vol"), "{inputs:?}");
+    // A reload (as `watch` makes after an edit) reads the frame's file again: the same values
+    // rebuild nothing, new ones the media.
+    w.reload(&desc);
+    let before = w.builds();
+    let (same, read) = update(&mut w, 1);
+    assert!(read == ["d1.vol"] && std::sync::Arc::ptr_eq(&same.media, &next.media));
+    assert_eq!(w.builds().media, before.media);
+    write_vol(&dir.join("d1.vol"), LEFT);
+    w.reload(&desc);
+    let (edited, read) = update(&mut w, 1);
+    assert!(read == ["d1.vol"] && w.builds().media == before.media + 1);
+    assert!(!std::sync::Arc::ptr_eq(&edited.media, &next.media));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -149,7 +149,10 @@ pub fn read_grid_frames(
                 tracing::debug!(frame = n, files = ?files.iter().map(|f| &f.path).collect::<Vec<_>>(), "grid files read");
                 held.0 = files;
                 match filling {
-                    Some(mut f) => f.0 = medium,
+                    // Files read again with the same values (after a reload) rebuild nothing.
+                    Some(mut f) => {
+                        f.set_if_neq(Filling(medium));
+                    }
                     None => {
                         commands.entity(e).insert(Filling(medium));
                     }

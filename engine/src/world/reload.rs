@@ -125,7 +125,8 @@ impl SceneWorld {
     /// Makes the world hold `desc`, writing only what differs from what it holds: the n-th
     /// object of the file is the n-th entity, objects past the end are spawned or despawned,
     /// and the next [`Self::update`] rebuilds only what the written components and resources
-    /// feed.
+    /// feed. The frame's files of grid sequences are read again by that update (a reload
+    /// follows an edit, maybe to them), and rebuild the media only if their values changed.
     pub fn reload(&mut self, desc: &SceneDesc) -> Reload {
         let mut fresh = SceneWorld::new(desc).world;
         let world = &mut self.world;
@@ -156,11 +157,10 @@ impl SceneWorld {
             sync(world, e, f.get::<ObjectIndex>());
             let mut changed = sync(world, e, f.get::<Shape>());
             changed |= sync(world, e, f.get::<MaterialId>());
-            // A sequence's medium is read by `read_grid_frames`, again when the sequence changed.
+            // A sequence's medium is read by `read_grid_frames`: again after a reload, which
+            // follows an edit that may be to the frame's files (the same values rebuild nothing).
             let sequence = sync(world, e, f.get::<GridSequence>());
-            if sequence {
-                sync(world, e, f.get::<GridInputs>());
-            }
+            sync(world, e, f.get::<GridInputs>());
             changed |= sequence;
             if f.get::<GridSequence>().is_none() || sequence {
                 changed |= sync(world, e, f.get::<Filling>());
