@@ -356,3 +356,38 @@ fn an_openvdb_frame_is_the_grid_its_file_names_alone() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A frame's files are confined as the scene's load is (`--assets-under`; `farm slurm`'s
+/// default, the scene's folder): a sequence outside the folder is refused by `render` (the
+/// world's read), `animate` and `farm slurm` (their checks before any work), naming the frame.
+#[test]
+fn a_sequence_outside_the_assets_folder_is_refused() {
+    let dir = temp("confined");
+    let (scenes, grids) = (dir.join("scenes"), dir.join("grids"));
+    std::fs::create_dir_all(&scenes).unwrap();
+    std::fs::create_dir_all(&grids).unwrap();
+    for n in 0..3 {
+        write_vol(&grids.join(format!("d{n}.vol")), LEFT);
+    }
+    let s = scene(&scenes, "../grids/d{frame}.vol", "");
+    let under = ["--assets-under", scenes.to_str().unwrap()];
+    let outside = "lies outside";
+    let e = fails(pathwave().arg("render").arg(&s).arg("-o").arg(dir.join("x.exr")).args(under));
+    assert!(e.contains("frame 0") && e.contains(outside), "{e}");
+    let e = fails(pathwave().arg("animate").arg(&s).arg("-o").arg(dir.join("f{frame}.exr")).args(under));
+    assert!(e.contains("frame 0") && e.contains(outside), "{e}");
+    let farm = pathwave()
+        .args(["farm", "slurm"])
+        .arg(&s)
+        .arg("-o")
+        .arg(dir.join("o/f{frame}.exr"))
+        .args(["--tasks", "2", "--dry-run"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&farm.stderr);
+    assert!(!farm.status.success() && e.contains("frame 0") && e.contains(outside), "{e}");
+    // Under the folder that holds both, all render.
+    let whole = ["--assets-under", dir.to_str().unwrap()];
+    run(pathwave().arg("animate").arg(&s).arg("-o").arg(dir.join("f{frame}.exr")).args(whole).arg("-q"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
