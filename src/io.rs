@@ -97,6 +97,12 @@ impl Inputs {
         Self::new(desc.inputs.iter().map(|f| f.path.as_path()))
     }
 
+    /// These inputs and the files `more` (those that exist): a frame's besides the scene's.
+    pub fn and(mut self, more: impl IntoIterator<Item = PathBuf>) -> Self {
+        self.0.extend(more.into_iter().filter_map(|f| std::fs::canonicalize(f).ok()));
+        self
+    }
+
     /// Refuses `out` when it is one of the inputs (through any link or `..`); a file that does
     /// not exist yet is none.
     pub fn check(&self, out: &Path) -> Result<(), String> {

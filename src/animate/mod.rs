@@ -5,12 +5,11 @@ pub mod sequence;
 
 use crate::checkpoint;
 use crate::denoiser;
-use crate::engine::world::SceneWorld;
 use crate::integrator::wavefront;
 use crate::io;
 use crate::render::args::{Checkpointing, How, RenderArgs, heat_map};
 use crate::render::image::{RenderId, metadata, render_id, render_image};
-use crate::render::load::{load, log_scene};
+use crate::render::load::{confined, load, log_scene, world};
 use crate::render::stats::{print_stats, stage_shares, write_heat_map};
 use crate::shard;
 use crate::view::Viewers;
@@ -97,8 +96,21 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
              render frame files (e.g. frame_{{frame:04}}.png) rather than a GIF"
         ));
     }
-    // No frame of this task, nor a file beside one, nor the trace may replace a scene's input.
-    let inputs = io::Inputs::of(&desc);
+    // Every frame this task renders reads its grid files (sequences'): they are there and
+    // start as grid files do, checked now rather than when the frame comes.
+    let task = (frames.0..frames.1).filter(|f| (f - frames.0) % shard.1 == shard.0);
+    if desc.grid_sequences().next().is_some() {
+        let written = |f: u32| {
+            !gif && !c.overwrite && sequence::frame_path(output, f).is_ok_and(|p| sequence::frame_written(&p))
+        };
+        let todo: Vec<u32> = task.clone().filter(|&f| !written(f)).collect();
+        confined(path, &args.scene, || todo.iter().try_for_each(|&f| desc.check_frame(f)))??;
+    }
+    // No frame of this task, nor a file beside one, nor the trace may replace a scene's input,
+    // nor a grid file a frame reads (this task's, another's, or one of the scene's frames
+    // outside --frames).
+    let last = frames.1.max(a.frames.get());
+    let inputs = io::Inputs::of(&desc).and((0..last).flat_map(|f| desc.frame_files(f)));
     if let Some(trace) = &args.profile.trace {
         inputs.check(trace)?;
     }
@@ -106,7 +118,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         true => inputs.check(&first)?,
         false => {
             let how = args.how();
-            for f in (frames.0..frames.1).filter(|f| (f - frames.0) % shard.1 == shard.0) {
+            for f in task {
                 let out = sequence::frame_path(output, f)?;
                 for w in how.files(&out).iter().chain(&every.map(|_| checkpoint::path_for(&out))) {
                     inputs.check(w)?;
@@ -120,7 +132,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     if let Some(d) = args.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
-    let mut world = SceneWorld::new(&desc);
+    let mut world = world(&desc, path, &args.scene);
     let quiet = args.log.quiet;
     let look = args.look.look();
     let seq = sequence::Sequence { output, frames, shard, fps, shutter, overwrite: c.overwrite, quiet, look };
@@ -140,7 +152,8 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
         }
         let r = match &info.path {
             Some(out) => {
-                let id = render_id(&desc.inputs, scene, &how, info.open, (info.open, info.close))?;
+                let inputs: Vec<_> = desc.inputs.iter().chain(&info.inputs).cloned().collect();
+                let id = render_id(&inputs, scene, &how, info.open, (info.open, info.close))?;
                 let r = render_image(scene, &id, out, &how, checkpointing.as_ref(), None, &pool, false, nv)?;
                 let metadata = metadata(id.key, scene, &r);
                 (r, metadata)

@@ -5,6 +5,7 @@
 //! overwriting, so a killed run resumes where it stopped. `--shard I/N` renders every N-th frame from the I-th, so that N
 //! processes (on one machine or several sharing the output directory) split a sequence.
 
+use crate::engine::format::files::InputFile;
 use crate::engine::render_scene::RenderScene;
 use crate::engine::world::SceneWorld;
 use crate::io;
@@ -33,15 +34,16 @@ pub fn frame_path(pattern: &str, frame: u32) -> Result<PathBuf, String> {
     Ok(PathBuf::from(format!("{}{number}{}", &pattern[..start], &pattern[end + 1..])))
 }
 
-/// The shutter interval of `frame`: it opens at `frame / fps` and stays open for `shutter`
-/// frame intervals.
+/// The shutter interval of `frame`: it opens at `frame / fps`
+/// ([`frame_start`](crate::engine::format::frames::frame_start), the rule `render --time` finds
+/// a moment's frame by) and stays open for `shutter` frame intervals.
 pub fn frame_time(frame: u32, fps: f32, shutter: f32) -> (f32, f32) {
-    let t = frame as f32 / fps;
+    let t = crate::engine::format::frames::frame_start(frame, fps);
     (t, t + shutter / fps)
 }
 
-/// Sets the world to `frame` and returns the scene to render, or why the frame is not the scene
-/// the file asks for.
+/// Sets the world to `frame` (its time, and the files grid sequences read) and returns the
+/// scene to render, or why the frame is not the scene the file asks for.
 pub fn scene_at(
     world: &mut SceneWorld,
     frame: u32,
@@ -50,7 +52,13 @@ pub fn scene_at(
 ) -> Result<Arc<RenderScene>, String> {
     let (open, close) = frame_time(frame, fps, shutter);
     world.set_time(open, close);
-    world.update_checked().map_err(|e| format!("frame {frame}: {e}"))
+    world.set_frame(frame);
+    let prefix = format!("frame {frame}: ");
+    // Errors of the frame's files name it already.
+    world.update_checked().map_err(|e| match e.starts_with(&prefix) {
+        true => e,
+        false => prefix + &e,
+    })
 }
 
 /// What `run` needs besides the world.
@@ -88,6 +96,9 @@ pub struct FrameInfo {
     pub update: std::time::Duration,
     /// What the update built ([`Builds::since`](crate::engine::world::Builds::since)).
     pub built: String,
+    /// The files the frame's media were read from besides the scene's inputs (grid
+    /// sequences'), with their hashes ([`SceneWorld::frame_inputs`]).
+    pub inputs: Vec<InputFile>,
 }
 
 /// Whether a frame's file is there: a regular file that is not empty (versions before atomic
@@ -149,7 +160,9 @@ pub fn run(
         let update = t0.elapsed();
         let built = world.builds().since(&before);
         let (open, close) = frame_time(frame, seq.fps, seq.shutter);
-        let out = render(&scene, &FrameInfo { frame, open, close, path: path.clone(), update, built })?;
+        let inputs = world.frame_inputs();
+        let info = FrameInfo { frame, open, close, path: path.clone(), update, built, inputs };
+        let out = render(&scene, &info)?;
         match &path {
             Some(p) => {
                 io::write_output(p, &out)?;

@@ -20,7 +20,7 @@ pub mod job;
 use crate::animate::sequence::frame_path;
 use crate::merge::merge;
 use crate::render::args::RenderArgs;
-use crate::render::load::load;
+use crate::render::load::{confined, load};
 use crate::shard;
 use job::{MergeArgs, SlurmArgs};
 use std::path::Path;
@@ -95,9 +95,19 @@ fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Resu
         forwarded.push(format!("--assets-under={dir}"));
     }
     let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
-    // What the tasks and the merge will write must not replace a file the scene reads: found
-    // now, not when the tasks start.
-    let inputs = crate::io::Inputs::of(&desc);
+    // Every frame's grid files (sequences': a file per frame) are there and start as grid
+    // files do, inside the folder the tasks read from; a share of one image's samples reads
+    // frame 0's (render without --time).
+    let frames = match plan.work {
+        job::Work::Frames { first, end } => first..end,
+        job::Work::Samples { .. } => 0..1,
+    };
+    if desc.grid_sequences().next().is_some() {
+        confined(&job.scene, &scene_args, || frames.clone().try_for_each(|f| desc.check_frame(f)))??;
+    }
+    // What the tasks and the merge will write must not replace a file the scene reads (a
+    // frame's grid files included): found now, not when the tasks start.
+    let inputs = crate::io::Inputs::of(&desc).and(frames.flat_map(|f| desc.frame_files(f)));
     match plan.work {
         job::Work::Frames { first, end } => {
             let how = args.how();

@@ -145,7 +145,8 @@ impl RenderArgs {
 pub struct TimeArgs {
     /// Evaluate keyframes at this time (seconds). A scene whose `animation` sets a shutter
     /// opens it here for that fraction of a frame, as `animate`'s frame at this time; else the
-    /// camera's shutter opens and closes relative to it.
+    /// camera's shutter opens and closes relative to it. Grid sequences read the files of
+    /// `animate`'s frame at this time (frame 0 at time 0).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
 }
@@ -158,6 +159,22 @@ pub fn shutter_at(desc: &SceneDesc, time: f32) -> (f32, f32) {
     match a.shutter.0 > 0.0 {
         true => (time, time + a.shutter.0 / a.fps.0),
         false => (time + desc.camera.shutter.0, time + desc.camera.shutter.1),
+    }
+}
+
+/// The frame whose files (grid sequences') `render --time` and `watch` read at `time`: the one
+/// `animate` renders at `time` at the scene's `animation.fps` (24 by default), the last whose
+/// shutter opened at or before it; frame 0 at the default time 0, so a still reads frame 0. A
+/// scene without grid sequences reads no frame's files: 0.
+pub fn frame_at(desc: &SceneDesc, time: f32) -> Result<u32, String> {
+    match desc.grid_sequences().next() {
+        None => Ok(0),
+        Some((_, s)) => crate::engine::format::frames::frame_at(time, desc.animation.fps.0).map_err(|e| {
+            format!(
+                "--time {time}: {e}, and the grid sequence \"{}\" has a file per frame from frame 0",
+                s.written
+            )
+        }),
     }
 }
 

@@ -24,8 +24,8 @@ pub struct RenderId {
     pub settings: String,
 }
 
-/// The [`RenderId`] of a render of the scene loaded from `inputs` at `time`, its shutter open
-/// over `shutter` (seconds).
+/// The [`RenderId`] of a render of the scene made from `inputs` (the files its load read, then
+/// those its frame read: grid sequences') at `time`, its shutter open over `shutter` (seconds).
 pub fn render_id(
     inputs: &[InputFile],
     scene: &RenderScene,

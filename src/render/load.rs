@@ -4,6 +4,7 @@
 use super::args::SceneArgs;
 use crate::engine::render_scene::PixelWindow;
 use crate::engine::scene;
+use crate::engine::world::SceneWorld;
 use crate::limits::{self, MAX_DEPTH, MAX_SPP};
 use std::path::Path;
 
@@ -83,6 +84,24 @@ pub fn load(path: &Path, o: &SceneArgs) -> Result<scene::SceneDesc, String> {
         ));
     }
     Ok(desc)
+}
+
+/// Runs `f` with the files it reads confined as the scene's load was (`--assets-under`).
+pub fn confined<R>(path: &Path, o: &SceneArgs, f: impl FnOnce() -> R) -> Result<R, String> {
+    match &o.assets_under {
+        Some(root) => crate::engine::format::files::confined(root, path, f),
+        None => Ok(f()),
+    }
+}
+
+/// The world of the scene loaded from `path`, reading the files of frames (grid sequences')
+/// confined as its load was (`--assets-under`).
+pub fn world(desc: &scene::SceneDesc, path: &Path, o: &SceneArgs) -> SceneWorld {
+    let mut world = SceneWorld::new(desc);
+    if let Some(root) = &o.assets_under {
+        world.confine(root, path);
+    }
+    world
 }
 
 /// Logs what the integrators will see of a scene (info).

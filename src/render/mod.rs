@@ -12,7 +12,6 @@ pub mod stats;
 use crate::checkpoint;
 use crate::denoiser;
 use crate::engine::render_scene::PixelWindow;
-use crate::engine::world::SceneWorld;
 use crate::io;
 use crate::shard;
 use crate::view::{ViewArgs, Viewers};
@@ -69,19 +68,23 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     io::check_writes(&writes, &io::Inputs::new([path.as_path()]))?;
     let time = c.time.checked()?;
     let desc = load(path, &c.args.scene)?;
-    io::check_writes(&writes, &io::Inputs::of(&desc))?;
+    // The frame's grid files are inputs too.
+    let frame = args::frame_at(&desc, time)?;
+    io::check_writes(&writes, &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
     let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     let pool = crate::pool(how.threads)?;
     if let Some(d) = how.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
-    let mut world = SceneWorld::new(&desc);
+    let mut world = load::world(&desc, path, &c.args.scene);
     let shutter = args::shutter_at(&desc, time);
     world.set_time(shutter.0, shutter.1);
+    world.set_frame(frame);
     let scene = world.update_checked()?;
     log_scene(&scene);
     let s = scene.settings;
-    let id = render_id(&desc.inputs, &scene, &how, time, shutter)?;
+    let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
+    let id = render_id(&inputs, &scene, &how, time, shutter)?;
     let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s, how.look);
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;

@@ -147,13 +147,20 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
     loop {
         let start = Instant::now();
         let loaded = load(&args.scene, &args.settings);
+        // The files of the frame at --time (grid sequences') are watched too.
+        let frame_files = |desc: &crate::engine::scene::SceneDesc| {
+            let frame = crate::render::args::frame_at(desc, time).unwrap_or(0);
+            desc.frame_files(frame)
+        };
         if let Ok(desc) = &loaded {
-            events.files = desc.inputs.iter().map(|f| normalize(&f.path)).collect();
+            let frame = frame_files(desc).into_iter().filter_map(|f| std::path::absolute(f).ok());
+            events.files =
+                desc.inputs.iter().map(|f| normalize(&f.path)).chain(frame.map(|f| normalize(&f))).collect();
         }
         // `-o` must not name a file the scene reads (it would reload for ever): an error in the
         // scene like any other, until either changes.
         let loaded = loaded.and_then(|desc| match &args.output {
-            Some(out) => io::Inputs::of(&desc).check(out).map(|()| desc),
+            Some(out) => io::Inputs::of(&desc).and(frame_files(&desc)).check(out).map(|()| desc),
             None => Ok(desc),
         });
         // Folders, not files: an editor that saves by renaming a new file over the old one
@@ -180,13 +187,17 @@ pub fn run(mut args: WatchArgs) -> Result<(), String> {
                         let r = w.reload(&desc);
                         (w, Some((r, before)))
                     }
-                    None => (SceneWorld::new(&desc), None),
+                    None => (crate::render::load::world(&desc, &args.scene, &args.settings), None),
                 };
                 let w = world.insert(w);
                 // As `render --time` (the shutter may have changed).
                 let shutter = crate::render::args::shutter_at(&desc, time);
                 w.set_time(shutter.0, shutter.1);
-                match w.update_checked() {
+                let frame = crate::render::args::frame_at(&desc, time);
+                if let Ok(frame) = frame {
+                    w.set_frame(frame);
+                }
+                match frame.and_then(|_| w.update_checked()) {
                     Err(e) => show_error(&mut viewers, &e),
                     Ok(scene) => {
                         let s = scene.settings;

@@ -16,6 +16,33 @@ pub const MAX_IMAGE_SIDE: u32 = 32768;
 
 /// The bytes of the regular file `path`, refused beyond `max` bytes; `what` names it in errors.
 pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String> {
+    let (path_read, len) = regular_file(path, max, what)?;
+    let fail = |e: std::io::Error| format!("cannot read the {what} {}: {e}", path.display());
+    let mut bytes = Vec::with_capacity(len as usize);
+    // A file that grows while it is read stops at the bound too.
+    std::fs::File::open(path_read).and_then(|f| f.take(max + 1).read_to_end(&mut bytes)).map_err(fail)?;
+    if bytes.len() as u64 > max {
+        return Err(format!("the {what} {} has more than the {max} bytes allowed", path.display()));
+    }
+    record(path, &bytes);
+    Ok(bytes)
+}
+
+/// The first `n` bytes of the regular file `path` (all of a shorter one) and its length, with
+/// [`read_bounded`]'s checks (its bound `max`, the folder of [`confined`]) but not recorded as
+/// an input: what a check of a file before it is read looks at.
+pub fn read_head(path: &Path, n: usize, max: u64, what: &str) -> Result<(Vec<u8>, u64), String> {
+    let (path_read, len) = regular_file(path, max, what)?;
+    let mut head = Vec::with_capacity(n);
+    std::fs::File::open(path_read)
+        .and_then(|f| f.take(n as u64).read_to_end(&mut head))
+        .map_err(|e| format!("cannot read the {what} {}: {e}", path.display()))?;
+    Ok((head, len))
+}
+
+/// The file to read for `path` (as resolved inside [`confined`]) and its length: a regular
+/// file of at most `max` bytes.
+fn regular_file(path: &Path, max: u64, what: &str) -> Result<(PathBuf, u64), String> {
     let fail = |e: std::io::Error| match e.kind() {
         // Where it was looked for: a path relative to the scene's folder, or to one the
         // scene file did not say.
@@ -39,8 +66,8 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
             }
         }
     })?;
-    let path_read = real.as_deref().unwrap_or(path);
-    let meta = std::fs::metadata(path_read).map_err(fail)?;
+    let path_read = real.unwrap_or_else(|| path.to_owned());
+    let meta = std::fs::metadata(&path_read).map_err(fail)?;
     if !meta.is_file() {
         return Err(format!("the {what} {} is not a regular file", path.display()));
     }
@@ -51,14 +78,7 @@ pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>, String
             meta.len()
         ));
     }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    // A file that grows while it is read stops at the bound too.
-    std::fs::File::open(path_read).and_then(|f| f.take(max + 1).read_to_end(&mut bytes)).map_err(fail)?;
-    if bytes.len() as u64 > max {
-        return Err(format!("the {what} {} has more than the {max} bytes allowed", path.display()));
-    }
-    record(path, &bytes);
-    Ok(bytes)
+    Ok((path_read, meta.len()))
 }
 
 /// Why `path`, which is not there, is not: no such file in its (absolute) folder, or no such

@@ -42,6 +42,9 @@ use std::path::{Path, PathBuf};
 /// The first 8 bytes of every OpenVDB file (`OPENVDB_MAGIC`, an `int64`).
 pub const MAGIC: [u8; 8] = [0x20, 0x42, 0x44, 0x56, 0, 0, 0, 0];
 
+/// The bytes of the magic and the file format version.
+pub const HEADER_BYTES: usize = 12;
+
 /// The oldest file format version read (`OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION`).
 pub const OLDEST_VERSION: u32 = 222;
 
@@ -116,21 +119,7 @@ impl VdbFile {
     /// Reads the header and grid list of the file `bytes` read from `path` (named in errors).
     pub fn parse(bytes: Vec<u8>, path: &Path) -> Result<Self, String> {
         let mut c = Cursor { bytes: &bytes, at: 0, path, mark: 0, flags: 0 };
-        if !is_vdb(&bytes) {
-            return Err(c.fail("not an OpenVDB file (its first 8 bytes are not OpenVDB's magic 0x56444220)"));
-        }
-        c.at = 8;
-        let version = c.u32("the file format version")?;
-        if version < OLDEST_VERSION {
-            return Err(c.fail(&format!(
-                "file format version {version}: pathwave reads versions {OLDEST_VERSION} to {NEWEST_VERSION}"
-            )));
-        }
-        if version > NEWEST_VERSION {
-            return Err(c.fail(&format!(
-                "file format version {version}: newer than {NEWEST_VERSION}, the latest pathwave reads"
-            )));
-        }
+        c.header()?;
         c.take(8, "the library version")?;
         let offsets = c.u8("the grid offsets flag")?;
         if offsets != 1 {
@@ -170,6 +159,13 @@ impl VdbFile {
         }
         let path = path.to_path_buf();
         Ok(VdbFile { bytes, path, grids })
+    }
+
+    /// Checks the start of a file, its first [`HEADER_BYTES`] bytes (or all of a shorter
+    /// file): OpenVDB's magic and a file format version pathwave reads. What a sequence's
+    /// frames are checked for before they are rendered.
+    pub fn check_header(head: &[u8], path: &Path) -> Result<(), String> {
+        Cursor { bytes: head, at: 0, path, mark: 0, flags: 0 }.header()
     }
 
     /// The names of its grids and their tree types, as an error lists them.
@@ -231,6 +227,28 @@ struct Cursor<'a> {
 
 impl<'a> Cursor<'a> {
     /// An error at the start of the last field read.
+    /// Reads and checks the magic and the file format version.
+    fn header(&mut self) -> Result<(), String> {
+        if !is_vdb(self.bytes) {
+            return Err(
+                self.fail("not an OpenVDB file (its first 8 bytes are not OpenVDB's magic 0x56444220)")
+            );
+        }
+        self.at = 8;
+        let version = self.u32("the file format version")?;
+        if version < OLDEST_VERSION {
+            return Err(self.fail(&format!(
+                "file format version {version}: pathwave reads versions {OLDEST_VERSION} to {NEWEST_VERSION}"
+            )));
+        }
+        if version > NEWEST_VERSION {
+            return Err(self.fail(&format!(
+                "file format version {version}: newer than {NEWEST_VERSION}, the latest pathwave reads"
+            )));
+        }
+        Ok(())
+    }
+
     fn fail(&self, why: &str) -> String {
         format!("the OpenVDB file {}: at byte {}: {why}", self.path.display(), self.mark)
     }

@@ -5,6 +5,8 @@
 use super::serialized::SerializedFile;
 use crate::accel::mesh::{MeshAttribute, MeshData};
 use crate::format::context;
+use crate::format::files::InputFile;
+use crate::format::frames::FramePattern;
 use crate::format::vdb::{VdbFile, is_vdb};
 use crate::media::grid::VoxelGrid;
 pub use crate::texture::image::ImageFile;
@@ -120,33 +122,112 @@ impl GridFile {
     }
 }
 
-impl<'de> Deserialize<'de> for GridFile {
+/// A grid file as a medium's `file` names it: one file, read when the scene is loaded, or a
+/// frame-numbered sequence (`smoke_{frame:04}.vdb`: [`FramePattern`]), whose files are read
+/// frame by frame as the frames are rendered.
+#[derive(Debug, Clone)]
+pub enum GridPath {
+    /// One file for every frame.
+    File(GridFile),
+    /// A file per frame.
+    Frames(GridFrames),
+}
+
+/// A grid file per frame: frame `n` reads the file its pattern names for `n`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridFrames {
+    /// The pattern as written.
+    pub written: String,
+    /// The pattern.
+    pub pattern: FramePattern,
+    /// The folder the names are relative to (the scene file's).
+    pub dir: std::path::PathBuf,
+}
+
+impl GridFrames {
+    /// The file frame `frame` reads.
+    pub fn path(&self, frame: u32) -> std::path::PathBuf {
+        self.dir.join(self.pattern.at(frame))
+    }
+
+    /// Reads frame `frame`'s file, and the hash of its bytes (an input of the frame's render).
+    pub fn read(&self, frame: u32) -> Result<(GridFile, InputFile), String> {
+        let full = self.path(frame);
+        let fail = |e: String| format!("the grid sequence \"{}\": {e}", self.written);
+        let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "grid").map_err(fail)?;
+        let hash = xxhash_rust::xxh3::xxh3_64(&bytes);
+        let source = grid_source(bytes, &full).map_err(fail)?;
+        let path = std::path::absolute(&full).unwrap_or_else(|_| full.clone());
+        Ok((GridFile { path: self.pattern.at(frame).into(), source }, InputFile { path, hash }))
+    }
+
+    /// Checks that frame `frame`'s file is there and starts as a grid file does (a `.vol`'s
+    /// header and length, an OpenVDB file's magic and version), without reading the rest: what
+    /// a command checks of every frame before it renders the first.
+    pub fn check(&self, frame: u32) -> Result<(), String> {
+        let full = self.path(frame);
+        let fail = |e: String| format!("the grid sequence \"{}\": {e}", self.written);
+        let max = super::files::MAX_ASSET_BYTES;
+        let head = crate::format::vol::HEADER_BYTES.max(crate::format::vdb::HEADER_BYTES);
+        let (bytes, len) = super::files::read_head(&full, head, max, "grid").map_err(fail)?;
+        if is_vdb(&bytes) || is_vdb_name(&full) {
+            return VdbFile::check_header(&bytes, &full).map_err(fail);
+        }
+        let h = crate::format::vol::VolHeader::parse(&bytes, &full, "grid").map_err(fail)?;
+        let want = (crate::format::vol::HEADER_BYTES + 4 * h.count()) as u64;
+        match len == want {
+            true => Ok(()),
+            false => Err(fail(format!(
+                "the grid {} has {len} bytes, where its header asks for {want}",
+                full.display()
+            ))),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for GridPath {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let path = std::path::PathBuf::from(String::deserialize(d)?);
-        let Some(dir) = context::scene_dir() else {
-            return Ok(GridFile { path, source: GridSource::Unread });
+        let written = String::deserialize(d)?;
+        let pattern = FramePattern::parse(&written).map_err(|e| D::Error::custom(format!("`file`: {e}")))?;
+        let dir = context::scene_dir();
+        if let Some(pattern) = pattern {
+            return Ok(GridPath::Frames(GridFrames { written, pattern, dir: dir.unwrap_or_default() }));
+        }
+        let path = std::path::PathBuf::from(written);
+        let Some(dir) = dir else {
+            return Ok(GridPath::File(GridFile { path, source: GridSource::Unread }));
         };
         let full = dir.join(&path);
         if let Some(grid) = context::read_before::<VoxelGrid>(&full) {
-            return Ok(GridFile { path, source: GridSource::Vol(grid) });
+            return Ok(GridPath::File(GridFile { path, source: GridSource::Vol(grid) }));
         }
         if let Some(file) = context::read_before::<VdbFile>(&full) {
-            return Ok(GridFile { path, source: GridSource::Vdb(file) });
+            return Ok(GridPath::File(GridFile { path, source: GridSource::Vdb(file) }));
         }
         let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "grid")
             .map_err(D::Error::custom)?;
-        let vdb = full.extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
-        let source = if is_vdb(&bytes) || vdb {
-            let file = Arc::new(VdbFile::parse(bytes, &full).map_err(D::Error::custom)?);
-            context::keep(full, file.clone());
-            GridSource::Vdb(file)
-        } else {
-            let grid = Arc::new(VoxelGrid::parse_vol(&bytes, &full).map_err(D::Error::custom)?);
-            context::keep(full, grid.clone());
-            GridSource::Vol(grid)
-        };
-        Ok(GridFile { path, source })
+        let source = grid_source(bytes, &full).map_err(D::Error::custom)?;
+        match &source {
+            GridSource::Vdb(file) => context::keep(full, file.clone()),
+            GridSource::Vol(grid) => context::keep(full, grid.clone()),
+            GridSource::Unread => {}
+        }
+        Ok(GridPath::File(GridFile { path, source }))
     }
+}
+
+/// Whether `path` is named as an OpenVDB file (`.vdb`), which a damaged one is read as.
+fn is_vdb_name(path: &std::path::Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"))
+}
+
+/// What the grid file `bytes` read from `path` holds: an OpenVDB file (told by its first
+/// bytes, or its name) or a `.vol`.
+fn grid_source(bytes: Vec<u8>, path: &std::path::Path) -> Result<GridSource, String> {
+    Ok(match is_vdb(&bytes) || is_vdb_name(path) {
+        true => GridSource::Vdb(Arc::new(VdbFile::parse(bytes, path)?)),
+        false => GridSource::Vol(Arc::new(VoxelGrid::parse_vol(&bytes, path)?)),
+    })
 }
 
 /// The mesh formats `Mesh(file: ..)` reads.

@@ -7,7 +7,7 @@
 use super::camera::{CameraDesc, RenderDesc};
 use super::light::{BackgroundDesc, LightDesc};
 use super::material::{LightRef, NamedMaterials};
-use super::object::ObjectDesc;
+use super::object::{Body, ObjectDesc};
 use super::texture::NamedTextures;
 use crate::format::{Positive, UnitInterval, context};
 use serde::{Deserialize, Deserializer, de::Error};
@@ -50,6 +50,35 @@ pub struct SceneDesc {
     /// identify the render in its checkpoints.
     #[serde(skip)]
     pub inputs: Vec<crate::format::files::InputFile>,
+}
+
+impl SceneDesc {
+    /// The grid sequences of its media (a file per frame: see [`super::GridDesc`]), with the
+    /// index of their object.
+    pub fn grid_sequences(&self) -> impl Iterator<Item = (usize, &super::GridFrames)> {
+        self.objects.iter().enumerate().flat_map(|(i, o)| {
+            let sequences = match &o.body {
+                Body::Volume(m) => Some(m.sequences().map(move |s| (i, s))),
+                Body::Surface(_) => None,
+            };
+            sequences.into_iter().flatten()
+        })
+    }
+
+    /// The files that frame `frame` reads besides the scene's [`inputs`](Self::inputs): those
+    /// its grid sequences name for it.
+    pub fn frame_files(&self, frame: u32) -> Vec<std::path::PathBuf> {
+        self.grid_sequences().map(|(_, s)| s.path(frame)).collect()
+    }
+
+    /// Checks that every file frame `frame` reads is there and starts as a grid file does
+    /// (without reading it all), naming the frame, the object and the path looked for.
+    pub fn check_frame(&self, frame: u32) -> Result<(), String> {
+        for (i, s) in self.grid_sequences() {
+            s.check(frame).map_err(|e| format!("frame {frame}: objects[{i}]: {e}"))?;
+        }
+        Ok(())
+    }
 }
 
 /// `animation: (frames: 48, fps: 24, shutter: 0.5, camera: (..), emit: [("light", ..)])`.

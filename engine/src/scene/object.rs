@@ -1,9 +1,10 @@
 //! `objects: [..]`: a shape with a material (a surface) or a medium (a volume), its transform,
 //! motion and keyframes; checked as placed (`placement::primitives`) at load.
 
-use super::assets::{MeshFile, MeshPath, MeshSource, open_edge};
+use super::assets::{GridFrames, GridPath, MeshFile, MeshPath, MeshSource, open_edge};
 use super::material::MaterialRef;
 use super::transform::{TransformOp, compose};
+use crate::format::files::InputFile;
 use crate::format::registry::{fields, registry};
 use crate::format::{Albedo, Color, Radiance, V3, context};
 use crate::media::grid::VoxelGrid;
@@ -127,25 +128,44 @@ pub const MAX_GRID_EXTINCTION: f32 = 1e7;
 /// by default "density") is the dense box over its active voxels, each a cell centred on its
 /// index as OpenVDB samples them, placed by the grid's own transform: the grid's world space
 /// is the medium's space before `transform`, which places it in the object.
+///
+/// A `file` with `{frame}` or `{frame:0N}` in it (`smoke_{frame:04}.vdb`, see
+/// [`FramePattern`](crate::format::frames::FramePattern)) is a sequence, a file per frame, such
+/// as a simulation writes: frame `n` of `pathwave animate` reads the file named for `n`, and
+/// `render --time t` the file of the frame that `animate` renders at `t` (frame 0 without
+/// `--time`). Within a frame, motion blur included, the grid is that frame's file: there is no
+/// interpolation between files. A frame's file is read when the frame is rendered, and only if
+/// it is another file than the previous frame's.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GridDesc {
-    /// The file as written.
+    /// The file as written (a sequence's pattern).
     pub file: std::path::PathBuf,
     /// The grid's name in an OpenVDB file.
     pub name: Option<String>,
     /// The values.
-    pub grid: Arc<VoxelGrid>,
-    /// Transforms applied in order, first to last: for an OpenVDB grid, where its own
-    /// transform puts the unit cube, then those written.
+    pub grid: GridValues,
+    /// Transforms applied in order, first to last: for an OpenVDB grid read, where its own
+    /// transform puts the unit cube, then those written (a sequence's: those written only,
+    /// each frame's file putting its cube first when it is read).
     pub transform: Vec<TransformOp>,
+}
+
+/// A grid's values: read with the scene, or a file per frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GridValues {
+    /// Read when the scene was loaded.
+    Read(Arc<VoxelGrid>),
+    /// A file per frame, read by [`GridDesc::at_frame`].
+    Frames(Box<GridFrames>),
 }
 
 /// A grid as written, before its file's grid is picked.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename = "Grid")]
 struct GridFields {
-    /// A Mitsuba `.vol` file of 1 or 3 channels or an OpenVDB file, relative to the scene file.
-    file: super::assets::GridFile,
+    /// A Mitsuba `.vol` file of 1 or 3 channels or an OpenVDB file, relative to the scene file,
+    /// or a pattern of such files numbered by frame.
+    file: GridPath,
     /// The grid of an OpenVDB file (default "density").
     #[serde(default)]
     name: Option<String>,
@@ -157,30 +177,71 @@ struct GridFields {
 impl<'de> Deserialize<'de> for GridDesc {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let f = GridFields::deserialize(d)?;
-        let (grid, unit) = f.file.pick(f.name.as_deref()).map_err(D::Error::custom)?;
-        let transform = unit.map(TransformOp).into_iter().chain(f.transform).collect();
-        Ok(GridDesc { file: f.file.path, name: f.name, grid, transform })
-    }
-}
-
-impl GridDesc {
-    /// The grid, placed in the object.
-    pub fn placed(&self) -> crate::media::PlacedGrid {
-        crate::media::PlacedGrid {
-            grid: self.grid.clone(),
-            grid_from_object: compose(&self.transform).inverse(),
+        match f.file {
+            GridPath::File(file) => {
+                let (grid, unit) = file.pick(f.name.as_deref()).map_err(D::Error::custom)?;
+                let transform = unit.map(TransformOp).into_iter().chain(f.transform).collect();
+                Ok(GridDesc { file: file.path, name: f.name, grid: GridValues::Read(grid), transform })
+            }
+            GridPath::Frames(frames) => Ok(GridDesc {
+                file: frames.written.clone().into(),
+                name: f.name,
+                grid: GridValues::Frames(Box::new(frames)),
+                transform: f.transform,
+            }),
         }
     }
 }
 
+impl GridDesc {
+    /// The grid, placed in the object: `None` for a sequence (see [`Self::at_frame`]).
+    pub fn placed(&self) -> Option<crate::media::PlacedGrid> {
+        match &self.grid {
+            GridValues::Read(grid) => Some(crate::media::PlacedGrid {
+                grid: grid.clone(),
+                grid_from_object: compose(&self.transform).inverse(),
+            }),
+            GridValues::Frames(_) => None,
+        }
+    }
+
+    /// The grid of frame `frame`: a sequence's file for the frame, read (with the hash of its
+    /// bytes), as a grid read at load; a grid read at load, as it is.
+    pub fn at_frame(&self, frame: u32) -> Result<(GridDesc, Option<InputFile>), String> {
+        let GridValues::Frames(frames) = &self.grid else { return Ok((self.clone(), None)) };
+        let (file, input) = frames.read(frame)?;
+        let (grid, unit) = file
+            .pick(self.name.as_deref())
+            .map_err(|e| format!("the grid sequence \"{}\": {e}", frames.written))?;
+        let transform = unit.map(TransformOp).into_iter().chain(self.transform.iter().cloned()).collect();
+        let read =
+            GridDesc { file: file.path, name: self.name.clone(), grid: GridValues::Read(grid), transform };
+        Ok((read, Some(input)))
+    }
+}
+
 impl MediumDesc {
-    /// The medium it describes.
-    pub fn medium(&self) -> crate::media::Medium {
+    /// The medium it describes: `None` where a grid is a sequence, whose medium is that of a
+    /// frame ([`Self::at_frame`]).
+    pub fn medium(&self) -> Option<crate::media::Medium> {
+        let placed = |g: &Option<GridDesc>| match g {
+            None => Some(None),
+            Some(g) => g.placed().map(Some),
+        };
+        Some(self.with_grids(placed(&self.grid)?, placed(&self.albedo_grid)?))
+    }
+
+    /// The medium with these grids.
+    fn with_grids(
+        &self,
+        density_grid: Option<crate::media::PlacedGrid>,
+        albedo_grid: Option<crate::media::PlacedGrid>,
+    ) -> crate::media::Medium {
         crate::media::Medium {
             sigma_t: self.density.0,
             albedo: self.albedo.0,
-            density_grid: self.grid.as_ref().map(GridDesc::placed),
-            albedo_grid: self.albedo_grid.as_ref().map(GridDesc::placed),
+            density_grid,
+            albedo_grid,
             g: match self.phase {
                 PhaseDesc::Isotropic => 0.0,
                 PhaseDesc::HenyeyGreenstein { g } => g.0,
@@ -188,23 +249,52 @@ impl MediumDesc {
         }
     }
 
-    /// Refuses a grid too dense to track through and an albedo grid with values above 1.
+    /// Its grids that are sequences.
+    pub fn sequences(&self) -> impl Iterator<Item = &GridFrames> {
+        [&self.grid, &self.albedo_grid].into_iter().flatten().filter_map(|g| match &g.grid {
+            GridValues::Frames(f) => Some(&**f),
+            GridValues::Read(_) => None,
+        })
+    }
+
+    /// The medium of frame `frame`, its sequences' files for the frame read and checked as
+    /// grids read at load are, and the files read, with their hashes.
+    pub fn at_frame(&self, frame: u32) -> Result<(crate::media::Medium, Vec<InputFile>), String> {
+        let mut read = Vec::new();
+        let mut at = |g: &Option<GridDesc>| -> Result<Option<GridDesc>, String> {
+            let Some(g) = g else { return Ok(None) };
+            let (g, input) = g.at_frame(frame)?;
+            read.extend(input);
+            Ok(Some(g))
+        };
+        let m = MediumDesc { grid: at(&self.grid)?, albedo_grid: at(&self.albedo_grid)?, ..self.clone() };
+        m.check()?;
+        let placed = |g: &Option<GridDesc>| g.as_ref().and_then(GridDesc::placed);
+        Ok((m.with_grids(placed(&m.grid), placed(&m.albedo_grid)), read))
+    }
+
+    /// Refuses a grid too dense to track through and an albedo grid with values above 1 (a
+    /// sequence's values when a frame is read).
     fn check(&self) -> Result<(), String> {
-        if let Some(g) = &self.grid {
-            let peak = self.density.0.max_element() * g.grid.max();
+        let values = |g: &Option<GridDesc>| match g {
+            Some(GridDesc { file, grid: GridValues::Read(v), .. }) => Some((file.clone(), v.clone())),
+            _ => None,
+        };
+        if let Some((file, grid)) = values(&self.grid) {
+            let peak = self.density.0.max_element() * grid.max();
             if !(peak <= MAX_GRID_EXTINCTION) {
                 return Err(format!(
                     "`density` times the grid {}'s largest value is {peak}: at most {MAX_GRID_EXTINCTION} (a medium that dense is opaque, and tracking through it would take that many steps per unit length)",
-                    g.file.display()
+                    file.display()
                 ));
             }
         }
-        if let Some(g) = &self.albedo_grid {
-            let max = g.grid.max();
+        if let Some((file, grid)) = values(&self.albedo_grid) {
+            let max = grid.max();
             if max > 1.0 {
                 return Err(format!(
                     "the albedo grid {} holds {max}: an albedo grid's values lie in [0, 1]",
-                    g.file.display()
+                    file.display()
                 ));
             }
         }

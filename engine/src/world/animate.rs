@@ -1,7 +1,9 @@
-//! The animation systems: keyframed objects, camera and emission set for the frame's shutter.
+//! The animation systems: keyframed objects, camera and emission set for the frame's shutter,
+//! media read from the frame's files.
 
 use super::components::{
-    Animated, CameraKeys, CameraParams, EmitKeys, FrameErrors, FrameTime, Materials, Motion, Transform,
+    Animated, CameraKeys, CameraParams, EmitKeys, Filling, FrameErrors, FrameNumber, FrameTime, GridInputs,
+    GridReads, GridSequence, Materials, Motion, ObjectIndex, Transform,
 };
 use crate::scene::{CameraDesc, CameraView};
 use bevy_ecs::prelude::*;
@@ -116,5 +118,54 @@ pub fn animate_emission(time: Res<FrameTime>, keys: Res<EmitKeys>, mut materials
     }
     if changed {
         materials.set_changed();
+    }
+}
+
+/// Reads the frame's files of media whose grids are sequences. A medium's [`Filling`] is
+/// written only when the files it is to read for the frame are not those it was read from, so
+/// that a file named by frame after frame (or a frame rendered again) is not read again, nor
+/// the volumes rebuilt. A frame whose files cannot be read reports why (the frame, the object,
+/// the path looked for) and leaves the medium out until a frame's files are read.
+#[expect(clippy::type_complexity, reason = "ECS queries name their components and filters in their types")]
+pub fn read_grid_frames(
+    frame: Res<FrameNumber>,
+    mut media: Query<(Entity, &GridSequence, &mut GridInputs, Option<&mut Filling>, Option<&ObjectIndex>)>,
+    mut reads: ResMut<GridReads>,
+    mut errors: ResMut<FrameErrors>,
+    mut commands: Commands,
+) {
+    let n = frame.0;
+    for (e, sequence, mut held, filling, index) in &mut media {
+        let paths: Vec<_> = sequence.0.sequences().map(|s| std::path::absolute(s.path(n))).collect();
+        let holds = held.0.len() == paths.len()
+            && held.0.iter().zip(&paths).all(|(f, p)| p.as_ref().is_ok_and(|p| *p == f.path));
+        if holds && filling.is_some() {
+            continue;
+        }
+        let _span = tracing::info_span!("read_grid_frames", frame = n).entered();
+        match sequence.0.at_frame(n) {
+            Ok((medium, files)) => {
+                reads.0 += files.len() as u64;
+                tracing::debug!(frame = n, files = ?files.iter().map(|f| &f.path).collect::<Vec<_>>(), "grid files read");
+                held.0 = files;
+                match filling {
+                    // Files read again with the same values (after a reload) rebuild nothing.
+                    Some(mut f) => {
+                        f.set_if_neq(Filling(medium));
+                    }
+                    None => {
+                        commands.entity(e).insert(Filling(medium));
+                    }
+                }
+            }
+            Err(why) => {
+                let object = index.map_or_else(String::new, |i| format!("objects[{}]: ", i.0));
+                errors.0.push(format!("frame {n}: {object}{why}"));
+                held.0.clear();
+                if filling.is_some() {
+                    commands.entity(e).remove::<Filling>();
+                }
+            }
+        }
     }
 }

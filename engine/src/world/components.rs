@@ -29,6 +29,25 @@ pub struct Shape(pub Form);
 #[derive(Component, Clone, Debug, PartialEq)]
 pub struct Filling(pub Medium);
 
+/// A medium whose grids are sequences (a file per frame): the system
+/// [`read_grid_frames`](super::read_grid_frames) reads the files of the [`FrameNumber`] and
+/// sets the entity's [`Filling`] from them.
+#[derive(Component, Clone, Debug, PartialEq)]
+pub struct GridSequence(pub crate::scene::MediumDesc);
+
+/// The files the [`Filling`] of a [`GridSequence`] entity was read from, with their hashes
+/// (empty until a frame's are read).
+#[derive(Component, Clone, Debug, Default, PartialEq)]
+pub struct GridInputs(pub Vec<crate::format::files::InputFile>);
+
+/// The frame whose files [`GridSequence`]s read (0 for a still).
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrameNumber(pub u32);
+
+/// How many grid files the [`GridSequence`]s have read.
+#[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GridReads(pub u64);
+
 /// Linear motion: at time `t` the entity lies translated by `velocity * t`.
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub struct Motion {

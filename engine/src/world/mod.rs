@@ -3,7 +3,8 @@
 //! [`RenderScene`].
 //!
 //! Data flows one way through the submodules: `spawn` turns a scene description into entities
-//! and resources (`components`); each frame the schedule runs the animation systems (`animate`),
+//! and resources (`components`); each frame the schedule runs the animation systems (`animate`:
+//! keyframes, and the grid files of the frame),
 //! the rebuilds (`rebuild`) and the extraction (`extract`), in that order; `reload` writes an
 //! edited description into a live world.
 
@@ -14,12 +15,13 @@ mod rebuild;
 mod reload;
 mod spawn;
 
-pub use animate::{animate_camera, animate_emission, animate_objects};
+pub use animate::{animate_camera, animate_emission, animate_objects, read_grid_frames};
 pub use components::*;
 pub use extract::extract_render_scene;
 pub use rebuild::{rebuild_geometry, rebuild_lights, rebuild_media, update_instances};
 pub use reload::{Builds, Reload};
 
+use crate::format::files;
 use crate::render_scene::RenderScene;
 use crate::scene::SceneDesc;
 use bevy_ecs::prelude::*;
@@ -30,6 +32,9 @@ pub struct SceneWorld {
     /// The ECS world (entities and resources); edit it between calls to [`Self::update`].
     pub world: World,
     schedule: Schedule,
+    /// The folder the files an update reads must lie in, and the file exempt (see
+    /// [`Self::confine`]).
+    confined: Option<(std::path::PathBuf, std::path::PathBuf)>,
 }
 
 impl SceneWorld {
@@ -40,14 +45,40 @@ impl SceneWorld {
         let mut schedule = Schedule::new(Update);
         schedule.add_systems(
             (
-                (animate_objects, animate_camera, animate_emission),
+                (animate_objects, animate_camera, animate_emission, read_grid_frames),
                 (rebuild_geometry, update_instances, rebuild_media),
                 rebuild_lights,
                 extract_render_scene,
             )
                 .chain(),
         );
-        Self { world, schedule }
+        Self { world, schedule, confined: None }
+    }
+
+    /// Makes every file an update reads (a grid sequence's frame) lie in the folder `root`,
+    /// but `exempt`, as the scene's load did ([`files::confined`], `--assets-under`).
+    pub fn confine(&mut self, root: &std::path::Path, exempt: &std::path::Path) {
+        self.confined = Some((root.to_owned(), exempt.to_owned()));
+    }
+
+    /// Sets the frame whose files grid sequences read (see [`crate::scene::GridDesc`]) for the
+    /// next [`Self::update`]; a world starts at frame 0.
+    pub fn set_frame(&mut self, frame: u32) {
+        if self.world.resource::<FrameNumber>().0 != frame {
+            self.world.resource_mut::<FrameNumber>().0 = frame;
+        }
+    }
+
+    /// The files the current media were read from besides the scene's inputs (grid
+    /// sequences' frames), with their hashes, sorted by path: with the scene's
+    /// [`inputs`](crate::scene::SceneDesc::inputs), what the last [`Self::update`]'s scene was
+    /// made from.
+    pub fn frame_inputs(&mut self) -> Vec<files::InputFile> {
+        let mut list: Vec<files::InputFile> =
+            self.world.query::<&GridInputs>().iter(&self.world).flat_map(|g| g.0.iter().cloned()).collect();
+        list.sort_by(|a, b| a.path.cmp(&b.path));
+        list.dedup();
+        list
     }
 
     /// Sets the frame's shutter interval (absolute seconds) for the next [`Self::update`].
@@ -62,7 +93,15 @@ impl SceneWorld {
     /// is the scene the file asks for.
     pub fn update(&mut self) -> Arc<RenderScene> {
         self.world.resource_mut::<FrameErrors>().0.clear();
-        self.schedule.run(&mut self.world);
+        let (schedule, world) = (&mut self.schedule, &mut self.world);
+        match &self.confined {
+            Some((root, exempt)) => {
+                if let Err(e) = files::confined(root, exempt, || schedule.run(world)) {
+                    world.resource_mut::<FrameErrors>().0.push(e);
+                }
+            }
+            None => schedule.run(world),
+        }
         self.world.clear_trackers();
         self.world.resource::<Extracted>().0.clone().expect("extract_render_scene always runs")
     }

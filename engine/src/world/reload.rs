@@ -5,10 +5,10 @@
 
 use crate::scene::SceneDesc;
 use crate::world::{
-    Animated, BackgroundLight, CameraKeys, EmitKeys, Filling, FrameTime, Instanced, MaterialId,
-    MaterialWrappers, Materials, MeshLibrary, Motion, ObjectEmission, ObjectIndex, PunctualLights,
-    SceneGeometry, SceneInstances, SceneLights, SceneMedia, SceneTextures, SceneWorld, Settings, Shape,
-    Transform,
+    Animated, BackgroundLight, CameraKeys, EmitKeys, Filling, FrameTime, GridInputs, GridReads, GridSequence,
+    Instanced, MaterialId, MaterialWrappers, Materials, MeshLibrary, Motion, ObjectEmission, ObjectIndex,
+    PunctualLights, SceneGeometry, SceneInstances, SceneLights, SceneMedia, SceneTextures, SceneWorld,
+    Settings, Shape, Transform,
 };
 use bevy_ecs::component::Mutable;
 use bevy_ecs::prelude::*;
@@ -48,6 +48,8 @@ pub struct Builds {
     pub media: u64,
     /// The light table.
     pub lights: u64,
+    /// Grid files read for a frame (grid sequences').
+    pub grids: u64,
 }
 
 impl Builds {
@@ -61,13 +63,15 @@ impl Builds {
             ("BLAS", self.blas - before.blas, "built"),
             ("media", self.media - before.media, "rebuilt"),
             ("light table", self.lights - before.lights, "rebuilt"),
+            ("grid files", self.grids - before.grids, "read"),
         ];
         let done: Vec<String> =
             parts.iter().filter(|p| p.1 > 0).map(|(name, _, how)| format!("{name} {how}")).collect();
         let mut kept: Vec<&str> = Vec::new();
         for (name, n, _) in parts {
             let touched = parts.iter().any(|p| p.0 == name && p.1 > 0);
-            if n == 0 && !touched && !kept.contains(&name) {
+            // Files are read, not kept.
+            if n == 0 && !touched && !kept.contains(&name) && name != "grid files" {
                 kept.push(name);
             }
         }
@@ -121,7 +125,8 @@ impl SceneWorld {
     /// Makes the world hold `desc`, writing only what differs from what it holds: the n-th
     /// object of the file is the n-th entity, objects past the end are spawned or despawned,
     /// and the next [`Self::update`] rebuilds only what the written components and resources
-    /// feed.
+    /// feed. The frame's files of grid sequences are read again by that update (a reload
+    /// follows an edit, maybe to them), and rebuild the media only if their values changed.
     pub fn reload(&mut self, desc: &SceneDesc) -> Reload {
         let mut fresh = SceneWorld::new(desc).world;
         let world = &mut self.world;
@@ -152,7 +157,14 @@ impl SceneWorld {
             sync(world, e, f.get::<ObjectIndex>());
             let mut changed = sync(world, e, f.get::<Shape>());
             changed |= sync(world, e, f.get::<MaterialId>());
-            changed |= sync(world, e, f.get::<Filling>());
+            // A sequence's medium is read by `read_grid_frames`: again after a reload, which
+            // follows an edit that may be to the frame's files (the same values rebuild nothing).
+            let sequence = sync(world, e, f.get::<GridSequence>());
+            sync(world, e, f.get::<GridInputs>());
+            changed |= sequence;
+            if f.get::<GridSequence>().is_none() || sequence {
+                changed |= sync(world, e, f.get::<Filling>());
+            }
             changed |= sync(world, e, f.get::<Instanced>());
             changed |= sync(world, e, f.get::<Animated>());
             // Keyframed objects are placed by `animate_objects` from their `Animated`.
@@ -186,6 +198,7 @@ impl SceneWorld {
             blas: w.resource::<MeshLibrary>().builds,
             media: w.resource::<SceneMedia>().rebuilds,
             lights: w.resource::<SceneLights>().rebuilds,
+            grids: w.resource::<GridReads>().0,
         }
     }
 }

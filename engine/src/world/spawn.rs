@@ -102,7 +102,10 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         // Objects without a material id are volumes.
         let Some(id) = id else {
             if let Body::Volume(m) = &obj.body {
-                world.spawn((placed, Filling(m.medium())));
+                match m.medium() {
+                    Some(medium) => world.spawn((placed, Filling(medium))),
+                    None => world.spawn((placed, GridSequence(m.clone()), GridInputs::default())),
+                };
             }
             continue;
         };
@@ -169,6 +172,8 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
     world.init_resource::<SceneMedia>();
     world.init_resource::<Extracted>();
     world.init_resource::<FrameErrors>();
+    world.init_resource::<FrameNumber>();
+    world.init_resource::<GridReads>();
 }
 
 /// A shape made of quads (a box, a quad) as a triangle mesh in its own space (two triangles
