@@ -18,7 +18,9 @@
 //! box; `albedo` is a constant or a grid too. They become a medium's `grid` and `albedo_grid`,
 //! placed in the object's space (the shape's `to_world` undone). Mitsuba bounds the medium by
 //! the world-axis box around a rotated grid, pathwave by the grid's own cube: the two agree
-//! for grids that are only scaled and moved.
+//! for grids that are only scaled and moved. A `gridvolume` may also name an OpenVDB file
+//! (told by its first bytes or `.vdb`; Mitsuba reads only `.vol`): its float grid "density",
+//! placed by the file's own transform and then by `to_world`, as a RON medium's VDB grid.
 
 use super::convert::{Converter, num, ops, v3};
 use super::props::{Op, Plugin, Value, compose};
@@ -150,6 +152,12 @@ fn grid(cx: &Converter, e: &Element, object_from_world: DMat4) -> Result<(String
     let header = read_header(&path).map_err(|why| at.error(why))?;
     let mut grid_to_world = compose(&g.transform("to_world")?.unwrap_or_default());
     if g.bool("use_grid_bbox")?.unwrap_or(false) {
+        let Some(header) = header else {
+            return Err(g.at.error(format!(
+                "{}: use_grid_bbox with the OpenVDB file {name}: its grid is placed by the file's own transform",
+                g.label()
+            )));
+        };
         let (lo, hi) = header.bbox;
         let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
         grid_to_world *= DMat4::from_translation(lo) * DMat4::from_scale(hi - lo);
@@ -158,15 +166,20 @@ fn grid(cx: &Converter, e: &Element, object_from_world: DMat4) -> Result<(String
     let m = object_from_world * grid_to_world;
     let rows = m.transpose().to_cols_array_2d();
     let file = cx.file(&name, &at)?;
-    Ok((format!("(file: {file}, transform: {})", ops(&[Op::Matrix(rows)])), header.channels))
+    // An OpenVDB file's grid is one float channel.
+    let channels = header.map_or(1, |h| h.channels);
+    Ok((format!("(file: {file}, transform: {})", ops(&[Op::Matrix(rows)])), channels))
 }
 
-/// The header of the `.vol` file at `path`.
-fn read_header(path: &std::path::Path) -> Result<crate::format::vol::VolHeader, String> {
-    use std::io::Read;
-    let mut bytes = Vec::with_capacity(crate::format::vol::HEADER_BYTES);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(crate::format::vol::HEADER_BYTES as u64).read_to_end(&mut bytes))
-        .map_err(|e| format!("cannot read the grid {}: {e}", path.display()))?;
-    crate::format::vol::VolHeader::parse(&bytes, path, "grid")
+/// The header of the `.vol` file at `path`, or `None` for an OpenVDB file (whose header is
+/// checked).
+fn read_header(path: &std::path::Path) -> Result<Option<crate::format::vol::VolHeader>, String> {
+    use crate::format::{files, vdb, vol};
+    let n = vol::HEADER_BYTES.max(vdb::HEADER_BYTES);
+    let (bytes, _) = files::read_head(path, n, files::MAX_ASSET_BYTES, "grid")?;
+    let named_vdb = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("vdb"));
+    if vdb::is_vdb(&bytes) || named_vdb {
+        return vdb::VdbFile::check_header(&bytes, path).map(|()| None);
+    }
+    vol::VolHeader::parse(&bytes, path, "grid").map(Some)
 }

@@ -885,6 +885,32 @@ fn grid_media_are_placed_in_their_objects() {
     super::load(&scene(tag, body), &[]).unwrap_or_else(|e| panic!("{e}"));
 }
 
+/// A `gridvolume` naming an OpenVDB file (a pathwave extension: Mitsuba reads `.vol` only)
+/// becomes a RON grid of that file, placed by `to_world` after the file's own transform, and
+/// the scene loads with the file's grid; `use_grid_bbox` (a `.vol` header's box) is refused
+/// for it. Checked to fail with the file's first bytes read as a `.vol` header.
+#[test]
+fn an_openvdb_gridvolume_is_read_and_placed() {
+    let tag = "grid-vdb";
+    let d = scene(tag, "").parent().unwrap().to_path_buf();
+    let vdb = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/assets/smoke-zip.vdb");
+    std::fs::copy(vdb, d.join("smoke.data")).unwrap();
+    let body = |extra: &str| {
+        format!(
+            r#"<shape type="cube"><bsdf type="null"/>
+        <medium type="heterogeneous" name="interior">
+          <volume name="sigma_t" type="gridvolume"><string name="filename" value="smoke.data"/><transform name="to_world"><translate x="3"/></transform>{extra}</volume>
+        </medium></shape>"#
+        )
+    };
+    let r = ron(tag, &body(""));
+    let want = r#"grid: (file: "smoke.data", transform: [Matrix([[1, 0, 0, 3], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])])"#;
+    assert!(r.contains(want), "missing {want} in\n{r}");
+    super::load(&scene(tag, &body("")), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let e = error(tag, &body(r#"<boolean name="use_grid_bbox" value="true"/>"#));
+    assert!(e.message.contains("use_grid_bbox") && e.message.contains("OpenVDB"), "{e}");
+}
+
 #[test]
 fn grid_media_pathwave_cannot_render_are_refused() {
     let tag = "grid-refused";
