@@ -4,6 +4,7 @@
 
 mod common;
 use common::*;
+use pathwave::engine::scene::Body;
 use pathwave::metrics::rel_mse;
 
 const CUBE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n\
@@ -72,6 +73,41 @@ fn grid_scene(grid: &str) -> String {
             ],
         )"#
     )
+}
+
+/// Media naming the same grid of an OpenVDB file share one dense box (made once: a box may
+/// hold 1 GiB); another grid name would make its own. Checked to fail with a box made at
+/// every pick.
+#[test]
+fn media_naming_one_openvdb_grid_share_its_box() {
+    let dir = std::env::temp_dir().join(format!("pathwave-vdb-shared-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let vdb = root().join("scenes/assets/smoke-zip.vdb");
+    let medium =
+        format!(r#"medium: (density: 2, albedo: (0.8, 0.8, 0.8), grid: (file: "{}"))"#, vdb.display());
+    let scene = format!(
+        r#"Scene(
+            camera: (look_from: (0, 1, -3), look_at: (0, 0.5, 0), vfov: 40),
+            materials: {{}},
+            objects: [
+                (shape: Box(a: (-1, 0, -1), b: (1, 2, 1)), {medium}),
+                (shape: Box(a: (2, 0, -1), b: (4, 2, 1)), {medium}, transform: [Translate((2.5, 0, 0))]),
+            ],
+        )"#
+    );
+    let p = dir.join("s.ron");
+    std::fs::write(&p, scene).unwrap();
+    let desc = pathwave::engine::scene::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    let grids: Vec<_> = desc
+        .objects
+        .iter()
+        .map(|o| match &o.body {
+            Body::Volume(m) => m.grid.as_ref().and_then(|g| g.placed()).expect("a grid read at load").grid,
+            Body::Surface(_) => panic!("a surface"),
+        })
+        .collect();
+    assert!(std::sync::Arc::ptr_eq(&grids[0], &grids[1]), "two boxes of one grid");
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

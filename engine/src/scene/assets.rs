@@ -12,7 +12,8 @@ use crate::media::grid::VoxelGrid;
 pub use crate::texture::image::ImageFile;
 use glam::Affine3A;
 use serde::{Deserialize, Deserializer, de::Error};
-use std::sync::Arc;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// The triangles of a mesh file, read when the scene is loaded. Objects naming the same file
 /// (and the same mesh and options of it) share one mesh (and, as instances, one BLAS).
@@ -68,7 +69,8 @@ impl<'de> Deserialize<'de> for MeshPath {
 
 /// A voxel grid file, read when the scene is loaded: Mitsuba's `.vol`, or an OpenVDB file
 /// (told by its first bytes, or by the extension `.vdb` for a damaged one) whose grid the
-/// medium picks by name ([`GridFile::pick`]). Objects naming the same `.vol` share its grid.
+/// medium picks by name ([`GridFile::pick`]). Objects naming the same `.vol`, or the same
+/// grid of an OpenVDB file, share one grid.
 #[derive(Debug, Clone)]
 pub struct GridFile {
     /// The path as written.
@@ -85,7 +87,47 @@ enum GridSource {
     /// A `.vol` file's grid.
     Vol(Arc<VoxelGrid>),
     /// An OpenVDB file's grids, to pick from by name.
-    Vdb(Arc<VdbFile>),
+    Vdb(Arc<VdbGrids>),
+}
+
+/// An OpenVDB file and the dense boxes made of its grids, each made once however many media
+/// pick it (a box may hold 2^28 voxels, 1 GiB).
+#[derive(Debug)]
+pub struct VdbGrids {
+    file: VdbFile,
+    /// The boxes made so far by grid name.
+    dense: Mutex<HashMap<String, DenseBox>>,
+}
+
+/// A grid made a dense box, with where its unit cube lies, or why it cannot be one.
+type DenseBox = Result<(Arc<VoxelGrid>, Affine3A), String>;
+
+impl VdbGrids {
+    fn new(file: VdbFile) -> Self {
+        Self { file, dense: Mutex::new(HashMap::new()) }
+    }
+
+    /// The grid `name` as a dense box and where its unit cube lies in the medium's space (its
+    /// transform: the grid's world is the medium's space), made on the first pick.
+    fn pick(&self, name: &str, path: &std::path::Path) -> Result<(Arc<VoxelGrid>, Affine3A), String> {
+        // A poisoned lock only means another thread panicked while building a box: build again.
+        let mut dense = self.dense.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        dense
+            .entry(name.to_owned())
+            .or_insert_with(|| {
+                let g = self.file.grid(name)?;
+                let unit = g.world_from_unit().as_affine3a();
+                let det = unit.matrix3.determinant();
+                if !(unit.is_finite() && det.is_normal()) {
+                    return Err(format!(
+                        "the OpenVDB file {}: the grid's box maps to {unit:?} in single precision, which is not finite and invertible",
+                        path.display()
+                    ));
+                }
+                Ok((Arc::new(VoxelGrid::new(g.size, 1, g.values)), unit))
+            })
+            .clone()
+    }
 }
 
 /// The grid a medium's `name` picks of the file's: OpenVDB's default.
@@ -106,17 +148,9 @@ impl GridFile {
                     self.path.display()
                 )),
             },
-            GridSource::Vdb(file) => {
-                let g = file.grid(name.unwrap_or(DEFAULT_VDB_GRID))?;
-                let unit = g.world_from_unit().as_affine3a();
-                let det = unit.matrix3.determinant();
-                if !(unit.is_finite() && det.is_normal()) {
-                    return Err(format!(
-                        "the OpenVDB file {}: the grid's box maps to {unit:?} in single precision, which is not finite and invertible",
-                        self.path.display()
-                    ));
-                }
-                Ok((Arc::new(VoxelGrid::new(g.size, 1, g.values)), Some(unit)))
+            GridSource::Vdb(grids) => {
+                let (grid, unit) = grids.pick(name.unwrap_or(DEFAULT_VDB_GRID), &self.path)?;
+                Ok((grid, Some(unit)))
             }
         }
     }
@@ -201,14 +235,14 @@ impl<'de> Deserialize<'de> for GridPath {
         if let Some(grid) = context::read_before::<VoxelGrid>(&full) {
             return Ok(GridPath::File(GridFile { path, source: GridSource::Vol(grid) }));
         }
-        if let Some(file) = context::read_before::<VdbFile>(&full) {
-            return Ok(GridPath::File(GridFile { path, source: GridSource::Vdb(file) }));
+        if let Some(grids) = context::read_before::<VdbGrids>(&full) {
+            return Ok(GridPath::File(GridFile { path, source: GridSource::Vdb(grids) }));
         }
         let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "grid")
             .map_err(D::Error::custom)?;
         let source = grid_source(bytes, &full).map_err(D::Error::custom)?;
         match &source {
-            GridSource::Vdb(file) => context::keep(full, file.clone()),
+            GridSource::Vdb(grids) => context::keep(full, grids.clone()),
             GridSource::Vol(grid) => context::keep(full, grid.clone()),
             GridSource::Unread => {}
         }
@@ -225,7 +259,7 @@ fn is_vdb_name(path: &std::path::Path) -> bool {
 /// bytes, or its name) or a `.vol`.
 fn grid_source(bytes: Vec<u8>, path: &std::path::Path) -> Result<GridSource, String> {
     Ok(match is_vdb(&bytes) || is_vdb_name(path) {
-        true => GridSource::Vdb(Arc::new(VdbFile::parse(bytes, path)?)),
+        true => GridSource::Vdb(Arc::new(VdbGrids::new(VdbFile::parse(bytes, path)?))),
         false => GridSource::Vol(Arc::new(VoxelGrid::parse_vol(&bytes, path)?)),
     })
 }
