@@ -5,7 +5,7 @@ scenes/cycles/make.py): both render the same .glb file, Cycles through Blender's
   beside_cycles.py render SCENE -o OUT.exr --spp N [--seed S] [--frame F] [--depth D] [--ggx]
       (run with the bpy venv, /opt/vdbvenv/bin/python): one Cycles render; prints a JSON line
       with render_s, the time of bpy.ops.render.render alone
-  beside_cycles.py bench [--scenes sampler,interior,shot] [--spp 16,64] [--ref-spp 1024] [--reps 2]
+  beside_cycles.py bench [--scenes sampler,interior,shot] [--spp 16,64] [--ref-spp 1024] [--reps 16]
       [--json OUT] [--png DIR]
       (run with a python that has numpy and mitsuba, /opt/mitsuba-anchor/bin/python): for each
       scene a converged render by each renderer (cached in $CYCLES_REFS, /tmp/cycles-refs by
@@ -13,7 +13,10 @@ scenes/cycles/make.py): both render the same .glb file, Cycles through Blender's
       means of the converged renders (pathwave's against Cycles'), each renderer's relMSE
       against its own converged render (its noise: the two differ by their models too, which
       would otherwise dominate) and the equal-error time ratio (pathwave's relMSE x time over
-      Cycles'; both errors fall as 1/spp, so below 1 pathwave reaches Cycles' error sooner).
+      Cycles'; both errors fall as 1/spp, so below 1 pathwave reaches Cycles' error sooner),
+      from the mean relMSE over the reps (seeds 100, 101, ..) and from their median: a sun's
+      caustics through sharp glossy lobes make the error heavy-tailed, one firefly of ~2000
+      lifting a 16-spp image's relMSE from 0.1 to 2, so a few reps' mean is mostly luck.
       --png DIR writes the converged renders side by side as DIR/cycles-SCENE.png (Cycles left;
       the README's images: --png docs)
 
@@ -160,7 +163,7 @@ def bench(argv):
     ap.add_argument('--scenes', default='sampler,interior,shot')
     ap.add_argument('--spp', default='16,64')
     ap.add_argument('--ref-spp', type=int, default=1024)
-    ap.add_argument('--reps', type=int, default=2)
+    ap.add_argument('--reps', type=int, default=16)
     ap.add_argument('--json', default=None)
     ap.add_argument('--png', default=None, help='write cycles-SCENE.png (Cycles | pathwave) here')
     a = ap.parse_args(argv)
@@ -193,10 +196,14 @@ def bench(argv):
             tp, tc = min(x[0] for x in pw), min(x[0] for x in cy)
             ep = sum(x[1]['relmse'] for x in pw) / a.reps
             ec = sum(x[1]['relmse'] for x in cy) / a.reps
+            mep = float(np.median([x[1]['relmse'] for x in pw]))
+            mec = float(np.median([x[1]['relmse'] for x in cy]))
             mp, mr = between['mean_test'], between['mean_ref']
             row = dict(scene=scene, spp=spp, pathwave_s=round(tp, 3), cycles_s=round(tc, 3),
                        pathwave_relmse=round(ep, 6), cycles_relmse=round(ec, 6),
                        equal_error_time_ratio=round(ep * tp / (ec * tc), 3),
+                       pathwave_relmse_median=round(mep, 6), cycles_relmse_median=round(mec, 6),
+                       equal_error_time_ratio_median=round(mep * tp / (mec * tc), 3), reps=a.reps,
                        mean_cycles=[round(v, 5) for v in mr], mean_pathwave=[round(v, 5) for v in mp],
                        mean_diff_pct=[round(100 * (p / q - 1), 2) for p, q in zip(mp, mr)],
                        relmse_between=round(between['relmse'], 5), ref_spp=a.ref_spp)
@@ -211,13 +218,15 @@ def bench(argv):
             for r in rows:
                 f.write(json.dumps(r) + '\n')
     print('\n| scene | spp | mean R G B Cycles | pathwave vs Cycles % | pathwave s | Cycles s '
-          '| relMSE pathwave | relMSE Cycles | equal-error time pathwave/Cycles |')
-    print('|---|---|---|---|---|---|---|---|---|')
+          '| relMSE pathwave | relMSE Cycles | equal-error time pathwave/Cycles '
+          '| median relMSE pathwave | median relMSE Cycles | equal-error time, medians |')
+    print('|---|---|---|---|---|---|---|---|---|---|---|---|')
     for r in rows:
-        print('| %s | %d | %s | %s | %.2f | %.2f | %.4g | %.4g | %.2f |' % (
+        print('| %s | %d | %s | %s | %.2f | %.2f | %.4g | %.4g | %.2f | %.4g | %.4g | %.2f |' % (
             r['scene'], r['spp'], ' '.join('%.4f' % v for v in r['mean_cycles']),
             ' '.join('%+.1f' % v for v in r['mean_diff_pct']), r['pathwave_s'], r['cycles_s'],
-            r['pathwave_relmse'], r['cycles_relmse'], r['equal_error_time_ratio']))
+            r['pathwave_relmse'], r['cycles_relmse'], r['equal_error_time_ratio'],
+            r['pathwave_relmse_median'], r['cycles_relmse_median'], r['equal_error_time_ratio_median']))
 
 
 def write_png(img, path):
