@@ -3,6 +3,7 @@
 
 mod common;
 use common::*;
+use pathwave::engine::world::SceneWorld;
 
 /// Mean of the pixels of a film with per-pixel values within `tolerance` sigma of `expected`.
 fn assert_all_pixels_near(film: &pathwave::integrator::film::Film, expected: impl Fn(usize) -> Option<f32>) {
@@ -152,12 +153,8 @@ fn a_coloured_medium_loses_nothing_in_any_channel() {
             ],
         )"#,
     );
-    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
-    assert!(scene.media.chromatic());
-    let oracle = render(&desc);
-    assert_all_pixels_near(&oracle, |_| Some(1.0));
-    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
-    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
+    assert!(SceneWorld::render_scene(&desc).media.chromatic());
+    assert_one_everywhere_in_both_integrators(&desc);
 }
 
 /// As [`a_coloured_medium_loses_nothing_in_any_channel`], with the coloured extinction on a
@@ -170,32 +167,9 @@ fn a_coloured_medium_loses_nothing_in_any_channel() {
 /// underestimate their error (chi2/dof 1.3).
 #[test]
 fn a_coloured_grid_medium_loses_nothing_in_any_channel() {
-    let desc = inline(
-        r#"Scene(
-            camera: (look_from: (0, 1.5, 4), look_at: (0, 1.1, 0), vfov: 30),
-            render: (width: 32, height: 24, spp: 64, max_depth: 200, rr_depth: 3),
-            background: Constant((1, 1, 1)),
-            materials: { "white": Lambertian(albedo: (1, 1, 1)) },
-            objects: [
-                (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
-                (
-                    shape: Box(a: (-1, 0, -1), b: (1, 2, 1)),
-                    medium: (
-                        density: (2, 8, 0.5),
-                        albedo: (1, 1, 1),
-                        grid: (file: "scenes/assets/plume.vol", transform: [Scale((2, 2, 2)), Translate((-1, 0, -1))]),
-                    ),
-                ),
-                (shape: Sphere(center: (0, 1.2, 0), radius: 0.5), medium: (density: (3, 0.2, 1), albedo: (1, 1, 1))),
-            ],
-        )"#,
-    );
-    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
-    assert!(scene.media.chromatic());
-    let oracle = render(&desc);
-    assert_all_pixels_near(&oracle, |_| Some(1.0));
-    let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
-    assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
+    let desc = plume_furnace("density: (2, 8, 0.5)", "density: (3, 0.2, 1)");
+    assert!(SceneWorld::render_scene(&desc).media.chromatic());
+    assert_one_everywhere_in_both_integrators(&desc);
 }
 
 /// Albedo-1 media under a uniform sky over a white ground: a grid medium (the plume of
@@ -208,33 +182,45 @@ fn a_coloured_grid_medium_loses_nothing_in_any_channel() {
 /// the same: `tests/mitsuba.rs` checks the phase function's shape against Mitsuba.)
 #[test]
 fn media_scattering_forwards_and_backwards_lose_nothing() {
-    let desc = inline(
+    let desc = plume_furnace(
+        "density: 20, phase: HenyeyGreenstein(g: 0.7)",
+        "density: 3, phase: HenyeyGreenstein(g: -0.5)",
+    );
+    assert_one_everywhere_in_both_integrators(&desc);
+}
+
+/// On a white ground under a uniform sky of 1, the plume of `scenes/smoke-plume.ron` in a box
+/// (its medium `plume`: a density and what else it takes) overlapped by a sphere of medium
+/// `sphere`, both of albedo 1.
+fn plume_furnace(plume: &str, sphere: &str) -> pathwave::engine::scene::SceneDesc {
+    inline(&format!(
         r#"Scene(
             camera: (look_from: (0, 1.5, 4), look_at: (0, 1.1, 0), vfov: 30),
             render: (width: 32, height: 24, spp: 64, max_depth: 200, rr_depth: 3),
             background: Constant((1, 1, 1)),
-            materials: { "white": Lambertian(albedo: (1, 1, 1)) },
+            materials: {{ "white": Lambertian(albedo: (1, 1, 1)) }},
             objects: [
                 (shape: Sphere(center: (0, -100, 0), radius: 100), material: "white"),
                 (
                     shape: Box(a: (-1, 0, -1), b: (1, 2, 1)),
                     medium: (
-                        density: 20,
+                        {plume},
                         albedo: (1, 1, 1),
                         grid: (file: "scenes/assets/plume.vol", transform: [Scale((2, 2, 2)), Translate((-1, 0, -1))]),
-                        phase: HenyeyGreenstein(g: 0.7),
                     ),
                 ),
-                (
-                    shape: Sphere(center: (0, 1.2, 0), radius: 0.5),
-                    medium: (density: 3, albedo: (1, 1, 1), phase: HenyeyGreenstein(g: -0.5)),
-                ),
+                (shape: Sphere(center: (0, 1.2, 0), radius: 0.5), medium: ({sphere}, albedo: (1, 1, 1))),
             ],
-        )"#,
-    );
-    let oracle = render(&desc);
+        )"#
+    ))
+}
+
+/// Every pixel of the reference integrator's image is 1 within its noise, and the wavefront
+/// gives its bits.
+fn assert_one_everywhere_in_both_integrators(desc: &pathwave::engine::scene::SceneDesc) {
+    let oracle = render(desc);
     assert_all_pixels_near(&oracle, |_| Some(1.0));
-    let scene = pathwave::engine::world::SceneWorld::render_scene(&desc);
+    let scene = SceneWorld::render_scene(desc);
     let (film, _) = pathwave::integrator::wavefront::render(&scene, Default::default(), &|_, _| {});
     assert_eq!(film.pixels, oracle.pixels, "the wavefront gives the oracle's bits");
 }
