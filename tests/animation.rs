@@ -11,22 +11,8 @@ use pathwave::io::read_linear;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn pathwave() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pathwave"))
-}
-
 fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pathwave-anim-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(out.status.success(), "{err}");
-    err
+    common::temp("anim", name)
 }
 
 #[test]

@@ -4,28 +4,16 @@
 //! `animate` and by `farm slurm`), bad braces are refused, and a frame's grid file is part of
 //! its checkpoint key and of the inputs no output may replace.
 
+mod common;
+use common::{pathwave, run};
 use pathwave::engine::format::files::recording;
 use pathwave::engine::world::{Filling, SceneWorld};
 use pathwave::io::read_linear;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn pathwave() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_pathwave"))
-}
-
 fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pathwave-grid-frames-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(cmd: &mut Command) -> String {
-    let out = cmd.output().unwrap();
-    let err = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(out.status.success(), "{err}");
-    err
+    common::temp("grid-frames", name)
 }
 
 fn fails(cmd: &mut Command) -> String {

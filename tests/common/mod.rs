@@ -41,6 +41,27 @@ pub fn render_cornell(
     c
 }
 
+/// The `pathwave` binary of this build, as a command.
+pub fn pathwave() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_pathwave"))
+}
+
+/// An empty folder `pathwave-{prefix}-{name}-{pid}` in the system's temporary folder.
+pub fn temp(prefix: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pathwave-{prefix}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `cmd`, which must succeed, and returns what it wrote to stderr.
+pub fn run(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{err}");
+    err
+}
+
 /// A scene from `scenes/`.
 pub fn scene(name: &str) -> SceneDesc {
     load(&root().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"))
