@@ -264,6 +264,52 @@ fn a_spinning_instance_averages_its_still_images() {
     blurs_like_its_stills(SPIN_SCENE, "spinning instance", |s| s.instances.list[0].motion.is_some());
 }
 
+/// A slab of grey smoke sliding across a white background (its stills are placed by the
+/// keys alone, so that they check the linear motion that rays see while the shutter is open).
+const SLIDING_SMOKE: &str = r#"Scene(
+    camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 1024, max_depth: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+    objects: [
+        (
+            shape: Box(a: (-1.2, -0.8, -0.5), b: (-0.2, 0.8, 0.5)),
+            medium: (density: 2, albedo: (0.5, 0.5, 0.5)),
+            animate: (translate: Linear([(0, (0, 0, 0)), (1, (1.5, 0.3, 0))])),
+        ),
+    ],
+)"#;
+
+/// A plume of smoke from a voxel grid turning a quarter turn about the view axis.
+const SPINNING_PLUME: &str = r#"Scene(
+    camera: (look_from: (0, 0, 7), look_at: (0, 0, 0), vfov: 40),
+    render: (width: 48, height: 48, spp: 1024, max_depth: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "m": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+    objects: [
+        (
+            shape: Box(a: (-0.6, 0, -0.6), b: (0.6, 2, 0.6)),
+            medium: (
+                density: 40,
+                albedo: (0.8, 0.8, 0.8),
+                grid: (file: "assets/plume.vol", transform: [Scale((1.2, 2, 1.2)), Translate((-0.6, 0, -0.6))]),
+            ),
+            transform: [Translate((0.3, -1, 0))],
+            animate: (rotate: Linear([(0, Euler((0, 0, 0))), (1, Euler((0, 0, 90)))])),
+        ),
+    ],
+)"#;
+
+#[test]
+fn a_sliding_medium_averages_its_still_images() {
+    blurs_like_its_stills(SLIDING_SMOKE, "sliding medium", |s| s.media.moving());
+}
+
+#[test]
+fn a_spinning_grid_medium_averages_its_still_images() {
+    blurs_like_its_stills(SPINNING_PLUME, "spinning grid medium", |s| s.media.moving());
+}
+
 #[test]
 fn camera_and_emission_keys_reach_the_scene_and_only_changes_rebuild() {
     use pathwave::engine::material::Material;

@@ -640,10 +640,6 @@ fn animation_errors_name_the_key() {
         r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", animate: (rotate: Linear([(0, Euler(1, 2))]))),"#,
     ));
     assert!(e.line == 8 && e.message.contains("in objects[0]"), "{e}");
-    let e = err(&with_object(
-        r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 1, 1)), animate: (translate: Linear([(0, (0, 0, 0))]))),"#,
-    ));
-    assert!(e.line == 8 && e.message.contains("media do not move"), "{e}");
 }
 
 /// Values the README bounds are refused, not clamped: a fuzz of 2 (README: [0, 1]).

@@ -256,7 +256,7 @@ impl Features {
     pub fn detect(geometry: &Geometry, instances: &Instances, media: &Media, camera: &Camera) -> Self {
         Self {
             media: !media.is_empty(),
-            motion: (geometry.velocity.is_some() || !instances.still() || camera.moves())
+            motion: (geometry.velocity.is_some() || !instances.still() || media.moving() || camera.moves())
                 && camera.shutter.0 != camera.shutter.1,
             textures: false,
             emitting_surfaces: false,

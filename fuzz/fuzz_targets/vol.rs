@@ -10,7 +10,8 @@
 use glam::{Affine3A, Vec3, Vec3A};
 use libfuzzer_sys::fuzz_target;
 use pathwave_engine::media::grid::VoxelGrid;
-use pathwave_engine::media::{Boundary, Media, Medium, PlacedGrid, Volume};
+use pathwave_engine::math::Ray;
+use pathwave_engine::media::{Boundary, Media, Medium, PlacedGrid, Volume, VolumeMotion};
 use pathwave_engine::shape::Closed;
 use std::path::Path;
 use std::sync::Arc;
@@ -57,16 +58,22 @@ fuzz_target!(|data: &[u8]| {
         ..Medium::homogeneous(Vec3::splat(sigma), Vec3::splat(0.8))
     };
     let boundary = Boundary::Closed(Closed::Box { min: Vec3A::ZERO, max: Vec3A::ONE });
-    let media = Media::new(vec![Volume { object_from_world: Affine3A::IDENTITY, boundary, medium }]);
+    let media = Media::new(vec![Volume {
+        object_from_world: Affine3A::IDENTITY,
+        boundary,
+        medium,
+        motion: VolumeMotion::Still,
+    }]);
     for _ in 0..8 {
         let o = Vec3A::new(rnd(), rnd(), rnd()) * 3.0 - 1.0;
         let d = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5);
         if d == Vec3A::ZERO {
             continue;
         }
-        let tr = media.transmittance(o, d, 10.0);
+        let ray = Ray::new(o, d);
+        let tr = media.transmittance(&ray, 10.0);
         assert!(tr.is_finite() && tr.min_element() >= 0.0 && tr.max_element() <= 1.0, "transmittance {tr}");
-        if let Some(e) = media.sample(o, d, 10.0, rnd().min(0.999_999)) {
+        if let Some(e) = media.sample(&ray, 10.0, rnd().min(0.999_999)) {
             let p = o + e.t * d;
             assert!((0.0..=10.0).contains(&e.t) && p.cmpge(Vec3A::splat(-1e-4)).all() && p.cmple(Vec3A::splat(1.0001)).all(), "scattered at {p}");
             assert!(e.albedo.is_finite() && e.albedo.min_element() >= 0.0, "albedo {}", e.albedo);

@@ -167,7 +167,7 @@ const MAX_SPECULAR: u32 = 4;
 fn first_surface(scene: &RenderScene, camera: &Ray, tmax: f32) -> [Vec3; 3] {
     let first = scene.intersect(camera, tmax);
     let transmittance = if scene.features.media {
-        scene.media.transmittance(camera.origin, camera.dir, first.map_or(f32::INFINITY, |h| h.t))
+        scene.media.transmittance(camera, first.map_or(f32::INFINITY, |h| h.t))
     } else {
         Vec3::ONE
     };

@@ -222,7 +222,7 @@ pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> Option<Vec3> {
 #[inline]
 pub fn media_transmittance(scene: &RenderScene, ray: &Ray) -> Vec3 {
     match scene.features.media {
-        true => scene.media.transmittance(ray.origin, ray.dir, 1.0),
+        true => scene.media.transmittance(ray, 1.0),
         false => Vec3::ONE,
     }
 }
@@ -259,7 +259,7 @@ pub fn sample_medium(
         let u0 = if depth == 0 { None } else { Some(u0()) };
         return chromatic_flight(scene, beta, ratio, ray, tmax, u, u0);
     }
-    let e = scene.media.sample(ray.origin, ray.dir, tmax, u)?;
+    let e = scene.media.sample(ray, tmax, u)?;
     *beta *= e.albedo;
     Some((ray.at(e.t), e.g))
 }
@@ -288,7 +288,7 @@ pub fn chromatic_flight(
         None => (u * 3.0 - hero as f32).clamp(0.0, 1.0 - f32::EPSILON / 2.0),
         Some(_) => u,
     };
-    let f = scene.media.sample_chromatic(ray.origin, ray.dir, tmax, u, hero);
+    let f = scene.media.sample_chromatic(ray, tmax, u, hero);
     let r = *ratio * f.ratio;
     let mean = r.element_sum() / 3.0;
     if !(mean > 0.0) {

@@ -95,7 +95,7 @@ impl ShutterMotion {
 
     /// The ray `o + t d` at `time` in object space (`t` unchanged).
     #[inline]
-    fn object_ray(&self, time: f32, o: Vec3A, d: Vec3A) -> (Vec3A, Vec3A) {
+    pub(crate) fn object_ray(&self, time: f32, o: Vec3A, d: Vec3A) -> (Vec3A, Vec3A) {
         let (s, r, t) = self.srt(time);
         let inv = r.inverse();
         let (o, d) = ((inv * (o - t)) / s, (inv * d) / s);

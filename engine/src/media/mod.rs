@@ -37,7 +37,9 @@
 pub mod grid;
 pub mod phase;
 
+use crate::accel::instances::ShutterMotion;
 use crate::accel::mesh::MeshBlas;
+use crate::math::Ray;
 use crate::shape::Closed;
 use glam::{Affine3A, Vec3, Vec3A};
 use std::cell::RefCell;
@@ -88,6 +90,27 @@ pub struct Volume {
     pub boundary: Boundary,
     /// What fills it.
     pub medium: Medium,
+    /// How it moves while the shutter is open.
+    pub motion: VolumeMotion,
+}
+
+/// How a volume moves while the shutter is open (as instances do, [`crate::accel::instances`]).
+#[derive(Clone, Debug, Default)]
+pub enum VolumeMotion {
+    /// It stays where `object_from_world` places it.
+    #[default]
+    Still,
+    /// At time `t` it lies translated by this velocity times `t` from where
+    /// `object_from_world` places it.
+    Linear(Vec3A),
+    /// It turns or scales while the shutter is open.
+    Keyed {
+        /// Places it per ray time.
+        motion: Box<ShutterMotion>,
+        /// The inverse of the volume's `object_from_world`: takes rays from its object space
+        /// back to its rest frame.
+        world_from_object: Affine3A,
+    },
 }
 
 impl Medium {
@@ -104,6 +127,20 @@ impl Medium {
 }
 
 impl Volume {
+    /// The ray `o + t d` at `time` in the volume's rest frame, the space in which
+    /// `object_from_world` places it (`t` unchanged).
+    #[inline]
+    fn rest_ray(&self, o: Vec3A, d: Vec3A, time: f32) -> (Vec3A, Vec3A) {
+        match &self.motion {
+            VolumeMotion::Still => (o, d),
+            VolumeMotion::Linear(v) => (o - *v * time, d),
+            VolumeMotion::Keyed { motion, world_from_object } => {
+                let (o, d) = motion.object_ray(time, o, d);
+                (world_from_object.transform_point3a(o), world_from_object.transform_vector3a(d))
+            }
+        }
+    }
+
     /// Calls `out(t0, t1)` for each `t` interval of `o + t d` inside the volume, clipped to
     /// `[0, tmax]`, in increasing order. Affine maps preserve `t`, so intervals are computed in
     /// object space.
@@ -189,6 +226,29 @@ thread_local! {
     static HITS: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
     /// Scratch for the intervals of all volumes along a ray.
     static SEGMENTS: RefCell<Vec<Segment>> = const { RefCell::new(Vec::new()) };
+    /// Scratch for a ray in the rest frame of each volume, where media move.
+    static RESTS: RefCell<Vec<(Vec3A, Vec3A)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// A ray as the volumes see it: in world space (`o + t d`, which seeds the tracking numbers
+/// and measures length) and, where media move, in each volume's rest frame at the ray's time
+/// ([`Volume::rest_ray`]; `t` is the same in each).
+#[derive(Clone, Copy)]
+struct Line<'a> {
+    o: Vec3A,
+    d: Vec3A,
+    rest: Option<&'a [(Vec3A, Vec3A)]>,
+}
+
+impl Line<'_> {
+    /// The ray in volume `i`'s rest frame.
+    #[inline(always)]
+    fn of(&self, i: usize) -> (Vec3A, Vec3A) {
+        match self.rest {
+            None => (self.o, self.d),
+            Some(r) => r[i],
+        }
+    }
 }
 
 /// The most tentative collisions one free flight or transmittance estimate takes through
@@ -293,6 +353,8 @@ pub struct Media {
     chromatic: bool,
     /// Some medium's density follows a grid.
     heterogeneous: bool,
+    /// Some volume moves while the shutter is open.
+    moving: bool,
 }
 
 /// A sampled scattering point along a ray in grey media.
@@ -331,7 +393,8 @@ impl Media {
         let albedo =
             volumes.iter().map(|v| WorldGrid::new(&v.medium.albedo_grid, v.object_from_world)).collect();
         let heterogeneous = density.iter().any(Option::is_some);
-        Self { volumes, density, albedo, chromatic, heterogeneous }
+        let moving = volumes.iter().any(|v| !matches!(v.motion, VolumeMotion::Still));
+        Self { volumes, density, albedo, chromatic, heterogeneous, moving }
     }
 
     /// The volumes.
@@ -350,14 +413,34 @@ impl Media {
         self.chromatic
     }
 
+    /// Some volume moves while the shutter is open: rays must carry their time.
+    pub fn moving(&self) -> bool {
+        self.moving
+    }
+
+    /// Calls `f` with `ray` as the volumes see it.
+    #[inline]
+    fn along<R>(&self, ray: &Ray, f: impl FnOnce(&Line) -> R) -> R {
+        let (o, d) = (ray.origin, ray.dir);
+        if !self.moving {
+            return f(&Line { o, d, rest: None });
+        }
+        RESTS.with_borrow_mut(|rest| {
+            rest.clear();
+            rest.extend(self.volumes.iter().map(|v| v.rest_ray(o, d, ray.time)));
+            f(&Line { o, d, rest: Some(rest) })
+        })
+    }
+
     /// The stretches of `o + t d`, `t` in `[0, tmax]`, inside each volume, with their
     /// majorants: a volume with a density grid covers only its grid's cube, one stretch per
     /// majorant cell crossed ([`grid::MajorantGrid`]; none in empty cells), at most its
     /// largest channel's extinction times the cell's bound.
-    fn segments(&self, o: Vec3A, d: Vec3A, tmax: f32, segs: &mut Vec<Segment>) {
+    fn segments(&self, line: &Line, tmax: f32, segs: &mut Vec<Segment>) {
         segs.clear();
         for (i, v) in self.volumes.iter().enumerate() {
             let vol = i as u32;
+            let (o, d) = line.of(i);
             match &self.density[i] {
                 None => {
                     let maj = v.medium.sigma_t.max_element();
@@ -396,22 +479,27 @@ impl Media {
     /// Transmittance `exp(-integral of sigma_t)` per channel along `o + t d`, `t` in `[0, tmax]`:
     /// exact through homogeneous media, a ratio-tracking estimate through grids.
     #[inline]
-    pub fn transmittance(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Vec3 {
-        if self.heterogeneous {
-            return self.tracked_transmittance(o, d, tmax);
-        }
-        if self.chromatic {
-            let mut depth = Vec3::ZERO;
-            for v in &self.volumes {
-                v.intervals(o, d, tmax, |t0, t1| depth += v.medium.sigma_t * (t1 - t0));
+    pub fn transmittance(&self, ray: &Ray, tmax: f32) -> Vec3 {
+        self.along(ray, |line| {
+            if self.heterogeneous {
+                return self.tracked_transmittance(line, tmax);
             }
-            return exp3(-depth * d.length());
-        }
-        let mut depth = 0.0;
-        for v in &self.volumes {
-            v.intervals(o, d, tmax, |t0, t1| depth += v.medium.sigma_t.x * (t1 - t0));
-        }
-        Vec3::splat(crate::math::exp(-depth * d.length()))
+            let len = line.d.length();
+            if self.chromatic {
+                let mut depth = Vec3::ZERO;
+                for (i, v) in self.volumes.iter().enumerate() {
+                    let (o, d) = line.of(i);
+                    v.intervals(o, d, tmax, |t0, t1| depth += v.medium.sigma_t * (t1 - t0));
+                }
+                return exp3(-depth * len);
+            }
+            let mut depth = 0.0;
+            for (i, v) in self.volumes.iter().enumerate() {
+                let (o, d) = line.of(i);
+                v.intervals(o, d, tmax, |t0, t1| depth += v.medium.sigma_t.x * (t1 - t0));
+            }
+            Vec3::splat(crate::math::exp(-depth * len))
+        })
     }
 
     /// [`Self::transmittance`] in media with grids: Beer-Lambert through the homogeneous
@@ -419,12 +507,12 @@ impl Media {
     /// tentative collisions (ratio tracking), in every channel at once: the majorant bounds
     /// the largest channel, so that each factor lies in [0, 1].
     #[inline(never)]
-    fn tracked_transmittance(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Vec3 {
-        let len = d.length();
-        let mut rng = Rng::seeded(o, d, tmax);
+    fn tracked_transmittance(&self, line: &Line, tmax: f32) -> Vec3 {
+        let len = line.d.length();
+        let mut rng = Rng::seeded(line.o, line.d, tmax);
         let mut steps = 0u32;
         SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(o, d, tmax, segs);
+            self.segments(line, tmax, segs);
             let mut depth = Vec3::ZERO;
             let mut tr = Vec3A::ONE;
             for s in segs.iter() {
@@ -433,6 +521,7 @@ impl Media {
                     depth += self.volumes[i].medium.sigma_t * (s.t1 - s.t0);
                     continue;
                 }
+                let (o, d) = line.of(i);
                 let mut t = s.t0;
                 loop {
                     t -= crate::math::ln(1.0 - rng.next()) / (s.maj * len);
@@ -469,17 +558,23 @@ impl Media {
     /// (probability `T(tmax)`) when the ray gets through; then the throughput is unchanged, as
     /// transmittance over its probability is one.
     #[inline]
-    pub fn sample(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32) -> Option<MediumEvent> {
-        if !self.heterogeneous {
-            return self.sample_homogeneous(o, d, tmax, u);
-        }
+    pub fn sample(&self, ray: &Ray, tmax: f32, u: f32) -> Option<MediumEvent> {
+        self.along(ray, |line| match self.heterogeneous {
+            true => self.tracked_flight(line, tmax, u),
+            false => self.sample_homogeneous(line, tmax, u),
+        })
+    }
+
+    /// [`Self::sample`] where grids are: delta tracking.
+    fn tracked_flight(&self, line: &Line, tmax: f32, u: f32) -> Option<MediumEvent> {
+        let (o, d) = (line.o, line.d);
         let len = d.length();
         // Optical depth to travel, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
         let (mut t, mut first, mut nulls) = (0.0f32, 0, 0u32);
         let mut rng = None;
         SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(o, d, tmax, segs);
+            self.segments(line, tmax, segs);
             // Sweep the piecewise-constant majorant: at `t`, the summed majorant of the
             // stretches covering [t, next) and the next stretch end or start.
             loop {
@@ -490,7 +585,7 @@ impl Media {
                 });
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, o, d, ts);
+                    let (s, e, g) = self.coefficients_at(segs, line, ts);
                     if tracked {
                         // A tentative collision: real with probability sigma_t / majorant.
                         let rng = rng.get_or_insert_with(|| Rng::seeded(o, d, u));
@@ -521,8 +616,8 @@ impl Media {
     /// order they are found, swept without sorting or majorant cells (no tentative
     /// collisions). The general sweep's sort and stretch records made cornell-smoke's renders
     /// 7.6% more instructions (callgrind, 96x96, 4 spp) than this, the sweep before grids.
-    fn sample_homogeneous(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32) -> Option<MediumEvent> {
-        let len = d.length();
+    fn sample_homogeneous(&self, line: &Line, tmax: f32, u: f32) -> Option<MediumEvent> {
+        let len = line.d.length();
         // Optical depth to travel, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
         let mut t = 0.0f32;
@@ -530,6 +625,7 @@ impl Media {
             segs.clear();
             for (i, v) in self.volumes.iter().enumerate() {
                 let (vol, maj) = (i as u32, v.medium.sigma_t.x);
+                let (o, d) = line.of(i);
                 v.intervals(o, d, tmax, |t0, t1| segs.push(Segment { t0, t1, vol, maj }));
             }
             // At `t`, the summed extinction of the stretches covering [t, next) and the next
@@ -546,7 +642,7 @@ impl Media {
                 }
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, o, d, ts);
+                    let (s, e, g) = self.coefficients_at(segs, line, ts);
                     let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
                     return Some(MediumEvent { t: ts, albedo, g });
                 }
@@ -568,18 +664,24 @@ impl Media {
     /// the three heroes, unbiased in each channel wherever any channel has extinction, with
     /// weights bounded by three times a channel's own estimator (a new hero at every flight
     /// would not bound them: their products grow along a path in a dense channel).
-    pub fn sample_chromatic(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
-        if self.heterogeneous {
-            return self.tracked_chromatic_flight(o, d, tmax, u, h);
-        }
-        let len = d.length();
+    pub fn sample_chromatic(&self, ray: &Ray, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
+        self.along(ray, |line| match self.heterogeneous {
+            true => self.tracked_chromatic_flight(line, tmax, u, h),
+            false => self.chromatic_flight(line, tmax, u, h),
+        })
+    }
+
+    /// [`Self::sample_chromatic`] where every medium is homogeneous: the optical depths are
+    /// exact.
+    fn chromatic_flight(&self, line: &Line, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
+        let len = line.d.length();
         // Optical depth to travel in channel h, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
         // Optical depth per channel so far, in units of t.
         let mut depth = Vec3::ZERO;
         let (mut t, mut first) = (0.0f32, 0);
         SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(o, d, tmax, segs);
+            self.segments(line, tmax, segs);
             loop {
                 let mut sigma = Vec3::ZERO;
                 let next = sweep(segs, &mut first, t, tmax, |s| {
@@ -590,7 +692,7 @@ impl Media {
                     // T / T_h from the difference of optical depths (neither underflows).
                     let at = depth + sigma * (ts - t);
                     let tr = exp3((Vec3::splat(at[h]) - at) * len);
-                    let (sigma_s, sigma_t, g) = self.coefficients_at(segs, o, d, ts);
+                    let (sigma_s, sigma_t, g) = self.coefficients_at(segs, line, ts);
                     let over = tr / sigma_t[h];
                     return ChromaticFlight { t: Some(ts), weight: sigma_s * over, ratio: sigma_t * over, g };
                 }
@@ -618,22 +720,22 @@ impl Media {
     /// and the real collision ends the flight with weight `sigma_s / sigma_t,h` and ratio
     /// `sigma_t / sigma_t,h` (pbrt-v4's `VolPathIntegrator`, 4th ed. 14.2.2, whose
     /// majorants are per channel).
-    fn tracked_chromatic_flight(&self, o: Vec3A, d: Vec3A, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
-        let len = d.length();
+    fn tracked_chromatic_flight(&self, line: &Line, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
+        let len = line.d.length();
         // Optical depth of the majorant to travel, in units of t.
         let mut left = -crate::math::ln(1.0 - u) / len;
         let (mut t, mut first, mut nulls) = (0.0f32, 0, 0u32);
         // The nulls' product, weight and ratio alike.
         let mut w = Vec3::ONE;
-        let mut rng = Rng::seeded(o, d, u);
+        let mut rng = Rng::seeded(line.o, line.d, u);
         SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(o, d, tmax, segs);
+            self.segments(line, tmax, segs);
             loop {
                 let mut sigma = 0.0f32;
                 let next = sweep(segs, &mut first, t, tmax, |s| sigma += s.maj);
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, o, d, ts);
+                    let (s, e, g) = self.coefficients_at(segs, line, ts);
                     if rng.next() * sigma < e[h] {
                         let over = w / e[h];
                         return ChromaticFlight { t: Some(ts), weight: s * over, ratio: e * over, g };
@@ -658,14 +760,15 @@ impl Media {
         })
     }
 
-    /// `(sigma_s, sigma_t)` of volume `i` at ray parameter `t` of `o + t d`, with its grids
+    /// `(sigma_s, sigma_t)` of volume `i` at ray parameter `t` of `line`, with its grids
     /// looked up there.
     #[inline]
-    fn volume_coefficients(&self, i: usize, o: Vec3A, d: Vec3A, t: f32) -> (Vec3, Vec3) {
+    fn volume_coefficients(&self, i: usize, line: &Line, t: f32) -> (Vec3, Vec3) {
         let m = &self.volumes[i].medium;
         if self.density[i].is_none() && self.albedo[i].is_none() {
             return (m.albedo * m.sigma_t, m.sigma_t);
         }
+        let (o, d) = line.of(i);
         let p = o + t * d;
         let sigma_t = match self.density[i] {
             Some(_) => self.extinction_at(i, p),
@@ -678,19 +781,19 @@ impl Media {
         (albedo * sigma_t, sigma_t)
     }
 
-    /// What scatters at ray parameter `t` of `o + t d`: `(sigma_s, sigma_t, g)` summed over the
+    /// What scatters at ray parameter `t` of `line`: `(sigma_s, sigma_t, g)` summed over the
     /// stretches covering it, and the phase function's asymmetry. Where overlapping media
     /// differ in phase function, one of them is picked in proportion to its scattering (summed
     /// over channels, by a number hashed from the point) and `sigma_s` is its own over the
     /// probability of the pick, so that each channel's mixture of phase functions is
     /// estimated without bias.
-    fn coefficients_at(&self, segs: &[Segment], o: Vec3A, d: Vec3A, t: f32) -> (Vec3, Vec3, f32) {
+    fn coefficients_at(&self, segs: &[Segment], line: &Line, t: f32) -> (Vec3, Vec3, f32) {
         let covering =
             || segs.iter().filter(move |seg| seg.t0 <= t && t <= seg.t1).map(|seg| seg.vol as usize);
         let (mut s, mut e) = (Vec3::ZERO, Vec3::ZERO);
         let (mut g, mut mixed) = (None, false);
         for i in covering() {
-            let (si, ei) = self.volume_coefficients(i, o, d, t);
+            let (si, ei) = self.volume_coefficients(i, line, t);
             (s, e) = (s + si, e + ei);
             let gi = self.volumes[i].medium.g;
             mixed |= g.is_some_and(|g| g != gi);
@@ -700,10 +803,10 @@ impl Media {
         if !mixed || !(total > 0.0) {
             return (s, e, g.unwrap_or(0.0));
         }
-        let mut x = Rng::seeded(o, d, t).next() * total;
+        let mut x = Rng::seeded(line.o, line.d, t).next() * total;
         let mut picked = (s, 0.0);
         for i in covering() {
-            let si = self.volume_coefficients(i, o, d, t).0;
+            let si = self.volume_coefficients(i, line, t).0;
             let share = si.element_sum();
             if share > 0.0 {
                 picked = (si * (total / share), self.volumes[i].medium.g);
@@ -727,6 +830,7 @@ mod tests {
             object_from_world: m.inverse(),
             boundary: Boundary::Closed(Closed::Box { min: Vec3A::ZERO, max: Vec3A::ONE }),
             medium: Medium::homogeneous(Vec3::splat(sigma_t), Vec3::splat(0.5)),
+            motion: VolumeMotion::Still,
         }
     }
 
@@ -758,6 +862,7 @@ mod tests {
             object_from_world: Affine3A::IDENTITY,
             boundary: Boundary::Closed(Closed::Sphere { center: Vec3A::ZERO, radius: 2.0 }),
             medium: Medium::homogeneous(Vec3::ONE, Vec3::ONE),
+            motion: VolumeMotion::Still,
         };
         let (t0, t1) = v.interval(Vec3A::new(0.0, 0.0, -10.0), Vec3A::new(0.0, 0.0, 4.0), 100.0).unwrap();
         assert!((t0 - 2.0).abs() < 1e-6 && (t1 - 3.0).abs() < 1e-6);
@@ -770,7 +875,7 @@ mod tests {
         let b = unit_box(2.0, Affine3A::from_translation(Vec3::new(0.5, 0.0, 0.0)));
         let media = Media::new(vec![a, b]);
         let (o, d) = (Vec3A::new(-1.0, 0.5, 0.5), Vec3A::new(0.5, 0.0, 0.0));
-        let tr = media.transmittance(o, d, 100.0);
+        let tr = media.transmittance(&Ray::new(o, d), 100.0);
         assert!((tr - Vec3::splat((-3.0f32).exp())).abs().max_element() < 1e-6, "{tr}");
     }
 
@@ -787,7 +892,7 @@ mod tests {
         let (mut before_overlap, mut passed) = (0, 0);
         for k in 0..n {
             let u = (k as f32 + 0.5) / n as f32;
-            match media.sample(o, d, 10.0, u) {
+            match media.sample(&Ray::new(o, d), 10.0, u) {
                 None => passed += 1,
                 Some(e) => {
                     let x = o.x + e.t;
@@ -898,14 +1003,14 @@ mod tests {
             let (mut got_through, mut got_scatter, mut tr) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
             for h in 0..3 {
                 for k in 0..n {
-                    let e = media.sample_chromatic(o, d, tmax, (k as f32 + 0.5) / n as f32, h);
+                    let e = media.sample_chromatic(&Ray::new(o, d), tmax, (k as f32 + 0.5) / n as f32, h);
                     let w = (e.weight / (e.ratio.element_sum() / 3.0)).as_dvec3();
                     match e.t {
                         None => got_through += w,
                         Some(t) => got_scatter += w * f64::from(f(o.x + d.x * t)),
                     }
                     // A new seed for each estimate: the ray's end moves, beyond the media.
-                    tr += media.transmittance(o, d, tmax + (h * n + k) as f32 * 1e-7).as_dvec3();
+                    tr += media.transmittance(&Ray::new(o, d), tmax + (h * n + k) as f32 * 1e-7).as_dvec3();
                 }
             }
             let m = (3 * n) as f64;
@@ -951,8 +1056,8 @@ mod tests {
         for k in 0..n {
             // A fresh ray each time: its start moves along the line, which changes its seed.
             let o = Vec3A::new(-1.0 - k as f32 * 1e-5, y, z);
-            tr += media.transmittance(o, Vec3A::X, 10.0).x as f64;
-            match media.sample(o, Vec3A::X, 10.0, (k as f32 + 0.5) / n as f32) {
+            tr += media.transmittance(&Ray::new(o, Vec3A::X), 10.0).x as f64;
+            match media.sample(&Ray::new(o, Vec3A::X), 10.0, (k as f32 + 0.5) / n as f32) {
                 None => passed += 1,
                 Some(e) => {
                     let x = o.x + e.t;
@@ -982,8 +1087,8 @@ mod tests {
         let (mut a, mut b) = (0.0f64, 0.0f64);
         for k in 0..n {
             let o = Vec3A::new(-1.0 - k as f32 * 1e-5, 0.5, 0.5);
-            a += alone.transmittance(o, Vec3A::X, 10.0).x as f64;
-            b += both.transmittance(o, Vec3A::X, 10.0).x as f64;
+            a += alone.transmittance(&Ray::new(o, Vec3A::X), 10.0).x as f64;
+            b += both.transmittance(&Ray::new(o, Vec3A::X), 10.0).x as f64;
         }
         // The fog covers x in [0.5, 1.5]: exp(-0.7) more.
         let (a, b) = (a / n as f64, b / n as f64);
@@ -1009,6 +1114,7 @@ mod tests {
             object_from_world: m.inverse(),
             boundary: Boundary::Mesh(Arc::new(MeshBlas::build(Arc::new(mesh)))),
             medium: Medium::homogeneous(Vec3::ONE, Vec3::splat(0.5)),
+            motion: VolumeMotion::Still,
         }
     }
 
@@ -1048,14 +1154,14 @@ mod tests {
         let mut got = Vec::new();
         media.volumes()[0].intervals(o, d, 100.0, |a, b| got.push((a, b)));
         assert_eq!(got, vec![(1.0, 2.0), (3.0, 4.0)]);
-        assert!((media.transmittance(o, d, 100.0).x - (-2.0f32).exp()).abs() < 1e-6);
+        assert!((media.transmittance(&Ray::new(o, d), 100.0).x - (-2.0f32).exp()).abs() < 1e-6);
         // From inside the first cube, the first interval starts at 0.
         got.clear();
         media.volumes()[0].intervals(Vec3A::new(0.5, 0.5, 0.5), d, 100.0, |a, b| got.push((a, b)));
         assert_eq!(got, vec![(0.0, 0.5), (1.5, 2.5)]);
         // Sampling never scatters in the gap.
         for k in 0..1000 {
-            if let Some(e) = media.sample(o, d, 100.0, (k as f32 + 0.5) / 1000.0) {
+            if let Some(e) = media.sample(&Ray::new(o, d), 100.0, (k as f32 + 0.5) / 1000.0) {
                 let x = o.x + e.t;
                 assert!(!(x > 1.0 && x < 2.0), "scattered in the gap at x = {x}");
             }

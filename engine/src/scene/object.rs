@@ -422,12 +422,6 @@ impl TryFrom<RawObject> for ObjectDesc {
                 return Err("an SdfGrid does not emit (nor does Mitsuba's sdfgrid): give it a material that reflects and no `emit`".into());
             }
         }
-        if r.motion.is_some() && matches!(body, Body::Volume(_)) {
-            return Err("media do not move: `motion` is for surfaces".into());
-        }
-        if r.animate.is_some() && matches!(body, Body::Volume(_)) {
-            return Err("media do not move: `animate` is for surfaces".into());
-        }
         if let Body::Surface(m) = &body {
             attributes_found(&r.shape, &m.0)?;
         }

@@ -184,6 +184,9 @@ pub struct SceneMedia {
     pub rebuilds: u64,
     /// The entities they were built from, sorted.
     pub entities: Vec<Entity>,
+    /// Why media were left out when last rebuilt (a transform that an animation made
+    /// singular), reported again with every frame until they are rebuilt.
+    pub left_out: Vec<String>,
 }
 
 /// The BLAS of every mesh that some instance uses, keyed by the mesh's address (each BLAS

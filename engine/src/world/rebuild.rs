@@ -7,11 +7,11 @@ use crate::accel::instances::{Instance, Instances, ShutterMotion};
 use crate::accel::mesh::MeshBlas;
 use crate::lighting::area::emission_table;
 use crate::lighting::lights::{LightInputs, LightTable};
-use crate::media::{Boundary, Media, Volume};
+use crate::media::{Boundary, Media, Volume, VolumeMotion};
 use crate::placement::{Form, primitives};
 use crate::shape::MAX_COORDINATE;
 use bevy_ecs::prelude::*;
-use glam::{Affine3A, Vec3A};
+use glam::{Affine3A, Vec3, Vec3A};
 use std::sync::Arc;
 
 /// Rebuilds primitives and BVH when a shape, transform, material id or motion changed, an
@@ -139,20 +139,7 @@ pub fn update_instances(
     time: Res<FrameTime>,
     mut errors: ResMut<FrameErrors>,
 ) {
-    // Keyframed instances that turn or scale while the shutter is open are placed per ray
-    // time; translation alone is the exact linear motion of `Motion`.
-    let shutter_motion = |anim: Option<&Animated>| -> Option<ShutterMotion> {
-        let a = anim?;
-        let (t0, t1) = (time.open, time.close);
-        let (a0, a1) = (a.keys.at(t0), a.keys.at(t1));
-        if !(t1 > t0) || a0.matrix3 == a1.matrix3 {
-            return None;
-        }
-        let v = Vec3A::from(a.velocity);
-        let a0 = Affine3A { translation: a0.translation + v * t0, ..a0 };
-        let a1 = Affine3A { translation: a1.translation + v * t1, ..a1 };
-        ShutterMotion::new(a.base, a0, a1, (t0, t1))
-    };
+    let shutter_motion = |anim: Option<&Animated>| shutter_motion(anim?, &time);
     let velocity = |m: Option<&Motion>| m.map_or(Vec3A::ZERO, |m| m.velocity.into());
     // An instance as placed, or why it cannot be: a singular transform, or a placement that
     // carries it beyond the world's bounds while the shutter is open.
@@ -253,28 +240,68 @@ pub fn update_instances(
     );
 }
 
-/// Rebuilds the media volumes when a medium, or the shape or transform of an entity with one,
-/// changed or was removed.
+/// The placement over the shutter of a keyframed object that turns or scales while the shutter
+/// is open (placed per ray time), or `None` when it does not: then translation alone is the
+/// exact linear motion of its [`Motion`].
+fn shutter_motion(a: &Animated, time: &FrameTime) -> Option<ShutterMotion> {
+    let (t0, t1) = (time.open, time.close);
+    let (a0, a1) = (a.keys.at(t0), a.keys.at(t1));
+    if !(t1 > t0) || a0.matrix3 == a1.matrix3 {
+        return None;
+    }
+    let v = Vec3A::from(a.velocity);
+    let a0 = Affine3A { translation: a0.translation + v * t0, ..a0 };
+    let a1 = Affine3A { translation: a1.translation + v * t1, ..a1 };
+    ShutterMotion::new(a.base, a0, a1, (t0, t1))
+}
+
+/// Rebuilds the media volumes when a medium, or the shape, transform or motion of an entity
+/// with one, changed or was removed, or, where media move, the frame's shutter.
 #[expect(clippy::type_complexity, reason = "ECS queries name their components and filters in their types")]
+#[expect(clippy::too_many_arguments, reason = "an ECS system takes each query and resource as a parameter")]
 pub fn rebuild_media(
     mut out: ResMut<SceneMedia>,
-    volumes: Query<(Entity, &Transform, &Shape, &Filling)>,
-    changed: Query<(), (With<Filling>, Or<(Changed<Transform>, Changed<Shape>, Changed<Filling>)>)>,
+    volumes: Query<(
+        Entity,
+        &Transform,
+        &Shape,
+        &Filling,
+        Option<&Motion>,
+        Option<&Animated>,
+        Option<&ObjectIndex>,
+    )>,
+    changed: Query<
+        (),
+        (With<Filling>, Or<(Changed<Transform>, Changed<Shape>, Changed<Filling>, Changed<Motion>)>),
+    >,
     mut removed_shape: RemovedComponents<Shape>,
     mut removed: RemovedComponents<Filling>,
+    mut stopped: RemovedComponents<Motion>,
+    time: Res<FrameTime>,
+    mut errors: ResMut<FrameErrors>,
 ) {
     let was_built_from = |e: Entity| out.entities.binary_search(&e).is_ok();
-    let removed = removed_shape.read().chain(removed.read()).any(was_built_from);
-    if !(removed || !changed.is_empty() || out.rebuilds == 0) {
+    let removed = removed_shape.read().chain(removed.read()).chain(stopped.read()).any(was_built_from);
+    // A new shutter changes how moving media are placed per ray time.
+    let new_shutter = out.media.moving() && time.is_changed();
+    if !(removed || !changed.is_empty() || new_shutter || out.rebuilds == 0) {
+        errors.0.extend(out.left_out.iter().cloned());
         return;
     }
     let _span = tracing::info_span!("rebuild_media").entered();
     let mut vols: Vec<_> = volumes.iter().collect();
     vols.sort_by_key(|(e, ..)| *e);
     out.entities = vols.iter().map(|(e, ..)| *e).collect();
+    let mut left_out = Vec::new();
     let volumes = vols
         .into_iter()
-        .filter_map(|(_, transform, shape, filling)| {
+        .filter_map(|(_, transform, shape, filling, moving, anim, index)| {
+            // Scene files are validated at load, but keyframes may scale an object to nothing.
+            let det = transform.0.matrix3.determinant();
+            if !(det != 0.0 && det.is_finite() && transform.0.translation.is_finite()) {
+                left_out.push(named(index, "its transform is singular or not finite"));
+                return None;
+            }
             let boundary = match &shape.0 {
                 Form::Mesh(mesh) => {
                     if let Some((a, b, _)) = crate::scene::open_edge(mesh) {
@@ -291,9 +318,23 @@ pub fn rebuild_media(
                     }
                 },
             };
-            Some(Volume { object_from_world: transform.0.inverse(), boundary, medium: filling.0.clone() })
+            let motion = match (anim.and_then(|a| shutter_motion(a, &time)), moving) {
+                (Some(motion), _) => {
+                    VolumeMotion::Keyed { motion: Box::new(motion), world_from_object: transform.0 }
+                }
+                (None, Some(m)) if m.velocity != Vec3::ZERO => VolumeMotion::Linear(m.velocity.into()),
+                (None, _) => VolumeMotion::Still,
+            };
+            Some(Volume {
+                object_from_world: transform.0.inverse(),
+                boundary,
+                medium: filling.0.clone(),
+                motion,
+            })
         })
         .collect();
+    errors.0.extend(left_out.iter().cloned());
+    out.left_out = left_out;
     out.media = Arc::new(Media::new(volumes));
     out.rebuilds += 1;
 }
@@ -486,5 +527,71 @@ mod tests {
         assert!(with.features.media);
         w.world.despawn(v);
         assert!(!w.update().features.media);
+    }
+
+    /// A medium's motion reaches its volume: rays find it where it is at their time; a new
+    /// shutter rebuilds the media only while one moves; stopping rebuilds; keys that scale it
+    /// to nothing leave it out, with an error every frame until it is whole again.
+    #[test]
+    fn moving_media_follow_their_motion_and_rebuild_with_the_shutter() {
+        let desc = parse(
+            r#"Scene(
+                camera: (look_from: (0, 0, 5), look_at: (0, 0, 0), vfov: 40, shutter: (0, 1)),
+                materials: { "a": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+                objects: [
+                    (shape: Box(a: (0, 0, 0), b: (1, 1, 1)), medium: (density: 1, albedo: (1, 1, 1)), motion: (velocity: (2, 0, 0))),
+                    (
+                        shape: Box(a: (0, 3, 0), b: (1, 4, 1)),
+                        medium: (density: 2, albedo: (1, 1, 1)),
+                        animate: (scale: Linear([(0, (1, 1, 1)), (10, (0, 0, 0))])),
+                    ),
+                ],
+            )"#,
+            Path::new("<test>"),
+        )
+        .unwrap();
+        let mut w = SceneWorld::new(&desc);
+        let media_rebuilds = |w: &SceneWorld| w.world.resource::<SceneMedia>().rebuilds;
+        let s = w.update();
+        assert!(s.media.moving() && s.features.motion);
+        // Along z through x = 2.5: the first box covers it from time 0.75 to 1.25.
+        let through = |s: &RenderScene, t: f32| {
+            let ray = Ray { origin: Vec3A::new(2.5, 0.5, -5.0), dir: Vec3A::Z, time: t };
+            s.media.transmittance(&ray, 10.0).x
+        };
+        assert_eq!((through(&s, 0.0), through(&s, 0.7)), (1.0, 1.0));
+        assert!((through(&s, 0.8) - (-1.0f32).exp()).abs() < 1e-6);
+
+        // A new shutter rebuilds them; the same one does not.
+        let n = media_rebuilds(&w);
+        w.set_time(0.0, 2.0);
+        w.update();
+        assert_eq!(media_rebuilds(&w), n + 1);
+        w.update();
+        assert_eq!(media_rebuilds(&w), n + 1);
+
+        // Stopped (the first box's motion removed, the second's keys still over a closed
+        // shutter): a rebuild, then none for a new shutter.
+        let mut objects = w.world.query::<(Entity, &ObjectIndex)>();
+        let first = objects.iter(&w.world).find(|(_, i)| i.0 == 0).unwrap().0;
+        w.world.entity_mut(first).remove::<Motion>();
+        w.set_time(1.0, 1.0);
+        let s = w.update();
+        assert!(!s.media.moving() && through(&s, 0.8) == 1.0);
+        let n = media_rebuilds(&w);
+        w.set_time(1.0, 1.0);
+        w.update();
+        assert_eq!(media_rebuilds(&w), n);
+
+        // Scaled to nothing at time 10: left out, and said so every frame.
+        w.set_time(10.0, 10.0);
+        let s = w.update();
+        assert_eq!(s.media.volumes().len(), 1);
+        let said = |w: &SceneWorld| w.world.resource::<FrameErrors>().0.clone();
+        assert_eq!(said(&w), ["objects[1]: its transform is singular or not finite"]);
+        w.update();
+        assert_eq!(said(&w).len(), 1);
+        w.set_time(5.0, 5.0);
+        assert_eq!((w.update().media.volumes().len(), said(&w).len()), (2, 0));
     }
 }

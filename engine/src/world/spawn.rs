@@ -99,17 +99,17 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         desc.objects.iter().zip(instanced).zip(shapes).zip(ids).enumerate()
     {
         let placed = (Transform(compose(&obj.transform)), Shape(shape), ObjectIndex(i as u32));
-        // Objects without a material id are volumes.
-        let Some(id) = id else {
-            if let Body::Volume(m) = &obj.body {
+        let mut e = match id {
+            Some(id) => world.spawn((placed, MaterialId(id))),
+            // Objects without a material id are volumes.
+            None => {
+                let Body::Volume(m) = &obj.body else { continue };
                 match m.medium() {
                     Some(medium) => world.spawn((placed, Filling(medium))),
                     None => world.spawn((placed, GridSequence(m.clone()), GridInputs::default())),
-                };
+                }
             }
-            continue;
         };
-        let mut e = world.spawn((placed, MaterialId(id)));
         let velocity = obj.motion.map_or(Vec3::ZERO, |m| m.velocity.0);
         if obj.motion.is_some() || obj.animate.is_some() {
             e.insert(Motion { velocity });
