@@ -33,187 +33,22 @@
 //! flight's first number, these take numbers from a generator seeded by a hash of the ray (as
 //! pbrt-v4 seeds its majorant sampling), so that an image stays a function of its samples.
 //! Where every medium is homogeneous, the majorant is the extinction and nothing else is drawn.
+//!
+//! Here: the scene's [`Media`] and their queries. What a volume is (medium, boundary, motion)
+//! is in the `volume` module, the tracking through grids in `tracking`.
 
 pub mod grid;
 pub mod phase;
+mod tracking;
+mod volume;
 
-use crate::accel::instances::ShutterMotion;
-use crate::accel::mesh::MeshBlas;
+pub use tracking::MAX_TRACKING_STEPS;
+pub use volume::{Boundary, Medium, PlacedGrid, Volume, VolumeMotion};
+
 use crate::math::Ray;
-use crate::shape::Closed;
-use glam::{Affine3A, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 use std::cell::RefCell;
-use std::sync::Arc;
-
-/// A medium: homogeneous, or scaled by grids.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Medium {
-    /// Extinction coefficient per unit length, per channel.
-    pub sigma_t: Vec3,
-    /// Single-scattering albedo `sigma_s / sigma_t`.
-    pub albedo: Vec3,
-    /// The density's grid: `sigma_t` times its value where its cube is, no medium outside
-    /// (Mitsuba's `heterogeneous` medium, which exists only in its `sigma_t` volume's bounding
-    /// box). Only with grey `sigma_t`.
-    pub density_grid: Option<PlacedGrid>,
-    /// The albedo's grid: `albedo` times its colour (taken from its edges outside its cube).
-    pub albedo_grid: Option<PlacedGrid>,
-    /// The Henyey-Greenstein phase function's asymmetry `g`, in (-1, 1) ([`phase`]; 0:
-    /// isotropic).
-    pub g: f32,
-}
-
-/// A grid in an object's space: it fills the unit cube of `grid_from_object`'s image.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PlacedGrid {
-    /// The values.
-    pub grid: Arc<grid::VoxelGrid>,
-    /// Object space to grid space.
-    pub grid_from_object: Affine3A,
-}
-
-/// The object-space shape that bounds a volume.
-#[derive(Clone, Debug)]
-pub enum Boundary {
-    /// A box or a ball, entered and left once along a ray.
-    Closed(Closed),
-    /// A closed triangle mesh (checked closed at load).
-    Mesh(Arc<MeshBlas>),
-}
-
-/// A medium filling a transformed boundary.
-#[derive(Clone, Debug)]
-pub struct Volume {
-    /// World to object space (the inverse of the object's transform).
-    pub object_from_world: Affine3A,
-    /// The boundary in object space.
-    pub boundary: Boundary,
-    /// What fills it.
-    pub medium: Medium,
-    /// How it moves while the shutter is open.
-    pub motion: VolumeMotion,
-}
-
-/// How a volume moves while the shutter is open (as instances do, [`crate::accel::instances`]).
-#[derive(Clone, Debug, Default)]
-pub enum VolumeMotion {
-    /// It stays where `object_from_world` places it.
-    #[default]
-    Still,
-    /// At time `t` it lies translated by this velocity times `t` from where
-    /// `object_from_world` places it.
-    Linear(Vec3A),
-    /// It turns or scales while the shutter is open.
-    Keyed {
-        /// Places it per ray time.
-        motion: Box<ShutterMotion>,
-        /// The inverse of the volume's `object_from_world`: takes rays from its object space
-        /// back to its rest frame.
-        world_from_object: Affine3A,
-    },
-}
-
-impl Medium {
-    /// A homogeneous medium.
-    pub fn homogeneous(sigma_t: Vec3, albedo: Vec3) -> Self {
-        Self { sigma_t, albedo, density_grid: None, albedo_grid: None, g: 0.0 }
-    }
-
-    /// The same extinction in every channel.
-    #[inline]
-    pub fn grey(&self) -> bool {
-        self.sigma_t.x == self.sigma_t.y && self.sigma_t.y == self.sigma_t.z
-    }
-}
-
-impl Volume {
-    /// The ray `o + t d` at `time` in the volume's rest frame, the space in which
-    /// `object_from_world` places it (`t` unchanged).
-    #[inline]
-    fn rest_ray(&self, o: Vec3A, d: Vec3A, time: f32) -> (Vec3A, Vec3A) {
-        match &self.motion {
-            VolumeMotion::Still => (o, d),
-            VolumeMotion::Linear(v) => (o - *v * time, d),
-            VolumeMotion::Keyed { motion, world_from_object } => {
-                let (o, d) = motion.object_ray(time, o, d);
-                (world_from_object.transform_point3a(o), world_from_object.transform_vector3a(d))
-            }
-        }
-    }
-
-    /// Calls `out(t0, t1)` for each `t` interval of `o + t d` inside the volume, clipped to
-    /// `[0, tmax]`, in increasing order. Affine maps preserve `t`, so intervals are computed in
-    /// object space.
-    #[inline]
-    pub fn intervals(&self, o: Vec3A, d: Vec3A, tmax: f32, mut out: impl FnMut(f32, f32)) {
-        let Boundary::Mesh(blas) = &self.boundary else {
-            if let Some((t0, t1)) = self.interval(o, d, tmax) {
-                out(t0, t1);
-            }
-            return;
-        };
-        let (o, d) =
-            (self.object_from_world.transform_point3a(o), self.object_from_world.transform_vector3a(d));
-        HITS.with_borrow_mut(|hits| {
-            hits.clear();
-            blas.all_hits(o, d, hits);
-            hits.sort_unstable_by(f32::total_cmp);
-            // An odd number of hits ahead: the origin is inside.
-            let mut start = (hits.len() % 2 == 1).then_some(0.0f32);
-            for &t in hits.iter() {
-                match start.take() {
-                    Some(t0) => {
-                        let t1 = t.min(tmax);
-                        if t0 < t1 {
-                            out(t0, t1);
-                        }
-                    }
-                    None => start = Some(t),
-                }
-                if t >= tmax {
-                    break;
-                }
-            }
-        });
-    }
-
-    /// The one `t` interval of `o + t d` inside a box or sphere volume, clipped to `[0, tmax]`,
-    /// or `None` (always `None` for a mesh: see [`Self::intervals`]).
-    #[inline]
-    pub fn interval(&self, o: Vec3A, d: Vec3A, tmax: f32) -> Option<(f32, f32)> {
-        let o = self.object_from_world.transform_point3a(o);
-        let d = self.object_from_world.transform_vector3a(d);
-        let (t0, t1) = match self.boundary {
-            Boundary::Mesh(_) => return None,
-            Boundary::Closed(Closed::Box { min, max }) => {
-                let inv = d.recip();
-                let (a, b) = ((min - o) * inv, (max - o) * inv);
-                // 0 * inf = NaN: a ray parallel to a slab and in one of its planes, which
-                // counts as inside the (closed) box: that slab does not limit it.
-                let nan = a.cmpne(a) | b.cmpne(b);
-                let lo = Vec3A::select(nan, Vec3A::NEG_INFINITY, a.min(b));
-                let hi = Vec3A::select(nan, Vec3A::INFINITY, a.max(b));
-                (lo.max_element(), hi.min_element())
-            }
-            Boundary::Closed(Closed::Sphere { center, radius }) => {
-                // Ray Tracing Gems ch. 7: the discriminant from the closest-approach vector.
-                let len = d.length();
-                let dn = d / len;
-                let f = o - center;
-                let b = -f.dot(dn);
-                let perp = f + b * dn;
-                let disc = radius * radius - perp.length_squared();
-                if !(disc >= 0.0) {
-                    return None;
-                }
-                let h = disc.sqrt();
-                ((b - h) / len, (b + h) / len)
-            }
-        };
-        let (t0, t1) = (t0.max(0.0), t1.min(tmax));
-        (t0 < t1).then_some((t0, t1))
-    }
-}
+use tracking::{Rng, WorldGrid};
 
 /// `exp` of each component.
 #[inline]
@@ -222,8 +57,6 @@ fn exp3(x: Vec3) -> Vec3 {
 }
 
 thread_local! {
-    /// Scratch for the hits of a mesh boundary.
-    static HITS: RefCell<Vec<f32>> = const { RefCell::new(Vec::new()) };
     /// Scratch for the intervals of all volumes along a ray.
     static SEGMENTS: RefCell<Vec<Segment>> = const { RefCell::new(Vec::new()) };
     /// Scratch for a ray in the rest frame of each volume, where media move.
@@ -250,18 +83,6 @@ impl Line<'_> {
         }
     }
 }
-
-/// The most tentative collisions one free flight or transmittance estimate takes through
-/// grids: a ray that would take more (a majorant far above the density it meets, over a long
-/// stretch) is taken as absorbed, so that no input can stall a render. Delta tracking meets
-/// about `majorant x length` of them, a million only past an optical depth of a million.
-#[cfg(not(fuzzing))]
-pub const MAX_TRACKING_STEPS: u32 = 1 << 20;
-/// The most tentative collisions one free flight or transmittance estimate takes, in fuzzing
-/// builds (`cargo fuzz` sets `cfg(fuzzing)`): 4096, so that the hostile grids the fuzzers make
-/// (1e6 beside zeros) end in milliseconds and they reach their executions.
-#[cfg(fuzzing)]
-pub const MAX_TRACKING_STEPS: u32 = 1 << 12;
 
 /// A stretch `[t0, t1]` of a ray inside volume `vol`, whose extinction there is at most `maj`
 /// in every channel (its largest channel's, for a homogeneous volume).
@@ -293,57 +114,6 @@ fn sweep(segs: &[Segment], first: &mut usize, t: f32, tmax: f32, mut cover: impl
         }
     }
     next
-}
-
-/// A grid as a volume looks it up: from world space.
-#[derive(Clone, Debug)]
-struct WorldGrid {
-    grid: Arc<grid::VoxelGrid>,
-    grid_from_world: Affine3A,
-}
-
-impl WorldGrid {
-    fn new(g: &Option<PlacedGrid>, object_from_world: Affine3A) -> Option<Self> {
-        g.as_ref()
-            .map(|g| Self { grid: g.grid.clone(), grid_from_world: g.grid_from_object * object_from_world })
-    }
-
-    /// The `t` interval of `o + t d` inside the grid's cube (unclipped), or `None`.
-    #[inline]
-    fn interval(&self, o: Vec3A, d: Vec3A) -> Option<(f32, f32)> {
-        let (o, d) = (self.grid_from_world.transform_point3a(o), self.grid_from_world.transform_vector3a(d));
-        let inv = d.recip();
-        let (a, b) = (-o * inv, (Vec3A::ONE - o) * inv);
-        // 0 * inf = NaN: a ray in a face's plane, inside the closed cube along that axis.
-        let nan = a.cmpne(a) | b.cmpne(b);
-        let lo = Vec3A::select(nan, Vec3A::NEG_INFINITY, a.min(b)).max_element();
-        let hi = Vec3A::select(nan, Vec3A::INFINITY, a.max(b)).min_element();
-        (lo < hi).then_some((lo, hi))
-    }
-}
-
-/// A small generator for the numbers of delta and ratio tracking beyond the sampler's
-/// (splitmix64: Steele et al., "Fast splittable pseudorandom number generators", OOPSLA 2014),
-/// seeded by hashing the bits of a ray.
-struct Rng(u64);
-
-impl Rng {
-    fn mix(mut z: u64) -> u64 {
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    fn seeded(o: Vec3A, d: Vec3A, x: f32) -> Self {
-        let words = [o.x, o.y, o.z, d.x, d.y, d.z, x].map(f32::to_bits);
-        Self(words.iter().fold(0x243f_6a88_85a3_08d3, |h, &w| Self::mix(h ^ w as u64)))
-    }
-
-    /// A number in [0, 1).
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        (Self::mix(self.0) >> 40) as f32 / (1u64 << 24) as f32
-    }
 }
 
 /// All volumes of a scene.
@@ -508,56 +278,6 @@ impl Media {
         })
     }
 
-    /// [`Self::transmittance`] in media with grids: Beer-Lambert through the homogeneous
-    /// stretches times, per grid stretch, the product of `1 - sigma_t / majorant` over
-    /// tentative collisions (ratio tracking), in every channel at once: the majorant bounds
-    /// the largest channel, so that each factor lies in [0, 1].
-    #[inline(never)]
-    fn tracked_transmittance(&self, line: &Line, tmax: f32) -> Vec3 {
-        let len = line.d.length();
-        let mut rng = Rng::seeded(line.o, line.d, tmax);
-        let mut steps = 0u32;
-        SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(line, tmax, segs);
-            let mut depth = Vec3::ZERO;
-            let mut tr = Vec3A::ONE;
-            for s in segs.iter() {
-                let i = s.vol as usize;
-                if self.density[i].is_none() {
-                    depth += self.volumes[i].medium.sigma_t * (s.t1 - s.t0);
-                    continue;
-                }
-                let (o, d) = line.of(i);
-                let mut t = s.t0;
-                loop {
-                    t -= crate::math::ln(1.0 - rng.next()) / (s.maj * len);
-                    if !(t < s.t1) {
-                        break;
-                    }
-                    tr *= Vec3A::ONE - Vec3A::from(self.extinction_at(i, o + t * d)) / s.maj;
-                    steps += 1;
-                    if steps > MAX_TRACKING_STEPS {
-                        return Vec3::ZERO;
-                    }
-                    // Russian roulette once little gets through (pbrt-v4's ratio tracking): the
-                    // steps end soon in dense media, and the estimate stays unbiased.
-                    if tr.max_element() < 0.05 {
-                        if rng.next() < 0.75 {
-                            return Vec3::ZERO;
-                        }
-                        tr /= 0.25;
-                    }
-                }
-            }
-            // (One exponential where every channel is the same.)
-            let through = match self.chromatic {
-                true => exp3(-depth * len),
-                false => Vec3::splat(crate::math::exp(-depth.x * len)),
-            };
-            Vec3::from(tr.max(Vec3A::ZERO)) * through
-        })
-    }
-
     /// Free-flight sampling along `o + t d` up to `tmax` (the closest surface, or infinity) in
     /// grey media: the distance has density `sigma_t(t) T(t)`, from the uniform number `u` by
     /// inverting the optical depth (of the majorant, where grids are: delta tracking). `None`
@@ -568,53 +288,6 @@ impl Media {
         self.along(ray, |line| match self.heterogeneous {
             true => self.tracked_flight(line, tmax, u),
             false => self.sample_homogeneous(line, tmax, u),
-        })
-    }
-
-    /// [`Self::sample`] where grids are: delta tracking.
-    fn tracked_flight(&self, line: &Line, tmax: f32, u: f32) -> Option<MediumEvent> {
-        let (o, d) = (line.o, line.d);
-        let len = d.length();
-        // Optical depth to travel, in units of t.
-        let mut left = -crate::math::ln(1.0 - u) / len;
-        let (mut t, mut first, mut nulls) = (0.0f32, 0, 0u32);
-        let mut rng = None;
-        SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(line, tmax, segs);
-            // Sweep the piecewise-constant majorant: at `t`, the summed majorant of the
-            // stretches covering [t, next) and the next stretch end or start.
-            loop {
-                let (mut sigma, mut tracked) = (0.0f32, false);
-                let next = sweep(segs, &mut first, t, tmax, |s| {
-                    sigma += s.maj;
-                    tracked |= self.density[s.vol as usize].is_some();
-                });
-                if sigma > 0.0 && sigma * (next - t) > left {
-                    let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, line, ts);
-                    if tracked {
-                        // A tentative collision: real with probability sigma_t / majorant.
-                        let rng = rng.get_or_insert_with(|| Rng::seeded(o, d, u));
-                        if !(rng.next() * sigma < e.x) {
-                            nulls += 1;
-                            if nulls > MAX_TRACKING_STEPS {
-                                // Absorbed (see MAX_TRACKING_STEPS).
-                                return Some(MediumEvent { t: ts, albedo: Vec3::ZERO, g });
-                            }
-                            t = ts;
-                            left = -crate::math::ln(1.0 - rng.next()) / len;
-                            continue;
-                        }
-                    }
-                    let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
-                    return Some(MediumEvent { t: ts, albedo, g });
-                }
-                left -= sigma * (next - t);
-                if !(next > t) || next >= tmax {
-                    return None;
-                }
-                t = next;
-            }
         })
     }
 
@@ -716,56 +389,6 @@ impl Media {
         })
     }
 
-    /// [`Self::sample_chromatic`] where grids are: delta tracking against the majorant of the
-    /// largest channel, `sigma_maj` (one for every channel, so that the majorant's
-    /// transmittance is the same in each and cancels from the ratios). A tentative collision
-    /// is real with probability `sigma_t,h / sigma_maj` in the hero channel `h`, else null.
-    /// Had channel `c` been the hero, the same collision's density would have been
-    /// `sigma_t,c` (real) or `sigma_maj - sigma_t,c` (null) times the majorant's part; so a
-    /// null multiplies weight and ratio by `(sigma_maj - sigma_t) / (sigma_maj - sigma_t,h)`,
-    /// and the real collision ends the flight with weight `sigma_s / sigma_t,h` and ratio
-    /// `sigma_t / sigma_t,h` (pbrt-v4's `VolPathIntegrator`, 4th ed. 14.2.2, whose
-    /// majorants are per channel).
-    fn tracked_chromatic_flight(&self, line: &Line, tmax: f32, u: f32, h: usize) -> ChromaticFlight {
-        let len = line.d.length();
-        // Optical depth of the majorant to travel, in units of t.
-        let mut left = -crate::math::ln(1.0 - u) / len;
-        let (mut t, mut first, mut nulls) = (0.0f32, 0, 0u32);
-        // The nulls' product, weight and ratio alike.
-        let mut w = Vec3::ONE;
-        let mut rng = Rng::seeded(line.o, line.d, u);
-        SEGMENTS.with_borrow_mut(|segs| {
-            self.segments(line, tmax, segs);
-            loop {
-                let mut sigma = 0.0f32;
-                let next = sweep(segs, &mut first, t, tmax, |s| sigma += s.maj);
-                if sigma > 0.0 && sigma * (next - t) > left {
-                    let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, line, ts);
-                    if rng.next() * sigma < e[h] {
-                        let over = w / e[h];
-                        return ChromaticFlight { t: Some(ts), weight: s * over, ratio: e * over, g };
-                    }
-                    let null = (Vec3::splat(sigma) - e).max(Vec3::ZERO);
-                    w *= null / null[h];
-                    nulls += 1;
-                    if nulls > MAX_TRACKING_STEPS || !w.is_finite() {
-                        // Absorbed (see MAX_TRACKING_STEPS).
-                        return ChromaticFlight { t: None, weight: Vec3::ZERO, ratio: Vec3::ZERO, g: 0.0 };
-                    }
-                    t = ts;
-                    left = -crate::math::ln(1.0 - rng.next()) / len;
-                    continue;
-                }
-                left -= sigma * (next - t);
-                if !(next > t) || next >= tmax {
-                    return ChromaticFlight { t: None, weight: w, ratio: w, g: 0.0 };
-                }
-                t = next;
-            }
-        })
-    }
-
     /// `(sigma_s, sigma_t)` of volume `i` at ray parameter `t` of `line`, with its grids
     /// looked up there.
     #[inline]
@@ -829,7 +452,11 @@ impl Media {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::mesh::MeshBlas;
+    use crate::shape::Closed;
+    use glam::Affine3A;
     use glam::DVec3;
+    use std::sync::Arc;
 
     fn unit_box(sigma_t: f32, m: Affine3A) -> Volume {
         Volume {
