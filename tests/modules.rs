@@ -4,6 +4,9 @@
 //!
 //! A module's arrows are the `crate::name` paths in its files (its submodules included, doc
 //! comments and unit tests not), `name` being another top-level module of the same crate.
+//!
+//! And no source file grows past [`MAX_LINES`] before its unit tests: one that does holds more
+//! than one idea, and is split by idea (issue 42).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -50,9 +53,8 @@ fn crate_paths(text: &str) -> BTreeSet<String> {
     out
 }
 
-/// The files of `src`, by top-level module (`a.rs` and everything under `a/`); the crate root's
-/// own files (`lib.rs`, `main.rs`) are left out.
-fn modules(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
+/// The `.rs` files under `src` that are not unit tests, sorted.
+fn source_files(src: &Path) -> Vec<PathBuf> {
     fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
@@ -68,8 +70,15 @@ fn modules(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
     // A unit-test module in a file of its own (`#[cfg(test)] mod tests;`) is test code too.
     let tests: BTreeSet<PathBuf> = files.iter().flat_map(|f| test_files(f)).collect();
     files.retain(|f| !tests.contains(f));
+    files.sort();
+    files
+}
+
+/// The files of `src`, by top-level module (`a.rs` and everything under `a/`); the crate root's
+/// own files (`lib.rs`, `main.rs`) are left out.
+fn modules(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
     let mut by_module: BTreeMap<String, Vec<PathBuf>> = BTreeMap::new();
-    for f in files {
+    for f in source_files(src) {
         let rel = f.strip_prefix(src).unwrap();
         let first = rel.components().next().unwrap().as_os_str().to_string_lossy().into_owned();
         let name = first.trim_end_matches(".rs").to_owned();
@@ -162,6 +171,15 @@ fn find_cycle(arrows: &BTreeMap<(String, String), PathBuf>) -> Option<Vec<String
     None
 }
 
+/// The most lines a source file holds before its unit tests.
+const MAX_LINES: usize = 600;
+
+/// The lines of `text` before its first line that starts with `#[cfg(test)]` (the unit tests
+/// that close a file; an indented one inside the code does not end it).
+fn lines_before_tests(text: &str) -> usize {
+    text.lines().take_while(|l| !l.starts_with("#[cfg(test)]")).count()
+}
+
 fn check(crate_src: &str) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(crate_src);
     let arrows = arrows(&src);
@@ -196,6 +214,37 @@ fn integrator_modules_have_no_cycle() {
 #[test]
 fn cli_modules_have_no_cycle() {
     check("src");
+}
+
+/// Every source file of the three crates, unit tests in files of their own left out, holds at
+/// most [`MAX_LINES`] lines before its unit tests; the message names every file over.
+#[test]
+fn no_source_file_is_over_600_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut over = Vec::new();
+    let mut seen = 0;
+    for src in ["engine/src", "integrator/src", "src"] {
+        for f in source_files(&root.join(src)) {
+            seen += 1;
+            let n = lines_before_tests(&std::fs::read_to_string(&f).unwrap());
+            if n > MAX_LINES {
+                over.push(format!("{} ({n} lines)", f.strip_prefix(root).unwrap().display()));
+            }
+        }
+    }
+    assert!(seen > 100, "only {seen} source files found: is the walk reading the crates?");
+    assert!(
+        over.is_empty(),
+        "{} source files are over {MAX_LINES} lines before their unit tests (split each by idea): {}",
+        over.len(),
+        over.join(", ")
+    );
+}
+
+#[test]
+fn lines_are_counted_up_to_the_unit_tests() {
+    assert_eq!(lines_before_tests("a\n\n    #[cfg(test)]\n    fn f() {}\n#[cfg(test)]\nmod tests {}\n"), 4);
+    assert_eq!(lines_before_tests("a\nb\n"), 2);
 }
 
 #[test]

@@ -2,17 +2,25 @@
 //! stages so that both compute every sample identically: what a ray that leaves the scene adds,
 //! what an emitter hit adds (MIS-weighted), the light sample that becomes a shadow ray, and
 //! BSDF sampling with Russian roulette.
+//!
+//! The light sample and shadow rays are in `light`, the steps in media in `medium`, the camera
+//! rays that start paths in `camera`.
+
+mod camera;
+mod light;
+mod medium;
+
+pub use camera::{camera_ray, camera_rays, camera_sampler};
+pub(crate) use light::{light_choice, pick_light};
+pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
+pub use medium::{chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
-use pathwave_engine::camera::RayLanes;
-use pathwave_engine::filter::PixelFilter;
-use pathwave_engine::lighting::lights::OtherLight;
 use pathwave_engine::material::wrap::{Resolved, terminator_shadowing};
 use pathwave_engine::material::{Material, Reads};
-use pathwave_engine::math::{Ray, offset_ray_origin, uniform_sphere};
-use pathwave_engine::media::phase::{hg, sample_hg};
+use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
 
@@ -115,239 +123,6 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, wo: Vec3A, time:
         power_heuristic(st.prev_pdf, scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, sp.p, sp.n, time))
     };
     st.l += st.beta * le * w;
-}
-
-/// A light sample seen from a point: the direction to it, the emitted radiance arriving, the
-/// density (solid angle, light choice included) and the offset point on the light to aim at.
-/// For a point, spot or directional light (`delta`), `le / pdf` is its estimate and `pdf` the
-/// choice's probability alone: BSDF sampling cannot reach it, so there is no MIS weight.
-pub(crate) struct LightPick {
-    pub wi: Vec3A,
-    pub le: Vec3,
-    pub pdf: f32,
-    pub target: Vec3A,
-    pub delta: bool,
-}
-
-/// Picks a light with `u_pick` and a point on it with `u` as seen from `p`; `None` when it
-/// sends nothing towards `p`.
-#[inline]
-pub(crate) fn pick_light(
-    scene: &RenderScene,
-    p: Vec3A,
-    time: f32,
-    u_pick: f32,
-    u: Vec2,
-) -> Option<LightPick> {
-    let geo = &*scene.geometry;
-    let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(u_pick);
-    if let Some(other) = lights.other(light) {
-        return pick_other(scene, other, pmf, p, u);
-    }
-    let ls = lights.sample(geo, light, p, u, time);
-    let to = ls.p - p;
-    let dist = to.length();
-    if !(dist > 0.0) {
-        return None;
-    }
-    let wi = to / dist;
-    let prim = lights.prims[light];
-    // A light's primitive emits: its material id is in the emission table.
-    let emission = lights.emission[geo.material[prim as usize] as usize].as_ref()?;
-    let le = emission.emitted(&scene.textures, ls.n.dot(-wi), || geo.surface(prim, ls.p, time));
-    let pdf = ls.pdf * pmf;
-    if le == Vec3::ZERO || !(pdf > 0.0) {
-        return None;
-    }
-    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
-    Some(LightPick { wi, le, pdf, target, delta: false })
-}
-
-/// [`pick_light`] for a light that is not a primitive, chosen with probability `pmf`.
-#[inline(never)]
-fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
-    match light {
-        OtherLight::Punctual(l) => {
-            let (wi, dist, le) = l.illuminate(p, &scene.textures);
-            if le == Vec3::ZERO || !(dist > 0.0) {
-                return None;
-            }
-            let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
-            Some(LightPick { wi, le, pdf: pmf, target, delta: true })
-        }
-        OtherLight::Environment => {
-            // The MIS-compensated density of a map (`Background::sample`): every caller, at
-            // surfaces of every shading kind and in media, weighs this sample by MIS against
-            // BSDF or phase sampling, which reaches the directions it leaves out.
-            let s = scene.background.sample(u)?;
-            let pdf = s.pdf * pmf;
-            if s.radiance == Vec3::ZERO || !(pdf > 0.0) {
-                return None;
-            }
-            Some(LightPick {
-                wi: s.dir,
-                le: s.radiance,
-                pdf,
-                target: scene.lights.beyond(p, s.dir),
-                delta: false,
-            })
-        }
-    }
-}
-
-/// The number that chooses the light at the vertex after `depth` bounces (one light needs
-/// none).
-#[inline]
-pub(crate) fn light_choice(scene: &RenderScene, sampler: &Sampler, depth: u32) -> f32 {
-    if scene.lights.len() > 1 { sampler.get_1d(Dims::vertex(depth, Dims::LIGHT_PICK)) } else { 0.0 }
-}
-
-/// The fraction of a shadow ray's contribution that gets through, per channel: `None` when
-/// something blocks it (what surfaces with a null lobe let through,
-/// [`RenderScene::null_transmittance`], in scenes that have them), times
-/// [`media_transmittance`].
-#[inline]
-pub fn shadow_transmittance(scene: &RenderScene, ray: &Ray) -> Option<Vec3> {
-    let surfaces = match scene.occluded(ray, 1.0) {
-        false => 1.0,
-        true if scene.features.null_surfaces => scene.null_transmittance(ray),
-        true => 0.0,
-    };
-    (surfaces > 0.0).then(|| media_transmittance(scene, ray) * surfaces)
-}
-
-/// What the media let through along a shadow ray that nothing blocks, from its origin to the
-/// light point at `t = 1`, per channel (1 without media).
-#[inline]
-pub fn media_transmittance(scene: &RenderScene, ray: &Ray) -> Vec3 {
-    match scene.features.media {
-        true => scene.media.transmittance(ray, 1.0),
-        false => Vec3::ONE,
-    }
-}
-
-/// Traces a shadow ray at once (one path at a time) and adds what gets through.
-#[inline]
-pub fn trace_shadow(scene: &RenderScene, st: &mut PathState, s: &ShadowRay) {
-    if let Some(tr) = shadow_transmittance(scene, &s.ray) {
-        st.l += s.contribution * tr;
-    }
-}
-
-/// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
-/// miss) with the number `u`, the path's [`medium_dim`] of its depth. When the ray scatters
-/// first, the throughput takes the medium's albedo and the scattering point is returned with
-/// the phase function's asymmetry there; otherwise nothing changes. In coloured media see [`chromatic_flight`] (`ratio`, the path's
-/// `depth` and its first number `u0` serve only there). Call only for scenes with media.
-#[inline]
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the path's pieces a flight reads and writes, from the oracle and the wavefront alike"
-)]
-pub fn sample_medium(
-    scene: &RenderScene,
-    beta: &mut Vec3,
-    ratio: &mut Vec3,
-    ray: &Ray,
-    tmax: f32,
-    u: f32,
-    depth: u32,
-    u0: impl FnOnce() -> f32,
-) -> Option<(Vec3A, f32)> {
-    if scene.media.chromatic() {
-        let u0 = if depth == 0 { None } else { Some(u0()) };
-        return chromatic_flight(scene, beta, ratio, ray, tmax, u, u0);
-    }
-    let e = scene.media.sample(ray, tmax, u)?;
-    *beta *= e.albedo;
-    Some((ray.at(e.t), e.g))
-}
-
-/// A free flight through coloured media ([`Media::sample_chromatic`]) with the number `u`: the
-/// path's hero channel is `floor(3 u0)`, `u0` the number of its first flight (the camera ray's,
-/// `None` on that flight, whose distance then takes `3 u - hero`, independent of the choice). `ratio` holds the path's density ratios
-/// (each channel as hero over the actual hero) over their mean, and `beta` the throughput over
-/// that mean, so that whatever the path gathers is already weighted by the spectral MIS over
-/// whole paths: nothing else in the integrators changes.
-///
-/// [`Media::sample_chromatic`]: pathwave_engine::media::Media::sample_chromatic
-#[inline(never)]
-pub fn chromatic_flight(
-    scene: &RenderScene,
-    beta: &mut Vec3,
-    ratio: &mut Vec3,
-    ray: &Ray,
-    tmax: f32,
-    u: f32,
-    u0: Option<f32>,
-) -> Option<(Vec3A, f32)> {
-    let hero = ((u0.unwrap_or(u) * 3.0) as usize).min(2);
-    // On the camera ray its distance takes the rest of the number.
-    let u = match u0 {
-        None => (u * 3.0 - hero as f32).clamp(0.0, 1.0 - f32::EPSILON / 2.0),
-        Some(_) => u,
-    };
-    let f = scene.media.sample_chromatic(ray, tmax, u, hero);
-    let r = *ratio * f.ratio;
-    let mean = r.element_sum() / 3.0;
-    if !(mean > 0.0) {
-        *beta = Vec3::ZERO;
-        return None;
-    }
-    (*beta, *ratio) = (*beta * f.weight / mean, r / mean);
-    f.t.map(|t| (ray.at(t), f.g))
-}
-
-/// The dimension of the free-flight number on the segment that leads to the vertex after
-/// `depth` bounces.
-#[inline]
-pub fn medium_dim(depth: u32) -> u32 {
-    Dims::vertex(depth, Dims::MEDIUM)
-}
-
-/// Density (and value) of the isotropic phase function.
-const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
-
-/// A scattering event at `p` inside a medium (after [`sample_medium`]), reached along `dir`,
-/// where the Henyey-Greenstein phase function has asymmetry `g` (0: isotropic): next-event
-/// estimation, then phase sampling and Russian roulette. Returns the shadow ray (if any) and
-/// the next ray (`None` when the path ends). The phase function's value is its density, so
-/// sampling it leaves the throughput as it is.
-#[inline]
-pub fn scatter_in_medium(
-    scene: &RenderScene,
-    st: &mut PathState,
-    p: Vec3A,
-    dir: Vec3A,
-    g: f32,
-    time: f32,
-    sampler: &Sampler,
-) -> (Option<ShadowRay>, Option<Ray>) {
-    if st.beta == Vec3::ZERO {
-        return (None, None);
-    }
-    let depth = st.depth;
-    let wo = -dir.normalize();
-    let phase = |wi: Vec3A| if g == 0.0 { ISOTROPIC } else { hg(wo.dot(wi.normalize()), g) };
-    let shadow = if scene.lights.is_empty() {
-        None
-    } else {
-        let u_pick = light_choice(scene, sampler, depth);
-        pick_light(scene, p, time, u_pick, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT))).map(|lp| {
-            let f = phase(lp.target - p);
-            let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, f) };
-            let contribution = st.beta * lp.le * (f * w / lp.pdf);
-            ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
-        })
-    };
-    let u = sampler.get_2d(Dims::vertex(depth, Dims::BSDF));
-    let (wi, pdf) = if g == 0.0 { (uniform_sphere(u), ISOTROPIC) } else { sample_hg(wo, g, u) };
-    (st.delta, st.prev_pdf, st.prev_p) = (false, pdf, p);
-    st.depth += 1;
-    let u_rr = || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE));
-    let next = roulette(scene, st, u_rr).then_some(Ray { origin: p, dir: wi, time });
-    (shadow, next)
 }
 
 /// A hit on a surface in a scene with wrappers ([`Features::wrappers`]): follows its material
@@ -675,66 +450,11 @@ pub fn shade_glossy(
     (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
 }
 
-/// The first ray of sample `index` of pixel (x, y), how far it reaches (the far clip plane;
-/// infinite without one) and its random stream ([`camera_rays`] on one lane).
-#[inline]
-pub fn camera_ray(scene: &RenderScene, x: u32, y: u32, index: u32) -> (Ray, f32, Sampler) {
-    let sampler = camera_sampler(scene, x, y, index);
-    let rays = camera_rays(scene, &SamplerLanes::from(&[sampler]), &[(x, y)]);
-    (rays.ray(0), rays.tmax[0], sampler)
-}
-
-/// The camera rays of `N` samples through the pixels `pixel` with the random streams `s`, their
-/// numbers and rays computed across lanes: the lens and time numbers are drawn only where the
-/// camera has an aperture and something moves while the shutter is open (else zero).
-#[inline(always)]
-pub fn camera_rays<const N: usize>(
-    scene: &RenderScene,
-    s: &SamplerLanes<N>,
-    pixel: &[(u32, u32); N],
-) -> RayLanes<N> {
-    let u = crate::sampler::get_2d_lanes(s, &[Dims::PIXEL; N]);
-    let lens = match scene.camera.has_aperture() {
-        true => crate::sampler::get_2d_lanes(s, &[Dims::LENS; N]),
-        false => [Vec2::ZERO; N],
-    };
-    let time = match scene.features.motion {
-        true => crate::sampler::get_1d_lanes(s, &[Dims::TIME; N]),
-        false => [0.0; N],
-    };
-    let (mut at, mut on_lens) = ([[0.0; 2]; N], [[0.0; 2]; N]);
-    // The pixel filter draws the position from the pixel numbers (filter importance sampling:
-    // every sample weighs the same); the box keeps its own loop, the one before filters.
-    match &scene.settings.filter {
-        PixelFilter::Box => {
-            for l in 0..N {
-                at[l] = [pixel[l].0 as f32 + u[l].x, pixel[l].1 as f32 + u[l].y];
-            }
-        }
-        filter => {
-            for l in 0..N {
-                at[l] = filter.position(pixel[l], [u[l].x, u[l].y]);
-            }
-        }
-    }
-    for l in 0..N {
-        on_lens[l] = [lens[l].x, lens[l].y];
-    }
-    scene.camera.generate_rays(&at, &on_lens, &time)
-}
-
-/// The random stream of sample `index` of pixel (x, y).
-#[inline]
-pub fn camera_sampler(scene: &RenderScene, x: u32, y: u32, index: u32) -> Sampler {
-    let s = scene.settings;
-    let sampler = Sampler::new(s.sampler, s.seed, y * s.width + x, index, s.spp);
-    if scene.camera.has_aperture() { sampler.with_lens() } else { sampler }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampler::TestRng;
+    use pathwave_engine::math::uniform_sphere;
     use pathwave_engine::world::SceneWorld;
 
     /// A light sample of the environment map and a ray that escapes in its direction weigh
