@@ -167,7 +167,8 @@ fn a_coloured_medium_loses_nothing_in_any_channel() {
 /// underestimate their error (chi2/dof 1.3).
 #[test]
 fn a_coloured_grid_medium_loses_nothing_in_any_channel() {
-    let desc = plume_furnace("density: (2, 8, 0.5)", "density: (3, 0.2, 1)");
+    let desc =
+        plume_furnace("density: (2, 8, 0.5), albedo: (1, 1, 1)", "density: (3, 0.2, 1), albedo: (1, 1, 1)");
     assert!(SceneWorld::render_scene(&desc).media.chromatic());
     assert_one_everywhere_in_both_integrators(&desc);
 }
@@ -183,15 +184,40 @@ fn a_coloured_grid_medium_loses_nothing_in_any_channel() {
 #[test]
 fn media_scattering_forwards_and_backwards_lose_nothing() {
     let desc = plume_furnace(
-        "density: 20, phase: HenyeyGreenstein(g: 0.7)",
-        "density: 3, phase: HenyeyGreenstein(g: -0.5)",
+        "density: 20, albedo: (1, 1, 1), phase: HenyeyGreenstein(g: 0.7)",
+        "density: 3, albedo: (1, 1, 1), phase: HenyeyGreenstein(g: -0.5)",
     );
     assert_one_everywhere_in_both_integrators(&desc);
 }
 
+/// Media that absorb and glow with radiance 1 under a uniform sky of 1, over a white ground:
+/// what a point absorbs of the radiance 1 around it, `sigma_a`, it emits again (`sigma_a Le`),
+/// so every pixel is 1 however dense, coloured or uneven the media (the radiative transfer
+/// equation's source balances its absorption where `L = Le`). The plume's grid (delta
+/// tracking) and a sphere over it, each with an albedo below 1: both grey (free flights in
+/// grey media), then the sphere coloured (spectral MIS). Injected errors that fail here: the
+/// emission weighted by `sigma_t` instead of `sigma_a` (chi2/dof 17 on the coloured scene),
+/// and gathered after the throughput took the albedo, in grey media (104) or in coloured ones
+/// (19). Gathering in coloured media without the spectral MIS's mean passes: each hero alone
+/// is unbiased where every channel has extinction (it only adds variance).
+#[test]
+fn glowing_media_give_back_what_they_absorb() {
+    let plume = "density: 20, albedo: (0.3, 0.6, 0.9), emission: (1, 1, 1)";
+    for (sphere, chromatic) in [
+        ("density: 3, albedo: (0.5, 0.2, 0.7), emission: (1, 1, 1)", false),
+        ("density: (3, 0.2, 1), albedo: (0.5, 0.5, 0.5), emission: (1, 1, 1)", true),
+    ] {
+        let desc = plume_furnace(plume, sphere);
+        let scene = SceneWorld::render_scene(&desc);
+        assert_eq!(scene.media.chromatic(), chromatic);
+        assert!(scene.media.volumes().iter().all(|v| v.medium.emission == glam::Vec3::ONE));
+        assert_one_everywhere_in_both_integrators(&desc);
+    }
+}
+
 /// On a white ground under a uniform sky of 1, the plume of `scenes/smoke-plume.ron` in a box
-/// (its medium `plume`: a density and what else it takes) overlapped by a sphere of medium
-/// `sphere`, both of albedo 1.
+/// (its medium `plume`: a density, an albedo and what else it takes) overlapped by a sphere of
+/// medium `sphere`.
 fn plume_furnace(plume: &str, sphere: &str) -> pathwave::engine::scene::SceneDesc {
     inline(&format!(
         r#"Scene(
@@ -205,11 +231,10 @@ fn plume_furnace(plume: &str, sphere: &str) -> pathwave::engine::scene::SceneDes
                     shape: Box(a: (-1, 0, -1), b: (1, 2, 1)),
                     medium: (
                         {plume},
-                        albedo: (1, 1, 1),
                         grid: (file: "scenes/assets/plume.vol", transform: [Scale((2, 2, 2)), Translate((-1, 0, -1))]),
                     ),
                 ),
-                (shape: Sphere(center: (0, 1.2, 0), radius: 0.5), medium: ({sphere}, albedo: (1, 1, 1))),
+                (shape: Sphere(center: (0, 1.2, 0), radius: 0.5), medium: ({sphere})),
             ],
         )"#
     ))

@@ -224,7 +224,7 @@ fn emit_is_for_surfaces_whose_material_reflects() {
         &["\"light\" is a DiffuseLight", "whose material reflects"],
     );
     let on_medium = r#"(shape: Sphere(center: (0, 0, 0), radius: 1), medium: (density: 1, albedo: (1, 1, 1)), emit: (radiance: (1, 1, 1))),"#;
-    assert_err(&with_object(on_medium), 8, end(on_medium), &["a medium does not emit"]);
+    assert_err(&with_object(on_medium), 8, end(on_medium), &["a medium glows by its own `emission`"]);
     let negative =
         r#"(shape: Sphere(center: (0, 0, 0), radius: 1), material: "white", emit: (radiance: (1, -1, 1))),"#;
     assert_err(
@@ -269,8 +269,9 @@ fn vol(size: [i32; 3], channels: i32, data: &[f32]) -> Vec<u8> {
     b
 }
 
-/// Grid media: a grid takes one density, an albedo grid values in [0, 1], a scene with a grid
-/// no coloured extinction elsewhere, and a bad file is named; each at the object.
+/// Grid media: a grid takes one density, an albedo grid values in [0, 1], an emission grid an
+/// `emission` it keeps below the brightest radiance, and a bad file is named; each at the
+/// object.
 #[test]
 fn grid_media_refuse_what_they_cannot_render() {
     let dir = std::env::temp_dir().join(format!("pathwave-grid-errors-{}", std::process::id()));
@@ -292,6 +293,11 @@ fn grid_media_refuse_what_they_cannot_render() {
         grid.replace("density: 2", "density: (1, 2, 0)")
     );
     assert_eq!(load_object(&coloured).unwrap_or_else(|e| panic!("{e}")).objects.len(), 2);
+    let glowing = grid.replace(
+        "albedo: (0.5, 0.5, 0.5)",
+        "albedo: (0.5, 0.5, 0.5), emission: (2, 1, 0.5), emission_grid: (file: \"bright.vol\")",
+    );
+    assert_eq!(load_object(&glowing).unwrap_or_else(|e| panic!("{e}")).objects.len(), 1);
     for (object, words) in [
         (
             grid.replace("grid: (file: \"d.vol\")", "albedo_grid: (file: \"bright.vol\")"),
@@ -304,6 +310,18 @@ fn grid_media_refuse_what_they_cannot_render() {
         ),
         // The bound holds for the densest channel.
         (grid.replace("density: 2", "density: (1, 1e30, 1)"), &["at most 10000000"][..]),
+        (
+            grid.replace("grid: (file: \"d.vol\")", "emission_grid: (file: \"bright.vol\")"),
+            &["an `emission_grid` scales the medium's `emission`"][..],
+        ),
+        (
+            grid.replace(
+                "grid: (file: \"d.vol\")",
+                "emission: (1, 1e10, 1), emission_grid: (file: \"bright.vol\")",
+            ),
+            &["bright.vol's largest value is 15000000000", "at most 1e10"][..],
+        ),
+        (grid.replace("grid: (file", "emission: (1, -1, 1), grid: (file"), &["emitted colour"][..]),
     ] {
         let e = load_object(&object).expect_err(&object);
         assert!(e.line >= 8 && words.iter().all(|w| e.message.contains(w)), "{object}: {e}");

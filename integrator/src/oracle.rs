@@ -126,6 +126,7 @@ pub fn radiance_witnessed(
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
                 if let Some((p, g)) = path::sample_medium(
                     scene,
+                    &mut st.l,
                     &mut st.beta,
                     &mut ratio,
                     &ray,

@@ -131,6 +131,10 @@ pub struct Media {
     heterogeneous: bool,
     /// Some volume moves while the shutter is open.
     moving: bool,
+    /// Per volume: its emission's grid, from world space.
+    emission: Vec<Option<WorldGrid>>,
+    /// Some medium emits.
+    emissive: bool,
 }
 
 /// A sampled scattering point along a ray in grey media.
@@ -142,6 +146,10 @@ pub struct MediumEvent {
     pub albedo: Vec3,
     /// The phase function's asymmetry there ([`phase`]; 0: isotropic).
     pub g: f32,
+    /// What the point emits over the flight's density there: `sigma_a Le / sigma_t` (summed
+    /// where volumes overlap), the radiance a path adds (times its throughput) when it gets
+    /// here, before the albedo.
+    pub emitted: Vec3,
 }
 
 /// A free flight through coloured media, sampled in the hero channel `h`
@@ -158,6 +166,22 @@ pub struct ChromaticFlight {
     pub ratio: Vec3,
     /// The phase function's asymmetry at the scattering point ([`phase`]; 0 through).
     pub g: f32,
+    /// What the scattering point emits over the flight's density in the hero channel, per
+    /// channel: `sigma_a Le T / (sigma_t,h T_h)` (0 through).
+    pub emitted: Vec3,
+}
+
+/// What the media hold at a point of a ray: summed over the volumes covering it.
+#[derive(Clone, Copy, Debug)]
+struct Coefficients {
+    /// Scattering, per channel (see [`Media::coefficients_at`] where phase functions differ).
+    sigma_s: Vec3,
+    /// Extinction, per channel.
+    sigma_t: Vec3,
+    /// The phase function's asymmetry.
+    g: f32,
+    /// Emission per unit length, `sigma_a Le`, per channel.
+    source: Vec3,
 }
 
 impl Media {
@@ -168,9 +192,12 @@ impl Media {
             volumes.iter().map(|v| WorldGrid::new(&v.medium.density_grid, v.object_from_world)).collect();
         let albedo =
             volumes.iter().map(|v| WorldGrid::new(&v.medium.albedo_grid, v.object_from_world)).collect();
+        let emission =
+            volumes.iter().map(|v| WorldGrid::new(&v.medium.emission_grid, v.object_from_world)).collect();
         let heterogeneous = density.iter().any(Option::is_some);
         let moving = volumes.iter().any(|v| !matches!(v.motion, VolumeMotion::Still));
-        Self { volumes, density, albedo, chromatic, heterogeneous, moving }
+        let emissive = volumes.iter().any(|v| v.medium.emission != Vec3::ZERO);
+        Self { volumes, density, albedo, chromatic, heterogeneous, moving, emission, emissive }
     }
 
     /// The volumes.
@@ -321,9 +348,7 @@ impl Media {
                 }
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, line, ts);
-                    let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
-                    return Some(MediumEvent { t: ts, albedo, g });
+                    return Some(self.coefficients_at(segs, line, ts).event(ts));
                 }
                 left -= sigma * (next - t);
                 if !(next > t) || next >= tmax {
@@ -371,9 +396,8 @@ impl Media {
                     // T / T_h from the difference of optical depths (neither underflows).
                     let at = depth + sigma * (ts - t);
                     let tr = exp3((Vec3::splat(at[h]) - at) * len);
-                    let (sigma_s, sigma_t, g) = self.coefficients_at(segs, line, ts);
-                    let over = tr / sigma_t[h];
-                    return ChromaticFlight { t: Some(ts), weight: sigma_s * over, ratio: sigma_t * over, g };
+                    let c = self.coefficients_at(segs, line, ts);
+                    return c.flight(ts, tr / c.sigma_t[h]);
                 }
                 // (Past the last volume `next` may be infinite, where sigma is zero.)
                 if sigma != Vec3::ZERO {
@@ -382,7 +406,7 @@ impl Media {
                 }
                 if !(next > t) || next >= tmax {
                     let tr = exp3((Vec3::splat(depth[h]) - depth) * len);
-                    return ChromaticFlight { t: None, weight: tr, ratio: tr, g: 0.0 };
+                    return ChromaticFlight::through(tr);
                 }
                 t = next;
             }
@@ -410,27 +434,44 @@ impl Media {
         (albedo * sigma_t, sigma_t)
     }
 
-    /// What scatters at ray parameter `t` of `line`: `(sigma_s, sigma_t, g)` summed over the
-    /// stretches covering it, and the phase function's asymmetry. Where overlapping media
+    /// The radiance volume `i` emits at ray parameter `t` of `line`, `Le`, with its grid
+    /// looked up there.
+    #[inline]
+    fn volume_emission(&self, i: usize, line: &Line, t: f32) -> Vec3 {
+        let le = self.volumes[i].medium.emission;
+        match &self.emission[i] {
+            None => le,
+            Some(g) => {
+                let (o, d) = line.of(i);
+                le * g.grid.color(g.grid_from_world.transform_point3a(o + t * d))
+            }
+        }
+    }
+
+    /// What scatters and glows at ray parameter `t` of `line`: the coefficients summed over
+    /// the stretches covering it, and the phase function's asymmetry. Where overlapping media
     /// differ in phase function, one of them is picked in proportion to its scattering (summed
     /// over channels, by a number hashed from the point) and `sigma_s` is its own over the
     /// probability of the pick, so that each channel's mixture of phase functions is
     /// estimated without bias.
-    fn coefficients_at(&self, segs: &[Segment], line: &Line, t: f32) -> (Vec3, Vec3, f32) {
+    fn coefficients_at(&self, segs: &[Segment], line: &Line, t: f32) -> Coefficients {
         let covering =
             || segs.iter().filter(move |seg| seg.t0 <= t && t <= seg.t1).map(|seg| seg.vol as usize);
-        let (mut s, mut e) = (Vec3::ZERO, Vec3::ZERO);
+        let (mut s, mut e, mut source) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
         let (mut g, mut mixed) = (None, false);
         for i in covering() {
             let (si, ei) = self.volume_coefficients(i, line, t);
             (s, e) = (s + si, e + ei);
+            if self.emissive {
+                source += (ei - si).max(Vec3::ZERO) * self.volume_emission(i, line, t);
+            }
             let gi = self.volumes[i].medium.g;
             mixed |= g.is_some_and(|g| g != gi);
             g = Some(gi);
         }
         let total = s.element_sum();
         if !mixed || !(total > 0.0) {
-            return (s, e, g.unwrap_or(0.0));
+            return Coefficients { sigma_s: s, sigma_t: e, g: g.unwrap_or(0.0), source };
         }
         let mut x = Rng::seeded(line.o, line.d, t).next() * total;
         let mut picked = (s, 0.0);
@@ -445,7 +486,41 @@ impl Media {
                 x -= share;
             }
         }
-        (picked.0, e, picked.1)
+        Coefficients { sigma_s: picked.0, sigma_t: e, g: picked.1, source }
+    }
+}
+
+impl Coefficients {
+    /// A scattering point at `t` in grey media: the albedo and the emission over the
+    /// extinction there.
+    #[inline]
+    fn event(&self, t: f32) -> MediumEvent {
+        let e = self.sigma_t.x;
+        let (albedo, emitted) = match e > 0.0 {
+            true => (self.sigma_s / e, self.source / e),
+            false => (Vec3::ZERO, Vec3::ZERO),
+        };
+        MediumEvent { t, albedo, g: self.g, emitted }
+    }
+
+    /// A coloured flight's scattering point at `t`, `over` its density in the hero channel.
+    #[inline]
+    fn flight(&self, t: f32, over: Vec3) -> ChromaticFlight {
+        ChromaticFlight {
+            t: Some(t),
+            weight: self.sigma_s * over,
+            ratio: self.sigma_t * over,
+            g: self.g,
+            emitted: self.source * over,
+        }
+    }
+}
+
+impl ChromaticFlight {
+    /// A flight that gets through, weighing `w`.
+    #[inline]
+    fn through(w: Vec3) -> Self {
+        Self { t: None, weight: w, ratio: w, g: 0.0, emitted: Vec3::ZERO }
     }
 }
 
@@ -560,19 +635,22 @@ mod tests {
     fn coloured_flights_are_unbiased_in_every_channel() {
         let mut a = unit_box(1.0, Affine3A::IDENTITY);
         a.medium = Medium::homogeneous(Vec3::new(0.5, 3.0, 0.0), Vec3::new(0.9, 0.5, 0.2));
+        a.medium.emission = Vec3::new(2.0, 1.0, 0.5);
         let mut b = unit_box(1.0, Affine3A::from_translation(Vec3::new(0.5, 0.0, 0.0)));
         b.medium = Medium::homogeneous(Vec3::splat(0.7), Vec3::splat(0.6));
+        b.medium.emission = Vec3::new(0.3, 0.6, 1.0);
         let (ma, mb) = (a.medium.clone(), b.medium.clone());
         let media = Media::new(vec![a, b]);
         assert!(media.chromatic());
         assert_coloured_flights_unbiased(&media, 100_000, 2e-3, |x| {
-            let (mut s, mut e) = (Vec3::ZERO, Vec3::ZERO);
+            let (mut s, mut e, mut source) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
             for (lo, m) in [(0.0, &ma), (0.5, &mb)] {
                 if (lo..=lo + 1.0).contains(&x) {
                     (s, e) = (s + m.albedo * m.sigma_t, e + m.sigma_t);
+                    source += (Vec3::ONE - m.albedo) * m.sigma_t * m.emission;
                 }
             }
-            (s, e)
+            (s, e, source)
         });
     }
 
@@ -585,35 +663,47 @@ mod tests {
         let mut a = grid_box(Affine3A::from_scale(Vec3::new(2.0, 1.0, 1.0)));
         a.medium.sigma_t = Vec3::new(0.25, 1.5, 0.0);
         a.medium.albedo = Vec3::new(0.9, 0.5, 0.2);
+        // It glows by a colour grid of its own that varies along x, over the whole box.
+        let glow = vec![0.0, 2.0, 1.0, 4.0, 1.0, 0.5, 3.0, 3.0, 0.2];
+        let glow = Arc::new(grid::VoxelGrid::new([3, 1, 1], 3, glow));
+        a.medium.emission = Vec3::new(1.5, 1.0, 2.0);
+        a.medium.emission_grid =
+            Some(PlacedGrid { grid: glow.clone(), grid_from_object: Affine3A::IDENTITY });
         let mut b = unit_box(1.0, Affine3A::from_translation(Vec3::new(0.5, 0.0, 0.0)));
         b.medium = Medium::homogeneous(Vec3::new(0.7, 0.2, 0.4), Vec3::splat(0.6));
+        b.medium.emission = Vec3::new(0.3, 0.6, 1.0);
         let mb = b.medium.clone();
         let media = Media::new(vec![a, b]);
         assert!(media.chromatic());
         // Null collisions make the estimates noisier than the homogeneous ones.
         assert_coloured_flights_unbiased(&media, 200_000, 4e-3, |x| {
             let p = Vec3A::new(x, 0.5, 0.5);
-            let (mut s, mut e) = (Vec3::ZERO, Vec3::ZERO);
+            let (mut s, mut e, mut source) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
             // The grid's cube, x in [0, 0.5], holds the box's medium.
             if (0.0..=0.5).contains(&x) {
                 let ea = media.extinction_at(0, p);
-                (s, e) = (Vec3::new(0.9, 0.5, 0.2) * ea, ea);
+                let albedo = Vec3::new(0.9, 0.5, 0.2);
+                (s, e) = (albedo * ea, ea);
+                source = (Vec3::ONE - albedo) * ea * Vec3::new(1.5, 1.0, 2.0) * glow.color(p);
             }
             if (0.5..=1.5).contains(&x) {
                 (s, e) = (s + mb.albedo * mb.sigma_t, e + mb.sigma_t);
+                source += (Vec3::ONE - mb.albedo) * mb.sigma_t * mb.emission;
             }
-            (s, e)
+            (s, e, source)
         });
     }
 
     /// `n` flights along x through `media` from x0 = -1 and from x0 = 0.25 to x = 1.8, with
-    /// each hero channel in turn, against quadratures of `sigma(x) = (sigma_s, sigma_t)` (to
-    /// `tolerance`); and the mean transmittance over the same stretch.
+    /// each hero channel in turn, against quadratures of `sigma(x) = (sigma_s, sigma_t,
+    /// sigma_a Le)` (to `tolerance`): what gets through, what scatters, and what the flights'
+    /// points emit (`emitted`, against the integral of `sigma_a Le T`); and the mean
+    /// transmittance over the same stretch.
     fn assert_coloured_flights_unbiased(
         media: &Media,
         n: usize,
         tolerance: f64,
-        sigma: impl Fn(f32) -> (Vec3, Vec3),
+        sigma: impl Fn(f32) -> (Vec3, Vec3, Vec3),
     ) {
         for x0 in [-1.0f32, 0.25] {
             let (o, d) = (Vec3A::new(x0, 0.5, 0.5), Vec3A::new(2.0, 0.0, 0.0));
@@ -621,23 +711,27 @@ mod tests {
             // The exact answers by quadrature along x from x0 to 1.8 (in f64: f32 sums of
             // 200 000 steps drift by 0.3%).
             let f = |x: f32| 1.0 + x * x;
-            let (mut depth, mut scatter, steps) = (DVec3::ZERO, DVec3::ZERO, 200_000);
+            let (mut depth, mut scatter, mut glow, steps) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, 200_000);
             let dx = f64::from(1.8 - x0) / steps as f64;
             for k in 0..steps {
                 let x = f64::from(x0) + (k as f64 + 0.5) * dx;
-                let (s, e) = sigma(x as f32);
+                let (s, e, source) = sigma(x as f32);
                 let (s, e) = (s.as_dvec3(), e.as_dvec3());
                 let tr = (-(depth + e * dx / 2.0)).exp();
                 scatter += s * tr * f64::from(f(x as f32)) * dx;
+                glow += source.as_dvec3() * tr * dx;
                 depth += e * dx;
             }
             let through = (-depth).exp();
             // Summed in f64: f32 sums of 300 000 terms drift by 1e-3.
             let (mut got_through, mut got_scatter, mut tr) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+            let mut got_glow = DVec3::ZERO;
             for h in 0..3 {
                 for k in 0..n {
                     let e = media.sample_chromatic(&Ray::new(o, d), tmax, (k as f32 + 0.5) / n as f32, h);
-                    let w = (e.weight / (e.ratio.element_sum() / 3.0)).as_dvec3();
+                    let mean = e.ratio.element_sum() / 3.0;
+                    let w = (e.weight / mean).as_dvec3();
+                    got_glow += (e.emitted / mean).as_dvec3();
                     match e.t {
                         None => got_through += w,
                         Some(t) => got_scatter += w * f64::from(f(o.x + d.x * t)),
@@ -647,7 +741,9 @@ mod tests {
                 }
             }
             let m = (3 * n) as f64;
-            let (got_through, got_scatter, tr) = (got_through / m, got_scatter / m, tr / m);
+            let (got_through, got_scatter, tr, got_glow) =
+                (got_through / m, got_scatter / m, tr / m, got_glow / m);
+            assert!((got_glow - glow).abs().max_element() < tolerance, "emitted {got_glow} vs {glow}");
             assert!((got_through - through).abs().max_element() < tolerance, "{got_through} vs {through}");
             assert!((got_scatter - scatter).abs().max_element() < tolerance, "{got_scatter} vs {scatter}");
             assert!((tr - through).abs().max_element() < tolerance, "transmittance {tr} vs {through}");

@@ -143,23 +143,23 @@ impl Media {
                 });
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, line, ts);
+                    let c = self.coefficients_at(segs, line, ts);
                     if tracked {
                         // A tentative collision: real with probability sigma_t / majorant.
                         let rng = rng.get_or_insert_with(|| Rng::seeded(o, d, u));
-                        if !(rng.next() * sigma < e.x) {
+                        if !(rng.next() * sigma < c.sigma_t.x) {
                             nulls += 1;
                             if nulls > MAX_TRACKING_STEPS {
                                 // Absorbed (see MAX_TRACKING_STEPS).
-                                return Some(MediumEvent { t: ts, albedo: Vec3::ZERO, g });
+                                let (albedo, emitted) = (Vec3::ZERO, Vec3::ZERO);
+                                return Some(MediumEvent { t: ts, albedo, g: c.g, emitted });
                             }
                             t = ts;
                             left = -crate::math::ln(1.0 - rng.next()) / len;
                             continue;
                         }
                     }
-                    let albedo = if e.x > 0.0 { s / e.x } else { Vec3::ZERO };
-                    return Some(MediumEvent { t: ts, albedo, g });
+                    return Some(c.event(ts));
                 }
                 left -= sigma * (next - t);
                 if !(next > t) || next >= tmax {
@@ -201,17 +201,16 @@ impl Media {
                 let next = sweep(segs, &mut first, t, tmax, |s| sigma += s.maj);
                 if sigma > 0.0 && sigma * (next - t) > left {
                     let ts = t + left / sigma;
-                    let (s, e, g) = self.coefficients_at(segs, line, ts);
-                    if rng.next() * sigma < e[h] {
-                        let over = w / e[h];
-                        return ChromaticFlight { t: Some(ts), weight: s * over, ratio: e * over, g };
+                    let c = self.coefficients_at(segs, line, ts);
+                    if rng.next() * sigma < c.sigma_t[h] {
+                        return c.flight(ts, w / c.sigma_t[h]);
                     }
-                    let null = (Vec3::splat(sigma) - e).max(Vec3::ZERO);
+                    let null = (Vec3::splat(sigma) - c.sigma_t).max(Vec3::ZERO);
                     w *= null / null[h];
                     nulls += 1;
                     if nulls > MAX_TRACKING_STEPS || !w.is_finite() {
                         // Absorbed (see MAX_TRACKING_STEPS).
-                        return ChromaticFlight { t: None, weight: Vec3::ZERO, ratio: Vec3::ZERO, g: 0.0 };
+                        return ChromaticFlight::through(Vec3::ZERO);
                     }
                     t = ts;
                     left = -crate::math::ln(1.0 - rng.next()) / len;
@@ -219,7 +218,7 @@ impl Media {
                 }
                 left -= sigma * (next - t);
                 if !(next > t) || next >= tmax {
-                    return ChromaticFlight { t: None, weight: w, ratio: w, g: 0.0 };
+                    return ChromaticFlight::through(w);
                 }
                 t = next;
             }

@@ -24,9 +24,16 @@ pub struct Medium {
     pub density_grid: Option<PlacedGrid>,
     /// The albedo's grid: `albedo` times its colour (taken from its edges outside its cube).
     pub albedo_grid: Option<PlacedGrid>,
-    /// The Henyey-Greenstein phase function's asymmetry `g`, in (-1, 1) ([`phase`]; 0:
+    /// The Henyey-Greenstein phase function's asymmetry `g`, in (-1, 1) ([`super::phase`]; 0:
     /// isotropic).
     pub g: f32,
+    /// The radiance the medium emits, `Le`: a point emits `sigma_a Le` per unit length
+    /// (absorption times the radiance, pbrt-v4's convention: an opaque, absorbing medium
+    /// shows `Le`). Zero for media that do not glow.
+    pub emission: Vec3,
+    /// The emission's grid: `emission` times its colour (taken from its edges outside its
+    /// cube), as a flame's temperature makes it glow.
+    pub emission_grid: Option<PlacedGrid>,
 }
 
 /// A grid in an object's space: it fills the unit cube of `grid_from_object`'s image.
@@ -82,7 +89,15 @@ pub enum VolumeMotion {
 impl Medium {
     /// A homogeneous medium.
     pub fn homogeneous(sigma_t: Vec3, albedo: Vec3) -> Self {
-        Self { sigma_t, albedo, density_grid: None, albedo_grid: None, g: 0.0 }
+        Self {
+            sigma_t,
+            albedo,
+            density_grid: None,
+            albedo_grid: None,
+            g: 0.0,
+            emission: Vec3::ZERO,
+            emission_grid: None,
+        }
     }
 
     /// The same extinction in every channel.

@@ -64,8 +64,8 @@ pub enum Body {
     /// `material: "name"`: a surface with a material from `materials`.
     Surface(MaterialRef),
     /// `medium: (density: .., albedo: ..)`: an invisible, index-matched boundary (a closed
-    /// shape: sphere, box or closed mesh) filled with a homogeneous medium.
-    Volume(MediumDesc),
+    /// shape: sphere, box or closed mesh) filled with a medium (boxed: it is the larger).
+    Volume(Box<MediumDesc>),
 }
 
 #[derive(Deserialize)]
@@ -108,7 +108,7 @@ impl TryFrom<RawObject> for ObjectDesc {
             }
             (None, Some(m)) => {
                 m.check()?;
-                Body::Volume(m)
+                Body::Volume(Box::new(m))
             }
             (Some(_), Some(_)) => return Err("an object has a `material` or a `medium`, not both".into()),
             (None, None) => {
@@ -116,7 +116,9 @@ impl TryFrom<RawObject> for ObjectDesc {
             }
         };
         match (&body, &r.emit) {
-            (Body::Volume(_), Some(_)) => return Err("a medium does not emit: `emit` is for surfaces".into()),
+            (Body::Volume(_), Some(_)) => {
+                return Err("`emit` is for surfaces: a medium glows by its own `emission`".into());
+            }
             (Body::Surface(name), Some(_))
                 if context::names(|n| n.is_some_and(|n| n.lights.contains(&name.0))) =>
             {

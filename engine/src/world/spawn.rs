@@ -106,7 +106,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
                 let Body::Volume(m) = &obj.body else { continue };
                 match m.medium() {
                     Some(medium) => world.spawn((placed, Filling(medium))),
-                    None => world.spawn((placed, GridSequence(m.clone()), GridInputs::default())),
+                    None => world.spawn((placed, GridSequence((**m).clone()), GridInputs::default())),
                 }
             }
         };

@@ -11,8 +11,9 @@ use pathwave_engine::render_scene::RenderScene;
 
 /// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
 /// miss) with the number `u`, the path's [`medium_dim`] of its depth. When the ray scatters
-/// first, the throughput takes the medium's albedo and the scattering point is returned with
-/// the phase function's asymmetry there; otherwise nothing changes. In coloured media see [`chromatic_flight`] (`ratio`, the path's
+/// first, the path gathers what the point emits (into `l`, in glowing media), the throughput
+/// takes the medium's albedo and the scattering point is returned with the phase function's
+/// asymmetry there; otherwise nothing changes. In coloured media see [`chromatic_flight`] (`ratio`, the path's
 /// `depth` and its first number `u0` serve only there). Call only for scenes with media.
 #[inline]
 #[expect(
@@ -21,6 +22,7 @@ use pathwave_engine::render_scene::RenderScene;
 )]
 pub fn sample_medium(
     scene: &RenderScene,
+    l: &mut Vec3,
     beta: &mut Vec3,
     ratio: &mut Vec3,
     ray: &Ray,
@@ -31,9 +33,10 @@ pub fn sample_medium(
 ) -> Option<(Vec3A, f32)> {
     if scene.media.chromatic() {
         let u0 = if depth == 0 { None } else { Some(u0()) };
-        return chromatic_flight(scene, beta, ratio, ray, tmax, u, u0);
+        return chromatic_flight(scene, l, beta, ratio, ray, tmax, u, u0);
     }
     let e = scene.media.sample(ray, tmax, u)?;
+    *l += *beta * e.emitted;
     *beta *= e.albedo;
     Some((ray.at(e.t), e.g))
 }
@@ -47,8 +50,13 @@ pub fn sample_medium(
 ///
 /// [`Media::sample_chromatic`]: pathwave_engine::media::Media::sample_chromatic
 #[inline(never)]
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the path's pieces a flight reads and writes, as sample_medium's"
+)]
 pub fn chromatic_flight(
     scene: &RenderScene,
+    l: &mut Vec3,
     beta: &mut Vec3,
     ratio: &mut Vec3,
     ray: &Ray,
@@ -69,6 +77,7 @@ pub fn chromatic_flight(
         *beta = Vec3::ZERO;
         return None;
     }
+    *l += *beta * f.emitted / mean;
     (*beta, *ratio) = (*beta * f.weight / mean, r / mean);
     f.t.map(|t| (ray.at(t), f.g))
 }

@@ -1,8 +1,8 @@
 //! `medium: (..)`: what fills a volume object: a homogeneous medium, or one scaled by voxel
 //! grids (files, or their frame sequences), with its phase function.
 
-use crate::format::Albedo;
 use crate::format::files::InputFile;
+use crate::format::{Albedo, Radiance};
 use crate::media::grid::VoxelGrid;
 use crate::scene::assets::{GridFrames, GridPath};
 use crate::scene::transform::{TransformOp, compose};
@@ -31,6 +31,17 @@ pub struct MediumDesc {
     /// The phase function (default `Isotropic`).
     #[serde(default)]
     pub phase: PhaseDesc,
+    /// `emission: (r, g, b)`: the radiance the medium emits, `Le` (default none): a point
+    /// emits `sigma_a Le` per unit length, where `sigma_a = (1 - albedo) sigma_t` is its
+    /// absorption (pbrt-v4's convention: an opaque medium that absorbs everything shows `Le`,
+    /// one that only scatters does not glow).
+    #[serde(default)]
+    pub emission: Option<Radiance>,
+    /// `emission_grid: (file: .., name: "temperature", transform: [..])`: the emission is
+    /// `emission` times the grid's colour (its edge values outside its cube), as a flame's
+    /// temperature makes it glow (default none; only with `emission`).
+    #[serde(default)]
+    pub emission_grid: Option<GridDesc>,
 }
 
 /// A medium's phase function: `Isotropic` or `HenyeyGreenstein(g: 0.7)`.
@@ -172,14 +183,13 @@ impl MediumDesc {
             None => Some(None),
             Some(g) => g.placed().map(Some),
         };
-        Some(self.with_grids(placed(&self.grid)?, placed(&self.albedo_grid)?))
+        Some(self.with_grids([placed(&self.grid)?, placed(&self.albedo_grid)?, placed(&self.emission_grid)?]))
     }
 
-    /// The medium with these grids.
+    /// The medium with these grids (density, albedo, emission).
     fn with_grids(
         &self,
-        density_grid: Option<crate::media::PlacedGrid>,
-        albedo_grid: Option<crate::media::PlacedGrid>,
+        [density_grid, albedo_grid, emission_grid]: [Option<crate::media::PlacedGrid>; 3],
     ) -> crate::media::Medium {
         crate::media::Medium {
             sigma_t: self.density.0,
@@ -190,14 +200,18 @@ impl MediumDesc {
                 PhaseDesc::Isotropic => 0.0,
                 PhaseDesc::HenyeyGreenstein { g } => g.0,
             },
+            emission: self.emission.map_or(glam::Vec3::ZERO, |e| e.0),
+            emission_grid,
         }
     }
 
     /// Its grids that are sequences.
     pub fn sequences(&self) -> impl Iterator<Item = &GridFrames> {
-        [&self.grid, &self.albedo_grid].into_iter().flatten().filter_map(|g| match &g.grid {
-            GridValues::Frames(f) => Some(&**f),
-            GridValues::Read(_) => None,
+        [&self.grid, &self.albedo_grid, &self.emission_grid].into_iter().flatten().filter_map(|g| {
+            match &g.grid {
+                GridValues::Frames(f) => Some(&**f),
+                GridValues::Read(_) => None,
+            }
         })
     }
 
@@ -211,14 +225,20 @@ impl MediumDesc {
             read.extend(input);
             Ok(Some(g))
         };
-        let m = MediumDesc { grid: at(&self.grid)?, albedo_grid: at(&self.albedo_grid)?, ..self.clone() };
+        let m = MediumDesc {
+            grid: at(&self.grid)?,
+            albedo_grid: at(&self.albedo_grid)?,
+            emission_grid: at(&self.emission_grid)?,
+            ..self.clone()
+        };
         m.check()?;
         let placed = |g: &Option<GridDesc>| g.as_ref().and_then(GridDesc::placed);
-        Ok((m.with_grids(placed(&m.grid), placed(&m.albedo_grid)), read))
+        Ok((m.with_grids([placed(&m.grid), placed(&m.albedo_grid), placed(&m.emission_grid)]), read))
     }
 
-    /// Refuses a grid too dense to track through and an albedo grid with values above 1 (a
-    /// sequence's values when a frame is read).
+    /// Refuses a grid too dense to track through, an albedo grid with values above 1, and an
+    /// emission grid without an `emission` or whose values take it beyond
+    /// [`crate::format::MAX_EMISSION`] (a sequence's values when a frame is read).
     pub(super) fn check(&self) -> Result<(), String> {
         let values = |g: &Option<GridDesc>| match g {
             Some(GridDesc { file, grid: GridValues::Read(v), .. }) => Some((file.clone(), v.clone())),
@@ -238,6 +258,19 @@ impl MediumDesc {
             if max > 1.0 {
                 return Err(format!(
                     "the albedo grid {} holds {max}: an albedo grid's values lie in [0, 1]",
+                    file.display()
+                ));
+            }
+        }
+        if self.emission_grid.is_some() && self.emission.is_none() {
+            return Err("an `emission_grid` scales the medium's `emission`: give it an `emission` too".into());
+        }
+        if let (Some((file, grid)), Some(e)) = (values(&self.emission_grid), self.emission) {
+            let peak = e.0.max_element() * grid.max();
+            let limit = crate::format::MAX_EMISSION;
+            if !(peak <= limit) {
+                return Err(format!(
+                    "`emission` times the emission grid {}'s largest value is {peak}: at most {limit:e}",
                     file.display()
                 ));
             }
