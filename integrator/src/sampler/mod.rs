@@ -31,7 +31,7 @@ mod cmj;
 mod sobol;
 
 use cmj::{cmj_2d, stratified_1d};
-use sobol::{owen_reversed, owen_sobol, owen_sobol_hi, pascal, shuffle, sobol_2_3_reversed};
+use sobol::{owen_reversed, owen_sobol, pascal, shuffle, sobol_2_3_reversed};
 
 /// MurmurHash3's 64-bit finaliser: a bijective mixer with full avalanche.
 #[inline]
@@ -126,35 +126,25 @@ impl Sampler {
         Self { lens: true, ..self }
     }
 
-    /// Dimension `dim` as one number in [0, 1).
+    /// Dimension `dim` as one number in [0, 1) (Sobol's points: [`get_1d_lanes`]'s for one
+    /// lane, so that the two are one definition).
     #[inline]
     pub fn get_1d(&self, dim: u32) -> f32 {
         let h = self.hash(dim);
         match self.kind {
-            SamplerKind::Sobol => {
-                let i = shuffle(self.index, h as u32);
-                to_unit(owen_sobol(i, false, (h >> 32) as u32))
-            }
+            SamplerKind::Sobol => sobol_1d_lanes(&SamplerLanes::from(&[*self]), &[dim])[0],
             SamplerKind::Stratified => stratified_1d(self.index, self.spp, h),
             SamplerKind::Independent => to_unit((mix64(h ^ self.index as u64) >> 32) as u32),
         }
     }
 
-    /// Dimension `dim` as two numbers in [0, 1).
+    /// Dimension `dim` as two numbers in [0, 1) (Sobol's points: [`get_2d_lanes`]'s for one
+    /// lane).
     #[inline]
     pub fn get_2d(&self, dim: u32) -> Vec2 {
         let h = self.hash(dim);
         match self.kind {
-            SamplerKind::Sobol => {
-                let lay = layout(dim, self.lens);
-                let hs = if lay.group == dim { h } else { self.hash(lay.group) };
-                let i = shuffle(self.index, hs as u32);
-                let (sx, sy) = coordinate_seeds(h);
-                match lay.lattice {
-                    true => lattice_2d(i, sx, sy, lay.g),
-                    false => net_2d(i, lay.hi, sx, sy),
-                }
-            }
+            SamplerKind::Sobol => sobol_2d_lanes(&SamplerLanes::from(&[*self]), &[dim])[0],
             SamplerKind::Stratified => cmj_2d(self.index, self.spp, h),
             SamplerKind::Independent => {
                 let r = mix64(h ^ self.index as u64);
@@ -313,24 +303,19 @@ fn coordinate_seeds(h: u64) -> (u32, u32) {
     ((h >> 32) as u32, mix64(h) as u32)
 }
 
-/// Owen-scrambled Sobol dimensions 0 and 1 (or 2 and 3, `hi`) of the shuffled index `i`, the
-/// two coordinates scrambled by their own seeds `sx` and `sy` ([`coordinate_seeds`]).
-#[inline]
-fn net_2d(i: u32, hi: bool, sx: u32, sy: u32) -> Vec2 {
-    if hi {
-        Vec2::new(to_unit(owen_sobol_hi(i, false, sx)), to_unit(owen_sobol_hi(i, true, sy)))
-    } else {
-        Vec2::new(to_unit(owen_sobol(i, false, sx)), to_unit(owen_sobol(i, true, sy)))
-    }
-}
-
 /// [`Sampler::get_1d`] for `N` samplers of one kind at once, each at its own dimension: the
 /// same integer operations lane by lane (so the same bits), in loops that LLVM vectorises.
 #[inline(always)]
 pub fn get_1d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [f32; N] {
-    if s.kind != SamplerKind::Sobol {
-        return std::array::from_fn(|l| s.get(l).get_1d(dim[l]));
+    match s.kind {
+        SamplerKind::Sobol => sobol_1d_lanes(s, dim),
+        _ => std::array::from_fn(|l| s.get(l).get_1d(dim[l])),
     }
+}
+
+/// [`get_1d_lanes`] of Sobol samplers.
+#[inline(always)]
+fn sobol_1d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [f32; N] {
     // Plain loops, not `std::array::from_fn`: LLVM leaves its closures out of line, and so
     // outside the instruction set of the caller's `simd::lanes` region.
     let (mut h, mut i, mut out) = ([0u64; N], [0u32; N], [0.0f32; N]);
@@ -361,9 +346,15 @@ pub fn get_1d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [f32
 /// by a select, not a branch per lane.
 #[inline(always)]
 pub fn get_2d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [Vec2; N] {
-    if s.kind != SamplerKind::Sobol {
-        return std::array::from_fn(|l| s.get(l).get_2d(dim[l]));
+    match s.kind {
+        SamplerKind::Sobol => sobol_2d_lanes(s, dim),
+        _ => std::array::from_fn(|l| s.get(l).get_2d(dim[l])),
     }
+}
+
+/// [`get_2d_lanes`] of Sobol samplers.
+#[inline(always)]
+fn sobol_2d_lanes<const N: usize>(s: &SamplerLanes<N>, dim: &[u32; N]) -> [Vec2; N] {
     let (key, index) = (&s.key, &s.index);
     let (mut group, mut hi, mut lattice) = ([0u32; N], [false; N], [false; N]);
     let (mut g0, mut g1) = ([0u32; N], [0u32; N]);

@@ -174,12 +174,6 @@ pub(super) fn sobol_2_3_reversed(i: u32, second: bool) -> u32 {
         ^ t[3][(i >> 24) as usize]
 }
 
-/// Owen-scrambled Sobol dimension 2 (`second` false) or 3 of sample `i`, as 32 fixed-point bits.
-#[inline]
-pub(super) fn owen_sobol_hi(i: u32, second: bool, seed: u32) -> u32 {
-    owen_reversed(sobol_2_3_reversed(i, second), seed).reverse_bits()
-}
-
 /// Sobol's dimension 1 before bit reversal: bit j of the result is the parity of the bits k of
 /// `i` with j a bit-subset of k.
 #[inline]
