@@ -5,9 +5,10 @@
 use crate::accel::bvh8::{Bvh8, PACKET};
 use crate::accel::geometry::Hit;
 use crate::accel::mesh::{MeshBlas, MeshHit};
+use crate::animation::ShutterMotion;
 use crate::math::{Ray, gamma, transform_box};
 use crate::shape::{MeshPoint, SurfacePoint, adapt_shading_normal};
-use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
+use glam::{Affine3A, Mat3A, Vec3A};
 use obvhs::aabb::Aabb;
 use std::sync::Arc;
 
@@ -33,93 +34,6 @@ pub struct Instance {
     /// A placement that turns or scales while the shutter is open: then it, not the fields
     /// above, places the instance (per ray time).
     pub motion: Option<Box<ShutterMotion>>,
-}
-
-/// A keyframed placement over the shutter interval: `world_from_object(time) = A(time) base`,
-/// with the scale, rotation and translation of `A` interpolated (lerp, slerp, lerp) from shutter
-/// open to close, so every ray sees the instance where it is at the ray's time.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ShutterMotion {
-    /// The static part.
-    pub base: Affine3A,
-    base_inv: Affine3A,
-    /// Shutter open and close.
-    pub times: (f32, f32),
-    scale: (Vec3, Vec3),
-    rotation: (Quat, Quat),
-    translation: (Vec3, Vec3),
-}
-
-impl ShutterMotion {
-    /// `open` and `close` are `A` at the shutter's open and close `times`; `None` when a
-    /// transform is singular or the interval empty.
-    pub fn new(base: Affine3A, open: Affine3A, close: Affine3A, times: (f32, f32)) -> Option<Self> {
-        let ok = |m: &Affine3A| {
-            let det = m.matrix3.determinant();
-            det.abs() > 0.0 && det.is_finite() && m.translation.is_finite()
-        };
-        if !(ok(&base) && ok(&open) && ok(&close) && times.1 > times.0) {
-            return None;
-        }
-        let (s0, r0, t0) = open.to_scale_rotation_translation();
-        let (s1, mut r1, t1) = close.to_scale_rotation_translation();
-        if r1.dot(r0) < 0.0 {
-            r1 = -r1;
-        }
-        Some(Self {
-            base,
-            base_inv: base.inverse(),
-            times,
-            scale: (s0, s1),
-            rotation: (r0, r1),
-            translation: (t0, t1),
-        })
-    }
-
-    /// Scale, rotation and translation of `A` at `time`.
-    #[inline]
-    fn srt(&self, time: f32) -> (Vec3A, Quat, Vec3A) {
-        let u = ((time - self.times.0) / (self.times.1 - self.times.0)).clamp(0.0, 1.0);
-        (
-            self.scale.0.lerp(self.scale.1, u).into(),
-            self.rotation.0.slerp(self.rotation.1, u),
-            self.translation.0.lerp(self.translation.1, u).into(),
-        )
-    }
-
-    /// Object to world at `time`.
-    pub fn world_from_object(&self, time: f32) -> Affine3A {
-        let (s, r, t) = self.srt(time);
-        Affine3A::from_scale_rotation_translation(s.into(), r, t.into()) * self.base
-    }
-
-    /// The ray `o + t d` at `time` in object space (`t` unchanged).
-    #[inline]
-    pub(crate) fn object_ray(&self, time: f32, o: Vec3A, d: Vec3A) -> (Vec3A, Vec3A) {
-        let (s, r, t) = self.srt(time);
-        let inv = r.inverse();
-        let (o, d) = ((inv * (o - t)) / s, (inv * d) / s);
-        (self.base_inv.transform_point3a(o), self.base_inv.transform_vector3a(d))
-    }
-
-    /// World bounds of the object box `b` over the shutter: the union of its bounds at 33
-    /// times, grown by how far a point of the box can move between two of them.
-    fn bounds(&self, b: &Aabb) -> Aabb {
-        const N: usize = 32;
-        let local = transform_box(b, &self.base);
-        let reach = local.min.abs().max(local.max.abs()).length();
-        let (s, r) = (self.scale, self.rotation);
-        let angle = r.0.angle_between(r.1) / N as f32;
-        let smax = s.0.abs().max(s.1.abs()).max_element();
-        let pad = reach * (angle * smax + (s.1 - s.0).abs().max_element() / N as f32)
-            + (self.translation.1 - self.translation.0).length() / N as f32;
-        let mut out = Aabb::empty();
-        for k in 0..=N {
-            let time = self.times.0 + (self.times.1 - self.times.0) * k as f32 / N as f32;
-            out = out.union(&transform_box(b, &self.world_from_object(time)));
-        }
-        Aabb { min: out.min - pad, max: out.max + pad }
-    }
 }
 
 impl Instance {
@@ -453,6 +367,7 @@ impl Instances {
 mod tests {
     use super::*;
     use crate::accel::mesh::MeshData;
+    use glam::{Quat, Vec3};
 
     #[test]
     fn packets_find_what_each_ray_finds_alone_among_still_instances() {

@@ -4,8 +4,8 @@
 //! `t` between its boundary's hits, found in object space (affine maps preserve `t`).
 
 use super::grid;
-use crate::accel::instances::ShutterMotion;
 use crate::accel::mesh::MeshBlas;
+use crate::animation::ShutterMotion;
 use crate::shape::Closed;
 use glam::{Affine3A, Vec3, Vec3A};
 use std::cell::RefCell;

@@ -3,8 +3,9 @@
 
 use super::components::*;
 use crate::accel::geometry::Geometry;
-use crate::accel::instances::{Instance, Instances, ShutterMotion};
+use crate::accel::instances::{Instance, Instances};
 use crate::accel::mesh::MeshBlas;
+use crate::animation::ShutterMotion;
 use crate::lighting::area::emission_table;
 use crate::lighting::lights::{LightInputs, LightTable};
 use crate::media::{Boundary, Media, Volume, VolumeMotion};
