@@ -187,6 +187,23 @@ fn the_noise_comes_from_the_lamp_through_the_glass() {
     assert!(d.by_vertex.contains_key(&Vertex::Material(frosted)));
 }
 
+/// Glowing media are a source of their own: where a glowing plume is the only light but a dim
+/// sky (`scenes/smoke-glow.ron`), nearly all the variance and the outliers come from it, found
+/// where paths scattered in it. (Before they were a source, their part was nobody's and the
+/// shares went to the sky.)
+#[test]
+fn the_noise_of_a_glowing_plume_comes_from_its_glow() {
+    let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());
+    let mut desc = load_with(&root().join("scenes/smoke-glow.ron"), &[]).unwrap();
+    desc.render.width = 48.try_into().unwrap();
+    desc.render.height = 48.try_into().unwrap();
+    desc.render.spp = 16.try_into().unwrap();
+    let d = diagnosis(&SceneWorld::render_scene(&desc));
+    let glow = d.by_light.get(&Light::Media).copied().unwrap_or(0.0) / d.variance;
+    assert!(glow > 0.95, "glowing media's share {glow}: {:?}", d.by_light);
+    assert!(!d.outliers.is_empty() && d.outliers.iter().all(|o| o.cause.light == Light::Media));
+}
+
 #[test]
 fn stats_name_the_glass_and_the_lamp() {
     let _alone = ALONE.lock().unwrap_or_else(|e| e.into_inner());

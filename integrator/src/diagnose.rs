@@ -39,6 +39,9 @@ pub enum Light {
     Background,
     /// The directions of an environment map at least [`PEAK`] times its mean radiance: a sun.
     BackgroundPeak,
+    /// Media that glow (their `emission`), which paths find where they scatter in them: they
+    /// are not sampled as lights.
+    Media,
 }
 
 impl Light {
@@ -306,6 +309,7 @@ impl Witness for Recorder<'_> {
             Source::LightSample => (self.sampled(self.last.map_or(0, |(d, _)| d)), Event::LightSampling),
             Source::Emitter(m) => (Light::Emitter(m), met),
             Source::Background => (Light::Background, met),
+            Source::Medium => (Light::Media, met),
         };
         let cause = Cause { light: peak(light), vertex, bounces, event };
         self.parts.push((part, cause));

@@ -74,6 +74,8 @@ pub enum Source {
     LightSample,
     /// The background, met by the path's ray.
     Background,
+    /// A glowing medium the path's ray scattered in.
+    Medium,
 }
 
 /// The light (its index in the scene's light table) that a path's vertex `depth` samples with
@@ -124,7 +126,8 @@ pub fn radiance_witnessed(
         let (shadow, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-                if let Some((p, g)) = path::sample_medium(
+                let before = st.l;
+                let scattered = path::sample_medium(
                     scene,
                     &mut st.l,
                     &mut st.beta,
@@ -134,7 +137,10 @@ pub fn radiance_witnessed(
                     sampler.get_1d(path::medium_dim(st.depth)),
                     st.depth,
                     || sampler.get_1d(path::medium_dim(0)),
-                ) {
+                );
+                // What a glowing medium gave where the path scattered (nothing elsewhere).
+                witness.adds(st.l - before, Source::Medium, ray.dir, st.delta);
+                if let Some((p, g)) = scattered {
                     if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }

@@ -152,6 +152,7 @@ fn light_name(names: &[String], light: Light) -> String {
         Light::BackgroundPeak => {
             format!("the background's sun (its directions {}x its mean or more)", diagnose::PEAK)
         }
+        Light::Media => "glowing media".into(),
     }
 }
 
@@ -334,8 +335,13 @@ pub fn report_noise(
         }
     }
     if let Some(&((event, at, from), e)) = causes.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        let glow = from == Light::Media;
         let (at, from) = (vertex(at), light(from));
         let lever = match event {
+            _ if glow => format!(
+                "{from}, which are not sampled as lights, found where paths scattered in them after {at}: \
+                 more samples, or --clamp"
+            ),
             Event::Caustic => format!(
                 "light reaches the eye through {at} after a rough bounce, where light sampling cannot find it: \
                  more samples, a rougher {at}, or --clamp"
