@@ -127,11 +127,10 @@ pub fn radiance_witnessed(
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
                 let before = st.l;
+                let flight = path::Flight { l: &mut st.l, beta: &mut st.beta, ratio: &mut ratio };
                 let scattered = path::sample_medium(
                     scene,
-                    &mut st.l,
-                    &mut st.beta,
-                    &mut ratio,
+                    flight,
                     &ray,
                     tmax,
                     sampler.get_1d(path::medium_dim(st.depth)),

@@ -13,7 +13,7 @@ mod medium;
 pub use camera::{camera_ray, camera_rays, camera_sampler};
 pub(crate) use light::{light_choice, pick_light};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
-pub use medium::{chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
+pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};

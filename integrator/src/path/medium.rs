@@ -9,6 +9,18 @@ use pathwave_engine::math::{Ray, uniform_sphere};
 use pathwave_engine::media::phase::{hg, sample_hg};
 use pathwave_engine::render_scene::RenderScene;
 
+/// What a free flight reads and changes of a path, wherever the path is held (the oracle's
+/// [`PathState`], the wavefront's arrays): the radiance it has gathered, its throughput, and
+/// its spectral MIS ratios (see [`chromatic_flight`]).
+pub struct Flight<'a> {
+    /// The radiance gathered.
+    pub l: &'a mut Vec3,
+    /// The throughput.
+    pub beta: &'a mut Vec3,
+    /// The density ratios of coloured media.
+    pub ratio: &'a mut Vec3,
+}
+
 /// Free-flight sampling through the media up to the closest surface at `tmax` (infinity for a
 /// miss) with the number `u`, the path's [`medium_dim`] of its depth. When the ray scatters
 /// first, the path gathers what the point emits (into `l`, in glowing media), the throughput
@@ -16,15 +28,9 @@ use pathwave_engine::render_scene::RenderScene;
 /// asymmetry there; otherwise nothing changes. In coloured media see [`chromatic_flight`] (`ratio`, the path's
 /// `depth` and its first number `u0` serve only there). Call only for scenes with media.
 #[inline]
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the path's pieces a flight reads and writes, from the oracle and the wavefront alike"
-)]
 pub fn sample_medium(
     scene: &RenderScene,
-    l: &mut Vec3,
-    beta: &mut Vec3,
-    ratio: &mut Vec3,
+    path: Flight,
     ray: &Ray,
     tmax: f32,
     u: f32,
@@ -33,11 +39,11 @@ pub fn sample_medium(
 ) -> Option<(Vec3A, f32)> {
     if scene.media.chromatic() {
         let u0 = if depth == 0 { None } else { Some(u0()) };
-        return chromatic_flight(scene, l, beta, ratio, ray, tmax, u, u0);
+        return chromatic_flight(scene, path, ray, tmax, u, u0);
     }
     let e = scene.media.sample(ray, tmax, u)?;
-    *l += *beta * e.emitted;
-    *beta *= e.albedo;
+    *path.l += *path.beta * e.emitted;
+    *path.beta *= e.albedo;
     Some((ray.at(e.t), e.g))
 }
 
@@ -50,15 +56,9 @@ pub fn sample_medium(
 ///
 /// [`Media::sample_chromatic`]: pathwave_engine::media::Media::sample_chromatic
 #[inline(never)]
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the path's pieces a flight reads and writes, as sample_medium's"
-)]
 pub fn chromatic_flight(
     scene: &RenderScene,
-    l: &mut Vec3,
-    beta: &mut Vec3,
-    ratio: &mut Vec3,
+    path: Flight,
     ray: &Ray,
     tmax: f32,
     u: f32,
@@ -71,6 +71,7 @@ pub fn chromatic_flight(
         Some(_) => u,
     };
     let f = scene.media.sample_chromatic(ray, tmax, u, hero);
+    let Flight { l, beta, ratio } = path;
     let r = *ratio * f.ratio;
     let mean = r.element_sum() / 3.0;
     if !(mean > 0.0) {

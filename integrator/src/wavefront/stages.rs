@@ -165,17 +165,8 @@ fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32
     let ray = p.ray(s);
     let sampler = &p.sampler[s];
     let u0 = || sampler.get_1d(path::medium_dim(0));
-    let Some((at, g)) = path::sample_medium(
-        scene,
-        &mut p.l[s],
-        &mut p.beta[s],
-        &mut p.ratio[s],
-        &ray,
-        tmax,
-        u,
-        p.depth[s],
-        u0,
-    ) else {
+    let flight = path::Flight { l: &mut p.l[s], beta: &mut p.beta[s], ratio: &mut p.ratio[s] };
+    let Some((at, g)) = path::sample_medium(scene, flight, &ray, tmax, u, p.depth[s], u0) else {
         return false;
     };
     // The path is now at the scattering point; `shade_medium` needs its direction and medium.
