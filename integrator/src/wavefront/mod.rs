@@ -18,6 +18,8 @@
 mod queues;
 mod stage_clock;
 mod stages;
+#[cfg(feature = "test-stage")]
+pub mod test_stage;
 mod tile_work;
 
 use crate::aov::Aovs;
@@ -64,27 +66,29 @@ impl Default for Options {
 /// [`Stage::index`], [`Stage::SLOTS`], [`Stage::name`], and the tile's pipeline, item counts and
 /// dispatch ([`TileWork::new`], [`TileWork::slots`], [`TileWork::stage`]); the first stage must
 /// be one without a field (it refills the slots, and the tile ends when it leaves none active).
+/// A row after `@cfg(predicate)` exists only where the predicate holds (as `#[cfg]`).
 macro_rules! stages {
     (@first $(#[$doc:meta])* $v:ident : $($rest:tt)*) => { Stage::$v };
     (@width) => { 1 };
     (@width $t:ident) => { $t::COUNT };
     (@gen [$first:expr] $(
         $(#[$doc:meta])*
+        $(@cfg($cfg:meta))?
         $v:ident $(($kind:ident : $t:ident in $list:expr))? :
             $name:expr, when $when:expr, slots $slots:expr, run $run:expr;
     )*) => {
         /// The stages (see `stages!` in `wavefront/mod.rs`, which lists them).
         #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-        pub enum Stage { $($(#[$doc])* $v $(($t))?,)* }
+        pub enum Stage { $($(#[$doc])* $(#[cfg($cfg)])? $v $(($t))?,)* }
 
         /// The table's rows, in order.
-        enum Row { $($v,)* }
+        enum Row { $($(#[cfg($cfg)])? $v,)* }
 
         /// Statistics slots per row.
-        const WIDTHS: &[usize] = &[$(stages!(@width $($t)?)),*];
+        const WIDTHS: &[usize] = &[$($(#[cfg($cfg)])? stages!(@width $($t)?)),*];
 
         /// Stages per row.
-        const COUNTS: &[usize] = &[$(1 $(- 1 + $list.len())?),*];
+        const COUNTS: &[usize] = &[$($(#[cfg($cfg)])? 1 $(- 1 + $list.len())?),*];
 
         /// The sum of `a[..n]`.
         const fn sum(a: &[usize], n: usize) -> usize {
@@ -104,7 +108,7 @@ macro_rules! stages {
             pub const ALL: [Stage; sum(COUNTS, COUNTS.len())] = {
                 let mut all = [$first; sum(COUNTS, COUNTS.len())];
                 let mut n = 0;
-                $(stages!(@push all n $v $(($list))?);)*
+                $($(#[cfg($cfg)])? stages!(@push all n $v $(($list))?);)*
                 assert!(n == all.len(), "every stage in its place");
                 all
             };
@@ -112,21 +116,21 @@ macro_rules! stages {
             /// Where the stage's figures are in [`Stats`]' arrays.
             pub const fn index(self) -> usize {
                 match self {
-                    $(Stage::$v $(($kind))? => sum(WIDTHS, Row::$v as usize) $(+ $kind as usize)?,)*
+                    $($(#[cfg($cfg)])? Stage::$v $(($kind))? => sum(WIDTHS, Row::$v as usize) $(+ $kind as usize)?,)*
                 }
             }
 
             /// The stage's name (also its tracing span's).
             pub const fn name(self) -> &'static str {
                 match self {
-                    $(Stage::$v $(($kind))? => $name,)*
+                    $($(#[cfg($cfg)])? Stage::$v $(($kind))? => $name,)*
                 }
             }
 
             /// Whether a tile set up as `setup` runs the stage.
             fn runs(self, setup: &Setup) -> bool {
                 match self {
-                    $(Stage::$v $(($kind))? => when(setup, $when),)*
+                    $($(#[cfg($cfg)])? Stage::$v $(($kind))? => when(setup, $when),)*
                 }
             }
         }
@@ -136,14 +140,14 @@ macro_rules! stages {
             /// now, one per item.
             pub(super) fn slots<'q>(&self, stage: Stage, q: &'q Queues) -> &'q [u32] {
                 match stage {
-                    $(Stage::$v $(($kind))? => slots(self, q, $slots),)*
+                    $($(#[cfg($cfg)])? Stage::$v $(($kind))? => slots(self, q, $slots),)*
                 }
             }
 
             /// Runs one stage.
             pub(super) fn stage(&mut self, stage: Stage, p: &mut Paths, q: &mut Queues) {
                 match stage {
-                    $(Stage::$v $(($kind))? => run(self, p, q, $run),)*
+                    $($(#[cfg($cfg)])? Stage::$v $(($kind))? => run(self, p, q, $run),)*
                 }
             }
         }
@@ -188,6 +192,10 @@ stages! {
     /// Occlusion tests.
     TraceShadowRays: "trace_shadow_rays", when |_| true,
         slots |_, q| &q.shadow.slot, run |w, p, q| stages::trace_shadow_rays(w.scene, p, q);
+    /// A stage that exists to test this table (see `test_stage`).
+    @cfg(feature = "test-stage")
+    TestExposure: "test_exposure", when |_| true,
+        slots |_, q| &q.finished, run |_, p, q| test_stage::expose(p, q);
     /// Finished paths into the film.
     AccumulateFilm: "accumulate_film", when |_| true,
         slots |_, q| &q.finished, run |w, p, q| w.accumulate_film(p, q);
