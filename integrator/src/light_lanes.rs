@@ -7,7 +7,7 @@
 //! picked another kind of light, and every point of other scenes take `path::pick_light`
 //! itself.
 
-use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, dot, lanes, offset, sel3};
+use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, dot, lanes, sel3};
 use crate::path;
 use glam::Vec3;
 use pathwave_engine::lighting::lights::PlainLight;
@@ -374,10 +374,8 @@ fn sphere_by_cone(i: &SphereIn) -> LightOut {
     light_out(lp, n, pdf_cone, light.err, light.emit.into(), light.two_sided, i.pmf, from, inside)
 }
 
-/// What `path::pick_light` derives from a light sample (`lp`, unit normal `n`, density
-/// `pdf_solid` in solid angle, error bound `err`) of a light emitting `emit` picked with
-/// probability `pmf`, seen from `from`: the direction, emission, density with the choice, and
-/// the target off the light, zero when the light sends nothing; `scalar` passes through.
+/// [`path::seen_from`] of a light emitting `emit` (on both sides if `two_sided`), zero where
+/// the sample does not count; `scalar` passes through.
 #[expect(
     clippy::too_many_arguments,
     reason = "a light sample's parts, each a value the lane loop holds in registers"
@@ -394,20 +392,13 @@ fn light_out(
     from: Vec3,
     scalar: bool,
 ) -> LightOut {
-    let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
-    let dist = dot(d, d).sqrt();
-    let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
-    let cos_out = dot(n, Vec3::new(-wi.x, -wi.y, -wi.z));
-    let le = sel3(two_sided || cos_out > 0.0, emit, Vec3::ZERO);
-    let pdf = pdf_solid * pmf;
-    let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
-    let side = sel3(dot(n, wi) < 0.0, n, Vec3::new(-n.x, -n.y, -n.z));
-    let target = offset(lp, err, side);
+    let emitted = |cos: f32| sel3(two_sided || cos > 0.0, emit, Vec3::ZERO);
+    let s = path::seen_from(lp, n, pdf_solid, err, pmf, from, emitted);
     LightOut {
-        wi: sel3(ok, wi, Vec3::ZERO),
-        le: sel3(ok, le, Vec3::ZERO),
-        pdf: if ok { pdf } else { 0.0 },
-        target: sel3(ok, target, Vec3::ZERO),
+        wi: sel3(s.ok, s.wi, Vec3::ZERO),
+        le: sel3(s.ok, s.le, Vec3::ZERO),
+        pdf: if s.ok { s.pdf } else { 0.0 },
+        target: sel3(s.ok, s.target, Vec3::ZERO),
         scalar,
     }
 }

@@ -3,10 +3,11 @@
 //! null lobe, media).
 
 use super::{PathState, ShadowRay};
+use crate::lambert_vertex::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::lighting::lights::OtherLight;
-use pathwave_engine::math::{Ray, offset_ray_origin};
+use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
 /// A light sample seen from a point: the direction to it, the emitted radiance arriving, the
@@ -38,22 +39,49 @@ pub(crate) fn pick_light(
         return pick_other(scene, other, pmf, p, u);
     }
     let ls = lights.sample(geo, light, p, u, time);
-    let to = ls.p - p;
-    let dist = to.length();
-    if !(dist > 0.0) {
-        return None;
-    }
-    let wi = to / dist;
     let prim = lights.prims[light];
     // A light's primitive emits: its material id is in the emission table.
     let emission = lights.emission[geo.material[prim as usize] as usize].as_ref()?;
-    let le = emission.emitted(&scene.textures, ls.n.dot(-wi), || geo.surface(prim, ls.p, time));
-    let pdf = ls.pdf * pmf;
-    if le == Vec3::ZERO || !(pdf > 0.0) {
-        return None;
-    }
-    let target = offset_ray_origin(ls.p, ls.err, if ls.n.dot(wi) < 0.0 { ls.n } else { -ls.n });
-    Some(LightPick { wi, le, pdf, target, delta: false })
+    let emit = |cos| emission.emitted(&scene.textures, cos, || geo.surface(prim, ls.p, time));
+    let s = seen_from(ls.p.into(), ls.n.into(), ls.pdf, ls.err, pmf, p.into(), emit);
+    s.ok.then(|| LightPick { wi: s.wi.into(), le: s.le, pdf: s.pdf, target: s.target.into(), delta: false })
+}
+
+/// What a light sample gives a shading point, before the choice of `ok`: the direction to it,
+/// the radiance arriving, the density with the light's choice, and the target off the light.
+pub(crate) struct SeenFrom {
+    /// Whether the sample counts: the point is off the light, sends radiance and has density.
+    pub ok: bool,
+    pub wi: Vec3,
+    pub le: Vec3,
+    pub pdf: f32,
+    pub target: Vec3,
+}
+
+/// What a sample of a light picked with probability `pmf` (the point `lp` with unit normal
+/// `n`, error bound `err`, density `pdf_solid` in solid angle) gives the point `from`; `emit`
+/// is the light's radiance towards a direction at cosine `cos` from `n`. The one definition
+/// for [`pick_light`] and the lanes' kernels (`light_lanes.rs`, which select by `ok` without
+/// branches): operation by operation on the components, so it vectorises across lanes and
+/// gives both the same bits.
+#[inline(always)]
+pub(crate) fn seen_from(
+    lp: Vec3,
+    n: Vec3,
+    pdf_solid: f32,
+    err: f32,
+    pmf: f32,
+    from: Vec3,
+    emit: impl FnOnce(f32) -> Vec3,
+) -> SeenFrom {
+    let d = Vec3::new(lp.x - from.x, lp.y - from.y, lp.z - from.z);
+    let dist = dot(d, d).sqrt();
+    let wi = Vec3::new(d.x / dist, d.y / dist, d.z / dist);
+    let le = emit(dot(n, Vec3::new(-wi.x, -wi.y, -wi.z)));
+    let pdf = pdf_solid * pmf;
+    let ok = dist > 0.0 && (le.x != 0.0 || le.y != 0.0 || le.z != 0.0) && pdf > 0.0;
+    let side = sel3(dot(n, wi) < 0.0, n, Vec3::new(-n.x, -n.y, -n.z));
+    SeenFrom { ok, wi, le, pdf, target: offset(lp, err, side) }
 }
 
 /// [`pick_light`] for a light that is not a primitive, chosen with probability `pmf`.
