@@ -18,7 +18,9 @@ pub enum Fresnel {
     Schlick,
 }
 
-/// `Dielectric(ior: 1.5, fresnel: Exact)`.
+/// Smooth glass of index of refraction `ior` (> 0), reflection/refraction chosen by exact Fresnel
+/// (or Schlick's approximation with `fresnel: Schlick`; default `Exact`), total internal
+/// reflection.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct DielectricDesc {

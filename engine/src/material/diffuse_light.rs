@@ -5,7 +5,8 @@ use super::{Colors, Emission, MaterialModel, Shading};
 use crate::format::{Color, Radiance};
 use glam::Vec3;
 
-/// `DiffuseLight(emit: (r, g, b), two_sided: false)`.
+/// Area emitter of radiance `emit` (a colour or a texture) with a black BSDF; emits only on the
+/// normal's side unless `two_sided: true` (default false).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct DiffuseLightDesc {

@@ -10,7 +10,9 @@ use crate::math::{Frame, concentric_disk};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
-/// `Lambertian(albedo: (r, g, b), two_sided: true)`.
+/// Diffuse; albedo components in [0, 1]; two-sided unless `two_sided: false` (default true), which
+/// makes it black seen from behind its shading normal (Mitsuba's `diffuse`: a path that meets its
+/// back ends there).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct LambertianDesc {

@@ -13,7 +13,10 @@ use crate::format::{Albedo, Color, UnitInterval};
 use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `Metal(albedo: (r, g, b), fuzz: 0.1)`.
+/// Mirror scaled by albedo; fuzz adds a point of a ball of that radius to the mirror direction;
+/// directions below the surface are absorbed. A fuzzy metal's lobe is evaluated too (its density is
+/// the ball's volume seen along a direction), so it samples lights with MIS like the rough kinds
+/// and shows highlights of point and spot lights.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct MetalDesc {

@@ -31,9 +31,17 @@ use crate::math::{Frame, luminance};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
-/// `MetallicRoughness(base_color: (r, g, b), metallic: 0, roughness: 1, ior: 1.5,
-/// clearcoat: 0, clearcoat_roughness: 0)`: glTF's `pbrMetallicRoughness` factors (the same
-/// defaults), `KHR_materials_ior` and `KHR_materials_clearcoat`.
+/// The glTF 2.0 metallic-roughness material as the glTF specification's Appendix B defines it (what
+/// glTF files' opaque materials become): a Lambertian `base_color / pi` weighted by `1 - F` under a
+/// GGX lobe (width `roughness^2`, separable Smith masking) weighted by the Schlick Fresnel factor
+/// `F` of `f0 = ((ior - 1) / (ior + 1))^2` at the half vector, mixed by `metallic` with the same
+/// GGX lobe tinted by Schlick's factor of `f0 = base_color`; `KHR_materials_clearcoat`'s coat on
+/// top, a GGX lobe of width `clearcoat_roughness^2` mixed in by `clearcoat (0.04 + 0.96 (1 -
+/// n.wo)^5)`. Single scattering, not energy-conserving (a white metal of roughness 1 reflects 31%
+/// head-on), both sides alike. The parameters are glTF's `pbrMetallicRoughness` factors,
+/// `KHR_materials_ior`'s `ior` and `KHR_materials_clearcoat`'s, with glTF's defaults: `base_color`
+/// 1 (or a texture), `metallic` 1, `roughness` 1, `ior` 1.5, `clearcoat` and
+/// `clearcoat_roughness` 0.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct MetallicRoughnessDesc {

@@ -5,7 +5,8 @@
 //! list of kinds: it generates the [`Material`] enum the integrators read, the
 //! [`MaterialDesc`] enum the scene parser fills (`Kind(field: value, ...)`), and
 //! [`MaterialKind`], which names the shading queues, stages and statistics. Adding a material
-//! means its file, one line in that list, and its RON description in the README.
+//! means its file and one line in that list; its README row is its description type's doc
+//! comment (`tests/readme_kinds.rs` checks it, and writes it with `PATHWAVE_BLESS=1`).
 //!
 //! Directions point away from the surface (`wo` towards the previous vertex, `wi` towards the
 //! next); `n` is the unit shading normal.

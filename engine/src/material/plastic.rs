@@ -29,7 +29,13 @@ use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
-/// `Plastic(albedo: (r, g, b), tint: (1, 1, 1), ior: 1.49, nonlinear: false, two_sided: false)`.
+/// A diffuse base under a smooth dielectric coating, as Mitsuba 3's `plastic`: a mirror of exact
+/// Fresnel reflectance times `tint` (default white) and a diffuse lobe `(1 - F(wo)) (1 - F(wi)) /
+/// ior^2 * albedo / (1 - Fdr) / pi`, `Fdr` the coating's diffuse reflectance from inside (Mitsuba's
+/// fits); `nonlinear: true` takes `albedo / (1 - albedo Fdr)`, which saturates colours. `albedo`
+/// and `tint` are colours in [0, 1] or textures; `ior` (coating over outside, default 1.49,
+/// polypropylene) in [0.1, 10]. Lobes chosen by Fresnel and Mitsuba's `specular_sampling_weight`.
+/// One-sided (black from below) unless `two_sided: true` (Mitsuba's `twosided`).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct PlasticDesc {

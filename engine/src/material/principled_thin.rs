@@ -22,9 +22,13 @@ use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
-/// `PrincipledThin(base_color: (r, g, b), roughness: 0.5, anisotropic: 0, spec_trans: 0,
-/// diff_trans: 0, eta: 1.5, spec_tint: 0, sheen: 0, sheen_tint: 0, flatness: 0)`: every weight
-/// a number or a texture.
+/// The thin-sheet Disney BSDF as Mitsuba 3's `principledthin` (leaves, paper, cloth): both sides
+/// alike, `Principled`'s diffuse, sheen and flatness, diffuse transmission `diff_trans` (0 to 2,
+/// Burley's range: 1 transmits half), and a specular pair weighted by `spec_trans`: a GGX
+/// reflection with the thin Fresnel (dielectric of `eta`, default 1.5, blended towards the tinted
+/// Schlick by `spec_tint`) and a transmission straight through off a GGX of roughness scaled by
+/// `0.65 eta - 0.35` (Burley 2015). Weights numbers or textures as `Principled`'s; `sampling_rates`
+/// (specular reflection and transmission, diffuse reflection and transmission, default 1).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct PrincipledThinDesc {

@@ -24,7 +24,10 @@ use crate::format::{Positive, Scalar};
 use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `RoughDielectric(ior: 1.5, alpha: 0.1, distribution: Ggx)`.
+/// Rough glass (Walter et al. 2007), `distribution` `Ggx` (default) or `Beckmann` as
+/// `RoughConductor`'s: reflection or refraction through the sampled microfacet chosen by exact
+/// Fresnel, radiance scaled by 1/eta^2 on refraction as `Dielectric`; two-sided. `alpha` in [0, 1]
+/// or a texture as `RoughConductor`'s; below 0.001 (or with `ior` 1) the smooth `Dielectric`.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct RoughDielectricDesc {

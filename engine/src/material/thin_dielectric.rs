@@ -17,7 +17,12 @@ use crate::format::Positive;
 use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
 
-/// `ThinDielectric(ior: 1.5)`.
+/// A pane too thin to see (a window, a bubble; Mitsuba 3's `thindielectric`): reflects with the
+/// pane's reflectance R' = R + T^2 R / (1 - R^2) = 2R / (1 + R) (R the exact Fresnel reflectance at
+/// the angle of incidence, either side, T = 1 - R), else lets the ray through unbent. The straight
+/// transmission is a null lobe: the path keeps its MIS state and the crossing is no bounce of
+/// `max_depth` (as Mitsuba's volumetric path tracer counts it), and shadow rays cross the pane
+/// attenuated by 1 - R' (up to 256 crossings), so light sampling reaches what lies behind it.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct ThinDielectricDesc {

@@ -32,7 +32,11 @@ pub enum BoxUv {
     Mitsuba,
 }
 
-/// `Box(a: .., b: .., uv: Around)`: any two opposite corners.
+/// Axis-aligned box between any two opposite corners: six quads facing out, each face the [0, 1]^2
+/// square of uv. `uv: Around` (default): the four sides' u runs around the box counter-clockwise
+/// seen from +y (the +z face's u along +x) and their v up; the top's u is +x and v -z, the bottom's
+/// u +x and v +z. `uv: Mitsuba`: each face as Mitsuba 3's `cube` maps it (v flipped as pathwave's
+/// images), kept under any transform.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct BoxDesc {

@@ -184,7 +184,11 @@ pub struct CylinderShape {
     pub flip_normals: bool,
 }
 
-/// `Cylinder(p0: .., p1: .., radius: r, flip_normals: false)`.
+/// The open tube (no caps) of `radius` about the segment from `p0` to `p1`, normal away from the
+/// axis (towards it with `flip_normals: true`, default false; a mirroring transform changes
+/// nothing, as in Mitsuba): Mitsuba's `cylinder`. uv: u = phi / 2pi about the axis from the first
+/// tangent of its frame, v = 1 at `p0` to 0 at `p1`. Transforms that make the cross-section an
+/// ellipse or shear the axis are refused. As a light, sampled uniformly by area.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct CylinderDesc {

@@ -142,7 +142,11 @@ pub struct DiskShape {
     pub flip_normals: bool,
 }
 
-/// `Disk(center: .., normal: .., radius: r, flip_normals: false)`.
+/// The points within `radius` of `center` in the plane normal to `normal`, facing along it (against
+/// it with `flip_normals: true`, default false): Mitsuba's `disk`. uv: u = r / radius, v = 1 - phi
+/// / 2pi, phi measured from the first tangent of `normal`'s frame (+x for +z) towards the second
+/// (+y); any transform (an ellipse under a non-uniform scale). As a light, sampled uniformly by
+/// area.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct DiskDesc {

@@ -16,7 +16,8 @@
 //! or, under a transform that is not a uniform scale, a `TransformedSphere`, and a mesh's
 //! triangles are `Triangle`s. A new kind is its file (description, [`ShapeModel`], and where it
 //! needs one a [`PrimitiveShape`]), its `mod` line, its line in [`with_shapes!`] and, if it has
-//! a primitive, its line in `primitives!`; its README row is checked by `tests/readme_kinds.rs`.
+//! a primitive, its line in `primitives!`; its README row, its description's doc comment, is
+//! checked (and written with `PATHWAVE_BLESS=1`) by `tests/readme_kinds.rs`.
 
 mod boxes;
 mod cylinder;

@@ -305,7 +305,9 @@ pub struct QuadShape {
     pub flip_normal: bool,
 }
 
-/// `Quad(q: .., u: .., v: .., flip_normal: false)`.
+/// Points q + a u + b v, a, b in [0, 1]; normal = normalize(u x v), or its opposite with
+/// `flip_normal: true` (default false); uv = (a, b). Under a mirroring transform the edges are
+/// swapped (the normal keeps facing its side; uv becomes (b, a)).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct QuadDesc {

@@ -118,7 +118,13 @@ pub enum SdfNormals {
     Analytic,
 }
 
-/// `SdfGrid(file: "torus.vol", normals: Smooth)`.
+/// The zero set of the signed distances in `file` (Mitsuba's grid-volume `.vol`: version 3,
+/// float32, one channel, at least 2 points per axis), a grid spanning [0, 1]^3 interpolated
+/// trilinearly in each voxel: Mitsuba's `sdfgrid`. Each voxel with a surface is a primitive of the
+/// BVH; a ray meets it at the first zero of the interpolant's cubic along it. `normals: Smooth`
+/// (default) shades with Mitsuba's blend of the eight neighbouring voxels' gradients
+/// (Hansson-Söderlund et al. 2022), `Analytic` with the voxel's gradient. No uv (Mitsuba's (0, 0));
+/// any invertible transform; it does not emit (refused, as in Mitsuba).
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SdfGridDesc {

@@ -182,7 +182,9 @@ pub struct SphereShape {
     pub poles: Poles,
 }
 
-/// `Sphere(center: (x, y, z), radius: r, poles: Y)`.
+/// The uv of the unit vector (x, y, z) from the centre: with `poles: Y` (default) u = (atan2(-z,
+/// x) + pi) / 2pi, v = acos(-y) / pi; with `poles: Z` (Mitsuba 3's sphere, v flipped as pathwave's
+/// images) u = atan2(y, x) / 2pi wrapped to [0, 1), v = acos(-z) / pi.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct SphereDesc {

@@ -215,7 +215,8 @@ pub struct TriangleShape {
     pub c: Vec3A,
 }
 
-/// `Triangle(a: .., b: .., c: ..)`.
+/// Normal = normalize((b - a) x (c - a)); uv = barycentric weights of b and c; watertight
+/// intersection (Woop et al. 2013).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct TriangleDesc {

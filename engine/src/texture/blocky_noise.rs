@@ -3,7 +3,8 @@
 use super::{NoiseKind, Texture, TextureId, TextureModel};
 use crate::format::{Color, Positive, Rgb, white};
 
-/// The lattice value of the cell of `scale * p`, times `color`.
+/// One random value per lattice cell of `scale * p`, in [0, 1), times `color` (default white);
+/// world space.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BlockyNoise {

@@ -3,7 +3,8 @@
 use super::{Texture, TextureId, TextureModel};
 use crate::format::{Color, Positive, Rgb};
 
-/// Cells of side `scale`, `even` where floor(x/s) + floor(y/s) + floor(z/s) is even.
+/// 3-D checker in world space: cells of side `scale` (s), `even` where floor(x/s) + floor(y/s) +
+/// floor(z/s) is even, else `odd`.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Checker {

@@ -8,7 +8,10 @@ use crate::format::{Color, Rgb, context};
 use serde::{Deserialize, Deserializer};
 use std::sync::Arc;
 
-/// Image `image` of a glTF file (PNG or JPEG; 8-bit images are sRGB unless `raw`).
+/// Image `image` (its index) of the glTF file `file` (relative to the scene file), PNG or JPEG,
+/// inside it (a buffer view, as `.glb` files keep images, or a `data:` URI) or beside it; otherwise
+/// as `Image` (sRGB unless `raw: true`; a bump map may read it). What a converted glTF scene names
+/// its embedded images with.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(try_from = "GltfImageFields")]
 pub struct GltfImage {

@@ -6,8 +6,12 @@ use crate::format::{Color, Rgb, context};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::sync::Arc;
 
-/// PNG, JPEG, BMP, HDR or EXR, relative to the scene file; 8-bit images are sRGB (unless `raw`),
-/// float ones linear.
+/// PNG, JPEG, BMP, HDR or EXR relative to the scene file; 8-bit files are sRGB (decoded once, at
+/// load) unless `raw: true` (codes / 255), float files linear. Row 0 is at v = 1. `filter`:
+/// `Bilinear` (default; between texel centres at ((i + 0.5) / width, 1 - (j + 0.5) / height)) or
+/// `Nearest` (the texel floor(u width), floor((1 - v) height)); `wrap` of texel indices: `Repeat`
+/// (default), `Clamp`, `Mirror` (every other copy reflected); `uv_transform` as `UvChecker`'s
+/// (Mitsuba's `to_uv`).
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(from = "ImageFields")]
 pub struct Image {

@@ -4,8 +4,9 @@ use super::turbulence::{octaves, seven};
 use super::{NoiseKind, Texture, TextureId, TextureModel};
 use crate::format::{Color, Positive, Rgb, white};
 
-/// Marble veins (RTNW's marble: the turbulence of the unscaled point distorts the phase),
-/// times `color`.
+/// Marble veins (RTNW's marble: the turbulence of the unscaled point distorts the phase): 0.5 (1 +
+/// sin(scale z + 10 turbulence(p))), in [0, 1], its turbulence of `depth` (1 to 24, default 7)
+/// octaves, times `color` (default white); world space.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Marble {

@@ -9,7 +9,11 @@ use super::{Texture, TextureId, TextureModel};
 use crate::format::{Color, Rgb};
 use serde::{Deserialize, Deserializer, de::Error};
 
-/// The attribute `name` of the mesh that was hit, times `scale`.
+/// A mesh's attribute `name` (`vertex_...`: interpolated by the hit's barycentric weights;
+/// `face_...`: constant over a face; one channel is grey) times `scale` (>= 0, default 1):
+/// Mitsuba's `mesh_attribute`. PLY integer properties are scaled to [0, 1] and read as sRGB, as
+/// Mitsuba reads them. A material reading one must be on a `Mesh` that has it (checked at load,
+/// naming the attributes the mesh has) and must not emit.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MeshAttribute {

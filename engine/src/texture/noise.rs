@@ -3,7 +3,8 @@
 use super::{NoiseKind, Texture, TextureId, TextureModel};
 use crate::format::{Color, Positive, Rgb, white};
 
-/// Perlin gradient noise mapped from [-1, 1] to [0, 1], times `color`.
+/// Perlin gradient noise of `scale * p` mapped from [-1, 1] to [0, 1], times `color` (default
+/// white); world space.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Noise {

@@ -3,7 +3,7 @@
 use super::{Texture, TextureId, TextureModel};
 use crate::format::{Color, Rgb};
 
-/// One colour, written as the kind's one unnamed value.
+/// One colour, written as the kind's one unnamed value: `Solid((r, g, b))`.
 #[derive(serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 #[serde(transparent)]
 pub struct Solid(pub Rgb);

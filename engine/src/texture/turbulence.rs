@@ -4,7 +4,8 @@ use super::{NoiseKind, Texture, TextureId, TextureModel};
 use crate::format::{Color, Positive, Rgb, white};
 use serde::{Deserialize, Deserializer, de::Error};
 
-/// Turbulence of `scale * p`, times `color`.
+/// Sum of `depth` (1 to 24, default 7) octaves of abs(noise) of `scale * p`, in [0, 2), times
+/// `color` (default white); world space.
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Turbulence {

@@ -3,8 +3,9 @@
 use super::{Texture, TextureId, TextureModel, UvTransform};
 use crate::format::{Color, Positive, Rgb};
 
-/// `u` by `v` cells over the uv square: `even` where floor(s u) + floor(t v) is even, (s, t)
-/// being the surface's uv after `uv_transform`.
+/// `u` by `v` cells over the surface's uv square (`even` where floor(u s) + floor(v t) is even, (s,
+/// t) the uv); `uv_transform: ((a, b, c), (d, e, f))` (optional) first maps the uv to (a s + b t +
+/// c, d s + e t + f).
 #[derive(serde::Deserialize, Debug, Clone, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct UvChecker {

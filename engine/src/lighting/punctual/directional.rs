@@ -3,7 +3,7 @@
 use super::{LightModel, PunctualLight};
 use crate::format::{Direction, Radiance};
 
-/// Parallel light travelling along `direction`, of irradiance (W/m^2) on a surface facing it.
+/// Parallel light travelling along `direction`, of `irradiance` (W/m^2) on a surface facing it.
 #[derive(serde::Deserialize, Debug, Clone, Copy)]
 #[serde(deny_unknown_fields)]
 pub struct Directional {

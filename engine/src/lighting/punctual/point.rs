@@ -3,7 +3,8 @@
 use super::{LightModel, LightPosition, PunctualLight};
 use crate::format::Radiance;
 
-/// Radiant intensity in W/sr, the same in every direction.
+/// An isotropic point light in `lights: [..]`: radiant intensity `intensity` (W/sr), the same in
+/// every direction; irradiance `intensity cos / d^2` at distance d.
 #[derive(serde::Deserialize, Debug, Clone, Copy)]
 #[serde(deny_unknown_fields)]
 pub struct Point {

@@ -1,14 +1,22 @@
 //! `Projector(position: (0, 4, 0), look_at: (0, 0, 0), up: (0, 0, 1), fov: 45, irradiance:
 //! "slide", scale: 1)`: Mitsuba 3's `projector` (`src/emitters/projector.cpp`), a pinhole that
-//! projects an image through a perspective frustum, the reciprocal of a perspective camera.
+//! projects an image through a perspective frustum, the reciprocal of a perspective camera. Its
+//! runtime form is [`PunctualLight::Projector`].
 
 use super::{LightModel, LightPosition, LightTextures, PunctualLight, look_frame};
 use crate::format::{Color, Fov, FovAxis, NonNegative, Radiance, V3};
 use glam::Vec3;
 
-/// A projector (see [`PunctualLight::Projector`]). Its image is `irradiance` (a texture, or
-/// one colour), whose width over height (1 for a texture that is not an image) shapes the
-/// frustum: `fov` degrees across `fov_axis`, as a camera's.
+/// Mitsuba 3's `projector`: a pinhole at `position` projecting the image `irradiance` (a texture's
+/// name, or a colour; default (1, 1, 1)) along `look_at - position`, with its top towards `up`
+/// (default (0, 1, 0), not along the axis), as a perspective camera would see it: `fov` degrees (in
+/// (0, 180)) across `fov_axis` (`X` default, `Y`, `Diagonal`, `Smaller`, `Larger`) of an image
+/// whose width over height is the texture's image's (1 for a colour or a texture that is not an
+/// image). A point at (x, y, z) in the frame (x = `normalize(up x axis)`, y = `axis x x`, z along
+/// the axis) with z > 0 reads uv = (0.5 - x / (2 z tan_x), 0.5 + y / (2 z tan_y)) (tan_x, tan_y:
+/// tan of the half fields of view; nothing outside [0, 1]^2); a plane at unit distance facing the
+/// projector receives pi `scale` (default 1, >= 0) times the image's value there (the intensity
+/// towards theta from the axis is pi `scale` E / cos^3 theta).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct Projector {

@@ -1,14 +1,26 @@
 //! `Spot(position: (0, 4, 0), look_at: (0, 0, 0), intensity: (50, 50, 50), cone_angle: 30,
 //! falloff_start: 25)`: a point light shining into a cone about `look_at - position`, its
 //! intensity falling off as pbrt-v4's `SpotLight` (`falloff: Smoothstep`, the default) or as
-//! Mitsuba 3's `spot` (`falloff: Linear`), optionally through a texture over the cone.
+//! Mitsuba 3's `spot` (`falloff: Linear`), optionally through a texture over the cone. Its
+//! runtime form is [`PunctualLight::Spot`].
 
 use super::{LightModel, LightPosition, LightTextures, PunctualLight, look_frame};
 use crate::format::{Color, Finite, Radiance, V3};
 use crate::lighting::lights::{SpotFalloff, SpotTexture};
 use glam::Vec3;
 
-/// A spot light (see [`PunctualLight::Spot`]).
+/// A point light into a cone about `look_at - position`: intensity towards a direction at angle
+/// theta from the axis is `intensity` times the falloff: full within `falloff_start`, none beyond
+/// `cone_angle` (degrees; cone in (0, 180), default 30; falloff in [0, cone], default 25), between
+/// them `smoothstep(cos(cone_angle), cos(falloff_start), cos theta)` with `falloff: Smoothstep`
+/// (the default; pbrt-v4's `SpotLight`; `smoothstep(a, b, x)` = 3t^2 - 2t^3 with t = (x - a) / (b -
+/// a) clamped to [0, 1]) or `(cone_angle - theta) / (cone_angle - falloff_start)` with `falloff:
+/// Linear` (Mitsuba 3's `spot`, whose `cutoff_angle` and `beam_width` are `cone_angle` and
+/// `falloff_start`). `texture` (a texture's name; a colour tints the intensity) multiplies it by
+/// the texture's value at Mitsuba's uv of the direction: for the direction (x, y, z) in the frame
+/// whose z is the axis, x is `normalize(up x axis)` and y `axis x x` (`up` default (0, 1, 0), not
+/// along the axis), uv = (0.5 + x / (2 z tan(cone_angle)), 0.5 - y / (2 z tan(cone_angle))) (a cone
+/// under 90 degrees).
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct Spot {

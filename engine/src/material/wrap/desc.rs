@@ -135,7 +135,16 @@ fn unit_scale() -> Finite {
     Finite(1.0)
 }
 
-/// `Bump(texture: "tiles", scale: 0.02, material: "plaster")`.
+/// A bump map (Mitsuba 3's `bumpmap`) around the material named `material` (defined before it, not
+/// an emitter, and not a map or a wrapper holding one: maps do not nest): the surface displaced
+/// along its normal by `scale` (default 1, finite) times the value of the `Image` texture `texture`
+/// (its luminance; `raw: true` for heights stored linearly). The shading normal is that of the
+/// displaced surface, from the image's bilinear slopes along the surface's `u` and `v` (Blinn
+/// 1978): spheres, quads and meshes give the derivatives; other shapes keep their normal.
+/// Directions must lie on the same side of the tilted and the untilted normal, and the BSDF is
+/// darkened towards the terminator by the microfacet shadowing of Estevez et al. 2019 (as Mitsuba);
+/// a normal facing away from the ray is mirrored towards it (`flip_invalid_normals`, default true).
+/// Lambertians under a map are shaded path by path with the glossy kinds' MIS, not the lane kernel.
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct BumpDesc {
@@ -152,7 +161,12 @@ pub struct BumpDesc {
     pub flip_invalid_normals: bool,
 }
 
-/// `NormalMap(texture: "tiles_normals", material: "plaster")`.
+/// A normal map (Mitsuba 3's `normalmap`) around `material` (as for `Bump`): the texture's value
+/// `c` gives the normal `2 c - 1` in the frame of `dp/du` projected on the tangent plane, the
+/// normal's cross product with it, and the normal (read the image with `raw: true`, as normal maps
+/// are stored; OpenGL's convention, green along `n x dp/du`). Same rules as `Bump` for directions,
+/// shadowing and `flip_invalid_normals`. Scenes: `scenes/maps.ron` (images written by
+/// `scenes/maps.py`).
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct NormalMapDesc {
@@ -166,7 +180,13 @@ pub struct NormalMapDesc {
     pub flip_invalid_normals: bool,
 }
 
-/// `Mask(opacity: 0.5, material: "leaf")`.
+/// An alpha cut-out (Mitsuba 3's `mask`) around the material named `material`, which must be
+/// defined before it and not be a `DiffuseLight`: `opacity` is a number in [0, 1] or a texture's
+/// name (its luminance at the hit, clamped to [0, 1]). A ray meets the material with probability
+/// `opacity` and otherwise goes on unbent, a null crossing as `ThinDielectric`'s (no bounce of
+/// `max_depth`, the MIS state kept); shadow rays cross it attenuated by `1 - opacity` (where
+/// Mitsuba's `path` stops them: the same in expectation, and light sampling sees through a leaf's
+/// holes). Wrappers nest (a mask around a blend, ...); an object with `emit` cannot use one.
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct MaskDesc {
@@ -176,7 +196,12 @@ pub struct MaskDesc {
     pub material: Wrapped,
 }
 
-/// `Blend(weight: 0.25, materials: ("a", "b"))`.
+/// `(1 - weight) first + weight second` of `materials: ("first", "second")`, both defined before it
+/// and not emitters (Mitsuba 3's `blendbsdf`); `weight` a number in [0, 1] or a texture's name (its
+/// luminance, clamped). Two Lambertians that reflect on the same sides blend into the Lambertian of
+/// the blended albedo (exact: no noise added); any other pair is sampled by picking the second with
+/// probability `weight` at each hit (unbiased; each shaded by its own kernel, with light sampling
+/// and MIS).
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct BlendDesc {

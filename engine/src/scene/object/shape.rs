@@ -1,5 +1,6 @@
 //! `shape: Kind(..)`: [`ShapeDesc`] from the shape registry, and `Mesh(file: ..)`, the
-//! triangles of a mesh file, beside it.
+//! triangles of a mesh file, beside it. Meshes are not in the shape registry: their runtime form
+//! is the shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
 
 use crate::format::registry::{fields, registry};
 use crate::placement::Form;
@@ -31,14 +32,34 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
     T::build(fields::<T::Desc, A>(variant)?).map_err(A::Error::custom)
 }
 
-/// `Mesh(file: "assets/knot.obj")`: the triangles of a mesh file (relative to the scene
-/// file: OBJ, PLY, glTF 2.0, whose mesh `mesh` it is, by name or index (default: the file's
-/// only mesh), all its primitives or only `primitive`, or Mitsuba's `.serialized`, whose mesh
-/// `shape_index` it is, default 0), read as the scene is parsed, smooth-shaded where the file gives vertex normals; `face_normals:
-/// true` shades it flat all the same (Mitsuba's `face_normals`), `flip_normals: true` turns it
-/// inside out (its faces wound the other way, its normals reversed), `flip_tex_coords: true`
-/// reads each uv's v as 1 - v. Meshes are not in the shape registry: their runtime form is the
-/// shared mesh data the world instances, not a [`ShapeModel`] that places primitives.
+/// The triangles of a mesh file, relative to the scene file, read as the scene is parsed: OBJ
+/// (tobj, faces triangulated), PLY (ASCII or binary of either byte order; polygons triangulated as
+/// fans; positions, normals `nx ny nz`, uv `u v`, `s t` or `texture_u texture_v`, and the other
+/// vertex and face properties as mesh attributes, grouped and named as Mitsuba 3 names them:
+/// `vertex_color` from `red green blue`, `face_weight` from `weight_0`, ...; see `MeshAttribute`)
+/// glTF 2.0 (`.gltf` with its buffers, or `.glb`; `mesh: "name"` or `mesh: 3` picks one of its
+/// meshes, which may be left out when the file has one; all its primitives, or `primitive: 1`
+/// alone; see [glTF input](#gltf-input)) or Mitsuba's `.serialized` (`shape_index` picks one of its
+/// meshes, default 0; its vertex colours are the attribute `vertex_color`). The format is told by
+/// the file's first bytes where they tell it (`ply`, `glTF` or a JSON `{`, the `.serialized` code),
+/// else by its extension; another file is refused, naming the formats there are. Every count in a
+/// file is checked against its length before anything is allocated. Triangles without area dropped.
+/// `flip_normals: true` turns the mesh inside out (faces wound the other way, vertex normals
+/// reversed), `flip_tex_coords: true` reads each v as 1 - v (both default false). With vertex
+/// normals (`vn`) the mesh is smooth shaded, unless `face_normals: true` (Mitsuba's `face_normals`;
+/// one flat copy of the file, shared by the objects that ask for it): BSDFs use the interpolated
+/// normal, bent towards the triangle's where the ray arrives from behind it or would reflect into
+/// the facet (Keller et al. 2017, as Cycles does), and rays leaving on the side the normals point
+/// to start at the smooth surface they describe (Hanika's shadow-terminator offset, 2021), so the
+/// terminator and the silhouette of a coarse mesh shade like the smooth surface's
+/// (`tests/smooth.rs`); a reflection on the outer side leaves whatever the facet's normal says,
+/// other directions on opposite sides of the two normals end the path; with vertex texture
+/// coordinates (`vt`) uv interpolates them (else uv is the barycentric weights of the second and
+/// third vertex). Objects naming the same file share one mesh and one BLAS: each is an instance
+/// (transform, material, motion) under the TLAS, so 10,000 objects of one mesh cost 10,000 instance
+/// records (`scenes/instances.ron`, written by `scenes/instances.py`). Meshes with an emitting
+/// material are baked into world-space flat-shaded triangles instead, so that light sampling finds
+/// them.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshDesc {
