@@ -479,7 +479,7 @@ mod tests {
         for _ in 0..20_000 {
             let u_pick = rng.next_1d();
             let u = Vec2::new(rng.next_1d(), rng.next_1d());
-            if scene.lights.pick(u_pick).0 != env {
+            if scene.lights.pick(u_pick, p).0 != env {
                 continue;
             }
             let Some(lp) = pick_light(&scene, p, 0.0, u_pick, u) else { continue };

@@ -34,7 +34,7 @@ pub(crate) fn pick_light(
 ) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(u_pick);
+    let (light, pmf) = lights.pick(u_pick, p);
     if let Some(other) = lights.other(light) {
         return pick_other(scene, other, pmf, p, u);
     }
@@ -90,7 +90,7 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
     match light {
         OtherLight::Punctual(l) => {
             let (wi, dist, le) = l.illuminate(p, &scene.textures);
-            if le == Vec3::ZERO || !(dist > 0.0) {
+            if le == Vec3::ZERO || !(dist > 0.0) || !(pmf > 0.0) {
                 return None;
             }
             let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
