@@ -82,36 +82,6 @@ impl LightBounds {
         }
     }
 
-    /// A bound on what these lights send to the point `p` (pbrt-v4's
-    /// `LightBounds::Importance` without a normal): the power over the squared distance to the
-    /// box's centre (at least half the box's diagonal, as pbrt-v4 clamps it), times the cosine
-    /// of the smallest angle between a direction from the box to `p` and a direction the lights
-    /// emit in; 0 where no light of the box can reach `p`.
-    #[inline]
-    pub fn importance(&self, p: Vec3A) -> f32 {
-        let pc = self.centroid();
-        let d2_true = p.distance_squared(pc);
-        let d2 = d2_true.max((self.hi - self.lo).length() * 0.5);
-        // The angle between the cone's axis and the direction from the box to `p`.
-        let wi = (p - pc).normalize_or_zero();
-        let cos_w = if self.two_sided { self.w.dot(wi).abs() } else { self.w.dot(wi) };
-        let sin_w = sin_of(cos_w);
-        // The half angle the box subtends from `p` (its bounding sphere's; all directions from
-        // inside it).
-        let r2 = (self.hi - pc).length_squared();
-        let cos_b = if d2_true < r2 { -1.0 } else { (1.0 - r2 / d2_true).max(0.0).sqrt() };
-        let sin_b = sin_of(cos_b);
-        // theta' = max(0, theta_w - theta_o - theta_b).
-        let sin_o = sin_of(self.cos_theta_o);
-        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
-        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
-        let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        if cos_p <= self.cos_theta_e {
-            return 0.0;
-        }
-        (self.phi * cos_p / d2).max(0.0)
-    }
-
     /// pbrt-v4's `EvaluateCost` of a child with these bounds, split along `dim` of the parent's
     /// box `lo..hi`: power times the solid angle measure of the cones times the box's surface
     /// area, times the parent's longest side over its side along `dim`.
@@ -155,11 +125,74 @@ fn cone_union(a: (Vec3A, f32), b: (Vec3A, f32)) -> (Vec3A, f32) {
     (w, cos(theta_o))
 }
 
+/// [`LightBounds`] as the importance reads them, with what depends on the bounds alone
+/// computed once: the box's centre, half its diagonal's length, its bounding sphere's squared
+/// radius, the sine of `theta_o`.
+#[derive(Clone, Copy, Debug)]
+struct Cone {
+    center: Vec3A,
+    w: Vec3A,
+    half_diagonal: f32,
+    r2: f32,
+    phi: f32,
+    cos_theta_o: f32,
+    sin_theta_o: f32,
+    cos_theta_e: f32,
+    two_sided: bool,
+}
+
+impl From<&LightBounds> for Cone {
+    fn from(b: &LightBounds) -> Self {
+        let center = b.centroid();
+        Cone {
+            center,
+            w: b.w,
+            half_diagonal: (b.hi - b.lo).length() * 0.5,
+            r2: (b.hi - center).length_squared(),
+            phi: b.phi,
+            cos_theta_o: b.cos_theta_o,
+            sin_theta_o: sin_of(b.cos_theta_o),
+            cos_theta_e: b.cos_theta_e,
+            two_sided: b.two_sided,
+        }
+    }
+}
+
+impl Cone {
+    /// A bound on what the lights send to the point `p` (pbrt-v4's `LightBounds::Importance`
+    /// without a normal): the power over the squared distance to the box's centre (at least
+    /// half the box's diagonal, as pbrt-v4 clamps it), times the cosine of the smallest angle
+    /// between a direction from the box to `p` and a direction the lights emit in; 0 where no
+    /// light of the box can reach `p`.
+    #[inline]
+    fn importance(&self, p: Vec3A) -> f32 {
+        let d2_true = p.distance_squared(self.center);
+        let d2 = d2_true.max(self.half_diagonal);
+        // The angle between the cone's axis and the direction from the box to `p`.
+        let wi = (p - self.center).normalize_or_zero();
+        let cos_w = if self.two_sided { self.w.dot(wi).abs() } else { self.w.dot(wi) };
+        let sin_w = sin_of(cos_w);
+        // The half angle the box subtends from `p` (its bounding sphere's; all directions from
+        // inside it).
+        let cos_b = if d2_true < self.r2 { -1.0 } else { (1.0 - self.r2 / d2_true).max(0.0).sqrt() };
+        let sin_b = sin_of(cos_b);
+        // theta' = max(0, theta_w - theta_o - theta_b).
+        let (cos_o, sin_o) = (self.cos_theta_o, self.sin_theta_o);
+        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+        let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
+        if cos_p <= self.cos_theta_e {
+            return 0.0;
+        }
+        (self.phi * cos_p / d2).max(0.0)
+    }
+}
+
 /// A node of the tree as plain data: an inner node's first child follows it, its second is at
 /// `index`; a leaf's light is `index`.
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    bounds: LightBounds,
+    cone: Cone,
     index: u32,
     leaf: bool,
 }
@@ -197,7 +230,7 @@ impl LightTree {
     /// Returns the subtree's bounds.
     fn build_node(&mut self, lights: &mut [(u32, LightBounds)], trail: u64, depth: u32) -> LightBounds {
         if let [(light, bounds)] = *lights {
-            self.nodes.push(Node { bounds, index: light, leaf: true });
+            self.nodes.push(Node { cone: Cone::from(&bounds), index: light, leaf: true });
             self.trail[light as usize] = trail;
             return bounds;
         }
@@ -245,13 +278,13 @@ impl LightTree {
             }
         };
         let at = self.nodes.len();
-        self.nodes.push(Node { bounds: lights[0].1, index: 0, leaf: false });
+        self.nodes.push(Node { cone: Cone::from(&lights[0].1), index: 0, leaf: false });
         let (first, second) = lights.split_at_mut(mid);
         let b0 = self.build_node(first, trail, depth + 1);
         self.nodes[at].index = self.nodes.len() as u32;
         let b1 = self.build_node(second, trail | 1 << depth, depth + 1);
         let bounds = b0.union(&b1);
-        self.nodes[at].bounds = bounds;
+        self.nodes[at].cone = Cone::from(&bounds);
         bounds
     }
 
@@ -259,7 +292,7 @@ impl LightTree {
     #[inline]
     fn children(&self, at: usize, p: Vec3A) -> [f32; 2] {
         let second = self.nodes[at].index as usize;
-        [self.nodes[at + 1].bounds.importance(p), self.nodes[second].bounds.importance(p)]
+        [self.nodes[at + 1].cone.importance(p), self.nodes[second].cone.importance(p)]
     }
 
     /// Picks a light for the point `p` with `u` in [0, 1): (light, probability), the
