@@ -463,9 +463,14 @@ impl LightTable {
             LightSamplerKind::Tree => bounded > 0,
             LightSamplerKind::Auto => bounded > TREE_MIN_LIGHTS,
         };
-        // Bounds that hold a moving light's sweep need the shutter: scenes with motion keep
-        // the table.
-        if tree && geometry.velocity.is_none() {
+        // Bounds that hold a moving light's sweep would need the shutter: scenes whose lights
+        // move keep the table.
+        let moving = (geometry.velocity.as_ref())
+            .is_some_and(|v| t.prims.iter().any(|&i| v[i as usize] != Vec3A::ZERO));
+        if tree && moving {
+            tracing::warn!("the light tree does not bound moving lights: lights are chosen by power");
+        }
+        if tree && !moving {
             let bounds: Vec<(u32, LightBounds)> = (0..t.pmf.len())
                 .filter_map(|l| {
                     let b = match t.other(l) {
