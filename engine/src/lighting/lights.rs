@@ -545,25 +545,26 @@ impl LightTable {
         from + wi * (2.0 * ((from - self.center).length() + self.radius) + 1.0)
     }
 
-    /// Picks a light for the point `from` with `u` in [0, 1): (light index, probability). The
-    /// table's choice ignores `from`; the tree's weighs the lights by their importance there,
+    /// Picks a light for the point `from` of shading normal `n` (zero in a medium) with `u` in
+    /// [0, 1): (light index, probability). The table's choice ignores the point; the tree's
+    /// weighs the lights by their importance there,
     /// after giving each light at infinity its share first (pbrt-v4's `pInfinite`), and its
     /// probability is 0 (the light meaningless) where no light of the tree reaches `from`.
     #[inline]
-    pub fn pick(&self, u: f32, from: Vec3A) -> (usize, f32) {
+    pub fn pick(&self, u: f32, from: Vec3A, n: Vec3A) -> (usize, f32) {
         let Some(tree) = &self.tree else {
             let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
             return (i, self.pmf[i]);
         };
-        let n = self.infinite.len();
+        let count = self.infinite.len();
         let finite = self.finite_share();
         let p_infinite = 1.0 - finite;
         if u < p_infinite {
-            let l = self.infinite[((u / p_infinite * n as f32) as usize).min(n - 1)] as usize;
+            let l = self.infinite[((u / p_infinite * count as f32) as usize).min(count - 1)] as usize;
             return (l, self.pmf[l]);
         }
         let u = ((u - p_infinite) / finite).min(1.0 - f32::EPSILON / 2.0);
-        let (l, pmf) = tree.pick(u, from);
+        let (l, pmf) = tree.pick(u, from, n);
         (l as usize, finite * pmf)
     }
 
@@ -573,11 +574,12 @@ impl LightTable {
         1.0 / (self.infinite.len() + 1) as f32
     }
 
-    /// The probability that [`Self::pick`] picks `light` for the point `from`: the same bits.
+    /// The probability that [`Self::pick`] picks `light` for the point `from` of normal `n`:
+    /// the same bits.
     #[inline]
-    pub fn pmf_from(&self, light: usize, from: Vec3A) -> f32 {
+    pub fn pmf_from(&self, light: usize, from: Vec3A, n: Vec3A) -> f32 {
         match &self.tree {
-            Some(tree) if !self.at_infinity(light) => self.finite_share() * tree.pmf(light as u32, from),
+            Some(tree) if !self.at_infinity(light) => self.finite_share() * tree.pmf(light as u32, from, n),
             _ => self.pmf[light],
         }
     }
@@ -605,17 +607,30 @@ impl LightTable {
         ls
     }
 
-    /// Solid-angle density (including the pick probability) with which NEE from `from` at `time`
-    /// would have produced the point `p` (normal `n`) on primitive `prim`; 0 for unsampled
-    /// emitters.
+    /// Solid-angle density (including the pick probability) with which NEE from `from` (of
+    /// shading normal `from_n`, zero in a medium) at `time` would have produced the point `p`
+    /// (normal `n`) on primitive `prim`; 0 for unsampled emitters.
     #[inline]
-    pub fn pdf(&self, geometry: &Geometry, prim: u32, from: Vec3A, p: Vec3A, n: Vec3A, time: f32) -> f32 {
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the two points, their normals, the primitive and the time"
+    )]
+    pub fn pdf(
+        &self,
+        geometry: &Geometry,
+        prim: u32,
+        from: Vec3A,
+        from_n: Vec3A,
+        p: Vec3A,
+        n: Vec3A,
+        time: f32,
+    ) -> f32 {
         // Instance hits (prim out of range) are never sampled.
         let light = self.light_of_prim.get(prim as usize).copied().unwrap_or(NO_LIGHT);
         if light == NO_LIGHT {
             return 0.0;
         }
-        let pmf = self.pmf_from(light as usize, from);
+        let pmf = self.pmf_from(light as usize, from, from_n);
         let off = geometry.offset(prim, time);
         let (from, p) = (from - off, p - off);
         let pdf = geometry.prims[prim as usize].pdf_solid_angle(from, p, n);
@@ -647,7 +662,7 @@ mod tests {
         let three = table(&[point(0.0, 1.0), point(1.0, 3.0), sun], Always);
         assert_eq!(three.pmf, [0.375 / 3.0, 0.625 / 3.0, 1.0 / 3.0, 1.0 / 3.0]);
         assert_eq!(three.environment, Some(3));
-        assert_eq!(three.pick(0.99, Vec3A::ZERO), (3, 1.0 / 3.0));
+        assert_eq!(three.pick(0.99, Vec3A::ZERO, Vec3A::ZERO), (3, 1.0 / 3.0));
         assert!(matches!(three.other(2), Some(OtherLight::Punctual(PunctualLight::Directional { .. }))));
         assert!(three.other(0).is_some() && LightTable::default().other(0).is_none());
         // A light that sends nothing is not in the table.

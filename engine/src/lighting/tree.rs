@@ -6,9 +6,9 @@
 //! is the same idea). Lights at infinity stay outside the tree: the light table chooses them
 //! first, each with the share pbrt-v4's `pInfinite` gives it.
 //!
-//! The importance takes no normal at the shading point (pbrt-v4's `n = 0`, as in a medium):
-//! a path's vertex does not keep its normal for the density of the next hit's emitter, and the
-//! choice and its probability must be one function of the point.
+//! The importance takes the shading normal at a surface (pbrt-v4's `cos theta_i` bound) and
+//! none in a medium (zero); a path keeps its vertex's normal beside its point for the density
+//! of the next hit's emitter, so that the choice and its probability are one function.
 
 use crate::math::{acos, cos_sin_turn};
 use glam::Vec3A;
@@ -159,13 +159,14 @@ impl From<&LightBounds> for Cone {
 }
 
 impl Cone {
-    /// A bound on what the lights send to the point `p` (pbrt-v4's `LightBounds::Importance`
-    /// without a normal): the power over the squared distance to the box's centre (at least
-    /// half the box's diagonal, as pbrt-v4 clamps it), times the cosine of the smallest angle
-    /// between a direction from the box to `p` and a direction the lights emit in; 0 where no
-    /// light of the box can reach `p`.
+    /// A bound on what the lights send to the point `p` of normal `n` (zero: none; pbrt-v4's
+    /// `LightBounds::Importance`): the power over the squared distance to the box's centre (at
+    /// least half the box's diagonal, as pbrt-v4 clamps it), times the cosine of the smallest
+    /// angle between a direction from the box to `p` and a direction the lights emit in, times
+    /// (with a normal) the cosine of the smallest angle between a direction to the box and the
+    /// normal's line; 0 where no light of the box can reach `p`.
     #[inline]
-    fn importance(&self, p: Vec3A) -> f32 {
+    fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
         let d2_true = p.distance_squared(self.center);
         let d2 = d2_true.max(self.half_diagonal);
         // The angle between the cone's axis and the direction from the box to `p`.
@@ -184,7 +185,12 @@ impl Cone {
         if cos_p <= self.cos_theta_e {
             return 0.0;
         }
-        (self.phi * cos_p / d2).max(0.0)
+        let importance = self.phi * cos_p / d2;
+        if n == Vec3A::ZERO {
+            return importance.max(0.0);
+        }
+        let cos_i = wi.dot(n).abs();
+        (importance * cos_sub_clamped(sin_of(cos_i), cos_i, sin_b, cos_b)).max(0.0)
     }
 }
 
@@ -288,24 +294,25 @@ impl LightTree {
         bounds
     }
 
-    /// The importances of the children of the inner node `at` seen from `p`.
+    /// The importances of the children of the inner node `at` seen from `p` (normal `n`).
     #[inline]
-    fn children(&self, at: usize, p: Vec3A) -> [f32; 2] {
+    fn children(&self, at: usize, p: Vec3A, n: Vec3A) -> [f32; 2] {
         let second = self.nodes[at].index as usize;
-        [self.nodes[at + 1].cone.importance(p), self.nodes[second].cone.importance(p)]
+        [self.nodes[at + 1].cone.importance(p, n), self.nodes[second].cone.importance(p, n)]
     }
 
-    /// Picks a light for the point `p` with `u` in [0, 1): (light, probability), the
-    /// probability 0 (and the light meaningless) where no light of the tree can reach `p`.
+    /// Picks a light for the point `p` of normal `n` (zero: none) with `u` in [0, 1): (light,
+    /// probability), the probability 0 (and the light meaningless) where no light of the tree
+    /// can reach `p`.
     #[inline]
-    pub fn pick(&self, mut u: f32, p: Vec3A) -> (u32, f32) {
+    pub fn pick(&self, mut u: f32, p: Vec3A, n: Vec3A) -> (u32, f32) {
         let (mut at, mut pmf) = (0, 1.0f32);
         loop {
             let node = &self.nodes[at];
             if node.leaf {
                 return (node.index, pmf);
             }
-            let c = self.children(at, p);
+            let c = self.children(at, p, n);
             let sum = c[0] + c[1];
             if !(sum > 0.0) {
                 // The first light below (an inner node's first child follows it).
@@ -322,17 +329,17 @@ impl LightTree {
         }
     }
 
-    /// The probability that [`Self::pick`] picks `light` for the point `p` (pbrt-v4's `PMF`):
-    /// the same products along the light's trail, so the same bits.
+    /// The probability that [`Self::pick`] picks `light` for the point `p` of normal `n`
+    /// (pbrt-v4's `PMF`): the same products along the light's trail, so the same bits.
     #[inline]
-    pub fn pmf(&self, light: u32, p: Vec3A) -> f32 {
+    pub fn pmf(&self, light: u32, p: Vec3A, n: Vec3A) -> f32 {
         let (mut at, mut pmf, mut trail) = (0, 1.0f32, self.trail[light as usize]);
         loop {
             let node = &self.nodes[at];
             if node.leaf {
                 return pmf;
             }
-            let c = self.children(at, p);
+            let c = self.children(at, p, n);
             let sum = c[0] + c[1];
             if !(sum > 0.0) {
                 return 0.0;
@@ -470,7 +477,12 @@ mod tests {
         let mut r = uniform(11);
         for k in 0..6 {
             let p = Vec3A::new(12.0 * (r() - 0.5), 14.0 * r() - 2.0, 12.0 * (r() - 0.5));
-            let pmf: Vec<f32> = (0..n).map(|l| table.pmf_from(l, p)).collect();
+            // Half the points in a medium, half on surfaces facing a random way.
+            let normal = match k % 2 {
+                0 => Vec3A::ZERO,
+                _ => Vec3A::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize(),
+            };
+            let pmf: Vec<f32> = (0..n).map(|l| table.pmf_from(l, p, normal)).collect();
             let sum: f64 = pmf.iter().map(|&x| x as f64).sum();
             assert!(sum <= 1.0 + 1e-6 && sum > 0.99, "point {k} at {p}: the pmf sums to {sum}");
             // Every light that sends something to the point may be picked.
@@ -495,7 +507,7 @@ mod tests {
             // probability 0 and no light, with the probability the lights' pmfs leave.
             let mut counts = vec![0f64; n + 1];
             for _ in 0..draws {
-                let (l, q) = table.pick(r(), p);
+                let (l, q) = table.pick(r(), p, normal);
                 match q {
                     0.0 => counts[n] += 1.0,
                     _ => {
@@ -529,11 +541,13 @@ mod tests {
     #[test]
     fn emitter_densities_hold_the_trees_pmf() {
         let (geo, table) = many_lights();
-        let from = Vec3A::new(0.5, 1.0, -0.5);
+        let (from, normal) = (Vec3A::new(0.5, 1.0, -0.5), Vec3A::new(0.6, 0.8, 0.0));
         for (l, &prim) in table.prims.iter().enumerate() {
             let s = table.sample(&geo, l, from, glam::Vec2::new(0.3, 0.6), 0.0);
-            let want = geo.prims[prim as usize].pdf_solid_angle(from, s.p, s.n) * table.pmf_from(l, from);
-            assert_eq!(table.pdf(&geo, prim, from, s.p, s.n, 0.0).to_bits(), want.to_bits(), "light {l}");
+            let want =
+                geo.prims[prim as usize].pdf_solid_angle(from, s.p, s.n) * table.pmf_from(l, from, normal);
+            let got = table.pdf(&geo, prim, from, normal, s.p, s.n, 0.0);
+            assert_eq!(got.to_bits(), want.to_bits(), "light {l}");
         }
     }
 
@@ -546,8 +560,9 @@ mod tests {
         let emission = vec![Some(AreaEmission { radiance: Vec3::ONE, texture: None, two_sided: false })];
         let inputs = LightInputs { sampler: LightSamplerKind::Tree, ..Default::default() };
         let table = LightTable::build(&geo, emission, inputs);
-        assert!(table.pick(0.3, Vec3A::new(0.5, up, 0.5)).1 > 0.0);
-        assert_eq!(table.pick(0.3, Vec3A::new(0.5, -up, 0.5)).1, 0.0);
-        assert_eq!(table.pmf_from(0, Vec3A::new(0.5, -up, 0.5)), 0.0);
+        let none = Vec3A::ZERO;
+        assert!(table.pick(0.3, Vec3A::new(0.5, up, 0.5), none).1 > 0.0);
+        assert_eq!(table.pick(0.3, Vec3A::new(0.5, -up, 0.5), none).1, 0.0);
+        assert_eq!(table.pmf_from(0, Vec3A::new(0.5, -up, 0.5), none), 0.0);
     }
 }

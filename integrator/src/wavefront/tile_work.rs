@@ -376,7 +376,10 @@ impl Charges {
             for &s in slots.iter().skip(start).step_by(MATERIAL_STRIDE) {
                 let s = s as usize;
                 // Where the vertex is: the medium's scattering point is the path's origin.
-                let at = if stage == Stage::ShadeMedium { p.origin[s] } else { p.hit[s].surface.p };
+                let at = match stage {
+                    Stage::ShadeMedium => [p.origin[s], glam::Vec3A::ZERO],
+                    _ => [p.hit[s].surface.p, p.hit[s].surface.ns],
+                };
                 let light = oracle::sampled_light(scene, &p.sampler[s], p.depth[s], at) as u32;
                 self.path_light[s] = (iteration, light);
             }
