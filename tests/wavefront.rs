@@ -47,6 +47,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
         ("wrappers.ron", 2),
         // Bump and normal maps (Lambertians under them shaded path by path).
         ("maps.ron", 2),
+        // 500 lights chosen by the light tree, each lane with its own point.
+        ("many-lights.ron", 2),
     ] {
         let desc = small(name, 6);
         let oracle = render_threads(&desc, 2);

@@ -83,6 +83,8 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Where in the image a pixel's samples land (the box: uniform over the pixel).
     pub filter: crate::filter::PixelFilter,
+    /// How next-event estimation chooses a light.
+    pub light_sampler: crate::scene::LightSamplerKind,
 }
 
 impl std::str::FromStr for SamplerKind {

@@ -260,8 +260,8 @@ fn add<K: PartialEq>(sums: &mut Vec<(K, f64, f64)>, key: K, part: f64, product: 
 struct Recorder<'a> {
     scene: &'a RenderScene,
     sampler: &'a Sampler,
-    /// The last vertex: its depth and where it was.
-    last: Option<(u32, Vertex)>,
+    /// The last vertex: its depth, what it was, its point and shading normal.
+    last: Option<(u32, Vertex, [Vec3A; 2])>,
     /// Whether some vertex scattered by a lobe that is not a delta.
     rough: bool,
     parts: Vec<(f64, Cause)>,
@@ -272,15 +272,15 @@ impl<'a> Recorder<'a> {
         Self { scene, sampler, last: None, rough: false, parts: Vec::new() }
     }
 
-    /// The light a vertex at `depth` sampled.
-    fn sampled(&self, depth: u32) -> Light {
-        Light::of(self.scene, oracle::sampled_light(self.scene, self.sampler, depth))
+    /// The light a vertex at `depth`, at the point and normal `at`, sampled.
+    fn sampled(&self, depth: u32, at: [Vec3A; 2]) -> Light {
+        Light::of(self.scene, oracle::sampled_light(self.scene, self.sampler, depth, at))
     }
 }
 
 impl Witness for Recorder<'_> {
-    fn scatters(&mut self, depth: u32, material: Option<u32>, delta: bool) {
-        self.last = Some((depth, material.map_or(Vertex::Medium, Vertex::Material)));
+    fn scatters(&mut self, depth: u32, at: [Vec3A; 2], material: Option<u32>, delta: bool) {
+        self.last = Some((depth, material.map_or(Vertex::Medium, Vertex::Material), at));
         self.rough |= !delta;
     }
 
@@ -289,7 +289,7 @@ impl Witness for Recorder<'_> {
         if part == 0.0 {
             return;
         }
-        let (bounces, vertex) = self.last.map_or((0, Vertex::Camera), |(d, v)| (d + 1, v));
+        let (bounces, vertex) = self.last.map_or((0, Vertex::Camera), |(d, v, _)| (d + 1, v));
         let peak = |light: Light| match (light, &self.scene.background) {
             (Light::Background, Background::Environment(map))
                 if luminance(map.radiance(dir))
@@ -306,7 +306,10 @@ impl Witness for Recorder<'_> {
             (true, false) => Event::Direct,
         };
         let (light, event) = match source {
-            Source::LightSample => (self.sampled(self.last.map_or(0, |(d, _)| d)), Event::LightSampling),
+            Source::LightSample => {
+                let (depth, at) = self.last.map_or((0, [Vec3A::ZERO; 2]), |(d, _, at)| (d, at));
+                (self.sampled(depth, at), Event::LightSampling)
+            }
             Source::Emitter(m) => (Light::Emitter(m), met),
             Source::Background => (Light::Background, met),
             Source::Medium => (Light::Media, met),

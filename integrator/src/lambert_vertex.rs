@@ -306,7 +306,7 @@ pub fn gather(
 ) -> LambertIn {
     let mut i = gather_surface(scene, st, sp, wo, albedo, u);
     if !scene.lights.is_empty()
-        && let Some(lp) = path::pick_light(scene, sp.p, time, u.light_pick, u.light)
+        && let Some(lp) = path::pick_light(scene, sp.p, i.n.into(), time, u.light_pick, u.light)
     {
         (i.wi, i.le, i.pdf_light, i.target, i.delta_light) =
             (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta);
@@ -387,8 +387,8 @@ pub fn apply(
         ray: Ray { origin: o.so.into(), dir: o.sd.into(), time },
         contribution: o.contribution,
     });
-    let PathState { beta, delta, prev_pdf, prev_p, depth, .. } = st;
-    if !scattered(i.p, i.depth_after, o, Bounce { beta, delta, prev_pdf, prev_p, depth }) {
+    let PathState { beta, delta, prev_pdf, prev_p, prev_n, depth, .. } = st;
+    if !scattered(i.p, i.n, i.depth_after, o, Bounce { beta, delta, prev_pdf, prev_p, prev_n, depth }) {
         return (shadow, None);
     }
     let next = o.alive.then(|| Ray { origin: o.o.into(), dir: o.d.into(), time });
@@ -406,6 +406,8 @@ pub struct Bounce<'a> {
     pub prev_pdf: &'a mut f32,
     /// Last scattering point.
     pub prev_p: &'a mut Vec3A,
+    /// Its shading normal.
+    pub prev_n: &'a mut Vec3A,
     /// Bounces so far.
     pub depth: &'a mut u32,
 }
@@ -415,7 +417,7 @@ pub struct Bounce<'a> {
 /// (false) the path ends as it was. [`apply`] and the wavefront's Lambertian loop both call it;
 /// each sends the next ray (`o.alive`) its own way.
 #[inline(always)]
-pub fn scattered(p: Vec3, depth_after: u32, o: &LambertOut, st: Bounce) -> bool {
+pub fn scattered(p: Vec3, n: Vec3, depth_after: u32, o: &LambertOut, st: Bounce) -> bool {
     if !(o.pdf > 0.0) {
         return false;
     }
@@ -423,6 +425,7 @@ pub fn scattered(p: Vec3, depth_after: u32, o: &LambertOut, st: Bounce) -> bool 
     *st.delta = false;
     *st.prev_pdf = o.pdf;
     *st.prev_p = p.into();
+    *st.prev_n = n.into();
     *st.depth = depth_after;
     true
 }

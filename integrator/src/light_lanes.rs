@@ -60,8 +60,11 @@ impl<'a> LightSampler<'a> {
             held: [[u32::MAX; LANES]; 3],
         };
         if let Some([PlainLight::Quad(one)]) = plain {
-            let pmf = scene.lights.pick(0.0).1;
-            (0..LANES).for_each(|l| me.ins.hold(l, one, pmf));
+            let pmf = scene.lights.pick(0.0, glam::Vec3A::ZERO, glam::Vec3A::ZERO).1;
+            for l in 0..LANES {
+                me.ins.hold(l, one);
+                me.ins.pmf[l] = pmf;
+            }
         }
         me
     }
@@ -76,8 +79,9 @@ impl<'a> LightSampler<'a> {
         let from = out.p;
         let scalar = |out: &mut LambertInLanes, l: usize| {
             let p = Vec3::new(from[0][l], from[1][l], from[2][l]);
+            let n = Vec3::new(out.n[0][l], out.n[1][l], out.n[2][l]);
             let u = u.get(l);
-            let lp = path::pick_light(scene, p.into(), time[l], u.light_pick, u.light);
+            let lp = path::pick_light(scene, p.into(), n.into(), time[l], u.light_pick, u.light);
             let (wi, le, pdf, target, delta): (Vec3, Vec3, f32, Vec3, bool) =
                 lp.map_or(Default::default(), |lp| (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta));
             for a in 0..3 {
@@ -91,7 +95,7 @@ impl<'a> LightSampler<'a> {
         }
         if let Some((bottom, top)) = self.sky {
             let lights = &scene.lights;
-            let pmf = lights.pick(0.0).1;
+            let pmf = lights.pick(0.0, glam::Vec3A::ZERO, glam::Vec3A::ZERO).1;
             let (center, radius) = (Vec3::from(lights.center), lights.radius);
             let ins = SkyInLanes { from, uv: u.light };
             sky_lanes(&ins, bottom, top, pmf, center, radius, out);
@@ -108,25 +112,32 @@ impl<'a> LightSampler<'a> {
             kind = [Kind::Quad; LANES];
         } else {
             for l in 0..LANES {
-                let (light, pmf) = scene.lights.pick(u.light_pick[l]);
+                let p = glam::Vec3A::new(from[0][l], from[1][l], from[2][l]);
+                let n = glam::Vec3A::new(out.n[0][l], out.n[1][l], out.n[2][l]);
+                let (light, pmf) = scene.lights.pick(u.light_pick[l], p, n);
                 let id = light as u32;
+                // The light's data stay while the lane picks it again; its probability, which
+                // the tree makes depend on the point, is set each time.
                 kind[l] = match &plain[light] {
                     PlainLight::Quad(q) => {
                         if std::mem::replace(&mut self.held[0][l], id) != id {
-                            self.ins.hold(l, q, pmf);
+                            self.ins.hold(l, q);
                         }
+                        self.ins.pmf[l] = pmf;
                         Kind::Quad
                     }
                     PlainLight::Sphere(s) => {
                         if std::mem::replace(&mut self.held[1][l], id) != id {
-                            self.sphere_ins.hold(l, s, pmf);
+                            self.sphere_ins.hold(l, s);
                         }
+                        self.sphere_ins.pmf[l] = pmf;
                         Kind::Sphere
                     }
                     PlainLight::Ellipsoid(e) => {
                         if std::mem::replace(&mut self.held[2][l], id) != id {
-                            self.ellipsoid_ins.hold(l, e, pmf);
+                            self.ellipsoid_ins.hold(l, e);
                         }
+                        self.ellipsoid_ins.pmf[l] = pmf;
                         Kind::Ellipsoid
                     }
                     PlainLight::Other => Kind::Other,
@@ -157,16 +168,15 @@ impl<'a> LightSampler<'a> {
     }
 }
 
-/// Holds a light and its pick probability in a lane of a kernel's inputs (the engine's light
-/// as it is, one array per field).
+/// Holds a light in a lane of a kernel's inputs (the engine's light as it is, one array per
+/// field).
 macro_rules! hold {
     ($($lanes:ident: $light:ident),*) => {$(
         impl $lanes {
-            /// Lane `l` takes `light`, picked with probability `pmf`.
+            /// Lane `l` takes `light`.
             #[inline]
-            fn hold(&mut self, l: usize, light: &$light, pmf: f32) {
+            fn hold(&mut self, l: usize, light: &$light) {
                 self.light.set(l, light);
-                self.pmf[l] = pmf;
             }
         }
     )*};
@@ -568,7 +578,8 @@ mod tests {
             sampler.sample(&[0.0; LANES], &u, &mut got);
             for l in 0..LANES {
                 let u = u.get(l);
-                let want = path::pick_light(&scene, p[l].into(), 0.0, u.light_pick, u.light);
+                let want =
+                    path::pick_light(&scene, p[l].into(), Vec3::ZERO.into(), 0.0, u.light_pick, u.light);
                 let bits = |v: [f32; 3]| v.map(f32::to_bits);
                 let lane = |a: &[[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
                 match want {
@@ -582,7 +593,9 @@ mod tests {
                     None => assert_eq!(got.pdf_light[l], 0.0, "no sample at {}", p[l]),
                 }
                 // Which lanes the spherical rectangle took, as the kernel decided.
-                if let PlainLight::Quad(q) = &scene.lights.plain[scene.lights.pick(u.light_pick).0] {
+                if let PlainLight::Quad(q) =
+                    &scene.lights.plain[scene.lights.pick(u.light_pick, p[l].into(), Vec3::ZERO.into()).0]
+                {
                     let c = Vec3::from(q.center) - p[l];
                     spherical += (q.rect
                         && q.area * Vec3::from(q.n).dot(c).abs() >= c.length_squared() * c.length())

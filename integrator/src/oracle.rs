@@ -78,20 +78,20 @@ pub enum Source {
     Medium,
 }
 
-/// The light (its index in the scene's light table) that a path's vertex `depth` samples with
-/// `sampler`'s numbers.
-pub fn sampled_light(scene: &RenderScene, sampler: &Sampler, depth: u32) -> usize {
-    scene.lights.pick(path::light_choice(scene, sampler, depth)).0
+/// The light (its index in the scene's light table) that a path's vertex `depth`, at the point
+/// `at[0]` of shading normal `at[1]` (zero in a medium), samples with `sampler`'s numbers.
+pub fn sampled_light(scene: &RenderScene, sampler: &Sampler, depth: u32, at: [Vec3A; 2]) -> usize {
+    scene.lights.pick(path::light_choice(scene, sampler, depth), at[0], at[1]).0
 }
 
 /// What a path tells an observer as it goes ([`radiance_witnessed`]): where it scatters, and
 /// each radiance it adds with where that came from. `()` listens to nothing.
 pub trait Witness {
-    /// The path scattered at its vertex `depth` (its vertices before it): off a surface whose
-    /// material is `material` (the id the surface names, before a wrapper resolves it), or in
-    /// a medium (`None`), by a delta lobe if `delta`. Told before what light sampling there
-    /// adds.
-    fn scatters(&mut self, depth: u32, material: Option<u32>, delta: bool);
+    /// The path scattered at its vertex `depth` (its vertices before it), the point `at` of
+    /// shading normal `n` (zero in a medium): off a surface whose material is `material` (the
+    /// id the surface names, before a wrapper resolves it), or in a medium (`None`), by a delta
+    /// lobe if `delta`. Told before what light sampling there adds.
+    fn scatters(&mut self, depth: u32, at: [Vec3A; 2], material: Option<u32>, delta: bool);
     /// The path adds `l` (its throughput included) from `source`, arriving along `-dir` (any
     /// length); met along its ray, it came by a delta lobe (or is the camera's ray) if `delta`.
     fn adds(&mut self, l: Vec3, source: Source, dir: Vec3A, delta: bool);
@@ -99,7 +99,7 @@ pub trait Witness {
 
 impl Witness for () {
     #[inline(always)]
-    fn scatters(&mut self, _: u32, _: Option<u32>, _: bool) {}
+    fn scatters(&mut self, _: u32, _: [Vec3A; 2], _: Option<u32>, _: bool) {}
     #[inline(always)]
     fn adds(&mut self, _: Vec3, _: Source, _: Vec3A, _: bool) {}
 }
@@ -143,7 +143,7 @@ pub fn radiance_witnessed(
                     if path::at_max_depth(scene, st.bounces()) {
                         break 'path;
                     }
-                    vertex = (st.depth, None);
+                    vertex = (st.depth, [p, Vec3A::ZERO], None);
                     break 'vertex path::scatter_in_medium(scene, &mut st, p, ray.dir, g, ray.time, sampler);
                 }
             }
@@ -179,7 +179,7 @@ pub fn radiance_witnessed(
             if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
                 break 'path;
             }
-            vertex = (st.depth, Some(named));
+            vertex = (st.depth, [hit.surface.p, hit.surface.ns], Some(named));
             match mat.shading() {
                 // A tilted normal: a Lambertian shaded as the glossy kinds are.
                 Shading::Diffuse if scene.features.tilts && path::tilted(&hit.surface) => {
@@ -213,7 +213,7 @@ pub fn radiance_witnessed(
                 Shading::Emitter => unreachable!("emitters end the path above"),
             }
         };
-        witness.scatters(vertex.0, vertex.1, st.delta);
+        witness.scatters(vertex.0, vertex.1, vertex.2, st.delta);
         if let Some(s) = shadow {
             let before = st.l;
             path::trace_shadow(scene, &mut st, &s);

@@ -37,6 +37,8 @@ pub struct PathState {
     pub delta: bool,
     /// Last scattering point, for the light pdf of emitters hit by BSDF sampling.
     pub prev_p: Vec3A,
+    /// Its shading normal (zero in a medium), which the light tree's choice there read.
+    pub prev_n: Vec3A,
     /// BSDF pdf of the last scattering.
     pub prev_pdf: f32,
     /// Vertices so far: bounces and null crossings (each takes its sampler numbers).
@@ -56,6 +58,7 @@ impl PathState {
             eta_scale: 1.0,
             delta: true,
             prev_p: origin,
+            prev_n: Vec3A::ZERO,
             prev_pdf: 0.0,
             depth: 0,
             crossings: 0,
@@ -120,7 +123,8 @@ pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, wo: Vec3A, time:
     let w = if st.delta {
         1.0
     } else {
-        power_heuristic(st.prev_pdf, scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, sp.p, sp.n, time))
+        let pdf = scene.lights.pdf(&scene.geometry, hit.prim, st.prev_p, st.prev_n, sp.p, sp.n, time);
+        power_heuristic(st.prev_pdf, pdf)
     };
     st.l += st.beta * le * w;
 }
@@ -365,7 +369,7 @@ pub fn scatter_with(
     // in full.
     st.delta = bs.delta || !nee;
     st.prev_pdf = bs.pdf;
-    st.prev_p = sp.p;
+    (st.prev_p, st.prev_n) = (sp.p, sp.ns);
     let ray = Ray { origin: offset_ray_origin(sp.p, sp.err, side), dir: bs.wi, time };
     st.depth += 1;
     roulette(scene, st, || u.roulette).then_some(ray)
@@ -433,7 +437,7 @@ pub fn shade_glossy(
 ) -> (Option<ShadowRay>, Option<Ray>) {
     let shadow = match scene.lights.is_empty() {
         true => None,
-        false => pick_light(scene, sp.p, time, u.light_pick, u.light).and_then(|lp| {
+        false => pick_light(scene, sp.p, sp.ns, time, u.light_pick, u.light).and_then(|lp| {
             // The same directions leave as in BSDF sampling, from the same side.
             let side = leaving_side(sp, wo, lp.wi)?;
             let e = mat.eval(wo, lp.wi, sp.ns);
@@ -479,10 +483,10 @@ mod tests {
         for _ in 0..20_000 {
             let u_pick = rng.next_1d();
             let u = Vec2::new(rng.next_1d(), rng.next_1d());
-            if scene.lights.pick(u_pick).0 != env {
+            if scene.lights.pick(u_pick, p, Vec3A::ZERO).0 != env {
                 continue;
             }
-            let Some(lp) = pick_light(&scene, p, 0.0, u_pick, u) else { continue };
+            let Some(lp) = pick_light(&scene, p, Vec3A::ZERO, 0.0, u_pick, u) else { continue };
             let (le, pdf) = scene.background.radiance_pdf(lp.wi);
             assert!(!lp.delta);
             sampled += 1;

@@ -7,7 +7,7 @@
 use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
 use crate::engine::render_scene::SamplerKind;
-use crate::engine::scene::{FilterDesc, SceneDesc};
+use crate::engine::scene::{FilterDesc, LightSamplerKind, SceneDesc};
 use crate::look::{Look, LookArgs};
 use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
@@ -31,6 +31,11 @@ pub struct SceneArgs {
     /// Maximum bounces (overrides the scene).
     #[arg(long)]
     pub max_depth: Option<u32>,
+    /// How a light is chosen: power (a table fixed for the scene), tree (the light tree: by
+    /// each point's view of the lights) or auto (the tree above a number of lights; default)
+    /// (overrides the scene).
+    #[arg(long, value_name = "power|tree|auto")]
+    pub light_sampler: Option<LightSamplerKind>,
     /// Scale samples down so that no component exceeds MAX (biased; off by default).
     #[arg(long, value_name = "MAX")]
     pub clamp: Option<f32>,

@@ -6,6 +6,7 @@ use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
+use crate::engine::scene::LightSamplerKind;
 use crate::engine::scene::files::InputFile;
 use crate::integrator::{costs::PixelCosts, film::Film, oracle, wavefront};
 use crate::io::{self, LinearImage};
@@ -35,8 +36,11 @@ pub fn render_id(
 ) -> Result<RenderId, String> {
     let s = scene.settings;
     let w = &s.window;
-    // The filter only where it is not the box, so that earlier checkpoints keep their key.
+    // The filter only where it is not the box, and the light sampler where it is not `Auto`,
+    // so that earlier checkpoints keep their key.
     let filter = (s.filter != PixelFilter::Box).then(|| ("filter", s.filter.describe()));
+    let lights = (s.light_sampler != LightSamplerKind::Auto)
+        .then(|| ("light_sampler", format!("{:?}", s.light_sampler)));
     let settings = checkpoint::settings_text(
         &[
             ("size", format!("{}x{}", s.width, s.height)),
@@ -53,6 +57,7 @@ pub fn render_id(
         ]
         .into_iter()
         .chain(filter)
+        .chain(lights)
         .collect::<Vec<_>>(),
     );
     if settings.len() > checkpoint::MAX_SETTINGS_BYTES {

@@ -293,6 +293,8 @@ pub struct RenderDesc {
     pub crop: Option<CropWindow>,
     /// The pixel filter: `Box` (default), `Tent(radius: 1)` or `Gaussian(stddev: 0.5)`.
     pub filter: FilterDesc,
+    /// How next-event estimation chooses a light: `Power`, `Tree` or `Auto` (default).
+    pub light_sampler: LightSamplerKind,
 }
 
 /// A pixel filter as Mitsuba 3 defines it (mitsuba3 `src/rfilters/`), in pixels: `Box`
@@ -433,6 +435,7 @@ impl Default for RenderDesc {
             sampler: SamplerKind::default(),
             crop: None,
             filter: FilterDesc::Box,
+            light_sampler: LightSamplerKind::Auto,
         }
     }
 }
@@ -449,6 +452,40 @@ pub enum SamplerKind {
     Stratified,
     /// Independent uniform numbers.
     Independent,
+}
+
+/// How next-event estimation chooses the light to sample ([`crate::lighting::lights`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+pub enum LightSamplerKind {
+    /// From a table fixed for the scene, by power and evenly among objects.
+    Power,
+    /// By the light tree ([`crate::lighting::tree`]): each shading point weighs the lights by
+    /// what they can send it (lights at infinity keep their shares).
+    Tree,
+    /// The tree where the scene has more than [`crate::lighting::lights::TREE_MIN_LIGHTS`]
+    /// lights with bounds, else the table.
+    #[default]
+    Auto,
+}
+
+impl LightSamplerKind {
+    /// The names, as the command line spells them.
+    pub const NAMES: [(&'static str, LightSamplerKind); 3] = [
+        ("power", LightSamplerKind::Power),
+        ("tree", LightSamplerKind::Tree),
+        ("auto", LightSamplerKind::Auto),
+    ];
+}
+
+impl std::str::FromStr for LightSamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::NAMES
+            .iter()
+            .find(|(n, _)| *n == s)
+            .map(|&(_, k)| k)
+            .ok_or_else(|| format!("no light sampler '{s}': there are power, tree and auto"))
+    }
 }
 
 impl SamplerKind {

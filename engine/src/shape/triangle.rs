@@ -46,7 +46,7 @@ impl Triangle {
 
     /// The unit normal (zero for a triangle without area, which [`Self::new`] never makes).
     #[inline]
-    fn normal(&self) -> Vec3A {
+    pub(crate) fn normal(&self) -> Vec3A {
         crate::math::unit(self.cross()).unwrap_or(Vec3A::ZERO)
     }
 

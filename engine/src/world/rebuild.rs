@@ -352,8 +352,10 @@ pub fn rebuild_lights(
     emitting: Res<ObjectEmission>,
     punctual: Res<PunctualLights>,
     background: Res<BackgroundLight>,
+    settings: Res<Settings>,
 ) {
     let any = geometry.is_changed()
+        || settings.is_changed()
         || instances.is_changed()
         || materials.is_changed()
         || textures.is_changed()
@@ -376,6 +378,7 @@ pub fn rebuild_lights(
         environment: background.0.sampling(),
         bounds,
         objects: Some(&geometry.objects),
+        sampler: settings.0.light_sampler,
     };
     let emission = emission_table(&materials.0, &textures.per_material, &emitting.0);
     out.lights = Arc::new(LightTable::build(geo, emission, inputs));

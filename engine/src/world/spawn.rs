@@ -138,6 +138,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         clamp: r.clamp.map(|c| c.0),
         sampler: r.sampler,
         filter: r.filter.into(),
+        light_sampler: r.light_sampler,
     }));
     world.insert_resource(CameraParams(desc.camera, None));
     world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });

@@ -22,19 +22,21 @@ pub(crate) struct LightPick {
     pub delta: bool,
 }
 
-/// Picks a light with `u_pick` and a point on it with `u` as seen from `p`; `None` when it
-/// sends nothing towards `p`.
+/// Picks a light with `u_pick` and a point on it with `u` as seen from `p` (of shading normal
+/// `n`, zero in a medium: the light tree weighs lights by it); `None` when it sends nothing
+/// towards `p`.
 #[inline]
 pub(crate) fn pick_light(
     scene: &RenderScene,
     p: Vec3A,
+    n: Vec3A,
     time: f32,
     u_pick: f32,
     u: Vec2,
 ) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(u_pick);
+    let (light, pmf) = lights.pick(u_pick, p, n);
     if let Some(other) = lights.other(light) {
         return pick_other(scene, other, pmf, p, u);
     }
@@ -90,7 +92,7 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
     match light {
         OtherLight::Punctual(l) => {
             let (wi, dist, le) = l.illuminate(p, &scene.textures);
-            if le == Vec3::ZERO || !(dist > 0.0) {
+            if le == Vec3::ZERO || !(dist > 0.0) || !(pmf > 0.0) {
                 return None;
             }
             let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };

@@ -118,7 +118,8 @@ pub fn scatter_in_medium(
         None
     } else {
         let u_pick = light_choice(scene, sampler, depth);
-        pick_light(scene, p, time, u_pick, sampler.get_2d(Dims::vertex(depth, Dims::LIGHT))).map(|lp| {
+        let u = sampler.get_2d(Dims::vertex(depth, Dims::LIGHT));
+        pick_light(scene, p, Vec3A::ZERO, time, u_pick, u).map(|lp| {
             let f = phase(lp.target - p);
             let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, f) };
             let contribution = st.beta * lp.le * (f * w / lp.pdf);
@@ -127,7 +128,7 @@ pub fn scatter_in_medium(
     };
     let u = sampler.get_2d(Dims::vertex(depth, Dims::BSDF));
     let (wi, pdf) = if g == 0.0 { (uniform_sphere(u), ISOTROPIC) } else { sample_hg(wo, g, u) };
-    (st.delta, st.prev_pdf, st.prev_p) = (false, pdf, p);
+    (st.delta, st.prev_pdf, st.prev_p, st.prev_n) = (false, pdf, p, Vec3A::ZERO);
     st.depth += 1;
     let u_rr = || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE));
     let next = roulette(scene, st, u_rr).then_some(Ray { origin: p, dir: wi, time });

@@ -37,6 +37,8 @@ pub struct Paths {
     pub delta: Vec<bool>,
     /// Last scattering point.
     pub prev_p: Vec<Vec3A>,
+    /// Its shading normal (zero in a medium).
+    pub prev_n: Vec<Vec3A>,
     /// Last BSDF pdf.
     pub prev_pdf: Vec<f32>,
     /// Vertices so far (bounces and null crossings).
@@ -88,6 +90,7 @@ impl Paths {
             eta_scale: vec![1.0; n],
             delta: vec![true; n],
             prev_p: vec![Vec3A::ZERO; n],
+            prev_n: vec![Vec3A::ZERO; n],
             prev_pdf: vec![0.0; n],
             depth: vec![0; n],
             crossings: vec![0; n],
@@ -136,6 +139,7 @@ impl Paths {
             eta_scale: self.eta_scale[i],
             delta: self.delta[i],
             prev_p: self.prev_p[i],
+            prev_n: self.prev_n[i],
             prev_pdf: self.prev_pdf[i],
             depth: self.depth[i],
             crossings: self.crossings[i],
@@ -151,6 +155,7 @@ impl Paths {
         self.eta_scale[i] = s.eta_scale;
         self.delta[i] = s.delta;
         self.prev_p[i] = s.prev_p;
+        self.prev_n[i] = s.prev_n;
         self.prev_pdf[i] = s.prev_pdf;
         self.depth[i] = s.depth;
         self.crossings[i] = s.crossings;

@@ -471,10 +471,12 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
                 delta: &mut p.delta[s],
                 prev_pdf: &mut p.prev_pdf[s],
                 prev_p: &mut p.prev_p[s],
+                prev_n: &mut p.prev_n[s],
                 depth: &mut p.depth[s],
             };
             let o = outs.get(l);
-            if lambert_vertex::scattered(v3(&ins.p, l), ins.depth_after[l], &o, st) && o.alive {
+            if lambert_vertex::scattered(v3(&ins.p, l), v3(&ins.n, l), ins.depth_after[l], &o, st) && o.alive
+            {
                 p.set_ray(
                     s,
                     Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },

@@ -375,7 +375,12 @@ impl Charges {
             let start = (iteration % MATERIAL_STRIDE as u64) as usize;
             for &s in slots.iter().skip(start).step_by(MATERIAL_STRIDE) {
                 let s = s as usize;
-                let light = oracle::sampled_light(scene, &p.sampler[s], p.depth[s]) as u32;
+                // Where the vertex is: the medium's scattering point is the path's origin.
+                let at = match stage {
+                    Stage::ShadeMedium => [p.origin[s], glam::Vec3A::ZERO],
+                    _ => [p.hit[s].surface.p, p.hit[s].surface.ns],
+                };
+                let light = oracle::sampled_light(scene, &p.sampler[s], p.depth[s], at) as u32;
                 self.path_light[s] = (iteration, light);
             }
         }
