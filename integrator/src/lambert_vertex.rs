@@ -6,6 +6,7 @@
 //! paths. Inputs are gathered and outputs applied by shared code, so both compute the same bits.
 
 use crate::path::{self, PathState, ShadowRay, power_heuristic};
+use crate::plain::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::Ray;
@@ -74,49 +75,6 @@ pub struct LambertOut {
     pub beta: Vec3,
     /// Density of the sampled direction.
     pub pdf: f32,
-}
-
-#[inline(always)]
-pub(crate) fn sel3(c: bool, a: Vec3, b: Vec3) -> Vec3 {
-    Vec3::new(if c { a.x } else { b.x }, if c { a.y } else { b.y }, if c { a.z } else { b.z })
-}
-
-#[inline(always)]
-pub(crate) fn dot(a: Vec3, b: Vec3) -> f32 {
-    a.x * b.x + a.y * b.y + a.z * b.z
-}
-
-/// `offset_ray_origin` on plain numbers: error bound along the normal, then one ulp further.
-#[inline(always)]
-pub(crate) fn offset(p: Vec3, err: f32, n: Vec3) -> Vec3 {
-    let d = err * (n.x.abs() + n.y.abs() + n.z.abs());
-    let o = Vec3::new(d * n.x, d * n.y, d * n.z);
-    let po = Vec3::new(p.x + o.x, p.y + o.y, p.z + o.z);
-    let away = |x: f32, o: f32| {
-        // next_up / next_down on the bits, branch-free for finite non-zero x.
-        let bits = x.to_bits() as i32;
-        let up = if x >= 0.0 { 1 } else { -1 };
-        let step = if o > 0.0 {
-            up
-        } else if o < 0.0 {
-            -up
-        } else {
-            0
-        };
-        let moved = f32::from_bits(bits.wrapping_add(step) as u32);
-        if x == 0.0 {
-            if o > 0.0 {
-                f32::from_bits(1)
-            } else if o < 0.0 {
-                -f32::from_bits(1)
-            } else {
-                x
-            }
-        } else {
-            moved
-        }
-    };
-    Vec3::new(away(po.x, o.x), away(po.y, o.y), away(po.z, o.z))
 }
 
 /// The kernel.

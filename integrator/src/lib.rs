@@ -12,6 +12,7 @@ pub mod lambert_vertex;
 pub mod light_lanes;
 pub mod oracle;
 pub mod path;
+mod plain;
 pub mod sampler;
 pub mod tile;
 pub mod wavefront;

@@ -7,8 +7,9 @@
 //! picked another kind of light, and every point of other scenes take `path::pick_light`
 //! itself.
 
-use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, dot, lanes, sel3};
+use crate::lambert_vertex::{LANES, LambertInLanes, VertexSamplesLanes, lanes};
 use crate::path;
+use crate::plain::{dot, sel3};
 use glam::Vec3;
 use pathwave_engine::lighting::lights::PlainLight;
 use pathwave_engine::render_scene::{Background, RenderScene};

@@ -9,4 +9,5 @@ pub mod distribution;
 pub mod environment;
 pub mod lights;
 pub mod punctual;
+pub mod punctual_light;
 pub mod tree;

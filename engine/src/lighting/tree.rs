@@ -375,15 +375,49 @@ fn partition(lights: &mut [(u32, LightBounds)], first: impl Fn(&LightBounds) -> 
     if mid == 0 || mid == lights.len() { lights.len() / 2 } else { mid }
 }
 
+/// How next-event estimation chooses the light to sample ([`crate::lighting::lights`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+pub enum LightSamplerKind {
+    /// From a table fixed for the scene, by power and evenly among objects.
+    Power,
+    /// By the light tree ([`crate::lighting::tree`]): each shading point weighs the lights by
+    /// what they can send it (lights at infinity keep their shares).
+    Tree,
+    /// The tree where the scene has more than [`crate::lighting::lights::TREE_MIN_LIGHTS`]
+    /// lights with bounds, else the table.
+    #[default]
+    Auto,
+}
+
+impl LightSamplerKind {
+    /// The names, as the command line spells them.
+    pub const NAMES: [(&'static str, LightSamplerKind); 3] = [
+        ("power", LightSamplerKind::Power),
+        ("tree", LightSamplerKind::Tree),
+        ("auto", LightSamplerKind::Auto),
+    ];
+}
+
+impl std::str::FromStr for LightSamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::NAMES
+            .iter()
+            .find(|(n, _)| *n == s)
+            .map(|&(_, k)| k)
+            .ok_or_else(|| format!("no light sampler '{s}': there are power, tree and auto"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::LightSamplerKind;
     use crate::accel::geometry::Geometry;
     use crate::lighting::area::AreaEmission;
     use crate::lighting::lights::{
         BackgroundSampling, LightInputs, LightTable, OtherLight, PunctualLight, SpotFalloff,
     };
     use crate::material::chi2::chi2_critical;
-    use crate::scene::LightSamplerKind;
     use crate::shape::{Disk, Primitive, Quad, Sphere, Triangle};
     use crate::texture::Textures;
     use glam::{Vec3, Vec3A};

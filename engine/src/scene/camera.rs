@@ -7,6 +7,8 @@ use glam::{Affine3A, Vec3};
 use serde::{Deserialize, Deserializer, de::Error};
 use std::num::NonZeroU32;
 
+pub use crate::lighting::tree::LightSamplerKind;
+
 /// Thin-lens camera: where it stands and how it projects ([`CameraView`]), its lens and its
 /// shutter.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
@@ -452,40 +454,6 @@ pub enum SamplerKind {
     Stratified,
     /// Independent uniform numbers.
     Independent,
-}
-
-/// How next-event estimation chooses the light to sample ([`crate::lighting::lights`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
-pub enum LightSamplerKind {
-    /// From a table fixed for the scene, by power and evenly among objects.
-    Power,
-    /// By the light tree ([`crate::lighting::tree`]): each shading point weighs the lights by
-    /// what they can send it (lights at infinity keep their shares).
-    Tree,
-    /// The tree where the scene has more than [`crate::lighting::lights::TREE_MIN_LIGHTS`]
-    /// lights with bounds, else the table.
-    #[default]
-    Auto,
-}
-
-impl LightSamplerKind {
-    /// The names, as the command line spells them.
-    pub const NAMES: [(&'static str, LightSamplerKind); 3] = [
-        ("power", LightSamplerKind::Power),
-        ("tree", LightSamplerKind::Tree),
-        ("auto", LightSamplerKind::Auto),
-    ];
-}
-
-impl std::str::FromStr for LightSamplerKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Self::NAMES
-            .iter()
-            .find(|(n, _)| *n == s)
-            .map(|&(_, k)| k)
-            .ok_or_else(|| format!("no light sampler '{s}': there are power, tree and auto"))
-    }
 }
 
 impl SamplerKind {

@@ -3,7 +3,7 @@
 //! null lobe, media).
 
 use super::{PathState, ShadowRay};
-use crate::lambert_vertex::{dot, offset, sel3};
+use crate::plain::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::lighting::lights::OtherLight;
