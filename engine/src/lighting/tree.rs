@@ -422,22 +422,11 @@ mod tests {
     use crate::texture::Textures;
     use glam::{Vec3, Vec3A};
 
-    /// Deterministic numbers in [0, 1) (SplitMix64, top 24 bits).
-    fn uniform(mut s: u64) -> impl FnMut() -> f32 {
-        move || {
-            s = s.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = s;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
-
     /// A table choosing by the tree among lights of every kind with bounds: quads facing up
     /// and down (one-sided and two-sided), spheres, triangles, a disk, point, spot and
     /// projector lights, with a directional light and the environment at infinity.
     fn many_lights() -> (Geometry, LightTable) {
-        let mut r = uniform(5);
+        let mut r = crate::testing::uniform(5);
         let mut at = |s: f32| Vec3A::new(s * (r() - 0.5), s * r(), s * (r() - 0.5));
         let (mut prims, mut material) = (Vec::new(), Vec::new());
         for k in 0..40 {
@@ -508,7 +497,7 @@ mod tests {
     fn picks_follow_the_pmf() {
         let (geo, table) = many_lights();
         let n = table.len();
-        let mut r = uniform(11);
+        let mut r = crate::testing::uniform(11);
         for k in 0..6 {
             let p = Vec3A::new(12.0 * (r() - 0.5), 14.0 * r() - 2.0, 12.0 * (r() - 0.5));
             // Half the points in a medium, half on surfaces facing a random way.
