@@ -85,22 +85,27 @@ impl Coating {
     /// Gauss-Legendre rule over the numbers of visible-normal sampling (32 points a side for an
     /// index above 1, 128 below, where total internal reflection makes the integrand jump),
     /// and `Fdr` as twice the mean of `R_in(mu) mu` over the 64 cosines.
-    fn compute<M: Microfacet>(md: Option<M>, eta: f32) -> Self {
+    ///
+    /// The 128 integrals (a million visible-normal samples for Beckmann below 1) run across
+    /// rayon's threads, each on its own, and are summed in order: the same bits on any number
+    /// of threads.
+    fn compute<M: Microfacet + Send + Sync>(md: Option<M>, eta: f32) -> Self {
+        use rayon::prelude::*;
         let mu = |i: usize| (i as f32 / (RES - 1) as f32).max(1e-6);
         let dir = |mu: f32| Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-        let transmittance = std::array::from_fn(|i| match md {
-            None => 1.0 - fresnel_exact(mu(i), eta),
-            Some(md) => interface_integral(md, dir(mu(i)), eta, Scattering::Transmission),
-        });
-        let sum: f64 = (0..RES)
-            .map(|i| {
-                let r = match md {
-                    None => fresnel_exact(mu(i), 1.0 / eta),
-                    Some(md) => interface_integral(md, dir(mu(i)), 1.0 / eta, Scattering::Reflection),
-                };
-                r as f64 * mu(i) as f64
+        let (outside, inside) = (GaussLegendre::for_index(eta), GaussLegendre::for_index(1.0 / eta));
+        let integrals: Vec<(f32, f32)> = (0..RES)
+            .into_par_iter()
+            .map(|i| match md {
+                None => (1.0 - fresnel_exact(mu(i), eta), fresnel_exact(mu(i), 1.0 / eta)),
+                Some(md) => (
+                    interface_integral(md, dir(mu(i)), eta, Scattering::Transmission, &outside),
+                    interface_integral(md, dir(mu(i)), 1.0 / eta, Scattering::Reflection, &inside),
+                ),
             })
-            .sum();
+            .collect();
+        let transmittance = std::array::from_fn(|i| integrals[i].0);
+        let sum: f64 = integrals.iter().enumerate().map(|(i, &(_, r))| r as f64 * mu(i) as f64).sum();
         Self { transmittance, internal_reflectance: (2.0 * sum / RES as f64) as f32 }
     }
 
@@ -142,14 +147,29 @@ enum Scattering {
     Transmission,
 }
 
+/// A Gauss-Legendre rule on [-1, 1]: its nodes and weights.
+struct GaussLegendre {
+    nodes: Vec<f64>,
+    weights: Vec<f64>,
+}
+
+impl GaussLegendre {
+    /// The rule [`interface_integral`] uses at relative index `eta`: 32 points for an index
+    /// above 1, 128 below, where total internal reflection makes the integrand jump.
+    fn for_index(eta: f32) -> Self {
+        let (nodes, weights) = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+        Self { nodes, weights }
+    }
+}
+
 /// The mean over the visible normals of `md` seen from `wi` (local, upper hemisphere) of the
 /// single-scattering reflectance or transmittance of an interface of relative index `eta`
-/// (Gauss-Legendre in each of the two sampling numbers).
-fn interface_integral<M: Microfacet>(md: M, wi: Vec3A, eta: f32, what: Scattering) -> f32 {
-    let (nodes, weights) = gauss_legendre(if eta > 1.0 { 32 } else { 128 });
+/// (the product `rule` in each of the two sampling numbers).
+fn interface_integral<M: Microfacet>(md: M, wi: Vec3A, eta: f32, what: Scattering, rule: &GaussLegendre) -> f32 {
+    let (nodes, weights) = (&rule.nodes, &rule.weights);
     let mut sum = 0.0f64;
-    for (&x, &wx) in nodes.iter().zip(&weights) {
-        for (&y, &wy) in nodes.iter().zip(&weights) {
+    for (&x, &wx) in nodes.iter().zip(weights) {
+        for (&y, &wy) in nodes.iter().zip(weights) {
             let m = md.sample_visible(wi, Vec2::new(0.5 * x as f32 + 0.5, 0.5 * y as f32 + 0.5));
             let c = wi.dot(m);
             if !(c > 0.0) {
