@@ -339,6 +339,10 @@ pub struct RenderScene {
     pub textures: Arc<Textures>,
     /// Per material: which colours come from textures.
     pub material_textures: Vec<MaterialTextures>,
+    /// Per material: whether a hit changes it ([`Self::material_at`] evaluates textures, sets
+    /// the tangent or mixes its Lambertians); the others are read in place, in scenes with
+    /// textures too ([`RenderScene::varying_materials`]).
+    pub varies: Vec<bool>,
     /// Per material: its wrapper, for the ids of wrappers (see [`Features::wrappers`]).
     pub wrappers: Arc<Wrappers>,
 }
@@ -457,11 +461,23 @@ impl RenderScene {
         Some(if flip { wrap::flip_invalid(sp.ns, n, wo) } else { n })
     }
 
+    /// [`Self::varies`] of the materials with these texture slots and wrappers.
+    pub fn varying_materials(per_material: &[MaterialTextures], wrappers: &Wrappers) -> Vec<bool> {
+        let mix = |id: usize| matches!(wrappers.get(id as u32), Some(Wrapper::LambertianMix { .. }));
+        per_material.iter().enumerate().map(|(id, slots)| slots.any() || mix(id)).collect()
+    }
+
+    /// Whether material `id` is changed by the hit it is met at (see [`Self::varies`]).
+    #[inline(always)]
+    fn changes_at_hits(&self, id: usize) -> bool {
+        self.features.textures && self.varies[id]
+    }
+
     /// Material `id` with its textured colours evaluated at `sp`.
     #[inline(always)]
     pub fn material_at(&self, id: u32, sp: &SurfacePoint) -> Material {
         let id = id as usize;
-        if !self.features.textures {
+        if !self.changes_at_hits(id) {
             return self.materials[id];
         }
         self.textured_material(id, sp)
@@ -472,7 +488,7 @@ impl RenderScene {
     /// through the stack; see [`Self::albedo_at`]).
     #[inline(always)]
     pub fn with_material<R>(&self, id: u32, sp: &SurfacePoint, f: impl FnOnce(&Material) -> R) -> R {
-        match self.features.textures {
+        match self.changes_at_hits(id as usize) {
             false => f(&self.materials[id as usize]),
             true => f(&self.textured_material(id as usize, sp)),
         }
@@ -483,7 +499,7 @@ impl RenderScene {
     /// went through the stack, and its read-back stalled store forwarding).
     #[inline(always)]
     pub fn albedo_at(&self, id: u32, sp: &SurfacePoint) -> Vec3 {
-        match self.features.textures {
+        match self.changes_at_hits(id as usize) {
             false => self.materials[id as usize].albedo(),
             true => self.textured_material(id as usize, sp).albedo(),
         }

@@ -80,6 +80,7 @@ pub fn extract_render_scene(
         media: media.media.clone(),
         textures: textures.textures.clone(),
         material_textures: textures.per_material.clone(),
+        varies: RenderScene::varying_materials(&textures.per_material, &wrappers.0),
         wrappers: wrappers.0.clone(),
     }));
 }

@@ -411,10 +411,13 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let mut st = p.state(s);
-            let hit = p.hit[s];
-            let mat = &scene.material_at(hit.material, &hit.surface);
-            let (shadow, next) =
-                path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]);
+            let hit = &p.hit[s];
+            let (shadow, next) = scene.with_material(
+                hit.material,
+                &hit.surface,
+                #[inline(always)]
+                |mat| path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]),
+            );
             route(p, q, i, shadow, next);
             p.set_state(s, &st);
         }
