@@ -590,6 +590,57 @@ fn assets_under_keeps_a_scene_in_its_folder() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A scene's meshes and images are read ahead of the parse that places them, side by side on
+/// rayon's threads, under the loading thread's rules: each file is an input of the load
+/// (recorded, as read on the loading thread), and `--assets-under` holds for them as for a file
+/// read in the parse (a read-ahead that escaped it would leave the file read for the parse,
+/// and the scene would load). Several files, so that the read-ahead runs.
+#[test]
+fn files_read_ahead_keep_the_loads_rules() {
+    use pathwave::engine::format::files::{confined, recording};
+    let dir = std::env::temp_dir().join(format!("pathwave-read-ahead-{}", std::process::id()));
+    let inside = dir.join("scene");
+    std::fs::create_dir_all(&inside).unwrap();
+    let obj =
+        |p: &Path, k: usize| std::fs::write(p, format!("v 0 0 0\nv 1 0 {k}\nv 0 1 0\nf 1 2 3\n")).unwrap();
+    let png = |p: &Path| image::RgbImage::new(2, 2).save_with_format(p, image::ImageFormat::Png).unwrap();
+    for k in 0..3 {
+        obj(&inside.join(format!("m{k}.obj")), k);
+    }
+    obj(&dir.join("private.obj"), 9);
+    png(&inside.join("a.png"));
+    png(&inside.join("b.png"));
+    let file = inside.join("s.ron");
+    let write = |last_mesh: &str| {
+        let meshes: String = ["m0.obj", "m1.obj", "m2.obj", last_mesh]
+            .iter()
+            .map(|m| format!(r#"        (shape: Mesh(file: "{m}"), material: "a"),"#))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let text = scene(CAMERA, r#""a": Lambertian(albedo: "ta"), "b": Lambertian(albedo: "tb"),"#, &meshes)
+            .replace(
+                "    materials:",
+                "    textures: { \"ta\": Image(file: \"a.png\"), \"tb\": Image(file: \"b.png\") },\n    materials:",
+            );
+        std::fs::write(&file, text).unwrap();
+    };
+    write("m0.obj");
+    let (desc, read) = recording(|| load(&file).unwrap());
+    let mut names: Vec<String> =
+        read.iter().map(|f| f.path.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["a.png", "b.png", "m0.obj", "m1.obj", "m2.obj", "s.ron"]);
+    assert_eq!(desc.inputs.len(), 6, "{:?}", desc.inputs);
+    // A mesh outside the folder, among files that are inside: refused where the scene names it.
+    write("../private.obj");
+    let Err(e) = confined(&inside, &file, || load(&file)).unwrap() else {
+        panic!("the scene loaded with a mesh outside the folder");
+    };
+    assert!(e.message.contains("lies outside") && e.line == 12, "{e}");
+    assert!(load(&file).is_ok(), "the same scene without the confinement");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 // 10. Positive control.
 
 #[test]

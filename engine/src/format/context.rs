@@ -52,6 +52,18 @@ struct Context {
     /// texture's image) are not named here, so that this module depends on nothing else of the
     /// engine.
     files: HashMap<(PathBuf, TypeId), Arc<dyn Any + Send + Sync>>,
+    /// In the first pass, the files the scene names, as written, in file order: what the
+    /// loader reads across threads before the second pass ([`take_wanted`]).
+    wanted: Vec<(PathBuf, Wanted)>,
+}
+
+/// What a file the first pass met is read as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Wanted {
+    /// A mesh file (OBJ, PLY, glTF, Mitsuba's serialized format).
+    Mesh,
+    /// An image (a texture's, an environment map's).
+    Image,
 }
 
 thread_local! {
@@ -118,6 +130,20 @@ pub(crate) fn set_current_object(i: Option<usize>) {
 /// name it. Taking it resets it for the next parse.
 pub(crate) fn take_current_object() -> Option<usize> {
     with(|c| c.object.take())
+}
+
+/// Notes, in the first pass, that the scene names the file `path` (as written), to be read as
+/// `what`.
+pub(crate) fn want(path: &Path, what: Wanted) {
+    with(|c| c.wanted.push((path.to_owned(), what)));
+}
+
+/// The files noted by [`want`] since the last call, in order, each once.
+pub(crate) fn take_wanted() -> Vec<(PathBuf, Wanted)> {
+    let mut wanted = with(|c| std::mem::take(&mut c.wanted));
+    let mut seen = std::collections::HashSet::new();
+    wanted.retain(|w| seen.insert(w.clone()));
+    wanted
 }
 
 /// What was read from the file at `path` earlier in this parse, as a `T`.

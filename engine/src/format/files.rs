@@ -150,6 +150,61 @@ pub fn recording<R>(f: impl FnOnce() -> R) -> (R, Vec<InputFile>) {
     (out, files)
 }
 
+/// This thread's rules for reading files ([`confined`]'s folder, and whether a [`recording`]
+/// is on), to read files on other threads as this one would: a scene's loader reads its
+/// meshes and images across rayon's threads.
+#[derive(Clone, Debug)]
+pub struct ReadRules {
+    confined: Option<(PathBuf, PathBuf)>,
+    recording: bool,
+}
+
+impl ReadRules {
+    /// The rules of the calling thread.
+    pub fn here() -> Self {
+        Self {
+            confined: CONFINED.with(|c| c.borrow().clone()),
+            recording: READ.with(|r| r.borrow().is_some()),
+        }
+    }
+
+    /// Runs `f` on the calling thread under these rules; returns its result and the files it
+    /// read, for [`Self::keep`] on the thread the rules came from.
+    pub fn apply<R>(&self, f: impl FnOnce() -> R) -> (R, FilesRead) {
+        /// Puts this thread's own rules back however `f` ends.
+        struct Restore(Option<(PathBuf, PathBuf)>, Option<BTreeMap<PathBuf, u64>>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                CONFINED.with(|c| *c.borrow_mut() = self.0.take());
+                READ.with(|r| *r.borrow_mut() = self.1.take());
+            }
+        }
+        let restore = Restore(
+            CONFINED.with(|c| std::mem::replace(&mut *c.borrow_mut(), self.confined.clone())),
+            READ.with(|r| r.borrow_mut().replace(BTreeMap::new())),
+        );
+        let out = f();
+        let read = READ.with(|r| r.borrow_mut().take().unwrap_or_default());
+        drop(restore);
+        (out, FilesRead(if self.recording { read } else { BTreeMap::new() }))
+    }
+}
+
+/// The files read under [`ReadRules::apply`] on another thread, with their hashes.
+#[derive(Debug, Default)]
+pub struct FilesRead(BTreeMap<PathBuf, u64>);
+
+impl FilesRead {
+    /// Adds them to this thread's [`recording`], if one is on, as if read here.
+    pub fn keep(self) {
+        READ.with(|r| {
+            if let Some(files) = r.borrow_mut().as_mut() {
+                files.extend(self.0);
+            }
+        });
+    }
+}
+
 /// Runs `f` with every file that [`read_bounded`] reads on this thread required to lie in the
 /// folder `root` once links are resolved, but `exempt` (the scene file the user named): a scene
 /// from elsewhere then cannot render a private file (`../`, an absolute path, `/proc`) into its

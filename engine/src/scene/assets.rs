@@ -5,10 +5,11 @@
 use super::serialized::SerializedFile;
 use crate::accel::mesh::{MeshAttribute, MeshData};
 use crate::format::context;
-use crate::format::files::InputFile;
+use crate::format::files::{InputFile, ReadRules};
 use crate::format::frames::FramePattern;
 use crate::format::vdb::{VdbFile, is_vdb};
 use crate::media::grid::VoxelGrid;
+use crate::texture::TextureImage;
 pub use crate::texture::image::ImageFile;
 use glam::Affine3A;
 use serde::{Deserialize, Deserializer, de::Error};
@@ -55,6 +56,7 @@ impl<'de> Deserialize<'de> for MeshPath {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
         let Some(dir) = context::scene_dir() else {
+            context::want(&path, context::Wanted::Mesh);
             return Ok(MeshPath { full: path.clone(), path, source: MeshSource::Unread });
         };
         let full = dir.join(&path);
@@ -307,22 +309,79 @@ pub fn mesh_format(bytes: &[u8], path: &std::path::Path) -> Result<MeshFormat, S
     }
 }
 
-/// Reads the mesh file at `path` in its format ([`mesh_format`]).
+/// Reads the mesh file at `path` in its format ([`mesh_format`]); a glTF file read before in
+/// this parse (by a texture or another mesh) is not parsed again.
 fn read_mesh_file(path: &std::path::Path) -> Result<MeshSource, String> {
     let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
+    if mesh_format(&bytes, path)? == MeshFormat::Gltf
+        && let Some(file) = context::read_before::<super::gltf::GltfFile>(path)
+    {
+        return Ok(MeshSource::Gltf(file));
+    }
+    let source = parse_mesh_file(bytes, path)?;
+    if let MeshSource::Gltf(file) = &source {
+        context::keep(path.to_owned(), file.clone());
+    }
+    Ok(source)
+}
+
+/// The mesh file `path` of these `bytes`, in its format ([`mesh_format`]); the parse context
+/// is not touched, so that it runs on any thread.
+fn parse_mesh_file(bytes: Vec<u8>, path: &std::path::Path) -> Result<MeshSource, String> {
     Ok(match mesh_format(&bytes, path)? {
         MeshFormat::Ply => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
         MeshFormat::Serialized => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
-        MeshFormat::Gltf => MeshSource::Gltf(match context::read_before::<super::gltf::GltfFile>(path) {
-            Some(file) => file,
-            None => {
-                let file = Arc::new(super::gltf::GltfFile::new(&bytes, path)?);
-                context::keep(path.to_owned(), file.clone());
-                file
-            }
-        }),
+        MeshFormat::Gltf => MeshSource::Gltf(Arc::new(super::gltf::GltfFile::new(&bytes, path)?)),
         MeshFormat::Obj => MeshSource::Mesh(Arc::new(parse_obj(&bytes, path)?)),
     })
+}
+
+/// Reads the mesh and image files that the first parsing pass met ([`context::take_wanted`];
+/// paths relative to `dir`) across rayon's threads, each under the calling thread's rules
+/// ([`ReadRules`]: `--assets-under`, the recording of inputs), and keeps what they hold for
+/// the second pass, which then finds them read. A file that cannot be read is left to the
+/// second pass: it reads it again and reports the error where the scene names the file.
+/// Without this, a scene's files were read one after the other, each as the parser reached it.
+pub(crate) fn read_ahead(dir: &std::path::Path) {
+    use rayon::prelude::*;
+    let wanted = context::take_wanted();
+    if wanted.len() < 2 {
+        return;
+    }
+    let rules = ReadRules::here();
+    let read: Vec<_> = wanted
+        .par_iter()
+        .map(|(path, what)| {
+            let full = dir.join(path);
+            let (ahead, files) = rules.apply(|| match what {
+                context::Wanted::Mesh => {
+                    let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "mesh");
+                    bytes.and_then(|b| parse_mesh_file(b, &full)).ok().map(Ahead::Mesh)
+                }
+                context::Wanted::Image => TextureImage::load(&full).ok().map(|i| Ahead::Image(Arc::new(i))),
+            });
+            (full, ahead, files)
+        })
+        .collect();
+    for (full, ahead, files) in read {
+        files.keep();
+        match ahead {
+            Some(Ahead::Mesh(source)) => {
+                if let MeshSource::Gltf(file) = &source {
+                    context::keep(full.clone(), file.clone());
+                }
+                context::keep(full, Arc::new(source));
+            }
+            Some(Ahead::Image(image)) => context::keep(full, image),
+            None => {}
+        }
+    }
+}
+
+/// What [`read_ahead`] read of a file.
+enum Ahead {
+    Mesh(MeshSource),
+    Image(Arc<TextureImage>),
 }
 
 /// An edge (by vertex position) that borders an odd number of triangles, and that number: a

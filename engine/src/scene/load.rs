@@ -75,6 +75,9 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             },
         }
     };
+    // The first pass notes the files the scene names; what an earlier parse on this thread
+    // left there (one that failed half way) is dropped.
+    drop(crate::format::context::take_wanted());
     let names: SceneDesc = options.from_str(text).map_err(error)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let _scope = ParseScope::enter(Names {
@@ -103,8 +106,9 @@ pub fn parse_with(text: &str, path: &Path, overrides: &[(String, String)]) -> Re
             .collect(),
         tilting: tilting(&names),
         attributes: attributes_read(&names),
-        dir,
+        dir: dir.clone(),
     });
+    super::assets::read_ahead(&dir);
     let desc: SceneDesc = options.from_str(text).map_err(error)?;
     let keys = &desc.animation.camera;
     let placed_keys = keys.look_from.is_some() || keys.look_at.is_some() || keys.vfov.is_some();

@@ -64,6 +64,7 @@ impl<'de> Deserialize<'de> for ImageFile {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let path = std::path::PathBuf::from(String::deserialize(d)?);
         let Some(dir) = context::scene_dir() else {
+            context::want(&path, context::Wanted::Image);
             return Ok(ImageFile { path, image: Arc::default() });
         };
         // Read once however many textures and maps name the file.
