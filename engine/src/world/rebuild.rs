@@ -174,6 +174,10 @@ pub fn update_instances(
         let start = std::time::Instant::now();
         let mut objs: Vec<_> = objects.iter().collect();
         objs.sort_by_key(|(e, ..)| *e);
+        library.build_all(objs.iter().filter_map(|(_, _, shape, ..)| match &shape.0 {
+            Form::Mesh(mesh) => Some(mesh),
+            _ => None,
+        }));
         let (mut blas, mut list, mut entities) = (Vec::<Arc<MeshBlas>>::new(), Vec::new(), Vec::new());
         for (e, transform, shape, material, motion, anim, object) in objs {
             let Form::Mesh(mesh) = &shape.0 else {
