@@ -65,7 +65,9 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     if !["png", "jpg", "jpeg", "exr", "gif"].contains(&ext.as_str()) {
         return Err(format!("{output}: unknown output format (use .png, .jpg, .exr or .gif)"));
     }
-    let desc = load(path, &args.scene)?;
+    // The load's parallel work (files read ahead, tables) runs on the render's threads.
+    let pool = crate::pool(args.engine.threads)?;
+    let desc = pool.install(|| load(path, &args.scene))?;
     let a = &desc.animation;
     let frames = match &c.frames {
         Some(f) => shard::parse_range(f, "--frames")?,
@@ -128,7 +130,6 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     }
     // A frame killed half way resumes from its checkpoint.
     let checkpointing = every.map(|every| Checkpointing { every, resume: true });
-    let pool = crate::pool(args.engine.threads)?;
     if let Some(d) = args.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }

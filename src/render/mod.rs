@@ -67,20 +67,23 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     writes.extend(c.args.profile.trace.clone());
     io::check_writes(&writes, &io::Inputs::new([path.as_path()]))?;
     let time = c.time.checked()?;
-    let desc = load(path, &c.args.scene)?;
+    // The load's parallel work (files read ahead, BLAS, tables) runs on the render's threads.
+    let pool = crate::pool(how.threads)?;
+    let desc = pool.install(|| load(path, &c.args.scene))?;
     // The frame's grid files are inputs too.
     let frame = args::frame_at(&desc, time)?;
     io::check_writes(&writes, &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
     let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
-    let pool = crate::pool(how.threads)?;
     if let Some(d) = how.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
-    let mut world = load::world(&desc, path, &c.args.scene);
     let shutter = args::shutter_at(&desc, time);
-    world.set_time(shutter.0, shutter.1);
-    world.set_frame(frame);
-    let scene = world.update_checked()?;
+    let (mut world, scene) = pool.install(|| {
+        let mut world = load::world(&desc, path, &c.args.scene);
+        world.set_time(shutter.0, shutter.1);
+        world.set_frame(frame);
+        world.update_checked().map(|scene| (world, scene))
+    })?;
     log_scene(&scene);
     let s = scene.settings;
     let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();

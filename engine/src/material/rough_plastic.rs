@@ -165,7 +165,13 @@ impl GaussLegendre {
 /// The mean over the visible normals of `md` seen from `wi` (local, upper hemisphere) of the
 /// single-scattering reflectance or transmittance of an interface of relative index `eta`
 /// (the product `rule` in each of the two sampling numbers).
-fn interface_integral<M: Microfacet>(md: M, wi: Vec3A, eta: f32, what: Scattering, rule: &GaussLegendre) -> f32 {
+fn interface_integral<M: Microfacet>(
+    md: M,
+    wi: Vec3A,
+    eta: f32,
+    what: Scattering,
+    rule: &GaussLegendre,
+) -> f32 {
     let (nodes, weights) = (&rule.nodes, &rule.weights);
     let mut sum = 0.0f64;
     for (&x, &wx) in nodes.iter().zip(weights) {
