@@ -127,6 +127,8 @@ pub struct LightInputs<'a> {
     pub objects: Option<&'a [u32]>,
     /// How lights are chosen.
     pub sampler: LightSamplerKind,
+    /// The shutter interval: the light tree bounds a moving light by its sweep over it.
+    pub shutter: (f32, f32),
 }
 
 impl LightTable {
@@ -218,14 +220,16 @@ impl LightTable {
             LightSamplerKind::Tree => bounded > 0,
             LightSamplerKind::Auto => bounded > TREE_MIN_LIGHTS,
         };
-        // Bounds that hold a moving light's sweep would need the shutter: scenes whose lights
-        // move keep the table.
-        let moving = (geometry.velocity.as_ref())
-            .is_some_and(|v| t.prims.iter().any(|&i| v[i as usize] != Vec3A::ZERO));
-        if tree && moving {
-            tracing::warn!("the light tree does not bound moving lights: lights are chosen by power");
-        }
-        if tree && !moving {
+        if tree {
+            // A primitive at time t lies translated by velocity * t: over the shutter its box
+            // sweeps between the two ends' (its normals do not turn).
+            let (t0, t1) = inputs.shutter;
+            let sweep = |i: usize| {
+                geometry.velocity.as_ref().map_or((Vec3A::ZERO, Vec3A::ZERO), |v| {
+                    let (a, b) = (v[i] * t0, v[i] * t1);
+                    (a.min(b), a.max(b))
+                })
+            };
             let bounds: Vec<(u32, LightBounds)> = (0..t.pmf.len())
                 .filter_map(|l| {
                     let b = match t.other(l) {
@@ -233,7 +237,9 @@ impl LightTable {
                             let i = t.prims[l] as usize;
                             let two_sided =
                                 emission[geometry.material[i] as usize].is_some_and(|e| e.two_sided);
-                            prim_bounds(&geometry.prims[i], power[l], two_sided)
+                            let b = prim_bounds(&geometry.prims[i], power[l], two_sided);
+                            let (lo, hi) = sweep(i);
+                            LightBounds { lo: b.lo + lo, hi: b.hi + hi, ..b }
                         }
                         Some(OtherLight::Punctual(p)) => p.bounds(power[l])?,
                         Some(OtherLight::Environment) => return None,

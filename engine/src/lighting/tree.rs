@@ -9,6 +9,10 @@
 //! The importance takes the shading normal at a surface (pbrt-v4's `cos theta_i` bound) and
 //! none in a medium (zero); a path keeps its vertex's normal beside its point for the density
 //! of the next hit's emitter, so that the choice and its probability are one function.
+//!
+//! A light that moves while the shutter is open is bounded by its box swept over the shutter
+//! (`LightInputs::shutter`): the choice cannot depend on a path's time, or the density of an
+//! emitter hit would have to know it.
 
 use crate::math::{acos, cos_sin_turn};
 use glam::Vec3A;

@@ -357,7 +357,10 @@ pub fn rebuild_lights(
     punctual: Res<PunctualLights>,
     background: Res<BackgroundLight>,
     settings: Res<Settings>,
+    camera: Res<CameraParams>,
 ) {
+    // A new shutter rebuilds the geometry where something moves (`rebuild_geometry`), and
+    // with it this table, whose tree bounds moving lights by their sweep.
     let any = geometry.is_changed()
         || settings.is_changed()
         || instances.is_changed()
@@ -383,6 +386,7 @@ pub fn rebuild_lights(
         bounds,
         objects: Some(&geometry.objects),
         sampler: settings.0.light_sampler,
+        shutter: camera.0.shutter,
     };
     let emission = emission_table(&materials.0, &textures.per_material, &emitting.0);
     out.lights = Arc::new(LightTable::build(geo, emission, inputs));
