@@ -90,11 +90,7 @@ pub struct RenderSettings {
 impl std::str::FromStr for SamplerKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::NAMES
-            .iter()
-            .find(|(n, _)| *n == s)
-            .map(|&(_, k)| k)
-            .ok_or_else(|| format!("no sampler '{s}': there are sobol, stratified and independent"))
+        crate::format::by_name(&Self::NAMES, s, "sampler")
     }
 }
 

@@ -251,3 +251,17 @@ impl<'de> Deserialize<'de> for MaterialRef {
         })
     }
 }
+
+/// The kind that `names` (each kind with its spelling) gives the name `s`, or an error naming
+/// `what` was asked for and listing the spellings: the command line's and the scene format's
+/// enums that go by name.
+pub fn by_name<K: Copy>(names: &[(&str, K)], s: &str, what: &str) -> Result<K, String> {
+    names.iter().find(|(n, _)| *n == s).map(|&(_, k)| k).ok_or_else(|| {
+        let spelled: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+        let list = match spelled.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => spelled.join(""),
+        };
+        format!("no {what} '{s}': there are {list}")
+    })
+}

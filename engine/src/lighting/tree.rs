@@ -405,11 +405,7 @@ impl LightSamplerKind {
 impl std::str::FromStr for LightSamplerKind {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::NAMES
-            .iter()
-            .find(|(n, _)| *n == s)
-            .map(|&(_, k)| k)
-            .ok_or_else(|| format!("no light sampler '{s}': there are power, tree and auto"))
+        crate::format::by_name(&Self::NAMES, s, "light sampler")
     }
 }
 
