@@ -27,8 +27,9 @@ def sphere(seed, segments):
             a = j * cols + i + 1
             b = j * cols + (i + 1) % cols + 1
             c, d = a + cols, b + cols
-            lines.append("f %d %d %d" % (a, c, b))
-            lines.append("f %d %d %d" % (b, c, d))
+            # Counter-clockwise seen from outside: the normals face out.
+            lines.append("f %d %d %d" % (a, b, c))
+            lines.append("f %d %d %d" % (b, d, c))
     return "\n".join(lines) + "\n"
 
 
