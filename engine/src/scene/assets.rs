@@ -313,22 +313,23 @@ pub fn mesh_format(bytes: &[u8], path: &std::path::Path) -> Result<MeshFormat, S
 /// this parse (by a texture or another mesh) is not parsed again.
 fn read_mesh_file(path: &std::path::Path) -> Result<MeshSource, String> {
     let bytes = super::files::read_bounded(path, super::files::MAX_ASSET_BYTES, "mesh")?;
-    if mesh_format(&bytes, path)? == MeshFormat::Gltf
+    let format = mesh_format(&bytes, path)?;
+    if format == MeshFormat::Gltf
         && let Some(file) = context::read_before::<super::gltf::GltfFile>(path)
     {
         return Ok(MeshSource::Gltf(file));
     }
-    let source = parse_mesh_file(bytes, path)?;
+    let source = parse_mesh_file(bytes, path, format)?;
     if let MeshSource::Gltf(file) = &source {
         context::keep(path.to_owned(), file.clone());
     }
     Ok(source)
 }
 
-/// The mesh file `path` of these `bytes`, in its format ([`mesh_format`]); the parse context
+/// The mesh file `path` of these `bytes`, in `format` ([`mesh_format`]); the parse context
 /// is not touched, so that it runs on any thread.
-fn parse_mesh_file(bytes: Vec<u8>, path: &std::path::Path) -> Result<MeshSource, String> {
-    Ok(match mesh_format(&bytes, path)? {
+fn parse_mesh_file(bytes: Vec<u8>, path: &std::path::Path, format: MeshFormat) -> Result<MeshSource, String> {
+    Ok(match format {
         MeshFormat::Ply => MeshSource::Mesh(Arc::new(super::ply::parse_ply(&bytes, path)?)),
         MeshFormat::Serialized => MeshSource::Serialized(Arc::new(SerializedFile::new(bytes, path)?)),
         MeshFormat::Gltf => MeshSource::Gltf(Arc::new(super::gltf::GltfFile::new(&bytes, path)?)),
@@ -355,8 +356,12 @@ pub(crate) fn read_ahead(dir: &std::path::Path) {
             let full = dir.join(path);
             let (ahead, files) = rules.apply(|| match what {
                 context::Wanted::Mesh => {
-                    let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "mesh");
-                    bytes.and_then(|b| parse_mesh_file(b, &full)).ok().map(Ahead::Mesh)
+                    let read = || {
+                        let bytes = super::files::read_bounded(&full, super::files::MAX_ASSET_BYTES, "mesh")?;
+                        let format = mesh_format(&bytes, &full)?;
+                        parse_mesh_file(bytes, &full, format)
+                    };
+                    read().ok().map(Ahead::Mesh)
                 }
                 context::Wanted::Image => TextureImage::load(&full).ok().map(|i| Ahead::Image(Arc::new(i))),
             });
