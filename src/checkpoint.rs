@@ -1,30 +1,37 @@
 //! Checkpoints of a render in progress: the film's exact per-pixel sums and its sample count,
 //! so that a render resumed from one finishes with the bits of an uninterrupted render.
 //!
-//! The file is binary, little-endian: the magic `PWCKPT03` (the format's version), a 64-bit key
+//! The file is binary, little-endian: the magic `PWCKPT04` (the format's version), a 64-bit key
 //! (a hash of the scene file and of every setting that changes what a sample is), those
 //! settings as text (a `u32` byte count, then UTF-8 lines `name: value`, so that a refusal can
 //! say which setting differs), the image width and height, the samples per pixel the render was
 //! started for, the index of its first sample and the count done (the samples `first..first + count` of every pixel), then per
-//! pixel the three sums and three sums of squares as fixed-point `i128` and the count of
-//! discarded samples (`u64`), and last the XXH3-64 checksum of everything before it. A file
-//! that fails any check (version, checksum, sizes, counts) is refused with what is wrong.
-//! Checkpoints of format 2 (`PWCKPT02`: the same without the settings' text) are still read and
-//! merge with one another; their key was made from another description of the settings, so
-//! `--resume` refuses them, saying that their settings are not recorded.
+//! pixel the three sums and three sums of squares as fixed-point `i128`, the count of
+//! discarded samples (`u64`) and the sums of the samples' weights and of their squares (`u64`
+//! each, 2^32 units), and last the XXH3-64 checksum of everything before it. A file that fails
+//! any check (version, checksum, sizes, counts) is refused with what is wrong. Checkpoints of
+//! format 3 (`PWCKPT03`: the same without the weights, which were all 1) are still read and
+//! resumed, their weights the sample counts. Those of format 2 (format 3 without the settings'
+//! text) are read and merge with one another; their key was made from another description of
+//! the settings, so `--resume` refuses them, saying that their settings are not recorded.
 
 use crate::integrator::film::{Film, PixelAccumulator};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"PWCKPT03";
-/// Format 2's magic: no settings' text (read with empty [`Checkpoint::settings`]).
+const MAGIC: &[u8; 8] = b"PWCKPT04";
+/// Format 3's magic: no weights (every sample weighed 1).
+const MAGIC_V3: &[u8; 8] = b"PWCKPT03";
+/// Format 2's magic: format 3 without the settings' text (read with empty
+/// [`Checkpoint::settings`]).
 const MAGIC_V2: &[u8; 8] = b"PWCKPT02";
 /// The first format's magic (no checksum), refused with a message of its own.
 const MAGIC_V1: &[u8; 8] = b"PWCKPT01";
 /// Bytes of the checksum at the end.
 const CHECKSUM_BYTES: usize = 8;
-/// Bytes per pixel: six `i128` and one `u64`.
-const PIXEL_BYTES: usize = 6 * 16 + 8;
+/// Bytes per pixel: six `i128` and three `u64`.
+const PIXEL_BYTES: usize = 6 * 16 + 3 * 8;
+/// Bytes per pixel of formats 2 and 3: six `i128` and one `u64`.
+const PIXEL_BYTES_V3: usize = 6 * 16 + 8;
 /// Bytes of the fields after the key (and the settings' text): width, height, target spp,
 /// first sample, sample count.
 const FIELDS_BYTES: usize = 5 * 4;
@@ -131,11 +138,13 @@ impl Checkpoint {
             out.extend_from_slice(&v.to_le_bytes());
         }
         for p in &f.pixels {
-            let (sum, sum_sq, non_finite) = p.raw();
+            let (sum, sum_sq, non_finite, weights) = p.raw();
             for v in sum.iter().chain(&sum_sq) {
                 out.extend_from_slice(&v.to_le_bytes());
             }
-            out.extend_from_slice(&non_finite.to_le_bytes());
+            for v in [non_finite, weights[0], weights[1]] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
         }
         let checksum = xxhash_rust::xxh3::xxh3_64(&out);
         out.extend_from_slice(&checksum.to_le_bytes());
@@ -155,10 +164,11 @@ impl Checkpoint {
         if bytes.starts_with(MAGIC_V1) {
             return Err(bad("written by an older pathwave, without a checksum; render without --resume"));
         }
-        let v2 = bytes.starts_with(MAGIC_V2);
-        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || !(v2 || bytes.starts_with(MAGIC)) {
-            return Err(bad("no PWCKPT03 or PWCKPT02 header"));
+        let (v2, v3) = (bytes.starts_with(MAGIC_V2), bytes.starts_with(MAGIC_V3));
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || !(v2 || v3 || bytes.starts_with(MAGIC)) {
+            return Err(bad("no PWCKPT04, PWCKPT03 or PWCKPT02 header"));
         }
+        let pixel_bytes = if v2 || v3 { PIXEL_BYTES_V3 } else { PIXEL_BYTES };
         let (body, tail) = bytes.split_at(bytes.len() - CHECKSUM_BYTES);
         if xxhash_rust::xxh3::xxh3_64(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
             return Err(bad("its checksum does not match: the file is damaged"));
@@ -182,7 +192,7 @@ impl Checkpoint {
         let (first_sample, spp) = (u32_at(12), u32_at(16));
         let pixels_at = at + FIELDS_BYTES;
         let expected = (width as u64 * height as u64)
-            .checked_mul(PIXEL_BYTES as u64)
+            .checked_mul(pixel_bytes as u64)
             .and_then(|n| n.checked_add((pixels_at + CHECKSUM_BYTES) as u64));
         if width == 0 || height == 0 || expected != Some(bytes.len() as u64) {
             return Err(bad(&format!("{} bytes do not hold a {width}x{height} image", bytes.len())));
@@ -194,13 +204,18 @@ impl Checkpoint {
         }
         let mut film = Film::new(width, height);
         film.spp = spp;
-        for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..].chunks_exact(PIXEL_BYTES)) {
+        for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..].chunks_exact(pixel_bytes)) {
             let i128_at = |k: usize| i128::from_le_bytes(chunk[16 * k..16 * k + 16].try_into().unwrap());
-            let non_finite = u64::from_le_bytes(chunk[96..104].try_into().unwrap());
+            let u64_at = |k: usize| u64::from_le_bytes(chunk[96 + 8 * k..104 + 8 * k].try_into().unwrap());
+            let weights = match pixel_bytes == PIXEL_BYTES {
+                true => [u64_at(1), u64_at(2)],
+                false => PixelAccumulator::unit_weights(spp),
+            };
             *p = PixelAccumulator::from_raw(
                 [i128_at(0), i128_at(1), i128_at(2)],
                 [i128_at(3), i128_at(4), i128_at(5)],
-                non_finite,
+                u64_at(0),
+                weights,
             );
         }
         Ok(Self { key, settings, target_spp, first_sample, film })
@@ -283,7 +298,7 @@ mod tests {
     #[test]
     fn a_checkpoint_reads_back_as_written_and_a_damaged_one_is_refused() {
         let mut film = Film::new(3, 2);
-        film.spp = 5;
+        film.spp = 2;
         for (i, p) in film.pixels.iter_mut().enumerate() {
             p.add(Vec3::new(i as f32, 0.5, 1e-9));
             p.add(Vec3::splat(f32::NAN));
@@ -325,12 +340,21 @@ mod tests {
         assert!(beyond.contains("does not fit"), "{beyond}");
         let binary = resealed(&|b| b[20] = 0xff);
         assert!(binary.contains("not UTF-8"), "{binary}");
-        // Format 2 (no settings' text) is still read, with empty settings.
-        let mut v2 = b"PWCKPT02".to_vec();
-        v2.extend_from_slice(&bytes[8..16]);
-        v2.extend_from_slice(&bytes[at..bytes.len() - CHECKSUM_BYTES]);
-        let sum = xxhash_rust::xxh3::xxh3_64(&v2);
-        v2.extend_from_slice(&sum.to_le_bytes());
+        // Formats 3 (no weights: every sample weighed 1) and 2 (no settings' text either) are
+        // still read, with the weights of their sample counts and empty settings.
+        let pixels = at + FIELDS_BYTES;
+        let unweighted: Vec<u8> = bytes[pixels..bytes.len() - CHECKSUM_BYTES]
+            .chunks_exact(PIXEL_BYTES)
+            .flat_map(|p| p[..PIXEL_BYTES_V3].to_vec())
+            .collect();
+        let sealed = |mut b: Vec<u8>| {
+            let sum = xxhash_rust::xxh3::xxh3_64(&b);
+            b.extend_from_slice(&sum.to_le_bytes());
+            b
+        };
+        let v3 = sealed([b"PWCKPT03", &bytes[8..pixels], &unweighted[..]].concat());
+        assert_eq!(Checkpoint::from_bytes(&v3, &path).unwrap(), c);
+        let v2 = sealed([b"PWCKPT02", &bytes[8..16], &bytes[at..pixels], &unweighted[..]].concat());
         let old = Checkpoint::from_bytes(&v2, &path).unwrap();
         assert_eq!(old, Checkpoint { settings: String::new(), ..c.clone() });
         let png = Checkpoint::from_bytes(b"PNG....", &path).unwrap_err();

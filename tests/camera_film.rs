@@ -266,3 +266,73 @@ fn far_clip_limits_only_camera_rays() {
         assert_sees(&clipped(camera, -10.0, mirror), true, &format!("{camera}, lamp seen in a mirror"));
     }
 }
+
+/// A splatted pixel's variance ([`Film::variance_of_mean`], from its weighted sums) is the
+/// variance its value has over seeds, and the image mean's variance is about the sum of the
+/// pixels' times the filter's gain (`PixelFilter::splat_gain`: splatted pixels share their
+/// noise), for the tent and the Gaussian, on a grey floor shadowed by a sphere under a white
+/// sky. Taken as the plain sum (the gain left out), the image mean's variance is 2.8 and 3.9
+/// times the prediction, and the test says so; with the effective sample count taken as the
+/// sum of the weights, the pixels' prediction is a third of what it should be, and
+/// the test says so too. 200 seeds of an independent sampler, so that the renders are
+/// independent draws; the green channel. (The gain is about 1.25 times short here: the image's
+/// edge rows, whose pixels have no neighbours beyond them, are a fifth of a 24x16 image.)
+#[test]
+fn splatted_pixels_know_their_variance_and_share_it() {
+    use pathwave::engine::filter::PixelFilter;
+    use pathwave::engine::scene::FilterDesc;
+    let seeds = 200;
+    for desc_filter in [FilterDesc::Tent { radius: 1.0 }, FilterDesc::Gaussian { stddev: 0.5 }] {
+        let filter = PixelFilter::from(desc_filter);
+        assert!(filter.splats());
+        let mut desc = inline(
+            r#"Scene(
+    camera: (look_from: (0, 6, 0.01), look_at: (0, 0, 0), vfov: 50),
+    render: (width: 24, height: 16, spp: 4),
+    background: Constant((1, 1, 1)),
+    materials: { "grey": Lambertian(albedo: (0.5, 0.5, 0.5)) },
+    objects: [
+        (shape: Quad(q: (-20, 0, -20), u: (40, 0, 0), v: (0, 0, 40)), material: "grey"),
+        (shape: Sphere(center: (0, 1.5, 0), radius: 1), material: "grey"),
+    ],
+)"#,
+        );
+        desc.render.filter = desc_filter;
+        desc.render.sampler = "independent".parse().unwrap();
+        let n = 24 * 16;
+        let (mut sum, mut sum_sq, mut predicted) = (vec![0.0f64; n], vec![0.0f64; n], vec![0.0f64; n]);
+        let mut means = Vec::new();
+        for seed in 0..seeds {
+            desc.render.seed = seed;
+            let scene = SceneWorld::render_scene(&desc);
+            let film = wavefront::render(&scene, wavefront::Options::default(), &|_, _| {}).0;
+            let (mean, var) = (film.mean(), film.variance_of_mean());
+            for p in 0..n {
+                let v = mean[p].y as f64;
+                (sum[p], sum_sq[p]) = (sum[p] + v, sum_sq[p] + v * v);
+                predicted[p] += var[p].y as f64 / seeds as f64;
+            }
+            means.push(mean.iter().map(|c| c.y as f64).sum::<f64>() / n as f64);
+        }
+        let k = seeds as f64;
+        let observed: f64 = (0..n).map(|p| (sum_sq[p] - sum[p] * sum[p] / k) / (k - 1.0)).sum();
+        let pixels = observed / predicted.iter().sum::<f64>();
+        let m = means.iter().sum::<f64>() / k;
+        let observed_mean = means.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0);
+        let predicted_mean = predicted.iter().sum::<f64>() / (n * n) as f64;
+        let image = observed_mean / (predicted_mean * filter.splat_gain());
+        eprintln!(
+            "{desc_filter:?}: observed / predicted variance: pixels {pixels:.3}, image mean {image:.3} \
+             (without the gain {:.3})",
+            observed_mean / predicted_mean
+        );
+        assert!(
+            (0.9..1.1).contains(&pixels),
+            "{desc_filter:?}: pixels' variance {pixels} times the prediction"
+        );
+        assert!(
+            (0.8..1.6).contains(&image),
+            "{desc_filter:?}: the image mean's {image} times the prediction"
+        );
+    }
+}

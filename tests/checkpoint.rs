@@ -108,18 +108,24 @@ fn parts_rendered_apart_merge_into_the_whole_render() {
         c.arg("merge").args(parts.iter().map(|p| out(p))).arg("-o").arg(out(to));
         c.output().unwrap()
     };
-    render("plain.exr", &[]);
-    // Three machines' shares, merged in any order.
-    render("a.exr", &["--samples", "0..2"]);
-    render("b.exr", &["--samples", "2..3"]);
-    render("c.exr", &["--samples", "3..7"]);
-    assert!(merge(&["c.exr.ckpt", "a.exr.ckpt", "b.exr.ckpt"], "all.exr").status.success());
-    assert_eq!(std::fs::read(out("all.exr")).unwrap(), std::fs::read(out("plain.exr")).unwrap());
-    // Two of three: an image of their samples and a checkpoint that --resume completes.
-    assert!(merge(&["a.exr.ckpt", "b.exr.ckpt"], "ab.exr").status.success());
-    assert_eq!(Checkpoint::load(&out("ab.exr.ckpt")).unwrap().film.spp, 3);
-    render("ab.exr", &["--resume"]);
-    assert_eq!(std::fs::read(out("ab.exr")).unwrap(), std::fs::read(out("plain.exr")).unwrap());
+    // With samples in their own pixels, and splatted over their neighbours' (the Gaussian).
+    for filter in ["box", "gaussian"] {
+        let render = |name: &str, extra: &[&str]| render(name, &[extra, &["--filter", filter]].concat());
+        render("plain.exr", &[]);
+        // Three machines' shares, merged in any order.
+        render("a.exr", &["--samples", "0..2"]);
+        render("b.exr", &["--samples", "2..3"]);
+        render("c.exr", &["--samples", "3..7"]);
+        assert!(merge(&["c.exr.ckpt", "a.exr.ckpt", "b.exr.ckpt"], "all.exr").status.success());
+        let plain = std::fs::read(out("plain.exr")).unwrap();
+        assert_eq!(std::fs::read(out("all.exr")).unwrap(), plain, "{filter}");
+        // Two of three: an image of their samples and a checkpoint that --resume completes.
+        std::fs::remove_file(out("ab.exr.ckpt")).ok();
+        assert!(merge(&["a.exr.ckpt", "b.exr.ckpt"], "ab.exr").status.success());
+        assert_eq!(Checkpoint::load(&out("ab.exr.ckpt")).unwrap().film.spp, 3);
+        render("ab.exr", &["--resume"]);
+        assert_eq!(std::fs::read(out("ab.exr")).unwrap(), plain, "{filter}");
+    }
     // A sample twice, or parts of other settings, are refused.
     let twice = merge(&["a.exr.ckpt", "a.exr.ckpt"], "x.exr");
     assert!(!twice.status.success() && String::from_utf8_lossy(&twice.stderr).contains("overlap"));

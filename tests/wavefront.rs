@@ -49,8 +49,13 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
         ("maps.ron", 2),
         // 500 lights chosen by the light tree, each lane with its own point.
         ("many-lights.ron", 2),
+        // Splatted filters: a sample that differs reaches 4 and 16 pixels.
+        ("cornell.ron tent", 8),
+        ("materials-env.ron gaussian", 32),
     ] {
-        let desc = small(name, 6);
+        let (name, filter) = name.split_once(' ').unwrap_or((name, "box"));
+        let mut desc = small(name, 6);
+        desc.render.filter = filter.parse().unwrap();
         let oracle = render_threads(&desc, 2);
         let mut first: Option<Film> = None;
         for (batch, threads) in [(1, 1), (7, 2), (1024, 2), (100_000, 1)] {

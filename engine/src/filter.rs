@@ -3,7 +3,9 @@
 //! is drawn with density proportional to the filter, so that its weight f / pdf is the
 //! filter's integral, the same for every sample, and the pixel's estimate stays a plain mean
 //! of its own samples. Its expectation is Mitsuba 3's weight-normalised splatted estimate,
-//! the integral of f(x - centre) L(x) over the integral of f. The filters are Mitsuba 3's
+//! the integral of f(x - centre) L(x) over the integral of f. Filters of a radius from half a
+//! pixel to [`SPLAT_MAX_RADIUS`] are splatted instead ([`PixelFilter::splats`]), which reaches
+//! that expectation with less noise a pixel. The filters are Mitsuba 3's
 //! (mitsuba3 `src/rfilters/box.cpp`, `tent.cpp`, `gaussian.cpp`), separable in x and y.
 //! Unlike pbrt's tabulated sampler, the Gaussian is sampled exactly (its CDF has a closed
 //! form), so the weight is constant to rounding and no weight needs carrying.
@@ -71,6 +73,65 @@ impl PixelFilter {
         }
     }
 
+    /// Whether the film splats this filter's samples: each sample, drawn uniformly over its
+    /// pixel as the box's are, is added to every pixel the filter reaches from it, weighed by
+    /// the filter there, and a pixel's estimate is its weighted sum over the sum of its weights
+    /// (Mitsuba 3's `ImageBlock::put`). Its expectation is the same as sampling the filter's
+    /// offsets ([`Self::position`], pbrt-v4's way), but a pixel averages the samples of its
+    /// neighbours too: [`Self::splat_gain`] times as many (2.25 for the tent of radius 1,
+    /// about 3.1 for the Gaussian of stddev 0.5), at the cost of noise that neighbours share.
+    /// Not the box (one pixel, weight 1), nor filters narrower than a pixel (their weights
+    /// would leave parts of a pixel out) or wider than [`SPLAT_MAX_RADIUS`] (a sample would
+    /// touch too many pixels); those sample their offsets.
+    pub fn splats(&self) -> bool {
+        let r = self.radius();
+        !matches!(self, PixelFilter::Box) && (0.5..=SPLAT_MAX_RADIUS).contains(&r)
+    }
+
+    /// Whether camera samples take their offsets from the filter (filter importance sampling):
+    /// every filter but the box and those the film splats.
+    pub fn samples_offsets(&self) -> bool {
+        !matches!(self, PixelFilter::Box) && !self.splats()
+    }
+
+    /// How many pixels beyond its own a splatted sample reaches on each side:
+    /// ceil(radius - 1/2) (0 where the filter is not splatted).
+    pub fn margin(&self) -> u32 {
+        match self.splats() {
+            true => (self.radius() - 0.5).ceil() as u32,
+            false => 0,
+        }
+    }
+
+    /// The filter ready to splat, where the film splats it.
+    pub fn splat(&self) -> Option<Splat> {
+        self.splats().then(|| Splat {
+            filter: *self,
+            margin: self.margin() as i32,
+            inv_radius: 1.0 / self.radius(),
+        })
+    }
+
+    /// How many times as many samples a splatted pixel averages as a pixel of its own samples
+    /// only: (integral of f)^2 / integral of f^2 over the filter's support, squared for the
+    /// two axes (the effective sample count of weights f; 1 where the film does not splat).
+    /// It is also how much larger the variance of the image's mean is than the sum of the
+    /// pixels' variances, their noise shared with their neighbours.
+    pub fn splat_gain(&self) -> f64 {
+        if !self.splats() {
+            return 1.0;
+        }
+        let r = self.radius() as f64;
+        let n = 100_000;
+        let (mut f1, mut f2) = (0.0, 0.0);
+        for k in 0..n {
+            let f = self.eval((-r + 2.0 * r * (k as f64 + 0.5) / n as f64) as f32) as f64;
+            (f1, f2) = (f1 + f, f2 + f * f);
+        }
+        let g = f1 * f1 / f2 * 2.0 * r / n as f64;
+        g * g
+    }
+
     /// The offset from the pixel centre that the numbers `u` give (1D, for tests).
     pub fn sample_1d(&self, u: f32) -> f32 {
         match self {
@@ -90,6 +151,61 @@ impl From<crate::scene::FilterDesc> for PixelFilter {
             FilterDesc::Gaussian { stddev } => PixelFilter::Gaussian(Gaussian::new(stddev)),
         }
     }
+}
+
+/// The widest filter the film splats, in pixels: a sample reaches at most
+/// (2 ceil(radius - 1/2) + 1)^2 pixels, 81 at this radius; wider filters sample their offsets.
+pub const SPLAT_MAX_RADIUS: f32 = 4.0;
+
+/// The most pixels a splatted sample reaches along one axis.
+pub const SPLAT_REACH: usize = 9;
+
+/// A filter the film splats ([`PixelFilter::splat`]), with what each sample's weights need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    filter: PixelFilter,
+    /// [`PixelFilter::margin`].
+    margin: i32,
+    /// 1 / radius (the tent's slope).
+    inv_radius: f32,
+}
+
+impl Splat {
+    /// The 1D weights of a sample at `u` in [0, 1) across its pixel: the filter at the centres
+    /// of the pixels `first..first + n` (offsets from the sample's own pixel), those where it
+    /// is not zero (the tent's slope as a product, not a division).
+    #[inline(always)]
+    pub fn weights(&self, u: f32) -> SplatWeights {
+        let m = self.margin;
+        let mut s = SplatWeights { first: 0, n: 0, w: [0.0; SPLAT_REACH] };
+        for k in -m..=m {
+            let x = k as f32 + 0.5 - u;
+            let w = match &self.filter {
+                PixelFilter::Tent { .. } => (1.0 - x.abs() * self.inv_radius).max(0.0),
+                PixelFilter::Gaussian(g) => g.eval_splat(x),
+                f => f.eval(x),
+            };
+            if w > 0.0 {
+                if s.n == 0 {
+                    s.first = k;
+                }
+                s.w[(k - s.first) as usize] = w;
+                s.n = (k - s.first + 1) as usize;
+            }
+        }
+        s
+    }
+}
+
+/// A splatted sample's weights along one axis ([`Splat::weights`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatWeights {
+    /// The offset of the first pixel reached from the sample's own (0 or below).
+    pub first: i32,
+    /// Pixels reached.
+    pub n: usize,
+    /// Their weights (the first `n`).
+    pub w: [f32; SPLAT_REACH],
 }
 
 /// The tent's inverse CDF: density (1 - |x| / r) / r on [-r, r] (pbrt-v4's `SampleTent`).
@@ -117,7 +233,16 @@ pub struct Gaussian {
     erf_radius: f64,
     /// x where the CDF is k / KNOTS.
     inverse: [f32; KNOTS + 1],
+    /// The filter at |x| = radius k / PROFILE, for splatting ([`Self::eval_splat`]).
+    profile: [f32; PROFILE + 2],
+    /// PROFILE / radius: profile intervals a pixel.
+    per_pixel: f32,
 }
+
+/// Intervals of the Gaussian's tabulated profile over its radius: linear interpolation is
+/// within 1e-5 of the filter's peak (the second derivative is at most 1 / stddev^2, the
+/// interval radius / PROFILE = stddev / 128).
+const PROFILE: usize = 512;
 
 impl Gaussian {
     /// The filter of standard deviation `stddev` pixels (positive and finite).
@@ -126,7 +251,19 @@ impl Gaussian {
         let radius = 4.0 * stddev;
         let bias = (-radius * radius / (2.0 * stddev * stddev)).exp();
         let erf_radius = erf(radius / (stddev * std::f64::consts::SQRT_2));
-        let mut g = Gaussian { stddev, radius, bias, total: 1.0, erf_radius, inverse: [0.0; KNOTS + 1] };
+        let mut g = Gaussian {
+            stddev,
+            radius,
+            bias,
+            total: 1.0,
+            erf_radius,
+            inverse: [0.0; KNOTS + 1],
+            profile: [0.0; PROFILE + 2],
+            per_pixel: (PROFILE as f64 / radius) as f32,
+        };
+        for k in 0..=PROFILE {
+            g.profile[k] = g.eval(radius * k as f64 / PROFILE as f64) as f32;
+        }
         g.total = g.cdf(radius);
         for k in 0..=KNOTS {
             // Bisection on the monotone CDF.
@@ -145,6 +282,17 @@ impl Gaussian {
     /// The filter at `x`.
     pub fn eval(&self, x: f64) -> f64 {
         ((-x * x / (2.0 * self.stddev * self.stddev)).exp() - self.bias).max(0.0)
+    }
+
+    /// The filter at `x` by linear interpolation in its tabulated profile: what a splatted
+    /// sample weighs (ten exponentials a sample were a third of its cost).
+    #[inline(always)]
+    pub fn eval_splat(&self, x: f32) -> f32 {
+        let t = (x.abs() * self.per_pixel).min(PROFILE as f32);
+        let k = t as usize;
+        let f = t - k as f32;
+        // profile[PROFILE + 1] is zero: the interval past the radius.
+        self.profile[k] + (self.profile[k + 1] - self.profile[k]) * f
     }
 
     /// The integral of the filter from -radius to `x` (in [-radius, radius]):

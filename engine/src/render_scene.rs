@@ -53,6 +53,27 @@ impl PixelWindow {
         self.w as usize * self.h as usize
     }
 
+    /// Whether image pixel (x, y) is in the window.
+    #[inline]
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        x.wrapping_sub(self.x0) < self.w && y.wrapping_sub(self.y0) < self.h
+    }
+
+    /// The window grown by `margin` pixels on every side, within an image `width` x `height`.
+    pub fn grown(&self, margin: u32, width: u32, height: u32) -> Self {
+        let (x0, y0) = (self.x0.saturating_sub(margin), self.y0.saturating_sub(margin));
+        let (x1, y1) = ((self.x0 + self.w + margin).min(width), (self.y0 + self.h + margin).min(height));
+        Self { x0, y0, w: x1.max(x0) - x0, h: y1.max(y0) - y0 }
+    }
+
+    /// The pixels of both windows (empty where they do not meet).
+    pub fn meet(&self, o: &Self) -> Self {
+        let (x0, y0) = (self.x0.max(o.x0), self.y0.max(o.y0));
+        let x1 = (self.x0 + self.w).min(o.x0 + o.w);
+        let y1 = (self.y0 + self.h).min(o.y0 + o.h);
+        Self { x0, y0, w: x1.max(x0) - x0, h: y1.max(y0) - y0 }
+    }
+
     /// True when it holds no pixel (never, for a window made by [`Self::crop`]).
     pub fn is_empty(&self) -> bool {
         self.len() == 0

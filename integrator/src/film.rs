@@ -1,9 +1,14 @@
-//! The film: per-pixel exact sums and sums of squares of sample radiance (for the mean and its
-//! variance), and the count of discarded non-finite samples (and absurdly large ones).
+//! The film: per-pixel exact sums and sums of squares of sample radiance, weighted by the pixel
+//! filter where it is splatted (`PixelFilter::splats`), the sums of the weights and of their
+//! squares (for the mean and its variance), and the count of discarded non-finite samples (and
+//! absurdly large ones). A pixel's estimate is its weighted sum over its weights' sum, the
+//! plain mean where every sample weighs 1.
 
 use crate::aov::Aovs;
 use crate::costs::PixelCosts;
 use glam::Vec3;
+use pathwave_engine::filter::Splat;
+use pathwave_engine::render_scene::PixelWindow;
 
 /// Accumulated samples of an image.
 #[derive(Clone, Debug, PartialEq)]
@@ -32,13 +37,14 @@ impl Film {
         Self { width, height, spp: 0, pixels, guides: None, costs: None }
     }
 
-    /// Per-pixel mean.
+    /// Per-pixel estimate: the weighted mean (the plain mean where samples weigh 1, as the
+    /// box's do: then the weight is the sample count and the bits are those of sum / spp).
     pub fn mean(&self) -> Vec<Vec3> {
-        let k = 1.0 / self.spp.max(1) as f64;
         self.pixels
             .iter()
             .map(|p| {
-                let s = p.sum();
+                let (s, w) = (p.sum(), p.weight());
+                let k = if w > 0.0 { 1.0 / w } else { 0.0 };
                 Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)
             })
             .collect()
@@ -97,17 +103,21 @@ impl Film {
         bad.map(|(i, p)| (i as u32, p.non_finite)).collect()
     }
 
-    /// Per-pixel variance of the mean (sample variance / spp).
+    /// Per-pixel variance of the estimate: the samples' weighted variance over the effective
+    /// sample count less one, n = (sum of weights)^2 / sum of squared weights (with weights 1,
+    /// the sample variance over spp; infinite below two samples). A splatted pixel's noise is
+    /// shared with its neighbours: the variance of a sum of pixels is larger than the sum of
+    /// their variances, by `PixelFilter::splat_gain` for the whole image.
     pub fn variance_of_mean(&self) -> Vec<Vec3> {
-        let n = self.spp as f64;
-        if n < 2.0 {
-            return vec![Vec3::splat(f32::INFINITY); self.pixels.len()];
-        }
         self.pixels
             .iter()
             .map(|p| {
-                let (s, q) = (p.sum(), p.sum_sq());
-                let v = |c: usize| (((q[c] - s[c] * s[c] / n) / (n - 1.0)).max(0.0) / n) as f32;
+                let (s, q, w) = (p.sum(), p.sum_sq(), p.weight());
+                let n = w * w / p.weight_sq();
+                if !(n >= 1.5) {
+                    return Vec3::splat(f32::INFINITY);
+                }
+                let v = |c: usize| (((q[c] - s[c] * s[c] / w) / (n - 1.0)).max(0.0) / w) as f32;
                 Vec3::new(v(0), v(1), v(2))
             })
             .collect()
@@ -128,6 +138,16 @@ pub fn clamp_sample(v: Vec3, max: Option<f32>) -> Vec3 {
 /// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish).
 const FIXED: f64 = (1u64 << 50) as f64;
 
+/// Fixed-point scale of the weights' sums: a sample of weight 1 adds 2^32 (and spp of them
+/// sum to spp exactly).
+const WEIGHT_FIXED: f64 = (1u64 << 32) as f64;
+
+/// Whether a sample is summed: finite, and no component above [`MAX_SAMPLE`].
+#[inline(always)]
+fn usable(v: Vec3) -> bool {
+    v.is_finite() && v.abs().max_element() <= MAX_SAMPLE
+}
+
 /// Samples with a component above this are treated like infinite ones (discarded and counted):
 /// it keeps every pixel sum exact for up to 1.5e11 samples. Squares of samples above about
 /// 4e11 saturate the sum of squares, and the pixel's variance reads as infinite.
@@ -147,17 +167,25 @@ fn fixed(v: f64) -> i128 {
 /// still write the image that the sequential reference writes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
 pub struct PixelAccumulator {
+    /// The samples' values times their weights.
     sum: [i128; 3],
+    /// Their squared values times their weights.
     sum_sq: [i128; 3],
     /// Non-finite (or above [`MAX_SAMPLE`]) samples seen.
     pub non_finite: u64,
+    /// The weights, in [`WEIGHT_FIXED`] units (discarded samples' included: they count as 0).
+    weight: u64,
+    /// The squared weights, in the same units.
+    weight_sq: u64,
 }
 
 impl PixelAccumulator {
-    /// Adds one sample value.
+    /// Adds one sample value of weight 1.
     #[inline]
     pub fn add(&mut self, v: Vec3) {
-        if !(v.is_finite() && v.abs().max_element() <= MAX_SAMPLE) {
+        const ONE: u64 = 1 << 32;
+        (self.weight, self.weight_sq) = (self.weight.saturating_add(ONE), self.weight_sq.saturating_add(ONE));
+        if !usable(v) {
             self.non_finite += 1;
             return;
         }
@@ -170,6 +198,27 @@ impl PixelAccumulator {
         }
     }
 
+    /// Adds a usable sample (its value and squared value in fixed-point units, `scaled`) with
+    /// the weight `w` (in [0, 1]).
+    #[inline(always)]
+    fn add_weighted(&mut self, scaled: &[[f64; 3]; 2], w: f32) {
+        let w = w as f64;
+        self.add_weight(w as f32);
+        for c in 0..3 {
+            self.sum[c] = self.sum[c].saturating_add(fixed(w * scaled[0][c]));
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(w * scaled[1][c]));
+        }
+    }
+
+    /// [`Self::add_weighted`] of a sample of value zero: its weights only.
+    #[inline(always)]
+    fn add_weight(&mut self, w: f32) {
+        let w = w as f64;
+        // Through i64 (w is at most 1): one conversion instruction where `as u64` is several.
+        self.weight = self.weight.saturating_add((w * WEIGHT_FIXED) as i64 as u64);
+        self.weight_sq = self.weight_sq.saturating_add((w * w * WEIGHT_FIXED) as i64 as u64);
+    }
+
     /// Adds another accumulator's samples.
     #[inline]
     pub fn merge(&mut self, o: &PixelAccumulator) {
@@ -178,17 +227,40 @@ impl PixelAccumulator {
             self.sum_sq[c] = self.sum_sq[c].saturating_add(o.sum_sq[c]);
         }
         self.non_finite = self.non_finite.saturating_add(o.non_finite);
+        self.weight = self.weight.saturating_add(o.weight);
+        self.weight_sq = self.weight_sq.saturating_add(o.weight_sq);
     }
 
-    /// The exact state: fixed-point sums and sums of squares (2^50 units) and the count of
-    /// discarded samples, for checkpoints.
-    pub fn raw(&self) -> ([i128; 3], [i128; 3], u64) {
-        (self.sum, self.sum_sq, self.non_finite)
+    /// The exact state, for checkpoints: fixed-point sums and sums of squares (2^50 units), the
+    /// count of discarded samples, and the sums of the weights and of their squares (2^32 units).
+    pub fn raw(&self) -> ([i128; 3], [i128; 3], u64, [u64; 2]) {
+        (self.sum, self.sum_sq, self.non_finite, [self.weight, self.weight_sq])
     }
 
     /// An accumulator from [`Self::raw`]'s parts.
-    pub fn from_raw(sum: [i128; 3], sum_sq: [i128; 3], non_finite: u64) -> Self {
-        Self { sum, sum_sq, non_finite }
+    pub fn from_raw(
+        sum: [i128; 3],
+        sum_sq: [i128; 3],
+        non_finite: u64,
+        [weight, weight_sq]: [u64; 2],
+    ) -> Self {
+        Self { sum, sum_sq, non_finite, weight, weight_sq }
+    }
+
+    /// The raw weights of `n` samples of weight 1 (what [`Self::raw`] holds of a pixel that
+    /// `n` calls of [`Self::add`] made).
+    pub fn unit_weights(n: u32) -> [u64; 2] {
+        [(n as u64) << 32; 2]
+    }
+
+    /// Sum of the weights (the sample count where each weighs 1).
+    pub fn weight(&self) -> f64 {
+        self.weight as f64 / WEIGHT_FIXED
+    }
+
+    /// Sum of the squared weights.
+    pub fn weight_sq(&self) -> f64 {
+        self.weight_sq as f64 / WEIGHT_FIXED
     }
 
     /// Sum of the values.
@@ -199,6 +271,60 @@ impl PixelAccumulator {
     /// Sum of the squared values (infinite where it saturated).
     pub fn sum_sq(&self) -> [f64; 3] {
         self.sum_sq.map(|s| if s == i128::MAX { f64::INFINITY } else { s as f64 / FIXED })
+    }
+}
+
+/// A tile's splatted samples (`PixelFilter::splats`): accumulators over `rect`, the pixels of
+/// the window that the tile's samples reach (the tile's own and a margin around them), row-major.
+#[derive(Clone, Debug)]
+pub struct SplatFilm {
+    /// The filter.
+    filter: Splat,
+    /// The pixels held, in image coordinates.
+    pub rect: PixelWindow,
+    /// Their sums.
+    pub pixels: Vec<PixelAccumulator>,
+}
+
+impl SplatFilm {
+    /// No samples of `filter` over `rect`.
+    pub fn new(filter: Splat, rect: PixelWindow) -> Self {
+        Self { filter, rect, pixels: vec![PixelAccumulator::default(); rect.len()] }
+    }
+
+    /// Adds a sample of value `v` of the pixel `pixel`, at `u` in [0, 1)^2 across it, to every
+    /// pixel of [`Self::rect`] that the filter reaches from there, weighed by the filter at its
+    /// centre. A non-finite sample (or one above [`MAX_SAMPLE`]) adds its weights as zero and
+    /// is counted in its own pixel.
+    #[inline(never)]
+    pub fn splat(&mut self, pixel: (u32, u32), u: [f32; 2], v: Vec3) {
+        let r = self.rect;
+        let ok = usable(v);
+        if !ok && r.contains(pixel.0, pixel.1) {
+            let own = r.index(pixel.0, pixel.1);
+            self.pixels[own].non_finite += 1;
+        }
+        let v = if ok { v.as_dvec3() } else { glam::DVec3::ZERO };
+        // The value and its square in fixed-point units, once (FIXED is a power of two: the
+        // scaling rounds nothing).
+        let scaled = [(v * FIXED).to_array(), (v * v * FIXED).to_array()];
+        let black = v == glam::DVec3::ZERO;
+        let (wx, wy) = (self.filter.weights(u[0]), self.filter.weights(u[1]));
+        for j in 0..wy.n {
+            let y = (pixel.1 as i64 + (wy.first + j as i32) as i64) as u32;
+            for i in 0..wx.n {
+                let x = (pixel.0 as i64 + (wx.first + i as i32) as i64) as u32;
+                // Pixels off the image (negative coordinates wrap to huge ones) or outside the
+                // window are not held.
+                if r.contains(x, y) {
+                    let (p, w) = (&mut self.pixels[r.index(x, y)], wx.w[i] * wy.w[j]);
+                    match black {
+                        true => p.add_weight(w),
+                        false => p.add_weighted(&scaled, w),
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -1,11 +1,11 @@
 //! The reference path tracer: one path at a time, recursion unrolled into a loop. It defines
 //! the estimator every other integrator must match in expectation: next-event estimation on
 //! every kind of light combined with BSDF sampling by MIS (power heuristic), free-flight
-//! sampling in media, Russian roulette, box-filtered pixel samples from the scene's sampler
-//! (Owen-scrambled Sobol by default, stratified or independent: `crate::sampler`), rayon over
-//! tiles.
+//! sampling in media, Russian roulette, pixel samples from the scene's sampler (Owen-scrambled
+//! Sobol by default, stratified or independent: `crate::sampler`) filtered as the scene says
+//! (splatted or not: `PixelFilter::splats`), rayon over tiles.
 
-use crate::film::{Film, PixelAccumulator, clamp_sample};
+use crate::film::{Film, PixelAccumulator, SplatFilm, clamp_sample};
 use crate::lambert_vertex;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
@@ -33,6 +33,30 @@ pub fn render_samples(
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
+    if let Some(filter) = s.filter.splat() {
+        tile::splat_tiles(
+            &s.window,
+            (s.width, s.height),
+            s.filter.margin(),
+            &mut film.pixels,
+            progress,
+            || (),
+            |_, tile, rect| {
+                let mut sums = SplatFilm::new(filter, *rect);
+                for i in 0..tile.len() {
+                    let (x, y) = tile.pixel(i);
+                    for k in samples.clone() {
+                        let (ray, tmax, sampler) = path::camera_ray(scene, x, y, k);
+                        let l = clamp_sample(radiance(scene, ray, tmax, &sampler), s.clamp);
+                        sums.splat((x, y), path::pixel_numbers(&sampler), l);
+                    }
+                }
+                (sums.pixels, ())
+            },
+            PixelAccumulator::merge,
+        );
+        return film;
+    }
     tile::render_tiles(
         &s.window,
         &mut film.pixels,

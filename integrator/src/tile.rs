@@ -56,12 +56,19 @@ impl Tile {
         self.w * self.h
     }
 
-    /// Each pixel's index in the tile (row-major) and in `window` (which holds the tile).
+    /// Each pixel's index in the tile (row-major) and in `window`, for the tile's pixels in
+    /// `window` (all of them, but for the tiles of a splatted render's margin).
     pub fn window_indices(&self, window: &PixelWindow) -> impl Iterator<Item = (usize, usize)> {
-        (0..self.len()).map(move |i| {
+        (0..self.len()).filter_map(move |i| {
             let (x, y) = self.pixel(i);
-            (i as usize, window.index(x, y))
+            window.contains(x, y).then(|| (i as usize, window.index(x, y)))
         })
+    }
+
+    /// The tile grown by `margin` pixels on every side, within `window`.
+    pub fn reach(&self, margin: u32, window: &PixelWindow) -> PixelWindow {
+        let own = PixelWindow { x0: self.x0, y0: self.y0, w: self.w, h: self.h };
+        own.grown(margin, u32::MAX, u32::MAX).meet(window)
     }
 }
 
@@ -126,6 +133,49 @@ pub fn render_tiles<S, P: Send, T: Send>(
         .collect()
 }
 
+/// [`render_tiles`] for a film that splats its samples `margin` pixels beyond their own
+/// (`PixelFilter::splats`): the tiles cover the window grown by the margin within the image
+/// `width` x `height` (pixels outside the window whose samples reach into it), each
+/// `render(state, tile, rect)` returns its sums over `rect` (its pixels and its margin, within
+/// the window), and they are added into `pixels` by `add` as the tiles finish. The sums are
+/// exact, so the order they finish in does not change a bit.
+#[expect(clippy::too_many_arguments, reason = "render_tiles' arguments, and the margin's three")]
+pub fn splat_tiles<S, P: Send, T: Send>(
+    window: &PixelWindow,
+    (width, height): (u32, u32),
+    margin: u32,
+    pixels: &mut [P],
+    progress: &(dyn Fn(usize, usize) + Sync),
+    init: impl Fn() -> S + Sync + Send,
+    render: impl Fn(&mut S, &Tile, &PixelWindow) -> (Vec<P>, T) + Sync + Send,
+    add: impl Fn(&mut P, &P) + Sync,
+) -> Vec<(Tile, T)> {
+    assert_eq!(pixels.len(), window.len(), "a buffer of the window's pixels");
+    let samples = window.grown(margin, width, height);
+    let (tx, ty) = Tile::grid_of(&samples);
+    let total = (tx * ty) as usize;
+    let film = std::sync::Mutex::new(pixels);
+    let done = AtomicUsize::new(0);
+    (0..total)
+        .into_par_iter()
+        .map_init(init, |state, t| {
+            let tile = Tile::in_window(t as u32, &samples);
+            let rect = tile.reach(margin, window);
+            let (sums, out) = render(state, &tile, &rect);
+            {
+                // A tile that panicked while it held the lock left whole pixels behind.
+                let mut film = film.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                for (k, p) in sums.iter().enumerate() {
+                    let (x, y) = (rect.x0 + k as u32 % rect.w, rect.y0 + k as u32 / rect.w);
+                    add(&mut film[window.index(x, y)], p);
+                }
+            }
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            (tile, out)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,6 +221,47 @@ mod tests {
         let mut reports = reports.into_inner().unwrap();
         reports.sort();
         assert_eq!(reports, (1..=tiles.len()).map(|d| (d, tiles.len())).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn splat_tiles_cover_the_window_and_its_margin_and_add_every_tiles_sums() {
+        // Each tile adds 1 to every pixel it reaches; a pixel's count is the number of tiles
+        // whose pixels lie within the margin of it (9 inside, fewer at the image's edges).
+        let (width, height, margin) = (40, 37, 2);
+        let window = PixelWindow { x0: 5, y0: 0, w: 30, h: 20 };
+        let mut counts = vec![0u32; window.len()];
+        let tiles = splat_tiles(
+            &window,
+            (width, height),
+            margin,
+            &mut counts,
+            &|_, _| {},
+            || (),
+            |_, tile, rect| {
+                assert_eq!(*rect, tile.reach(margin, &window));
+                (vec![1u32; rect.len()], *tile)
+            },
+            |a, b| *a += b,
+        );
+        // The tiles cover the pixels within the margin of the window, each once.
+        let samples = window.grown(margin, width, height);
+        assert_eq!(samples, PixelWindow { x0: 3, y0: 0, w: 34, h: 22 });
+        let mut covered = vec![0; samples.len()];
+        for (t, _) in &tiles {
+            (0..t.len()).map(|i| t.pixel(i)).for_each(|(x, y)| covered[samples.index(x, y)] += 1);
+        }
+        assert!(covered.iter().all(|&c| c == 1));
+        // Each pixel counts the tiles with a pixel within the margin of it.
+        let m = margin as i64;
+        let near = |x: u32, y: u32| {
+            let (x, y) = (x as i64, y as i64);
+            let within = |a0: u32, n: u32, a: i64| a0 as i64 <= a + m && (a0 + n) as i64 > a - m;
+            tiles.iter().filter(|(t, _)| within(t.x0, t.w, x) && within(t.y0, t.h, y)).count() as u32
+        };
+        for (k, &c) in counts.iter().enumerate() {
+            let (x, y) = (window.x0 + k as u32 % window.w, window.y0 + k as u32 / window.w);
+            assert_eq!(c, near(x, y), "pixel ({x}, {y})");
+        }
     }
 
     #[test]

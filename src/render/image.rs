@@ -37,8 +37,12 @@ pub fn render_id(
     let s = scene.settings;
     let w = &s.window;
     // The filter only where it is not the box, and the light sampler where it is not `Auto`,
-    // so that earlier checkpoints keep their key.
-    let filter = (s.filter != PixelFilter::Box).then(|| ("filter", s.filter.describe()));
+    // so that earlier checkpoints keep their key; a splatted filter says so (the samples of
+    // earlier checkpoints sampled its offsets).
+    let filter = (s.filter != PixelFilter::Box).then(|| match s.filter.splats() {
+        true => ("filter", format!("{}, splatted", s.filter.describe())),
+        false => ("filter", s.filter.describe()),
+    });
     let lights = (s.light_sampler != LightSamplerKind::Auto)
         .then(|| ("light_sampler", format!("{:?}", s.light_sampler)));
     let settings = checkpoint::settings_text(

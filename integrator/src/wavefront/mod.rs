@@ -28,11 +28,11 @@ use crate::film::{Film, PixelAccumulator};
 use crate::tile::{self, Tile};
 use glam::Vec3;
 use pathwave_engine::material::{MaterialKind, Shading};
-use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use queues::{Paths, Queues};
 use std::ops::Range;
 use std::time::Duration;
-use tile_work::TileWork;
+use tile_work::{TileFilm, TileWork};
 
 /// Settings of the wavefront integrator.
 #[derive(Clone, Copy, Debug)]
@@ -328,25 +328,38 @@ pub fn render_samples(
     let batch = opts.batch.max(1);
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
-    let results = tile::render_tiles(
-        &s.window,
-        &mut film.pixels,
-        progress,
-        || (Paths::with_slots(batch), Queues::default()),
-        |(paths, queues), tile, mut rows| {
-            let span =
-                tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
-            let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
-            let clock = opts.timing || opts.costs || tracing;
-            let out = render_tile(scene, tile, samples.clone(), opts, clock, paths, queues);
-            if tracing {
-                trace_tile(&out.stats, batch);
-            }
-            drop(span);
-            rows.copy_from(&out.film);
+    let run = |(paths, queues): &mut (Paths, Queues), tile: &Tile, splat: Option<&PixelWindow>| {
+        let _span =
+            tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
+        let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
+        let clock = opts.timing || opts.costs || tracing;
+        let out = render_tile(scene, tile, samples.clone(), splat.copied(), opts, clock, paths, queues);
+        if tracing {
+            trace_tile(&out.stats, batch);
+        }
+        out
+    };
+    let init = || (Paths::with_slots(batch), Queues::default());
+    let results = match s.filter.splats() {
+        true => tile::splat_tiles(
+            &s.window,
+            (s.width, s.height),
+            s.filter.margin(),
+            &mut film.pixels,
+            progress,
+            init,
+            |state, tile, rect| {
+                let out = run(state, tile, Some(rect));
+                (out.film.into_pixels(), (out.guides, out.charges, out.stats))
+            },
+            PixelAccumulator::merge,
+        ),
+        false => tile::render_tiles(&s.window, &mut film.pixels, progress, init, |state, tile, mut rows| {
+            let out = run(state, tile, None);
+            rows.copy_from(&out.film.into_pixels());
             (out.guides, out.charges, out.stats)
-        },
-    );
+        }),
+    };
     let n = s.window.len();
     let mut guides = opts.guides.then(|| Aovs {
         width: s.window.w,
@@ -433,16 +446,18 @@ fn trace_tile(st: &Stats, batch: usize) {
 
 /// Runs the wavefront over samples `samples` of every pixel of one tile (timing the stages if
 /// `clock`).
+#[expect(clippy::too_many_arguments, reason = "the tile's work, and where it runs")]
 fn render_tile(
     scene: &RenderScene,
     tile: &Tile,
     samples: Range<u32>,
+    splat: Option<PixelWindow>,
     opts: Options,
     clock: bool,
     p: &mut Paths,
     q: &mut Queues,
 ) -> TileResult {
-    let mut work = TileWork::new(scene, tile, samples, opts.guides, opts.costs);
+    let mut work = TileWork::new(scene, tile, samples, splat, opts.guides, opts.costs);
     work.run(opts.batch.max(1), clock, p, q, &mut |_, _, _, _, _| {});
     work.result()
 }
@@ -450,7 +465,7 @@ fn render_tile(
 /// What one tile's worker hands back: the pixels' sums, the guides' sums (albedo, normal,
 /// emission) and what its pixels cost when asked for, and statistics.
 struct TileResult {
-    film: Vec<PixelAccumulator>,
+    film: TileFilm,
     guides: Option<Vec<[Vec3; 3]>>,
     charges: Option<tile_work::Charges>,
     stats: Stats,
@@ -510,7 +525,8 @@ pub fn capture_stages<'a>(
     let tile = Tile::in_window(tile, &s.window);
     let batch = opts.batch.max(1);
     let (mut p, mut q) = (Paths::with_slots(batch), Queues::default());
-    let mut work = TileWork::new(scene, &tile, 0..s.spp, opts.guides, opts.costs);
+    let splat = s.filter.splats().then(|| tile.reach(s.filter.margin(), &s.window));
+    let mut work = TileWork::new(scene, &tile, 0..s.spp, splat, opts.guides, opts.costs);
     let mut out = Vec::new();
     work.run(batch, false, &mut p, &mut q, &mut |i, work, stage, p, q| {
         if i == iteration {

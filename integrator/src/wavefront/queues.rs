@@ -51,6 +51,9 @@ pub struct Paths {
     pub sampler: Vec<Sampler>,
     /// Pixel (index within the worker's tile).
     pub pixel: Vec<u32>,
+    /// Where in its pixel the sample lies, in [0, 1)^2 (written and read only where the film
+    /// splats: `PixelFilter::splats`).
+    pub within: Vec<[f32; 2]>,
     /// Closest hit of the last intersection.
     pub hit: Vec<Hit>,
     /// How far the next ray reaches: the camera ray's far clip distance until its first
@@ -97,6 +100,7 @@ impl Paths {
             ratio: vec![Vec3::ONE; n],
             sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
+            within: vec![[0.0; 2]; n],
             hit: vec![hit0; n],
             far: vec![f32::INFINITY; n],
             guide: vec![Guide::NEW; n],

@@ -7,7 +7,7 @@ use super::stage_clock::StageClock;
 use super::{Stage, Stats};
 use crate::aov::Guide;
 use crate::costs::PixelCosts;
-use crate::film::{PixelAccumulator, clamp_sample};
+use crate::film::{PixelAccumulator, SplatFilm, clamp_sample};
 use crate::lambert_vertex::LANES;
 use crate::oracle;
 use crate::path;
@@ -15,7 +15,7 @@ use crate::sampler::{Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
-use pathwave_engine::render_scene::RenderScene;
+use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use std::ops::Range;
 use std::time::Duration;
 
@@ -32,7 +32,9 @@ pub(super) struct TileWork<'a> {
     /// Samples of the tile (pixels times samples per pixel) and how many have started.
     work: u64,
     next_sample: u64,
-    pub(super) film: Vec<PixelAccumulator>,
+    /// The tile's pixels' sums, or where the film splats, those of the pixels its samples
+    /// reach.
+    pub(super) film: TileFilm,
     pub(super) guide_sums: Option<Vec<[Vec3; 3]>>,
     /// What the tile's pixels and materials cost (with [`super::Options::costs`]).
     charges: Option<Charges>,
@@ -50,18 +52,23 @@ impl<'a> TileWork<'a> {
         scene: &'a RenderScene,
         tile: &Tile,
         samples: Range<u32>,
+        splat: Option<PixelWindow>,
         guides: bool,
         costs: bool,
     ) -> Self {
         let pixels = (tile.w * tile.h) as usize;
         let pipeline = super::pipeline(scene, guides);
+        let film = match (scene.settings.filter.splat(), splat) {
+            (Some(filter), Some(rect)) => TileFilm::Splat(Box::new(SplatFilm::new(filter, rect))),
+            _ => TileFilm::Own(vec![PixelAccumulator::default(); pixels]),
+        };
         Self {
             scene,
             tile: *tile,
             work: pixels as u64 * samples.len() as u64,
             samples,
             next_sample: 0,
-            film: vec![PixelAccumulator::default(); pixels],
+            film,
             guide_sums: guides.then(|| vec![[Vec3::ZERO; 3]; pixels]),
             charges: costs
                 .then(|| Charges::new(pixels, scene.materials.len(), scene.lights.len(), &pipeline)),
@@ -207,7 +214,8 @@ impl<'a> TileWork<'a> {
             let chromatic = scene.features.media && scene.media.chromatic();
             let samplers: [Sampler; LANES] =
                 std::array::from_fn(|l| path::camera_sampler(scene, pixel[l].0, pixel[l].1, which[l].1));
-            let rays = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
+            let (rays, within) = camera_rays(scene, &SamplerLanes::from(&samplers), &pixel);
+            let splat = matches!(self.film, TileFilm::Splat(_));
             for l in 0..m {
                 let slot = q.free.pop().expect("a free slot for every new path");
                 let ray = rays.ray(l);
@@ -219,6 +227,9 @@ impl<'a> TileWork<'a> {
                 }
                 p.sampler[s] = samplers[l];
                 p.pixel[s] = which[l].0;
+                if splat {
+                    p.within[s] = within[l].to_array();
+                }
                 if far_clip {
                     p.far[s] = rays.tmax[l];
                 }
@@ -236,8 +247,19 @@ impl<'a> TileWork<'a> {
     /// free their slots.
     pub(super) fn accumulate_film(&mut self, p: &Paths, q: &mut Queues) {
         let clamp = self.scene.settings.clamp;
-        for &i in &q.finished {
-            self.film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], clamp));
+        match &mut self.film {
+            TileFilm::Own(film) => {
+                for &i in &q.finished {
+                    film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], clamp));
+                }
+            }
+            TileFilm::Splat(film) => {
+                for &i in &q.finished {
+                    let i = i as usize;
+                    let own = self.tile.pixel(p.pixel[i]);
+                    film.splat(own, p.within[i], clamp_sample(p.l[i], clamp));
+                }
+            }
         }
         if let Some(sums) = &mut self.guide_sums {
             for &i in &q.finished {
@@ -505,9 +527,33 @@ impl Charges {
     }
 }
 
+/// A tile's sums: of its own pixels, or where the film splats, of the pixels its samples reach.
+#[derive(Clone)]
+pub(super) enum TileFilm {
+    /// Each sample in its own pixel (row-major within the tile).
+    Own(Vec<PixelAccumulator>),
+    /// Each sample splatted over the pixels the filter reaches (boxed: the filter's tables
+    /// are 2 KB).
+    Splat(Box<SplatFilm>),
+}
+
+impl TileFilm {
+    /// The sums: of the tile's pixels, or of the pixels its samples reach (row-major).
+    pub(super) fn into_pixels(self) -> Vec<PixelAccumulator> {
+        match self {
+            TileFilm::Own(pixels) => pixels,
+            TileFilm::Splat(film) => film.pixels,
+        }
+    }
+}
+
 /// [`path::camera_rays`] for `LANES` samples, with AVX-512 where the CPU has it.
 #[inline]
-fn camera_rays(scene: &RenderScene, s: &SamplerLanes<LANES>, pixel: &[(u32, u32); LANES]) -> RayLanes<LANES> {
+fn camera_rays(
+    scene: &RenderScene,
+    s: &SamplerLanes<LANES>,
+    pixel: &[(u32, u32); LANES],
+) -> (RayLanes<LANES>, [glam::Vec2; LANES]) {
     pathwave_engine::simd::lanes(
         #[inline(always)]
         || path::camera_rays(scene, s, pixel),
