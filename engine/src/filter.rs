@@ -183,7 +183,7 @@ impl Splat {
             let w = match &self.filter {
                 PixelFilter::Tent { .. } => (1.0 - x.abs() * self.inv_radius).max(0.0),
                 PixelFilter::Gaussian(g) => g.eval_splat(x),
-                f => f.eval(x),
+                PixelFilter::Box => (x.abs() <= 0.5) as u32 as f32,
             };
             if w > 0.0 {
                 if s.n == 0 {
