@@ -108,6 +108,7 @@ impl PixelFilter {
         self.splats().then(|| Splat {
             filter: *self,
             margin: self.margin() as i32,
+            radius: self.radius(),
             inv_radius: 1.0 / self.radius(),
         })
     }
@@ -166,32 +167,31 @@ pub struct Splat {
     filter: PixelFilter,
     /// [`PixelFilter::margin`].
     margin: i32,
+    /// The filter's radius in pixels.
+    radius: f32,
     /// 1 / radius (the tent's slope).
     inv_radius: f32,
 }
 
 impl Splat {
     /// The 1D weights of a sample at `u` in [0, 1) across its pixel: the filter at the centres
-    /// of the pixels `first..first + n` (offsets from the sample's own pixel), those where it
-    /// is not zero (the tent's slope as a product, not a division).
+    /// of the pixels `first..first + n` (offsets from the sample's own pixel), those strictly
+    /// within its radius (the tent's slope as a product, not a division). The range comes from
+    /// `u` by floor and ceiling, not by testing each weight: those tests, as random as `u`,
+    /// were mispredicted half the time.
     #[inline(always)]
     pub fn weights(&self, u: f32) -> SplatWeights {
-        let m = self.margin;
-        let mut s = SplatWeights { first: 0, n: 0, w: [0.0; SPLAT_REACH] };
-        for k in -m..=m {
-            let x = k as f32 + 0.5 - u;
-            let w = match &self.filter {
+        let (m, r) = (self.margin, self.radius);
+        let first = ((u - 0.5 - r).floor() as i32 + 1).max(-m);
+        let last = ((u - 0.5 + r).ceil() as i32 - 1).min(m);
+        let mut s = SplatWeights { first, n: (last - first + 1).max(0) as usize, w: [0.0; SPLAT_REACH] };
+        for (i, w) in s.w.iter_mut().enumerate().take(s.n) {
+            let x = (first + i as i32) as f32 + 0.5 - u;
+            *w = match &self.filter {
                 PixelFilter::Tent { .. } => (1.0 - x.abs() * self.inv_radius).max(0.0),
                 PixelFilter::Gaussian(g) => g.eval_splat(x),
                 PixelFilter::Box => (x.abs() <= 0.5) as u32 as f32,
             };
-            if w > 0.0 {
-                if s.n == 0 {
-                    s.first = k;
-                }
-                s.w[(k - s.first) as usize] = w;
-                s.n = (k - s.first + 1) as usize;
-            }
         }
         s
     }

@@ -296,7 +296,7 @@ impl SplatFilm {
     /// pixel of [`Self::rect`] that the filter reaches from there, weighed by the filter at its
     /// centre. A non-finite sample (or one above [`MAX_SAMPLE`]) adds its weights as zero and
     /// is counted in its own pixel.
-    #[inline(never)]
+    #[inline]
     pub fn splat(&mut self, pixel: (u32, u32), u: [f32; 2], v: Vec3) {
         let r = self.rect;
         let ok = usable(v);
