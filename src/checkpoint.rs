@@ -6,16 +6,19 @@
 //! settings as text (a `u32` byte count, then UTF-8 lines `name: value`, so that a refusal can
 //! say which setting differs), the image width and height, the samples per pixel the render was
 //! started for, the index of its first sample and the count done (the samples `first..first + count` of every pixel), then per
-//! pixel the three sums and three sums of squares as fixed-point `i128`, the count of
-//! discarded samples (`u64`) and the sums of the samples' weights and of their squares (`u64`
-//! each, 2^32 units), and last the XXH3-64 checksum of everything before it. A file that fails
-//! any check (version, checksum, sizes, counts) is refused with what is wrong. Checkpoints of
-//! format 3 (`PWCKPT03`: the same without the weights, which were all 1) are still read and
-//! resumed, their weights the sample counts. Those of format 2 (format 3 without the settings'
-//! text) are read and merge with one another; their key was made from another description of
-//! the settings, so `--resume` refuses them, saying that their settings are not recorded.
+//! pixel the three sums (2^50 units) and three sums of squares (2^40 units) as 96-bit
+//! fixed-point integers (12 bytes each, as the film keeps them), the count of discarded samples
+//! (`u64`) and the sums of the samples' weights and of their squares (`u64` each, 2^32 units),
+//! and last the XXH3-64 checksum of everything before it. A file that fails any check (version,
+//! checksum, sizes, counts) is refused with what is wrong. Checkpoints of format 3 (`PWCKPT03`:
+//! `i128` sums, squares in 2^50 units, no weights, which were all 1) are still read and
+//! resumed, their weights the sample counts and their squares' sums rescaled (a variance
+//! resumed from one may differ in its last bits from a fresh render's; the image does not).
+//! Those of format 2 (format 3 without the settings' text) are read and merge with one
+//! another; their key was made from another description of the settings, so `--resume` refuses
+//! them, saying that their settings are not recorded.
 
-use crate::integrator::film::{Film, PixelAccumulator};
+use crate::integrator::film::{Film, PixelSums};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"PWCKPT04";
@@ -28,8 +31,8 @@ const MAGIC_V2: &[u8; 8] = b"PWCKPT02";
 const MAGIC_V1: &[u8; 8] = b"PWCKPT01";
 /// Bytes of the checksum at the end.
 const CHECKSUM_BYTES: usize = 8;
-/// Bytes per pixel: six `i128` and three `u64`.
-const PIXEL_BYTES: usize = 6 * 16 + 3 * 8;
+/// Bytes per pixel: six 96-bit sums and three `u64`.
+const PIXEL_BYTES: usize = 6 * 12 + 3 * 8;
 /// Bytes per pixel of formats 2 and 3: six `i128` and one `u64`.
 const PIXEL_BYTES_V3: usize = 6 * 16 + 8;
 /// Bytes of the fields after the key (and the settings' text): width, height, target spp,
@@ -138,9 +141,9 @@ impl Checkpoint {
             out.extend_from_slice(&v.to_le_bytes());
         }
         for p in &f.pixels {
-            let (sum, sum_sq, non_finite, weights) = p.raw();
-            for v in sum.iter().chain(&sum_sq) {
-                out.extend_from_slice(&v.to_le_bytes());
+            let (sums, non_finite, weights) = p.raw();
+            for v in sums {
+                out.extend_from_slice(&v.to_le_bytes()[..12]);
             }
             for v in [non_finite, weights[0], weights[1]] {
                 out.extend_from_slice(&v.to_le_bytes());
@@ -205,18 +208,31 @@ impl Checkpoint {
         let mut film = Film::new(width, height);
         film.spp = spp;
         for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..].chunks_exact(pixel_bytes)) {
-            let i128_at = |k: usize| i128::from_le_bytes(chunk[16 * k..16 * k + 16].try_into().unwrap());
-            let u64_at = |k: usize| u64::from_le_bytes(chunk[96 + 8 * k..104 + 8 * k].try_into().unwrap());
-            let weights = match pixel_bytes == PIXEL_BYTES {
-                true => [u64_at(1), u64_at(2)],
-                false => PixelAccumulator::unit_weights(spp),
+            // Format 4: 96-bit sums (sign-extended); formats 2 and 3: `i128`, squares in 2^50
+            // units (2^10 times format 4's).
+            let v4 = pixel_bytes == PIXEL_BYTES;
+            let size = if v4 { 12 } else { 16 };
+            let int_at = |k: usize| {
+                let mut b = [0u8; 16];
+                b[..size].copy_from_slice(&chunk[size * k..size * (k + 1)]);
+                if v4 && chunk[size * k + 11] & 0x80 != 0 {
+                    b[12..].fill(0xff);
+                }
+                i128::from_le_bytes(b)
             };
-            *p = PixelAccumulator::from_raw(
-                [i128_at(0), i128_at(1), i128_at(2)],
-                [i128_at(3), i128_at(4), i128_at(5)],
-                u64_at(0),
-                weights,
-            );
+            let u64_at = |k: usize| {
+                let at = 6 * size + 8 * k;
+                u64::from_le_bytes(chunk[at..at + 8].try_into().unwrap())
+            };
+            let mut sums = [0, 1, 2, 3, 4, 5].map(int_at);
+            let weights = match v4 {
+                true => [u64_at(1), u64_at(2)],
+                false => {
+                    sums[3..].iter_mut().for_each(|s| *s >>= 10);
+                    PixelSums::unit_weights(spp)
+                }
+            };
+            *p = PixelSums::from_raw(sums, u64_at(0), weights);
         }
         Ok(Self { key, settings, target_spp, first_sample, film })
     }
@@ -293,6 +309,7 @@ impl Merger {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrator::film::PixelAccumulator;
     use glam::Vec3;
 
     #[test]
@@ -300,8 +317,11 @@ mod tests {
         let mut film = Film::new(3, 2);
         film.spp = 2;
         for (i, p) in film.pixels.iter_mut().enumerate() {
-            p.add(Vec3::new(i as f32, 0.5, 1e-9));
-            p.add(Vec3::splat(f32::NAN));
+            let mut a = PixelAccumulator::default();
+            // Negative sums too (the 96-bit fields are sign-extended as read).
+            a.add(Vec3::new(i as f32 - 2.5, 0.5, 1e-9));
+            a.add(Vec3::splat(f32::NAN));
+            p.add(&a);
         }
         let settings = settings_text(&[("seed", "0".into()), ("max_depth", "64".into())]);
         let c = Checkpoint { key: key(b"scene", &settings), settings, target_spp: 64, first_sample: 3, film };
@@ -342,11 +362,21 @@ mod tests {
         assert!(binary.contains("not UTF-8"), "{binary}");
         // Formats 3 (no weights: every sample weighed 1) and 2 (no settings' text either) are
         // still read, with the weights of their sample counts and empty settings.
+        // Their pixels: `i128` sums, squares in 2^50 units.
         let pixels = at + FIELDS_BYTES;
-        let unweighted: Vec<u8> = bytes[pixels..bytes.len() - CHECKSUM_BYTES]
-            .chunks_exact(PIXEL_BYTES)
-            .flat_map(|p| p[..PIXEL_BYTES_V3].to_vec())
+        let unweighted: Vec<u8> = c
+            .film
+            .pixels
+            .iter()
+            .flat_map(|p| {
+                let (sums, non_finite, _) = p.raw();
+                let wide = [sums[0], sums[1], sums[2], sums[3] << 10, sums[4] << 10, sums[5] << 10];
+                let mut b: Vec<u8> = wide.iter().flat_map(|v| v.to_le_bytes()).collect();
+                b.extend_from_slice(&non_finite.to_le_bytes());
+                b
+            })
             .collect();
+        assert_eq!(unweighted.len(), c.film.pixels.len() * PIXEL_BYTES_V3);
         let sealed = |mut b: Vec<u8>| {
             let sum = xxhash_rust::xxh3::xxh3_64(&b);
             b.extend_from_slice(&sum.to_le_bytes());

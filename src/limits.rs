@@ -34,7 +34,7 @@ pub fn check_size(width: u32, height: u32) -> Result<(), String> {
         return Err(format!("a {width}x{height} image: each side is at most {MAX_SIDE} pixels"));
     }
     // Per pixel: the accumulator, the mean and a copy for the output, the three guides.
-    let per_pixel = std::mem::size_of::<crate::integrator::film::PixelAccumulator>() + 6 * 12;
+    let per_pixel = std::mem::size_of::<crate::integrator::film::PixelSums>() + 6 * 12;
     let need = width as u64 * height as u64 * per_pixel as u64;
     let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
         let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?.to_owned();

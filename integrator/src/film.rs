@@ -20,7 +20,7 @@ pub struct Film {
     /// Samples per pixel accumulated.
     pub spp: u32,
     /// Per pixel (row-major, row 0 on top): the samples' exact sums.
-    pub pixels: Vec<PixelAccumulator>,
+    pub pixels: Vec<PixelSums>,
     /// The denoiser's guides over the same samples, when the integrator recorded them.
     pub guides: Option<Aovs>,
     /// What the pixels cost, when the integrator measured it: over the samples it rendered
@@ -31,7 +31,7 @@ pub struct Film {
 impl Film {
     /// An empty film. Its pixels are allocated zeroed (`bytemuck::zeroed_vec`), so that the
     /// memory is faulted in where the samples are first written, not here as well: a
-    /// 256x256 film is 6.8 MB, and `vec![PixelAccumulator::default(); n]` wrote every byte.
+    /// 256x256 film is 6.3 MB, and `vec![PixelSums::default(); n]` wrote every byte.
     pub fn new(width: u32, height: u32) -> Self {
         let pixels = bytemuck::zeroed_vec(width as usize * height as usize);
         Self { width, height, spp: 0, pixels, guides: None, costs: None }
@@ -135,8 +135,13 @@ pub fn clamp_sample(v: Vec3, max: Option<f32>) -> Vec3 {
     }
 }
 
-/// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish).
+/// Fixed-point scale of the exact sums: 2^50 (values below 1e-15 vanish). The film keeps them
+/// in 96 bits ([`PixelSums`]): a pixel's sum saturates at 2^45, about 3.5e13.
 const FIXED: f64 = (1u64 << 50) as f64;
+
+/// Fixed-point scale of the exact sums of squares: 2^40 (squares below 1e-12 vanish; in 96
+/// bits a pixel's sum saturates at 2^55, about 3.6e16, and its variance then reads infinite).
+const FIXED_SQ: f64 = (1u64 << 40) as f64;
 
 /// Fixed-point scale of the weights' sums: a sample of weight 1 adds 2^32 (and spp of them
 /// sum to spp exactly).
@@ -149,8 +154,9 @@ fn usable(v: Vec3) -> bool {
 }
 
 /// Samples with a component above this are treated like infinite ones (discarded and counted):
-/// it keeps every pixel sum exact for up to 1.5e11 samples. Squares of samples above about
-/// 4e11 saturate the sum of squares, and the pixel's variance reads as infinite.
+/// one sample's fixed-point value then fits its sum. A pixel's sum saturates at about 3.5e13
+/// (its value then reads infinite) and its sum of squares at 3.6e16 (its variance reads
+/// infinite): samples of 1e6 saturate the squares after 36,000 samples, the sum after 35 million.
 pub const MAX_SAMPLE: f32 = 1e12;
 
 /// `v as i128` (truncated, saturating), through one `i64` conversion instruction when `v`
@@ -194,7 +200,7 @@ impl PixelAccumulator {
             // Saturating (`as` saturates too): for the non-negative values of radiance the
             // result is the same in any order.
             self.sum[c] = self.sum[c].saturating_add(fixed(x * FIXED));
-            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(x * x * FIXED));
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(x * x * FIXED_SQ));
         }
     }
 
@@ -231,24 +237,102 @@ impl PixelAccumulator {
         self.weight_sq = self.weight_sq.saturating_add(o.weight_sq);
     }
 
-    /// The exact state, for checkpoints: fixed-point sums and sums of squares (2^50 units), the
-    /// count of discarded samples, and the sums of the weights and of their squares (2^32 units).
-    pub fn raw(&self) -> ([i128; 3], [i128; 3], u64, [u64; 2]) {
-        (self.sum, self.sum_sq, self.non_finite, [self.weight, self.weight_sq])
+    /// Sum of the values (for tests; the film reads [`PixelSums`]).
+    pub fn sum(&self) -> [f64; 3] {
+        PixelSums::from(self).sum()
+    }
+}
+
+/// The largest magnitude of a 96-bit sum.
+const I96_MAX: i128 = (1 << 95) - 1;
+
+/// A 96-bit integer, as three 32-bit words, low first.
+type I96 = [u32; 3];
+
+/// `v` in 96 bits, saturated.
+#[inline(always)]
+fn narrow(v: i128) -> I96 {
+    let v = v.clamp(-I96_MAX, I96_MAX) as u128;
+    [v as u32, (v >> 32) as u32, (v >> 64) as u32]
+}
+
+/// A 96-bit integer's value.
+#[inline(always)]
+fn widen(w: &I96) -> i128 {
+    let v = w[0] as u128 | (w[1] as u128) << 32 | (w[2] as u128) << 64;
+    ((v << 32) as i128) >> 32
+}
+
+/// One pixel's sums as the film keeps them: a [`PixelAccumulator`]'s, each fixed-point sum in
+/// 96 bits (saturated, the two ends reading infinite) and aligned to 8 bytes: 96 bytes a pixel
+/// where the accumulator takes 128 (a 1024 x 1024 film: 100 MB, not 134). Tiles accumulate in
+/// the wide form and hand their sums over once, so the narrowing costs nothing per sample; the
+/// sums are integers, saturating at the same ends in any order, so the film's bits do not
+/// depend on the order tiles, passes or shares come in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Zeroable)]
+pub struct PixelSums {
+    /// The values' sums (2^50 units), then their squares' (2^40 units).
+    sums: [I96; 6],
+    /// Non-finite (or above [`MAX_SAMPLE`]) samples seen.
+    pub non_finite: u64,
+    /// The weights' sum (2^32 units).
+    weight: u64,
+    /// The squared weights' sum (2^32 units).
+    weight_sq: u64,
+}
+
+impl From<&PixelAccumulator> for PixelSums {
+    fn from(a: &PixelAccumulator) -> Self {
+        let mut p = PixelSums::default();
+        p.add(a);
+        p
+    }
+}
+
+impl PixelSums {
+    /// Adds a tile's (or another film's, widened) sums of this pixel.
+    #[inline]
+    pub fn add(&mut self, a: &PixelAccumulator) {
+        for c in 0..3 {
+            self.sums[c] = narrow(widen(&self.sums[c]).saturating_add(a.sum[c]));
+            self.sums[3 + c] = narrow(widen(&self.sums[3 + c]).saturating_add(a.sum_sq[c]));
+        }
+        self.non_finite = self.non_finite.saturating_add(a.non_finite);
+        self.weight = self.weight.saturating_add(a.weight);
+        self.weight_sq = self.weight_sq.saturating_add(a.weight_sq);
     }
 
-    /// An accumulator from [`Self::raw`]'s parts.
-    pub fn from_raw(
-        sum: [i128; 3],
-        sum_sq: [i128; 3],
-        non_finite: u64,
-        [weight, weight_sq]: [u64; 2],
-    ) -> Self {
-        Self { sum, sum_sq, non_finite, weight, weight_sq }
+    /// Adds another film's sums of this pixel.
+    #[inline]
+    pub fn merge(&mut self, o: &PixelSums) {
+        self.add(&o.wide());
+    }
+
+    /// The sums in the accumulator's form.
+    fn wide(&self) -> PixelAccumulator {
+        PixelAccumulator {
+            sum: [0, 1, 2].map(|c| widen(&self.sums[c])),
+            sum_sq: [3, 4, 5].map(|c| widen(&self.sums[c])),
+            non_finite: self.non_finite,
+            weight: self.weight,
+            weight_sq: self.weight_sq,
+        }
+    }
+
+    /// The exact state, for checkpoints: the fixed-point sums of the values (2^50 units) and of
+    /// their squares (2^40 units), each within 96 bits, the count of discarded samples, and the
+    /// sums of the weights and of their squares (2^32 units).
+    pub fn raw(&self) -> ([i128; 6], u64, [u64; 2]) {
+        (self.sums.map(|s| widen(&s)), self.non_finite, [self.weight, self.weight_sq])
+    }
+
+    /// Sums from [`Self::raw`]'s parts (saturated to 96 bits).
+    pub fn from_raw(sums: [i128; 6], non_finite: u64, [weight, weight_sq]: [u64; 2]) -> Self {
+        Self { sums: sums.map(narrow), non_finite, weight, weight_sq }
     }
 
     /// The raw weights of `n` samples of weight 1 (what [`Self::raw`] holds of a pixel that
-    /// `n` calls of [`Self::add`] made).
+    /// `n` calls of [`PixelAccumulator::add`] made).
     pub fn unit_weights(n: u32) -> [u64; 2] {
         [(n as u64) << 32; 2]
     }
@@ -263,14 +347,22 @@ impl PixelAccumulator {
         self.weight_sq as f64 / WEIGHT_FIXED
     }
 
-    /// Sum of the values.
+    /// Sum of the values (infinite where it saturated).
     pub fn sum(&self) -> [f64; 3] {
-        self.sum.map(|s| s as f64 / FIXED)
+        [0, 1, 2].map(|c| read(widen(&self.sums[c]), FIXED))
     }
 
     /// Sum of the squared values (infinite where it saturated).
     pub fn sum_sq(&self) -> [f64; 3] {
-        self.sum_sq.map(|s| if s == i128::MAX { f64::INFINITY } else { s as f64 / FIXED })
+        [3, 4, 5].map(|c| read(widen(&self.sums[c]), FIXED_SQ))
+    }
+}
+
+/// A 96-bit fixed-point sum's value in `scale` units, infinite where it saturated.
+fn read(s: i128, scale: f64) -> f64 {
+    match s.abs() >= I96_MAX {
+        true => f64::INFINITY.copysign(s as f64),
+        false => s as f64 / scale,
     }
 }
 
@@ -307,7 +399,7 @@ impl SplatFilm {
         let v = if ok { v.as_dvec3() } else { glam::DVec3::ZERO };
         // The value and its square in fixed-point units, once (FIXED is a power of two: the
         // scaling rounds nothing).
-        let scaled = [(v * FIXED).to_array(), (v * v * FIXED).to_array()];
+        let scaled = [(v * FIXED).to_array(), (v * v * FIXED_SQ).to_array()];
         let black = v == glam::DVec3::ZERO;
         let (wx, wy) = (self.filter.weights(u[0]), self.filter.weights(u[1]));
         for j in 0..wy.n {
@@ -349,7 +441,7 @@ mod tests {
     #[test]
     fn a_new_film_holds_no_samples() {
         let film = Film::new(3, 2);
-        assert_eq!(film.pixels, vec![PixelAccumulator::default(); 6]);
+        assert_eq!(film.pixels, vec![PixelSums::default(); 6]);
         assert_eq!((film.spp, film.non_finite()), (0, 0));
     }
 
@@ -358,9 +450,9 @@ mod tests {
         let film = |spp: u32, v: f32| {
             let mut f = Film::new(2, 1);
             f.spp = spp;
-            for _ in 0..spp {
-                f.pixels.iter_mut().for_each(|p| p.add(Vec3::splat(v)));
-            }
+            let mut a = PixelAccumulator::default();
+            (0..spp).for_each(|_| a.add(Vec3::splat(v)));
+            f.pixels.iter_mut().for_each(|p| p.add(&a));
             f
         };
         for (a, b) in
@@ -403,6 +495,35 @@ mod tests {
         values.iter().rev().for_each(|v| b.add(*v));
         assert_eq!(a, b);
         assert_eq!(a.sum()[0], 2.0 * 9e11f32 as f64 + 1.25);
-        assert_eq!(a.sum_sq()[0], f64::INFINITY, "the squares saturate: the variance is unknown");
+        let film = PixelSums::from(&a);
+        assert_eq!(film.sum()[0], a.sum()[0]);
+        assert_eq!(film.sum_sq()[0], f64::INFINITY, "the squares saturate: the variance is unknown");
+    }
+
+    /// The film's 96-bit sums hold what fits, saturate what does not (reading infinite), sign
+    /// included, and saturate the same in any order for non-negative sums.
+    #[test]
+    fn film_sums_keep_96_bits_and_saturate() {
+        for v in [0, 1, -1, 12345 << 70, -(12345 << 70), I96_MAX, -I96_MAX] {
+            assert_eq!(widen(&narrow(v)), v, "{v}");
+        }
+        assert_eq!(widen(&narrow(i128::MAX)), I96_MAX);
+        assert_eq!(widen(&narrow(i128::MIN + 1)), -I96_MAX);
+        assert_eq!(read(I96_MAX, FIXED), f64::INFINITY);
+        assert_eq!(read(-I96_MAX, FIXED), f64::NEG_INFINITY);
+        // Three pixels' worth of 1e11 samples (2^50 units: 2^86.5 each) pass 2^95 in the sum's
+        // third part: saturated whichever part comes first.
+        let part = |v: f32, n: usize| {
+            let mut a = PixelAccumulator::default();
+            (0..n).for_each(|_| a.add(Vec3::splat(v)));
+            a
+        };
+        let parts = [part(1e11, 200), part(1.0, 3), part(1e11, 200)];
+        let (mut ab, mut ba) = (PixelSums::default(), PixelSums::default());
+        parts.iter().for_each(|p| ab.add(p));
+        parts.iter().rev().for_each(|p| ba.add(p));
+        assert_eq!(ab, ba);
+        assert_eq!(ab.sum()[0], f64::INFINITY);
+        assert_eq!(PixelSums::from(&parts[1]).sum()[0], 3.0);
     }
 }

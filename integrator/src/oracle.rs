@@ -5,7 +5,7 @@
 //! Sobol by default, stratified or independent: `crate::sampler`) filtered as the scene says
 //! (splatted or not: `PixelFilter::splats`), rayon over tiles.
 
-use crate::film::{Film, PixelAccumulator, SplatFilm, clamp_sample};
+use crate::film::{Film, PixelAccumulator, PixelSums, SplatFilm, clamp_sample};
 use crate::lambert_vertex;
 use crate::path::{self, PathState};
 use crate::sampler::Sampler;
@@ -53,7 +53,7 @@ pub fn render_samples(
                 }
                 (sums.pixels, ())
             },
-            PixelAccumulator::merge,
+            PixelSums::add,
         );
         return film;
     }
@@ -65,7 +65,7 @@ pub fn render_samples(
         |_, tile, mut rows| {
             for i in 0..tile.len() {
                 let (x, y) = tile.pixel(i);
-                rows.set(i as usize, render_pixel(scene, x, y, samples.clone()));
+                rows.set(i as usize, PixelSums::from(&render_pixel(scene, x, y, samples.clone())));
             }
         },
     );

@@ -85,14 +85,11 @@ impl<P> TileRows<'_, P> {
         self.rows[i / w][i % w] = value;
     }
 
-    /// Sets every pixel from `src` (row-major within the tile).
-    pub fn copy_from(&mut self, src: &[P])
-    where
-        P: Copy,
-    {
+    /// Sets every pixel from `src` (row-major within the tile), each as `from` makes it.
+    pub fn copy_from<Q>(&mut self, src: &[Q], from: impl Fn(&Q) -> P) {
         let w = self.rows[0].len();
         for (row, src) in self.rows.iter_mut().zip(src.chunks_exact(w)) {
-            row.copy_from_slice(src);
+            row.iter_mut().zip(src).for_each(|(p, q)| *p = from(q));
         }
     }
 }
@@ -140,15 +137,15 @@ pub fn render_tiles<S, P: Send, T: Send>(
 /// the window), and they are added into `pixels` by `add` as the tiles finish. The sums are
 /// exact, so the order they finish in does not change a bit.
 #[expect(clippy::too_many_arguments, reason = "render_tiles' arguments, and the margin's three")]
-pub fn splat_tiles<S, P: Send, T: Send>(
+pub fn splat_tiles<S, P: Send, Q, T: Send>(
     window: &PixelWindow,
     (width, height): (u32, u32),
     margin: u32,
     pixels: &mut [P],
     progress: &(dyn Fn(usize, usize) + Sync),
     init: impl Fn() -> S + Sync + Send,
-    render: impl Fn(&mut S, &Tile, &PixelWindow) -> (Vec<P>, T) + Sync + Send,
-    add: impl Fn(&mut P, &P) + Sync,
+    render: impl Fn(&mut S, &Tile, &PixelWindow) -> (Vec<Q>, T) + Sync + Send,
+    add: impl Fn(&mut P, &Q) + Sync,
 ) -> Vec<(Tile, T)> {
     assert_eq!(pixels.len(), window.len(), "a buffer of the window's pixels");
     let samples = window.grown(margin, width, height);
@@ -276,7 +273,7 @@ mod tests {
             |_, tile, mut rows| {
                 let own: Vec<u32> =
                     (0..tile.len()).map(|i| tile.pixel(i)).map(|(x, y)| 100 * y + x).collect();
-                rows.copy_from(&own);
+                rows.copy_from(&own, |&v| v);
             },
         );
         assert!(pixels.iter().enumerate().all(|(k, &v)| v == 100 * (k as u32 / 20) + k as u32 % 20));

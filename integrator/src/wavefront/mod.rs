@@ -24,7 +24,7 @@ mod tile_work;
 
 use crate::aov::Aovs;
 use crate::costs::PixelCosts;
-use crate::film::{Film, PixelAccumulator};
+use crate::film::{Film, PixelSums};
 use crate::tile::{self, Tile};
 use glam::Vec3;
 use pathwave_engine::material::{MaterialKind, Shading};
@@ -352,11 +352,11 @@ pub fn render_samples(
                 let out = run(state, tile, Some(rect));
                 (out.film.into_pixels(), (out.guides, out.charges, out.stats))
             },
-            PixelAccumulator::merge,
+            PixelSums::add,
         ),
         false => tile::render_tiles(&s.window, &mut film.pixels, progress, init, |state, tile, mut rows| {
             let out = run(state, tile, None);
-            rows.copy_from(&out.film.into_pixels());
+            rows.copy_from(&out.film.into_pixels(), |a| PixelSums::from(a));
             (out.guides, out.charges, out.stats)
         }),
     };
