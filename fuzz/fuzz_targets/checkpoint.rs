@@ -1,6 +1,6 @@
 //! Arbitrary bytes, and mutations of checkpoints written by `render --samples` (the seed
 //! corpus), into the checkpoint reader and `merge`. The input after its first byte is cut into
-//! parts before each `PWCKPT0` magic (formats 2 and 3); when the first byte is odd each part's checksum is
+//! parts before each `PWCKPT0` magic (formats 2, 3 and 4); when the first byte is odd each part's checksum is
 //! recomputed first, so that mutations reach the checks behind it. Whatever loads is merged
 //! and read out as `merge` and `--resume` do: nothing may panic, a merged checkpoint must read
 //! back as written, and its mean must be finite.

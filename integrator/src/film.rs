@@ -155,8 +155,7 @@ fn usable(v: Vec3) -> bool {
 
 /// Samples with a component above this are treated like infinite ones (discarded and counted):
 /// one sample's fixed-point value then fits its sum. A pixel's sum saturates at about 3.5e13
-/// (its value then reads infinite) and its sum of squares at 3.6e16 (its variance reads
-/// infinite): samples of 1e6 saturate the squares after 36,000 samples, the sum after 35 million.
+/// and its sum of squares at 3.6e16 (its variance then reads infinite): samples of 1e6 saturate the squares after 36,000 samples, the sum after 35 million.
 pub const MAX_SAMPLE: f32 = 1e12;
 
 /// `v as i128` (truncated, saturating), through one `i64` conversion instruction when `v`
@@ -264,7 +263,7 @@ fn widen(w: &I96) -> i128 {
 }
 
 /// One pixel's sums as the film keeps them: a [`PixelAccumulator`]'s, each fixed-point sum in
-/// 96 bits (saturated, the two ends reading infinite) and aligned to 8 bytes: 96 bytes a pixel
+/// 96 bits (saturated; a saturated sum of squares reads infinite) and aligned to 8 bytes: 96 bytes a pixel
 /// where the accumulator takes 128 (a 1024 x 1024 film: 100 MB, not 134). Tiles accumulate in
 /// the wide form and hand their sums over once, so the narrowing costs nothing per sample; the
 /// sums are integers, saturating at the same ends in any order, so the film's bits do not
@@ -347,22 +346,18 @@ impl PixelSums {
         self.weight_sq as f64 / WEIGHT_FIXED
     }
 
-    /// Sum of the values (infinite where it saturated).
+    /// Sum of the values (where it saturated, its largest value: a pixel's estimate stays
+    /// finite).
     pub fn sum(&self) -> [f64; 3] {
-        [0, 1, 2].map(|c| read(widen(&self.sums[c]), FIXED))
+        [0, 1, 2].map(|c| widen(&self.sums[c]) as f64 / FIXED)
     }
 
-    /// Sum of the squared values (infinite where it saturated).
+    /// Sum of the squared values (infinite where it saturated: the variance is unknown).
     pub fn sum_sq(&self) -> [f64; 3] {
-        [3, 4, 5].map(|c| read(widen(&self.sums[c]), FIXED_SQ))
-    }
-}
-
-/// A 96-bit fixed-point sum's value in `scale` units, infinite where it saturated.
-fn read(s: i128, scale: f64) -> f64 {
-    match s.abs() >= I96_MAX {
-        true => f64::INFINITY.copysign(s as f64),
-        false => s as f64 / scale,
+        [3, 4, 5].map(|c| match widen(&self.sums[c]) {
+            s if s.abs() >= I96_MAX => f64::INFINITY.copysign(s as f64),
+            s => s as f64 / FIXED_SQ,
+        })
     }
 }
 
@@ -500,8 +495,9 @@ mod tests {
         assert_eq!(film.sum_sq()[0], f64::INFINITY, "the squares saturate: the variance is unknown");
     }
 
-    /// The film's 96-bit sums hold what fits, saturate what does not (reading infinite), sign
-    /// included, and saturate the same in any order for non-negative sums.
+    /// The film's 96-bit sums hold what fits, saturate what does not (the sum at its largest
+    /// value, the squares' reading infinite), sign included, and saturate the same in any
+    /// order for non-negative sums.
     #[test]
     fn film_sums_keep_96_bits_and_saturate() {
         for v in [0, 1, -1, 12345 << 70, -(12345 << 70), I96_MAX, -I96_MAX] {
@@ -509,8 +505,6 @@ mod tests {
         }
         assert_eq!(widen(&narrow(i128::MAX)), I96_MAX);
         assert_eq!(widen(&narrow(i128::MIN + 1)), -I96_MAX);
-        assert_eq!(read(I96_MAX, FIXED), f64::INFINITY);
-        assert_eq!(read(-I96_MAX, FIXED), f64::NEG_INFINITY);
         // Three pixels' worth of 1e11 samples (2^50 units: 2^86.5 each) pass 2^95 in the sum's
         // third part: saturated whichever part comes first.
         let part = |v: f32, n: usize| {
@@ -523,7 +517,7 @@ mod tests {
         parts.iter().for_each(|p| ab.add(p));
         parts.iter().rev().for_each(|p| ba.add(p));
         assert_eq!(ab, ba);
-        assert_eq!(ab.sum()[0], f64::INFINITY);
+        assert_eq!((ab.sum()[0], ab.sum_sq()[0]), (I96_MAX as f64 / FIXED, f64::INFINITY));
         assert_eq!(PixelSums::from(&parts[1]).sum()[0], 3.0);
     }
 }
