@@ -155,7 +155,8 @@ fn usable(v: Vec3) -> bool {
 
 /// Samples with a component above this are treated like infinite ones (discarded and counted):
 /// one sample's fixed-point value then fits its sum. A pixel's sum saturates at about 3.5e13
-/// and its sum of squares at 3.6e16 (its variance then reads infinite): samples of 1e6 saturate the squares after 36,000 samples, the sum after 35 million.
+/// and its sum of squares at 3.6e16 (its variance then reads infinite): samples of 1e6
+/// saturate the squares after 36,000 samples, the sum after 35 million.
 pub const MAX_SAMPLE: f32 = 1e12;
 
 /// `v as i128` (truncated, saturating), through one `i64` conversion instruction when `v`
