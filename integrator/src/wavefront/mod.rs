@@ -27,6 +27,7 @@ use crate::costs::PixelCosts;
 use crate::film::{Film, PixelSums};
 use crate::tile::{self, Tile};
 use glam::Vec3;
+use pathwave_engine::filter::Splat;
 use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use queues::{Paths, Queues};
@@ -328,20 +329,20 @@ pub fn render_samples(
     let batch = opts.batch.max(1);
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
-    let run = |(paths, queues): &mut (Paths, Queues), tile: &Tile, splat: Option<&PixelWindow>| {
+    let run = |(paths, queues): &mut (Paths, Queues), tile: &Tile, splat: Option<(Splat, PixelWindow)>| {
         let _span =
             tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();
         let tracing = tracing::enabled!(target: "pathwave::stage", tracing::Level::TRACE);
         let clock = opts.timing || opts.costs || tracing;
-        let out = render_tile(scene, tile, samples.clone(), splat.copied(), opts, clock, paths, queues);
+        let out = render_tile(scene, tile, samples.clone(), splat, opts, clock, paths, queues);
         if tracing {
             trace_tile(&out.stats, batch);
         }
         out
     };
     let init = || (Paths::with_slots(batch), Queues::default());
-    let results = match s.filter.splats() {
-        true => tile::splat_tiles(
+    let results = match s.filter.splat() {
+        Some(filter) => tile::splat_tiles(
             &s.window,
             (s.width, s.height),
             s.filter.margin(),
@@ -349,12 +350,12 @@ pub fn render_samples(
             progress,
             init,
             |state, tile, rect| {
-                let out = run(state, tile, Some(rect));
+                let out = run(state, tile, Some((filter, *rect)));
                 (out.film.into_pixels(), (out.guides, out.charges, out.stats))
             },
             PixelSums::add,
         ),
-        false => tile::render_tiles(&s.window, &mut film.pixels, progress, init, |state, tile, mut rows| {
+        None => tile::render_tiles(&s.window, &mut film.pixels, progress, init, |state, tile, mut rows| {
             let out = run(state, tile, None);
             rows.copy_from(&out.film.into_pixels(), |a| PixelSums::from(a));
             (out.guides, out.charges, out.stats)
@@ -451,7 +452,7 @@ fn render_tile(
     scene: &RenderScene,
     tile: &Tile,
     samples: Range<u32>,
-    splat: Option<PixelWindow>,
+    splat: Option<(Splat, PixelWindow)>,
     opts: Options,
     clock: bool,
     p: &mut Paths,
@@ -525,7 +526,7 @@ pub fn capture_stages<'a>(
     let tile = Tile::in_window(tile, &s.window);
     let batch = opts.batch.max(1);
     let (mut p, mut q) = (Paths::with_slots(batch), Queues::default());
-    let splat = s.filter.splats().then(|| tile.reach(s.filter.margin(), &s.window));
+    let splat = s.filter.splat().map(|f| (f, tile.reach(s.filter.margin(), &s.window)));
     let mut work = TileWork::new(scene, &tile, 0..s.spp, splat, opts.guides, opts.costs);
     let mut out = Vec::new();
     work.run(batch, false, &mut p, &mut q, &mut |i, work, stage, p, q| {

@@ -15,6 +15,7 @@ use crate::sampler::{Sampler, SamplerLanes};
 use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
+use pathwave_engine::filter::Splat;
 use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use std::ops::Range;
 use std::time::Duration;
@@ -52,15 +53,15 @@ impl<'a> TileWork<'a> {
         scene: &'a RenderScene,
         tile: &Tile,
         samples: Range<u32>,
-        splat: Option<PixelWindow>,
+        splat: Option<(Splat, PixelWindow)>,
         guides: bool,
         costs: bool,
     ) -> Self {
         let pixels = (tile.w * tile.h) as usize;
         let pipeline = super::pipeline(scene, guides);
-        let film = match (scene.settings.filter.splat(), splat) {
-            (Some(filter), Some(rect)) => TileFilm::Splat(Box::new(SplatFilm::new(filter, rect))),
-            _ => TileFilm::Own(vec![PixelAccumulator::default(); pixels]),
+        let film = match splat {
+            Some((filter, rect)) => TileFilm::Splat(Box::new(SplatFilm::new(filter, rect))),
+            None => TileFilm::Own(vec![PixelAccumulator::default(); pixels]),
         };
         Self {
             scene,
