@@ -27,13 +27,16 @@ fn avx512_and_avx2_render_the_same_bits() {
     );
     let dir = std::env::temp_dir().join(format!("pathwave-isa-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    // Quads (closest hits and shadow rays), a glass sphere, media, and the lens with spheres.
+    // Quads (closest hits and shadow rays), a glass sphere, media, the lens with spheres, and
+    // the rough materials (GGX and Beckmann conductors, shaded across lanes, among others).
     for scene in [
         "scenes/cornell-diffuse.ron",
         "scenes/cornell.ron",
         "scenes/cornell-smoke.ron",
         "scenes/spheres-sky.ron",
         "scenes/materials-env.ron",
+        "scenes/rough-spheres.ron",
+        "tests/mitsuba-data/tests/scenes/bsdf_spheres/test_arealight_path.xml",
     ] {
         let a = render(scene, "avx2", &dir.join("a.exr"));
         let b = render(scene, "avx512", &dir.join("b.exr"));

@@ -42,12 +42,8 @@ impl Frame {
     /// Builds a frame around the unit vector `n`.
     #[inline]
     pub fn from_normal(n: Vec3A) -> Self {
-        let sign = 1f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let t = Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let bt = Vec3A::new(b, sign + n.y * n.y * a, -n.y);
-        Self { t, b: bt, n }
+        let (t, b) = basis(n.into());
+        Self { t: t.into(), b: b.into(), n }
     }
 
     /// Local (x, y, z) to world.
@@ -55,6 +51,25 @@ impl Frame {
     pub fn to_world(&self, v: Vec3A) -> Vec3A {
         self.t * v.x + self.b * v.y + self.n * v.z
     }
+}
+
+/// `v` over its length, on plain numbers: a division, as glam's `Vec3A::normalize` (glam's
+/// `Vec3::normalize` multiplies by the reciprocal, which rounds twice).
+#[inline(always)]
+pub fn normalized(v: glam::Vec3) -> glam::Vec3 {
+    v / v.length()
+}
+
+/// The tangent and bitangent of [`Frame::from_normal`] on plain numbers (the form the lane
+/// kernels run): Duff et al. 2017, "Building an Orthonormal Basis, Revisited" (JCGT 6(1)).
+#[inline(always)]
+pub fn basis(n: glam::Vec3) -> (glam::Vec3, glam::Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    let t = glam::Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    let bt = glam::Vec3::new(b, sign + n.y * n.y * a, -n.y);
+    (t, bt)
 }
 
 /// Rec. 709 (sRGB primaries) luminance of a linear RGB colour.
@@ -334,6 +349,30 @@ pub fn ln(x: f32) -> f32 {
         ix = (x * 8_388_608.0).to_bits();
         k0 = -23;
     }
+    ln_core(ix, k0)
+}
+
+/// [`ln`] without branches, for loops that compute across lanes (the lane kernels): every
+/// case is computed and the result selected. The same bits as [`ln`] for every input but NaN
+/// (a NaN in, a NaN out, its payload not kept).
+#[inline(always)]
+pub fn ln_branch_free(x: f32) -> f32 {
+    let ix = x.to_bits();
+    // Positive subnormals, normalised by 2^23.
+    let sub = ix.wrapping_sub(1) < 0x007f_ffff;
+    let v = ln_core(if sub { (x * 8_388_608.0).to_bits() } else { ix }, if sub { -23 } else { 0 });
+    let normal = ix.wrapping_sub(0x0080_0000) < 0x7f80_0000 - 0x0080_0000;
+    let special = match () {
+        _ if ix << 1 == 0 => f32::NEG_INFINITY,
+        _ if ix == 0x7f80_0000 || x.is_nan() => x,
+        _ => f32::NAN,
+    };
+    if normal || sub { v } else { special }
+}
+
+/// [`ln`] of the positive normal number whose bits are `ix`, times `2^k0`.
+#[inline(always)]
+fn ln_core(ix: u32, k0: i32) -> f32 {
     let tmp = ix.wrapping_sub(LN_OFF);
     let i = (tmp >> (23 - LN_BITS)) as usize % (1 << LN_BITS);
     let k = (tmp as i32 >> 23) + k0;
@@ -390,14 +429,34 @@ pub fn exp(x: f32) -> f32 {
     exp_core(x)
 }
 
+/// [`exp`] without branches, for loops that compute across lanes (the lane kernels): the
+/// argument clamped to the range the core computes, the ends selected. The same bits as
+/// [`exp`] for every input but NaN (a NaN in, a NaN out, its payload not kept).
+#[inline(always)]
+pub fn exp_branch_free(x: f32) -> f32 {
+    let v = exp_core(x.clamp(-104.0, 88.8));
+    if x > 88.8 {
+        f32::INFINITY
+    } else if x < -104.0 {
+        0.0
+    } else {
+        v
+    }
+}
+
 /// [`exp`] for `x` in [-104, 88.8].
 #[inline(always)]
 fn exp_core(x: f32) -> f32 {
     const N: f64 = (1 << EXP_BITS) as f64;
+    // 1.5 2^52: added to |z| < 2^51, the sum's last place is 1, so its mantissa holds
+    // `round_ties_even(z) + 2^51` (no conversion from float to integer, which the lane
+    // kernels' loops do not vectorise).
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
     let z = x as f64 * (N / LN2);
-    let kd = z.round_ties_even();
+    let shifted = z + SHIFT;
+    let kd = shifted - SHIFT;
     let r = (z - kd) * (LN2 / N);
-    let ki = kd as i64;
+    let ki = (shifted.to_bits() & ((1 << 52) - 1)) as i64 - (1 << 51);
     let t = EXP_TABLE[(ki & ((1 << EXP_BITS) - 1)) as usize];
     // 2^(ki / N) = 2^(ki mod N / N) 2^floor(ki / N): the second factor added to the exponent.
     let s = f64::from_bits(t.to_bits().wrapping_add(((ki >> EXP_BITS) as u64) << 52));
@@ -609,5 +668,20 @@ mod tests {
         assert_eq!(specials, (f32::INFINITY, f32::INFINITY, 0.0, 0.0));
         assert!(exp(f32::NAN).is_nan());
         assert_eq!(exp(88.73), f32::INFINITY, "past f32::MAX");
+    }
+
+    /// The lane kernels' [`ln_branch_free`] and [`exp_branch_free`] give [`ln`]'s and [`exp`]'s
+    /// bits on every 61st float of either sign (subnormals, zeros, infinities and the ends of
+    /// `exp`'s range included), and NaN for NaN.
+    #[test]
+    fn branch_free_ln_and_exp_have_the_bits_of_the_others() {
+        let same = |a: f32, b: f32| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        let edges =
+            [0.0, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 88.8, 88.80001, -104.0, -104.00001];
+        let every = (0..=u32::MAX).step_by(61).map(f32::from_bits);
+        for x in every.chain(edges) {
+            assert!(same(ln_branch_free(x), ln(x)), "ln({x:e}): {} vs {}", ln_branch_free(x), ln(x));
+            assert!(same(exp_branch_free(x), exp(x)), "exp({x:e}): {} vs {}", exp_branch_free(x), exp(x));
+        }
     }
 }

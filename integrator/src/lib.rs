@@ -4,6 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod aov;
+pub mod conductor_lanes;
 pub mod costs;
 pub mod denoise;
 pub mod diagnose;

@@ -11,7 +11,7 @@ mod light;
 mod medium;
 
 pub use camera::{camera_ray, camera_rays, camera_sampler, pixel_numbers};
-pub(crate) use light::{light_choice, pick_light, seen_from};
+pub(crate) use light::{LightPick, light_choice, pick_light, seen_from};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
 pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 
@@ -19,7 +19,7 @@ use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::material::wrap::{Resolved, terminator_shadowing};
-use pathwave_engine::material::{Material, Reads};
+use pathwave_engine::material::{BsdfEval, BsdfSample, Material, Reads};
 use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -350,7 +350,24 @@ pub fn scatter_with(
     u: &ScatterSamples,
     nee: bool,
 ) -> Option<Ray> {
-    let mut bs = mat.sample(wo, sp.ns, u.dir, u.lobe)?;
+    scatter_sampled(scene, st, sp, wo, mat.sample(wo, sp.ns, u.dir, u.lobe)?, time, u, nee)
+}
+
+/// [`scatter_with`] once the BSDF has been sampled (`bs`): the side the ray leaves from, the
+/// throughput, the MIS state and roulette. The lane kernels sample the BSDF across lanes and
+/// call it per path.
+#[expect(clippy::too_many_arguments, reason = "the vertex's pieces, as scatter_with")]
+#[inline(always)]
+pub fn scatter_sampled(
+    scene: &RenderScene,
+    st: &mut PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    mut bs: BsdfSample,
+    time: f32,
+    u: &ScatterSamples,
+    nee: bool,
+) -> Option<Ray> {
     let side = leaving_side(sp, wo, bs.wi)?;
     bs.weight = shadowed(scene, sp, bs.wi, bs.weight);
     if bs.null {
@@ -435,23 +452,49 @@ pub fn shade_glossy(
     time: f32,
     u: &GlossySamples,
 ) -> (Option<ShadowRay>, Option<Ray>) {
-    let shadow = match scene.lights.is_empty() {
-        true => None,
-        false => pick_light(scene, sp.p, sp.ns, time, u.light_pick, u.light).and_then(|lp| {
-            // The same directions leave as in BSDF sampling, from the same side.
-            let side = leaving_side(sp, wo, lp.wi)?;
-            let e = mat.eval(wo, lp.wi, sp.ns);
-            if e.f_cos == Vec3::ZERO {
-                return None;
-            }
-            let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, e.pdf) };
-            let origin = offset_ray_origin(sp.p, sp.err, side);
-            let f_cos = shadowed(scene, sp, lp.wi, e.f_cos);
-            let contribution = st.beta * f_cos * lp.le * (w / lp.pdf);
-            Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
-        }),
-    };
+    let shadow = glossy_light(scene, sp, time, u)
+        .and_then(|lp| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time));
     (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
+}
+
+/// The light sample of a [`shade_glossy`] vertex at `sp` (none in a scene without lights).
+#[inline(always)]
+pub(crate) fn glossy_light(
+    scene: &RenderScene,
+    sp: &SurfacePoint,
+    time: f32,
+    u: &GlossySamples,
+) -> Option<LightPick> {
+    match scene.lights.is_empty() {
+        true => None,
+        false => pick_light(scene, sp.p, sp.ns, time, u.light_pick, u.light),
+    }
+}
+
+/// The shadow ray of the light sample `lp` at a vertex whose BSDF towards it is `eval()`
+/// (evaluated only where the direction may leave), MIS-weighted against BSDF sampling (point,
+/// spot and directional lights in full); `None` where nothing can arrive.
+#[inline(always)]
+pub(crate) fn light_shadow(
+    scene: &RenderScene,
+    st: &PathState,
+    sp: &SurfacePoint,
+    wo: Vec3A,
+    lp: &LightPick,
+    eval: impl FnOnce() -> BsdfEval,
+    time: f32,
+) -> Option<ShadowRay> {
+    // The same directions leave as in BSDF sampling, from the same side.
+    let side = leaving_side(sp, wo, lp.wi)?;
+    let e = eval();
+    if e.f_cos == Vec3::ZERO {
+        return None;
+    }
+    let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, e.pdf) };
+    let origin = offset_ray_origin(sp.p, sp.err, side);
+    let f_cos = shadowed(scene, sp, lp.wi, e.f_cos);
+    let contribution = st.beta * f_cos * lp.le * (w / lp.pdf);
+    Some(ShadowRay { ray: Ray { origin, dir: lp.target - origin, time }, contribution })
 }
 
 #[cfg(test)]

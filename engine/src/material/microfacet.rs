@@ -20,7 +20,7 @@ mod beckmann;
 
 use crate::math::Frame;
 pub use beckmann::{Beckmann, BeckmannAniso};
-use glam::{Vec2, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::PI;
 
 /// Below this alpha a rough material is treated as smooth (a delta mirror or smooth glass): the
@@ -58,13 +58,6 @@ pub fn to_local(f: &Frame, v: Vec3A) -> Vec3A {
     Vec3A::new(v.dot(f.t), v.dot(f.b), v.dot(f.n))
 }
 
-/// Squared sine of a unit local vector's polar angle, from its x and y (exact near the pole,
-/// where `1 - z^2` would cancel).
-#[inline]
-fn sin2(w: Vec3A) -> f32 {
-    w.x * w.x + w.y * w.y
-}
-
 /// The form of the Smith shadowing-masking term.
 #[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Smith {
@@ -86,25 +79,59 @@ pub enum Distribution {
     Beckmann,
 }
 
+/// The vectors the [`Microfacet`] functions take: [`Vec3A`] for the materials' one-path code,
+/// [`Vec3`] (plain numbers) for the lane kernels, whose loops over lanes vectorise only on
+/// scalar operations.
+pub trait LocalVector: Copy {
+    /// The component along the normal: the cosine of a unit vector's polar angle.
+    fn cos(self) -> f32;
+    /// The dot product.
+    fn dot_with(self, o: Self) -> f32;
+}
+
+impl LocalVector for Vec3A {
+    #[inline(always)]
+    fn cos(self) -> f32 {
+        self.z
+    }
+    #[inline(always)]
+    fn dot_with(self, o: Self) -> f32 {
+        self.dot(o)
+    }
+}
+
+impl LocalVector for Vec3 {
+    #[inline(always)]
+    fn cos(self) -> f32 {
+        self.z
+    }
+    #[inline(always)]
+    fn dot_with(self, o: Self) -> f32 {
+        self.dot(o)
+    }
+}
+
 /// A distribution of microfacet normals, in the local frame of the macro normal (for the
 /// anisotropic ones, x along the surface's tangent). The rough materials are generic over it,
-/// so each distribution's code is compiled on its own.
-pub trait Microfacet: Copy {
+/// so each distribution's code is compiled on its own. The isotropic [`Ggx`] and [`Beckmann`]
+/// implement it on plain numbers ([`Vec3`], written without branches, for the lane kernels)
+/// and on [`Vec3A`] through those: one source for both.
+pub trait Microfacet<V: LocalVector = Vec3A>: Copy {
     /// The distribution of normals at the unit local microfacet normal `m`, normalised so that
     /// the integral of `D(m) cos(theta_m)` over the hemisphere is 1; 0 below the surface.
-    fn d(&self, m: Vec3A) -> f32;
+    fn d(&self, m: V) -> f32;
 
     /// Smith masking `G1 = 1 / (1 + Lambda)` of the unit local direction `w` (either side; the
     /// side tests are the BSDF's). 1 along the normal, 0 at grazing.
-    fn g1(&self, w: Vec3A) -> f32;
+    fn g1(&self, w: V) -> f32;
 
     /// `G1(w) / |cos(w)|`, finite at grazing.
-    fn g1_over_cos(&self, w: Vec3A) -> f32;
+    fn g1_over_cos(&self, w: V) -> f32;
 
     /// Samples a visible microfacet normal from `wo` (local, `wo.z > 0`) and `u` in [0, 1]^2,
     /// with density [`Self::pdf_visible`]. The result may be degenerate (`m.z <= 0`, or zero)
     /// at the boundary of the domain; callers check.
-    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A;
+    fn sample_visible(&self, wo: V, u: Vec2) -> V;
 
     /// `G(wo, wi) / G1(wo)` under `smith`: what is left of the shadowing-masking in a sample's
     /// weight once visible-normal sampling has divided out `G1(wo)`. Separable: `G1(wi)`;
@@ -113,7 +140,7 @@ pub trait Microfacet: Copy {
     // Always inlined, as `pdf_visible`: with two distributions the compiler left it out of line
     // in the rough materials' sampling (callgrind, materials-env).
     #[inline(always)]
-    fn shadowing(&self, smith: Smith, wo: Vec3A, wi: Vec3A) -> f32 {
+    fn shadowing(&self, smith: Smith, wo: V, wi: V) -> f32 {
         let gi = self.g1(wi);
         match smith {
             Smith::Separable => gi,
@@ -128,13 +155,37 @@ pub trait Microfacet: Copy {
     /// Density of visible normals seen from `wo` (local, `wo.z > 0`):
     /// `D_wo(m) = G1(wo) max(0, wo.m) D(m) / cos(wo)` (Heitz 2014, eq. 2 of Heitz 2018).
     #[inline(always)]
-    fn pdf_visible(&self, wo: Vec3A, m: Vec3A) -> f32 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        self.g1_over_cos(wo) * wo.dot(m).max(0.0) * self.d(m)
+    fn pdf_visible(&self, wo: V, m: V) -> f32 {
+        let pdf = self.g1_over_cos(wo) * wo.dot_with(m).max(0.0) * self.d(m);
+        if wo.cos() > 0.0 { pdf } else { 0.0 }
     }
 }
+
+/// Implements [`Microfacet`] on [`Vec3A`] for an isotropic distribution through its
+/// implementation on [`Vec3`].
+macro_rules! through_plain {
+    ($t:ty) => {
+        impl Microfacet for $t {
+            #[inline(always)]
+            fn d(&self, m: Vec3A) -> f32 {
+                Microfacet::<Vec3>::d(self, m.into())
+            }
+            #[inline(always)]
+            fn g1(&self, w: Vec3A) -> f32 {
+                Microfacet::<Vec3>::g1(self, w.into())
+            }
+            #[inline(always)]
+            fn g1_over_cos(&self, w: Vec3A) -> f32 {
+                Microfacet::<Vec3>::g1_over_cos(self, w.into())
+            }
+            #[inline(always)]
+            fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+                Microfacet::<Vec3>::sample_visible(self, wo.into(), u).into()
+            }
+        }
+    };
+}
+use through_plain;
 
 /// The isotropic GGX distribution of width `alpha` (> 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,54 +194,51 @@ pub struct Ggx {
     pub alpha: f32,
 }
 
-impl Microfacet for Ggx {
+impl Microfacet<Vec3> for Ggx {
     /// `D(m) = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2)`, written as
     /// `alpha^2 / (pi (alpha^2 cos^2 + sin^2)^2)` (no division by cos).
-    #[inline]
-    fn d(&self, m: Vec3A) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
+    #[inline(always)]
+    fn d(&self, m: Vec3) -> f32 {
         let a2 = self.alpha * self.alpha;
-        let t = a2 * m.z * m.z + sin2(m);
-        if t <= 0.0 {
-            return 0.0;
-        }
-        a2 / (PI * t * t)
+        let t = a2 * m.z * m.z + (m.x * m.x + m.y * m.y);
+        let d = a2 / (PI * t * t);
+        if m.z > 0.0 && t > 0.0 { d } else { 0.0 }
     }
 
     /// `G1 = 2 / (1 + sqrt(1 + alpha^2 tan^2))`, written as
     /// `2 |cos| / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
-    #[inline]
-    fn g1(&self, w: Vec3A) -> f32 {
+    #[inline(always)]
+    fn g1(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
-        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        let den = c + (c * c + self.alpha * self.alpha * (w.x * w.x + w.y * w.y)).sqrt();
         if den > 0.0 { 2.0 * c / den } else { 0.0 }
     }
 
     /// `2 / (|cos| + sqrt(cos^2 + alpha^2 sin^2))`.
-    #[inline]
-    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+    #[inline(always)]
+    fn g1_over_cos(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
-        let den = c + (c * c + self.alpha * self.alpha * sin2(w)).sqrt();
+        let den = c + (c * c + self.alpha * self.alpha * (w.x * w.x + w.y * w.y)).sqrt();
         if den > 0.0 { 2.0 / den } else { 0.0 }
     }
 
     /// Heitz 2018, listing 1 (isotropic).
-    #[inline]
-    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+    #[inline(always)]
+    fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
         ggx_sample_visible(self.alpha, self.alpha, wo, u)
     }
 }
 
+through_plain!(Ggx);
+
 /// Heitz 2018, listing 1: a visible normal of GGX with widths `ax` along x and `ay` along y.
 #[inline(always)]
-fn ggx_sample_visible(ax: f32, ay: f32, wo: Vec3A, u: Vec2) -> Vec3A {
+fn ggx_sample_visible(ax: f32, ay: f32, wo: Vec3, u: Vec2) -> Vec3 {
     // Section 3.2: stretch the view direction to the hemisphere configuration.
-    let vh = Vec3A::new(ax * wo.x, ay * wo.y, wo.z).normalize();
+    let vh = crate::math::normalized(Vec3::new(ax * wo.x, ay * wo.y, wo.z));
     // Section 4.1: orthonormal basis about it.
     let lensq = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if lensq > 0.0 { Vec3A::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3A::X };
+    let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
     let t2 = vh.cross(t1);
     // Section 4.2: a point of the projected area, a disk warped towards the visible half.
     let r = u.x.clamp(0.0, 1.0).sqrt();
@@ -202,7 +250,7 @@ fn ggx_sample_visible(ax: f32, ay: f32, wo: Vec3A, u: Vec2) -> Vec3A {
     // Section 4.3: reprojection onto the hemisphere.
     let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
     // Section 3.4: back to the ellipsoid configuration.
-    Vec3A::new(ax * nh.x, ay * nh.y, nh.z.max(0.0)).normalize_or_zero()
+    Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(0.0)).normalize_or_zero()
 }
 
 /// The anisotropic GGX distribution of widths `ax` along the local x axis (the tangent) and
@@ -257,7 +305,7 @@ impl Microfacet for GgxAniso {
 
     #[inline]
     fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        ggx_sample_visible(self.ax, self.ay, wo, u)
+        ggx_sample_visible(self.ax, self.ay, wo.into(), u).into()
     }
 }
 

@@ -16,6 +16,7 @@
 //! edge), which the two may break differently: `tests/wavefront.rs` allows 2 differing pixels.
 
 mod queues;
+mod shading;
 mod stage_clock;
 mod stages;
 #[cfg(feature = "test-stage")]
@@ -189,7 +190,7 @@ stages! {
         slots |_, q| &q.medium, run |w, p, q| stages::shade_medium(w.scene, p, q);
     /// The shading loop of one material kind (not an emitter).
     Shade(kind: MaterialKind in SHADED_KINDS): kind.stage_name(), when |s| s.kinds.contains(&kind),
-        slots |_, q| &q.shade[kind as usize], run |w, p, q| stages::shade(w.scene, p, q, kind);
+        slots |_, q| &q.shade[kind as usize], run |w, p, q| shading::shade(w.scene, p, q, kind);
     /// Occlusion tests.
     TraceShadowRays: "trace_shadow_rays", when |_| true,
         slots |_, q| &q.shadow.slot, run |w, p, q| stages::trace_shadow_rays(w.scene, p, q);

@@ -15,9 +15,9 @@
 //! - Abramowitz and Stegun 1964, 7.1.26: `erf`; Giles 2010, "Approximating the erfinv function"
 //!   (GPU Computing Gems Jade, ch. 10), single precision: `erf_inv`.
 
-use super::{Microfacet, sin2};
-use crate::math::{exp, ln};
-use glam::{Vec2, Vec3A};
+use super::Microfacet;
+use crate::math::{exp_branch_free as exp, ln_branch_free as ln};
+use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::PI;
 
 /// `1 / sqrt(pi)`.
@@ -31,69 +31,67 @@ pub struct Beckmann {
     pub alpha: f32,
 }
 
-impl Microfacet for Beckmann {
+impl Microfacet<Vec3> for Beckmann {
     /// `D(m) = exp(-tan^2 / alpha^2) / (pi alpha^2 cos^4)`; as Mitsuba, 0 where `D cos` falls
     /// below 1e-20 (far in the tail, where the terms would underflow).
-    #[inline]
-    fn d(&self, m: Vec3A) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
+    #[inline(always)]
+    fn d(&self, m: Vec3) -> f32 {
         let a2 = self.alpha * self.alpha;
         let c2 = m.z * m.z;
-        let d = exp(-sin2(m) / (c2 * a2)) / (PI * a2 * c2 * c2);
-        if d * m.z > 1e-20 { d } else { 0.0 }
+        let d = exp(-(m.x * m.x + m.y * m.y) / (c2 * a2)) / (PI * a2 * c2 * c2);
+        if m.z > 0.0 && d * m.z > 1e-20 { d } else { 0.0 }
     }
 
     /// Walter et al.'s rational approximation in `a = 1 / (alpha tan)`:
     /// `(3.535 a + 2.181 a^2) / (1 + 2.276 a + 2.577 a^2)` below `a = 1.6`, 1 above (and along
     /// the normal), 0 at grazing.
-    #[inline]
-    fn g1(&self, w: Vec3A) -> f32 {
+    #[inline(always)]
+    fn g1(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
+        let a = c / (self.alpha * (w.x * w.x + w.y * w.y).sqrt());
+        let g = (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
         if c == 0.0 {
-            return 0.0;
+            0.0
+        } else if a >= 1.6 {
+            1.0
+        } else {
+            g
         }
-        let a = c / (self.alpha * sin2(w).sqrt());
-        if a >= 1.6 {
-            return 1.0;
-        }
-        (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
     }
 
     /// With `a = |cos| / (alpha sin)`: `1 / |cos|` from `a = 1.6` on, and below it the rational
     /// form divided by `|cos|`, `(3.535 + 2.181 a) / (alpha sin (1 + 2.276 a + 2.577 a^2))`,
     /// finite at grazing (`3.535 / alpha`).
-    #[inline]
-    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+    #[inline(always)]
+    fn g1_over_cos(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
-        let s = self.alpha * sin2(w).sqrt();
-        if c >= 1.6 * s {
-            return if c > 0.0 { 1.0 / c } else { 0.0 };
-        }
+        let s = self.alpha * (w.x * w.x + w.y * w.y).sqrt();
         let a = c / s;
-        (3.535 + 2.181 * a) / (s * (1.0 + 2.276 * a + 2.577 * a * a))
+        let g = (3.535 + 2.181 * a) / (s * (1.0 + 2.276 * a + 2.577 * a * a));
+        if c >= 1.6 * s { if c > 0.0 { 1.0 / c } else { 0.0 } } else { g }
     }
 
     /// Heitz and d'Eon's stretch, slopes of unit roughness from [`sample_slopes`], rotation to
     /// `wo`'s azimuth and unstretch, as Mitsuba's `MicrofacetDistribution::sample`.
-    #[inline]
-    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
+    #[inline(always)]
+    fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
         sample_visible(self.alpha, self.alpha, wo, u)
     }
 }
 
+super::through_plain!(Beckmann);
+
 /// [`Beckmann::sample_visible`] with widths `ax` along x and `ay` along y.
 #[inline(always)]
-fn sample_visible(ax: f32, ay: f32, wo: Vec3A, u: Vec2) -> Vec3A {
+fn sample_visible(ax: f32, ay: f32, wo: Vec3, u: Vec2) -> Vec3 {
     // The view direction in the configuration of unit roughness.
-    let v = Vec3A::new(ax * wo.x, ay * wo.y, wo.z).normalize();
-    let sin = sin2(v).sqrt();
+    let v = crate::math::normalized(Vec3::new(ax * wo.x, ay * wo.y, wo.z));
+    let sin = (v.x * v.x + v.y * v.y).sqrt();
     let (cos_phi, sin_phi) = if sin > 0.0 { (v.x / sin, v.y / sin) } else { (1.0, 0.0) };
     let (sx, sy) = sample_slopes(sin, v.z, u);
     let (tx, ty) = ((cos_phi * sx - sin_phi * sy) * ax, (sin_phi * sx + cos_phi * sy) * ay);
-    let m = Vec3A::new(-tx, -ty, 1.0).normalize_or_zero();
-    if m.is_finite() { m } else { Vec3A::ZERO }
+    let m = Vec3::new(-tx, -ty, 1.0).normalize_or_zero();
+    if m.is_finite() { m } else { Vec3::ZERO }
 }
 
 /// The anisotropic Beckmann distribution of widths `ax` along the local x axis (the tangent)
@@ -155,7 +153,7 @@ impl Microfacet for BeckmannAniso {
 
     #[inline]
     fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        sample_visible(self.ax, self.ay, wo, u)
+        sample_visible(self.ax, self.ay, wo.into(), u).into()
     }
 }
 
@@ -164,30 +162,36 @@ impl Microfacet for BeckmannAniso {
 /// second slope is Gaussian and independent; the first has, in the variable `x = erf(slope)`
 /// on [-1, erf(cot)], the unnormalised CDF `1 + x + tan exp(-erfinv(x)^2) / sqrt(pi)`, inverted
 /// by three Newton steps from the exact inverse at grazing incidence.
-#[inline]
+#[inline(always)]
 fn sample_slopes(sin: f32, cos: f32, u: Vec2) -> (f32, f32) {
     let tan = sin / cos;
     let cot = cos / sin;
     // The upper end of the interval: facets steeper than cot face away.
     let top = erf(cot);
     let u = u.clamp(Vec2::splat(1e-6), Vec2::splat(1.0 - 1e-6));
-    let mut x = top - (top + 1.0) * erf((-ln(u.x)).sqrt());
+    let x = top - (top + 1.0) * erf((-ln(u.x)).sqrt());
     // The CDF's normalisation (its value at `top`), as the target's scale.
     let target = u.x * (1.0 + top + INV_SQRT_PI * tan * exp(-cot * cot));
-    for _ in 0..3 {
+    // One Newton step, kept in the interval (a step past `top`, where the derivative
+    // vanishes, or a 0/0, lands on its ends).
+    #[inline(always)]
+    fn newton(x: f32, tan: f32, top: f32, target: f32) -> f32 {
         let slope = erf_inv(x);
         let value = 1.0 + x + INV_SQRT_PI * tan * exp(-slope * slope) - target;
         let derivative = 1.0 - slope * tan;
-        // Kept in the interval (a step past `top`, where the derivative vanishes, or a 0/0,
-        // lands on its ends).
-        x = (x - value / derivative).max(-1.0).min(top);
+        (x - value / derivative).max(-1.0).min(top)
     }
+    // Three steps written out: as a loop, it stayed one (too large to unroll), and the lane
+    // kernel's loop over lanes, which contains it, did not vectorise.
+    let x = newton(x, tan, top, target);
+    let x = newton(x, tan, top, target);
+    let x = newton(x, tan, top, target);
     (erf_inv(x), erf_inv(2.0 * u.y - 1.0))
 }
 
 /// The error function, Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7, as pbrt-v3's
 /// `Erf`); odd, 1 at infinity.
-#[inline]
+#[inline(always)]
 fn erf(x: f32) -> f32 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.327_591_1 * z);
@@ -199,11 +203,12 @@ fn erf(x: f32) -> f32 {
 /// The inverse error function on (-1, 1), Giles 2010's single-precision polynomials (relative
 /// error about 1e-7, as pbrt-v4's `ErfInv`); arguments are first clamped to the largest `f32`
 /// below 1 in magnitude, so the result is finite (|erf_inv| <= 3.9).
-#[inline]
+#[inline(always)]
 fn erf_inv(x: f32) -> f32 {
     let x = x.clamp(-0.999_999_94, 0.999_999_94);
     let w = -ln((1.0 - x) * (1.0 + x));
-    let p = if w < 5.0 {
+    // Both polynomials, then the one for `w` (no branch: the lane kernels run it).
+    let central = {
         let w = w - 2.5;
         let mut p = 2.810_226_4e-8;
         p = 3.432_739_4e-7 + p * w;
@@ -214,7 +219,8 @@ fn erf_inv(x: f32) -> f32 {
         p = -0.004_177_681_6 + p * w;
         p = 0.246_640_73 + p * w;
         1.501_409_4 + p * w
-    } else {
+    };
+    let tail = {
         let w = w.sqrt() - 3.0;
         let mut p = -0.000_200_214_26;
         p = 0.000_100_950_56 + p * w;
@@ -226,6 +232,7 @@ fn erf_inv(x: f32) -> f32 {
         p = 1.001_674 + p * w;
         2.832_976_8 + p * w
     };
+    let p = if w < 5.0 { central } else { tail };
     p * x
 }
 

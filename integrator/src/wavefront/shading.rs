@@ -1,0 +1,302 @@
+//! The shading stages of one wavefront iteration: one loop per material kind's queue, its
+//! per-vertex math from [`crate::path`] and the lane kernels ([`crate::lambert_vertex`],
+//! [`crate::conductor_lanes`]), so every sample equals the reference path tracer's.
+
+use super::queues::{Paths, Queues};
+use super::stages::route;
+use crate::conductor_lanes;
+use crate::lambert_vertex;
+use crate::light_lanes;
+use crate::path;
+use pathwave_engine::material::{Material, MaterialKind, Reads, Shading};
+use pathwave_engine::math::Ray;
+use pathwave_engine::render_scene::RenderScene;
+
+/// One shading loop for the hits of one material kind: kinds shaded as
+/// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
+/// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
+/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors with
+/// the BSDF's work across lanes, the other kinds path by path.
+pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
+    let mut queue = std::mem::take(&mut q.shade[kind as usize]);
+    match kind.shading() {
+        Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
+        Shading::Sampled => shade_sampled(scene, p, q, &queue),
+        Shading::Glossy if kind == MaterialKind::RoughConductor => shade_conductors(scene, p, q, &queue),
+        Shading::Glossy => shade_glossy(scene, p, q, &queue),
+        Shading::Emitter => unreachable!("emitters have no shading queue"),
+    }
+    queue.clear();
+    q.shade[kind as usize] = queue;
+}
+
+/// The paths of `queue` that may scatter again, in order (in the scratch list, to be handed
+/// back); those at [`path::at_max_depth`] end here, but for hits on a material with a null lobe
+/// where `null_lobes` (whose null samples go on).
+#[inline]
+fn below_max_depth(
+    scene: &RenderScene,
+    p: &Paths,
+    q: &mut Queues,
+    queue: &[u32],
+    null_lobes: bool,
+) -> Vec<u32> {
+    let mut live = std::mem::take(&mut q.scratch);
+    live.clear();
+    for &i in queue {
+        let s = i as usize;
+        let ends = path::at_max_depth(scene, p.depth[s] - p.crossings[s])
+            && !(null_lobes && scene.materials[p.hit[s].material as usize].has_null_lobe());
+        match ends {
+            true => q.finished.push(i),
+            false => live.push(i),
+        }
+    }
+    live
+}
+
+/// The numbers that some material of the hits of `chunk` reads: those of all lanes are drawn
+/// at once.
+fn reads_of(scene: &RenderScene, p: &Paths, chunk: &[u32]) -> Reads {
+    chunk.iter().fold(Reads { dir: false, lobe: false }, |r, &i| {
+        let m = scene.materials[p.hit[i as usize].material as usize].reads();
+        Reads { dir: r.dir || m.dir, lobe: r.lobe || m.lobe }
+    })
+}
+
+/// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
+/// drawn at once, then BSDF sampling path by path.
+fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use lambert_vertex::LANES;
+    let live = below_max_depth(scene, p, q, queue, scene.features.null_surfaces);
+    for chunk in live.chunks(LANES) {
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let reads = reads_of(scene, p, chunk);
+        let u = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || path::ScatterSamples::draw_lanes(scene, &samplers, &depths, reads),
+        );
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let mut st = p.state(s);
+            let hit = &p.hit[s];
+            let next = scene.with_material(
+                hit.material,
+                &hit.surface,
+                #[inline(always)]
+                |mat| {
+                    path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l], false)
+                },
+            );
+            route(p, q, i, None, next);
+            p.set_state(s, &st);
+        }
+    }
+    q.scratch = live;
+}
+
+/// Hits on a [`Shading::Glossy`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
+/// drawn at once, then [`path::shade_glossy`] path by path.
+fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use lambert_vertex::LANES;
+    let live = below_max_depth(scene, p, q, queue, false);
+    for chunk in live.chunks(LANES) {
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let reads = reads_of(scene, p, chunk);
+        let u = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
+        );
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let mut st = p.state(s);
+            let hit = &p.hit[s];
+            let (shadow, next) = scene.with_material(
+                hit.material,
+                &hit.surface,
+                #[inline(always)]
+                |mat| path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]),
+            );
+            route(p, q, i, shadow, next);
+            p.set_state(s, &st);
+        }
+    }
+    q.scratch = live;
+}
+
+/// Hits on rough conductors: the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at
+/// once, the light sample path by path, then the BSDF evaluated towards it and sampled across
+/// lanes by [`conductor_lanes`] for those the kernel shades
+/// ([`RoughConductor::shaded_in_lanes`]), and the path's bookkeeping path by path. Smooth,
+/// anisotropic and height-correlated ones are shaded as other glossy kinds.
+///
+/// [`RoughConductor::shaded_in_lanes`]: pathwave_engine::material::rough_conductor::RoughConductor::shaded_in_lanes
+fn shade_conductors(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use conductor_lanes::{ConductorIn, ConductorInLanes, ConductorOutLanes};
+    use lambert_vertex::LANES;
+    use pathwave_engine::material::microfacet::Distribution;
+    let live = below_max_depth(scene, p, q, queue, false);
+    let mut ins = ConductorInLanes::default();
+    let (mut ggx, mut beckmann) = (ConductorOutLanes::default(), ConductorOutLanes::default());
+    for chunk in live.chunks(LANES) {
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let reads = reads_of(scene, p, chunk);
+        let u = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
+        );
+        // Per lane: the kernel's distribution (none: shaded path by path) and light sample.
+        let mut kernel = [None; LANES];
+        let mut lights: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let hit = &p.hit[s];
+            let conductor = scene.with_material(hit.material, &hit.surface, |mat| match mat {
+                Material::RoughConductor(c) if c.shaded_in_lanes() => Some(*c),
+                _ => None,
+            });
+            let Some(c) = conductor else { continue };
+            let (sp, time) = (&hit.surface, p.time[s]);
+            lights[l] = path::glossy_light(scene, sp, time, &u[l]);
+            let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
+            ins.set(l, &ConductorIn::new(&c, (-p.dir[s]).into(), sp.ns.into(), wi.into(), u[l].bsdf.dir));
+            kernel[l] = Some(c.distribution);
+        }
+        if kernel.contains(&Some(Distribution::Ggx)) {
+            conductor_lanes::conductor_lanes(&ins, Distribution::Ggx, &mut ggx);
+        }
+        if kernel.contains(&Some(Distribution::Beckmann)) {
+            conductor_lanes::conductor_lanes(&ins, Distribution::Beckmann, &mut beckmann);
+        }
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let mut st = p.state(s);
+            let hit = &p.hit[s];
+            let (sp, wo, time) = (&hit.surface, -p.dir[s], p.time[s]);
+            let (shadow, next) = match kernel[l] {
+                None => scene.with_material(
+                    hit.material,
+                    sp,
+                    #[inline(always)]
+                    |mat| path::shade_glossy(scene, &mut st, sp, wo, mat, time, &u[l]),
+                ),
+                Some(d) => {
+                    let o = match d {
+                        Distribution::Ggx => ggx.get(l),
+                        Distribution::Beckmann => beckmann.get(l),
+                    };
+                    let light = lights[l].as_ref();
+                    let shadow =
+                        light.and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || o.eval(), time));
+                    let next = o.sample().and_then(|bs| {
+                        path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
+                    });
+                    (shadow, next)
+                }
+            };
+            route(p, q, i, shadow, next);
+            p.set_state(s, &st);
+        }
+    }
+    q.scratch = live;
+}
+
+/// Lambertian hits: inputs are gathered [`LANES`](lambert_vertex::LANES) paths at a time into lane arrays,
+/// the branch-free kernel runs on all lanes at once (vectorised), and outputs are written
+/// straight to the paths' arrays ([`lambert_vertex::scattered`], as the reference path
+/// tracer's [`lambert_vertex::apply`] does) and the queues.
+fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+    use lambert_vertex::{LANES, LambertInLanes, LambertOutLanes};
+    let mut ins = LambertInLanes::default();
+    let mut outs = LambertOutLanes::default();
+    let mut lights = light_lanes::LightSampler::new(scene);
+    let mut live = below_max_depth(scene, p, q, queue, false);
+    if scene.features.one_sided {
+        end_behind(scene, p, q, &mut live);
+    }
+    if scene.features.tilts {
+        shade_tilted(scene, p, q, &mut live);
+    }
+    for chunk in live.chunks(LANES) {
+        // The vertex's numbers for all lanes at once.
+        let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
+        let u = lambert_vertex::VertexSamples::draw_lanes(scene, &samplers, &depths);
+        let mut times = [0.0; LANES];
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let hit = &p.hit[s];
+            let albedo = scene.albedo_at(hit.material, &hit.surface);
+            let path =
+                lambert_vertex::PathIn { beta: p.beta[s], eta_scale: p.eta_scale[s], depth: p.depth[s] };
+            ins.set_surface(l, path, &hit.surface, -p.dir[s], albedo);
+            times[l] = p.time[s];
+        }
+        ins.set_numbers(scene, &u);
+        // A short last chunk leaves its last lanes as the chunk before: their samples go unread.
+        lights.sample(&times, &u, &mut ins);
+        lambert_vertex::lambert_lanes(&ins, &mut outs);
+        // The shadow rays, lanes that made one first.
+        let (mut pick, mut n) = ([0; LANES], 0);
+        for l in 0..chunk.len() {
+            pick[n] = l;
+            n += outs.shadow[l] as usize;
+        }
+        q.shadow.extend_lanes(&pick[..n], chunk, &times, &outs.so, &outs.sd, &outs.contribution);
+        let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
+        for (l, &i) in chunk.iter().enumerate() {
+            let s = i as usize;
+            let st = lambert_vertex::Bounce {
+                beta: &mut p.beta[s],
+                delta: &mut p.delta[s],
+                prev_pdf: &mut p.prev_pdf[s],
+                prev_p: &mut p.prev_p[s],
+                prev_n: &mut p.prev_n[s],
+                depth: &mut p.depth[s],
+            };
+            let o = outs.get(l);
+            if lambert_vertex::scattered(v3(&ins.p, l), v3(&ins.n, l), ins.depth_after[l], &o, st) && o.alive
+            {
+                p.set_ray(
+                    s,
+                    Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },
+                );
+                q.next.push(i);
+            } else {
+                q.finished.push(i);
+            }
+        }
+    }
+    q.scratch = live;
+}
+
+/// Shades the hits of `live` whose normal a map tilted ([`path::tilted`]) path by path, as
+/// glossy kinds are, and leaves the others to the lane kernel. Out of line: scenes without
+/// maps never call it.
+#[inline(never)]
+fn shade_tilted(scene: &RenderScene, p: &mut Paths, q: &mut Queues, live: &mut Vec<u32>) {
+    let mut tilted = Vec::new();
+    live.retain(|&i| {
+        let t = path::tilted(&p.hit[i as usize].surface);
+        if t {
+            tilted.push(i);
+        }
+        !t
+    });
+    shade_glossy(scene, p, q, &tilted);
+}
+
+/// Ends the paths of `live` that meet a one-sided Lambertian from behind
+/// ([`path::black_behind`]). Out of line, so that the Lambertian stage's code is as it was for
+/// scenes without one-sided materials (benches/RESULTS.md).
+#[inline(never)]
+fn end_behind(scene: &RenderScene, p: &Paths, q: &mut Queues, live: &mut Vec<u32>) {
+    live.retain(|&i| {
+        let hit = &p.hit[i as usize];
+        let behind =
+            path::black_behind(&scene.materials[hit.material as usize], &hit.surface, -p.dir[i as usize]);
+        if behind {
+            q.finished.push(i);
+        }
+        !behind
+    });
+}
