@@ -4,11 +4,11 @@
 #![warn(missing_docs)]
 
 pub mod aov;
-pub mod conductor_lanes;
 pub mod costs;
 pub mod denoise;
 pub mod diagnose;
 pub mod film;
+pub mod glossy_lanes;
 pub mod lambert_vertex;
 pub mod light_lanes;
 pub mod oracle;

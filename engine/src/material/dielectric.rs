@@ -70,16 +70,15 @@ impl MaterialModel for Dielectric {
 
 /// Exact unpolarised Fresnel reflectance. `cos_i` >= 0 is measured on the incident side and
 /// `eta` = n_transmitted / n_incident.
-#[inline]
+/// Without branches (total internal reflection selected), for the lane kernels too.
+#[inline(always)]
 pub fn fresnel_exact(cos_i: f32, eta: f32) -> f32 {
     let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
     let cos_t = (1.0 - sin2_t).sqrt();
     let parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (parl * parl + perp * perp)
+    let f = 0.5 * (parl * parl + perp * perp);
+    if sin2_t >= 1.0 { 1.0 } else { f }
 }
 
 /// Schlick's approximation, using the cosine on the optically thinner side, with total internal
@@ -99,13 +98,18 @@ pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
 /// internal reflection.
 #[inline]
 pub fn refract(wo: Vec3A, n: Vec3A, eta: f32) -> Option<Vec3A> {
+    let (wt, refracts) = refract_plain(wo.into(), n.into(), eta);
+    refracts.then(|| wt.into())
+}
+
+/// [`refract`] on plain numbers and without branches, for the lane kernels: the direction
+/// (meaningless on total internal reflection) and whether it refracts.
+#[inline(always)]
+pub fn refract_plain(wo: Vec3, n: Vec3, eta: f32) -> (Vec3, bool) {
     let cos_i = wo.dot(n);
     let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return None;
-    }
     let cos_t = (1.0 - sin2_t).sqrt();
-    Some(-wo / eta + (cos_i / eta - cos_t) * n)
+    (-wo / eta + (cos_i / eta - cos_t) * n, sin2_t < 1.0)
 }
 
 /// Chooses reflection or refraction with probability F; `uc` in [0, 1).

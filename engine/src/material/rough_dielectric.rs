@@ -17,11 +17,11 @@
 //! Single scattering only (energy that would scatter again between microfacets is lost).
 //! Below [`SMOOTH_ALPHA`] (or with `ior` 1) it is the smooth dielectric.
 
-use super::dielectric::{Fresnel, fresnel_exact, refract};
-use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith, to_local};
+use super::dielectric::{Fresnel, fresnel_exact, refract_plain};
+use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::{Positive, Scalar};
-use crate::math::{Frame, reflect};
+use crate::math::{basis, normalized};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Rough glass (Walter et al. 2007), `distribution` `Ggx` (default) or `Beckmann` as
@@ -65,8 +65,9 @@ impl RoughDielectric {
         self.alpha < SMOOTH_ALPHA || self.ior == 1.0
     }
 
-    /// The relative IOR seen from `wo` and the normal on its side, or `None` at grazing.
-    #[inline]
+    /// The relative IOR seen from `wo` and the normal on its side, or `None` at grazing (for
+    /// the tests: the BSDF's code takes [`Self::side_plain`]).
+    #[cfg(test)]
     fn side(&self, wo: Vec3A, n: Vec3A) -> Option<(f32, Vec3A)> {
         let cos_o = wo.dot(n);
         if cos_o > 0.0 {
@@ -78,98 +79,162 @@ impl RoughDielectric {
         }
     }
 
-    /// [`MaterialModel::sample`] off the smooth limit with the distribution `md`, the normal
-    /// `nf` on `wo`'s side and the relative IOR `eta` seen from there.
-    #[inline(always)]
-    fn sample_rough<M: Microfacet>(
-        &self,
-        md: M,
-        wo: Vec3A,
-        nf: Vec3A,
-        eta: f32,
-        u: Vec2,
-        uc: f32,
-    ) -> Option<BsdfSample> {
-        let frame = Frame::from_normal(nf);
-        let lo = to_local(&frame, wo);
-        let m = md.sample_visible(lo, u);
-        let cos_om = lo.dot(m);
-        if lo.z <= 0.0 || m.z <= 0.0 || cos_om <= 0.0 {
-            return None;
-        }
-        let pdf_m = md.pdf_visible(lo, m);
-        let fr = fresnel_exact(cos_om.min(1.0), eta);
-        let (li, pdf, weight, eta) = if uc < fr {
-            let li = reflect(lo, m);
-            if li.z <= 0.0 {
-                return None;
-            }
-            // f cos_i / pdf = G / G1(wo): F, D and G1(wo) / cos_o cancel.
-            (li, pdf_m / (4.0 * cos_om) * fr, md.shadowing(self.smith, lo, li), 1.0)
-        } else {
-            let li = refract(lo, m, eta)?.normalize();
-            let cos_im = li.dot(m);
-            if li.z >= 0.0 || cos_im >= 0.0 {
-                return None;
-            }
-            let den = (cos_im + cos_om / eta).powi(2);
-            // f cos_i / pdf = G / G1(wo) / eta^2 (the radiance scaling).
-            (li, pdf_m * -cos_im / den * (1.0 - fr), md.shadowing(self.smith, lo, li) / (eta * eta), eta)
-        };
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight: Vec3::splat(weight), pdf, eta, delta: false, null: false })
+    /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]): rough,
+    /// with separable shadowing-masking.
+    #[inline]
+    pub fn shaded_in_lanes(&self) -> bool {
+        !self.is_smooth() && self.smith == Smith::Separable
     }
 
-    /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, the normal `nf`
-    /// on `wo`'s side and the relative IOR `eta` seen from there.
+    /// The relative IOR seen from `wo` (of cosine `cos_o` with `n`) and the normal on its side.
     #[inline(always)]
-    fn eval_rough<M: Microfacet>(&self, md: M, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
-        let frame = Frame::from_normal(nf);
-        let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
-        if lo.z <= 0.0 || li.z == 0.0 {
-            return BsdfEval::ZERO;
-        }
+    fn side_plain(&self, cos_o: f32, n: Vec3) -> (f32, Vec3) {
+        if cos_o > 0.0 { (self.ior, n) } else { (1.0 / self.ior, -n) }
+    }
+
+    /// [`MaterialModel::sample`] off the smooth limit with the distribution `md` (a visible
+    /// normal from `u`, then reflection if `uc < F`, refraction otherwise), on plain numbers
+    /// and without branches: the one source of the one-path code and the lane kernel. The
+    /// sample, and whether there is one (none at grazing, or when the direction ends on the
+    /// wrong side of the surface: single-scattering loss).
+    #[inline(always)]
+    pub fn sample_plain<M: Microfacet<Vec3>>(
+        &self,
+        md: M,
+        wo: Vec3,
+        n: Vec3,
+        u: Vec2,
+        uc: f32,
+    ) -> (DielectricSample, bool) {
+        let cos_o = wo.dot(n);
+        let (eta, nf) = self.side_plain(cos_o, n);
+        let (t, b) = basis(nf);
+        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(nf));
+        let m = md.sample_visible(lo, u);
+        let cos_om = lo.dot(m);
+        let pdf_m = md.pdf_visible(lo, m);
+        let fr = fresnel_exact(cos_om.min(1.0), eta);
+        // Both lobes, then the one `uc` chose.
+        let lr = 2.0 * lo.dot(m) * m - lo;
+        // f cos_i / pdf = G / G1(wo): F, D and G1(wo) / cos_o cancel.
+        let (pdf_r, weight_r) = (pdf_m / (4.0 * cos_om) * fr, md.shadowing(self.smith, lo, lr));
+        let (lt, refracts) = refract_plain(lo, m, eta);
+        let lt = normalized(lt);
+        let cos_im = lt.dot(m);
+        let den = (cos_im + cos_om / eta).powi(2);
+        // f cos_i / pdf = G / G1(wo) / eta^2 (the radiance scaling).
+        let pdf_t = pdf_m * -cos_im / den * (1.0 - fr);
+        let weight_t = md.shadowing(self.smith, lo, lt) / (eta * eta);
+        let reflects = uc < fr;
+        let (li, pdf, weight, eta) = match reflects {
+            true => (lr, pdf_r, weight_r, 1.0),
+            false => (lt, pdf_t, weight_t, eta),
+        };
+        let leaves = match reflects {
+            true => lr.z > 0.0,
+            false => refracts && lt.z < 0.0 && cos_im < 0.0,
+        };
+        let valid =
+            cos_o != 0.0 && lo.z > 0.0 && m.z > 0.0 && cos_om > 0.0 && leaves && pdf > 0.0 && pdf.is_finite();
+        let wi = normalized(t * li.x + b * li.y + nf * li.z);
+        (DielectricSample { wi, weight, pdf, eta }, valid)
+    }
+
+    /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, on plain
+    /// numbers and without branches as [`Self::sample_plain`].
+    #[inline(always)]
+    pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n: Vec3) -> BsdfEval {
+        let cos_o = wo.dot(n);
+        let (eta, nf) = self.side_plain(cos_o, n);
+        let (t, b) = basis(nf);
+        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(nf));
+        let li = Vec3::new(wi.dot(t), wi.dot(b), wi.dot(nf));
         let reflection = li.z > 0.0;
         // The (generalised) half vector on the side of the normal.
         let h = if reflection { lo + li } else { lo + eta * li };
         let m = if h.z < 0.0 { -h } else { h }.normalize_or_zero();
         let (cos_om, cos_im) = (lo.dot(m), li.dot(m));
-        // Microfacets seen from behind by either direction do not scatter.
-        if m.z <= 0.0 || cos_om <= 0.0 || (cos_im > 0.0) != reflection || cos_im == 0.0 {
-            return BsdfEval::ZERO;
-        }
         let fr = fresnel_exact(cos_om.min(1.0), eta);
         // D_wo(m) = G1(wo) (wo.m) D(m) / cos_o: the density of the sampled normal.
         let d_wo = md.g1_over_cos(lo) * cos_om * md.d(m);
-        let (f_cos, pdf) = if reflection {
-            let pdf_r = d_wo / (4.0 * cos_om);
-            (pdf_r * fr * md.shadowing(self.smith, lo, li), pdf_r * fr)
-        } else {
-            let den = (cos_im + cos_om / eta).powi(2);
-            // |d h / d wi| = |wi.h| / (wi.h + wo.h / eta)^2 (Walter et al. eq. 17).
-            let pdf_t = d_wo * -cos_im / den;
-            (pdf_t * (1.0 - fr) * md.shadowing(self.smith, lo, li) / (eta * eta), pdf_t * (1.0 - fr))
+        let g = md.shadowing(self.smith, lo, li);
+        let pdf_r = d_wo / (4.0 * cos_om);
+        let den = (cos_im + cos_om / eta).powi(2);
+        // |d h / d wi| = |wi.h| / (wi.h + wo.h / eta)^2 (Walter et al. eq. 17).
+        let pdf_t = d_wo * -cos_im / den;
+        let (f_cos, pdf) = match reflection {
+            true => (pdf_r * fr * g, pdf_r * fr),
+            false => (pdf_t * (1.0 - fr) * g / (eta * eta), pdf_t * (1.0 - fr)),
         };
-        if !(pdf > 0.0 && pdf.is_finite() && f_cos.is_finite()) {
-            return BsdfEval::ZERO;
+        // Microfacets seen from behind by either direction do not scatter.
+        let valid = cos_o != 0.0
+            && lo.z > 0.0
+            && li.z != 0.0
+            && m.z > 0.0
+            && cos_om > 0.0
+            && (cos_im > 0.0) == reflection
+            && cos_im != 0.0
+            && pdf > 0.0
+            && pdf.is_finite()
+            && f_cos.is_finite();
+        match valid {
+            true => BsdfEval { f_cos: Vec3::splat(f_cos), pdf },
+            false => BsdfEval::ZERO,
         }
-        BsdfEval { f_cos: Vec3::splat(f_cos), pdf }
+    }
+
+    /// [`Self::sample_plain`] as a [`BsdfSample`].
+    #[inline(always)]
+    fn sample_rough<M: Microfacet<Vec3>>(
+        &self,
+        md: M,
+        wo: Vec3A,
+        n: Vec3A,
+        u: Vec2,
+        uc: f32,
+    ) -> Option<BsdfSample> {
+        let (s, valid) = self.sample_plain(md, wo.into(), n.into(), u, uc);
+        valid.then(|| s.into())
     }
 
     /// [`Self::sample_rough`] with Beckmann, out of line: inlined beside GGX's, it made the
     /// compiler lay out GGX's path less well (0.4% more instructions on materials-env).
     #[inline(never)]
-    fn sample_beckmann(&self, wo: Vec3A, nf: Vec3A, eta: f32, u: Vec2, uc: f32) -> Option<BsdfSample> {
-        self.sample_rough(Beckmann { alpha: self.alpha }, wo, nf, eta, u, uc)
+    fn sample_beckmann(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
+        self.sample_rough(Beckmann { alpha: self.alpha }, wo, n, u, uc)
     }
 
-    /// [`Self::eval_rough`] with Beckmann, out of line as [`Self::sample_beckmann`].
+    /// [`Self::eval_plain`] with Beckmann, out of line as [`Self::sample_beckmann`].
     #[inline(never)]
-    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, nf: Vec3A, eta: f32) -> BsdfEval {
-        self.eval_rough(Beckmann { alpha: self.alpha }, wo, wi, nf, eta)
+    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        self.eval_plain(Beckmann { alpha: self.alpha }, wo.into(), wi.into(), n.into())
+    }
+}
+
+/// A sampled direction of [`RoughDielectric::sample_plain`], on plain numbers.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DielectricSample {
+    /// The unit direction (world space).
+    pub wi: Vec3,
+    /// `f cos / pdf` (grey).
+    pub weight: f32,
+    /// Its solid-angle density.
+    pub pdf: f32,
+    /// The relative IOR crossed (1 on reflection).
+    pub eta: f32,
+}
+
+impl From<DielectricSample> for BsdfSample {
+    #[inline(always)]
+    fn from(s: DielectricSample) -> Self {
+        BsdfSample {
+            wi: s.wi.into(),
+            weight: Vec3::splat(s.weight),
+            pdf: s.pdf,
+            eta: s.eta,
+            delta: false,
+            null: false,
+        }
     }
 }
 
@@ -193,10 +258,9 @@ impl MaterialModel for RoughDielectric {
         if self.is_smooth() {
             return super::dielectric::sample(self.ior, Fresnel::Exact, wo, n, uc);
         }
-        let (eta, nf) = self.side(wo, n)?;
         match self.distribution {
-            Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, nf, eta, u, uc),
-            Distribution::Beckmann => self.sample_beckmann(wo, nf, eta, u, uc),
+            Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, n, u, uc),
+            Distribution::Beckmann => self.sample_beckmann(wo, n, u, uc),
         }
     }
 
@@ -204,10 +268,9 @@ impl MaterialModel for RoughDielectric {
         if self.is_smooth() {
             return BsdfEval::ZERO;
         }
-        let Some((eta, nf)) = self.side(wo, n) else { return BsdfEval::ZERO };
         match self.distribution {
-            Distribution::Ggx => self.eval_rough(Ggx { alpha: self.alpha }, wo, wi, nf, eta),
-            Distribution::Beckmann => self.eval_beckmann(wo, wi, nf, eta),
+            Distribution::Ggx => self.eval_plain(Ggx { alpha: self.alpha }, wo.into(), wi.into(), n.into()),
+            Distribution::Beckmann => self.eval_beckmann(wo, wi, n),
         }
     }
 
@@ -224,7 +287,9 @@ impl MaterialModel for RoughDielectric {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::dielectric::refract;
     use crate::material::microfacet::testing::assert_chi2;
+    use crate::math::{Frame, reflect};
 
     /// A normal that is not an axis, and the direction `deg` degrees from it, outside or inside.
     fn setup(deg: f32, inside: bool) -> (Vec3A, Vec3A) {

@@ -1,28 +1,36 @@
 //! The shading stages of one wavefront iteration: one loop per material kind's queue, its
 //! per-vertex math from [`crate::path`] and the lane kernels ([`crate::lambert_vertex`],
-//! [`crate::conductor_lanes`]), so every sample equals the reference path tracer's.
+//! [`crate::glossy_lanes`]), so every sample equals the reference path tracer's.
 
 use super::queues::{Paths, Queues};
 use super::stages::route;
-use crate::conductor_lanes;
+use crate::glossy_lanes::GlossyLanes;
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
-use pathwave_engine::material::{Material, MaterialKind, Reads, Shading};
+use pathwave_engine::material::microfacet::Distribution;
+use pathwave_engine::material::rough_conductor::RoughConductor;
+use pathwave_engine::material::rough_dielectric::RoughDielectric;
+use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
 /// One shading loop for the hits of one material kind: kinds shaded as
 /// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
 /// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
-/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors with
-/// the BSDF's work across lanes, the other kinds path by path.
+/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors and
+/// dielectrics with the BSDF's work across lanes, the other kinds path by path.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
     let mut queue = std::mem::take(&mut q.shade[kind as usize]);
     match kind.shading() {
         Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
         Shading::Sampled => shade_sampled(scene, p, q, &queue),
-        Shading::Glossy if kind == MaterialKind::RoughConductor => shade_conductors(scene, p, q, &queue),
+        Shading::Glossy if kind == MaterialKind::RoughConductor => {
+            shade_in_lanes::<RoughConductor>(scene, p, q, &queue)
+        }
+        Shading::Glossy if kind == MaterialKind::RoughDielectric => {
+            shade_in_lanes::<RoughDielectric>(scene, p, q, &queue)
+        }
         Shading::Glossy => shade_glossy(scene, p, q, &queue),
         Shading::Emitter => unreachable!("emitters have no shading queue"),
     }
@@ -124,20 +132,16 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     q.scratch = live;
 }
 
-/// Hits on rough conductors: the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at
-/// once, the light sample path by path, then the BSDF evaluated towards it and sampled across
-/// lanes by [`conductor_lanes`] for those the kernel shades
-/// ([`RoughConductor::shaded_in_lanes`]), and the path's bookkeeping path by path. Smooth,
-/// anisotropic and height-correlated ones are shaded as other glossy kinds.
-///
-/// [`RoughConductor::shaded_in_lanes`]: pathwave_engine::material::rough_conductor::RoughConductor::shaded_in_lanes
-fn shade_conductors(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
-    use conductor_lanes::{ConductorIn, ConductorInLanes, ConductorOutLanes};
+/// Hits on a kind shaded across lanes ([`GlossyLanes`]: rough conductors and dielectrics):
+/// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
+/// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
+/// shades, and the path's bookkeeping path by path. The others (smooth, anisotropic,
+/// height-correlated) are shaded as the other glossy kinds.
+fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
-    use pathwave_engine::material::microfacet::Distribution;
     let live = below_max_depth(scene, p, q, queue, false);
-    let mut ins = ConductorInLanes::default();
-    let (mut ggx, mut beckmann) = (ConductorOutLanes::default(), ConductorOutLanes::default());
+    let mut ins = K::In::default();
+    let (mut ggx, mut beckmann) = (K::Out::default(), K::Out::default());
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let reads = reads_of(scene, p, chunk);
@@ -151,22 +155,20 @@ fn shade_conductors(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let hit = &p.hit[s];
-            let conductor = scene.with_material(hit.material, &hit.surface, |mat| match mat {
-                Material::RoughConductor(c) if c.shaded_in_lanes() => Some(*c),
-                _ => None,
-            });
-            let Some(c) = conductor else { continue };
+            let Some((m, d)) = scene.with_material(hit.material, &hit.surface, K::lane_material) else {
+                continue;
+            };
             let (sp, time) = (&hit.surface, p.time[s]);
             lights[l] = path::glossy_light(scene, sp, time, &u[l]);
             let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
-            ins.set(l, &ConductorIn::new(&c, (-p.dir[s]).into(), sp.ns.into(), wi.into(), u[l].bsdf.dir));
-            kernel[l] = Some(c.distribution);
+            K::set(&mut ins, l, &m, (-p.dir[s]).into(), sp.ns.into(), wi.into(), &u[l].bsdf);
+            kernel[l] = Some(d);
         }
         if kernel.contains(&Some(Distribution::Ggx)) {
-            conductor_lanes::conductor_lanes(&ins, Distribution::Ggx, &mut ggx);
+            K::run(&ins, Distribution::Ggx, &mut ggx);
         }
         if kernel.contains(&Some(Distribution::Beckmann)) {
-            conductor_lanes::conductor_lanes(&ins, Distribution::Beckmann, &mut beckmann);
+            K::run(&ins, Distribution::Beckmann, &mut beckmann);
         }
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
@@ -182,13 +184,13 @@ fn shade_conductors(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &
                 ),
                 Some(d) => {
                     let o = match d {
-                        Distribution::Ggx => ggx.get(l),
-                        Distribution::Beckmann => beckmann.get(l),
+                        Distribution::Ggx => &ggx,
+                        Distribution::Beckmann => &beckmann,
                     };
                     let light = lights[l].as_ref();
-                    let shadow =
-                        light.and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || o.eval(), time));
-                    let next = o.sample().and_then(|bs| {
+                    let shadow = light
+                        .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || K::eval(o, l), time));
+                    let next = K::sample(o, l).and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
                     });
                     (shadow, next)

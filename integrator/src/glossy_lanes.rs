@@ -1,0 +1,307 @@
+//! Rough conductors and rough dielectrics across lanes: the BSDF evaluated towards each
+//! path's light sample and sampled for its next direction, [`LANES`] paths at a time. The
+//! kernels are the engine's own `eval_plain` and `sample_plain` (plain numbers, no branches),
+//! which the one-path code calls too: one source, so both integrators compute the same bits.
+//! The light sample before and the path's bookkeeping after stay path by path
+//! ([`crate::path::light_shadow`], [`crate::path::scatter_sampled`]); the wavefront's
+//! `shading` stage runs them for every kind that implements [`GlossyLanes`].
+
+use crate::lambert_vertex::{LANES, lanes};
+use crate::path::ScatterSamples;
+use glam::{Vec2, Vec3};
+use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Smith};
+use pathwave_engine::material::rough_conductor::{ComplexIor, PlainSample, RoughConductor};
+use pathwave_engine::material::rough_dielectric::{DielectricSample, RoughDielectric};
+use pathwave_engine::material::{BsdfEval, BsdfSample, Material};
+
+/// A material kind whose BSDF the wavefront evaluates and samples across lanes.
+pub trait GlossyLanes {
+    /// The kernel's inputs for every lane.
+    type In: Default;
+    /// Its outputs for every lane.
+    type Out: Default;
+
+    /// The material as the kernel takes it, and its distribution; `None` where the kernel
+    /// does not shade it (smooth, anisotropic, height-correlated shadowing): path by path then.
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)>
+    where
+        Self: Sized;
+
+    /// Sets lane `l`'s inputs: the material `m`, the unit directions back along the ray (`wo`)
+    /// and to the light sample (`wi`, any unit vector where there is none), the shading normal
+    /// and the BSDF's numbers.
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples);
+
+    /// Runs the kernel on every lane with the distribution `d` (lanes of another are computed
+    /// too, and not read).
+    fn run(i: &Self::In, d: Distribution, o: &mut Self::Out);
+
+    /// Lane `l`'s BSDF towards its light sample.
+    fn eval(o: &Self::Out, l: usize) -> BsdfEval;
+
+    /// Lane `l`'s sampled direction, if any.
+    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample>;
+}
+
+/// What the kernel reads for one path: the directions, the normal, the BSDF's numbers and the
+/// conductor's parameters (textures applied).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ConductorIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit shading normal.
+    pub n: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The BSDF sample's numbers.
+    pub u: [f32; 2],
+    /// Colour multiplying the reflectance.
+    pub tint: Vec3,
+    /// Roughness.
+    pub alpha: f32,
+    /// Complex index of refraction: real part.
+    pub eta: Vec3,
+    /// Complex index of refraction: imaginary part.
+    pub k: Vec3,
+    /// Fresnel of the index (else 1).
+    pub fresnel: bool,
+    /// Reflects on both sides.
+    pub two_sided: bool,
+}
+
+impl ConductorIn {
+    /// The inputs of a path that meets `c` ([`RoughConductor::shaded_in_lanes`]).
+    #[inline(always)]
+    pub fn new(c: &RoughConductor, wo: Vec3, n: Vec3, wi: Vec3, u: Vec2) -> Self {
+        Self {
+            wo,
+            n,
+            wi,
+            u: [u.x, u.y],
+            tint: c.tint,
+            alpha: c.alpha,
+            eta: c.ior.eta,
+            k: c.ior.k,
+            fresnel: c.fresnel,
+            two_sided: c.two_sided,
+        }
+    }
+
+    /// The conductor again, with the distribution `distribution`.
+    #[inline(always)]
+    fn conductor(&self, distribution: Distribution) -> RoughConductor {
+        RoughConductor {
+            tint: self.tint,
+            alpha: self.alpha,
+            alpha_v: self.alpha,
+            tangent: 0.0,
+            ior: ComplexIor { eta: self.eta, k: self.k },
+            fresnel: self.fresnel,
+            distribution,
+            smith: Smith::Separable,
+            two_sided: self.two_sided,
+        }
+    }
+}
+
+/// What the kernel writes for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ConductorOut {
+    /// `f cos` towards the light sample.
+    pub f_cos: Vec3,
+    /// The BSDF's density of that direction.
+    pub eval_pdf: f32,
+    /// The sampled direction.
+    pub wi: Vec3,
+    /// Its weight, `f cos / pdf`.
+    pub weight: Vec3,
+    /// Its density.
+    pub pdf: f32,
+    /// A direction was sampled.
+    pub sampled: bool,
+}
+
+lanes!(pub ConductorInLanes for ConductorIn {
+    wo: v3, n: v3, wi: v3, u: f2, tint: v3, alpha: f32, eta: v3, k: v3, fresnel: bool, two_sided: bool,
+});
+
+lanes!(pub ConductorOutLanes for ConductorOut {
+    f_cos: v3, eval_pdf: f32, wi: v3, weight: v3, pdf: f32, sampled: bool,
+});
+
+/// The kernel for one path, with the distribution `md` of its roughness.
+#[inline(always)]
+fn conductor<M: Microfacet<Vec3>>(i: &ConductorIn, distribution: Distribution, md: M) -> ConductorOut {
+    let c = i.conductor(distribution);
+    let e = c.eval_plain(md, i.wo, i.wi, i.n);
+    let (s, sampled) = c.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]));
+    ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
+}
+
+impl GlossyLanes for RoughConductor {
+    type In = ConductorInLanes;
+    type Out = ConductorOutLanes;
+
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::RoughConductor(c) if c.shaded_in_lanes() => Some((*c, c.distribution)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        i.set(l, &ConductorIn::new(m, wo, n, wi, u.dir));
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
+        pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || match distribution {
+                Distribution::Ggx => {
+                    for l in 0..LANES {
+                        let x = i.get(l);
+                        o.set(l, &conductor(&x, distribution, Ggx { alpha: x.alpha }));
+                    }
+                }
+                Distribution::Beckmann => {
+                    for l in 0..LANES {
+                        let x = i.get(l);
+                        o.set(l, &conductor(&x, distribution, Beckmann { alpha: x.alpha }));
+                    }
+                }
+            },
+        )
+    }
+
+    #[inline(always)]
+    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
+        BsdfEval { f_cos: v3(&o.f_cos, l), pdf: o.eval_pdf[l] }
+    }
+
+    #[inline(always)]
+    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
+        let s = PlainSample { wi: v3(&o.wi, l), weight: v3(&o.weight, l), pdf: o.pdf[l] };
+        o.sampled[l].then(|| s.into())
+    }
+}
+
+/// Lane `l` of a vector's lanes.
+#[inline(always)]
+fn v3(a: &[[f32; LANES]; 3], l: usize) -> Vec3 {
+    Vec3::new(a[0][l], a[1][l], a[2][l])
+}
+
+/// What the dielectric kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DielectricIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit shading normal.
+    pub n: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// Index of refraction inside.
+    pub ior: f32,
+    /// Roughness.
+    pub alpha: f32,
+}
+
+/// What the dielectric kernel writes for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DielectricOut {
+    /// `f cos` towards the light sample (grey).
+    pub f_cos: f32,
+    /// The BSDF's density of that direction.
+    pub eval_pdf: f32,
+    /// The sampled direction.
+    pub wi: Vec3,
+    /// Its weight, `f cos / pdf` (grey).
+    pub weight: f32,
+    /// Its density.
+    pub pdf: f32,
+    /// The relative IOR it crossed (1: reflected).
+    pub eta: f32,
+    /// A direction was sampled.
+    pub sampled: bool,
+}
+
+lanes!(pub DielectricInLanes for DielectricIn { wo: v3, n: v3, wi: v3, u: f2, uc: f32, ior: f32, alpha: f32 });
+
+lanes!(pub DielectricOutLanes for DielectricOut {
+    f_cos: f32, eval_pdf: f32, wi: v3, weight: f32, pdf: f32, eta: f32, sampled: bool,
+});
+
+/// The dielectric kernel for one path, with the distribution `md` of its roughness.
+#[inline(always)]
+fn dielectric<M: Microfacet<Vec3>>(i: &DielectricIn, distribution: Distribution, md: M) -> DielectricOut {
+    let g = RoughDielectric { ior: i.ior, alpha: i.alpha, distribution, smith: Smith::Separable };
+    let e = g.eval_plain(md, i.wo, i.wi, i.n);
+    let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
+    DielectricOut {
+        f_cos: e.f_cos.x,
+        eval_pdf: e.pdf,
+        wi: s.wi,
+        weight: s.weight,
+        pdf: s.pdf,
+        eta: s.eta,
+        sampled,
+    }
+}
+
+impl GlossyLanes for RoughDielectric {
+    type In = DielectricInLanes;
+    type Out = DielectricOutLanes;
+
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::RoughDielectric(g) if g.shaded_in_lanes() => Some((*g, g.distribution)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let x = DielectricIn { wo, n, wi, u: [u.dir.x, u.dir.y], uc: u.lobe, ior: m.ior, alpha: m.alpha };
+        i.set(l, &x);
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
+        pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || match distribution {
+                Distribution::Ggx => {
+                    for l in 0..LANES {
+                        let x = i.get(l);
+                        o.set(l, &dielectric(&x, distribution, Ggx { alpha: x.alpha }));
+                    }
+                }
+                Distribution::Beckmann => {
+                    for l in 0..LANES {
+                        let x = i.get(l);
+                        o.set(l, &dielectric(&x, distribution, Beckmann { alpha: x.alpha }));
+                    }
+                }
+            },
+        )
+    }
+
+    #[inline(always)]
+    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
+        BsdfEval { f_cos: Vec3::splat(o.f_cos[l]), pdf: o.eval_pdf[l] }
+    }
+
+    #[inline(always)]
+    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
+        let s = DielectricSample { wi: v3(&o.wi, l), weight: o.weight[l], pdf: o.pdf[l], eta: o.eta[l] };
+        o.sampled[l].then(|| s.into())
+    }
+}
