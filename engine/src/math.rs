@@ -157,7 +157,7 @@ pub fn reflect(wo: Vec3A, n: Vec3A) -> Vec3A {
 
 /// Shirley-Chiu concentric map from the unit square to the unit disk ([`disk_branch_free`]'s
 /// numbers).
-#[inline]
+#[inline(always)]
 pub fn concentric_disk(u: Vec2) -> Vec2 {
     let (x, y) = disk_branch_free([u.x, u.y]);
     Vec2::new(x, y)

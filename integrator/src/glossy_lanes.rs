@@ -1,4 +1,4 @@
-//! Rough conductors and rough dielectrics across lanes: the BSDF evaluated towards each
+//! Rough conductors, dielectrics and plastics across lanes: the BSDF evaluated towards each
 //! path's light sample and sampled for its next direction, [`LANES`] paths at a time. The
 //! kernels are the engine's own `eval_plain` and `sample_plain` (plain numbers, no branches),
 //! which the one-path code calls too: one source, so both integrators compute the same bits.
@@ -12,6 +12,7 @@ use glam::{Vec2, Vec3};
 use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Smith};
 use pathwave_engine::material::rough_conductor::{ComplexIor, PlainSample, RoughConductor};
 use pathwave_engine::material::rough_dielectric::{DielectricSample, RoughDielectric};
+use pathwave_engine::material::rough_plastic::{Coating, RoughPlastic};
 use pathwave_engine::material::{BsdfEval, BsdfSample, Material};
 
 /// A material kind whose BSDF the wavefront evaluates and samples across lanes.
@@ -303,5 +304,142 @@ impl GlossyLanes for RoughDielectric {
     fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
         let s = DielectricSample { wi: v3(&o.wi, l), weight: o.weight[l], pdf: o.pdf[l], eta: o.eta[l] };
         o.sampled[l].then(|| s.into())
+    }
+}
+
+/// A rough plastic's coating tables, as a lane holds them (by default [`Coating::OPAQUE`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CoatingRef(pub &'static Coating);
+
+impl Default for CoatingRef {
+    fn default() -> Self {
+        CoatingRef(&Coating::OPAQUE)
+    }
+}
+
+/// What the plastic kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlasticIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit shading normal.
+    pub n: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The base's reflectance.
+    pub albedo: Vec3,
+    /// Colour multiplying the coating's reflection.
+    pub tint: Vec3,
+    /// The coating's index of refraction.
+    pub ior: f32,
+    /// Roughness.
+    pub alpha: f32,
+    /// The base's inner bounces are nonlinear.
+    pub nonlinear: bool,
+    /// Reflects on both sides.
+    pub two_sided: bool,
+    /// The glossy lobe's sampling weight.
+    pub specular_weight: f32,
+    /// The coating's tables.
+    pub coating: CoatingRef,
+}
+
+lanes!(pub PlasticInLanes for PlasticIn {
+    wo: v3, n: v3, wi: v3, u: f2, uc: f32, albedo: v3, tint: v3, ior: f32, alpha: f32, nonlinear: bool,
+    two_sided: bool, specular_weight: f32, coating: CoatingRef,
+});
+
+/// The plastic kernel for one path, with the distribution `md` of its roughness (its outputs
+/// are the conductor's).
+#[inline(always)]
+fn plastic<M: Microfacet<Vec3>>(i: &PlasticIn, distribution: Distribution, md: M) -> ConductorOut {
+    let g = RoughPlastic {
+        albedo: i.albedo,
+        tint: i.tint,
+        ior: i.ior,
+        alpha: i.alpha,
+        distribution,
+        nonlinear: i.nonlinear,
+        two_sided: i.two_sided,
+        specular_weight: i.specular_weight,
+        coating: i.coating.0,
+    };
+    let e = g.eval_plain(md, i.wo, i.wi, i.n);
+    let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
+    ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
+}
+
+impl GlossyLanes for RoughPlastic {
+    type In = PlasticInLanes;
+    type Out = ConductorOutLanes;
+
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::RoughPlastic(g) if g.shaded_in_lanes() => Some((*g, g.distribution)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let x = PlasticIn {
+            wo,
+            n,
+            wi,
+            u: [u.dir.x, u.dir.y],
+            uc: u.lobe,
+            albedo: m.albedo,
+            tint: m.tint,
+            ior: m.ior,
+            alpha: m.alpha,
+            nonlinear: m.nonlinear,
+            two_sided: m.two_sided,
+            specular_weight: m.specular_weight,
+            coating: CoatingRef(m.coating),
+        };
+        i.set(l, &x);
+    }
+
+    /// The loop writes a local of its own, copied out after: writing `o`, whose memory it could
+    /// not tell from the coating tables it reads through each lane's pointer, it did not
+    /// vectorise (LLVM: "cannot identify array bounds").
+    #[inline(never)]
+    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
+        *o = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || {
+                let mut out = ConductorOutLanes::default();
+                match distribution {
+                    Distribution::Ggx => {
+                        for l in 0..LANES {
+                            let x = i.get(l);
+                            out.set(l, &plastic(&x, distribution, Ggx { alpha: x.alpha }));
+                        }
+                    }
+                    Distribution::Beckmann => {
+                        for l in 0..LANES {
+                            let x = i.get(l);
+                            out.set(l, &plastic(&x, distribution, Beckmann { alpha: x.alpha }));
+                        }
+                    }
+                }
+                out
+            },
+        )
+    }
+
+    #[inline(always)]
+    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
+        <RoughConductor as GlossyLanes>::eval(o, l)
+    }
+
+    #[inline(always)]
+    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
+        <RoughConductor as GlossyLanes>::sample(o, l)
     }
 }

@@ -95,9 +95,15 @@ impl Lambertian {
 /// Cosine-weighted direction about +z: density `cos(theta) / pi`.
 #[inline]
 pub fn cosine_hemisphere(u: Vec2) -> Vec3A {
+    cosine_hemisphere_plain(u).into()
+}
+
+/// [`cosine_hemisphere`] on plain numbers, for the lane kernels.
+#[inline(always)]
+pub fn cosine_hemisphere_plain(u: Vec2) -> glam::Vec3 {
     let d = concentric_disk(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    Vec3A::new(d.x, d.y, z)
+    glam::Vec3::new(d.x, d.y, z)
 }
 
 /// Samples `wi` on the side of `wo`.

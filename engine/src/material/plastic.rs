@@ -157,13 +157,21 @@ pub(super) fn specular_sampling_weight(albedo: Vec3, tint: Vec3) -> f32 {
 /// to `r w` against `(1 - r) (1 - w)`. `None` when both are 0.
 #[inline]
 pub(super) fn lobe_probability(r: f32, w: f32) -> Option<f32> {
+    let (p, some) = lobe_probability_plain(r, w);
+    some.then_some(p)
+}
+
+/// [`lobe_probability`] without branches, for the lane kernels: the probability and whether
+/// there is one.
+#[inline(always)]
+pub(super) fn lobe_probability_plain(r: f32, w: f32) -> (f32, bool) {
     let (s, d) = (r * w, (1.0 - r) * (1.0 - w));
-    if s + d > 0.0 { Some(s / (s + d)) } else { None }
+    (s / (s + d), s + d > 0.0)
 }
 
 /// The base's albedo after its inner bounces under a coating of inner diffuse reflectance
 /// `fdr`: `albedo / (1 - albedo fdr)` when `nonlinear`, else `albedo / (1 - fdr)`.
-#[inline]
+#[inline(always)]
 pub(super) fn inner_bounces(albedo: Vec3, fdr: f32, nonlinear: bool) -> Vec3 {
     match nonlinear {
         true => albedo / (Vec3::ONE - albedo * fdr),

@@ -19,15 +19,17 @@
 //! black from below the normal unless `two_sided`. Below [`SMOOTH_ALPHA`] the coating is a
 //! mirror (a delta lobe of reflectance `F(cos wo)`, with `T = 1 - F`).
 
-use super::lambertian::cosine_hemisphere;
-use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, to_local};
+use super::lambertian::{cosine_hemisphere, cosine_hemisphere_plain};
+use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA};
 use super::plastic::{
-    CoatingIor, inner_bounces, lobe_probability, polypropylene, specular_sampling_weight, white,
+    CoatingIor, inner_bounces, lobe_probability, lobe_probability_plain, polypropylene,
+    specular_sampling_weight, white,
 };
+use super::rough_conductor::PlainSample;
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color};
 use crate::material::dielectric::fresnel_exact;
-use crate::math::{Frame, reflect};
+use crate::math::{Frame, basis, normalized, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 use std::collections::HashMap;
 use std::f32::consts::FRAC_1_PI;
@@ -79,6 +81,10 @@ pub struct Coating {
 }
 
 impl Coating {
+    /// A coating that transmits nothing, for what needs a coating and reads none (the lanes of
+    /// a lane kernel that no hit fills).
+    pub const OPAQUE: Coating = Coating { transmittance: [0.0; RES], internal_reflectance: 0.0 };
+
     /// The coating of a distribution `md` (`None`: smooth) and relative index `eta`, as Mitsuba
     /// 3's `roughplastic` computes it (`eval_transmittance` and `eval_reflectance` in
     /// `include/mitsuba/render/microfacet.h`): each `T(mu)` and `R_in(mu)` by a product
@@ -129,7 +135,7 @@ impl Coating {
     }
 
     /// `T(mu)`, linearly interpolated.
-    #[inline]
+    #[inline(always)]
     pub fn transmittance(&self, mu: f32) -> f32 {
         let x = mu.clamp(0.0, 1.0) * (RES - 1) as f32;
         let i = (x as usize).min(RES - 2);
@@ -298,40 +304,86 @@ impl RoughPlastic {
 
     /// The diffuse lobe's `f cos` towards local `li` (upper hemisphere) where `t_i` is the
     /// transmittance towards `wo`.
-    #[inline]
+    #[inline(always)]
     fn diffuse_f_cos(&self, t_i: f32, cos_o: f32) -> Vec3 {
         let t_o = self.coating.transmittance(cos_o);
         inner_bounces(self.albedo, self.coating.internal_reflectance, self.nonlinear)
             * (FRAC_1_PI / (self.ior * self.ior) * cos_o * t_i * t_o)
     }
 
-    /// [`MaterialModel::eval`] in the local frame of the (facing) normal, both lobes, with
-    /// the distribution `md`: Mitsuba's `eval_pdf`.
+    /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]): a
+    /// rough coating.
+    #[inline]
+    pub fn shaded_in_lanes(&self) -> bool {
+        !self.is_smooth()
+    }
+
+    /// The normal facing `wo` (two-sided) and the local frame about it: (t, b, n).
     #[inline(always)]
-    fn eval_local<M: Microfacet>(&self, md: M, lo: Vec3A, li: Vec3A) -> BsdfEval {
-        if !(lo.z > 0.0 && li.z > 0.0) {
-            return BsdfEval::ZERO;
-        }
+    fn frame_plain(&self, wo: Vec3, n_given: Vec3) -> (Vec3, Vec3, Vec3) {
+        let n = if self.two_sided && wo.dot(n_given) < 0.0 { -n_given } else { n_given };
+        let (t, b) = basis(n);
+        (t, b, n)
+    }
+
+    /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, on plain
+    /// numbers and without branches: the one source of the one-path code and the lane kernel.
+    #[inline(always)]
+    pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n_given: Vec3) -> BsdfEval {
+        let (t, b, n) = self.frame_plain(wo, n_given);
+        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
+        let li = Vec3::new(wi.dot(t), wi.dot(b), wi.dot(n));
+        self.eval_local(md, lo, li)
+    }
+
+    /// [`Self::eval_plain`] in the local frame of the (facing) normal, both lobes: Mitsuba's
+    /// `eval_pdf`.
+    #[inline(always)]
+    fn eval_local<M: Microfacet<Vec3>>(&self, md: M, lo: Vec3, li: Vec3) -> BsdfEval {
         let t_i = self.coating.transmittance(lo.z);
-        let Some(p) = lobe_probability(1.0 - t_i, self.specular_weight) else { return BsdfEval::ZERO };
-        let h = (lo + li).normalize();
+        let (p, some) = lobe_probability_plain(1.0 - t_i, self.specular_weight);
+        let h = normalized(lo + li);
         // D G1(wo) / (4 cos_o): visible normals through the reflection's Jacobian.
         let spec_pdf = md.d(h) * md.g1_over_cos(lo) * 0.25;
         let f = fresnel_exact(lo.dot(h).clamp(0.0, 1.0), self.ior);
         let cos_o = li.z.min(1.0);
         let f_cos = self.tint * (f * spec_pdf * md.g1(li)) + self.diffuse_f_cos(t_i, cos_o);
         let pdf = p * spec_pdf + (1.0 - p) * cos_o * FRAC_1_PI;
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return BsdfEval::ZERO;
+        let valid = lo.z > 0.0 && li.z > 0.0 && some && pdf > 0.0 && pdf.is_finite();
+        match valid {
+            true => BsdfEval { f_cos, pdf },
+            false => BsdfEval::ZERO,
         }
-        BsdfEval { f_cos, pdf }
     }
 
-    /// [`MaterialModel::sample`] off the smooth limit, `n` facing `wo`: the glossy lobe by
-    /// visible normals or the cosine lobe, weighted by both lobes' `f cos` over their mixed
-    /// density.
+    /// [`MaterialModel::sample`] off the smooth limit with the distribution `md`: the glossy
+    /// lobe by visible normals or the cosine lobe (both drawn, one chosen by `uc`), weighted by
+    /// both lobes' `f cos` over their mixed density; on plain numbers and without branches as
+    /// [`Self::eval_plain`]. The sample, and whether there is one.
     #[inline(always)]
-    fn sample_rough<M: Microfacet>(
+    pub fn sample_plain<M: Microfacet<Vec3>>(
+        &self,
+        md: M,
+        wo: Vec3,
+        n_given: Vec3,
+        u: Vec2,
+        uc: f32,
+    ) -> (PlainSample, bool) {
+        let (t, b, n) = self.frame_plain(wo, n_given);
+        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
+        let (p, some) = lobe_probability_plain(1.0 - self.coating.transmittance(lo.z), self.specular_weight);
+        let m = md.sample_visible(lo, u);
+        let glossy = 2.0 * lo.dot(m) * m - lo;
+        let li = if uc < p { glossy } else { cosine_hemisphere_plain(u) };
+        let e = self.eval_local(md, lo, li);
+        let wi = normalized(t * li.x + b * li.y + n * li.z);
+        let valid = lo.z > 0.0 && some && e.pdf != 0.0;
+        (PlainSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf }, valid)
+    }
+
+    /// [`Self::sample_plain`] as a [`BsdfSample`].
+    #[inline(always)]
+    fn sample_rough<M: Microfacet<Vec3>>(
         &self,
         md: M,
         wo: Vec3A,
@@ -339,19 +391,8 @@ impl RoughPlastic {
         u: Vec2,
         uc: f32,
     ) -> Option<BsdfSample> {
-        let frame = Frame::from_normal(n);
-        let lo = to_local(&frame, wo);
-        if !(lo.z > 0.0) {
-            return None;
-        }
-        let p = lobe_probability(1.0 - self.coating.transmittance(lo.z), self.specular_weight)?;
-        let li = if uc < p { reflect(lo, md.sample_visible(lo, u)) } else { cosine_hemisphere(u) };
-        let e = self.eval_local(md, lo, li);
-        if e.pdf == 0.0 {
-            return None;
-        }
-        let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf, eta: 1.0, delta: false, null: false })
+        let (s, valid) = self.sample_plain(md, wo.into(), n.into(), u, uc);
+        valid.then(|| s.into())
     }
 
     /// [`MaterialModel::sample`] with a mirror coating.
@@ -406,10 +447,10 @@ impl RoughPlastic {
         self.sample_rough(Beckmann { alpha: self.alpha }, wo, n, u, uc)
     }
 
-    /// [`Self::eval_local`] with Beckmann, out of line.
+    /// [`Self::eval_plain`] with Beckmann, out of line.
     #[inline(never)]
-    fn eval_beckmann(&self, lo: Vec3A, li: Vec3A) -> BsdfEval {
-        self.eval_local(Beckmann { alpha: self.alpha }, lo, li)
+    fn eval_beckmann(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
+        self.eval_plain(Beckmann { alpha: self.alpha }, wo.into(), wi.into(), n.into())
     }
 }
 
@@ -435,9 +476,8 @@ impl MaterialModel for RoughPlastic {
     }
 
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
-        let n = self.facing(wo, n);
         if self.is_smooth() {
-            return self.sample_smooth(wo, n, u, uc);
+            return self.sample_smooth(wo, self.facing(wo, n), u, uc);
         }
         match self.distribution {
             Distribution::Ggx => self.sample_rough(Ggx { alpha: self.alpha }, wo, n, u, uc),
@@ -446,15 +486,12 @@ impl MaterialModel for RoughPlastic {
     }
 
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        let n = self.facing(wo, n);
         if self.is_smooth() {
-            return self.eval_smooth(wo, wi, n);
+            return self.eval_smooth(wo, wi, self.facing(wo, n));
         }
-        let frame = Frame::from_normal(n);
-        let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
         match self.distribution {
-            Distribution::Ggx => self.eval_local(Ggx { alpha: self.alpha }, lo, li),
-            Distribution::Beckmann => self.eval_beckmann(lo, li),
+            Distribution::Ggx => self.eval_plain(Ggx { alpha: self.alpha }, wo.into(), wi.into(), n.into()),
+            Distribution::Beckmann => self.eval_beckmann(wo, wi, n),
         }
     }
 

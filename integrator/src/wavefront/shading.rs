@@ -11,6 +11,7 @@ use crate::path;
 use pathwave_engine::material::microfacet::Distribution;
 use pathwave_engine::material::rough_conductor::RoughConductor;
 use pathwave_engine::material::rough_dielectric::RoughDielectric;
+use pathwave_engine::material::rough_plastic::RoughPlastic;
 use pathwave_engine::material::{MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
@@ -18,20 +19,19 @@ use pathwave_engine::render_scene::RenderScene;
 /// One shading loop for the hits of one material kind: kinds shaded as
 /// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
 /// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
-/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors and
-/// dielectrics with the BSDF's work across lanes, the other kinds path by path.
+/// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors,
+/// dielectrics and plastics with the BSDF's work across lanes, the other kinds path by path.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
     let mut queue = std::mem::take(&mut q.shade[kind as usize]);
     match kind.shading() {
         Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
         Shading::Sampled => shade_sampled(scene, p, q, &queue),
-        Shading::Glossy if kind == MaterialKind::RoughConductor => {
-            shade_in_lanes::<RoughConductor>(scene, p, q, &queue)
-        }
-        Shading::Glossy if kind == MaterialKind::RoughDielectric => {
-            shade_in_lanes::<RoughDielectric>(scene, p, q, &queue)
-        }
-        Shading::Glossy => shade_glossy(scene, p, q, &queue),
+        Shading::Glossy => match kind {
+            MaterialKind::RoughConductor => shade_in_lanes::<RoughConductor>(scene, p, q, &queue),
+            MaterialKind::RoughDielectric => shade_in_lanes::<RoughDielectric>(scene, p, q, &queue),
+            MaterialKind::RoughPlastic => shade_in_lanes::<RoughPlastic>(scene, p, q, &queue),
+            _ => shade_glossy(scene, p, q, &queue),
+        },
         Shading::Emitter => unreachable!("emitters have no shading queue"),
     }
     queue.clear();
@@ -132,7 +132,8 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
     q.scratch = live;
 }
 
-/// Hits on a kind shaded across lanes ([`GlossyLanes`]: rough conductors and dielectrics):
+/// Hits on a kind shaded across lanes ([`GlossyLanes`]: rough conductors, dielectrics and
+/// plastics):
 /// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
 /// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
 /// shades, and the path's bookkeeping path by path. The others (smooth, anisotropic,
