@@ -44,6 +44,40 @@ pub trait GlossyLanes {
     fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample>;
 }
 
+/// Runs `$kernel` (a lane's outputs from its inputs `$x` and its distribution `$md`) on every
+/// lane of `$i` into `$o` (of type `$out`), in the AVX-512 region where the CPU has it, with a
+/// loop for each distribution (each compiled with its distribution's code). The loop writes a
+/// local output, copied to `$o` after it: writing `$o` itself, the plastic's loop, whose kernel
+/// reads its coating tables through each lane's pointer, did not vectorise (LLVM could not tell
+/// its stores from those tables).
+macro_rules! each_lane {
+    ($i:expr, $d:expr, $o:expr, $out:ty, |$x:ident, $md:ident| $kernel:expr) => {
+        *$o = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || {
+                let mut out = <$out>::default();
+                match $d {
+                    Distribution::Ggx => {
+                        for l in 0..LANES {
+                            let $x = $i.get(l);
+                            let $md = Ggx { alpha: $x.alpha };
+                            out.set(l, &$kernel);
+                        }
+                    }
+                    Distribution::Beckmann => {
+                        for l in 0..LANES {
+                            let $x = $i.get(l);
+                            let $md = Beckmann { alpha: $x.alpha };
+                            out.set(l, &$kernel);
+                        }
+                    }
+                }
+                out
+            },
+        )
+    };
+}
+
 /// What the kernel reads for one path: the directions, the normal, the BSDF's numbers and the
 /// conductor's parameters (textures applied).
 #[derive(Clone, Copy, Debug, Default)]
@@ -158,23 +192,7 @@ impl GlossyLanes for RoughConductor {
 
     #[inline(never)]
     fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        pathwave_engine::simd::lanes(
-            #[inline(always)]
-            || match distribution {
-                Distribution::Ggx => {
-                    for l in 0..LANES {
-                        let x = i.get(l);
-                        o.set(l, &conductor(&x, distribution, Ggx { alpha: x.alpha }));
-                    }
-                }
-                Distribution::Beckmann => {
-                    for l in 0..LANES {
-                        let x = i.get(l);
-                        o.set(l, &conductor(&x, distribution, Beckmann { alpha: x.alpha }));
-                    }
-                }
-            },
-        )
+        each_lane!(i, distribution, o, ConductorOutLanes, |x, md| conductor(&x, distribution, md));
     }
 
     #[inline(always)]
@@ -276,23 +294,7 @@ impl GlossyLanes for RoughDielectric {
 
     #[inline(never)]
     fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        pathwave_engine::simd::lanes(
-            #[inline(always)]
-            || match distribution {
-                Distribution::Ggx => {
-                    for l in 0..LANES {
-                        let x = i.get(l);
-                        o.set(l, &dielectric(&x, distribution, Ggx { alpha: x.alpha }));
-                    }
-                }
-                Distribution::Beckmann => {
-                    for l in 0..LANES {
-                        let x = i.get(l);
-                        o.set(l, &dielectric(&x, distribution, Beckmann { alpha: x.alpha }));
-                    }
-                }
-            },
-        )
+        each_lane!(i, distribution, o, DielectricOutLanes, |x, md| dielectric(&x, distribution, md));
     }
 
     #[inline(always)]
@@ -405,32 +407,9 @@ impl GlossyLanes for RoughPlastic {
         i.set(l, &x);
     }
 
-    /// The loop writes a local of its own, copied out after: writing `o`, whose memory it could
-    /// not tell from the coating tables it reads through each lane's pointer, it did not
-    /// vectorise (LLVM: "cannot identify array bounds").
     #[inline(never)]
     fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        *o = pathwave_engine::simd::lanes(
-            #[inline(always)]
-            || {
-                let mut out = ConductorOutLanes::default();
-                match distribution {
-                    Distribution::Ggx => {
-                        for l in 0..LANES {
-                            let x = i.get(l);
-                            out.set(l, &plastic(&x, distribution, Ggx { alpha: x.alpha }));
-                        }
-                    }
-                    Distribution::Beckmann => {
-                        for l in 0..LANES {
-                            let x = i.get(l);
-                            out.set(l, &plastic(&x, distribution, Beckmann { alpha: x.alpha }));
-                        }
-                    }
-                }
-                out
-            },
-        )
+        each_lane!(i, distribution, o, ConductorOutLanes, |x, md| plastic(&x, distribution, md));
     }
 
     #[inline(always)]

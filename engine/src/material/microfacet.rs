@@ -58,6 +58,45 @@ pub fn to_local(f: &Frame, v: Vec3A) -> Vec3A {
     Vec3A::new(v.dot(f.t), v.dot(f.b), v.dot(f.n))
 }
 
+/// A local frame on plain numbers ([`Vec3`], the lane kernels'): [`crate::math::basis`] about a
+/// unit normal, the same axes as [`Frame::from_normal`].
+#[derive(Clone, Copy, Debug)]
+pub struct PlainFrame {
+    /// First tangent.
+    pub t: Vec3,
+    /// Second tangent.
+    pub b: Vec3,
+    /// The normal.
+    pub n: Vec3,
+}
+
+impl PlainFrame {
+    /// About the unit normal `n`.
+    #[inline(always)]
+    pub fn new(n: Vec3) -> Self {
+        let (t, b) = crate::math::basis(n);
+        Self { t, b, n }
+    }
+
+    /// About `n` turned to `wo`'s side where `two_sided` (else `n` as it is).
+    #[inline(always)]
+    pub fn facing(wo: Vec3, n: Vec3, two_sided: bool) -> Self {
+        Self::new(if two_sided && wo.dot(n) < 0.0 { -n } else { n })
+    }
+
+    /// `v` in the frame: (v.t, v.b, v.n).
+    #[inline(always)]
+    pub fn local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    /// The local `v` in world space, normalised (by a division, as glam's `Vec3A::normalize`).
+    #[inline(always)]
+    pub fn world_unit(&self, v: Vec3) -> Vec3 {
+        crate::math::normalized(self.t * v.x + self.b * v.y + self.n * v.z)
+    }
+}
+
 /// The form of the Smith shadowing-masking term.
 #[derive(serde::Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Smith {

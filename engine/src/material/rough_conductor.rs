@@ -16,12 +16,12 @@
 //! the two are equal the isotropic code runs.
 
 use super::microfacet::{
-    Beckmann, BeckmannAniso, Distribution, Ggx, GgxAniso, Microfacet, Roughness, SMOOTH_ALPHA, Smith,
-    to_local,
+    Beckmann, BeckmannAniso, Distribution, Ggx, GgxAniso, Microfacet, PlainFrame, Roughness, SMOOTH_ALPHA,
+    Smith, to_local,
 };
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::{Albedo, Color, Rgb, Scalar};
-use crate::math::{Frame, basis, normalized, reflect};
+use crate::math::{Frame, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Microfacet reflector (Walter et al. 2007) with the `distribution` `Ggx` (default) or `Beckmann`
@@ -245,10 +245,8 @@ impl RoughConductor {
     /// kernel, whose loop over lanes vectorises.
     #[inline(always)]
     pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n_given: Vec3) -> BsdfEval {
-        let n = if self.two_sided && wo.dot(n_given) < 0.0 { -n_given } else { n_given };
-        let (t, b) = basis(n);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
-        let li = Vec3::new(wi.dot(t), wi.dot(b), wi.dot(n));
+        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        let (lo, li) = (f.local(wo), f.local(wi));
         let m = (lo + li).normalize_or_zero();
         let cos_om = lo.dot(m);
         // D_wo(m) / (4 wo.m) = D G1(wo) / (4 cos_o), which is also f cos_i / (F G / G1(wo))
@@ -275,9 +273,8 @@ impl RoughConductor {
         n_given: Vec3,
         u: Vec2,
     ) -> (PlainSample, bool) {
-        let n = if self.two_sided && wo.dot(n_given) < 0.0 { -n_given } else { n_given };
-        let (t, b) = basis(n);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
+        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        let lo = f.local(wo);
         let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
         let li = 2.0 * lo.dot(m) * m - lo;
@@ -286,7 +283,7 @@ impl RoughConductor {
         // f cos_i / pdf: D and G1(wo) / cos_o cancel, leaving F G / G1(wo) (F G1(wi) when
         // separable).
         let weight = self.tint * self.fresnel(cos_om.min(1.0)) * md.shadowing(self.smith, lo, li);
-        let wi = normalized(t * li.x + b * li.y + n * li.z);
+        let wi = f.world_unit(li);
         let valid = lo.z > 0.0 && m.z > 0.0 && cos_om > 0.0 && li.z > 0.0 && pdf > 0.0 && pdf.is_finite();
         (PlainSample { wi, weight, pdf }, valid)
     }

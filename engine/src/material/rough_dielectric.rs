@@ -18,10 +18,12 @@
 //! Below [`SMOOTH_ALPHA`] (or with `ior` 1) it is the smooth dielectric.
 
 use super::dielectric::{Fresnel, fresnel_exact, refract_plain};
-use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA, Smith};
+use super::microfacet::{
+    Beckmann, Distribution, Ggx, Microfacet, PlainFrame, Roughness, SMOOTH_ALPHA, Smith,
+};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::{Positive, Scalar};
-use crate::math::{basis, normalized};
+use crate::math::normalized;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Rough glass (Walter et al. 2007), `distribution` `Ggx` (default) or `Beckmann` as
@@ -108,8 +110,8 @@ impl RoughDielectric {
     ) -> (DielectricSample, bool) {
         let cos_o = wo.dot(n);
         let (eta, nf) = self.side_plain(cos_o, n);
-        let (t, b) = basis(nf);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(nf));
+        let f = PlainFrame::new(nf);
+        let lo = f.local(wo);
         let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
         let pdf_m = md.pdf_visible(lo, m);
@@ -136,7 +138,7 @@ impl RoughDielectric {
         };
         let valid =
             cos_o != 0.0 && lo.z > 0.0 && m.z > 0.0 && cos_om > 0.0 && leaves && pdf > 0.0 && pdf.is_finite();
-        let wi = normalized(t * li.x + b * li.y + nf * li.z);
+        let wi = f.world_unit(li);
         (DielectricSample { wi, weight, pdf, eta }, valid)
     }
 
@@ -146,9 +148,8 @@ impl RoughDielectric {
     pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n: Vec3) -> BsdfEval {
         let cos_o = wo.dot(n);
         let (eta, nf) = self.side_plain(cos_o, n);
-        let (t, b) = basis(nf);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(nf));
-        let li = Vec3::new(wi.dot(t), wi.dot(b), wi.dot(nf));
+        let f = PlainFrame::new(nf);
+        let (lo, li) = (f.local(wo), f.local(wi));
         let reflection = li.z > 0.0;
         // The (generalised) half vector on the side of the normal.
         let h = if reflection { lo + li } else { lo + eta * li };

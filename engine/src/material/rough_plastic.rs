@@ -20,7 +20,7 @@
 //! mirror (a delta lobe of reflectance `F(cos wo)`, with `T = 1 - F`).
 
 use super::lambertian::{cosine_hemisphere, cosine_hemisphere_plain};
-use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Roughness, SMOOTH_ALPHA};
+use super::microfacet::{Beckmann, Distribution, Ggx, Microfacet, PlainFrame, Roughness, SMOOTH_ALPHA};
 use super::plastic::{
     CoatingIor, inner_bounces, lobe_probability, lobe_probability_plain, polypropylene,
     specular_sampling_weight, white,
@@ -29,7 +29,7 @@ use super::rough_conductor::PlainSample;
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color};
 use crate::material::dielectric::fresnel_exact;
-use crate::math::{Frame, basis, normalized, reflect};
+use crate::math::{Frame, normalized, reflect};
 use glam::{Vec2, Vec3, Vec3A};
 use std::collections::HashMap;
 use std::f32::consts::FRAC_1_PI;
@@ -318,21 +318,12 @@ impl RoughPlastic {
         !self.is_smooth()
     }
 
-    /// The normal facing `wo` (two-sided) and the local frame about it: (t, b, n).
-    #[inline(always)]
-    fn frame_plain(&self, wo: Vec3, n_given: Vec3) -> (Vec3, Vec3, Vec3) {
-        let n = if self.two_sided && wo.dot(n_given) < 0.0 { -n_given } else { n_given };
-        let (t, b) = basis(n);
-        (t, b, n)
-    }
-
     /// [`MaterialModel::eval`] off the smooth limit with the distribution `md`, on plain
     /// numbers and without branches: the one source of the one-path code and the lane kernel.
     #[inline(always)]
     pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n_given: Vec3) -> BsdfEval {
-        let (t, b, n) = self.frame_plain(wo, n_given);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
-        let li = Vec3::new(wi.dot(t), wi.dot(b), wi.dot(n));
+        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        let (lo, li) = (f.local(wo), f.local(wi));
         self.eval_local(md, lo, li)
     }
 
@@ -369,14 +360,14 @@ impl RoughPlastic {
         u: Vec2,
         uc: f32,
     ) -> (PlainSample, bool) {
-        let (t, b, n) = self.frame_plain(wo, n_given);
-        let lo = Vec3::new(wo.dot(t), wo.dot(b), wo.dot(n));
+        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        let lo = f.local(wo);
         let (p, some) = lobe_probability_plain(1.0 - self.coating.transmittance(lo.z), self.specular_weight);
         let m = md.sample_visible(lo, u);
         let glossy = 2.0 * lo.dot(m) * m - lo;
         let li = if uc < p { glossy } else { cosine_hemisphere_plain(u) };
         let e = self.eval_local(md, lo, li);
-        let wi = normalized(t * li.x + b * li.y + n * li.z);
+        let wi = f.world_unit(li);
         let valid = lo.z > 0.0 && some && e.pdf != 0.0;
         (PlainSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf }, valid)
     }
