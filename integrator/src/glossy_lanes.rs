@@ -37,11 +37,8 @@ pub trait GlossyLanes {
     /// too, and not read).
     fn run(i: &Self::In, d: Distribution, o: &mut Self::Out);
 
-    /// Lane `l`'s BSDF towards its light sample.
-    fn eval(o: &Self::Out, l: usize) -> BsdfEval;
-
-    /// Lane `l`'s sampled direction, if any.
-    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample>;
+    /// Lane `l`'s BSDF towards its light sample, and its sampled direction (if any).
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>);
 }
 
 /// Runs `$kernel` (a lane's outputs from its inputs `$x` and its distribution `$md`) on every
@@ -196,21 +193,11 @@ impl GlossyLanes for RoughConductor {
     }
 
     #[inline(always)]
-    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
-        BsdfEval { f_cos: v3(&o.f_cos, l), pdf: o.eval_pdf[l] }
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        let x = o.get(l);
+        let s = PlainSample { wi: x.wi, weight: x.weight, pdf: x.pdf };
+        (BsdfEval { f_cos: x.f_cos, pdf: x.eval_pdf }, x.sampled.then(|| s.into()))
     }
-
-    #[inline(always)]
-    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
-        let s = PlainSample { wi: v3(&o.wi, l), weight: v3(&o.weight, l), pdf: o.pdf[l] };
-        o.sampled[l].then(|| s.into())
-    }
-}
-
-/// Lane `l` of a vector's lanes.
-#[inline(always)]
-fn v3(a: &[[f32; LANES]; 3], l: usize) -> Vec3 {
-    Vec3::new(a[0][l], a[1][l], a[2][l])
 }
 
 /// What the dielectric kernel reads for one path.
@@ -298,14 +285,10 @@ impl GlossyLanes for RoughDielectric {
     }
 
     #[inline(always)]
-    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
-        BsdfEval { f_cos: Vec3::splat(o.f_cos[l]), pdf: o.eval_pdf[l] }
-    }
-
-    #[inline(always)]
-    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
-        let s = DielectricSample { wi: v3(&o.wi, l), weight: o.weight[l], pdf: o.pdf[l], eta: o.eta[l] };
-        o.sampled[l].then(|| s.into())
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        let x = o.get(l);
+        let s = DielectricSample { wi: x.wi, weight: x.weight, pdf: x.pdf, eta: x.eta };
+        (BsdfEval { f_cos: Vec3::splat(x.f_cos), pdf: x.eval_pdf }, x.sampled.then(|| s.into()))
     }
 }
 
@@ -413,12 +396,7 @@ impl GlossyLanes for RoughPlastic {
     }
 
     #[inline(always)]
-    fn eval(o: &Self::Out, l: usize) -> BsdfEval {
-        <RoughConductor as GlossyLanes>::eval(o, l)
-    }
-
-    #[inline(always)]
-    fn sample(o: &Self::Out, l: usize) -> Option<BsdfSample> {
-        <RoughConductor as GlossyLanes>::sample(o, l)
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        <RoughConductor as GlossyLanes>::result(o, l)
     }
 }

@@ -308,15 +308,15 @@ pub struct GgxAniso {
 impl GgxAniso {
     /// `alpha^2 sin^2` of the isotropic forms: the squared projected width seen along `w`.
     #[inline]
-    fn width2(&self, w: Vec3A) -> f32 {
+    fn width2(&self, w: Vec3) -> f32 {
         let (x, y) = (self.ax * w.x, self.ay * w.y);
         x * x + y * y
     }
 }
 
-impl Microfacet for GgxAniso {
+impl Microfacet<Vec3> for GgxAniso {
     #[inline]
-    fn d(&self, m: Vec3A) -> f32 {
+    fn d(&self, m: Vec3) -> f32 {
         if m.z <= 0.0 {
             return 0.0;
         }
@@ -329,24 +329,26 @@ impl Microfacet for GgxAniso {
     }
 
     #[inline]
-    fn g1(&self, w: Vec3A) -> f32 {
+    fn g1(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
         let den = c + (c * c + self.width2(w)).sqrt();
         if den > 0.0 { 2.0 * c / den } else { 0.0 }
     }
 
     #[inline]
-    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+    fn g1_over_cos(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
         let den = c + (c * c + self.width2(w)).sqrt();
         if den > 0.0 { 2.0 / den } else { 0.0 }
     }
 
     #[inline]
-    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        ggx_sample_visible(self.ax, self.ay, wo.into(), u).into()
+    fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        ggx_sample_visible(self.ax, self.ay, wo, u)
     }
 }
+
+through_plain!(GgxAniso);
 
 /// Test support: chi-square of a direction sampler with the cells packed about a lobe.
 #[cfg(test)]

@@ -17,7 +17,7 @@
 
 use super::microfacet::{
     Beckmann, BeckmannAniso, Distribution, Ggx, GgxAniso, Microfacet, PlainFrame, Roughness, SMOOTH_ALPHA,
-    Smith, to_local,
+    Smith,
 };
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading, Specular};
 use crate::format::{Albedo, Color, Rgb, Scalar};
@@ -156,11 +156,11 @@ impl RoughConductor {
     /// facing `nf` (`n` or its opposite, see [`Self::facing`]): the tangent at its angle,
     /// the bitangent completing a right-handed frame about `nf`.
     #[inline]
-    fn tangent_frame(&self, n: Vec3A, nf: Vec3A) -> Frame {
+    fn tangent_frame(&self, n: Vec3A, nf: Vec3A) -> PlainFrame {
         let f = Frame::from_normal(n);
         let (s, c) = self.tangent.sin_cos();
         let t = c * f.t + s * f.b;
-        Frame { t, b: nf.cross(t), n: nf }
+        PlainFrame { t: t.into(), b: nf.cross(t).into(), n: nf.into() }
     }
 
     /// The normal a two-sided conductor reflects about: `n` turned to `wo`'s side.
@@ -184,55 +184,6 @@ impl RoughConductor {
         }
     }
 
-    /// [`MaterialModel::sample`] off the smooth limit in `frame` (its normal facing `wo`),
-    /// with the distribution `md`: visible-normal sampling and mirroring about the normal.
-    #[inline(always)]
-    fn sample_rough<M: Microfacet>(&self, md: M, frame: Frame, wo: Vec3A, u: Vec2) -> Option<BsdfSample> {
-        let lo = to_local(&frame, wo);
-        let m = md.sample_visible(lo, u);
-        let cos_om = lo.dot(m);
-        if m.z <= 0.0 || cos_om <= 0.0 {
-            return None;
-        }
-        let li = reflect(lo, m);
-        if li.z <= 0.0 {
-            return None;
-        }
-        // D_wo(m) / (4 wo.m), the Jacobian of the reflection (Walter et al. 2007, eq. 14).
-        let pdf = md.pdf_visible(lo, m) / (4.0 * cos_om);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        // f cos_i / pdf: D and G1(wo) / cos_o cancel, leaving F G / G1(wo) (F G1(wi) when
-        // separable).
-        let weight = self.tint * self.fresnel(cos_om.min(1.0)) * md.shadowing(self.smith, lo, li);
-        let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight, pdf, eta: 1.0, delta: false, null: false })
-    }
-
-    /// [`MaterialModel::eval`] off the smooth limit in `frame` (its normal facing `wo`), with
-    /// the distribution `md`.
-    #[inline(always)]
-    fn eval_rough<M: Microfacet>(&self, md: M, frame: Frame, wo: Vec3A, wi: Vec3A) -> BsdfEval {
-        let (lo, li) = (to_local(&frame, wo), to_local(&frame, wi));
-        if lo.z <= 0.0 || li.z <= 0.0 {
-            return BsdfEval::ZERO;
-        }
-        let m = (lo + li).normalize_or_zero();
-        let cos_om = lo.dot(m);
-        if m.z <= 0.0 || cos_om <= 0.0 {
-            return BsdfEval::ZERO;
-        }
-        // D_wo(m) / (4 wo.m) = D G1(wo) / (4 cos_o), which is also f cos_i / (F G / G1(wo))
-        // with f cos_i = F D G / (4 cos_o).
-        let pdf = md.d(m) * md.g1_over_cos(lo) * 0.25;
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return BsdfEval::ZERO;
-        }
-        let f_cos = self.tint * self.fresnel(cos_om.min(1.0)) * (pdf * md.shadowing(self.smith, lo, li));
-        BsdfEval { f_cos, pdf }
-    }
-
     /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]):
     /// rough, isotropic, with separable shadowing-masking.
     #[inline]
@@ -245,7 +196,13 @@ impl RoughConductor {
     /// kernel, whose loop over lanes vectorises.
     #[inline(always)]
     pub fn eval_plain<M: Microfacet<Vec3>>(&self, md: M, wo: Vec3, wi: Vec3, n_given: Vec3) -> BsdfEval {
-        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        self.eval_in(PlainFrame::facing(wo, n_given, self.two_sided), md, wo, wi)
+    }
+
+    /// [`Self::eval_plain`] in the frame `f` (its normal facing `wo`; the anisotropic one's
+    /// tangent along the roughness `alpha`'s direction).
+    #[inline(always)]
+    fn eval_in<M: Microfacet<Vec3>>(&self, f: PlainFrame, md: M, wo: Vec3, wi: Vec3) -> BsdfEval {
         let (lo, li) = (f.local(wo), f.local(wi));
         let m = (lo + li).normalize_or_zero();
         let cos_om = lo.dot(m);
@@ -273,7 +230,12 @@ impl RoughConductor {
         n_given: Vec3,
         u: Vec2,
     ) -> (PlainSample, bool) {
-        let f = PlainFrame::facing(wo, n_given, self.two_sided);
+        self.sample_in(PlainFrame::facing(wo, n_given, self.two_sided), md, wo, u)
+    }
+
+    /// [`Self::sample_plain`] in the frame `f`, as [`Self::eval_in`].
+    #[inline(always)]
+    fn sample_in<M: Microfacet<Vec3>>(&self, f: PlainFrame, md: M, wo: Vec3, u: Vec2) -> (PlainSample, bool) {
         let lo = f.local(wo);
         let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
@@ -314,26 +276,27 @@ impl RoughConductor {
         self.eval_plain(Beckmann { alpha: self.alpha }, wo.into(), wi.into(), n.into())
     }
 
-    /// [`Self::sample_rough`] when anisotropic, out of line (`n` as the integrators gave it,
-    /// `nf` facing `wo`).
+    /// [`Self::sample_in`] when anisotropic, out of line (`n` as the integrators gave it, `nf`
+    /// facing `wo`).
     #[inline(never)]
     fn sample_anisotropic(&self, wo: Vec3A, n: Vec3A, nf: Vec3A, u: Vec2) -> Option<BsdfSample> {
-        let frame = self.tangent_frame(n, nf);
+        let f = self.tangent_frame(n, nf);
         let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
-        match self.distribution {
-            Distribution::Ggx => self.sample_rough(GgxAniso { ax, ay }, frame, wo, u),
-            Distribution::Beckmann => self.sample_rough(BeckmannAniso { ax, ay }, frame, wo, u),
-        }
+        let (s, valid) = match self.distribution {
+            Distribution::Ggx => self.sample_in(f, GgxAniso { ax, ay }, wo.into(), u),
+            Distribution::Beckmann => self.sample_in(f, BeckmannAniso { ax, ay }, wo.into(), u),
+        };
+        valid.then(|| s.into())
     }
 
-    /// [`Self::eval_rough`] when anisotropic, out of line as [`Self::sample_anisotropic`].
+    /// [`Self::eval_in`] when anisotropic, out of line as [`Self::sample_anisotropic`].
     #[inline(never)]
     fn eval_anisotropic(&self, wo: Vec3A, wi: Vec3A, n: Vec3A, nf: Vec3A) -> BsdfEval {
-        let frame = self.tangent_frame(n, nf);
+        let f = self.tangent_frame(n, nf);
         let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
         match self.distribution {
-            Distribution::Ggx => self.eval_rough(GgxAniso { ax, ay }, frame, wo, wi),
-            Distribution::Beckmann => self.eval_rough(BeckmannAniso { ax, ay }, frame, wo, wi),
+            Distribution::Ggx => self.eval_in(f, GgxAniso { ax, ay }, wo.into(), wi.into()),
+            Distribution::Beckmann => self.eval_in(f, BeckmannAniso { ax, ay }, wo.into(), wi.into()),
         }
     }
 }

@@ -188,10 +188,11 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                         Distribution::Ggx => &ggx,
                         Distribution::Beckmann => &beckmann,
                     };
-                    let light = lights[l].as_ref();
-                    let shadow = light
-                        .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || K::eval(o, l), time));
-                    let next = K::sample(o, l).and_then(|bs| {
+                    let (e, bs) = K::result(o, l);
+                    let shadow = lights[l]
+                        .as_ref()
+                        .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
+                    let next = bs.and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
                     });
                     (shadow, next)

@@ -109,15 +109,15 @@ pub struct BeckmannAniso {
 impl BeckmannAniso {
     /// `alpha sin` of the isotropic forms: the projected width seen along `w`.
     #[inline]
-    fn width(&self, w: Vec3A) -> f32 {
+    fn width(&self, w: Vec3) -> f32 {
         let (x, y) = (self.ax * w.x, self.ay * w.y);
         (x * x + y * y).sqrt()
     }
 }
 
-impl Microfacet for BeckmannAniso {
+impl Microfacet<Vec3> for BeckmannAniso {
     #[inline]
-    fn d(&self, m: Vec3A) -> f32 {
+    fn d(&self, m: Vec3) -> f32 {
         if m.z <= 0.0 {
             return 0.0;
         }
@@ -128,7 +128,7 @@ impl Microfacet for BeckmannAniso {
     }
 
     #[inline]
-    fn g1(&self, w: Vec3A) -> f32 {
+    fn g1(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
         if c == 0.0 {
             return 0.0;
@@ -141,7 +141,7 @@ impl Microfacet for BeckmannAniso {
     }
 
     #[inline]
-    fn g1_over_cos(&self, w: Vec3A) -> f32 {
+    fn g1_over_cos(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
         let s = self.width(w);
         if c >= 1.6 * s {
@@ -152,10 +152,12 @@ impl Microfacet for BeckmannAniso {
     }
 
     #[inline]
-    fn sample_visible(&self, wo: Vec3A, u: Vec2) -> Vec3A {
-        sample_visible(self.ax, self.ay, wo.into(), u).into()
+    fn sample_visible(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        sample_visible(self.ax, self.ay, wo, u)
     }
 }
+
+super::through_plain!(BeckmannAniso);
 
 /// Slopes of a visible normal of the Beckmann distribution of unit roughness seen from a direction
 /// in the xz plane with sine `sin` and cosine `cos` (> 0) of its polar angle (Jakob 2014). The
