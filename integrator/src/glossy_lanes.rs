@@ -1,4 +1,4 @@
-//! Rough conductors, dielectrics and plastics across lanes: the BSDF evaluated towards each
+//! Rough conductors, dielectrics and plastics, and the principled BSDF, across lanes: the BSDF evaluated towards each
 //! path's light sample and sampled for its next direction, [`LANES`] paths at a time. The
 //! kernels are the engine's own `eval_plain` and `sample_plain` (plain numbers, no branches),
 //! which the one-path code calls too: one source, so both integrators compute the same bits.
@@ -9,7 +9,8 @@
 use crate::lambert_vertex::{LANES, lanes};
 use crate::path::ScatterSamples;
 use glam::{Vec2, Vec3};
-use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Smith};
+use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, PlainFrame, Smith};
+use pathwave_engine::material::principled::{Lobes, Principled};
 use pathwave_engine::material::rough_conductor::{ComplexIor, PlainSample, RoughConductor};
 use pathwave_engine::material::rough_dielectric::{DielectricSample, RoughDielectric};
 use pathwave_engine::material::rough_plastic::{Coating, RoughPlastic};
@@ -43,11 +44,25 @@ pub trait GlossyLanes {
 
 /// Runs `$kernel` (a lane's outputs from its inputs `$x` and its distribution `$md`) on every
 /// lane of `$i` into `$o` (of type `$out`), in the AVX-512 region where the CPU has it, with a
-/// loop for each distribution (each compiled with its distribution's code). The loop writes a
+/// loop for each distribution (each compiled with its distribution's code; one loop for a kind
+/// of one distribution, whose kernel takes `$x` alone). The loop writes a
 /// local output, copied to `$o` after it: writing `$o` itself, the plastic's loop, whose kernel
 /// reads its coating tables through each lane's pointer, did not vectorise (LLVM could not tell
 /// its stores from those tables).
 macro_rules! each_lane {
+    ($i:expr, $o:expr, $out:ty, |$x:ident| $kernel:expr) => {
+        *$o = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || {
+                let mut out = <$out>::default();
+                for l in 0..LANES {
+                    let $x = $i.get(l);
+                    out.set(l, &$kernel);
+                }
+                out
+            },
+        )
+    };
     ($i:expr, $d:expr, $o:expr, $out:ty, |$x:ident, $md:ident| $kernel:expr) => {
         *$o = pathwave_engine::simd::lanes(
             #[inline(always)]
@@ -398,5 +413,131 @@ impl GlossyLanes for RoughPlastic {
     #[inline(always)]
     fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
         <RoughConductor as GlossyLanes>::result(o, l)
+    }
+}
+
+lanes!(pub LobesLanes for Lobes {
+    base: v3, base_sqrt: v3, tint: v3, roughness: f32, metallic: f32, spec_tint: f32, sheen: f32,
+    sheen_tint: f32, flatness: f32, clearcoat: f32, brdf: f32, bsdf: f32, ax: f32, ay: f32, eta: f32,
+    rate_spec: f32, rate_cc: f32, rate_diff: f32, cc_alpha: f32, cc_a2: f32, cc_ln_a2: f32,
+});
+
+/// What the principled kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrincipledIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The shading frame ([`Principled::frame`]): the tangent, ...
+    pub t: Vec3,
+    /// ... the bitangent ...
+    pub b: Vec3,
+    /// ... and the normal.
+    pub n: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The clearcoat normal's cosine squared ([`Lobes::clearcoat_cos2`]).
+    pub cc_cos2: f32,
+    /// The material's numbers.
+    pub lobes: Lobes,
+}
+
+lanes!(pub PrincipledInLanes for PrincipledIn {
+    wo: v3, wi: v3, t: v3, b: v3, n: v3, u: f2, uc: f32, cc_cos2: f32, lobes: (lanes LobesLanes),
+});
+
+/// What the principled kernel writes for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrincipledOut {
+    /// `f cos` towards the light sample.
+    pub f_cos: Vec3,
+    /// The BSDF's density of that direction.
+    pub eval_pdf: f32,
+    /// The sampled direction.
+    pub wi: Vec3,
+    /// Its weight, `f cos / pdf`.
+    pub weight: Vec3,
+    /// Its density.
+    pub pdf: f32,
+    /// The relative IOR it crossed (1: reflected).
+    pub eta: f32,
+    /// A direction was sampled.
+    pub sampled: bool,
+}
+
+lanes!(pub PrincipledOutLanes for PrincipledOut {
+    f_cos: v3, eval_pdf: f32, wi: v3, weight: v3, pdf: f32, eta: f32, sampled: bool,
+});
+
+/// The principled kernel for one path: [`Principled`]'s `eval` and `sample` in its frame.
+#[inline(always)]
+fn principled(i: &PrincipledIn) -> PrincipledOut {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    let lo = f.local(i.wo);
+    let e = i.lobes.eval_plain(lo, f.local(i.wi));
+    let (li, eta, s, sampled) = i.lobes.sample_plain(lo, Vec2::new(i.u[0], i.u[1]), i.uc, i.cc_cos2);
+    PrincipledOut {
+        f_cos: e.f_cos,
+        eval_pdf: e.pdf,
+        wi: f.world_unit(li),
+        weight: s.f_cos / s.pdf,
+        pdf: s.pdf,
+        eta,
+        sampled,
+    }
+}
+
+impl GlossyLanes for Principled {
+    type In = PrincipledInLanes;
+    type Out = PrincipledOutLanes;
+
+    /// Every principled material, with its one distribution (GGX).
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::Principled(p) => Some((*p, Distribution::Ggx)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let f = m.frame(n.into());
+        let lobes = m.lobes();
+        let cc_cos2 = lobes.clearcoat_cos2(u.dir.y);
+        let x = PrincipledIn {
+            wo,
+            wi,
+            t: f.t,
+            b: f.b,
+            n: f.n,
+            u: [u.dir.x, u.dir.y],
+            uc: u.lobe,
+            cc_cos2,
+            lobes,
+        };
+        i.set(l, &x);
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+        each_lane!(i, o, PrincipledOutLanes, |x| principled(&x));
+    }
+
+    #[inline(always)]
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        let x = o.get(l);
+        let s = BsdfSample {
+            wi: x.wi.into(),
+            weight: x.weight,
+            pdf: x.pdf,
+            eta: x.eta,
+            delta: false,
+            null: false,
+        };
+        (BsdfEval { f_cos: x.f_cos, pdf: x.eval_pdf }, x.sampled.then_some(s))
     }
 }

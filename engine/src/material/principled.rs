@@ -20,10 +20,10 @@
 //! and clearcoat directions' density is not quite the one the weights divide by (the reference
 //! images carry the same bias). Seen from below the surface only the two specular lobes act.
 
-use super::microfacet::{GgxAniso, Microfacet};
+use super::microfacet::{GgxAniso, LocalVector, Microfacet, PlainFrame};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color, Positive, Scalar, UnitInterval};
-use crate::math::{Frame, reflect};
+use crate::math::Frame;
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -139,22 +139,54 @@ pub struct Principled {
     pub rates: [f32; 3],
 }
 
-/// Everything of a principled BSDF at one hit that the lobes read.
-struct Lobes {
-    base: Vec3,
-    lum: f32,
-    roughness: f32,
-    metallic: f32,
-    spec_tint: f32,
-    sheen: f32,
-    sheen_tint: f32,
-    flatness: f32,
-    clearcoat: f32,
-    clearcoat_gloss: f32,
-    /// `(1 - metallic)(1 - spec_trans)` and `(1 - metallic) spec_trans`.
-    brdf: f32,
-    bsdf: f32,
-    ggx: GgxAniso,
+/// Everything of a principled BSDF at one hit that its lobes read, as plain numbers: what the
+/// one-path code and the wavefront's lane kernel ([`Lobes::eval_plain`], [`Lobes::sample_plain`])
+/// take, so that both compute the same bits.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Lobes {
+    /// Base colour.
+    pub base: Vec3,
+    /// Its square root (as `powf(0.5)`): the transmission's tint.
+    pub base_sqrt: Vec3,
+    /// The base colour over its luminance (white for black): the tint of `spec_tint` and sheen.
+    pub tint: Vec3,
+    /// Roughness.
+    pub roughness: f32,
+    /// Metallic blend.
+    pub metallic: f32,
+    /// Tint of the dielectric reflection.
+    pub spec_tint: f32,
+    /// Sheen amount.
+    pub sheen: f32,
+    /// Tint of the sheen.
+    pub sheen_tint: f32,
+    /// Blend towards the fake subsurface.
+    pub flatness: f32,
+    /// Clearcoat amount.
+    pub clearcoat: f32,
+    /// `(1 - metallic)(1 - spec_trans)`.
+    pub brdf: f32,
+    /// `(1 - metallic) spec_trans`.
+    pub bsdf: f32,
+    /// The main lobe's GGX widths along the tangent and across.
+    pub ax: f32,
+    /// See `ax`.
+    pub ay: f32,
+    /// Relative index of refraction inside.
+    pub eta: f32,
+    /// Sampling rates of the main specular, clearcoat and diffuse lobes.
+    pub rate_spec: f32,
+    /// See `rate_spec`.
+    pub rate_cc: f32,
+    /// See `rate_spec`.
+    pub rate_diff: f32,
+    /// The clearcoat's GTR1 width (0.1 to 0.001 by `clearcoat_gloss`), its square and that
+    /// square's logarithm.
+    pub cc_alpha: f32,
+    /// See `cc_alpha`.
+    pub cc_a2: f32,
+    /// See `cc_alpha`.
+    pub cc_ln_a2: f32,
 }
 
 impl Principled {
@@ -170,13 +202,20 @@ impl Principled {
         self.weights[i] = (v.clamp(0.0, 1.0) * 65535.0).round() as u16;
     }
 
-    fn lobes(&self) -> Lobes {
+    /// The lobes' numbers.
+    #[inline]
+    pub fn lobes(&self) -> Lobes {
         let (roughness, anisotropic) = (self.w(ROUGHNESS), self.w(ANISOTROPIC));
         let (metallic, spec_trans) = (self.w(METALLIC), self.w(SPEC_TRANS));
         let ggx = ggx(roughness, anisotropic);
+        let base = self.base_color;
+        let lum = crate::math::luminance(base);
+        let cc_alpha = lerp(0.1, 0.001, self.w(CLEARCOAT_GLOSS));
+        let cc_a2 = cc_alpha * cc_alpha;
         Lobes {
-            base: self.base_color,
-            lum: crate::math::luminance(self.base_color),
+            base,
+            base_sqrt: base.max(Vec3::ZERO).powf(0.5),
+            tint: if lum > 0.0 { base / lum } else { Vec3::ONE },
             roughness,
             metallic,
             spec_tint: self.w(SPEC_TINT),
@@ -184,122 +223,182 @@ impl Principled {
             sheen_tint: self.w(SHEEN_TINT),
             flatness: self.w(FLATNESS),
             clearcoat: self.w(CLEARCOAT),
-            clearcoat_gloss: self.w(CLEARCOAT_GLOSS),
             brdf: (1.0 - metallic) * (1.0 - spec_trans),
             bsdf: (1.0 - metallic) * spec_trans,
-            ggx,
+            ax: ggx.ax,
+            ay: ggx.ay,
+            eta: self.eta,
+            rate_spec: self.rates[0],
+            rate_cc: self.rates[1],
+            rate_diff: self.rates[2],
+            cc_alpha,
+            cc_a2,
+            cc_ln_a2: cc_a2.ln(),
         }
     }
 
-    /// The shading frame: the tangent at its angle about `n`.
+    /// The shading frame about the unit normal `n`: the tangent at its angle.
     #[inline]
-    fn frame(&self, n: Vec3A) -> Frame {
+    pub fn frame(&self, n: Vec3A) -> PlainFrame {
         let f = Frame::from_normal(n);
         let (s, c) = self.tangent.sin_cos();
         let t = c * f.t + s * f.b;
-        Frame { t, b: n.cross(t), n }
+        PlainFrame { t: t.into(), b: n.cross(t).into(), n: n.into() }
+    }
+}
+
+impl Lobes {
+    /// The main lobe's distribution.
+    #[inline(always)]
+    fn ggx(&self) -> GgxAniso {
+        GgxAniso { ax: self.ax, ay: self.ay }
+    }
+
+    /// The cosine squared of a clearcoat normal for the sample's second number `u_y` (GTR1's
+    /// inverse CDF, `(1 - a2^(1 - u_y)) / (1 - a2)`): its power comes from the C library, so the
+    /// callers compute it before [`Self::sample_plain`], whose lane loop could not vectorise it;
+    /// 0 without a clearcoat.
+    #[inline]
+    pub fn clearcoat_cos2(&self, u_y: f32) -> f32 {
+        let a2 = self.cc_a2;
+        if self.clearcoat > 0.0 { (1.0 - a2.powf(1.0 - u_y)) / (1.0 - a2) } else { 0.0 }
     }
 
     /// The lobes' probabilities (diffuse, clearcoat, transmission, main reflection) for the
     /// dielectric Fresnel factor `f` seen from the front or not.
-    #[inline]
-    fn probabilities(&self, l: &Lobes, f: f32, front: bool) -> [f32; 4] {
-        let [spec, cc, diff] = self.rates;
-        let p = match front {
-            true => [
-                l.brdf * diff,
-                0.25 * l.clearcoat * cc,
-                spec * l.bsdf * (1.0 - f),
-                spec * (1.0 - l.bsdf * (1.0 - f)),
-            ],
-            false => [0.0, 0.0, 1.0 - f, f],
-        };
+    #[inline(always)]
+    fn probabilities(&self, f: f32, front: bool) -> [f32; 4] {
+        let (spec, cc, diff) = (self.rate_spec, self.rate_cc, self.rate_diff);
+        let in_front = [
+            self.brdf * diff,
+            0.25 * self.clearcoat * cc,
+            spec * self.bsdf * (1.0 - f),
+            spec * (1.0 - self.bsdf * (1.0 - f)),
+        ];
+        let behind = [0.0, 0.0, 1.0 - f, f];
+        let p: [f32; 4] = std::array::from_fn(|i| if front { in_front[i] } else { behind[i] });
         let total = p[0] + p[1] + p[2] + p[3];
-        if total > 0.0 { p.map(|x| x / total) } else { [0.0; 4] }
+        p.map(|x| if total > 0.0 { x / total } else { 0.0 })
     }
 
-    /// `f |cos|` and the density for local directions (`lo` Mitsuba's `wi`, `li` its `wo`).
-    fn eval_local(&self, l: &Lobes, lo: Vec3A, li: Vec3A) -> BsdfEval {
+    /// The GTR1 distribution of the clearcoat at the microfacet normal `m` (0 in the tail where
+    /// `D cos` < 1e-20, as Mitsuba).
+    #[inline(always)]
+    fn gtr1(&self, m: Vec3) -> f32 {
+        let a2 = self.cc_a2;
+        let d = (a2 - 1.0) / (PI * self.cc_ln_a2 * (1.0 + (a2 - 1.0) * m.z * m.z));
+        if d * m.z > 1e-20 { d } else { 0.0 }
+    }
+
+    /// `f |cos|` and the density for local directions (`lo` Mitsuba's `wi`, `li` its `wo`), on
+    /// plain numbers and without branches (every lobe computed, the ones that apply added).
+    #[inline(always)]
+    pub fn eval_plain(&self, lo: Vec3, li: Vec3) -> BsdfEval {
+        let ggx = self.ggx();
         let (cos_i, cos_o) = (lo.z, li.z);
-        if cos_i == 0.0 || cos_o == 0.0 {
-            return BsdfEval::ZERO;
-        }
         let front = cos_i > 0.0;
         let reflect = cos_i * cos_o > 0.0;
         let eta_path = if front { self.eta } else { 1.0 / self.eta };
         let wh = (lo + li * if reflect { 1.0 } else { eta_path }).normalize_or_zero();
-        if wh == Vec3A::ZERO {
-            return BsdfEval::ZERO;
-        }
+        let defined = cos_i != 0.0 && cos_o != 0.0 && wh != Vec3::ZERO;
         let wh = if wh.z < 0.0 { -wh } else { wh };
         let (cos_ih, cos_oh) = (lo.dot(wh), li.dot(wh));
         let f = fresnel(cos_ih, self.eta).0;
         let compatible = compatible(wh, lo, li, cos_i, reflect);
-        let d = l.ggx.d(wh);
-        let g = smith_g1(&l.ggx, lo, wh) * smith_g1(&l.ggx, li, wh);
-        let mut value = Vec3::ZERO;
-        if reflect && compatible && f > 0.0 {
-            let fp = principled_fresnel(l, f, cos_ih, front, self.eta);
-            value += fp * (d * g / (4.0 * cos_i.abs()));
-        }
-        if !reflect && compatible && l.bsdf > 0.0 && f < 1.0 {
-            let scale = 1.0 / (eta_path * eta_path);
-            let t = scale * (1.0 - f) * d * g * eta_path * eta_path * cos_ih * cos_oh
-                / (cos_i * (cos_ih + eta_path * cos_oh).powi(2));
-            value += l.base.max(Vec3::ZERO).powf(0.5) * (l.bsdf * t.abs());
-        }
-        if reflect && compatible && front && l.clearcoat > 0.0 {
-            let fcc = schlick(0.04, cos_ih, self.eta);
-            let alpha = lerp(0.1, 0.001, l.clearcoat_gloss);
-            let dcc = gtr1(alpha, wh);
-            let gcc = smith_ggx1(lo, wh, 0.25) * smith_ggx1(li, wh, 0.25);
-            value += Vec3::splat(l.clearcoat * 0.25 * fcc * dcc * gcc * cos_o.abs());
-        }
-        if reflect && front && l.brdf > 0.0 {
-            let (fo, fi) = (schlick_weight(cos_o.abs()), schlick_weight(cos_i.abs()));
-            let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-            let cos_d = wh.dot(li);
-            let rr = 2.0 * l.roughness * cos_d * cos_d;
-            let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-            let mut lobe = f_diff + f_retro;
-            if l.flatness > 0.0 {
-                // Hanrahan-Krueger's fake subsurface, with Fss90 flattening the retro-reflection.
-                let fss90 = rr / 2.0;
-                let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
-                let f_ss = 1.25 * (fss * (1.0 / (cos_o.abs() + cos_i.abs()) - 0.5) + 0.5);
-                lobe = lerp(lobe, f_ss, l.flatness);
-            }
-            value += l.base * (l.brdf * cos_o.abs() * FRAC_1_PI * lobe);
-            if l.sheen > 0.0 && l.metallic < 1.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let tint = if l.lum > 0.0 { l.base / l.lum } else { Vec3::ONE };
-                let c = Vec3::ONE.lerp(tint, l.sheen_tint);
-                value += c * (l.sheen * (1.0 - l.metallic) * fd * cos_o.abs());
-            }
-        }
+        let d = Microfacet::<Vec3>::d(&ggx, wh);
+        let g = smith_g1(&ggx, lo, wh) * smith_g1(&ggx, li, wh);
+        let add = |on: bool, v: Vec3| if on { v } else { Vec3::ZERO };
+
+        let fp = principled_fresnel(self, f, cos_ih, front, self.eta);
+        let mut value = add(reflect && compatible && f > 0.0, fp * (d * g / (4.0 * cos_i.abs())));
+
+        let scale = 1.0 / (eta_path * eta_path);
+        let t = scale * (1.0 - f) * d * g * eta_path * eta_path * cos_ih * cos_oh
+            / (cos_i * (cos_ih + eta_path * cos_oh).powi(2));
+        let transmits = !reflect && compatible && self.bsdf > 0.0 && f < 1.0;
+        value += add(transmits, self.base_sqrt * (self.bsdf * t.abs()));
+
+        let fcc = schlick(0.04, cos_ih, self.eta);
+        let dcc = self.gtr1(wh);
+        let gcc = smith_ggx1(lo, wh, 0.25) * smith_ggx1(li, wh, 0.25);
+        let coat = reflect && compatible && front && self.clearcoat > 0.0;
+        value += add(coat, Vec3::splat(self.clearcoat * 0.25 * fcc * dcc * gcc * cos_o.abs()));
+
+        let diffuse = reflect && front && self.brdf > 0.0;
+        let (fo, fi) = (schlick_weight(cos_o.abs()), schlick_weight(cos_i.abs()));
+        let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+        let cos_d = wh.dot(li);
+        let rr = 2.0 * self.roughness * cos_d * cos_d;
+        let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+        let lobe = f_diff + f_retro;
+        // Hanrahan-Krueger's fake subsurface, with Fss90 flattening the retro-reflection.
+        let fss90 = rr / 2.0;
+        let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
+        let f_ss = 1.25 * (fss * (1.0 / (cos_o.abs() + cos_i.abs()) - 0.5) + 0.5);
+        let lobe = if self.flatness > 0.0 { lerp(lobe, f_ss, self.flatness) } else { lobe };
+        value += add(diffuse, self.base * (self.brdf * cos_o.abs() * FRAC_1_PI * lobe));
+        let fd = schlick_weight(cos_d.abs());
+        let c = Vec3::ONE.lerp(self.tint, self.sheen_tint);
+        let sheen = diffuse && self.sheen > 0.0 && self.metallic < 1.0;
+        value += add(sheen, c * (self.sheen * (1.0 - self.metallic) * fd * cos_o.abs()));
+
         // The density.
-        let [p_diff, p_cc, p_trans, p_spec] = self.probabilities(l, f, front);
+        let [p_diff, p_cc, p_trans, p_spec] = self.probabilities(f, front);
         let dwh_dwo = match reflect {
             true => (1.0 / (4.0 * cos_oh)).abs(),
             false => (eta_path * eta_path * cos_oh / (cos_ih + eta_path * cos_oh).powi(2)).abs(),
         };
         let lo_up = if front { lo } else { -lo };
-        let visible = l.ggx.d(wh) * smith_g1(&l.ggx, lo_up, wh) * lo_up.dot(wh).abs() / lo_up.z;
-        let mut pdf = 0.0;
-        if reflect && compatible {
-            pdf += p_spec * visible * dwh_dwo;
-            pdf += p_cc * wh.z * gtr1(lerp(0.1, 0.001, l.clearcoat_gloss), wh) * dwh_dwo;
+        let visible =
+            Microfacet::<Vec3>::d(&ggx, wh) * smith_g1(&ggx, lo_up, wh) * lo_up.dot(wh).abs() / lo_up.z;
+        let add = |on: bool, v: f32| if on { v } else { 0.0 };
+        let mut pdf = add(reflect && compatible, p_spec * visible * dwh_dwo);
+        pdf += add(reflect && compatible, p_cc * wh.z * dcc * dwh_dwo);
+        pdf += add(reflect, p_diff * cos_o.max(0.0) * FRAC_1_PI);
+        pdf += add(!reflect && compatible, p_trans * visible * dwh_dwo);
+        match defined && value.is_finite() && pdf.is_finite() {
+            true => BsdfEval { f_cos: value, pdf },
+            false => BsdfEval::ZERO,
         }
-        if reflect {
-            pdf += p_diff * cos_o.max(0.0) * FRAC_1_PI;
-        }
-        if !reflect && compatible {
-            pdf += p_trans * visible * dwh_dwo;
-        }
-        if !(value.is_finite() && pdf.is_finite()) {
-            return BsdfEval::ZERO;
-        }
-        BsdfEval { f_cos: value, pdf }
+    }
+
+    /// Samples a local direction from `lo` with the numbers `u` and `uc` (and the clearcoat's
+    /// [`Self::clearcoat_cos2`] of `u.y`), choosing the lobe as Mitsuba does, on plain numbers
+    /// and without branches (every lobe's direction computed, the chosen one kept): the
+    /// direction, the relative index crossed (1: reflected), its [`Self::eval_plain`], and
+    /// whether there is a sample.
+    #[inline(always)]
+    pub fn sample_plain(&self, lo: Vec3, u: Vec2, uc: f32, cc_cos2: f32) -> (Vec3, f32, BsdfEval, bool) {
+        let cos_i = lo.z;
+        let front = cos_i > 0.0;
+        let lo_up = if front { lo } else { -lo };
+        let m = Microfacet::<Vec3>::sample_visible(&self.ggx(), lo_up, u);
+        let (f, cos_t, eta_it, eta_ti) = fresnel(lo.dot(m), self.eta);
+        let [p_diff, p_cc, p_trans, _] = self.probabilities(f, front);
+        // Each lobe's direction.
+        let li_diff = super::lambertian::cosine_hemisphere_plain(u);
+        let m_cc = gtr1_normal(cc_cos2, u);
+        let li_cc = reflect_plain(lo, m_cc);
+        // Mitsuba's refract(wi, m, cos_theta_t, eta_ti).
+        let li_trans = m * (lo.dot(m) * eta_ti + cos_t) - lo * eta_ti;
+        let li_spec = reflect_plain(lo, m);
+        let (is_diff, is_cc, is_trans) = (uc < p_diff, uc < p_diff + p_cc, uc < p_diff + p_cc + p_trans);
+        let (li, eta, fits) = match (is_diff, is_cc, is_trans) {
+            (true, _, _) => (li_diff, 1.0, true),
+            (false, true, _) => (li_cc, 1.0, compatible(m_cc, lo, li_cc, cos_i, true)),
+            (false, false, true) => (li_trans, eta_it, compatible(m, lo, li_trans, cos_i, false)),
+            (false, false, false) => (li_spec, 1.0, compatible(m, lo, li_spec, cos_i, true)),
+        };
+        let reflected = eta == 1.0;
+        let e = self.eval_plain(lo, li);
+        let valid = cos_i != 0.0
+            && (front || self.bsdf > 0.0)
+            && m.z > 0.0
+            && fits
+            && (cos_i * li.z > 0.0) == reflected
+            && li.z != 0.0
+            && e.pdf > 0.0;
+        (li, eta, e, valid)
     }
 }
 
@@ -365,62 +464,21 @@ impl MaterialModel for Principled {
 
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
         let frame = self.frame(n);
-        let lo = super::microfacet::to_local(&frame, wo);
-        let cos_i = lo.z;
-        if cos_i == 0.0 {
-            return None;
-        }
         let l = self.lobes();
-        let front = cos_i > 0.0;
-        if !front && l.bsdf <= 0.0 {
-            return None;
-        }
-        let lo_up = if front { lo } else { -lo };
-        let m = l.ggx.sample_visible(lo_up, u);
-        if m.z <= 0.0 {
-            return None;
-        }
-        let (f, cos_t, eta_it, eta_ti) = fresnel(lo.dot(m), self.eta);
-        let [p_diff, p_cc, p_trans, _] = self.probabilities(&l, f, front);
-        let (li, eta) = if uc < p_diff {
-            (super::lambertian::cosine_hemisphere(u), 1.0)
-        } else if uc < p_diff + p_cc {
-            let m = gtr1_sample(lerp(0.1, 0.001, l.clearcoat_gloss), u);
-            let li = reflect(lo, m);
-            if !compatible(m, lo, li, cos_i, true) {
-                return None;
-            }
-            (li, 1.0)
-        } else if uc < p_diff + p_cc + p_trans {
-            // Mitsuba's refract(wi, m, cos_theta_t, eta_ti).
-            let li = m * (lo.dot(m) * eta_ti + cos_t) - lo * eta_ti;
-            if !compatible(m, lo, li, cos_i, false) {
-                return None;
-            }
-            (li, eta_it)
-        } else {
-            let li = reflect(lo, m);
-            if !compatible(m, lo, li, cos_i, true) {
-                return None;
-            }
-            (li, 1.0)
-        };
-        let reflected = eta == 1.0;
-        if (cos_i * li.z > 0.0) != reflected || li.z == 0.0 {
-            return None;
-        }
-        let e = self.eval_local(&l, lo, li);
-        if !(e.pdf > 0.0) {
-            return None;
-        }
-        let wi = frame.to_world(li).normalize();
-        Some(BsdfSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf, eta, delta: false, null: false })
+        let (li, eta, e, valid) = l.sample_plain(frame.local(wo.into()), u, uc, l.clearcoat_cos2(u.y));
+        valid.then(|| BsdfSample {
+            wi: frame.world_unit(li).into(),
+            weight: e.f_cos / e.pdf,
+            pdf: e.pdf,
+            eta,
+            delta: false,
+            null: false,
+        })
     }
 
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
         let frame = self.frame(n);
-        let to_local = |v| super::microfacet::to_local(&frame, v);
-        self.eval_local(&self.lobes(), to_local(wo), to_local(wi))
+        self.lobes().eval_plain(frame.local(wo.into()), frame.local(wi.into()))
     }
 
     #[inline]
@@ -474,20 +532,17 @@ pub(super) fn schlick(r0: f32, cos_i: f32, eta: f32) -> f32 {
 /// Mitsuba's `principled_fresnel`: in front, the dielectric factor `f` for the untinted,
 /// non-metallic part, Schlick's from the base colour for the metallic part and from the tinted
 /// dielectric reflectance for the `spec_tint` part; from behind `bsdf f`.
-#[inline]
+#[inline(always)]
 fn principled_fresnel(l: &Lobes, f: f32, cos_ih: f32, front: bool, eta: f32) -> Vec3 {
-    if !front {
-        return Vec3::splat(l.bsdf * f);
-    }
     let w = schlick_w(cos_ih, eta);
     let eta_it = if cos_ih >= 0.0 { eta } else { 1.0 / eta };
     let metal = l.base + (Vec3::ONE - l.base) * w;
-    let tint = if l.lum > 0.0 { l.base / l.lum } else { Vec3::ONE };
-    let r0 = tint * ((eta_it - 1.0) / (eta_it + 1.0)).powi(2);
+    let r0 = l.tint * ((eta_it - 1.0) / (eta_it + 1.0)).powi(2);
     let tinted = r0 + (Vec3::ONE - r0) * w;
-    Vec3::splat((1.0 - l.metallic) * (1.0 - l.spec_tint) * f)
+    let in_front = Vec3::splat((1.0 - l.metallic) * (1.0 - l.spec_tint) * f)
         + metal * l.metallic
-        + tinted * ((1.0 - l.metallic) * l.spec_tint)
+        + tinted * ((1.0 - l.metallic) * l.spec_tint);
+    if front { in_front } else { Vec3::splat(l.bsdf * f) }
 }
 
 /// Mitsuba's dielectric `fresnel(cos_theta_i, eta)`: the reflectance, the signed cosine of the
@@ -511,47 +566,49 @@ pub(super) fn fresnel(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 
 /// Mitsuba's `mac_mic_compatibility`: `wo` and `wi` on the sides of the microfacet normal `m`
 /// (turned to `wo`'s side of the surface) that a reflection or a refraction puts them.
-#[inline]
-pub(super) fn compatible(m: Vec3A, lo: Vec3A, li: Vec3A, cos_i: f32, reflection: bool) -> bool {
+#[inline(always)]
+pub(super) fn compatible<V: LocalVector + std::ops::Neg<Output = V>>(
+    m: V,
+    lo: V,
+    li: V,
+    cos_i: f32,
+    reflection: bool,
+) -> bool {
     let m = if cos_i < 0.0 { -m } else { m };
-    lo.dot(m) > 0.0 && if reflection { li.dot(m) > 0.0 } else { li.dot(m) < 0.0 }
+    let (o, i) = (lo.dot_with(m), li.dot_with(m));
+    o > 0.0 && if reflection { i > 0.0 } else { i < 0.0 }
 }
 
 /// Mitsuba's `smith_g1` of its GGX: [`Microfacet::g1`], and 0 where `v` sees the microfacet
 /// `m` from its back.
-#[inline]
-pub(super) fn smith_g1(ggx: &GgxAniso, v: Vec3A, m: Vec3A) -> f32 {
-    if v.dot(m) * v.z <= 0.0 { 0.0 } else { ggx.g1(v) }
+#[inline(always)]
+pub(super) fn smith_g1<V: LocalVector>(ggx: &impl Microfacet<V>, v: V, m: V) -> f32 {
+    let g = ggx.g1(v);
+    if v.dot_with(m) * v.cos() <= 0.0 { 0.0 } else { g }
 }
 
 /// Mitsuba's `smith_ggx1` (the clearcoat's isotropic masking of width `alpha`).
-#[inline]
-fn smith_ggx1(v: Vec3A, m: Vec3A, alpha: f32) -> f32 {
-    if v.dot(m) * v.z <= 0.0 {
-        return 0.0;
-    }
+#[inline(always)]
+fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
     let c2 = v.z * v.z;
     let tan2 = (1.0 - c2) / c2;
-    2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+    let g = 2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt());
+    if v.dot(m) * v.z <= 0.0 { 0.0 } else { g }
 }
 
-/// Burley's GTR1 distribution of width `alpha` at the microfacet normal `m` (0 in the tail
-/// where `D cos` < 1e-20, as Mitsuba).
-#[inline]
-fn gtr1(alpha: f32, m: Vec3A) -> f32 {
-    let a2 = alpha * alpha;
-    let d = (a2 - 1.0) / (PI * a2.ln() * (1.0 + (a2 - 1.0) * m.z * m.z));
-    if d * m.z > 1e-20 { d } else { 0.0 }
-}
-
-/// A GTR1 normal, density `D(m) cos(theta_m)`.
-#[inline]
-fn gtr1_sample(alpha: f32, u: Vec2) -> Vec3A {
+/// The GTR1 normal of the clearcoat whose cosine squared is `c2` ([`Lobes::clearcoat_cos2`] of
+/// `u.y`), at the azimuth `u.x` of a turn: density `D(m) cos(theta_m)`.
+#[inline(always)]
+fn gtr1_normal(c2: f32, u: Vec2) -> Vec3 {
     let (cos_phi, sin_phi) = crate::math::cos_sin_turn(u.x);
-    let a2 = alpha * alpha;
-    let c2 = (1.0 - a2.powf(1.0 - u.y)) / (1.0 - a2);
     let (s, c) = ((1.0 - c2).max(0.0).sqrt(), c2.max(0.0).sqrt());
-    Vec3A::new(cos_phi * s, sin_phi * s, c)
+    Vec3::new(cos_phi * s, sin_phi * s, c)
+}
+
+/// [`crate::math::reflect`] on plain numbers.
+#[inline(always)]
+fn reflect_plain(wo: Vec3, n: Vec3) -> Vec3 {
+    2.0 * wo.dot(n) * n - wo
 }
 
 #[cfg(test)]
@@ -559,6 +616,7 @@ mod tests {
     use super::*;
     use crate::material::Material;
     use crate::material::microfacet::testing::assert_chi2;
+    use crate::math::reflect;
     use crate::testing::material_desc as parse;
 
     /// A principled material of these weights (`[roughness, anisotropic, metallic, spec_trans,
