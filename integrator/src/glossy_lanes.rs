@@ -1,4 +1,4 @@
-//! Rough conductors, dielectrics and plastics, and the principled BSDF, across lanes: the BSDF evaluated towards each
+//! Rough conductors, dielectrics and plastics, and the principled BSDFs, across lanes: the BSDF evaluated towards each
 //! path's light sample and sampled for its next direction, [`LANES`] paths at a time. The
 //! kernels are the engine's own `eval_plain` and `sample_plain` (plain numbers, no branches),
 //! which the one-path code calls too: one source, so both integrators compute the same bits.
@@ -11,6 +11,7 @@ use crate::path::ScatterSamples;
 use glam::{Vec2, Vec3};
 use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, PlainFrame, Smith};
 use pathwave_engine::material::principled::{Lobes, Principled};
+use pathwave_engine::material::principled_thin::{PrincipledThin, ThinLobes};
 use pathwave_engine::material::rough_conductor::{ComplexIor, PlainSample, RoughConductor};
 use pathwave_engine::material::rough_dielectric::{DielectricSample, RoughDielectric};
 use pathwave_engine::material::rough_plastic::{Coating, RoughPlastic};
@@ -539,5 +540,88 @@ impl GlossyLanes for Principled {
             null: false,
         };
         (BsdfEval { f_cos: x.f_cos, pdf: x.eval_pdf }, x.sampled.then_some(s))
+    }
+}
+
+lanes!(pub ThinLobesLanes for ThinLobes {
+    base: v3, tint: v3, roughness: f32, spec_trans: f32, diff_trans: f32, spec_tint: f32, sheen: f32,
+    sheen_tint: f32, flatness: f32, eta: f32, spec_ax: f32, spec_ay: f32, trans_ax: f32, trans_ay: f32,
+    p_spec_reflect: f32, p_spec_trans: f32, p_diff_reflect: f32, p_diff_trans: f32,
+});
+
+/// What the thin principled kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ThinIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The shading frame ([`PrincipledThin::frame`]): the tangent, ...
+    pub t: Vec3,
+    /// ... the bitangent ...
+    pub b: Vec3,
+    /// ... and the normal.
+    pub n: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The material's numbers.
+    pub lobes: ThinLobes,
+}
+
+lanes!(pub ThinInLanes for ThinIn {
+    wo: v3, wi: v3, t: v3, b: v3, n: v3, u: f2, uc: f32, lobes: (lanes ThinLobesLanes),
+});
+
+/// The thin principled kernel for one path: [`PrincipledThin`]'s `eval` and `sample` in its
+/// frame, both sides alike (the directions turned to `wo`'s side). Its outputs are the
+/// conductor's (it does not refract).
+#[inline(always)]
+fn thin(i: &ThinIn) -> ConductorOut {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    let lo = f.local(i.wo);
+    let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
+    let e = i.lobes.eval_plain(lo * side, f.local(i.wi) * side);
+    let (li, s, sampled) = i.lobes.sample_plain(lo * side, Vec2::new(i.u[0], i.u[1]), i.uc);
+    ConductorOut {
+        f_cos: e.f_cos,
+        eval_pdf: e.pdf,
+        wi: f.world_unit(li * side),
+        weight: s.f_cos / s.pdf,
+        pdf: s.pdf,
+        sampled: sampled && lo.z != 0.0,
+    }
+}
+
+impl GlossyLanes for PrincipledThin {
+    type In = ThinInLanes;
+    type Out = ConductorOutLanes;
+
+    /// Every thin principled material, with its one distribution (GGX).
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::PrincipledThin(p) => Some((*p, Distribution::Ggx)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let f = m.frame(n.into());
+        let x =
+            ThinIn { wo, wi, t: f.t, b: f.b, n: f.n, u: [u.dir.x, u.dir.y], uc: u.lobe, lobes: m.lobes() };
+        i.set(l, &x);
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+        each_lane!(i, o, ConductorOutLanes, |x| thin(&x));
+    }
+
+    #[inline(always)]
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        <RoughConductor as GlossyLanes>::result(o, l)
     }
 }

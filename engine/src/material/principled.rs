@@ -607,7 +607,7 @@ fn gtr1_normal(c2: f32, u: Vec2) -> Vec3 {
 
 /// [`crate::math::reflect`] on plain numbers.
 #[inline(always)]
-fn reflect_plain(wo: Vec3, n: Vec3) -> Vec3 {
+pub(super) fn reflect_plain(wo: Vec3, n: Vec3) -> Vec3 {
     2.0 * wo.dot(n) * n - wo
 }
 

@@ -12,13 +12,13 @@
 //! transmission `(1 - spec_trans) diff_trans / 2`, each times its sampling rate), so sampling
 //! follows the density exactly.
 
-use super::microfacet::Microfacet;
+use super::microfacet::{GgxAniso, Microfacet, PlainFrame};
 use super::principled::{
-    compatible, fresnel, ggx, grey, half, lerp, schlick_w, schlick_weight, smith_g1, zero,
+    compatible, fresnel, ggx, grey, half, lerp, reflect_plain, schlick_w, schlick_weight, smith_g1, zero,
 };
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color, Positive, Scalar, UnitInterval};
-use crate::math::{Frame, reflect};
+use crate::math::Frame;
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
@@ -138,107 +138,186 @@ impl PrincipledThin {
         self.weights[i] = (v.clamp(0.0, 1.0) * 65535.0).round() as u16;
     }
 
+    /// The shading frame about the unit normal `n`: the tangent at its angle.
     #[inline]
-    fn frame(&self, n: Vec3A) -> Frame {
+    pub fn frame(&self, n: Vec3A) -> PlainFrame {
         let f = Frame::from_normal(n);
         let (s, c) = self.tangent.sin_cos();
         let t = c * f.t + s * f.b;
-        Frame { t, b: n.cross(t), n }
+        PlainFrame { t: t.into(), b: n.cross(t).into(), n: n.into() }
     }
 
-    /// Probabilities of specular reflection, specular transmission, diffuse reflection and
-    /// diffuse transmission.
+    /// The lobes' numbers.
     #[inline]
-    fn probabilities(&self) -> [f32; 4] {
+    pub fn lobes(&self) -> ThinLobes {
+        let (roughness, anisotropic) = (self.w(ROUGHNESS), self.w(ANISOTROPIC));
         let (st, dt) = (self.w(SPEC_TRANS), self.w(DIFF_TRANS));
+        let base = self.base_color;
+        let lum = crate::math::luminance(base);
+        let spec = ggx(roughness, anisotropic);
+        // The specular transmission's distribution: roughness scaled by `0.65 eta - 0.35`.
+        let trans = ggx((0.65 * self.eta - 0.35) * roughness, anisotropic);
+        // Probabilities of specular reflection, specular transmission, diffuse reflection and
+        // diffuse transmission.
         let [a, b, c, d] = self.rates;
         let p = [st * a / 2.0, st * b / 2.0, c * (1.0 - st) * (1.0 - dt), d * (1.0 - st) * dt];
         let total = p[0] + p[1] + p[2] + p[3];
-        if total > 0.0 { p.map(|x| x / total) } else { [0.0; 4] }
+        let p = if total > 0.0 { p.map(|x| x / total) } else { [0.0; 4] };
+        ThinLobes {
+            base,
+            tint: if lum > 0.0 { base / lum } else { Vec3::ONE },
+            roughness,
+            spec_trans: st,
+            diff_trans: dt,
+            spec_tint: self.w(SPEC_TINT),
+            sheen: self.w(SHEEN),
+            sheen_tint: self.w(SHEEN_TINT),
+            flatness: self.w(FLATNESS),
+            eta: self.eta,
+            spec_ax: spec.ax,
+            spec_ay: spec.ay,
+            trans_ax: trans.ax,
+            trans_ay: trans.ay,
+            p_spec_reflect: p[0],
+            p_spec_trans: p[1],
+            p_diff_reflect: p[2],
+            p_diff_trans: p[3],
+        }
     }
+}
 
-    /// The specular transmission's distribution: roughness scaled by `0.65 eta - 0.35`.
-    #[inline]
-    fn ggx_trans(&self) -> super::microfacet::GgxAniso {
-        ggx((0.65 * self.eta - 0.35) * self.w(ROUGHNESS), self.w(ANISOTROPIC))
-    }
+/// Everything of a thin principled BSDF at one hit that its lobes read, as plain numbers: what
+/// the one-path code and the wavefront's lane kernel ([`ThinLobes::eval_plain`],
+/// [`ThinLobes::sample_plain`]) take, so that both compute the same bits.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ThinLobes {
+    /// Base colour.
+    pub base: Vec3,
+    /// The base colour over its luminance (white for black).
+    pub tint: Vec3,
+    /// Roughness.
+    pub roughness: f32,
+    /// Specular transmission.
+    pub spec_trans: f32,
+    /// Diffuse transmission (halved: 0 to 1).
+    pub diff_trans: f32,
+    /// Tint of the specular reflection.
+    pub spec_tint: f32,
+    /// Sheen amount.
+    pub sheen: f32,
+    /// Tint of the sheen.
+    pub sheen_tint: f32,
+    /// Blend towards the fake subsurface.
+    pub flatness: f32,
+    /// Index of refraction of the sheet.
+    pub eta: f32,
+    /// The specular reflection's GGX widths.
+    pub spec_ax: f32,
+    /// See `spec_ax`.
+    pub spec_ay: f32,
+    /// The specular transmission's GGX widths.
+    pub trans_ax: f32,
+    /// See `trans_ax`.
+    pub trans_ay: f32,
+    /// Probability of the specular reflection.
+    pub p_spec_reflect: f32,
+    /// Of the specular transmission.
+    pub p_spec_trans: f32,
+    /// Of the diffuse reflection.
+    pub p_diff_reflect: f32,
+    /// Of the diffuse transmission.
+    pub p_diff_trans: f32,
+}
 
-    /// `f |cos|` and the density for local directions, `lo` above the surface.
-    fn eval_local(&self, lo: Vec3A, li: Vec3A) -> BsdfEval {
+impl ThinLobes {
+    /// `f |cos|` and the density for local directions, `lo` above the surface, on plain numbers
+    /// and without branches (every lobe computed, those that apply added).
+    #[inline(always)]
+    pub fn eval_plain(&self, lo: Vec3, li: Vec3) -> BsdfEval {
         let (cos_i, cos_o) = (lo.z, li.z);
-        if cos_i <= 0.0 || cos_o == 0.0 {
-            return BsdfEval::ZERO;
-        }
         let reflect = cos_o > 0.0;
-        let (roughness, st, dt) = (self.w(ROUGHNESS), self.w(SPEC_TRANS), self.w(DIFF_TRANS));
-        let base = self.base_color;
-        let wh = (lo + Vec3A::new(li.x, li.y, li.z.abs())).normalize_or_zero();
-        if wh == Vec3A::ZERO {
-            return BsdfEval::ZERO;
-        }
-        let spec = ggx(roughness, self.w(ANISOTROPIC));
-        let trans = self.ggx_trans();
+        let (roughness, st, dt) = (self.roughness, self.spec_trans, self.diff_trans);
+        let base = self.base;
+        let li_up = Vec3::new(li.x, li.y, li.z.abs());
+        let wh = (lo + li_up).normalize_or_zero();
+        let defined = cos_i > 0.0 && cos_o != 0.0 && wh != Vec3::ZERO;
+        let spec = GgxAniso { ax: self.spec_ax, ay: self.spec_ay };
+        let trans = GgxAniso { ax: self.trans_ax, ay: self.trans_ay };
         let ok = compatible(wh, lo, li, cos_i, reflect);
-        let mut value = Vec3::ZERO;
-        if st > 0.0 && ok {
-            let f = fresnel(lo.dot(wh), self.eta).0;
-            if reflect {
-                let lum = crate::math::luminance(base);
-                let tint = if lum > 0.0 { base / lum } else { Vec3::ONE };
-                let r0 = tint * ((self.eta - 1.0) / (self.eta + 1.0)).powi(2);
-                let w = schlick_w(lo.dot(wh), self.eta);
-                let schlick = r0 + (Vec3::ONE - r0) * w;
-                let spec_tint = self.w(SPEC_TINT);
-                let f_thin = Vec3::splat(f) * (1.0 - spec_tint) + schlick * spec_tint;
-                let dg = spec.d(wh) * smith_g1(&spec, lo, wh) * smith_g1(&spec, li, wh);
-                value += f_thin * (st * dg / (4.0 * cos_i));
-            } else {
-                let dg = trans.d(wh) * smith_g1(&trans, lo, wh) * smith_g1(&trans, li, wh);
-                value += base * (st * (1.0 - f) * dg / (4.0 * cos_i));
-            }
-        }
-        if reflect && st < 1.0 && dt < 1.0 {
-            let (fo, fi) = (schlick_weight(cos_o), schlick_weight(cos_i));
-            let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-            let cos_d = wh.dot(li);
-            let rr = 2.0 * roughness * cos_d * cos_d;
-            let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-            let mut lobe = f_diff + f_retro;
-            let flatness = self.w(FLATNESS);
-            if flatness > 0.0 {
-                let fss90 = rr / 2.0;
-                let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
-                let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
-                lobe = lerp(lobe, f_ss, flatness);
-            }
-            value += base * ((1.0 - st) * cos_o * FRAC_1_PI * (1.0 - dt) * lobe);
-            let sheen = self.w(SHEEN);
-            if sheen > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let lum = crate::math::luminance(base);
-                let tint = if lum > 0.0 { base / lum } else { Vec3::ONE };
-                let c = Vec3::ONE.lerp(tint, self.w(SHEEN_TINT));
-                value += c * (sheen * (1.0 - st) * fd * (1.0 - dt) * cos_o);
-            }
-        }
-        if !reflect && st < 1.0 && dt > 0.0 {
-            value += base * ((1.0 - st) * dt * FRAC_1_PI * cos_o.abs());
-        }
-        let [p_sr, p_st, p_dr, p_dt] = self.probabilities();
-        let mut pdf = 0.0;
-        if st > 0.0 && ok {
-            let dwh_dwo = (1.0 / (4.0 * Vec3A::new(li.x, li.y, li.z.abs()).dot(wh))).abs();
-            let (md, p) = if reflect { (&spec, p_sr) } else { (&trans, p_st) };
-            pdf += p * md.d(wh) * smith_g1(md, lo, wh) * lo.dot(wh).abs() / cos_i * dwh_dwo;
-        }
-        pdf += match reflect {
-            true => p_dr * cos_o * FRAC_1_PI,
-            false => p_dt * -cos_o * FRAC_1_PI,
+        let add = |on: bool, v: Vec3| if on { v } else { Vec3::ZERO };
+
+        let f = fresnel(lo.dot(wh), self.eta).0;
+        let r0 = self.tint * ((self.eta - 1.0) / (self.eta + 1.0)).powi(2);
+        let w = schlick_w(lo.dot(wh), self.eta);
+        let schlick = r0 + (Vec3::ONE - r0) * w;
+        let f_thin = Vec3::splat(f) * (1.0 - self.spec_tint) + schlick * self.spec_tint;
+        let dg_spec = spec.d(wh) * smith_g1(&spec, lo, wh) * smith_g1(&spec, li, wh);
+        let dg_trans = trans.d(wh) * smith_g1(&trans, lo, wh) * smith_g1(&trans, li, wh);
+        let specular = match reflect {
+            true => f_thin * (st * dg_spec / (4.0 * cos_i)),
+            false => base * (st * (1.0 - f) * dg_trans / (4.0 * cos_i)),
         };
-        if !(value.is_finite() && pdf.is_finite()) {
-            return BsdfEval::ZERO;
+        let mut value = add(st > 0.0 && ok, specular);
+
+        let diffuse = reflect && st < 1.0 && dt < 1.0;
+        let (fo, fi) = (schlick_weight(cos_o), schlick_weight(cos_i));
+        let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+        let cos_d = wh.dot(li);
+        let rr = 2.0 * roughness * cos_d * cos_d;
+        let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+        let lobe = f_diff + f_retro;
+        let fss90 = rr / 2.0;
+        let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
+        let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
+        let lobe = if self.flatness > 0.0 { lerp(lobe, f_ss, self.flatness) } else { lobe };
+        value += add(diffuse, base * ((1.0 - st) * cos_o * FRAC_1_PI * (1.0 - dt) * lobe));
+        let fd = schlick_weight(cos_d.abs());
+        let c = Vec3::ONE.lerp(self.tint, self.sheen_tint);
+        let sheen = diffuse && self.sheen > 0.0;
+        value += add(sheen, c * (self.sheen * (1.0 - st) * fd * (1.0 - dt) * cos_o));
+        let diffuse_through = !reflect && st < 1.0 && dt > 0.0;
+        value += add(diffuse_through, base * ((1.0 - st) * dt * FRAC_1_PI * cos_o.abs()));
+
+        let dwh_dwo = (1.0 / (4.0 * li_up.dot(wh))).abs();
+        let visible =
+            |md: &GgxAniso, p: f32| p * md.d(wh) * smith_g1(md, lo, wh) * lo.dot(wh).abs() / cos_i * dwh_dwo;
+        let (spec_pdf, trans_pdf) = (visible(&spec, self.p_spec_reflect), visible(&trans, self.p_spec_trans));
+        let mut pdf = if st > 0.0 && ok { if reflect { spec_pdf } else { trans_pdf } } else { 0.0 };
+        pdf += match reflect {
+            true => self.p_diff_reflect * cos_o * FRAC_1_PI,
+            false => self.p_diff_trans * -cos_o * FRAC_1_PI,
+        };
+        match defined && value.is_finite() && pdf.is_finite() {
+            true => BsdfEval { f_cos: value, pdf },
+            false => BsdfEval::ZERO,
         }
-        BsdfEval { f_cos: value, pdf }
+    }
+
+    /// Samples a local direction from `lo` (above the surface) with the numbers `u` and `uc`,
+    /// choosing the lobe by its fixed probability, on plain numbers and without branches
+    /// (every lobe's direction computed, the chosen one kept): the direction, its
+    /// [`Self::eval_plain`], and whether there is a sample.
+    #[inline(always)]
+    pub fn sample_plain(&self, lo: Vec3, u: Vec2, uc: f32) -> (Vec3, BsdfEval, bool) {
+        let spec = GgxAniso { ax: self.spec_ax, ay: self.spec_ay };
+        let trans = GgxAniso { ax: self.trans_ax, ay: self.trans_ay };
+        let m_spec = spec.sample_visible(lo, u);
+        let li_spec = reflect_plain(lo, m_spec);
+        let m_trans = trans.sample_visible(lo, u);
+        let r = reflect_plain(lo, m_trans);
+        let li_trans = Vec3::new(r.x, r.y, -r.z);
+        let d = super::lambertian::cosine_hemisphere_plain(u);
+        let (p_sr, p_st, p_dr) = (self.p_spec_reflect, self.p_spec_trans, self.p_diff_reflect);
+        let (li, fits) = match (uc < p_sr, uc < p_sr + p_st, uc < p_sr + p_st + p_dr) {
+            (true, _, _) => (li_spec, li_spec.z > 0.0 && compatible(m_spec, lo, li_spec, lo.z, true)),
+            (false, true, _) => {
+                (li_trans, li_trans.z < 0.0 && compatible(m_trans, lo, li_trans, lo.z, false))
+            }
+            (false, false, true) => (d, true),
+            (false, false, false) => (-d, true),
+        };
+        let e = self.eval_plain(lo, li);
+        (li, e, fits && e.pdf > 0.0)
     }
 }
 
@@ -287,47 +366,25 @@ impl MaterialModel for PrincipledThin {
 
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
         let frame = self.frame(n);
-        let lo = super::microfacet::to_local(&frame, wo);
-        if lo.z == 0.0 {
-            return None;
-        }
+        let lo = frame.local(wo.into());
         // Both sides alike: work from above and turn the result back.
-        let side = lo.z.signum();
-        let lo = lo * side;
-        let [p_sr, p_st, p_dr, _] = self.probabilities();
-        let li = if uc < p_sr {
-            let m = ggx(self.w(ROUGHNESS), self.w(ANISOTROPIC)).sample_visible(lo, u);
-            let li = reflect(lo, m);
-            if li.z <= 0.0 || !compatible(m, lo, li, lo.z, true) {
-                return None;
-            }
-            li
-        } else if uc < p_sr + p_st {
-            let m = self.ggx_trans().sample_visible(lo, u);
-            let r = reflect(lo, m);
-            let li = Vec3A::new(r.x, r.y, -r.z);
-            if li.z >= 0.0 || !compatible(m, lo, li, lo.z, false) {
-                return None;
-            }
-            li
-        } else if uc < p_sr + p_st + p_dr {
-            super::lambertian::cosine_hemisphere(u)
-        } else {
-            -super::lambertian::cosine_hemisphere(u)
-        };
-        let e = self.eval_local(lo, li);
-        if !(e.pdf > 0.0) {
-            return None;
-        }
-        let wi = frame.to_world(li * side).normalize();
-        Some(BsdfSample { wi, weight: e.f_cos / e.pdf, pdf: e.pdf, eta: 1.0, delta: false, null: false })
+        let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
+        let (li, e, valid) = self.lobes().sample_plain(lo * side, u, uc);
+        (valid && lo.z != 0.0).then(|| BsdfSample {
+            wi: frame.world_unit(li * side).into(),
+            weight: e.f_cos / e.pdf,
+            pdf: e.pdf,
+            eta: 1.0,
+            delta: false,
+            null: false,
+        })
     }
 
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
         let frame = self.frame(n);
-        let (lo, li) = (super::microfacet::to_local(&frame, wo), super::microfacet::to_local(&frame, wi));
+        let (lo, li) = (frame.local(wo.into()), frame.local(wi.into()));
         let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
-        self.eval_local(lo * side, li * side)
+        self.lobes().eval_plain(lo * side, li * side)
     }
 
     #[inline]
@@ -341,6 +398,7 @@ mod tests {
     use super::*;
     use crate::material::Material;
     use crate::material::microfacet::testing::assert_chi2;
+    use crate::math::reflect;
     use crate::testing::material_desc as parse;
 
     /// `[roughness, anisotropic, spec_trans, diff_trans / 2, spec_tint, sheen, sheen_tint,
