@@ -14,6 +14,7 @@
 pub mod chi2;
 pub mod dielectric;
 pub mod diffuse_light;
+mod disney;
 pub mod lambertian;
 pub mod metal;
 pub mod metallic_roughness;

@@ -12,10 +12,9 @@
 //! transmission `(1 - spec_trans) diff_trans / 2`, each times its sampling rate), so sampling
 //! follows the density exactly.
 
+use super::disney::{compatible, fresnel, ggx, lerp, reflect_plain, schlick_w, schlick_weight, smith_g1};
 use super::microfacet::{GgxAniso, Microfacet, PlainFrame};
-use super::principled::{
-    compatible, fresnel, ggx, grey, half, lerp, reflect_plain, schlick_w, schlick_weight, smith_g1, zero,
-};
+use super::principled::{grey, half, zero};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color, Positive, Scalar, UnitInterval};
 use crate::math::Frame;

@@ -1,0 +1,223 @@
+//! The principled BSDF and its thin variant across lanes, as [`crate::glossy_lanes`]' kinds:
+//! their lobes' numbers gathered per path (the tangent frame, and what needs the C library's
+//! `ln`, `pow` and `sin_cos`), the engine's `eval_plain` and `sample_plain` run over
+//! [`LANES`] paths at a time.
+
+use crate::glossy_lanes::{ConductorOut, ConductorOutLanes, GlossyLanes, each_lane};
+use crate::lambert_vertex::{LANES, lanes};
+use crate::path::ScatterSamples;
+use glam::{Vec2, Vec3};
+use pathwave_engine::material::microfacet::{Distribution, PlainFrame};
+use pathwave_engine::material::principled::{Lobes, Principled};
+use pathwave_engine::material::principled_thin::{PrincipledThin, ThinLobes};
+use pathwave_engine::material::rough_conductor::RoughConductor;
+use pathwave_engine::material::{BsdfEval, BsdfSample, Material};
+
+lanes!(pub LobesLanes for Lobes {
+    base: v3, base_sqrt: v3, tint: v3, roughness: f32, metallic: f32, spec_tint: f32, sheen: f32,
+    sheen_tint: f32, flatness: f32, clearcoat: f32, brdf: f32, bsdf: f32, ax: f32, ay: f32, eta: f32,
+    rate_spec: f32, rate_cc: f32, rate_diff: f32, cc_alpha: f32, cc_a2: f32, cc_ln_a2: f32,
+});
+
+/// What the principled kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrincipledIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The shading frame ([`Principled::frame`]): the tangent, ...
+    pub t: Vec3,
+    /// ... the bitangent ...
+    pub b: Vec3,
+    /// ... and the normal.
+    pub n: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The clearcoat normal's cosine squared ([`Lobes::clearcoat_cos2`]).
+    pub cc_cos2: f32,
+    /// The material's numbers.
+    pub lobes: Lobes,
+}
+
+lanes!(pub PrincipledInLanes for PrincipledIn {
+    wo: v3, wi: v3, t: v3, b: v3, n: v3, u: f2, uc: f32, cc_cos2: f32, lobes: (lanes LobesLanes),
+});
+
+/// What the principled kernel writes for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrincipledOut {
+    /// `f cos` towards the light sample.
+    pub f_cos: Vec3,
+    /// The BSDF's density of that direction.
+    pub eval_pdf: f32,
+    /// The sampled direction.
+    pub wi: Vec3,
+    /// Its weight, `f cos / pdf`.
+    pub weight: Vec3,
+    /// Its density.
+    pub pdf: f32,
+    /// The relative IOR it crossed (1: reflected).
+    pub eta: f32,
+    /// A direction was sampled.
+    pub sampled: bool,
+}
+
+lanes!(pub PrincipledOutLanes for PrincipledOut {
+    f_cos: v3, eval_pdf: f32, wi: v3, weight: v3, pdf: f32, eta: f32, sampled: bool,
+});
+
+/// The principled kernel for one path: [`Principled`]'s `eval` and `sample` in its frame.
+#[inline(always)]
+fn principled(i: &PrincipledIn) -> PrincipledOut {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    let lo = f.local(i.wo);
+    let e = i.lobes.eval_plain(lo, f.local(i.wi));
+    let (li, eta, s, sampled) = i.lobes.sample_plain(lo, Vec2::new(i.u[0], i.u[1]), i.uc, i.cc_cos2);
+    PrincipledOut {
+        f_cos: e.f_cos,
+        eval_pdf: e.pdf,
+        wi: f.world_unit(li),
+        weight: s.f_cos / s.pdf,
+        pdf: s.pdf,
+        eta,
+        sampled,
+    }
+}
+
+impl GlossyLanes for Principled {
+    type In = PrincipledInLanes;
+    type Out = PrincipledOutLanes;
+
+    /// Every principled material, with its one distribution (GGX).
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::Principled(p) => Some((*p, Distribution::Ggx)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let f = m.frame(n.into());
+        let lobes = m.lobes();
+        let cc_cos2 = lobes.clearcoat_cos2(u.dir.y);
+        let x = PrincipledIn {
+            wo,
+            wi,
+            t: f.t,
+            b: f.b,
+            n: f.n,
+            u: [u.dir.x, u.dir.y],
+            uc: u.lobe,
+            cc_cos2,
+            lobes,
+        };
+        i.set(l, &x);
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+        each_lane!(i, o, PrincipledOutLanes, |x| principled(&x));
+    }
+
+    #[inline(always)]
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        let x = o.get(l);
+        let s = BsdfSample {
+            wi: x.wi.into(),
+            weight: x.weight,
+            pdf: x.pdf,
+            eta: x.eta,
+            delta: false,
+            null: false,
+        };
+        (BsdfEval { f_cos: x.f_cos, pdf: x.eval_pdf }, x.sampled.then_some(s))
+    }
+}
+
+lanes!(pub ThinLobesLanes for ThinLobes {
+    base: v3, tint: v3, roughness: f32, spec_trans: f32, diff_trans: f32, spec_tint: f32, sheen: f32,
+    sheen_tint: f32, flatness: f32, eta: f32, spec_ax: f32, spec_ay: f32, trans_ax: f32, trans_ay: f32,
+    p_spec_reflect: f32, p_spec_trans: f32, p_diff_reflect: f32, p_diff_trans: f32,
+});
+
+/// What the thin principled kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ThinIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The shading frame ([`PrincipledThin::frame`]): the tangent, ...
+    pub t: Vec3,
+    /// ... the bitangent ...
+    pub b: Vec3,
+    /// ... and the normal.
+    pub n: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The material's numbers.
+    pub lobes: ThinLobes,
+}
+
+lanes!(pub ThinInLanes for ThinIn {
+    wo: v3, wi: v3, t: v3, b: v3, n: v3, u: f2, uc: f32, lobes: (lanes ThinLobesLanes),
+});
+
+/// The thin principled kernel for one path: [`PrincipledThin`]'s `eval` and `sample` in its
+/// frame, both sides alike (the directions turned to `wo`'s side). Its outputs are the
+/// conductor's (it does not refract).
+#[inline(always)]
+fn thin(i: &ThinIn) -> ConductorOut {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    let lo = f.local(i.wo);
+    let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
+    let e = i.lobes.eval_plain(lo * side, f.local(i.wi) * side);
+    let (li, s, sampled) = i.lobes.sample_plain(lo * side, Vec2::new(i.u[0], i.u[1]), i.uc);
+    ConductorOut {
+        f_cos: e.f_cos,
+        eval_pdf: e.pdf,
+        wi: f.world_unit(li * side),
+        weight: s.f_cos / s.pdf,
+        pdf: s.pdf,
+        sampled: sampled && lo.z != 0.0,
+    }
+}
+
+impl GlossyLanes for PrincipledThin {
+    type In = ThinInLanes;
+    type Out = ConductorOutLanes;
+
+    /// Every thin principled material, with its one distribution (GGX).
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+        match m {
+            Material::PrincipledThin(p) => Some((*p, Distribution::Ggx)),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        let f = m.frame(n.into());
+        let x =
+            ThinIn { wo, wi, t: f.t, b: f.b, n: f.n, u: [u.dir.x, u.dir.y], uc: u.lobe, lobes: m.lobes() };
+        i.set(l, &x);
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+        each_lane!(i, o, ConductorOutLanes, |x| thin(&x));
+    }
+
+    #[inline(always)]
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        <RoughConductor as GlossyLanes>::result(o, l)
+    }
+}
