@@ -77,11 +77,11 @@ pub struct LambertOut {
     pub pdf: f32,
 }
 
-/// The kernel.
+/// The light sample's part of the kernel: whether it makes a shadow ray, the ray's origin
+/// and its contribution if unoccluded.
 #[inline(always)]
-pub fn lambert(i: &LambertIn) -> LambertOut {
+fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
     let (p, n, ng) = (i.p, i.n, i.ng);
-    // Light sample.
     let wi = i.wi;
     let (co, ci) = (dot(i.wo, n), dot(wi, n));
     let c = ci.abs() * FRAC_1_PI;
@@ -94,6 +94,37 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let cig = dot(wi, ng);
     let shadow = i.pdf_light > 0.0 && co * ci > 0.0 && (ci > 0.0 || cig < 0.0);
     let so = offset(p, i.err, sel3(ci > 0.0, ng, -ng));
+    (shadow, so, contribution)
+}
+
+/// The shadow ray towards the environment sampled apart from the other lights
+/// (`LightTable::environment_apart`) at the vertex of inputs `i` (its light sample replaced),
+/// with the numbers `u`: the kernel's light part, one path at a time, in both integrators.
+#[inline]
+pub fn environment_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2) -> Option<ShadowRay> {
+    let lp = path::environment_light(scene, i.p.into(), u)?;
+    let i = LambertIn {
+        wi: lp.wi.into(),
+        le: lp.le,
+        pdf_light: lp.pdf,
+        delta_light: lp.delta,
+        target: lp.target.into(),
+        ..*i
+    };
+    let (shadow, so, contribution) = light_part(&i);
+    shadow.then(|| ShadowRay {
+        ray: Ray { origin: so.into(), dir: (i.target - so).into(), time },
+        contribution,
+    })
+}
+
+/// The kernel.
+#[inline(always)]
+pub fn lambert(i: &LambertIn) -> LambertOut {
+    let (p, n, ng) = (i.p, i.n, i.ng);
+    // Light sample.
+    let (shadow, so, contribution) = light_part(i);
+    let co = dot(i.wo, n);
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
     let (dx, dy) = disk_branch_free(i.u_dir);
@@ -135,6 +166,8 @@ pub struct VertexSamples {
     pub light_pick: f32,
     /// Where on it.
     pub light: Vec2,
+    /// The point on the environment sampled apart (zero where there is none).
+    pub environment: Vec2,
     /// The next direction.
     pub dir: Vec2,
     /// Russian roulette.
@@ -183,6 +216,10 @@ impl VertexSamples {
         } else {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
+        let environment = match scene.lights.environment_apart() {
+            Some(_) => crate::sampler::get_2d_lanes(samplers, &Dims::environment_lanes(depths)),
+            None => [Vec2::ZERO; N],
+        };
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
         // Roulette's number only where some lane plays it.
         let plays = depths.map(|d| path::plays_roulette(scene, d + 1));
@@ -194,6 +231,7 @@ impl VertexSamples {
         let mut out = VertexSamplesLanes { light_pick: pick, ..Default::default() };
         for l in 0..N {
             (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
+            (out.environment[0][l], out.environment[1][l]) = (environment[l].x, environment[l].y);
             (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
             out.roulette[l] = if plays[l] { rr[l] } else { 0.0 };
         }
@@ -209,6 +247,8 @@ pub struct VertexSamplesLanes<const N: usize = LANES> {
     pub light_pick: [f32; N],
     /// Where on it: the two coordinates, per lane.
     pub light: [[f32; N]; 2],
+    /// The point on the environment sampled apart, per lane.
+    pub environment: [[f32; N]; 2],
     /// The next direction: the two coordinates, per lane.
     pub dir: [[f32; N]; 2],
     /// Russian roulette, per lane.
@@ -217,7 +257,13 @@ pub struct VertexSamplesLanes<const N: usize = LANES> {
 
 impl<const N: usize> Default for VertexSamplesLanes<N> {
     fn default() -> Self {
-        Self { light_pick: [0.0; N], light: [[0.0; N]; 2], dir: [[0.0; N]; 2], roulette: [0.0; N] }
+        Self {
+            light_pick: [0.0; N],
+            light: [[0.0; N]; 2],
+            environment: [[0.0; N]; 2],
+            dir: [[0.0; N]; 2],
+            roulette: [0.0; N],
+        }
     }
 }
 
@@ -228,6 +274,7 @@ impl<const N: usize> VertexSamplesLanes<N> {
         VertexSamples {
             light_pick: self.light_pick[l],
             light: Vec2::new(self.light[0][l], self.light[1][l]),
+            environment: Vec2::new(self.environment[0][l], self.environment[1][l]),
             dir: Vec2::new(self.dir[0][l], self.dir[1][l]),
             roulette: self.roulette[l],
         }

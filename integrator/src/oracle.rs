@@ -96,6 +96,8 @@ pub enum Source {
     Emitter(u32),
     /// The light sampled at the path's last vertex ([`sampled_light`] says which).
     LightSample,
+    /// The environment sampled apart from the other lights at the path's last vertex.
+    EnvironmentSample,
     /// The background, met by the path's ray.
     Background,
     /// A glowing medium the path's ray scattered in.
@@ -147,7 +149,7 @@ pub fn radiance_witnessed(
         // Each vertex yields an optional shadow ray and the next ray (None: the path ends).
         // The vertex's depth and material (None: a medium), for the witness.
         let vertex;
-        let (shadow, next) = 'vertex: {
+        let (shadows, next) = 'vertex: {
             if scene.features.media {
                 let tmax = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
                 let before = st.l;
@@ -225,11 +227,15 @@ pub fn radiance_witnessed(
                         &u,
                     );
                     let out = lambert_vertex::lambert(&input);
-                    lambert_vertex::apply(&input, &out, &mut st, ray.time)
+                    let environment =
+                        lambert_vertex::environment_shadow(scene, &input, ray.time, u.environment);
+                    let (light, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time);
+                    (path::Shadows { light, environment }, next)
                 }
-                Shading::Sampled => {
-                    (None, path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler))
-                }
+                Shading::Sampled => (
+                    path::Shadows::default(),
+                    path::scatter(scene, &mut st, &hit.surface, wo, mat, ray.time, sampler),
+                ),
                 Shading::Glossy => {
                     let u = path::GlossySamples::draw(scene, sampler, st.depth);
                     path::shade_glossy(scene, &mut st, &hit.surface, wo, mat, ray.time, &u)
@@ -238,10 +244,14 @@ pub fn radiance_witnessed(
             }
         };
         witness.scatters(vertex.0, vertex.1, vertex.2, st.delta);
-        if let Some(s) = shadow {
-            let before = st.l;
-            path::trace_shadow(scene, &mut st, &s);
-            witness.adds(st.l - before, Source::LightSample, s.ray.dir, false);
+        for (s, source) in
+            [(shadows.light, Source::LightSample), (shadows.environment, Source::EnvironmentSample)]
+        {
+            if let Some(s) = s {
+                let before = st.l;
+                path::trace_shadow(scene, &mut st, &s);
+                witness.adds(st.l - before, source, s.ray.dir, false);
+            }
         }
         match next {
             Some(r) => ray = r,

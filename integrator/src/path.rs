@@ -11,7 +11,7 @@ mod light;
 mod medium;
 
 pub use camera::{camera_ray, camera_rays, camera_sampler, pixel_numbers};
-pub(crate) use light::{LightPick, light_choice, pick_light, seen_from};
+pub(crate) use light::{LightPick, environment_light, light_choice, pick_light, seen_from};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
 pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 
@@ -79,6 +79,30 @@ pub struct ShadowRay {
     pub ray: Ray,
     /// Throughput times the MIS-weighted light estimate.
     pub contribution: Vec3,
+}
+
+/// The shadow rays of one vertex: the chosen light's, and the environment's where it is
+/// sampled apart from the other lights (`LightTable::environment_apart`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Shadows {
+    /// Towards the light chosen.
+    pub light: Option<ShadowRay>,
+    /// Towards the environment sampled apart.
+    pub environment: Option<ShadowRay>,
+}
+
+impl Shadows {
+    /// The chosen light's shadow ray alone.
+    #[inline]
+    pub fn one(light: Option<ShadowRay>) -> Self {
+        Self { light, environment: None }
+    }
+
+    /// Those there are, the chosen light's first.
+    #[inline]
+    pub fn iter(&self) -> impl Iterator<Item = &ShadowRay> {
+        self.light.iter().chain(self.environment.iter())
+    }
 }
 
 /// Power heuristic (beta = 2) weight of the strategy with density `a` against `b` (Veach 1997).
@@ -400,6 +424,9 @@ pub struct GlossySamples {
     pub light_pick: f32,
     /// Where on it.
     pub light: Vec2,
+    /// The point on the environment sampled apart ([`Dims::environment`]; zero where there is
+    /// none).
+    pub environment: Vec2,
     /// BSDF sampling and roulette.
     pub bsdf: ScatterSamples,
 }
@@ -432,8 +459,17 @@ impl GlossySamples {
             false => crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT)),
             true => [Vec2::ZERO; N],
         };
+        let environment = match scene.lights.environment_apart() {
+            Some(_) => crate::sampler::get_2d_lanes(samplers, &Dims::environment_lanes(depths)),
+            None => [Vec2::ZERO; N],
+        };
         let bsdf = ScatterSamples::draw_lanes(scene, samplers, depths, reads);
-        std::array::from_fn(|l| Self { light_pick: light_pick[l], light: light[l], bsdf: bsdf[l] })
+        std::array::from_fn(|l| Self {
+            light_pick: light_pick[l],
+            light: light[l],
+            environment: environment[l],
+            bsdf: bsdf[l],
+        })
     }
 }
 
@@ -441,7 +477,7 @@ impl GlossySamples {
 /// towards the light sample and weighted against BSDF sampling by MIS (power heuristic; point,
 /// spot and directional lights in full), then BSDF sampling and Russian roulette as in
 /// [`scatter_with`]. Lambertian hits whose normal a map tilted ([`tilted`]) are shaded here
-/// too. Returns the shadow ray (if any) and the next ray (`None`: the path ends).
+/// too. Returns the shadow rays and the next ray (`None`: the path ends).
 #[inline]
 pub fn shade_glossy(
     scene: &RenderScene,
@@ -451,10 +487,13 @@ pub fn shade_glossy(
     mat: &Material,
     time: f32,
     u: &GlossySamples,
-) -> (Option<ShadowRay>, Option<Ray>) {
-    let shadow = glossy_light(scene, sp, time, u)
-        .and_then(|lp| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time));
-    (shadow, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
+) -> (Shadows, Option<Ray>) {
+    let shadow = |lp: LightPick| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time);
+    let shadows = Shadows {
+        light: glossy_light(scene, sp, time, u).and_then(shadow),
+        environment: environment_light(scene, sp.p, u.environment).and_then(shadow),
+    };
+    (shadows, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
 }
 
 /// The light sample of a [`shade_glossy`] vertex at `sp` (none in a scene without lights).
@@ -505,7 +544,7 @@ mod tests {
     use pathwave_engine::world::SceneWorld;
 
     /// A light sample of the environment map and a ray that escapes in its direction weigh
-    /// with one density: the sample's is the light choice's probability times the density
+    /// with one density: the sample's is the light choice's probability (1: sampled apart) times the density
     /// [`escape`] reads there (the map's MIS-compensated one; up to round-off, as the sample's
     /// is read at its (u, v) and the escape's at the direction's), so that the two
     /// techniques' MIS weights sum to 1. Directions dimmer than the map's mean have radiance but no light
@@ -517,19 +556,16 @@ mod tests {
         let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/materials-env.ron"));
         let desc = pathwave_engine::scene::load(path).unwrap();
         let scene = SceneWorld::render_scene(&desc);
+        // Beside its point light the map is sampled apart, at every vertex: probability 1.
         let (env, pmf) = (scene.lights.environment.unwrap() as usize, scene.lights.environment_pmf());
-        assert!(pmf > 0.0 && pmf < 1.0, "{pmf}");
+        assert_eq!((scene.lights.environment_apart(), pmf), (Some(env), 1.0));
         let mut rng = TestRng::new(3);
         let p = Vec3A::new(0.3, 0.01, 2.0);
         let (mut sampled, mut other_cell) = (0, 0);
         let agree = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * a.abs().max(b.abs());
-        for _ in 0..20_000 {
-            let u_pick = rng.next_1d();
+        for _ in 0..10_000 {
             let u = Vec2::new(rng.next_1d(), rng.next_1d());
-            if scene.lights.pick(u_pick, p, Vec3A::ZERO).0 != env {
-                continue;
-            }
-            let Some(lp) = pick_light(&scene, p, Vec3A::ZERO, 0.0, u_pick, u) else { continue };
+            let Some(lp) = environment_light(&scene, p, u) else { continue };
             let (le, pdf) = scene.background.radiance_pdf(lp.wi);
             assert!(!lp.delta);
             sampled += 1;

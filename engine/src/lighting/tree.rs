@@ -505,7 +505,10 @@ mod tests {
                 0 => Vec3A::ZERO,
                 _ => Vec3A::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize(),
             };
-            let pmf: Vec<f32> = (0..n).map(|l| table.pmf_from(l, p, normal)).collect();
+            // The environment beside the other lights is sampled apart, never picked.
+            let apart = table.environment_apart();
+            let pmf: Vec<f32> =
+                (0..n).map(|l| if Some(l) == apart { 0.0 } else { table.pmf_from(l, p, normal) }).collect();
             let sum: f64 = pmf.iter().map(|&x| x as f64).sum();
             assert!(sum <= 1.0 + 1e-6 && sum > 0.99, "point {k} at {p}: the pmf sums to {sum}");
             // Every light that sends something to the point may be picked.
@@ -514,7 +517,7 @@ mod tests {
                     Some(OtherLight::Punctual(light)) => {
                         light.illuminate(p, &Textures::default()).2 != Vec3::ZERO
                     }
-                    Some(OtherLight::Environment) => true,
+                    Some(OtherLight::Environment) => apart.is_none(),
                     None => {
                         let prim = table.prims[l] as usize;
                         let two_sided = table.emission[geo.material[prim] as usize].unwrap().two_sided;

@@ -118,6 +118,15 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
     }
 }
 
+/// The environment's light sample seen from `p` with the numbers `u`, where it is sampled
+/// apart from the other lights (`LightTable::environment_apart`: with probability 1, at every
+/// vertex that samples a light); `None` elsewhere, or when it sends nothing.
+#[inline]
+pub(crate) fn environment_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
+    scene.lights.environment_apart()?;
+    pick_other(scene, &OtherLight::Environment, 1.0, p, u)
+}
+
 /// The number that chooses the light at the vertex after `depth` bounces (one light needs
 /// none).
 #[inline]

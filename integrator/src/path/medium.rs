@@ -2,7 +2,10 @@
 //! spectral MIS over the hero channel), and a scattering event with next-event estimation,
 //! Henyey-Greenstein phase sampling and Russian roulette.
 
-use super::{PathState, ShadowRay, light_choice, pick_light, power_heuristic, roulette};
+use super::{
+    LightPick, PathState, ShadowRay, Shadows, environment_light, light_choice, pick_light, power_heuristic,
+    roulette,
+};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec3, Vec3A};
 use pathwave_engine::math::{Ray, uniform_sphere};
@@ -95,7 +98,7 @@ const ISOTROPIC: f32 = 1.0 / (4.0 * std::f32::consts::PI);
 
 /// A scattering event at `p` inside a medium (after [`sample_medium`]), reached along `dir`,
 /// where the Henyey-Greenstein phase function has asymmetry `g` (0: isotropic): next-event
-/// estimation, then phase sampling and Russian roulette. Returns the shadow ray (if any) and
+/// estimation, then phase sampling and Russian roulette. Returns the shadow rays and
 /// the next ray (`None` when the path ends). The phase function's value is its density, so
 /// sampling it leaves the throughput as it is.
 #[inline]
@@ -107,30 +110,36 @@ pub fn scatter_in_medium(
     g: f32,
     time: f32,
     sampler: &Sampler,
-) -> (Option<ShadowRay>, Option<Ray>) {
+) -> (Shadows, Option<Ray>) {
     if st.beta == Vec3::ZERO {
-        return (None, None);
+        return (Shadows::default(), None);
     }
     let depth = st.depth;
     let wo = -dir.normalize();
     let phase = |wi: Vec3A| if g == 0.0 { ISOTROPIC } else { hg(wo.dot(wi.normalize()), g) };
-    let shadow = if scene.lights.is_empty() {
+    let shadow = |lp: LightPick| {
+        let f = phase(lp.target - p);
+        let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, f) };
+        let contribution = st.beta * lp.le * (f * w / lp.pdf);
+        ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
+    };
+    let light = if scene.lights.is_empty() {
         None
     } else {
         let u_pick = light_choice(scene, sampler, depth);
         let u = sampler.get_2d(Dims::vertex(depth, Dims::LIGHT));
-        pick_light(scene, p, Vec3A::ZERO, time, u_pick, u).map(|lp| {
-            let f = phase(lp.target - p);
-            let w = if lp.delta { 1.0 } else { power_heuristic(lp.pdf, f) };
-            let contribution = st.beta * lp.le * (f * w / lp.pdf);
-            ShadowRay { ray: Ray { origin: p, dir: lp.target - p, time }, contribution }
-        })
+        pick_light(scene, p, Vec3A::ZERO, time, u_pick, u).map(shadow)
     };
+    let environment = match scene.lights.environment_apart() {
+        Some(_) => environment_light(scene, p, sampler.get_2d(Dims::environment(depth))).map(shadow),
+        None => None,
+    };
+    let shadows = Shadows { light, environment };
     let u = sampler.get_2d(Dims::vertex(depth, Dims::BSDF));
     let (wi, pdf) = if g == 0.0 { (uniform_sphere(u), ISOTROPIC) } else { sample_hg(wo, g, u) };
     (st.delta, st.prev_pdf, st.prev_p, st.prev_n) = (false, pdf, p, Vec3A::ZERO);
     st.depth += 1;
     let u_rr = || sampler.get_1d(Dims::vertex(depth, Dims::ROULETTE));
     let next = roulette(scene, st, u_rr).then_some(Ray { origin: p, dir: wi, time });
-    (shadow, next)
+    (shadows, next)
 }

@@ -98,6 +98,28 @@ impl Dims {
         }
         d
     }
+
+    /// The first of the environment's numbers ([`Self::environment`]), between the vertices'
+    /// and the wrappers' (a path of 2^28 vertices would reach it).
+    const ENVIRONMENT: u32 = 1 << 30;
+
+    /// The point on the environment sampled apart from the other lights at the vertex after
+    /// `depth` bounces (2D; `LightTable::environment_apart`): numbers of their own, so that
+    /// scenes without one keep theirs.
+    #[inline]
+    pub const fn environment(depth: u32) -> u32 {
+        Self::ENVIRONMENT.wrapping_add(depth)
+    }
+
+    /// [`Self::environment`] for `N` paths at once.
+    #[inline(always)]
+    pub fn environment_lanes<const N: usize>(depths: &[u32; N]) -> [u32; N] {
+        let mut d = [0; N];
+        for l in 0..N {
+            d[l] = Self::environment(depths[l]);
+        }
+        d
+    }
 }
 
 /// The samples of one pixel sample: a key and an index, immutable along the path.

@@ -101,7 +101,7 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
                     path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l], false)
                 },
             );
-            route(p, q, i, None, next);
+            route(p, q, i, path::Shadows::default(), next);
             p.set_state(s, &st);
         }
     }
@@ -124,13 +124,13 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
             let s = i as usize;
             let mut st = p.state(s);
             let hit = &p.hit[s];
-            let (shadow, next) = scene.with_material(
+            let (shadows, next) = scene.with_material(
                 hit.material,
                 &hit.surface,
                 #[inline(always)]
                 |mat| path::shade_glossy(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l]),
             );
-            route(p, q, i, shadow, next);
+            route(p, q, i, shadows, next);
             p.set_state(s, &st);
         }
     }
@@ -181,7 +181,7 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
             let mut st = p.state(s);
             let hit = &p.hit[s];
             let (sp, wo, time) = (&hit.surface, -p.dir[s], p.time[s]);
-            let (shadow, next) = match kernel[l] {
+            let (shadows, next) = match kernel[l] {
                 None => scene.with_material(
                     hit.material,
                     sp,
@@ -194,16 +194,22 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                         Distribution::Beckmann => &beckmann,
                     };
                     let (e, bs) = K::result(o, l);
-                    let shadow = lights[l]
+                    let light = lights[l]
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
+                    // The environment sampled apart: the BSDF towards it one path at a time.
+                    let environment = path::environment_light(scene, sp.p, u[l].environment).and_then(|lp| {
+                        scene.with_material(hit.material, sp, |mat| {
+                            path::light_shadow(scene, &st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time)
+                        })
+                    });
                     let next = bs.and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
                     });
-                    (shadow, next)
+                    (path::Shadows { light, environment }, next)
                 }
             };
-            route(p, q, i, shadow, next);
+            route(p, q, i, shadows, next);
             p.set_state(s, &st);
         }
     }
@@ -251,6 +257,15 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             n += outs.shadow[l] as usize;
         }
         q.shadow.extend_lanes(&pick[..n], chunk, &times, &outs.so, &outs.sd, &outs.contribution);
+        if scene.lights.environment_apart().is_some() {
+            // The environment sampled apart: its light part of the kernel one path at a time.
+            for (l, &i) in chunk.iter().enumerate() {
+                let env = u.get(l).environment;
+                if let Some(sh) = lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env) {
+                    q.shadow.push(i, &sh.ray, sh.contribution);
+                }
+            }
+        }
         let v3 = |a: &[[f32; LANES]; 3], l: usize| glam::Vec3::new(a[0][l], a[1][l], a[2][l]);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;

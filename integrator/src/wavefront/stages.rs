@@ -175,16 +175,10 @@ fn scatters_in_medium(scene: &RenderScene, p: &mut Paths, q: &mut Queues, i: u32
     true
 }
 
-/// Queues path `i`'s shadow ray (if any) and its next ray, or ends the path.
+/// Queues path `i`'s shadow rays and its next ray, or ends the path.
 #[inline]
-pub(super) fn route(
-    p: &mut Paths,
-    q: &mut Queues,
-    i: u32,
-    shadow: Option<path::ShadowRay>,
-    next: Option<Ray>,
-) {
-    if let Some(sh) = shadow {
+pub(super) fn route(p: &mut Paths, q: &mut Queues, i: u32, shadows: path::Shadows, next: Option<Ray>) {
+    for sh in shadows.iter() {
         q.shadow.push(i, &sh.ray, sh.contribution);
     }
     match next {

@@ -445,11 +445,20 @@ impl Charges {
                 }
             }
             Stage::TraceShadowRays if many_lights => {
+                // A vertex that samples the environment apart queues its ray after the chosen
+                // light's: a slot's second ray is the environment's (its first, where the
+                // chosen light made none, is counted as the chosen light's).
+                const SECOND: u64 = 1 << 63;
+                let apart = scene.lights.environment_apart();
                 for &s in slots {
                     let (shaded, light) = self.path_light[s as usize];
-                    if shaded == iteration {
-                        self.light_items[light as usize] += 1;
-                    }
+                    let light = match apart {
+                        Some(env) if shaded == iteration | SECOND => env as u32,
+                        _ if shaded == iteration => light,
+                        _ => continue,
+                    };
+                    self.light_items[light as usize] += 1;
+                    self.path_light[s as usize].0 = iteration | SECOND;
                 }
             }
             Stage::TraceShadowRays => {
