@@ -43,6 +43,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
         ("mesh.ron", 2),
         // Rough materials, an environment map and a point light.
         ("materials-env.ron", 2),
+        // Every glossy kind across lanes, a map sampled apart from a lamp.
+        ("rough-spheres.ron", 2),
         // Masks (camera, bounce and shadow rays through their holes) and blends.
         ("wrappers.ron", 2),
         // Bump and normal maps (Lambertians under them shaded path by path).

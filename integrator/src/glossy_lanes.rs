@@ -40,7 +40,51 @@ pub trait GlossyLanes {
 
     /// Lane `l`'s BSDF towards its light sample, and its sampled direction (if any).
     fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>);
+
+    /// Sets lane `l`'s direction to the light sample (for [`Self::eval`]: the environment's,
+    /// sampled apart; any unit vector where there is none).
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3);
+
+    /// The BSDF towards every lane's light sample with the distribution `d`, across lanes: the
+    /// kernel's evaluation alone.
+    fn eval(i: &Self::In, d: Distribution, o: &mut EvalLanes);
 }
+
+/// A lane's BSDF towards a direction, as [`GlossyLanes::eval`] writes it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EvalOut {
+    /// `f cos`.
+    pub f_cos: Vec3,
+    /// The BSDF's density of the direction.
+    pub pdf: f32,
+}
+
+impl From<BsdfEval> for EvalOut {
+    #[inline(always)]
+    fn from(e: BsdfEval) -> Self {
+        Self { f_cos: e.f_cos, pdf: e.pdf }
+    }
+}
+
+lanes!(pub EvalLanes for EvalOut { f_cos: v3, pdf: f32 });
+
+impl EvalLanes {
+    /// Lane `l`'s evaluation.
+    #[inline(always)]
+    pub fn eval(&self, l: usize) -> BsdfEval {
+        let x = self.get(l);
+        BsdfEval { f_cos: x.f_cos, pdf: x.pdf }
+    }
+}
+
+/// Sets lane `$l`'s `wi` of the lane inputs `$i` to `$wi`.
+macro_rules! set_wi {
+    ($i:expr, $l:expr, $wi:expr) => {
+        ($i.wi[0][$l], $i.wi[1][$l], $i.wi[2][$l]) = ($wi.x, $wi.y, $wi.z)
+    };
+}
+
+pub(crate) use set_wi;
 
 /// Runs `$kernel` (a lane's outputs from its inputs `$x` and its distribution `$md`) on every
 /// lane of `$i` into `$o` (of type `$out`), in the AVX-512 region where the CPU has it, with a
@@ -215,6 +259,18 @@ impl GlossyLanes for RoughConductor {
         let s = PlainSample { wi: x.wi, weight: x.weight, pdf: x.pdf };
         (BsdfEval { f_cos: x.f_cos, pdf: x.eval_pdf }, x.sampled.then(|| s.into()))
     }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
+        each_lane!(i, distribution, o, EvalLanes, |x, md| {
+            EvalOut::from(x.conductor(distribution).eval_plain(md, x.wo, x.wi, x.n))
+        });
+    }
 }
 
 /// What the dielectric kernel reads for one path.
@@ -234,6 +290,14 @@ pub struct DielectricIn {
     pub ior: f32,
     /// Roughness.
     pub alpha: f32,
+}
+
+impl DielectricIn {
+    /// The dielectric, with the distribution `distribution`.
+    #[inline(always)]
+    fn dielectric(&self, distribution: Distribution) -> RoughDielectric {
+        RoughDielectric { ior: self.ior, alpha: self.alpha, distribution, smith: Smith::Separable }
+    }
 }
 
 /// What the dielectric kernel writes for one path.
@@ -264,7 +328,7 @@ lanes!(pub DielectricOutLanes for DielectricOut {
 /// The dielectric kernel for one path, with the distribution `md` of its roughness.
 #[inline(always)]
 fn dielectric<M: Microfacet<Vec3>>(i: &DielectricIn, distribution: Distribution, md: M) -> DielectricOut {
-    let g = RoughDielectric { ior: i.ior, alpha: i.alpha, distribution, smith: Smith::Separable };
+    let g = i.dielectric(distribution);
     let e = g.eval_plain(md, i.wo, i.wi, i.n);
     let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
     DielectricOut {
@@ -306,6 +370,18 @@ impl GlossyLanes for RoughDielectric {
         let x = o.get(l);
         let s = DielectricSample { wi: x.wi, weight: x.weight, pdf: x.pdf, eta: x.eta };
         (BsdfEval { f_cos: Vec3::splat(x.f_cos), pdf: x.eval_pdf }, x.sampled.then(|| s.into()))
+    }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
+        each_lane!(i, distribution, o, EvalLanes, |x, md| {
+            EvalOut::from(x.dielectric(distribution).eval_plain(md, x.wo, x.wi, x.n))
+        });
     }
 }
 
@@ -355,21 +431,29 @@ lanes!(pub PlasticInLanes for PlasticIn {
     two_sided: bool, specular_weight: f32, coating: CoatingRef,
 });
 
+impl PlasticIn {
+    /// The plastic, with the distribution `distribution`.
+    #[inline(always)]
+    fn plastic(&self, distribution: Distribution) -> RoughPlastic {
+        RoughPlastic {
+            albedo: self.albedo,
+            tint: self.tint,
+            ior: self.ior,
+            alpha: self.alpha,
+            distribution,
+            nonlinear: self.nonlinear,
+            two_sided: self.two_sided,
+            specular_weight: self.specular_weight,
+            coating: self.coating.0,
+        }
+    }
+}
+
 /// The plastic kernel for one path, with the distribution `md` of its roughness (its outputs
 /// are the conductor's).
 #[inline(always)]
 fn plastic<M: Microfacet<Vec3>>(i: &PlasticIn, distribution: Distribution, md: M) -> ConductorOut {
-    let g = RoughPlastic {
-        albedo: i.albedo,
-        tint: i.tint,
-        ior: i.ior,
-        alpha: i.alpha,
-        distribution,
-        nonlinear: i.nonlinear,
-        two_sided: i.two_sided,
-        specular_weight: i.specular_weight,
-        coating: i.coating.0,
-    };
+    let g = i.plastic(distribution);
     let e = g.eval_plain(md, i.wo, i.wi, i.n);
     let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
     ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
@@ -415,5 +499,17 @@ impl GlossyLanes for RoughPlastic {
     #[inline(always)]
     fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
         <RoughConductor as GlossyLanes>::result(o, l)
+    }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
+        each_lane!(i, distribution, o, EvalLanes, |x, md| {
+            EvalOut::from(x.plastic(distribution).eval_plain(md, x.wo, x.wi, x.n))
+        });
     }
 }

@@ -3,7 +3,9 @@
 //! `ln`, `pow` and `sin_cos`), the engine's `eval_plain` and `sample_plain` run over
 //! [`LANES`] paths at a time.
 
-use crate::glossy_lanes::{ConductorOut, ConductorOutLanes, GlossyLanes, each_lane};
+use crate::glossy_lanes::{
+    ConductorOut, ConductorOutLanes, EvalLanes, EvalOut, GlossyLanes, each_lane, set_wi,
+};
 use crate::lambert_vertex::{LANES, lanes};
 use crate::path::ScatterSamples;
 use glam::{Vec2, Vec3};
@@ -74,7 +76,7 @@ lanes!(pub PrincipledOutLanes for PrincipledOut {
 fn principled(i: &PrincipledIn) -> PrincipledOut {
     let f = PlainFrame { t: i.t, b: i.b, n: i.n };
     let lo = f.local(i.wo);
-    let e = i.lobes.eval_plain(lo, f.local(i.wi));
+    let e = principled_eval(i);
     let (li, eta, s, sampled) = i.lobes.sample_plain(lo, Vec2::new(i.u[0], i.u[1]), i.uc, i.cc_cos2);
     PrincipledOut {
         f_cos: e.f_cos,
@@ -85,6 +87,13 @@ fn principled(i: &PrincipledIn) -> PrincipledOut {
         eta,
         sampled,
     }
+}
+
+/// The principled BSDF towards `i.wi`.
+#[inline(always)]
+fn principled_eval(i: &PrincipledIn) -> BsdfEval {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    i.lobes.eval_plain(f.local(i.wo), f.local(i.wi))
 }
 
 impl GlossyLanes for Principled {
@@ -122,6 +131,16 @@ impl GlossyLanes for Principled {
     #[inline(never)]
     fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
         each_lane!(i, o, PrincipledOutLanes, |x| principled(&x));
+    }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, _: Distribution, o: &mut EvalLanes) {
+        each_lane!(i, o, EvalLanes, |x| EvalOut::from(principled_eval(&x)));
     }
 
     #[inline(always)]
@@ -178,7 +197,7 @@ fn thin(i: &ThinIn) -> ConductorOut {
     let f = PlainFrame { t: i.t, b: i.b, n: i.n };
     let lo = f.local(i.wo);
     let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
-    let e = i.lobes.eval_plain(lo * side, f.local(i.wi) * side);
+    let e = thin_eval(i);
     let (li, s, sampled) = i.lobes.sample_plain(lo * side, Vec2::new(i.u[0], i.u[1]), i.uc);
     ConductorOut {
         f_cos: e.f_cos,
@@ -188,6 +207,15 @@ fn thin(i: &ThinIn) -> ConductorOut {
         pdf: s.pdf,
         sampled: sampled && lo.z != 0.0,
     }
+}
+
+/// The thin principled BSDF towards `i.wi`, both sides alike.
+#[inline(always)]
+fn thin_eval(i: &ThinIn) -> BsdfEval {
+    let f = PlainFrame { t: i.t, b: i.b, n: i.n };
+    let lo = f.local(i.wo);
+    let side = if lo.z < 0.0 { -1.0 } else { 1.0 };
+    i.lobes.eval_plain(lo * side, f.local(i.wi) * side)
 }
 
 impl GlossyLanes for PrincipledThin {
@@ -214,6 +242,16 @@ impl GlossyLanes for PrincipledThin {
     #[inline(never)]
     fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
         each_lane!(i, o, ConductorOutLanes, |x| thin(&x));
+    }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, _: Distribution, o: &mut EvalLanes) {
+        each_lane!(i, o, EvalLanes, |x| EvalOut::from(thin_eval(&x)));
     }
 
     #[inline(always)]

@@ -4,7 +4,7 @@
 
 use super::queues::{Paths, Queues};
 use super::stages::route;
-use crate::glossy_lanes::GlossyLanes;
+use crate::glossy_lanes::{EvalLanes, GlossyLanes};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
@@ -148,6 +148,7 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
     let live = below_max_depth(scene, p, q, queue, false);
     let mut ins = K::In::default();
     let (mut ggx, mut beckmann) = (K::Out::default(), K::Out::default());
+    let (mut env_ggx, mut env_beckmann) = (EvalLanes::default(), EvalLanes::default());
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let reads = reads_of(scene, p, chunk);
@@ -176,6 +177,23 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
         if kernel.contains(&Some(Distribution::Beckmann)) {
             K::run(&ins, Distribution::Beckmann, &mut beckmann);
         }
+        // The environment sampled apart: the BSDF towards its samples, across lanes again.
+        let mut environment: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
+        if scene.lights.environment_apart().is_some() {
+            for (l, &i) in chunk.iter().enumerate() {
+                if kernel[l].is_some() {
+                    let sp = &p.hit[i as usize].surface;
+                    environment[l] = path::environment_light(scene, sp.p, u[l].environment);
+                    K::set_wi(&mut ins, l, environment[l].as_ref().map_or(sp.ns, |lp| lp.wi).into());
+                }
+            }
+            if kernel.contains(&Some(Distribution::Ggx)) {
+                K::eval(&ins, Distribution::Ggx, &mut env_ggx);
+            }
+            if kernel.contains(&Some(Distribution::Beckmann)) {
+                K::eval(&ins, Distribution::Beckmann, &mut env_beckmann);
+            }
+        }
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let mut st = p.state(s);
@@ -197,12 +215,13 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                     let light = lights[l]
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
-                    // The environment sampled apart: the BSDF towards it one path at a time.
-                    let environment = path::environment_light(scene, sp.p, u[l].environment).and_then(|lp| {
-                        scene.with_material(hit.material, sp, |mat| {
-                            path::light_shadow(scene, &st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time)
-                        })
-                    });
+                    let env_eval = match d {
+                        Distribution::Ggx => &env_ggx,
+                        Distribution::Beckmann => &env_beckmann,
+                    };
+                    let environment = environment[l]
+                        .as_ref()
+                        .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || env_eval.eval(l), time));
                     let next = bs.and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
                     });
