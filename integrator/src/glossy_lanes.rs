@@ -1,5 +1,5 @@
-//! Rough conductors, dielectrics and plastics (and, in [`crate::principled_lanes`], the
-//! principled BSDFs) across lanes: the BSDF evaluated towards each
+//! Rough conductors and dielectrics (and, in [`crate::plastic_lanes`] and
+//! [`crate::principled_lanes`], rough plastics and the principled BSDFs) across lanes: the BSDF evaluated towards each
 //! path's light sample and sampled for its next direction, [`LANES`] paths at a time. The
 //! kernels are the engine's own `eval_plain` and `sample_plain` (plain numbers, no branches),
 //! which the one-path code calls too: one source, so both integrators compute the same bits.
@@ -10,10 +10,11 @@
 use crate::lambert_vertex::{LANES, lanes};
 use crate::path::ScatterSamples;
 use glam::{Vec2, Vec3};
-use pathwave_engine::material::microfacet::{Beckmann, Distribution, Ggx, Microfacet, Smith};
+use pathwave_engine::material::microfacet::{
+    Beckmann, BeckmannAniso, Distribution, Ggx, GgxAniso, Microfacet, PlainFrame, SMOOTH_ALPHA, Smith,
+};
 use pathwave_engine::material::rough_conductor::{ComplexIor, PlainSample, RoughConductor};
 use pathwave_engine::material::rough_dielectric::{DielectricSample, RoughDielectric};
-use pathwave_engine::material::rough_plastic::{Coating, RoughPlastic};
 use pathwave_engine::material::{BsdfEval, BsdfSample, Material};
 
 /// A material kind whose BSDF the wavefront evaluates and samples across lanes.
@@ -23,9 +24,9 @@ pub trait GlossyLanes {
     /// Its outputs for every lane.
     type Out: Default;
 
-    /// The material as the kernel takes it, and its distribution; `None` where the kernel
-    /// does not shade it (smooth, anisotropic, height-correlated shadowing): path by path then.
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)>
+    /// The material as the kernel takes it, and the kernel that shades it; `None` where no
+    /// kernel does (smooth, height-correlated shadowing): path by path then.
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)>
     where
         Self: Sized;
 
@@ -34,9 +35,9 @@ pub trait GlossyLanes {
     /// and the BSDF's numbers.
     fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples);
 
-    /// Runs the kernel on every lane with the distribution `d` (lanes of another are computed
-    /// too, and not read).
-    fn run(i: &Self::In, d: Distribution, o: &mut Self::Out);
+    /// Runs the kernel `k` on every lane (lanes of another kernel are computed too, and not
+    /// read).
+    fn run(i: &Self::In, k: Kernel, o: &mut Self::Out);
 
     /// Lane `l`'s BSDF towards its light sample, and its sampled direction (if any).
     fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>);
@@ -45,9 +46,44 @@ pub trait GlossyLanes {
     /// sampled apart; any unit vector where there is none).
     fn set_wi(i: &mut Self::In, l: usize, wi: Vec3);
 
-    /// The BSDF towards every lane's light sample with the distribution `d`, across lanes: the
-    /// kernel's evaluation alone.
-    fn eval(i: &Self::In, d: Distribution, o: &mut EvalLanes);
+    /// The BSDF towards every lane's light sample by the kernel `k`, across lanes: its
+    /// evaluation alone.
+    fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes);
+}
+
+/// Which of a kind's kernels shades a lane: its roughness's distribution, and whether the
+/// roughness is anisotropic (rough conductors only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Kernel {
+    /// The distribution of microfacet normals.
+    pub distribution: Distribution,
+    /// Anisotropic roughness, in the tangent frame.
+    pub anisotropic: bool,
+}
+
+impl Kernel {
+    /// Every kernel, in [`Self::index`] order.
+    pub const ALL: [Kernel; 4] = [
+        Kernel::isotropic(Distribution::Ggx),
+        Kernel::isotropic(Distribution::Beckmann),
+        Kernel { distribution: Distribution::Ggx, anisotropic: true },
+        Kernel { distribution: Distribution::Beckmann, anisotropic: true },
+    ];
+
+    /// The isotropic kernel of `distribution`.
+    pub const fn isotropic(distribution: Distribution) -> Self {
+        Kernel { distribution, anisotropic: false }
+    }
+
+    /// Its place in [`Self::ALL`].
+    #[inline]
+    pub fn index(self) -> usize {
+        let d = match self.distribution {
+            Distribution::Ggx => 0,
+            Distribution::Beckmann => 1,
+        };
+        d + 2 * self.anisotropic as usize
+    }
 }
 
 /// A lane's BSDF towards a direction, as [`GlossyLanes::eval`] writes it.
@@ -160,6 +196,14 @@ pub struct ConductorIn {
     pub fresnel: bool,
     /// Reflects on both sides.
     pub two_sided: bool,
+    /// Anisotropic roughness across the tangent (`alpha` along it).
+    pub alpha_v: f32,
+    /// The anisotropic kernel's frame ([`RoughConductor::anisotropic_frame`]): the tangent, ...
+    pub t: Vec3,
+    /// ... the bitangent ...
+    pub b: Vec3,
+    /// ... and the normal facing `wo`.
+    pub nf: Vec3,
 }
 
 impl ConductorIn {
@@ -177,6 +221,7 @@ impl ConductorIn {
             k: c.ior.k,
             fresnel: c.fresnel,
             two_sided: c.two_sided,
+            ..Default::default()
         }
     }
 
@@ -216,6 +261,7 @@ pub struct ConductorOut {
 
 lanes!(pub ConductorInLanes for ConductorIn {
     wo: v3, n: v3, wi: v3, u: f2, tint: v3, alpha: f32, eta: v3, k: v3, fresnel: bool, two_sided: bool,
+    alpha_v: f32, t: v3, b: v3, nf: v3,
 });
 
 lanes!(pub ConductorOutLanes for ConductorOut {
@@ -231,26 +277,86 @@ fn conductor<M: Microfacet<Vec3>>(i: &ConductorIn, distribution: Distribution, m
     ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
 }
 
+/// The anisotropic kernel for one path, with the distribution `md` of its widths, in its
+/// tangent frame.
+#[inline(always)]
+fn conductor_anisotropic<M: Microfacet<Vec3>>(
+    i: &ConductorIn,
+    distribution: Distribution,
+    md: M,
+) -> ConductorOut {
+    let (c, f) = (i.conductor(distribution), PlainFrame { t: i.t, b: i.b, n: i.nf });
+    let e = c.eval_in(f, md, i.wo, i.wi);
+    let (s, sampled) = c.sample_in(f, md, i.wo, Vec2::new(i.u[0], i.u[1]));
+    ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
+}
+
+/// Runs `$kernel` on every lane of `$i` into `$o` (of type `$out`) with the anisotropic
+/// distribution `$md` of `$k`'s (the lanes' `alpha` and `alpha_v`, at least `SMOOTH_ALPHA`).
+macro_rules! each_anisotropic_lane {
+    ($i:expr, $k:expr, $o:expr, $out:ty, |$x:ident, $md:ident| $kernel:expr) => {
+        *$o = pathwave_engine::simd::lanes(
+            #[inline(always)]
+            || {
+                let mut out = <$out>::default();
+                let widths = |x: &ConductorIn| (x.alpha.max(SMOOTH_ALPHA), x.alpha_v.max(SMOOTH_ALPHA));
+                match $k.distribution {
+                    Distribution::Ggx => {
+                        for l in 0..LANES {
+                            let $x = $i.get(l);
+                            let (ax, ay) = widths(&$x);
+                            let $md = GgxAniso { ax, ay };
+                            out.set(l, &$kernel);
+                        }
+                    }
+                    Distribution::Beckmann => {
+                        for l in 0..LANES {
+                            let $x = $i.get(l);
+                            let (ax, ay) = widths(&$x);
+                            let $md = BeckmannAniso { ax, ay };
+                            out.set(l, &$kernel);
+                        }
+                    }
+                }
+                out
+            },
+        )
+    };
+}
+
 impl GlossyLanes for RoughConductor {
     type In = ConductorInLanes;
     type Out = ConductorOutLanes;
 
     #[inline(always)]
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
-            Material::RoughConductor(c) if c.shaded_in_lanes() => Some((*c, c.distribution)),
+            Material::RoughConductor(c) if c.shaded_in_lanes() => {
+                Some((*c, Kernel { distribution: c.distribution, anisotropic: c.is_anisotropic() }))
+            }
             _ => None,
         }
     }
 
     #[inline(always)]
     fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
-        i.set(l, &ConductorIn::new(m, wo, n, wi, u.dir));
+        let mut x = ConductorIn::new(m, wo, n, wi, u.dir);
+        if m.is_anisotropic() {
+            let f = m.anisotropic_frame(wo.into(), n.into());
+            (x.alpha_v, x.t, x.b, x.nf) = (m.alpha_v, f.t, f.b, f.n);
+        }
+        i.set(l, &x);
     }
 
     #[inline(never)]
-    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        each_lane!(i, distribution, o, ConductorOutLanes, |x, md| conductor(&x, distribution, md));
+    fn run(i: &Self::In, k: Kernel, o: &mut Self::Out) {
+        let d = k.distribution;
+        match k.anisotropic {
+            false => each_lane!(i, d, o, ConductorOutLanes, |x, md| conductor(&x, d, md)),
+            true => {
+                each_anisotropic_lane!(i, k, o, ConductorOutLanes, |x, md| conductor_anisotropic(&x, d, md))
+            }
+        }
     }
 
     #[inline(always)]
@@ -266,10 +372,16 @@ impl GlossyLanes for RoughConductor {
     }
 
     #[inline(never)]
-    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
-        each_lane!(i, distribution, o, EvalLanes, |x, md| {
-            EvalOut::from(x.conductor(distribution).eval_plain(md, x.wo, x.wi, x.n))
-        });
+    fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes) {
+        let d = k.distribution;
+        match k.anisotropic {
+            false => each_lane!(i, d, o, EvalLanes, |x, md| {
+                EvalOut::from(x.conductor(d).eval_plain(md, x.wo, x.wi, x.n))
+            }),
+            true => each_anisotropic_lane!(i, k, o, EvalLanes, |x, md| {
+                EvalOut::from(x.conductor(d).eval_in(PlainFrame { t: x.t, b: x.b, n: x.nf }, md, x.wo, x.wi))
+            }),
+        }
     }
 }
 
@@ -347,9 +459,11 @@ impl GlossyLanes for RoughDielectric {
     type Out = DielectricOutLanes;
 
     #[inline(always)]
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
-            Material::RoughDielectric(g) if g.shaded_in_lanes() => Some((*g, g.distribution)),
+            Material::RoughDielectric(g) if g.shaded_in_lanes() => {
+                Some((*g, Kernel::isotropic(g.distribution)))
+            }
             _ => None,
         }
     }
@@ -361,8 +475,9 @@ impl GlossyLanes for RoughDielectric {
     }
 
     #[inline(never)]
-    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        each_lane!(i, distribution, o, DielectricOutLanes, |x, md| dielectric(&x, distribution, md));
+    fn run(i: &Self::In, k: Kernel, o: &mut Self::Out) {
+        let d = k.distribution;
+        each_lane!(i, d, o, DielectricOutLanes, |x, md| dielectric(&x, d, md));
     }
 
     #[inline(always)]
@@ -378,138 +493,10 @@ impl GlossyLanes for RoughDielectric {
     }
 
     #[inline(never)]
-    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
-        each_lane!(i, distribution, o, EvalLanes, |x, md| {
-            EvalOut::from(x.dielectric(distribution).eval_plain(md, x.wo, x.wi, x.n))
-        });
-    }
-}
-
-/// A rough plastic's coating tables, as a lane holds them (by default [`Coating::OPAQUE`]).
-#[derive(Clone, Copy, Debug)]
-pub struct CoatingRef(pub &'static Coating);
-
-impl Default for CoatingRef {
-    fn default() -> Self {
-        CoatingRef(&Coating::OPAQUE)
-    }
-}
-
-/// What the plastic kernel reads for one path.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PlasticIn {
-    /// Unit direction back along the ray.
-    pub wo: Vec3,
-    /// Unit shading normal.
-    pub n: Vec3,
-    /// Unit direction to the light sample (any unit vector where there is none).
-    pub wi: Vec3,
-    /// The BSDF sample's numbers: the direction's.
-    pub u: [f32; 2],
-    /// The lobe's.
-    pub uc: f32,
-    /// The base's reflectance.
-    pub albedo: Vec3,
-    /// Colour multiplying the coating's reflection.
-    pub tint: Vec3,
-    /// The coating's index of refraction.
-    pub ior: f32,
-    /// Roughness.
-    pub alpha: f32,
-    /// The base's inner bounces are nonlinear.
-    pub nonlinear: bool,
-    /// Reflects on both sides.
-    pub two_sided: bool,
-    /// The glossy lobe's sampling weight.
-    pub specular_weight: f32,
-    /// The coating's tables.
-    pub coating: CoatingRef,
-}
-
-lanes!(pub PlasticInLanes for PlasticIn {
-    wo: v3, n: v3, wi: v3, u: f2, uc: f32, albedo: v3, tint: v3, ior: f32, alpha: f32, nonlinear: bool,
-    two_sided: bool, specular_weight: f32, coating: CoatingRef,
-});
-
-impl PlasticIn {
-    /// The plastic, with the distribution `distribution`.
-    #[inline(always)]
-    fn plastic(&self, distribution: Distribution) -> RoughPlastic {
-        RoughPlastic {
-            albedo: self.albedo,
-            tint: self.tint,
-            ior: self.ior,
-            alpha: self.alpha,
-            distribution,
-            nonlinear: self.nonlinear,
-            two_sided: self.two_sided,
-            specular_weight: self.specular_weight,
-            coating: self.coating.0,
-        }
-    }
-}
-
-/// The plastic kernel for one path, with the distribution `md` of its roughness (its outputs
-/// are the conductor's).
-#[inline(always)]
-fn plastic<M: Microfacet<Vec3>>(i: &PlasticIn, distribution: Distribution, md: M) -> ConductorOut {
-    let g = i.plastic(distribution);
-    let e = g.eval_plain(md, i.wo, i.wi, i.n);
-    let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
-    ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
-}
-
-impl GlossyLanes for RoughPlastic {
-    type In = PlasticInLanes;
-    type Out = ConductorOutLanes;
-
-    #[inline(always)]
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
-        match m {
-            Material::RoughPlastic(g) if g.shaded_in_lanes() => Some((*g, g.distribution)),
-            _ => None,
-        }
-    }
-
-    #[inline(always)]
-    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
-        let x = PlasticIn {
-            wo,
-            n,
-            wi,
-            u: [u.dir.x, u.dir.y],
-            uc: u.lobe,
-            albedo: m.albedo,
-            tint: m.tint,
-            ior: m.ior,
-            alpha: m.alpha,
-            nonlinear: m.nonlinear,
-            two_sided: m.two_sided,
-            specular_weight: m.specular_weight,
-            coating: CoatingRef(m.coating),
-        };
-        i.set(l, &x);
-    }
-
-    #[inline(never)]
-    fn run(i: &Self::In, distribution: Distribution, o: &mut Self::Out) {
-        each_lane!(i, distribution, o, ConductorOutLanes, |x, md| plastic(&x, distribution, md));
-    }
-
-    #[inline(always)]
-    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
-        <RoughConductor as GlossyLanes>::result(o, l)
-    }
-
-    #[inline(always)]
-    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
-        set_wi!(i, l, wi);
-    }
-
-    #[inline(never)]
-    fn eval(i: &Self::In, distribution: Distribution, o: &mut EvalLanes) {
-        each_lane!(i, distribution, o, EvalLanes, |x, md| {
-            EvalOut::from(x.plastic(distribution).eval_plain(md, x.wo, x.wi, x.n))
-        });
+    fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes) {
+        let d = k.distribution;
+        each_lane!(i, d, o, EvalLanes, |x, md| EvalOut::from(
+            x.dielectric(d).eval_plain(md, x.wo, x.wi, x.n)
+        ));
     }
 }

@@ -14,6 +14,7 @@ pub mod light_lanes;
 pub mod oracle;
 pub mod path;
 mod plain;
+pub mod plastic_lanes;
 pub mod principled_lanes;
 pub mod sampler;
 pub mod tile;

@@ -4,7 +4,7 @@
 //! [`LANES`] paths at a time.
 
 use crate::glossy_lanes::{
-    ConductorOut, ConductorOutLanes, EvalLanes, EvalOut, GlossyLanes, each_lane, set_wi,
+    ConductorOut, ConductorOutLanes, EvalLanes, EvalOut, GlossyLanes, Kernel, each_lane, set_wi,
 };
 use crate::lambert_vertex::{LANES, lanes};
 use crate::path::ScatterSamples;
@@ -102,9 +102,9 @@ impl GlossyLanes for Principled {
 
     /// Every principled material, with its one distribution (GGX).
     #[inline(always)]
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
-            Material::Principled(p) => Some((*p, Distribution::Ggx)),
+            Material::Principled(p) => Some((*p, Kernel::isotropic(Distribution::Ggx))),
             _ => None,
         }
     }
@@ -129,7 +129,7 @@ impl GlossyLanes for Principled {
     }
 
     #[inline(never)]
-    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+    fn run(i: &Self::In, _: Kernel, o: &mut Self::Out) {
         each_lane!(i, o, PrincipledOutLanes, |x| principled(&x));
     }
 
@@ -139,7 +139,7 @@ impl GlossyLanes for Principled {
     }
 
     #[inline(never)]
-    fn eval(i: &Self::In, _: Distribution, o: &mut EvalLanes) {
+    fn eval(i: &Self::In, _: Kernel, o: &mut EvalLanes) {
         each_lane!(i, o, EvalLanes, |x| EvalOut::from(principled_eval(&x)));
     }
 
@@ -224,9 +224,9 @@ impl GlossyLanes for PrincipledThin {
 
     /// Every thin principled material, with its one distribution (GGX).
     #[inline(always)]
-    fn lane_material(m: &Material) -> Option<(Self, Distribution)> {
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
-            Material::PrincipledThin(p) => Some((*p, Distribution::Ggx)),
+            Material::PrincipledThin(p) => Some((*p, Kernel::isotropic(Distribution::Ggx))),
             _ => None,
         }
     }
@@ -240,7 +240,7 @@ impl GlossyLanes for PrincipledThin {
     }
 
     #[inline(never)]
-    fn run(i: &Self::In, _: Distribution, o: &mut Self::Out) {
+    fn run(i: &Self::In, _: Kernel, o: &mut Self::Out) {
         each_lane!(i, o, ConductorOutLanes, |x| thin(&x));
     }
 
@@ -250,7 +250,7 @@ impl GlossyLanes for PrincipledThin {
     }
 
     #[inline(never)]
-    fn eval(i: &Self::In, _: Distribution, o: &mut EvalLanes) {
+    fn eval(i: &Self::In, _: Kernel, o: &mut EvalLanes) {
         each_lane!(i, o, EvalLanes, |x| EvalOut::from(thin_eval(&x)));
     }
 

@@ -184,11 +184,26 @@ impl RoughConductor {
         }
     }
 
-    /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]):
-    /// rough, isotropic, with separable shadowing-masking.
+    /// Whether the lane kernels shade it ([`Self::eval_plain`] and [`Self::sample_plain`],
+    /// or [`Self::eval_in`] and [`Self::sample_in`] in its [`Self::anisotropic_frame`]): rough,
+    /// with separable shadowing-masking.
     #[inline]
     pub fn shaded_in_lanes(&self) -> bool {
-        !self.is_smooth() && !self.is_anisotropic() && self.smith == Smith::Separable
+        !self.is_smooth() && self.smith == Smith::Separable
+    }
+
+    /// The frame of an anisotropic conductor at the shading normal `n` seen from `wo`: its
+    /// tangent at its angle, its normal facing `wo` where it is two-sided.
+    #[inline]
+    pub fn anisotropic_frame(&self, wo: Vec3A, n: Vec3A) -> PlainFrame {
+        self.tangent_frame(n, self.facing(wo, n))
+    }
+
+    /// The anisotropic distribution's widths along the tangent and across (at least
+    /// [`SMOOTH_ALPHA`]).
+    #[inline(always)]
+    pub fn anisotropic_widths(&self) -> (f32, f32) {
+        (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA))
     }
 
     /// [`MaterialModel::eval`] of an isotropic rough conductor with the distribution `md`, on
@@ -202,7 +217,7 @@ impl RoughConductor {
     /// [`Self::eval_plain`] in the frame `f` (its normal facing `wo`; the anisotropic one's
     /// tangent along the roughness `alpha`'s direction).
     #[inline(always)]
-    fn eval_in<M: Microfacet<Vec3>>(&self, f: PlainFrame, md: M, wo: Vec3, wi: Vec3) -> BsdfEval {
+    pub fn eval_in<M: Microfacet<Vec3>>(&self, f: PlainFrame, md: M, wo: Vec3, wi: Vec3) -> BsdfEval {
         let (lo, li) = (f.local(wo), f.local(wi));
         let m = (lo + li).normalize_or_zero();
         let cos_om = lo.dot(m);
@@ -235,7 +250,13 @@ impl RoughConductor {
 
     /// [`Self::sample_plain`] in the frame `f`, as [`Self::eval_in`].
     #[inline(always)]
-    fn sample_in<M: Microfacet<Vec3>>(&self, f: PlainFrame, md: M, wo: Vec3, u: Vec2) -> (PlainSample, bool) {
+    pub fn sample_in<M: Microfacet<Vec3>>(
+        &self,
+        f: PlainFrame,
+        md: M,
+        wo: Vec3,
+        u: Vec2,
+    ) -> (PlainSample, bool) {
         let lo = f.local(wo);
         let m = md.sample_visible(lo, u);
         let cos_om = lo.dot(m);
@@ -281,7 +302,7 @@ impl RoughConductor {
     #[inline(never)]
     fn sample_anisotropic(&self, wo: Vec3A, n: Vec3A, nf: Vec3A, u: Vec2) -> Option<BsdfSample> {
         let f = self.tangent_frame(n, nf);
-        let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
+        let (ax, ay) = self.anisotropic_widths();
         let (s, valid) = match self.distribution {
             Distribution::Ggx => self.sample_in(f, GgxAniso { ax, ay }, wo.into(), u),
             Distribution::Beckmann => self.sample_in(f, BeckmannAniso { ax, ay }, wo.into(), u),
@@ -293,7 +314,7 @@ impl RoughConductor {
     #[inline(never)]
     fn eval_anisotropic(&self, wo: Vec3A, wi: Vec3A, n: Vec3A, nf: Vec3A) -> BsdfEval {
         let f = self.tangent_frame(n, nf);
-        let (ax, ay) = (self.alpha.max(SMOOTH_ALPHA), self.alpha_v.max(SMOOTH_ALPHA));
+        let (ax, ay) = self.anisotropic_widths();
         match self.distribution {
             Distribution::Ggx => self.eval_in(f, GgxAniso { ax, ay }, wo.into(), wi.into()),
             Distribution::Beckmann => self.eval_in(f, BeckmannAniso { ax, ay }, wo.into(), wi.into()),

@@ -4,11 +4,10 @@
 
 use super::queues::{Paths, Queues};
 use super::stages::route;
-use crate::glossy_lanes::{EvalLanes, GlossyLanes};
+use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
-use pathwave_engine::material::microfacet::Distribution;
 use pathwave_engine::material::principled::Principled;
 use pathwave_engine::material::principled_thin::PrincipledThin;
 use pathwave_engine::material::rough_conductor::RoughConductor;
@@ -141,14 +140,17 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 /// plastics, principled and thin principled):
 /// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
 /// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
-/// shades, and the path's bookkeeping path by path. The others (smooth, anisotropic,
-/// height-correlated) are shaded as the other glossy kinds.
+/// shades (anisotropic conductors by kernels of their own, in their tangent frame), and the
+/// path's bookkeeping path by path; where the environment is sampled apart, the BSDF is
+/// evaluated towards its samples across lanes too. The others (smooth, height-correlated) are
+/// shaded as the other glossy kinds.
 fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
     let live = below_max_depth(scene, p, q, queue, false);
     let mut ins = K::In::default();
-    let (mut ggx, mut beckmann) = (K::Out::default(), K::Out::default());
-    let (mut env_ggx, mut env_beckmann) = (EvalLanes::default(), EvalLanes::default());
+    // Each kernel's outputs, by `Kernel::index`.
+    let mut outs: [K::Out; 4] = std::array::from_fn(|_| K::Out::default());
+    let mut env_outs: [EvalLanes; 4] = Default::default();
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let reads = reads_of(scene, p, chunk);
@@ -156,26 +158,25 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
             #[inline(always)]
             || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
         );
-        // Per lane: the kernel's distribution (none: shaded path by path) and light sample.
+        // Per lane: the kernel (none: shaded path by path) and light sample.
         let mut kernel = [None; LANES];
         let mut lights: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let hit = &p.hit[s];
-            let Some((m, d)) = scene.with_material(hit.material, &hit.surface, K::lane_material) else {
+            let Some((m, k)) = scene.with_material(hit.material, &hit.surface, K::lane_material) else {
                 continue;
             };
             let (sp, time) = (&hit.surface, p.time[s]);
             lights[l] = path::glossy_light(scene, sp, time, &u[l]);
             let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
             K::set(&mut ins, l, &m, (-p.dir[s]).into(), sp.ns.into(), wi.into(), &u[l].bsdf);
-            kernel[l] = Some(d);
+            kernel[l] = Some(k);
         }
-        if kernel.contains(&Some(Distribution::Ggx)) {
-            K::run(&ins, Distribution::Ggx, &mut ggx);
-        }
-        if kernel.contains(&Some(Distribution::Beckmann)) {
-            K::run(&ins, Distribution::Beckmann, &mut beckmann);
+        for k in Kernel::ALL {
+            if kernel.contains(&Some(k)) {
+                K::run(&ins, k, &mut outs[k.index()]);
+            }
         }
         // The environment sampled apart: the BSDF towards its samples, across lanes again.
         let mut environment: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
@@ -187,11 +188,10 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                     K::set_wi(&mut ins, l, environment[l].as_ref().map_or(sp.ns, |lp| lp.wi).into());
                 }
             }
-            if kernel.contains(&Some(Distribution::Ggx)) {
-                K::eval(&ins, Distribution::Ggx, &mut env_ggx);
-            }
-            if kernel.contains(&Some(Distribution::Beckmann)) {
-                K::eval(&ins, Distribution::Beckmann, &mut env_beckmann);
+            for k in Kernel::ALL {
+                if kernel.contains(&Some(k)) {
+                    K::eval(&ins, k, &mut env_outs[k.index()]);
+                }
             }
         }
         for (l, &i) in chunk.iter().enumerate() {
@@ -206,19 +206,12 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                     #[inline(always)]
                     |mat| path::shade_glossy(scene, &mut st, sp, wo, mat, time, &u[l]),
                 ),
-                Some(d) => {
-                    let o = match d {
-                        Distribution::Ggx => &ggx,
-                        Distribution::Beckmann => &beckmann,
-                    };
-                    let (e, bs) = K::result(o, l);
+                Some(k) => {
+                    let (e, bs) = K::result(&outs[k.index()], l);
                     let light = lights[l]
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
-                    let env_eval = match d {
-                        Distribution::Ggx => &env_ggx,
-                        Distribution::Beckmann => &env_beckmann,
-                    };
+                    let env_eval = &env_outs[k.index()];
                     let environment = environment[l]
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || env_eval.eval(l), time));
