@@ -78,7 +78,8 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
 /// directions the two normals disagree about) take the same shared code in both integrators:
 /// a coarse sphere mesh in each material kind that shades (Lambertian, Metal, both rough ones
 /// with either distribution, glass, plastic, textured rough plastic, a textured principled, a
-/// textured thin principled and an anisotropic rough conductor), one of them sheared,
+/// textured thin principled, a textured glTF metallic-roughness and an anisotropic rough
+/// conductor), one of them sheared,
 /// under a lamp, a point light and the sky, gives the oracle's bits.
 #[test]
 fn reproduces_the_oracle_on_smooth_shaded_meshes() {
@@ -104,6 +105,7 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
                 "lamp": DiffuseLight(emit: (30, 30, 30), two_sided: true),
                 "principled": Principled(base_color: "checks", roughness: 0.4, anisotropic: 0.7, metallic: "checks", spec_trans: 0.3, sheen: 0.5, clearcoat: 0.6),
                 "brushed": RoughConductor(tint: (0.9, 0.9, 0.9), alpha: 0.05, alpha_v: "checks"),
+                "gltf": MetallicRoughness(base_color: "checks", metallic: 0.4, roughness: 0.5, clearcoat: 0.5, clearcoat_roughness: 0.2),
                 "leaf": PrincipledThin(base_color: "checks", roughness: 0.5, anisotropic: 0.4, spec_trans: 0.4, diff_trans: 0.8, sheen: 0.3, flatness: 0.5),
             },
             textures: {"checks": UvChecker(u: 8, v: 4, even: (0.8, 0.3, 0.1), odd: (0.1, 0.3, 0.8))},
@@ -122,6 +124,7 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
                 (shape: Mesh(file: "ball.obj"), material: "principled", transform: [UniformScale(0.5), Translate((-0.8, 1.4, 1))]),
                 (shape: Mesh(file: "ball.obj"), material: "brushed", transform: [UniformScale(0.5), Translate((0.8, 1.4, 1))]),
                 (shape: Mesh(file: "ball.obj"), material: "leaf", transform: [UniformScale(0.4), Translate((0, 2.2, 0.5))]),
+                (shape: Mesh(file: "ball.obj"), material: "gltf", transform: [UniformScale(0.4), Translate((-2.2, 1.6, 0.5))]),
             ],
             lights: [Point(position: (-4, 4, 3), intensity: (20, 20, 20))],
         )"#,

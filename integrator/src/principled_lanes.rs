@@ -1,4 +1,4 @@
-//! The principled BSDF and its thin variant across lanes, as [`crate::glossy_lanes`]' kinds:
+//! The principled BSDF, its thin variant and glTF's metallic-roughness material across lanes, as [`crate::glossy_lanes`]' kinds:
 //! their lobes' numbers gathered per path (the tangent frame, and what needs the C library's
 //! `ln`, `pow` and `sin_cos`), the engine's `eval_plain` and `sample_plain` run over
 //! [`LANES`] paths at a time.
@@ -9,6 +9,7 @@ use crate::glossy_lanes::{
 use crate::lambert_vertex::{LANES, lanes};
 use crate::path::ScatterSamples;
 use glam::{Vec2, Vec3};
+use pathwave_engine::material::metallic_roughness::MetallicRoughness;
 use pathwave_engine::material::microfacet::{Distribution, PlainFrame};
 use pathwave_engine::material::principled::{Lobes, Principled};
 use pathwave_engine::material::principled_thin::{PrincipledThin, ThinLobes};
@@ -257,5 +258,93 @@ impl GlossyLanes for PrincipledThin {
     #[inline(always)]
     fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
         <RoughConductor as GlossyLanes>::result(o, l)
+    }
+}
+
+lanes!(pub MetallicRoughnessLanes for MetallicRoughness {
+    base_color: v3, metallic: f32, alpha: f32, f0: f32, clearcoat: f32, alpha_coat: f32,
+});
+
+/// What the glTF metallic-roughness kernel reads for one path.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GltfIn {
+    /// Unit direction back along the ray.
+    pub wo: Vec3,
+    /// Unit shading normal.
+    pub n: Vec3,
+    /// Unit direction to the light sample (any unit vector where there is none).
+    pub wi: Vec3,
+    /// The BSDF sample's numbers: the direction's.
+    pub u: [f32; 2],
+    /// The lobe's.
+    pub uc: f32,
+    /// The material (textures applied).
+    pub material: MetallicRoughness,
+}
+
+lanes!(pub GltfInLanes for GltfIn {
+    wo: v3, n: v3, wi: v3, u: f2, uc: f32, material: (lanes MetallicRoughnessLanes),
+});
+
+/// The glTF material towards `i.wi`, both sides alike.
+#[inline(always)]
+fn gltf_eval(i: &GltfIn) -> BsdfEval {
+    let f = MetallicRoughness::frame(i.wo, i.n);
+    i.material.eval_plain(f.local(i.wo), f.local(i.wi))
+}
+
+/// The glTF metallic-roughness kernel for one path: [`MetallicRoughness`]'s `eval` and
+/// `sample` in its frame (its outputs are the conductor's: it does not refract).
+#[inline(always)]
+fn gltf(i: &GltfIn) -> ConductorOut {
+    let f = MetallicRoughness::frame(i.wo, i.n);
+    let e = gltf_eval(i);
+    let (li, s, sampled) = i.material.sample_plain(f.local(i.wo), Vec2::new(i.u[0], i.u[1]), i.uc);
+    ConductorOut {
+        f_cos: e.f_cos,
+        eval_pdf: e.pdf,
+        wi: f.world(li),
+        weight: s.f_cos / s.pdf,
+        pdf: s.pdf,
+        sampled,
+    }
+}
+
+impl GlossyLanes for MetallicRoughness {
+    type In = GltfInLanes;
+    type Out = ConductorOutLanes;
+
+    /// Every glTF material, with its one distribution (GGX).
+    #[inline(always)]
+    fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
+        match m {
+            Material::MetallicRoughness(g) => Some((*g, Kernel::isotropic(Distribution::Ggx))),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn set(i: &mut Self::In, l: usize, m: &Self, wo: Vec3, n: Vec3, wi: Vec3, u: &ScatterSamples) {
+        i.set(l, &GltfIn { wo, n, wi, u: [u.dir.x, u.dir.y], uc: u.lobe, material: *m });
+    }
+
+    #[inline(never)]
+    fn run(i: &Self::In, _: Kernel, o: &mut Self::Out) {
+        each_lane!(i, o, ConductorOutLanes, |x| gltf(&x));
+    }
+
+    #[inline(always)]
+    fn result(o: &Self::Out, l: usize) -> (BsdfEval, Option<BsdfSample>) {
+        <RoughConductor as GlossyLanes>::result(o, l)
+    }
+
+    #[inline(always)]
+    fn set_wi(i: &mut Self::In, l: usize, wi: Vec3) {
+        set_wi!(i, l, wi);
+    }
+
+    #[inline(never)]
+    fn eval(i: &Self::In, _: Kernel, o: &mut EvalLanes) {
+        each_lane!(i, o, EvalLanes, |x| EvalOut::from(gltf_eval(&x)));
     }
 }

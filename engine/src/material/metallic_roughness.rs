@@ -24,10 +24,10 @@
 //! normal), and weighs the
 //! direction by the mixture's density: `eval`'s `pdf` is that mixture, so MIS sees one lobe.
 
-use super::microfacet::{Ggx, Microfacet, SMOOTH_ALPHA, to_local};
+use super::microfacet::{Ggx, Microfacet, PlainFrame, SMOOTH_ALPHA};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color, Positive, UnitInterval};
-use crate::math::{Frame, luminance};
+use crate::math::luminance;
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
@@ -78,17 +78,20 @@ fn ior() -> Positive {
 }
 
 /// The glTF metallic-roughness BRDF (see the module's notes).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MetallicRoughness {
-    base_color: Vec3,
-    metallic: f32,
+    /// Base colour.
+    pub base_color: Vec3,
+    /// Metallic blend.
+    pub metallic: f32,
     /// GGX width of the base layer, `roughness^2` (at least [`SMOOTH_ALPHA`]).
-    alpha: f32,
+    pub alpha: f32,
     /// Normal-incidence reflectance of the dielectric part.
-    f0: f32,
-    clearcoat: f32,
+    pub f0: f32,
+    /// Clear coat weight.
+    pub clearcoat: f32,
     /// GGX width of the clear coat.
-    alpha_coat: f32,
+    pub alpha_coat: f32,
 }
 
 /// `(1 - cos)^5`, `cos` limited to [0, 1].
@@ -120,15 +123,13 @@ impl MetallicRoughness {
         [diffuse / sum, specular / sum, coat / sum]
     }
 
-    /// `f |cos wi|` and the mixture's density for local directions with `lo.z > 0`.
-    fn eval_local(&self, lo: Vec3A, li: Vec3A) -> BsdfEval {
-        if lo.z <= 0.0 || li.z <= 0.0 {
-            return BsdfEval::ZERO;
-        }
+    /// `f |cos wi|` and the mixture's density for local directions with `lo.z > 0`, on plain
+    /// numbers and without branches (the coat computed, and added where there is one): the one
+    /// source of the one-path code and the wavefront's lane kernel.
+    #[inline(always)]
+    pub fn eval_plain(&self, lo: Vec3, li: Vec3) -> BsdfEval {
         let h = (lo + li).normalize_or_zero();
-        if h == Vec3A::ZERO {
-            return BsdfEval::ZERO;
-        }
+        let defined = lo.z > 0.0 && li.z > 0.0 && h != Vec3::ZERO;
         let vh = lo.dot(h).clamp(0.0, 1.0);
         let fw = schlick(vh);
         let base = Ggx { alpha: self.alpha };
@@ -138,26 +139,41 @@ impl MetallicRoughness {
         let dielectric =
             Vec3::splat(f_dielectric * specular) + (1.0 - f_dielectric) * FRAC_1_PI * self.base_color;
         let metal = (self.base_color + (Vec3::ONE - self.base_color) * fw) * specular;
-        let mut f = dielectric.lerp(metal, self.metallic);
+        let f = dielectric.lerp(metal, self.metallic);
         let [p_diffuse, p_specular, p_coat] = self.lobe_weights(lo.z);
-        let mut pdf = p_diffuse * li.z * FRAC_1_PI + p_specular * base.pdf_visible(lo, h) / (4.0 * vh);
-        if self.clearcoat > 0.0 {
-            let coat = Ggx { alpha: self.alpha_coat };
-            let fc = self.clearcoat * (0.04 + 0.96 * schlick(lo.z));
-            let coat_specular = coat.d(h) * coat.g1_over_cos(lo) * coat.g1_over_cos(li) * 0.25;
-            f = f * (1.0 - fc) + Vec3::splat(fc * coat_specular);
-            pdf += p_coat * coat.pdf_visible(lo, h) / (4.0 * vh);
+        let pdf = p_diffuse * li.z * FRAC_1_PI + p_specular * base.pdf_visible(lo, h) / (4.0 * vh);
+        let coat = Ggx { alpha: self.alpha_coat };
+        let fc = self.clearcoat * (0.04 + 0.96 * schlick(lo.z));
+        let coat_specular = coat.d(h) * coat.g1_over_cos(lo) * coat.g1_over_cos(li) * 0.25;
+        let coated = self.clearcoat > 0.0;
+        let f = if coated { f * (1.0 - fc) + Vec3::splat(fc * coat_specular) } else { f };
+        let pdf = if coated { pdf + p_coat * coat.pdf_visible(lo, h) / (4.0 * vh) } else { pdf };
+        match defined && pdf > 0.0 && pdf.is_finite() {
+            true => BsdfEval { f_cos: f * li.z, pdf },
+            false => BsdfEval::ZERO,
         }
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return BsdfEval::ZERO;
-        }
-        BsdfEval { f_cos: f * li.z, pdf }
+    }
+
+    /// Samples a local direction from `lo` (the lobe by `uc`, the direction by `u`) on plain
+    /// numbers and without branches: the direction, its [`Self::eval_plain`], and whether there
+    /// is a sample.
+    #[inline(always)]
+    pub fn sample_plain(&self, lo: Vec3, u: Vec2, uc: f32) -> (Vec3, BsdfEval, bool) {
+        let [p_diffuse, p_specular, _] = self.lobe_weights(lo.z);
+        let alpha = if uc < p_diffuse + p_specular { self.alpha } else { self.alpha_coat };
+        let m = Ggx { alpha }.sample_visible(lo, u);
+        let li = match uc < p_diffuse {
+            true => super::lambertian::cosine_hemisphere_plain(u),
+            false => 2.0 * lo.dot(m) * m - lo,
+        };
+        let e = self.eval_plain(lo, li);
+        (li, e, lo.z > 0.0 && e.pdf > 0.0)
     }
 
     /// The shading frame, its normal turned to `wo`'s side (both sides shade alike).
-    #[inline]
-    fn frame(wo: Vec3A, n: Vec3A) -> Frame {
-        Frame::from_normal(if wo.dot(n) < 0.0 { -n } else { n })
+    #[inline(always)]
+    pub fn frame(wo: Vec3, n: Vec3) -> PlainFrame {
+        PlainFrame::facing(wo, n, true)
     }
 }
 
@@ -184,25 +200,10 @@ impl MaterialModel for MetallicRoughness {
     }
 
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
-        let frame = Self::frame(wo, n);
-        let lo = to_local(&frame, wo);
-        if lo.z <= 0.0 {
-            return None;
-        }
-        let [p_diffuse, p_specular, _] = self.lobe_weights(lo.z);
-        let li = if uc < p_diffuse {
-            super::lambertian::cosine_hemisphere(u)
-        } else {
-            let alpha = if uc < p_diffuse + p_specular { self.alpha } else { self.alpha_coat };
-            let m = Ggx { alpha }.sample_visible(lo, u);
-            crate::math::reflect(lo, m)
-        };
-        let e = self.eval_local(lo, li);
-        if e.pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi: frame.to_world(li),
+        let frame = Self::frame(wo.into(), n.into());
+        let (li, e, valid) = self.sample_plain(frame.local(wo.into()), u, uc);
+        valid.then(|| BsdfSample {
+            wi: frame.world(li).into(),
             weight: e.f_cos / e.pdf,
             pdf: e.pdf,
             eta: 1.0,
@@ -212,8 +213,8 @@ impl MaterialModel for MetallicRoughness {
     }
 
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        let frame = Self::frame(wo, n);
-        self.eval_local(to_local(&frame, wo), to_local(&frame, wi))
+        let frame = Self::frame(wo.into(), n.into());
+        self.eval_plain(frame.local(wo.into()), frame.local(wi.into()))
     }
 
     #[inline]

@@ -90,6 +90,12 @@ impl PlainFrame {
         Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
 
+    /// The local `v` in world space (as [`Frame::to_world`]).
+    #[inline(always)]
+    pub fn world(&self, v: Vec3) -> Vec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+
     /// The local `v` in world space, normalised (by a division, as glam's `Vec3A::normalize`).
     #[inline(always)]
     pub fn world_unit(&self, v: Vec3) -> Vec3 {

@@ -8,6 +8,7 @@ use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
+use pathwave_engine::material::metallic_roughness::MetallicRoughness;
 use pathwave_engine::material::principled::Principled;
 use pathwave_engine::material::principled_thin::PrincipledThin;
 use pathwave_engine::material::rough_conductor::RoughConductor;
@@ -21,8 +22,8 @@ use pathwave_engine::render_scene::RenderScene;
 /// [`Shading::Diffuse`] go through the Lambertian lane kernel (light sampling into the shadow
 /// queue, BSDF sampling into the next iteration's queue); [`Shading::Sampled`] kinds only sample
 /// their BSDF; [`Shading::Glossy`] kinds sample a light and their BSDF, rough conductors,
-/// dielectrics and plastics and the principled BSDFs (thin too) with the BSDF's work across
-/// lanes, the other kinds path by path.
+/// dielectrics and plastics, the principled BSDFs (thin too) and glTF's metallic-roughness
+/// with the BSDF's work across lanes, the other kinds path by path.
 pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialKind) {
     let mut queue = std::mem::take(&mut q.shade[kind as usize]);
     match kind.shading() {
@@ -34,6 +35,7 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
             MaterialKind::RoughPlastic => shade_in_lanes::<RoughPlastic>(scene, p, q, &queue),
             MaterialKind::Principled => shade_in_lanes::<Principled>(scene, p, q, &queue),
             MaterialKind::PrincipledThin => shade_in_lanes::<PrincipledThin>(scene, p, q, &queue),
+            MaterialKind::MetallicRoughness => shade_in_lanes::<MetallicRoughness>(scene, p, q, &queue),
             _ => shade_glossy(scene, p, q, &queue),
         },
         Shading::Emitter => unreachable!("emitters have no shading queue"),
@@ -137,7 +139,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 }
 
 /// Hits on a kind shaded across lanes ([`GlossyLanes`]: rough conductors, dielectrics and
-/// plastics, principled and thin principled):
+/// plastics, principled, thin principled and glTF's metallic-roughness):
 /// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
 /// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
 /// shades (anisotropic conductors by kernels of their own, in their tangent frame), and the
