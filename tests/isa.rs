@@ -28,7 +28,8 @@ fn avx512_and_avx2_render_the_same_bits() {
     let dir = std::env::temp_dir().join(format!("pathwave-isa-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // Quads (closest hits and shadow rays), a glass sphere, media, the lens with spheres, and
-    // the rough materials (GGX and Beckmann conductors, shaded across lanes, among others).
+    // the kinds shaded across lanes (GGX and Beckmann conductors, plastics smooth and rough,
+    // principled, a fuzzy metal, among others).
     for scene in [
         "scenes/cornell-diffuse.ron",
         "scenes/cornell.ron",
@@ -36,6 +37,8 @@ fn avx512_and_avx2_render_the_same_bits() {
         "scenes/spheres-sky.ron",
         "scenes/materials-env.ron",
         "scenes/rough-spheres.ron",
+        "scenes/plastics.ron",
+        "scenes/textures.ron",
         "tests/mitsuba-data/tests/scenes/bsdf_spheres/test_arealight_path.xml",
     ] {
         let a = render(scene, "avx2", &dir.join("a.exr"));

@@ -116,8 +116,8 @@ fn fuzzy_metal_shows_a_point_lights_highlight() {
     let (light, eye) = (Vec3::new(0.5, 2.0, -0.3), Vec3::new(0.0, 6.0, 0.0));
     check_scene(&text, |p| {
         let (d, wo) = (light - p, (eye - p).normalize());
-        let r = glam::Vec3A::from(2.0 * wo.y * Vec3::Y - wo);
-        10.0 * fuzz_pdf(r, 0.5, glam::Vec3A::from(d.normalize())) / d.length_squared()
+        let r = 2.0 * wo.y * Vec3::Y - wo;
+        10.0 * fuzz_pdf(r, 0.5, d.normalize()) / d.length_squared()
     });
 }
 

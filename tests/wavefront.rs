@@ -74,73 +74,136 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
     }
 }
 
-/// Smooth-shaded meshes (vertex normals: adapted shading normals, lifted ray origins, and
-/// directions the two normals disagree about) take the same shared code in both integrators:
-/// a coarse sphere mesh in each material kind that shades (Lambertian, Metal, both rough ones
-/// with either distribution, glass, plastic, textured rough plastic, a textured principled, a
-/// textured thin principled, a textured glTF metallic-roughness and an anisotropic rough
-/// conductor), one of them sheared,
-/// under a lamp, a point light and the sky, gives the oracle's bits.
-#[test]
-fn reproduces_the_oracle_on_smooth_shaded_meshes() {
+/// Every material kind that shades, each on a coarse sphere mesh (see
+/// [`reproduces_the_oracle_on_smooth_shaded_meshes`]), as RON.
+const SHADING_KINDS: [(&str, &str); 16] = [
+    ("white", r#"Lambertian(albedo: (0.7, 0.7, 0.7))"#),
+    ("metal", r#"Metal(albedo: (0.9, 0.8, 0.7), fuzz: 0.2)"#),
+    ("gold", r#"RoughConductor(tint: (1, 0.8, 0.4), alpha: 0.3)"#),
+    ("frost", r#"RoughDielectric(ior: 1.5, alpha: 0.2)"#),
+    (
+        "copper",
+        r#"RoughConductor(tint: (1, 0.6, 0.4), alpha: 0.2, distribution: Beckmann, smith: HeightCorrelated)"#,
+    ),
+    ("etched", r#"RoughDielectric(ior: 1.5, alpha: 0.3, distribution: Beckmann, smith: HeightCorrelated)"#),
+    ("glass", r#"Dielectric(ior: 1.5)"#),
+    ("plastic", r#"Plastic(albedo: (0.1, 0.27, 0.36), ior: 1.9)"#),
+    (
+        "rough_plastic",
+        r#"RoughPlastic(albedo: "checks", alpha: 0.2, distribution: Beckmann, nonlinear: true)"#,
+    ),
+    (
+        "principled",
+        r#"Principled(base_color: "checks", roughness: 0.4, anisotropic: 0.7, metallic: "checks", spec_trans: 0.3, sheen: 0.5, clearcoat: 0.6)"#,
+    ),
+    ("brushed", r#"RoughConductor(tint: (0.9, 0.9, 0.9), alpha: 0.05, alpha_v: "checks")"#),
+    (
+        "gltf",
+        r#"MetallicRoughness(base_color: "checks", metallic: 0.4, roughness: 0.5, clearcoat: 0.5, clearcoat_roughness: 0.2)"#,
+    ),
+    (
+        "leaf",
+        r#"PrincipledThin(base_color: "checks", roughness: 0.5, anisotropic: 0.4, spec_trans: 0.4, diff_trans: 0.8, sheen: 0.3, flatness: 0.5)"#,
+    ),
+    ("frost2", r#"RoughDielectric(ior: 1.3, alpha: 0.4)"#),
+    ("fuzz", r#"Metal(albedo: (0.7, 0.8, 0.9), fuzz: 0.7)"#),
+    (
+        "coated",
+        r#"Plastic(albedo: "checks", tint: (0.9, 0.8, 0.7), ior: 1.5, nonlinear: true, two_sided: true)"#,
+    ),
+];
+
+/// Loads a scene of `ball.obj` (a coarse smooth-shaded sphere) in every kind of
+/// [`SHADING_KINDS`], laid out by `objects` (RON objects that name them), under `lights`, at
+/// `spp` samples per pixel.
+fn shading_kinds_scene(camera: &str, objects: &str, lights: &str, spp: u32) -> SceneDesc {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("ball.obj"), sphere_obj(6, 12, true)).unwrap();
     let path = dir.path().join("smooth.ron");
+    let materials: String = SHADING_KINDS.iter().map(|(name, m)| format!("\"{name}\": {m},\n")).collect();
     std::fs::write(
         &path,
-        r#"Scene(
-            camera: (look_from: (0, 2, 9), look_at: (0, 0.5, 0), vfov: 40),
-            render: (width: 48, height: 32, spp: 6, max_depth: 8, rr_depth: 3),
+        format!(
+            r#"Scene(
+            camera: {camera},
+            render: (width: 48, height: 32, spp: {spp}, max_depth: 8, rr_depth: 3),
             background: Sky(bottom: (0.1, 0.1, 0.1), top: (0.4, 0.5, 0.7)),
-            materials: {
-                "white": Lambertian(albedo: (0.7, 0.7, 0.7)),
-                "metal": Metal(albedo: (0.9, 0.8, 0.7), fuzz: 0.2),
-                "gold": RoughConductor(tint: (1, 0.8, 0.4), alpha: 0.3),
-                "frost": RoughDielectric(ior: 1.5, alpha: 0.2),
-                "copper": RoughConductor(tint: (1, 0.6, 0.4), alpha: 0.2, distribution: Beckmann),
-                "etched": RoughDielectric(ior: 1.5, alpha: 0.3, distribution: Beckmann),
-                "glass": Dielectric(ior: 1.5),
-                "plastic": Plastic(albedo: (0.1, 0.27, 0.36), ior: 1.9),
-                "rough_plastic": RoughPlastic(albedo: "checks", alpha: 0.2, distribution: Beckmann, nonlinear: true),
+            materials: {{
+                {materials}
                 "lamp": DiffuseLight(emit: (30, 30, 30), two_sided: true),
-                "principled": Principled(base_color: "checks", roughness: 0.4, anisotropic: 0.7, metallic: "checks", spec_trans: 0.3, sheen: 0.5, clearcoat: 0.6),
-                "brushed": RoughConductor(tint: (0.9, 0.9, 0.9), alpha: 0.05, alpha_v: "checks"),
-                "gltf": MetallicRoughness(base_color: "checks", metallic: 0.4, roughness: 0.5, clearcoat: 0.5, clearcoat_roughness: 0.2),
-                "leaf": PrincipledThin(base_color: "checks", roughness: 0.5, anisotropic: 0.4, spec_trans: 0.4, diff_trans: 0.8, sheen: 0.3, flatness: 0.5),
-            },
-            textures: {"checks": UvChecker(u: 8, v: 4, even: (0.8, 0.3, 0.1), odd: (0.1, 0.3, 0.8))},
-            objects: [
-                (shape: Quad(q: (-6, -1, -6), u: (0, 0, 12), v: (12, 0, 0)), material: "white"),
-                (shape: Mesh(file: "ball.obj"), material: "plastic", transform: [UniformScale(0.7), Translate((-3.6, -0.3, 0.5))]),
-                (shape: Mesh(file: "ball.obj"), material: "rough_plastic", transform: [UniformScale(0.7), Translate((3.6, -0.3, 0.5))]),
-                (shape: Mesh(file: "ball.obj"), material: "white", transform: [Translate((-3, 0, 0))]),
-                (shape: Mesh(file: "ball.obj"), material: "metal", transform: [Shear(xy: 0.3), Translate((-1.2, 0, 0))]),
-                (shape: Mesh(file: "ball.obj"), material: "gold", transform: [Translate((0.6, 0, 0))]),
-                (shape: Mesh(file: "ball.obj"), material: "frost", transform: [Translate((2.4, 0, 0))]),
-                (shape: Mesh(file: "ball.obj"), material: "glass", transform: [UniformScale(0.7), Translate((0, 0.5, 2))]),
-                (shape: Mesh(file: "ball.obj"), material: "copper", transform: [UniformScale(0.6), Translate((-2, 0.2, 2))]),
-                (shape: Mesh(file: "ball.obj"), material: "etched", transform: [UniformScale(0.6), Translate((2, 0.2, 2))]),
-                (shape: Quad(q: (4, 3, -1), u: (0, 0, 1), v: (-0.3, 1, 0)), material: "lamp"),
-                (shape: Mesh(file: "ball.obj"), material: "principled", transform: [UniformScale(0.5), Translate((-0.8, 1.4, 1))]),
-                (shape: Mesh(file: "ball.obj"), material: "brushed", transform: [UniformScale(0.5), Translate((0.8, 1.4, 1))]),
-                (shape: Mesh(file: "ball.obj"), material: "leaf", transform: [UniformScale(0.4), Translate((0, 2.2, 0.5))]),
-                (shape: Mesh(file: "ball.obj"), material: "gltf", transform: [UniformScale(0.4), Translate((-2.2, 1.6, 0.5))]),
-            ],
-            lights: [Point(position: (-4, 4, 3), intensity: (20, 20, 20))],
-        )"#,
+                "panel": DiffuseLight(emit: (2, 2, 2)),
+            }},
+            textures: {{"checks": UvChecker(u: 8, v: 4, even: (0.8, 0.3, 0.1), odd: (0.1, 0.3, 0.8))}},
+            objects: [{objects}],
+            lights: [{lights}],
+        )"#
+        ),
     )
     .unwrap();
-    let desc = pathwave::engine::scene::load(&path).unwrap();
-    let oracle = render_threads(&desc, 2);
+    pathwave::engine::scene::load(&path).unwrap()
+}
+
+/// The wavefront integrator gives the oracle's bits on `desc` (but a pixel or two: see
+/// [`reproduces_the_oracle_for_any_batch_and_thread_count`]), in batches of one path on one
+/// thread, seven on two and all at once.
+fn assert_oracle_bits(desc: &SceneDesc, what: &str) {
+    let oracle = render_threads(desc, 2);
     for (batch, threads) in [(1, 1), (7, 2), (100_000, 2)] {
-        let (film, stats) = wavefront(&desc, batch, threads);
+        let (film, stats) = wavefront(desc, batch, threads);
         assert_eq!(stats.paths, (film.width * film.height * film.spp) as u64);
         let differing = film.pixels.iter().zip(&oracle.pixels).filter(|(a, b)| a != b).count();
         assert!(
             differing <= 2,
-            "batch {batch}, {threads} threads: {differing} pixels differ from the oracle"
+            "{what}, batch {batch}, {threads} threads: {differing} pixels differ from the oracle"
         );
     }
+}
+
+/// Smooth-shaded meshes (vertex normals: adapted shading normals, lifted ray origins, and
+/// directions the two normals disagree about) take the same shared code in both integrators:
+/// a coarse sphere mesh in each material kind that shades ([`SHADING_KINDS`]: Lambertian,
+/// fuzzy metals, both rough ones with either distribution, the Beckmann ones with
+/// height-correlated shadowing, glass, plastics, textured rough plastic, a textured principled,
+/// a textured thin principled, a textured glTF metallic-roughness and an anisotropic rough
+/// conductor), one of them sheared, under a lamp, a point light and the sky, gives the
+/// oracle's bits. Seen again close up under a bright panel, which the BSDFs' sampled
+/// directions often meet: there the emitter's MIS weight reads each kernel's sampled density.
+#[test]
+fn reproduces_the_oracle_on_smooth_shaded_meshes() {
+    let objects = r#"
+        (shape: Quad(q: (-6, -1, -6), u: (0, 0, 12), v: (12, 0, 0)), material: "white"),
+        (shape: Mesh(file: "ball.obj"), material: "plastic", transform: [UniformScale(0.7), Translate((-3.6, -0.3, 0.5))]),
+        (shape: Mesh(file: "ball.obj"), material: "rough_plastic", transform: [UniformScale(0.7), Translate((3.6, -0.3, 0.5))]),
+        (shape: Mesh(file: "ball.obj"), material: "white", transform: [Translate((-3, 0, 0))]),
+        (shape: Mesh(file: "ball.obj"), material: "metal", transform: [Shear(xy: 0.3), Translate((-1.2, 0, 0))]),
+        (shape: Mesh(file: "ball.obj"), material: "gold", transform: [Translate((0.6, 0, 0))]),
+        (shape: Mesh(file: "ball.obj"), material: "frost", transform: [Translate((2.4, 0, 0))]),
+        (shape: Mesh(file: "ball.obj"), material: "glass", transform: [UniformScale(0.7), Translate((0, 0.5, 2))]),
+        (shape: Mesh(file: "ball.obj"), material: "copper", transform: [UniformScale(0.6), Translate((-2, 0.2, 2))]),
+        (shape: Mesh(file: "ball.obj"), material: "etched", transform: [UniformScale(0.6), Translate((2, 0.2, 2))]),
+        (shape: Quad(q: (4, 3, -1), u: (0, 0, 1), v: (-0.3, 1, 0)), material: "lamp"),
+        (shape: Mesh(file: "ball.obj"), material: "principled", transform: [UniformScale(0.5), Translate((-0.8, 1.4, 1))]),
+        (shape: Mesh(file: "ball.obj"), material: "brushed", transform: [UniformScale(0.5), Translate((0.8, 1.4, 1))]),
+        (shape: Mesh(file: "ball.obj"), material: "leaf", transform: [UniformScale(0.4), Translate((0, 2.2, 0.5))]),
+        (shape: Mesh(file: "ball.obj"), material: "gltf", transform: [UniformScale(0.4), Translate((-2.2, 1.6, 0.5))]),
+    "#;
+    let camera = "(look_from: (0, 2, 9), look_at: (0, 0.5, 0), vfov: 40)";
+    let point = "Point(position: (-4, 4, 3), intensity: (20, 20, 20))";
+    assert_oracle_bits(&shading_kinds_scene(camera, objects, point, 6), "the scene");
+    // Each kind on a 4 x 4 grid, under a panel as wide as the grid.
+    let grid: String = SHADING_KINDS
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| {
+            let (x, z) = (((i % 4) as f32 - 1.5) * 1.1, ((i / 4) as f32 - 1.5) * 1.1);
+            format!(r#"(shape: Mesh(file: "ball.obj"), material: "{name}", transform: [UniformScale(0.45), Translate(({x}, 0, {z}))]),"#)
+        })
+        .collect();
+    let objects = format!(
+        r#"(shape: Quad(q: (-2.5, 2.5, -2.5), u: (5, 0, 0), v: (0, 0, 5)), material: "panel"), {grid}"#
+    );
+    let camera = "(look_from: (0, 2.2, 5), look_at: (0, 0, 0), vfov: 40)";
+    assert_oracle_bits(&shading_kinds_scene(camera, &objects, "", 16), "under a panel");
 }
 
 /// An SDF grid (a ball, smooth- and flat-shaded) and one-sided Lambertians (Mitsuba's
@@ -178,6 +241,7 @@ fn reproduces_the_oracle_on_sdf_grids_and_one_sided_lambertians() {
                 "white": Lambertian(albedo: (0.7, 0.7, 0.7)),
                 "front": Lambertian(albedo: (0.6, 0.5, 0.4), two_sided: {}),
                 "lamp": DiffuseLight(emit: (30, 30, 30), two_sided: true),
+                "panel": DiffuseLight(emit: (2, 2, 2)),
             }},
             objects: [
                 (shape: Quad(q: (-6, -1, -6), u: (0, 0, 12), v: (12, 0, 0)), material: "white"),

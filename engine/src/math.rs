@@ -271,22 +271,26 @@ pub fn acos(x: f32) -> f32 {
     atan2(((1.0 - x) * (1.0 + x)).sqrt(), x)
 }
 
-/// The cube root of a finite `x`: an estimate from the exponent bits, two steps of Halley's
-/// iteration in `f64` (each cubes the relative error, 3% -> 3e-5 -> 3e-14), rounded to `f32`.
-/// The same bits on every machine, which the C library's `cbrtf` does not promise.
-#[inline]
+/// The cube root of `x`: an estimate from the exponent bits, two steps of Halley's iteration
+/// in `f64` (each cubes the relative error, 3% -> 3e-5 -> 3e-14), rounded to `f32`. The same
+/// bits on every machine, which the C library's `cbrtf` does not promise. Without branches
+/// (zero, infinities and NaN are selected after), so that a loop over lanes of it vectorises.
+#[inline(always)]
 pub fn cbrt(x: f32) -> f32 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    let a = x.abs() as f64;
-    // Dividing the biased exponent (and mantissa bits) by three (Kahan's estimate).
-    let mut y = f64::from_bits(a.to_bits() / 3 + 0x2a9f_7893_0000_0000);
+    let a = x.abs();
+    // Kahan's estimate: the biased exponent (and mantissa bits) divided by three, on `f32`
+    // bits (a `u64` division has no vector instruction); a subnormal `a` scaled by 2^24 first
+    // and its root by 2^-8 after.
+    let tiny = a < f32::MIN_POSITIVE;
+    let scaled = if tiny { a * 16_777_216.0 } else { a };
+    let y0 = f32::from_bits(scaled.to_bits() / 3 + 0x2a51_4067) * if tiny { 1.0 / 256.0 } else { 1.0 };
+    let (a, mut y) = (a as f64, y0 as f64);
     for _ in 0..2 {
         let y3 = y * y * y;
         y *= (y3 + 2.0 * a) / (2.0 * y3 + a);
     }
-    (y as f32).copysign(x)
+    let root = (y as f32).copysign(x);
+    if x == 0.0 || !x.is_finite() { x } else { root }
 }
 
 /// Subintervals of [`ln`]'s table: `|r| < 0.008`, so that four terms of `log1p(r)` leave a
@@ -564,6 +568,9 @@ mod tests {
             let exact = (v as f64).cbrt();
             worst[3] = worst[3].max((cbrt(v) as f64 - exact).abs() / exact);
             assert_eq!(cbrt(-v), -cbrt(v));
+            // Subnormals too.
+            let t = v * 1e-15;
+            worst[3] = worst[3].max((cbrt(t) as f64 - (t as f64).cbrt()).abs() / (t as f64).cbrt());
         }
         assert!(worst[0] < 3e-7 && worst[1] < 3e-7 && worst[2] < 6e-7 && worst[3] < 6e-8, "{worst:?}");
         use std::f32::consts::{FRAC_PI_2, PI};
@@ -574,6 +581,8 @@ mod tests {
         assert_eq!((atan2(0.0, 0.0), atan2(-0.0, 1.0).to_bits()), (0.0, (-0.0f32).to_bits()));
         assert!(atan2(f32::NAN, 1.0).is_nan() && atan2(1.0, f32::NAN).is_nan() && acos(1.5).is_nan());
         assert_eq!((cbrt(0.0), cbrt(8.0), cbrt(-27.0), cbrt(1.0)), (0.0, 2.0, -3.0, 1.0));
+        assert_eq!((cbrt(f32::INFINITY), cbrt(-0.0).to_bits()), (f32::INFINITY, (-0.0f32).to_bits()));
+        assert!(cbrt(f32::NAN).is_nan());
     }
 
     #[test]

@@ -25,7 +25,7 @@ pub trait GlossyLanes {
     type Out: Default;
 
     /// The material as the kernel takes it, and the kernel that shades it; `None` where no
-    /// kernel does (smooth, height-correlated shadowing): path by path then.
+    /// kernel does (smooth): path by path then.
     fn lane_material(m: &Material) -> Option<(Self, Kernel)>
     where
         Self: Sized;
@@ -51,28 +51,41 @@ pub trait GlossyLanes {
     fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes);
 }
 
-/// Which of a kind's kernels shades a lane: its roughness's distribution, and whether the
-/// roughness is anisotropic (rough conductors only).
+/// Which of a kind's kernels shades a lane: its roughness's distribution, whether the
+/// roughness is anisotropic (rough conductors only) and its shadowing-masking (rough conductors
+/// and dielectrics: the others' is separable).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Kernel {
     /// The distribution of microfacet normals.
     pub distribution: Distribution,
     /// Anisotropic roughness, in the tangent frame.
     pub anisotropic: bool,
+    /// Smith's shadowing-masking, separable or height-correlated.
+    pub smith: Smith,
 }
 
 impl Kernel {
-    /// Every kernel, in [`Self::index`] order.
-    pub const ALL: [Kernel; 4] = [
-        Kernel::isotropic(Distribution::Ggx),
-        Kernel::isotropic(Distribution::Beckmann),
-        Kernel { distribution: Distribution::Ggx, anisotropic: true },
-        Kernel { distribution: Distribution::Beckmann, anisotropic: true },
-    ];
+    /// How many kernels there are.
+    pub const COUNT: usize = 8;
 
-    /// The isotropic kernel of `distribution`.
+    /// Every kernel, in [`Self::index`] order.
+    pub const ALL: [Kernel; Self::COUNT] = {
+        let mut all = [Kernel::isotropic(Distribution::Ggx); Self::COUNT];
+        let mut i = 0;
+        while i < Self::COUNT {
+            all[i] = Kernel {
+                distribution: if i & 1 == 0 { Distribution::Ggx } else { Distribution::Beckmann },
+                anisotropic: i & 2 != 0,
+                smith: if i & 4 == 0 { Smith::Separable } else { Smith::HeightCorrelated },
+            };
+            i += 1;
+        }
+        all
+    };
+
+    /// The isotropic kernel of `distribution`, with separable shadowing-masking.
     pub const fn isotropic(distribution: Distribution) -> Self {
-        Kernel { distribution, anisotropic: false }
+        Kernel { distribution, anisotropic: false, smith: Smith::Separable }
     }
 
     /// Its place in [`Self::ALL`].
@@ -82,8 +95,30 @@ impl Kernel {
             Distribution::Ggx => 0,
             Distribution::Beckmann => 1,
         };
-        d + 2 * self.anisotropic as usize
+        let s = match self.smith {
+            Smith::Separable => 0,
+            Smith::HeightCorrelated => 1,
+        };
+        d + 2 * self.anisotropic as usize + 4 * s
     }
+}
+
+/// Evaluates `$body` with `$s` bound to `$smith`'s value, known where `$body` is compiled: the
+/// kernels' loops are compiled once for each shadowing-masking (a separable lane computes no
+/// `G1(wo)`).
+macro_rules! with_smith {
+    ($smith:expr, |$s:ident| $body:expr) => {
+        match $smith {
+            Smith::Separable => {
+                let $s = Smith::Separable;
+                $body
+            }
+            Smith::HeightCorrelated => {
+                let $s = Smith::HeightCorrelated;
+                $body
+            }
+        }
+    };
 }
 
 /// A lane's BSDF towards a direction, as [`GlossyLanes::eval`] writes it.
@@ -225,9 +260,9 @@ impl ConductorIn {
         }
     }
 
-    /// The conductor again, with the distribution `distribution`.
+    /// The conductor again, with the distribution `distribution` and shadowing-masking `smith`.
     #[inline(always)]
-    fn conductor(&self, distribution: Distribution) -> RoughConductor {
+    fn conductor(&self, distribution: Distribution, smith: Smith) -> RoughConductor {
         RoughConductor {
             tint: self.tint,
             alpha: self.alpha,
@@ -236,7 +271,7 @@ impl ConductorIn {
             ior: ComplexIor { eta: self.eta, k: self.k },
             fresnel: self.fresnel,
             distribution,
-            smith: Smith::Separable,
+            smith,
             two_sided: self.two_sided,
         }
     }
@@ -268,24 +303,20 @@ lanes!(pub ConductorOutLanes for ConductorOut {
     f_cos: v3, eval_pdf: f32, wi: v3, weight: v3, pdf: f32, sampled: bool,
 });
 
-/// The kernel for one path, with the distribution `md` of its roughness.
+/// The kernel for one path of the kernel `k`, with the distribution `md` of its roughness.
 #[inline(always)]
-fn conductor<M: Microfacet<Vec3>>(i: &ConductorIn, distribution: Distribution, md: M) -> ConductorOut {
-    let c = i.conductor(distribution);
+fn conductor<M: Microfacet<Vec3>>(i: &ConductorIn, k: Kernel, md: M) -> ConductorOut {
+    let c = i.conductor(k.distribution, k.smith);
     let e = c.eval_plain(md, i.wo, i.wi, i.n);
     let (s, sampled) = c.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]));
     ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
 }
 
-/// The anisotropic kernel for one path, with the distribution `md` of its widths, in its
-/// tangent frame.
+/// The anisotropic kernel for one path of the kernel `k`, with the distribution `md` of its
+/// widths, in its tangent frame.
 #[inline(always)]
-fn conductor_anisotropic<M: Microfacet<Vec3>>(
-    i: &ConductorIn,
-    distribution: Distribution,
-    md: M,
-) -> ConductorOut {
-    let (c, f) = (i.conductor(distribution), PlainFrame { t: i.t, b: i.b, n: i.nf });
+fn conductor_anisotropic<M: Microfacet<Vec3>>(i: &ConductorIn, k: Kernel, md: M) -> ConductorOut {
+    let (c, f) = (i.conductor(k.distribution, k.smith), PlainFrame { t: i.t, b: i.b, n: i.nf });
     let e = c.eval_in(f, md, i.wo, i.wi);
     let (s, sampled) = c.sample_in(f, md, i.wo, Vec2::new(i.u[0], i.u[1]));
     ConductorOut { f_cos: e.f_cos, eval_pdf: e.pdf, wi: s.wi, weight: s.weight, pdf: s.pdf, sampled }
@@ -331,9 +362,10 @@ impl GlossyLanes for RoughConductor {
     #[inline(always)]
     fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
-            Material::RoughConductor(c) if c.shaded_in_lanes() => {
-                Some((*c, Kernel { distribution: c.distribution, anisotropic: c.is_anisotropic() }))
-            }
+            Material::RoughConductor(c) if c.shaded_in_lanes() => Some((
+                *c,
+                Kernel { distribution: c.distribution, anisotropic: c.is_anisotropic(), smith: c.smith },
+            )),
             _ => None,
         }
     }
@@ -350,13 +382,17 @@ impl GlossyLanes for RoughConductor {
 
     #[inline(never)]
     fn run(i: &Self::In, k: Kernel, o: &mut Self::Out) {
-        let d = k.distribution;
-        match k.anisotropic {
-            false => each_lane!(i, d, o, ConductorOutLanes, |x, md| conductor(&x, d, md)),
-            true => {
-                each_anisotropic_lane!(i, k, o, ConductorOutLanes, |x, md| conductor_anisotropic(&x, d, md))
+        with_smith!(k.smith, |smith| {
+            let k = Kernel { smith, ..k };
+            match k.anisotropic {
+                false => each_lane!(i, k.distribution, o, ConductorOutLanes, |x, md| conductor(&x, k, md)),
+                true => {
+                    each_anisotropic_lane!(i, k, o, ConductorOutLanes, |x, md| conductor_anisotropic(
+                        &x, k, md
+                    ))
+                }
             }
-        }
+        })
     }
 
     #[inline(always)]
@@ -374,14 +410,15 @@ impl GlossyLanes for RoughConductor {
     #[inline(never)]
     fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes) {
         let d = k.distribution;
-        match k.anisotropic {
+        with_smith!(k.smith, |smith| match k.anisotropic {
             false => each_lane!(i, d, o, EvalLanes, |x, md| {
-                EvalOut::from(x.conductor(d).eval_plain(md, x.wo, x.wi, x.n))
+                EvalOut::from(x.conductor(d, smith).eval_plain(md, x.wo, x.wi, x.n))
             }),
             true => each_anisotropic_lane!(i, k, o, EvalLanes, |x, md| {
-                EvalOut::from(x.conductor(d).eval_in(PlainFrame { t: x.t, b: x.b, n: x.nf }, md, x.wo, x.wi))
+                let f = PlainFrame { t: x.t, b: x.b, n: x.nf };
+                EvalOut::from(x.conductor(d, smith).eval_in(f, md, x.wo, x.wi))
             }),
-        }
+        })
     }
 }
 
@@ -405,10 +442,10 @@ pub struct DielectricIn {
 }
 
 impl DielectricIn {
-    /// The dielectric, with the distribution `distribution`.
+    /// The dielectric, with the distribution `distribution` and shadowing-masking `smith`.
     #[inline(always)]
-    fn dielectric(&self, distribution: Distribution) -> RoughDielectric {
-        RoughDielectric { ior: self.ior, alpha: self.alpha, distribution, smith: Smith::Separable }
+    fn dielectric(&self, distribution: Distribution, smith: Smith) -> RoughDielectric {
+        RoughDielectric { ior: self.ior, alpha: self.alpha, distribution, smith }
     }
 }
 
@@ -437,10 +474,11 @@ lanes!(pub DielectricOutLanes for DielectricOut {
     f_cos: f32, eval_pdf: f32, wi: v3, weight: f32, pdf: f32, eta: f32, sampled: bool,
 });
 
-/// The dielectric kernel for one path, with the distribution `md` of its roughness.
+/// The dielectric kernel for one path of the kernel `k`, with the distribution `md` of its
+/// roughness.
 #[inline(always)]
-fn dielectric<M: Microfacet<Vec3>>(i: &DielectricIn, distribution: Distribution, md: M) -> DielectricOut {
-    let g = i.dielectric(distribution);
+fn dielectric<M: Microfacet<Vec3>>(i: &DielectricIn, k: Kernel, md: M) -> DielectricOut {
+    let g = i.dielectric(k.distribution, k.smith);
     let e = g.eval_plain(md, i.wo, i.wi, i.n);
     let (s, sampled) = g.sample_plain(md, i.wo, i.n, Vec2::new(i.u[0], i.u[1]), i.uc);
     DielectricOut {
@@ -462,7 +500,7 @@ impl GlossyLanes for RoughDielectric {
     fn lane_material(m: &Material) -> Option<(Self, Kernel)> {
         match m {
             Material::RoughDielectric(g) if g.shaded_in_lanes() => {
-                Some((*g, Kernel::isotropic(g.distribution)))
+                Some((*g, Kernel { smith: g.smith, ..Kernel::isotropic(g.distribution) }))
             }
             _ => None,
         }
@@ -476,8 +514,10 @@ impl GlossyLanes for RoughDielectric {
 
     #[inline(never)]
     fn run(i: &Self::In, k: Kernel, o: &mut Self::Out) {
-        let d = k.distribution;
-        each_lane!(i, d, o, DielectricOutLanes, |x, md| dielectric(&x, d, md));
+        with_smith!(k.smith, |smith| {
+            let k = Kernel { smith, ..k };
+            each_lane!(i, k.distribution, o, DielectricOutLanes, |x, md| dielectric(&x, k, md))
+        })
     }
 
     #[inline(always)]
@@ -495,8 +535,8 @@ impl GlossyLanes for RoughDielectric {
     #[inline(never)]
     fn eval(i: &Self::In, k: Kernel, o: &mut EvalLanes) {
         let d = k.distribution;
-        each_lane!(i, d, o, EvalLanes, |x, md| EvalOut::from(
-            x.dielectric(d).eval_plain(md, x.wo, x.wi, x.n)
-        ));
+        with_smith!(k.smith, |smith| each_lane!(i, d, o, EvalLanes, |x, md| EvalOut::from(
+            x.dielectric(d, smith).eval_plain(md, x.wo, x.wi, x.n)
+        )));
     }
 }

@@ -11,6 +11,7 @@ pub mod film;
 pub mod glossy_lanes;
 pub mod lambert_vertex;
 pub mod light_lanes;
+pub mod metal_lanes;
 pub mod oracle;
 pub mod path;
 mod plain;

@@ -8,6 +8,7 @@
 //! against the lobe by MIS): under a point or spot light a fuzzy metal shows its highlight,
 //! which BSDF sampling alone never finds. A perfect mirror (fuzz 0) is a delta lobe, as before.
 
+use super::rough_conductor::PlainSample;
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::{Albedo, Color, UnitInterval};
 use crate::math::reflect;
@@ -62,12 +63,7 @@ impl MaterialModel for Metal {
     /// (a mirror's delta lobe has none).
     #[inline]
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        let nf = if wo.dot(n) < 0.0 { -n } else { n };
-        if self.fuzz == 0.0 || wi.dot(nf) <= 0.0 {
-            return BsdfEval::ZERO;
-        }
-        let pdf = fuzz_pdf(reflect(wo, nf), self.fuzz, wi);
-        BsdfEval { f_cos: self.albedo * pdf, pdf }
+        eval_plain(self.albedo, self.fuzz, wo.into(), wi.into(), n.into())
     }
 
     #[inline]
@@ -86,29 +82,56 @@ impl MaterialModel for Metal {
 }
 
 /// Uniform point in the unit ball from three uniform numbers.
-#[inline]
-pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3A {
+#[inline(always)]
+pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
     let (cos_phi, sin_phi) = crate::math::cos_sin_turn(u.y);
-    Vec3A::new(r * cos_phi, r * sin_phi, z) * crate::math::cbrt(uc)
+    Vec3::new(r * cos_phi, r * sin_phi, z) * crate::math::cbrt(uc)
+}
+
+/// `n` turned to the side of `wo`, and the mirror direction of `wo` about it.
+#[inline(always)]
+fn mirror(wo: Vec3, n: Vec3) -> (Vec3, Vec3) {
+    let nf = if wo.dot(n) < 0.0 { -n } else { n };
+    (nf, 2.0 * wo.dot(nf) * nf - wo)
+}
+
+/// [`MaterialModel::eval`] of a metal of fuzz `fuzz`, on plain numbers and without branches:
+/// the one source of the one-path code and the lane kernel, whose loop over lanes vectorises.
+/// The albedo times [`fuzz_pdf`] above the surface; nothing for a mirror (`fuzz` 0).
+#[inline(always)]
+pub fn eval_plain(albedo: Vec3, fuzz: f32, wo: Vec3, wi: Vec3, n: Vec3) -> BsdfEval {
+    let (nf, r) = mirror(wo, n);
+    let pdf = fuzz_pdf(r, fuzz, wi);
+    match fuzz > 0.0 && wi.dot(nf) > 0.0 {
+        true => BsdfEval { f_cos: albedo * pdf, pdf },
+        false => BsdfEval::ZERO,
+    }
+}
+
+/// The fuzzed direction of a metal of fuzz `fuzz` > 0 ([`sample`]), on plain numbers and
+/// without branches as [`eval_plain`]: the sample and whether there is one (none where the
+/// direction falls below the surface: absorbed).
+#[inline(always)]
+pub fn sample_plain(albedo: Vec3, fuzz: f32, wo: Vec3, n: Vec3, u: Vec2, uc: f32) -> (PlainSample, bool) {
+    let (nf, r) = mirror(wo, n);
+    let wi = (r + fuzz * uniform_ball(u, uc)).normalize_or_zero();
+    let pdf = fuzz_pdf(r, fuzz, wi);
+    (PlainSample { wi, weight: albedo, pdf }, wi.dot(nf) > 0.0 && pdf > 0.0)
 }
 
 /// Samples the reflected direction: the mirror's (a delta) or the fuzzed one with its density
 /// ([`fuzz_pdf`]; `f |cos| / pdf` is the albedo).
 #[inline]
 pub fn sample(albedo: Vec3, fuzz: f32, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
-    let nf = if wo.dot(n) < 0.0 { -n } else { n };
-    let r = reflect(wo, nf);
     if fuzz == 0.0 {
+        let nf = if wo.dot(n) < 0.0 { -n } else { n };
+        let r = reflect(wo, nf);
         return Some(BsdfSample { wi: r, weight: albedo, pdf: 1.0, eta: 1.0, delta: true, null: false });
     }
-    let wi = (r + fuzz * uniform_ball(u, uc)).normalize_or_zero();
-    let pdf = fuzz_pdf(r, fuzz, wi);
-    if wi.dot(nf) <= 0.0 || !(pdf > 0.0) {
-        return None;
-    }
-    Some(BsdfSample { wi, weight: albedo, pdf, eta: 1.0, delta: false, null: false })
+    let (s, valid) = sample_plain(albedo, fuzz, wo.into(), n.into(), u, uc);
+    valid.then(|| s.into())
 }
 
 /// Density in solid angle of the direction `normalize(r + fuzz * ball)` about the unit mirror
@@ -116,21 +139,20 @@ pub fn sample(albedo: Vec3, fuzz: f32, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) ->
 /// `(t1^3 - t0^3) / 3` between the ray's entry and exit, over its total volume. The entry and
 /// exit solve `t^2 - 2 c t + 1 - fuzz^2 = 0` (`c = w . r`), their gap `2 s` with
 /// `s^2 = fuzz^2 - |w x r|^2` (no cancellation near the mirror direction), and
-/// `t1^3 - t0^3 = (t1 - t0)(t1^2 + t1 t0 + t0^2)` where both are ahead.
-pub fn fuzz_pdf(r: Vec3A, fuzz: f32, w: Vec3A) -> f32 {
+/// `t1^3 - t0^3 = (t1 - t0)(t1^2 + t1 t0 + t0^2)` where both are ahead. Without branches.
+#[inline(always)]
+pub fn fuzz_pdf(r: Vec3, fuzz: f32, w: Vec3) -> f32 {
     let c = w.dot(r);
     let disc = fuzz * fuzz - w.cross(r).length_squared();
-    if disc < 0.0 || c + disc.sqrt() <= 0.0 {
-        return 0.0;
-    }
-    let s = disc.sqrt();
+    let s = disc.max(0.0).sqrt();
     let (t0, t1) = (c - s, c + s);
     let volume = match t0 > 0.0 {
         true => 2.0 * s * (t1 * t1 + t1 * t0 + t0 * t0),
         // The origin is inside the ball (fuzz >= 1): from 0.
         false => t1 * t1 * t1,
     };
-    volume / (4.0 * std::f32::consts::PI * fuzz * fuzz * fuzz)
+    let pdf = volume / (4.0 * std::f32::consts::PI * fuzz * fuzz * fuzz);
+    if disc < 0.0 || t1 <= 0.0 { 0.0 } else { pdf }
 }
 
 #[cfg(test)]
@@ -154,10 +176,10 @@ mod tests {
             let r = reflect(wo, n);
             let (stat, dof) = chi2(
                 |u, uc| {
-                    let wi = (r + fuzz * uniform_ball(u, uc)).normalize();
+                    let wi = (r + fuzz * Vec3A::from(uniform_ball(u, uc))).normalize();
                     Some(wi)
                 },
-                |w| fuzz_pdf(r, fuzz, w),
+                |w| fuzz_pdf(r.into(), fuzz, w.into()),
                 r,
                 // The lobe lies within the cone of half-angle asin(fuzz) about r.
                 if fuzz < 1.0 { ((1.0 - fuzz * fuzz) as f64).sqrt() - 1e-6 } else { -1.0 },
@@ -169,14 +191,14 @@ mod tests {
 
     #[test]
     fn fuzz_pdf_integrates_to_one() {
-        let r = Vec3A::Z;
+        let r = Vec3::Z;
         for fuzz in [0.1f32, 0.5, 1.0] {
             let (nt, np) = (4000, 16);
             let mut sum = 0.0f64;
             for i in 0..nt {
                 let z = -1.0 + 2.0 * (i as f32 + 0.5) / nt as f32;
                 for _ in 0..np {
-                    sum += fuzz_pdf(r, fuzz, Vec3A::new((1.0 - z * z).sqrt(), 0.0, z)) as f64;
+                    sum += fuzz_pdf(r, fuzz, Vec3::new((1.0 - z * z).sqrt(), 0.0, z)) as f64;
                 }
             }
             let integral = sum * 4.0 * std::f64::consts::PI / (nt * np) as f64;
@@ -208,7 +230,7 @@ mod tests {
             for j in 0..np {
                 let phi = (j as f32 + 0.5) / np as f32 * std::f32::consts::TAU;
                 let sz = (1.0 - z * z).sqrt();
-                below += fuzz_pdf(r, 1.0, Vec3A::new(sz * phi.cos(), sz * phi.sin(), z)) as f64;
+                below += fuzz_pdf(r.into(), 1.0, Vec3::new(sz * phi.cos(), sz * phi.sin(), z)) as f64;
             }
         }
         below *= std::f64::consts::TAU / (nt * np) as f64;

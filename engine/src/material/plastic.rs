@@ -21,11 +21,12 @@
 //! integrals `eta^2 (1 - Fdr(1 / eta)) = 1 - Fdr(eta)`, which is what makes the linear model's
 //! albedo `F + (1 - F) albedo` (the tests check both).
 
-use super::lambertian::cosine_hemisphere;
+use super::lambertian::cosine_hemisphere_plain;
+use super::rough_conductor::PlainSample;
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color};
 use crate::material::dielectric::fresnel_exact;
-use crate::math::{Frame, reflect};
+use crate::math::basis;
 use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
@@ -123,25 +124,57 @@ impl Plastic {
     }
 
     /// The normal it reflects about: `n`, turned to `wo`'s side when two-sided.
-    #[inline]
-    fn facing(&self, wo: Vec3A, n: Vec3A) -> Vec3A {
+    #[inline(always)]
+    fn facing(&self, wo: Vec3, n: Vec3) -> Vec3 {
         if self.two_sided && wo.dot(n) < 0.0 { -n } else { n }
-    }
-
-    /// The probability of sampling the mirror at the Fresnel reflectance `f_i`; `None` when
-    /// neither lobe reflects anything (a black tint at normal incidence of index 1, say).
-    #[inline]
-    fn mirror_probability(&self, f_i: f32) -> Option<f32> {
-        lobe_probability(f_i, self.specular_weight)
     }
 
     /// The diffuse lobe's `f` towards a direction of cosine `cos_o`, where `f_i` is the
     /// Fresnel reflectance towards `wo`.
-    #[inline]
+    #[inline(always)]
     fn diffuse(&self, f_i: f32, cos_o: f32) -> Vec3 {
         let f_o = fresnel_exact(cos_o, self.ior);
         inner_bounces(self.albedo, self.fdr_int, self.nonlinear)
             * ((1.0 - f_i) * (1.0 - f_o) * FRAC_1_PI / (self.ior * self.ior))
+    }
+
+    /// [`MaterialModel::eval`] on plain numbers and without branches: the one source of the
+    /// one-path code and the lane kernel, whose loop over lanes vectorises.
+    #[inline(always)]
+    pub fn eval_plain(&self, wo: Vec3, wi: Vec3, n: Vec3) -> BsdfEval {
+        let n = self.facing(wo, n);
+        let (cos_i, cos_o) = (wo.dot(n), wi.dot(n));
+        let f_i = fresnel_exact(cos_i.min(1.0), self.ior);
+        let (p, some) = lobe_probability_plain(f_i, self.specular_weight);
+        let cos_o1 = cos_o.min(1.0);
+        let e = BsdfEval { f_cos: self.diffuse(f_i, cos_o1) * cos_o1, pdf: (1.0 - p) * cos_o1 * FRAC_1_PI };
+        match cos_i > 0.0 && cos_o > 0.0 && some {
+            true => e,
+            false => BsdfEval::ZERO,
+        }
+    }
+
+    /// [`MaterialModel::sample`] on plain numbers and without branches as [`Self::eval_plain`]:
+    /// the sample, whether it is the mirror's (a delta lobe, its `pdf` the lobe's
+    /// probability), and whether there is one (none from below the normal).
+    #[inline(always)]
+    pub fn sample_plain(&self, wo: Vec3, n: Vec3, u: Vec2, uc: f32) -> (PlainSample, bool, bool) {
+        let n = self.facing(wo, n);
+        let cos_i = wo.dot(n);
+        let f_i = fresnel_exact(cos_i.min(1.0), self.ior);
+        let (p, some) = lobe_probability_plain(f_i, self.specular_weight);
+        let mirror = PlainSample { wi: 2.0 * cos_i * n - wo, weight: self.tint * (f_i / p), pdf: p };
+        let local = cosine_hemisphere_plain(u);
+        let (t, b) = basis(n);
+        let diffuse = PlainSample {
+            wi: t * local.x + b * local.y + n * local.z,
+            // f cos / pdf: the cosines and 1 / pi cancel.
+            weight: self.diffuse(f_i, local.z) * (std::f32::consts::PI / (1.0 - p)),
+            pdf: (1.0 - p) * local.z * FRAC_1_PI,
+        };
+        let is_mirror = uc < p;
+        let s = if is_mirror { mirror } else { diffuse };
+        (s, is_mirror, cos_i > 0.0 && some && (is_mirror || diffuse.pdf > 0.0))
     }
 }
 
@@ -214,55 +247,18 @@ impl MaterialModel for Plastic {
         }
     }
 
-    /// The mirror with probability [`Self::mirror_probability`] (a delta lobe), else the cosine
+    /// The mirror with probability `F w / (F w + (1 - F)(1 - w))` (a delta lobe), else the cosine
     /// lobe; `None` from below the normal.
+    #[inline]
     fn sample(&self, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
-        let n = self.facing(wo, n);
-        let cos_i = wo.dot(n);
-        if !(cos_i > 0.0) {
-            return None;
-        }
-        let f_i = fresnel_exact(cos_i.min(1.0), self.ior);
-        let p = self.mirror_probability(f_i)?;
-        if uc < p {
-            let weight = self.tint * (f_i / p);
-            return Some(BsdfSample {
-                wi: reflect(wo, n),
-                weight,
-                pdf: p,
-                eta: 1.0,
-                delta: true,
-                null: false,
-            });
-        }
-        let local = cosine_hemisphere(u);
-        let pdf = (1.0 - p) * local.z * FRAC_1_PI;
-        if !(pdf > 0.0) {
-            return None;
-        }
-        // f cos / pdf: the cosines and 1 / pi cancel.
-        let weight = self.diffuse(f_i, local.z) * (std::f32::consts::PI / (1.0 - p));
-        Some(BsdfSample {
-            wi: Frame::from_normal(n).to_world(local),
-            weight,
-            pdf,
-            eta: 1.0,
-            delta: false,
-            null: false,
-        })
+        let (s, delta, valid) = self.sample_plain(wo.into(), n.into(), u, uc);
+        valid.then(|| BsdfSample { delta, ..s.into() })
     }
 
     /// The diffuse lobe (the mirror is a delta).
+    #[inline]
     fn eval(&self, wo: Vec3A, wi: Vec3A, n: Vec3A) -> BsdfEval {
-        let n = self.facing(wo, n);
-        let (cos_i, cos_o) = (wo.dot(n), wi.dot(n));
-        if !(cos_i > 0.0 && cos_o > 0.0) {
-            return BsdfEval::ZERO;
-        }
-        let f_i = fresnel_exact(cos_i.min(1.0), self.ior);
-        let Some(p) = self.mirror_probability(f_i) else { return BsdfEval::ZERO };
-        let cos_o = cos_o.min(1.0);
-        BsdfEval { f_cos: self.diffuse(f_i, cos_o) * cos_o, pdf: (1.0 - p) * cos_o * FRAC_1_PI }
+        self.eval_plain(wo.into(), wi.into(), n.into())
     }
 
     /// The base's albedo.
@@ -277,6 +273,7 @@ mod tests {
     use super::*;
     use crate::material::Material;
     use crate::material::microfacet::testing::assert_chi2;
+    use crate::math::{Frame, reflect};
     use crate::testing::{material as build, material_desc as parse};
 
     /// A normal that is not an axis, and the direction `deg` degrees from it.
@@ -350,7 +347,7 @@ mod tests {
                     Plastic::new(Vec3::new(0.9, 0.5, 0.1), Vec3::new(0.8, 0.9, 1.0), 1.6, nonlinear, false);
                 let (n, wo) = setup(deg);
                 let f_i = fresnel_exact(wo.dot(n), m.ior);
-                let p = m.mirror_probability(f_i).unwrap();
+                let p = lobe_probability(f_i, m.specular_weight).unwrap();
                 let (mut mirrors, count) = (0, 4000);
                 for _ in 0..count {
                     let s = m.sample(wo, n, Vec2::new(r(), r()), r()).unwrap();

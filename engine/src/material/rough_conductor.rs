@@ -185,11 +185,10 @@ impl RoughConductor {
     }
 
     /// Whether the lane kernels shade it ([`Self::eval_plain`] and [`Self::sample_plain`],
-    /// or [`Self::eval_in`] and [`Self::sample_in`] in its [`Self::anisotropic_frame`]): rough,
-    /// with separable shadowing-masking.
+    /// or [`Self::eval_in`] and [`Self::sample_in`] in its [`Self::anisotropic_frame`]): rough.
     #[inline]
     pub fn shaded_in_lanes(&self) -> bool {
-        !self.is_smooth() && self.smith == Smith::Separable
+        !self.is_smooth()
     }
 
     /// The frame of an anisotropic conductor at the shading normal `n` seen from `wo`: its

@@ -81,11 +81,10 @@ impl RoughDielectric {
         }
     }
 
-    /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]): rough,
-    /// with separable shadowing-masking.
+    /// Whether the lane kernel shades it ([`Self::eval_plain`], [`Self::sample_plain`]): rough.
     #[inline]
     pub fn shaded_in_lanes(&self) -> bool {
-        !self.is_smooth() && self.smith == Smith::Separable
+        !self.is_smooth()
     }
 
     /// The relative IOR seen from `wo` (of cosine `cos_o` with `n`) and the normal on its side.

@@ -8,7 +8,9 @@ use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
+use pathwave_engine::material::metal::Metal;
 use pathwave_engine::material::metallic_roughness::MetallicRoughness;
+use pathwave_engine::material::plastic::Plastic;
 use pathwave_engine::material::principled::Principled;
 use pathwave_engine::material::principled_thin::PrincipledThin;
 use pathwave_engine::material::rough_conductor::RoughConductor;
@@ -30,8 +32,10 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
         Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
         Shading::Sampled => shade_sampled(scene, p, q, &queue),
         Shading::Glossy => match kind {
+            MaterialKind::Metal => shade_in_lanes::<Metal>(scene, p, q, &queue),
             MaterialKind::RoughConductor => shade_in_lanes::<RoughConductor>(scene, p, q, &queue),
             MaterialKind::RoughDielectric => shade_in_lanes::<RoughDielectric>(scene, p, q, &queue),
+            MaterialKind::Plastic => shade_in_lanes::<Plastic>(scene, p, q, &queue),
             MaterialKind::RoughPlastic => shade_in_lanes::<RoughPlastic>(scene, p, q, &queue),
             MaterialKind::Principled => shade_in_lanes::<Principled>(scene, p, q, &queue),
             MaterialKind::PrincipledThin => shade_in_lanes::<PrincipledThin>(scene, p, q, &queue),
@@ -142,17 +146,17 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 /// plastics, principled, thin principled and glTF's metallic-roughness):
 /// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
 /// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
-/// shades (anisotropic conductors by kernels of their own, in their tangent frame), and the
-/// path's bookkeeping path by path; where the environment is sampled apart, the BSDF is
-/// evaluated towards its samples across lanes too. The others (smooth, height-correlated) are
-/// shaded as the other glossy kinds.
+/// shades (anisotropic conductors and height-correlated shadowing by kernels of their own),
+/// and the path's bookkeeping path by path; where the environment is sampled apart, the BSDF
+/// is evaluated towards its samples across lanes too. Smooth ones (delta lobes) are shaded as
+/// the other glossy kinds.
 fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
     let live = below_max_depth(scene, p, q, queue, false);
     let mut ins = K::In::default();
     // Each kernel's outputs, by `Kernel::index`.
-    let mut outs: [K::Out; 4] = std::array::from_fn(|_| K::Out::default());
-    let mut env_outs: [EvalLanes; 4] = Default::default();
+    let mut outs: [K::Out; Kernel::COUNT] = std::array::from_fn(|_| K::Out::default());
+    let mut env_outs: [EvalLanes; Kernel::COUNT] = std::array::from_fn(|_| EvalLanes::default());
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let reads = reads_of(scene, p, chunk);
@@ -160,8 +164,9 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
             #[inline(always)]
             || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
         );
-        // Per lane: the kernel (none: shaded path by path) and light sample.
-        let mut kernel = [None; LANES];
+        // Per lane: the kernel (none: shaded path by path) and light sample; the kernels that
+        // some lane takes, as bits by `Kernel::index`.
+        let (mut kernel, mut used) = ([None; LANES], 0u32);
         let mut lights: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
@@ -174,9 +179,10 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
             let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
             K::set(&mut ins, l, &m, (-p.dir[s]).into(), sp.ns.into(), wi.into(), &u[l].bsdf);
             kernel[l] = Some(k);
+            used |= 1 << k.index();
         }
         for k in Kernel::ALL {
-            if kernel.contains(&Some(k)) {
+            if used & 1 << k.index() != 0 {
                 K::run(&ins, k, &mut outs[k.index()]);
             }
         }
@@ -191,7 +197,7 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                 }
             }
             for k in Kernel::ALL {
-                if kernel.contains(&Some(k)) {
+                if used & 1 << k.index() != 0 {
                     K::eval(&ins, k, &mut env_outs[k.index()]);
                 }
             }
