@@ -19,7 +19,7 @@ use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
 use pathwave_engine::material::wrap::{Resolved, terminator_shadowing};
-use pathwave_engine::material::{BsdfEval, BsdfSample, Material, Reads};
+use pathwave_engine::material::{BsdfEval, BsdfSample, Material, Reads, Specular};
 use pathwave_engine::math::{Ray, offset_ray_origin};
 use pathwave_engine::render_scene::RenderScene;
 use pathwave_engine::shape::SurfacePoint;
@@ -477,7 +477,9 @@ impl GlossySamples {
 /// towards the light sample and weighted against BSDF sampling by MIS (power heuristic; point,
 /// spot and directional lights in full), then BSDF sampling and Russian roulette as in
 /// [`scatter_with`]. Lambertian hits whose normal a map tilted ([`tilted`]) are shaded here
-/// too. Returns the shadow rays and the next ray (`None`: the path ends).
+/// too. A delta lobe alone (a perfect mirror, smooth glass: [`Material::specular`]) reflects
+/// no light sample, so none is taken. Returns the shadow rays and the next ray (`None`: the
+/// path ends).
 #[inline]
 pub fn shade_glossy(
     scene: &RenderScene,
@@ -488,6 +490,9 @@ pub fn shade_glossy(
     time: f32,
     u: &GlossySamples,
 ) -> (Shadows, Option<Ray>) {
+    if mat.specular() != Specular::No {
+        return (Shadows::default(), scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true));
+    }
     let shadow = |lp: LightPick| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time);
     let shadows = Shadows {
         light: glossy_light(scene, sp, time, u).and_then(shadow),
