@@ -76,7 +76,7 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
 
 /// Every material kind that shades, each on a coarse sphere mesh (see
 /// [`reproduces_the_oracle_on_smooth_shaded_meshes`]), as RON.
-const SHADING_KINDS: [(&str, &str); 16] = [
+const SHADING_KINDS: [(&str, &str); 18] = [
     ("white", r#"Lambertian(albedo: (0.7, 0.7, 0.7))"#),
     ("metal", r#"Metal(albedo: (0.9, 0.8, 0.7), fuzz: 0.2)"#),
     ("gold", r#"RoughConductor(tint: (1, 0.8, 0.4), alpha: 0.3)"#),
@@ -87,6 +87,8 @@ const SHADING_KINDS: [(&str, &str); 16] = [
     ),
     ("etched", r#"RoughDielectric(ior: 1.5, alpha: 0.3, distribution: Beckmann, smith: HeightCorrelated)"#),
     ("glass", r#"Dielectric(ior: 1.5)"#),
+    ("schlick", r#"Dielectric(ior: 1.7, fresnel: Schlick)"#),
+    ("pane", r#"ThinDielectric(ior: 1.5)"#),
     ("plastic", r#"Plastic(albedo: (0.1, 0.27, 0.36), ior: 1.9)"#),
     (
         "rough_plastic",
@@ -163,7 +165,7 @@ fn assert_oracle_bits(desc: &SceneDesc, what: &str) {
 /// directions the two normals disagree about) take the same shared code in both integrators:
 /// a coarse sphere mesh in each material kind that shades ([`SHADING_KINDS`]: Lambertian,
 /// fuzzy metals, both rough ones with either distribution, the Beckmann ones with
-/// height-correlated shadowing, glass, plastics, textured rough plastic, a textured principled,
+/// height-correlated shadowing, glass (exact and Schlick's Fresnel), a thin pane, plastics, textured rough plastic, a textured principled,
 /// a textured thin principled, a textured glTF metallic-roughness and an anisotropic rough
 /// conductor), one of them sheared, under a lamp, a point light and the sky, gives the
 /// oracle's bits. Seen again close up under a bright panel, which the BSDFs' sampled
@@ -190,7 +192,7 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
     let camera = "(look_from: (0, 2, 9), look_at: (0, 0.5, 0), vfov: 40)";
     let point = "Point(position: (-4, 4, 3), intensity: (20, 20, 20))";
     assert_oracle_bits(&shading_kinds_scene(camera, objects, point, 6), "the scene");
-    // Each kind on a 4 x 4 grid, under a panel as wide as the grid.
+    // Each kind on a grid four wide, under a panel as large as the grid.
     let grid: String = SHADING_KINDS
         .iter()
         .enumerate()
@@ -200,7 +202,7 @@ fn reproduces_the_oracle_on_smooth_shaded_meshes() {
         })
         .collect();
     let objects = format!(
-        r#"(shape: Quad(q: (-2.5, 2.5, -2.5), u: (5, 0, 0), v: (0, 0, 5)), material: "panel"), {grid}"#
+        r#"(shape: Quad(q: (-2.5, 2.5, -2.5), u: (5, 0, 0), v: (0, 0, 6)), material: "panel"), {grid}"#
     );
     let camera = "(look_from: (0, 2.2, 5), look_at: (0, 0, 0), vfov: 40)";
     assert_oracle_bits(&shading_kinds_scene(camera, &objects, "", 16), "under a panel");

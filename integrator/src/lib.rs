@@ -5,6 +5,7 @@
 
 pub mod aov;
 pub mod costs;
+pub mod delta_lanes;
 pub mod denoise;
 pub mod diagnose;
 pub mod film;

@@ -3,9 +3,10 @@
 //! reflection (Shirley, "Ray Tracing in One Weekend", dielectrics). Radiance is scaled by
 //! 1/eta^2 on refraction.
 
+use super::rough_dielectric::DielectricSample;
 use super::{BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::Positive;
-use crate::math::reflect;
+use crate::math::normalized;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// How a dielectric computes its reflectance.
@@ -82,16 +83,14 @@ pub fn fresnel_exact(cos_i: f32, eta: f32) -> f32 {
 }
 
 /// Schlick's approximation, using the cosine on the optically thinner side, with total internal
-/// reflection.
-#[inline]
+/// reflection. Without branches.
+#[inline(always)]
 pub fn fresnel_schlick(cos_i: f32, eta: f32) -> f32 {
     let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
     let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
     let c = if eta < 1.0 { (1.0 - sin2_t).sqrt() } else { cos_i };
-    r0 + (1.0 - r0) * (1.0 - c).powi(5)
+    let f = r0 + (1.0 - r0) * (1.0 - c).powi(5);
+    if sin2_t >= 1.0 { 1.0 } else { f }
 }
 
 /// Refraction of `wo` through a surface with normal `n` on the side of `wo`; `None` on total
@@ -115,32 +114,27 @@ pub fn refract_plain(wo: Vec3, n: Vec3, eta: f32) -> (Vec3, bool) {
 /// Chooses reflection or refraction with probability F; `uc` in [0, 1).
 #[inline]
 pub fn sample(ior: f32, fresnel: Fresnel, wo: Vec3A, n: Vec3A, uc: f32) -> Option<BsdfSample> {
+    let (s, valid) = sample_plain(ior, fresnel, wo.into(), n.into(), uc);
+    valid.then(|| BsdfSample { delta: true, ..s.into() })
+}
+
+/// [`sample`] on plain numbers and without branches: the one source of the one-path code and
+/// the lane kernel. The sample (the mirror direction, or the refracted one with its weight
+/// `1 / eta^2`), and whether there is one (none on total internal reflection's refraction,
+/// which Fresnel's reflectance 1 leaves only to rounding).
+#[inline(always)]
+pub fn sample_plain(ior: f32, fresnel: Fresnel, wo: Vec3, n: Vec3, uc: f32) -> (DielectricSample, bool) {
     let cos_o = wo.dot(n);
-    let (eta, nf) = if cos_o >= 0.0 { (ior, n) } else { (1.0 / ior, -n) };
+    let outside = cos_o >= 0.0;
+    let (eta, nf) = (if outside { ior } else { 1.0 / ior }, if outside { n } else { -n });
     let cos_i = cos_o.abs();
-    let f = match fresnel {
-        Fresnel::Exact => fresnel_exact(cos_i, eta),
-        Fresnel::Schlick => fresnel_schlick(cos_i, eta),
-    };
-    if uc < f {
-        return Some(BsdfSample {
-            wi: reflect(wo, nf),
-            weight: Vec3::ONE,
-            pdf: f,
-            eta: 1.0,
-            delta: true,
-            null: false,
-        });
-    }
-    let wi = refract(wo, nf, eta)?.normalize();
-    Some(BsdfSample {
-        wi,
-        weight: Vec3::splat(1.0 / (eta * eta)),
-        pdf: 1.0 - f,
-        eta,
-        delta: true,
-        null: false,
-    })
+    let (exact, schlick) = (fresnel_exact(cos_i, eta), fresnel_schlick(cos_i, eta));
+    let f = if fresnel == Fresnel::Schlick { schlick } else { exact };
+    let reflects = uc < f;
+    let (wt, refracts) = refract_plain(wo, nf, eta);
+    let reflected = DielectricSample { wi: 2.0 * wo.dot(nf) * nf - wo, weight: 1.0, pdf: f, eta: 1.0 };
+    let refracted = DielectricSample { wi: normalized(wt), weight: 1.0 / (eta * eta), pdf: 1.0 - f, eta };
+    (if reflects { reflected } else { refracted }, reflects || refracts)
 }
 
 #[cfg(test)]

@@ -14,7 +14,6 @@
 use super::dielectric::fresnel_exact;
 use super::{BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::Positive;
-use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// A pane too thin to see (a window, a bubble; Mitsuba 3's `thindielectric`): reflects with the
@@ -41,10 +40,23 @@ pub struct ThinDielectric {
 impl ThinDielectric {
     /// The pane's reflectance R' = 2R / (1 + R) for light arriving at `cos` (either side) from
     /// the normal.
-    #[inline]
+    #[inline(always)]
     pub fn reflectance(&self, cos: f32) -> f32 {
         let r = fresnel_exact(cos.abs(), self.ior);
         r * 2.0 / (1.0 + r)
+    }
+
+    /// [`MaterialModel::sample`] on plain numbers and without branches: the one source of the
+    /// one-path code and the lane kernel. The direction (the mirror's, or straight on), its
+    /// probability, and whether it goes straight on (the null lobe); both weigh 1.
+    #[inline(always)]
+    pub fn sample_plain(&self, wo: Vec3, n: Vec3, uc: f32) -> (Vec3, f32, bool) {
+        let cos = wo.dot(n);
+        let r = self.reflectance(cos);
+        let nf = if cos >= 0.0 { n } else { -n };
+        let reflects = uc < r;
+        let wi = if reflects { 2.0 * wo.dot(nf) * nf - wo } else { -wo };
+        (wi, if reflects { r } else { 1.0 - r }, !reflects)
     }
 }
 
@@ -59,20 +71,8 @@ impl MaterialModel for ThinDielectric {
     /// Reflection with probability R', else straight on; both weigh 1.
     #[inline]
     fn sample(&self, wo: Vec3A, n: Vec3A, _u: Vec2, uc: f32) -> Option<BsdfSample> {
-        let cos = wo.dot(n);
-        let r = self.reflectance(cos);
-        if uc < r {
-            let nf = if cos >= 0.0 { n } else { -n };
-            return Some(BsdfSample {
-                wi: reflect(wo, nf),
-                weight: Vec3::ONE,
-                pdf: r,
-                eta: 1.0,
-                delta: true,
-                null: false,
-            });
-        }
-        Some(BsdfSample { wi: -wo, weight: Vec3::ONE, pdf: 1.0 - r, eta: 1.0, delta: true, null: true })
+        let (wi, pdf, null) = self.sample_plain(wo.into(), n.into(), uc);
+        Some(BsdfSample { wi: wi.into(), weight: Vec3::ONE, pdf, eta: 1.0, delta: true, null })
     }
 
     /// Glass shows as white in the albedo guide.
@@ -102,6 +102,7 @@ impl MaterialModel for ThinDielectric {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::reflect;
 
     #[test]
     fn reflectance_sums_the_inter_reflections() {

@@ -4,10 +4,12 @@
 
 use super::queues::{Paths, Queues};
 use super::stages::route;
+use crate::delta_lanes::{DeltaInLanes, DeltaLanes, DeltaOutLanes};
 use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
+use pathwave_engine::material::dielectric::Dielectric;
 use pathwave_engine::material::metal::Metal;
 use pathwave_engine::material::metallic_roughness::MetallicRoughness;
 use pathwave_engine::material::plastic::Plastic;
@@ -16,7 +18,8 @@ use pathwave_engine::material::principled_thin::PrincipledThin;
 use pathwave_engine::material::rough_conductor::RoughConductor;
 use pathwave_engine::material::rough_dielectric::RoughDielectric;
 use pathwave_engine::material::rough_plastic::RoughPlastic;
-use pathwave_engine::material::{MaterialKind, Reads, Shading};
+use pathwave_engine::material::thin_dielectric::ThinDielectric;
+use pathwave_engine::material::{Material, MaterialKind, Reads, Shading};
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
@@ -30,7 +33,11 @@ pub fn shade(scene: &RenderScene, p: &mut Paths, q: &mut Queues, kind: MaterialK
     let mut queue = std::mem::take(&mut q.shade[kind as usize]);
     match kind.shading() {
         Shading::Diffuse => shade_lambertian_lanes(scene, p, q, &queue),
-        Shading::Sampled => shade_sampled(scene, p, q, &queue),
+        Shading::Sampled => match kind {
+            MaterialKind::Dielectric => shade_sampled::<Dielectric>(scene, p, q, &queue),
+            MaterialKind::ThinDielectric => shade_sampled::<ThinDielectric>(scene, p, q, &queue),
+            _ => shade_sampled::<NoLanes>(scene, p, q, &queue),
+        },
         Shading::Glossy => match kind {
             MaterialKind::Metal => shade_in_lanes::<Metal>(scene, p, q, &queue),
             MaterialKind::RoughConductor => shade_in_lanes::<RoughConductor>(scene, p, q, &queue),
@@ -82,11 +89,14 @@ fn reads_of(scene: &RenderScene, p: &Paths, chunk: &[u32]) -> Reads {
     })
 }
 
-/// Hits on a [`Shading::Sampled`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
-/// drawn at once, then BSDF sampling path by path.
-fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
+/// Hits on a [`Shading::Sampled`] kind (delta lobes alone): the numbers of
+/// [`LANES`](lambert_vertex::LANES) paths drawn at once, the BSDF sampled across lanes for
+/// those the kind `K` takes ([`DeltaLanes`]: smooth glass, thin panes), path by path for the
+/// others, then the path's bookkeeping path by path.
+fn shade_sampled<K: DeltaLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
     use lambert_vertex::LANES;
     let live = below_max_depth(scene, p, q, queue, scene.features.null_surfaces);
+    let (mut ins, mut outs) = (DeltaInLanes::default(), DeltaOutLanes::default());
     for chunk in live.chunks(LANES) {
         let (samplers, depths) = p.sampler_lanes::<LANES>(chunk);
         let reads = reads_of(scene, p, chunk);
@@ -94,23 +104,50 @@ fn shade_sampled(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u3
             #[inline(always)]
             || path::ScatterSamples::draw_lanes(scene, &samplers, &depths, reads),
         );
+        let mut in_lanes = [false; LANES];
+        for (l, &i) in chunk.iter().enumerate() {
+            let hit = &p.hit[i as usize];
+            if let Some(m) = scene.with_material(hit.material, &hit.surface, K::lane_material) {
+                K::set(&mut ins, l, &m, (-p.dir[i as usize]).into(), hit.surface.ns.into(), u[l].lobe);
+                in_lanes[l] = true;
+            }
+        }
+        if in_lanes.contains(&true) {
+            K::run(&ins, &mut outs);
+        }
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let mut st = p.state(s);
-            let hit = &p.hit[s];
-            let next = scene.with_material(
-                hit.material,
-                &hit.surface,
-                #[inline(always)]
-                |mat| {
-                    path::scatter_with(scene, &mut st, &hit.surface, -p.dir[s], mat, p.time[s], &u[l], false)
-                },
-            );
+            let (hit, wo, time) = (&p.hit[s], -p.dir[s], p.time[s]);
+            let next = match in_lanes[l] {
+                true => outs.sample(l).and_then(|bs| {
+                    path::scatter_sampled(scene, &mut st, &hit.surface, wo, bs, time, &u[l], false)
+                }),
+                false => scene.with_material(
+                    hit.material,
+                    &hit.surface,
+                    #[inline(always)]
+                    |mat| path::scatter_with(scene, &mut st, &hit.surface, wo, mat, time, &u[l], false),
+                ),
+            };
             route(p, q, i, path::Shadows::default(), next);
             p.set_state(s, &st);
         }
     }
     q.scratch = live;
+}
+
+/// The delta kinds no kernel takes (a test's fixtures): sampled path by path.
+struct NoLanes;
+
+impl DeltaLanes for NoLanes {
+    fn lane_material(_: &Material) -> Option<Self> {
+        None
+    }
+
+    fn set(_: &mut DeltaInLanes, _: usize, _: &Self, _: glam::Vec3, _: glam::Vec3, _: f32) {}
+
+    fn run(_: &DeltaInLanes, _: &mut DeltaOutLanes) {}
 }
 
 /// Hits on a [`Shading::Glossy`] kind: the numbers of [`LANES`](lambert_vertex::LANES) paths
