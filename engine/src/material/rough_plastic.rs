@@ -95,10 +95,10 @@ impl Coating {
     /// The 128 integrals (a million visible-normal samples for Beckmann below 1) run across
     /// rayon's threads, each on its own, and are summed in order: the same bits on any number
     /// of threads.
-    fn compute<M: Microfacet + Send + Sync>(md: Option<M>, eta: f32) -> Self {
+    fn compute<M: Microfacet<Vec3> + Send + Sync>(md: Option<M>, eta: f32) -> Self {
         use rayon::prelude::*;
         let mu = |i: usize| (i as f32 / (RES - 1) as f32).max(1e-6);
-        let dir = |mu: f32| Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+        let dir = |mu: f32| Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
         let (outside, inside) = (GaussLegendre::for_index(eta), GaussLegendre::for_index(1.0 / eta));
         let integrals: Vec<(f32, f32)> = (0..RES)
             .into_par_iter()
@@ -170,44 +170,59 @@ impl GaussLegendre {
 
 /// The mean over the visible normals of `md` seen from `wi` (local, upper hemisphere) of the
 /// single-scattering reflectance or transmittance of an interface of relative index `eta`
-/// (the product `rule` in each of the two sampling numbers).
-fn interface_integral<M: Microfacet>(
+/// (the product `rule` in each of the two sampling numbers). Each row of the rule's terms is
+/// computed across lanes ([`interface_term`], without branches), then summed in order in
+/// `f64`.
+fn interface_integral<M: Microfacet<Vec3>>(
     md: M,
-    wi: Vec3A,
+    wi: Vec3,
     eta: f32,
     what: Scattering,
     rule: &GaussLegendre,
 ) -> f32 {
     let (nodes, weights) = (&rule.nodes, &rule.weights);
+    let below = what == Scattering::Transmission;
+    let ys: Vec<f32> = nodes.iter().map(|&y| 0.5 * y as f32 + 0.5).collect();
+    let mut terms = vec![0.0f32; nodes.len()];
     let mut sum = 0.0f64;
     for (&x, &wx) in nodes.iter().zip(weights) {
-        for (&y, &wy) in nodes.iter().zip(weights) {
-            let m = md.sample_visible(wi, Vec2::new(0.5 * x as f32 + 0.5, 0.5 * y as f32 + 0.5));
-            let c = wi.dot(m);
-            if !(c > 0.0) {
-                continue;
-            }
-            let f = fresnel_exact(c.min(1.0), eta);
-            let (w, fraction) = match what {
-                Scattering::Reflection => (reflect(wi, m), f),
-                Scattering::Transmission => {
-                    // Refraction about m: wt = -wi / eta + m (c / eta - cos_t).
-                    let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
-                    if sin2_t >= 1.0 {
-                        continue;
-                    }
-                    (m * (c / eta - (1.0 - sin2_t).sqrt()) - wi / eta, 1.0 - f)
+        let ux = 0.5 * x as f32 + 0.5;
+        crate::simd::lanes(
+            #[inline(always)]
+            || {
+                for (t, &uy) in terms.iter_mut().zip(&ys) {
+                    *t = interface_term(md, wi, eta, below, Vec2::new(ux, uy));
                 }
-            };
-            // Mitsuba's smith_g1: zero unless w lies on the side of m it has of the surface.
-            let below = what == Scattering::Transmission;
-            if (w.z < 0.0) != below || w.z == 0.0 || w.dot(m) * w.z <= 0.0 {
-                continue;
-            }
-            sum += (md.g1(w) * fraction) as f64 * wx * wy;
+            },
+        );
+        for (&t, &wy) in terms.iter().zip(weights) {
+            sum += t as f64 * wx * wy;
         }
     }
     (0.25 * sum) as f32
+}
+
+/// One term of [`interface_integral`] at the sampling numbers `u`: `F G1(wr)` of the mirrored
+/// direction above the surface, or `(1 - F) G1(wt)` of the refracted one below (`below`), 0
+/// where the visible normal faces away, the refraction is total internal reflection, or the
+/// direction lies off the side of `m` it has of the surface (Mitsuba's `smith_g1`).
+#[inline(always)]
+fn interface_term<M: Microfacet<Vec3>>(md: M, wi: Vec3, eta: f32, below: bool, u: Vec2) -> f32 {
+    let m = md.sample_visible(wi, u);
+    let c = wi.dot(m);
+    let f = fresnel_exact(c.min(1.0), eta);
+    // Refraction about m: wt = -wi / eta + m (c / eta - cos_t).
+    let sin2_t = (1.0 - c * c).max(0.0) / (eta * eta);
+    let wt = m * (c / eta - (1.0 - sin2_t).sqrt()) - wi / eta;
+    let wr = 2.0 * wi.dot(m) * m - wi;
+    let (w, fraction) = if below { (wt, 1.0 - f) } else { (wr, f) };
+    let term = md.g1(w) * fraction;
+    let counts = c > 0.0
+        && !(below && sin2_t >= 1.0)
+        && (w.z < 0.0) == below
+        && w.z != 0.0
+        && w.dot(m) * w.z > 0.0;
+    if counts { term } else { 0.0 }
 }
 
 /// The nodes and weights of the `n`-point Gauss-Legendre rule on [-1, 1]: the roots of the
