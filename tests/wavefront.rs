@@ -76,7 +76,7 @@ fn reproduces_the_oracle_for_any_batch_and_thread_count() {
 
 /// Every material kind that shades, each on a coarse sphere mesh (see
 /// [`reproduces_the_oracle_on_smooth_shaded_meshes`]), as RON.
-const SHADING_KINDS: [(&str, &str); 18] = [
+const SHADING_KINDS: [(&str, &str); 19] = [
     ("white", r#"Lambertian(albedo: (0.7, 0.7, 0.7))"#),
     ("metal", r#"Metal(albedo: (0.9, 0.8, 0.7), fuzz: 0.2)"#),
     ("gold", r#"RoughConductor(tint: (1, 0.8, 0.4), alpha: 0.3)"#),
@@ -109,6 +109,7 @@ const SHADING_KINDS: [(&str, &str); 18] = [
     ),
     ("frost2", r#"RoughDielectric(ior: 1.3, alpha: 0.4)"#),
     ("fuzz", r#"Metal(albedo: (0.7, 0.8, 0.9), fuzz: 0.7)"#),
+    ("mirror", r#"Metal(albedo: (0.9, 0.9, 0.8))"#),
     (
         "coated",
         r#"Plastic(albedo: "checks", tint: (0.9, 0.8, 0.7), ior: 1.5, nonlinear: true, two_sided: true)"#,
@@ -164,7 +165,7 @@ fn assert_oracle_bits(desc: &SceneDesc, what: &str) {
 /// Smooth-shaded meshes (vertex normals: adapted shading normals, lifted ray origins, and
 /// directions the two normals disagree about) take the same shared code in both integrators:
 /// a coarse sphere mesh in each material kind that shades ([`SHADING_KINDS`]: Lambertian,
-/// fuzzy metals, both rough ones with either distribution, the Beckmann ones with
+/// fuzzy metals and a perfect mirror, both rough ones with either distribution, the Beckmann ones with
 /// height-correlated shadowing, glass (exact and Schlick's Fresnel), a thin pane, plastics, textured rough plastic, a textured principled,
 /// a textured thin principled, a textured glTF metallic-roughness and an anisotropic rough
 /// conductor), one of them sheared, under a lamp, a point light and the sky, gives the
