@@ -217,11 +217,8 @@ fn interface_term<M: Microfacet<Vec3>>(md: M, wi: Vec3, eta: f32, below: bool, u
     let wr = 2.0 * wi.dot(m) * m - wi;
     let (w, fraction) = if below { (wt, 1.0 - f) } else { (wr, f) };
     let term = md.g1(w) * fraction;
-    let counts = c > 0.0
-        && !(below && sin2_t >= 1.0)
-        && (w.z < 0.0) == below
-        && w.z != 0.0
-        && w.dot(m) * w.z > 0.0;
+    let counts =
+        c > 0.0 && !(below && sin2_t >= 1.0) && (w.z < 0.0) == below && w.z != 0.0 && w.dot(m) * w.z > 0.0;
     if counts { term } else { 0.0 }
 }
 
