@@ -11,7 +11,6 @@
 use super::rough_conductor::PlainSample;
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Reads, Shading, Specular};
 use crate::format::{Albedo, Color, UnitInterval};
-use crate::math::reflect;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// Mirror scaled by albedo; fuzz adds a point of a ball of that radius to the mirror direction;
@@ -90,7 +89,8 @@ pub fn uniform_ball(u: Vec2, uc: f32) -> Vec3 {
     Vec3::new(r * cos_phi, r * sin_phi, z) * crate::math::cbrt(uc)
 }
 
-/// `n` turned to the side of `wo`, and the mirror direction of `wo` about it.
+/// `n` turned to the side of `wo`, and the mirror direction of `wo` about it: a perfect
+/// mirror's sample, and the centre of a fuzzy one's ball.
 #[inline(always)]
 fn mirror(wo: Vec3, n: Vec3) -> (Vec3, Vec3) {
     let nf = if wo.dot(n) < 0.0 { -n } else { n };
@@ -126,9 +126,15 @@ pub fn sample_plain(albedo: Vec3, fuzz: f32, wo: Vec3, n: Vec3, u: Vec2, uc: f32
 #[inline]
 pub fn sample(albedo: Vec3, fuzz: f32, wo: Vec3A, n: Vec3A, u: Vec2, uc: f32) -> Option<BsdfSample> {
     if fuzz == 0.0 {
-        let nf = if wo.dot(n) < 0.0 { -n } else { n };
-        let r = reflect(wo, nf);
-        return Some(BsdfSample { wi: r, weight: albedo, pdf: 1.0, eta: 1.0, delta: true, null: false });
+        let (_, r) = mirror(wo.into(), n.into());
+        return Some(BsdfSample {
+            wi: r.into(),
+            weight: albedo,
+            pdf: 1.0,
+            eta: 1.0,
+            delta: true,
+            null: false,
+        });
     }
     let (s, valid) = sample_plain(albedo, fuzz, wo.into(), n.into(), u, uc);
     valid.then(|| s.into())
@@ -159,6 +165,7 @@ pub fn fuzz_pdf(r: Vec3, fuzz: f32, w: Vec3) -> f32 {
 mod tests {
     use super::*;
     use crate::material::chi2::{chi2, chi2_critical};
+    use crate::math::reflect;
 
     #[test]
     fn perfect_mirror_reflects() {
