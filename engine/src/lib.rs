@@ -11,6 +11,7 @@ pub mod animation;
 pub mod camera;
 pub mod filter;
 pub mod format;
+pub mod guiding;
 pub mod lighting;
 pub mod material;
 pub mod math;

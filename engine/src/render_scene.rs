@@ -106,6 +106,8 @@ pub struct RenderSettings {
     pub filter: crate::filter::PixelFilter,
     /// How next-event estimation chooses a light.
     pub light_sampler: crate::scene::LightSamplerKind,
+    /// Whether the render learns a guide first ([`RenderScene::guide`]).
+    pub guiding: crate::guiding::Guiding,
 }
 
 impl std::str::FromStr for SamplerKind {
@@ -329,7 +331,8 @@ impl Features {
     }
 }
 
-/// Everything an integrator needs, in flat arrays.
+/// Everything an integrator needs, in flat arrays (its large parts shared: a clone is cheap).
+#[derive(Clone)]
 pub struct RenderScene {
     /// What the scene contains.
     pub features: Features,
@@ -362,6 +365,9 @@ pub struct RenderScene {
     pub varies: Vec<bool>,
     /// Per material: its wrapper, for the ids of wrappers (see [`Features::wrappers`]).
     pub wrappers: Arc<Wrappers>,
+    /// The distribution of incident light that Lambertian vertices draw part of their
+    /// directions from (path guiding), once trained; `None` renders without.
+    pub guide: Option<Arc<crate::guiding::Guide>>,
 }
 
 impl RenderScene {

@@ -9,6 +9,7 @@ use crate::path::{self, PathState, ShadowRay, power_heuristic};
 use crate::plain::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
+use pathwave_engine::guiding::Guide;
 use pathwave_engine::math::Ray;
 use pathwave_engine::math::disk_branch_free;
 use pathwave_engine::render_scene::RenderScene;
@@ -81,12 +82,19 @@ pub struct LambertOut {
 /// and its contribution if unoccluded.
 #[inline(always)]
 fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
+    light_part_with(i, |c, _| c)
+}
+
+/// [`light_part`] where directions are drawn with the density `pdf(c, wi)` of the direction
+/// `wi` (`c`: the BSDF's cosine-weighted density there, which the kernel draws with).
+#[inline(always)]
+pub(crate) fn light_part_with(i: &LambertIn, pdf: impl FnOnce(f32, Vec3) -> f32) -> (bool, Vec3, Vec3) {
     let (p, n, ng) = (i.p, i.n, i.ng);
     let wi = i.wi;
     let (co, ci) = (dot(i.wo, n), dot(wi, n));
     let c = ci.abs() * FRAC_1_PI;
     let f = i.albedo * c;
-    let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { c });
+    let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { pdf(c, wi) });
     let contribution = i.beta * (f * i.le * (w / i.pdf_light));
     // The light must lie on wo's side of the shading normal, and leaves from that side: on
     // the outer side (ci > 0: ng is on the shading normal's side) whatever the facet says, on
@@ -101,7 +109,13 @@ fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
 /// (`LightTable::environment_apart`) at the vertex of inputs `i` (its light sample replaced),
 /// with the numbers `u`: the kernel's light part, one path at a time, in both integrators.
 #[inline]
-pub fn environment_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2) -> Option<ShadowRay> {
+pub fn environment_shadow(
+    scene: &RenderScene,
+    i: &LambertIn,
+    time: f32,
+    u: Vec2,
+    guide: Option<(&Guide, u32)>,
+) -> Option<ShadowRay> {
     let lp = path::environment_light(scene, i.p.into(), u)?;
     let i = LambertIn {
         wi: lp.wi.into(),
@@ -111,7 +125,10 @@ pub fn environment_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2
         target: lp.target.into(),
         ..*i
     };
-    let (shadow, so, contribution) = light_part(&i);
+    let (shadow, so, contribution) = match guide {
+        Some((g, cell)) => light_part_with(&i, |c, wi| mixture(c, g.pdf(cell, wi.into()))),
+        None => light_part(&i),
+    };
     shadow.then(|| ShadowRay {
         ray: Ray { origin: so.into(), dir: (i.target - so).into(), time },
         contribution,
@@ -127,15 +144,8 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     let co = dot(i.wo, n);
     // Cosine-weighted direction about the normal on the side of wo.
     let nf = sel3(co < 0.0, -n, n);
-    let (dx, dy) = disk_branch_free(i.u_dir);
-    let z = (1.0 - (dx * dx + dy * dy)).max(0.0).sqrt();
+    let (d, z) = cosine_about(nf, i.u_dir);
     let pdf = z * FRAC_1_PI;
-    let sign = 1f32.copysign(nf.z);
-    let a = -1.0 / (sign + nf.z);
-    let b = nf.x * nf.y * a;
-    let t = Vec3::new(1.0 + sign * nf.x * nf.x * a, sign * b, -sign * nf.x);
-    let bt = Vec3::new(b, sign + nf.y * nf.y * a, -nf.y);
-    let d = t * dx + bt * dy + nf * z;
     // The same rule for the sampled direction (on wo's side of the shading normal but for
     // rounding).
     let (dg, ds) = (dot(d, ng), dot(d, n));
@@ -157,6 +167,30 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
         beta,
         pdf,
     }
+}
+
+/// Where a guide was learned ([`crate::guided`]), the share of directions drawn from the BSDF
+/// (Müller et al.'s 0.5); the rest come from the guide.
+pub const BSDF_SHARE: f32 = 0.5;
+
+/// The density of a guided vertex's mixture for a direction where the BSDF's (cosine-weighted)
+/// density is `c` and the guide's `g`.
+#[inline(always)]
+pub fn mixture(c: f32, g: f32) -> f32 {
+    BSDF_SHARE * c + (1.0 - BSDF_SHARE) * g
+}
+
+/// A cosine-weighted direction about the unit normal `nf` for the numbers `u`, and its cosine.
+#[inline(always)]
+pub(crate) fn cosine_about(nf: Vec3, u: [f32; 2]) -> (Vec3, f32) {
+    let (dx, dy) = disk_branch_free(u);
+    let z = (1.0 - (dx * dx + dy * dy)).max(0.0).sqrt();
+    let sign = 1f32.copysign(nf.z);
+    let a = -1.0 / (sign + nf.z);
+    let b = nf.x * nf.y * a;
+    let t = Vec3::new(1.0 + sign * nf.x * nf.x * a, sign * b, -sign * nf.x);
+    let bt = Vec3::new(b, sign + nf.y * nf.y * a, -nf.y);
+    (t * dx + bt * dy + nf * z, z)
 }
 
 /// The numbers a Lambertian vertex reads (those it does not need are left at zero).

@@ -10,6 +10,8 @@ pub mod denoise;
 pub mod diagnose;
 pub mod film;
 pub mod glossy_lanes;
+pub mod guide_training;
+pub mod guided;
 pub mod lambert_vertex;
 pub mod light_lanes;
 pub mod metal_lanes;

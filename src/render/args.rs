@@ -6,6 +6,7 @@
 
 use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
+use crate::engine::guiding::Guiding;
 use crate::engine::render_scene::SamplerKind;
 use crate::engine::scene::{FilterDesc, LightSamplerKind, SceneDesc};
 use crate::look::{Look, LookArgs};
@@ -36,6 +37,11 @@ pub struct SceneArgs {
     /// (overrides the scene).
     #[arg(long, value_name = "power|tree|auto")]
     pub light_sampler: Option<LightSamplerKind>,
+    /// Path guiding: on (training passes of 1, 2 and 4 samples per pixel over the whole image
+    /// learn where light comes from, and Lambertian surfaces draw half their directions from
+    /// what was learned) or off (default) (overrides the scene).
+    #[arg(long, value_name = "on|off")]
+    pub guiding: Option<Guiding>,
     /// Scale samples down so that no component exceeds MAX (biased; off by default).
     #[arg(long, value_name = "MAX")]
     pub clamp: Option<f32>,

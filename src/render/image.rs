@@ -5,6 +5,7 @@ use super::args::{Checkpointing, How, Integrator};
 use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
+use crate::engine::guiding::Guiding;
 use crate::engine::render_scene::{RenderScene, SamplerKind};
 use crate::engine::scene::LightSamplerKind;
 use crate::engine::scene::files::InputFile;
@@ -45,6 +46,7 @@ pub fn render_id(
     });
     let lights = (s.light_sampler != LightSamplerKind::Auto)
         .then(|| ("light_sampler", format!("{:?}", s.light_sampler)));
+    let guiding = (s.guiding != Guiding::Off).then(|| ("guiding", format!("{:?}", s.guiding)));
     let settings = checkpoint::settings_text(
         &[
             ("size", format!("{}x{}", s.width, s.height)),
@@ -62,6 +64,7 @@ pub fn render_id(
         .into_iter()
         .chain(filter)
         .chain(lights)
+        .chain(guiding)
         .collect::<Vec<_>>(),
     );
     if settings.len() > checkpoint::MAX_SETTINGS_BYTES {
@@ -201,6 +204,33 @@ pub fn render_image(
             eprintln!("{}: no checkpoint yet, starting at sample {lo}", ckpt_path.display());
         }
     }
+    // Path guiding learns its guide first (the same for every share and pass of the image).
+    let trained;
+    let scene = match s.guiding {
+        Guiding::On if lo + film.spp < hi => {
+            let started = Instant::now();
+            let opts = wavefront::Options { batch: how.batch, ..Default::default() };
+            let guide = pool.install(|| {
+                crate::integrator::guide_training::train(
+                    scene,
+                    opts,
+                    crate::integrator::guide_training::PASSES,
+                )
+            });
+            if !how.quiet {
+                let size = guide.as_ref().map_or((0, 0), |g| g.size());
+                eprintln!(
+                    "guide learned in {:.2} s: {} cells, {} directional nodes",
+                    started.elapsed().as_secs_f64(),
+                    size.0,
+                    size.1
+                );
+            }
+            trained = RenderScene { guide, ..scene.clone() };
+            &trained
+        }
+        _ => scene,
+    };
     let first_spp = film.spp;
     let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&s.window);
     let tiles = (tiles_x * tiles_y) as usize;
@@ -228,6 +258,7 @@ pub fn render_image(
                     guides: how.guides(),
                     timing: how.stats,
                     costs: how.costs(),
+                    train: false,
                 };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))

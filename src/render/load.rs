@@ -72,6 +72,7 @@ pub fn load(path: &Path, o: &SceneArgs) -> Result<scene::SceneDesc, String> {
     r.filter = o.image.filter.unwrap_or(r.filter);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     r.light_sampler = o.light_sampler.unwrap_or(r.light_sampler);
+    r.guiding = o.guiding.unwrap_or(r.guiding);
     r.clamp = o.clamp()?.or(r.clamp);
     r.crop = o.crop()?.or(r.crop);
     limits::check_render(r)?;

@@ -6,9 +6,10 @@
 
 pub mod events;
 
+use crate::engine::guiding::Guiding;
 use crate::engine::render_scene::{PixelWindow, RenderScene};
 use crate::engine::world::SceneWorld;
-use crate::integrator::{film::Film, oracle, wavefront};
+use crate::integrator::{film::Film, guide_training, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::look::LookArgs;
 use crate::render::args::{EngineArgs, Integrator, LogArgs, SceneArgs, TimeArgs};
@@ -78,6 +79,17 @@ fn passes(
     engine: EngineArgs,
     pool: &rayon::ThreadPool,
 ) -> Ended {
+    // Path guiding learns its guide first, once for each version of the scene.
+    let trained;
+    let scene = match scene.settings.guiding {
+        Guiding::On => {
+            let opts = wavefront::Options { batch: engine.batch as usize, ..Default::default() };
+            let guide = pool.install(|| guide_training::train(scene, opts, guide_training::PASSES));
+            trained = RenderScene { guide, ..scene.clone() };
+            &trained
+        }
+        Guiding::Off => scene,
+    };
     let target = scene.settings.spp;
     let (mut pass, mut number) = (1, 0);
     while film.spp < target {

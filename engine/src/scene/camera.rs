@@ -297,6 +297,8 @@ pub struct RenderDesc {
     pub filter: FilterDesc,
     /// How next-event estimation chooses a light: `Power`, `Tree` or `Auto` (default).
     pub light_sampler: LightSamplerKind,
+    /// Path guiding: `Off` (default) or `On` (see [`crate::guiding`]).
+    pub guiding: crate::guiding::Guiding,
 }
 
 /// A pixel filter as Mitsuba 3 defines it (mitsuba3 `src/rfilters/`), in pixels: `Box`
@@ -438,6 +440,7 @@ impl Default for RenderDesc {
             crop: None,
             filter: FilterDesc::Box,
             light_sampler: LightSamplerKind::Auto,
+            guiding: crate::guiding::Guiding::Off,
         }
     }
 }

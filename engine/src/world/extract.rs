@@ -82,5 +82,6 @@ pub fn extract_render_scene(
         material_textures: textures.per_material.clone(),
         varies: RenderScene::varying_materials(&textures.per_material, &wrappers.0),
         wrappers: wrappers.0.clone(),
+        guide: None,
     }));
 }

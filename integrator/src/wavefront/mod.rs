@@ -29,6 +29,7 @@ use crate::film::{Film, PixelSums};
 use crate::tile::{self, Tile};
 use glam::Vec3;
 use pathwave_engine::filter::Splat;
+use pathwave_engine::guiding::Record;
 use pathwave_engine::material::{MaterialKind, Shading};
 use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use queues::{Paths, Queues};
@@ -50,11 +51,14 @@ pub struct Options {
     /// Measure what each pixel costs ([`Film::costs`]) and what shading each material took
     /// ([`Stats::material_time`]), in the thread's CPU time; times the stages too.
     pub costs: bool,
+    /// Record what paths bring back at their Lambertian vertices, for path guiding to learn
+    /// from ([`render_training`]).
+    pub train: bool,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 256, guides: false, timing: false, costs: false }
+        Self { batch: 256, guides: false, timing: false, costs: false, train: false }
     }
 }
 
@@ -324,6 +328,19 @@ pub fn render_samples(
     samples: Range<u32>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> (Film, Stats) {
+    let (film, stats, _) = render_training(scene, Options { train: false, ..opts }, samples, progress);
+    (film, stats)
+}
+
+/// [`render_samples`], and with [`Options::train`] what the paths recorded at their Lambertian
+/// vertices for path guiding to learn from, tile by tile in the window's order and path by path
+/// in the order they ended (the same records whatever the thread count).
+pub fn render_training(
+    scene: &RenderScene,
+    opts: Options,
+    samples: Range<u32>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (Film, Stats, Vec<Record>) {
     let s = scene.settings;
     let _span =
         tracing::info_span!("wavefront_render", width = s.width, height = s.height, spp = s.spp).entered();
@@ -352,14 +369,14 @@ pub fn render_samples(
             init,
             |state, tile, rect| {
                 let out = run(state, tile, Some((filter, *rect)));
-                (out.film.into_pixels(), (out.guides, out.charges, out.stats))
+                (out.film.into_pixels(), (out.guides, out.charges, out.stats, out.records))
             },
             PixelSums::add,
         ),
         None => tile::render_tiles(&s.window, &mut film.pixels, progress, init, |state, tile, mut rows| {
             let out = run(state, tile, None);
             rows.copy_from(&out.film.into_pixels(), |a| PixelSums::from(a));
-            (out.guides, out.charges, out.stats)
+            (out.guides, out.charges, out.stats, out.records)
         }),
     };
     let n = s.window.len();
@@ -373,7 +390,9 @@ pub fn render_samples(
     let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
     let mut charges = Vec::new();
-    for (tile, (tile_guides, tile_charges, tile_stats)) in results {
+    let mut records = Vec::new();
+    for (tile, (tile_guides, tile_charges, tile_stats, tile_records)) in results {
+        records.extend(tile_records);
         if let (Some(g), Some(sums)) = (&mut guides, &tile_guides) {
             for (i, k) in tile.window_indices(&s.window) {
                 let [a, n, e] = sums[i];
@@ -404,7 +423,7 @@ pub fn render_samples(
         }
         film.costs = Some(costs);
     }
-    (film, stats)
+    (film, stats, records)
 }
 
 /// Adds `b` to `a` entry by entry, `a` lengthened as needed.
@@ -459,7 +478,7 @@ fn render_tile(
     p: &mut Paths,
     q: &mut Queues,
 ) -> TileResult {
-    let mut work = TileWork::new(scene, tile, samples, splat, opts.guides, opts.costs);
+    let mut work = TileWork::new(scene, tile, samples, splat, opts.guides, opts.costs, opts.train);
     work.run(opts.batch.max(1), clock, p, q, &mut |_, _, _, _, _| {});
     work.result()
 }
@@ -471,6 +490,7 @@ struct TileResult {
     guides: Option<Vec<[Vec3; 3]>>,
     charges: Option<tile_work::Charges>,
     stats: Stats,
+    records: Vec<Record>,
 }
 
 /// One stage's input as the wavefront met it: the paths and queues of one tile just before
@@ -528,7 +548,7 @@ pub fn capture_stages<'a>(
     let batch = opts.batch.max(1);
     let (mut p, mut q) = (Paths::with_slots(batch), Queues::default());
     let splat = s.filter.splat().map(|f| (f, tile.reach(s.filter.margin(), &s.window)));
-    let mut work = TileWork::new(scene, &tile, 0..s.spp, splat, opts.guides, opts.costs);
+    let mut work = TileWork::new(scene, &tile, 0..s.spp, splat, opts.guides, opts.costs, opts.train);
     let mut out = Vec::new();
     work.run(batch, false, &mut p, &mut q, &mut |i, work, stage, p, q| {
         if i == iteration {

@@ -7,6 +7,7 @@
 )]
 
 use crate::aov::Guide;
+use crate::guided::Trail;
 use crate::lambert_vertex::LANES;
 use crate::path::PathState;
 use crate::sampler::{Sampler, SamplerLanes};
@@ -65,6 +66,9 @@ pub struct Paths {
     /// The phase function's asymmetry where the path scatters in a medium, from free-flight
     /// sampling to `shade_medium` (written and read only in scenes with media).
     pub phase_g: Vec<f32>,
+    /// The Lambertian vertices of training paths (only with [`super::Options::train`]; empty
+    /// otherwise).
+    pub trail: Vec<Trail>,
 }
 
 impl Paths {
@@ -105,6 +109,7 @@ impl Paths {
             far: vec![f32::INFINITY; n],
             guide: vec![Guide::NEW; n],
             phase_g: vec![0.0; n],
+            trail: Vec::new(),
         }
     }
 

@@ -307,6 +307,12 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         // A short last chunk leaves its last lanes as the chunk before: their samples go unread.
         lights.sample(&times, &u, &mut ins);
         lambert_vertex::lambert_lanes(&ins, &mut outs);
+        // Where a guide was learned, the lanes it covers draw their directions from it.
+        let cells =
+            scene.guide.as_deref().map(|g| (g, crate::guided::lambert_guided_lanes(g, &ins, &mut outs)));
+        let guided = |l: usize| {
+            cells.and_then(|(g, c)| (c[l] != pathwave_engine::guiding::Guide::EMPTY).then_some((g, c[l])))
+        };
         // The shadow rays, lanes that made one first.
         let (mut pick, mut n) = ([0; LANES], 0);
         for l in 0..chunk.len() {
@@ -318,7 +324,9 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             // The environment sampled apart: its light part of the kernel one path at a time.
             for (l, &i) in chunk.iter().enumerate() {
                 let env = u.get(l).environment;
-                if let Some(sh) = lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env) {
+                if let Some(sh) =
+                    lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env, guided(l))
+                {
                     q.shadow.push(i, &sh.ray, sh.contribution);
                 }
             }
@@ -337,6 +345,9 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             let o = outs.get(l);
             if lambert_vertex::scattered(v3(&ins.p, l), v3(&ins.n, l), ins.depth_after[l], &o, st) && o.alive
             {
+                if !p.trail.is_empty() {
+                    p.trail[s].push(v3(&ins.p, l), o.d, o.pdf, o.beta, p.l[s], p.depth[s]);
+                }
                 p.set_ray(
                     s,
                     Ray { origin: v3(&outs.o, l).into(), dir: v3(&outs.d, l).into(), time: times[l] },

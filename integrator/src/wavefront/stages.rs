@@ -270,6 +270,9 @@ pub fn handle_escaped(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let s = i as usize;
         let mut st = p.state(s);
         path::escape(scene, &mut st, p.dir[s]);
+        if !p.trail.is_empty() {
+            p.trail[s].direct(p.depth[s], st.l - p.l[s]);
+        }
         p.l[s] = st.l;
         q.finished.push(i);
     }
@@ -283,6 +286,9 @@ pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         let hit = p.hit[s];
         let mut st = p.state(s);
         path::emit(scene, &mut st, &hit, -p.dir[s], p.time[s]);
+        if !p.trail.is_empty() {
+            p.trail[s].direct(p.depth[s], st.l - p.l[s]);
+        }
         p.l[s] = st.l;
         if scene.materials[hit.material as usize].is_emissive() {
             q.finished.push(i);
@@ -346,6 +352,12 @@ pub fn trace_shadow_rays(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
     for k in 0..n {
         if !sq.occluded[k] {
             p.l[sq.slot[k] as usize] += sq.contribution[k];
+        }
+    }
+    if !p.trail.is_empty() {
+        for k in (0..n).filter(|&k| !sq.occluded[k]) {
+            let s = sq.slot[k] as usize;
+            p.trail[s].direct(p.depth[s], sq.contribution[k]);
         }
     }
 }

@@ -8,6 +8,7 @@ use super::{Stage, Stats};
 use crate::aov::Guide;
 use crate::costs::PixelCosts;
 use crate::film::{PixelAccumulator, SplatFilm, clamp_sample};
+use crate::guided::Trail;
 use crate::lambert_vertex::LANES;
 use crate::oracle;
 use crate::path;
@@ -16,6 +17,7 @@ use crate::tile::Tile;
 use glam::Vec3;
 use pathwave_engine::camera::RayLanes;
 use pathwave_engine::filter::Splat;
+use pathwave_engine::guiding::Record;
 use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use std::ops::Range;
 use std::time::Duration;
@@ -40,6 +42,8 @@ pub(super) struct TileWork<'a> {
     /// What the tile's pixels and materials cost (with [`super::Options::costs`]).
     charges: Option<Charges>,
     pub(super) stats: Stats,
+    /// What training paths recorded, in the order they ended (with [`super::Options::train`]).
+    pub(super) records: Option<Vec<Record>>,
     /// Each stage's time in [`StageClock`] ticks while the tile runs (then added to
     /// [`Stats::time`]).
     ticks: [u64; Stage::SLOTS],
@@ -56,6 +60,7 @@ impl<'a> TileWork<'a> {
         splat: Option<(Splat, PixelWindow)>,
         guides: bool,
         costs: bool,
+        train: bool,
     ) -> Self {
         let pixels = (tile.w * tile.h) as usize;
         let pipeline = super::pipeline(scene, guides);
@@ -74,6 +79,7 @@ impl<'a> TileWork<'a> {
             charges: costs
                 .then(|| Charges::new(pixels, scene.materials.len(), scene.lights.len(), &pipeline)),
             stats: Stats::default(),
+            records: train.then(Vec::new),
             ticks: [0; Stage::SLOTS],
             pipeline,
         }
@@ -94,6 +100,10 @@ impl<'a> TileWork<'a> {
         let span = clock.map(StageClock::span);
         q.free.clear();
         q.free.extend((0..batch as u32).rev());
+        p.trail.clear();
+        if self.records.is_some() {
+            p.trail.resize(batch, Trail::default());
+        }
         q.active.clear();
         let pipeline = std::mem::take(&mut self.pipeline);
         // The first stage fills free slots with new paths: none active after it, the tile is done.
@@ -147,6 +157,7 @@ impl<'a> TileWork<'a> {
             guides: self.guide_sums,
             charges: self.charges,
             stats: self.stats,
+            records: self.records.unwrap_or_default(),
         }
     }
 
@@ -246,7 +257,7 @@ impl<'a> TileWork<'a> {
 
     /// `accumulate_film`: finished paths add their radiance (and guides) to their pixels and
     /// free their slots.
-    pub(super) fn accumulate_film(&mut self, p: &Paths, q: &mut Queues) {
+    pub(super) fn accumulate_film(&mut self, p: &mut Paths, q: &mut Queues) {
         let clamp = self.scene.settings.clamp;
         match &mut self.film {
             TileFilm::Own(film) => {
@@ -269,6 +280,11 @@ impl<'a> TileWork<'a> {
                 let albedo = if g.open { g.tint } else { g.albedo };
                 let sum = &mut sums[p.pixel[i as usize] as usize];
                 (sum[0], sum[1], sum[2]) = (sum[0] + albedo, sum[1] + g.normal, sum[2] + g.emission);
+            }
+        }
+        if let Some(records) = &mut self.records {
+            for &i in &q.finished {
+                p.trail[i as usize].finish(p.l[i as usize], records);
             }
         }
         q.free.extend_from_slice(&q.finished);

@@ -1,0 +1,175 @@
+//! The Lambertian vertex where a guide was learned ([`pathwave_engine::guiding`]): the next
+//! direction comes from the BSDF (cosine-weighted) or from the guide's distribution of the light
+//! arriving there, each half the time, and is weighted by the density of the mixture (one-sample
+//! MIS with the balance heuristic, Müller et al. 2017); the light sample's MIS weight reads the
+//! mixture's density too. Path by path, in both integrators.
+
+use crate::lambert_vertex::{
+    BSDF_SHARE, LANES, LambertIn, LambertInLanes, LambertOut, LambertOutLanes, cosine_about, light_part_with,
+    mixture,
+};
+use crate::path;
+use crate::plain::{dot, offset, sel3};
+use glam::Vec3;
+use pathwave_engine::guiding::Guide;
+use std::f32::consts::FRAC_1_PI;
+
+/// The Lambertian kernel ([`crate::lambert_vertex::lambert`]) on the lanes whose point lies in
+/// a cell where `guide` learned something: the next direction is drawn from the mixture of the
+/// BSDF and the cell's guide (the first number chooses which, and is stretched back to [0, 1),
+/// the two then draw the direction), weighted by the mixture's density, and the light sample's
+/// MIS weight reads that density too. Writes those lanes' outputs over `o` (the others keep
+/// theirs) and returns every lane's cell ([`Guide::EMPTY`]: not guided). Each lane's numbers
+/// are those of the lane alone.
+pub fn lambert_guided_lanes(guide: &Guide, i: &LambertInLanes, o: &mut LambertOutLanes) -> [u32; LANES] {
+    pathwave_engine::simd::lanes(
+        #[inline(always)]
+        || {
+            let cells = guide.cells(&i.p);
+            let g_light = guide.pdf_lanes(&cells, &i.wi);
+            const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
+            let (mut from_bsdf, mut u) = ([false; LANES], [[0.0f32; LANES]; 2]);
+            for l in 0..LANES {
+                let u0 = i.u_dir[0][l];
+                from_bsdf[l] = u0 < BSDF_SHARE;
+                let stretched =
+                    if from_bsdf[l] { u0 / BSDF_SHARE } else { (u0 - BSDF_SHARE) / (1.0 - BSDF_SHARE) };
+                (u[0][l], u[1][l]) = (stretched.min(BELOW_ONE), i.u_dir[1][l]);
+            }
+            let (drawn, _) = guide.sample_lanes(&cells, &u);
+            let mut d = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
+                let (n, wo) = (
+                    Vec3::new(i.n[0][l], i.n[1][l], i.n[2][l]),
+                    Vec3::new(i.wo[0][l], i.wo[1][l], i.wo[2][l]),
+                );
+                let nf = sel3(dot(wo, n) < 0.0, -n, n);
+                let b = cosine_about(nf, [u[0][l], u[1][l]]).0;
+                let g = Vec3::new(drawn[0][l], drawn[1][l], drawn[2][l]);
+                let v = sel3(from_bsdf[l], b, g);
+                (d[0][l], d[1][l], d[2][l]) = (v.x, v.y, v.z);
+            }
+            let g_d = guide.pdf_lanes(&cells, &d);
+            // Every lane, then the guided ones copied: the first loop vectorises.
+            let mut g = LambertOutLanes::default();
+            for l in 0..LANES {
+                let d = Vec3::new(d[0][l], d[1][l], d[2][l]);
+                g.set(l, &guided(&i.get(l), g_light[l], d, g_d[l]));
+            }
+            for l in (0..LANES).filter(|&l| cells[l] != Guide::EMPTY) {
+                o.set(l, &g.get(l));
+            }
+            cells
+        },
+    )
+}
+
+/// [`lambert_guided_lanes`] for one path: `None` where its point's cell learned nothing.
+pub fn lambert_guided(guide: &Guide, i: &LambertIn) -> Option<LambertOut> {
+    let (mut ins, mut outs) = (LambertInLanes::default(), LambertOutLanes::default());
+    ins.set(0, i);
+    let cells = lambert_guided_lanes(guide, &ins, &mut outs);
+    (cells[0] != Guide::EMPTY).then(|| outs.get(0))
+}
+
+/// One guided lane's outputs: `g_light` the guide's density towards the light sample, `d` the
+/// next direction and `g_d` the guide's density of it.
+#[inline(always)]
+fn guided(i: &LambertIn, g_light: f32, d: Vec3, g_d: f32) -> LambertOut {
+    let (p, n, ng) = (i.p, i.n, i.ng);
+    let (shadow, so, contribution) = light_part_with(i, |c, _| mixture(c, g_light));
+    let co = dot(i.wo, n);
+    let nf = sel3(co < 0.0, -n, n);
+    let cos = dot(d, nf);
+    let c = cos.max(0.0) * FRAC_1_PI;
+    let pdf = mixture(c, g_d);
+    let (dg, ds) = (dot(d, ng), dot(d, n));
+    let leaves = cos > 0.0 && ((ds > 0.0 && co > 0.0) || dg * ds > 0.0);
+    let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
+    let beta = i.beta * i.albedo * (c / pdf);
+    let (rr_drawn, q) = path::roulette_rule(i.rr_on, beta, i.eta_scale);
+    let survive = !(rr_drawn && i.u_rr < q);
+    let beta = if rr_drawn { beta / (1.0 - q) } else { beta };
+    LambertOut {
+        shadow,
+        so,
+        sd: i.target - so,
+        contribution,
+        alive: pdf > 0.0 && survive && leaves,
+        o,
+        d,
+        beta,
+        pdf,
+    }
+}
+
+/// The Lambertian vertices a training path recorded (at most [`Trail::MAX`], the first
+/// ones), to learn from once it ends: at each, the light that came back along the direction it
+/// left is what the path gathered after it, divided by the throughput after it, less the light
+/// the vertex found directly (by its light sample, or on the emitter or background its
+/// direction met): light sampling finds that, so the guide learns where the rest comes from.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Trail {
+    len: u8,
+    v: [TrailVertex; Trail::MAX],
+}
+
+/// A recorded vertex.
+#[derive(Clone, Copy, Debug, Default)]
+struct TrailVertex {
+    p: [f32; 3],
+    d: Vec3,
+    pdf: f32,
+    /// Throughput after the vertex (its BSDF sample and roulette).
+    beta: Vec3,
+    /// The path's radiance when the vertex was made, and what its own light sample added.
+    before: Vec3,
+    own: Vec3,
+    /// The path's vertex count after it (its light sample's shadow ray comes with it).
+    depth: u32,
+}
+
+impl Trail {
+    /// The most vertices recorded per path.
+    pub const MAX: usize = 8;
+
+    /// Records the vertex at `p` that left along `d` drawn with density `pdf`, its throughput
+    /// after being `beta` and the path's radiance `l` and depth `depth` after it.
+    #[inline]
+    pub fn push(&mut self, p: Vec3, d: Vec3, pdf: f32, beta: Vec3, l: Vec3, depth: u32) {
+        if (self.len as usize) < Self::MAX {
+            let v = TrailVertex { p: p.into(), d, pdf, beta, before: l, own: Vec3::ZERO, depth };
+            self.v[self.len as usize] = v;
+            self.len += 1;
+        }
+    }
+
+    /// Light `c` that the path's vertex `depth` found directly (by its shadow ray, or where
+    /// its next ray met an emitter or left the scene): the last recorded vertex's own when it
+    /// is that vertex.
+    #[inline]
+    pub fn direct(&mut self, depth: u32, c: Vec3) {
+        if let Some(v) = self.v[..self.len as usize].last_mut()
+            && v.depth == depth
+        {
+            v.own += c;
+        }
+    }
+
+    /// The records of the ended path whose radiance is `l`, appended to `out`; the trail is
+    /// emptied.
+    pub fn finish(&mut self, l: Vec3, out: &mut Vec<pathwave_engine::guiding::Record>) {
+        for v in &self.v[..self.len as usize] {
+            let back = l - v.before - v.own;
+            let div = |a: f32, b: f32| if b > 0.0 { a / b } else { 0.0 };
+            let li = Vec3::new(div(back.x, v.beta.x), div(back.y, v.beta.y), div(back.z, v.beta.z));
+            let energy = pathwave_engine::math::luminance(li).max(0.0) / v.pdf;
+            out.push(pathwave_engine::guiding::Record {
+                p: v.p,
+                square: pathwave_engine::guiding::to_square(v.d.into()),
+                energy: if energy.is_finite() { energy } else { 0.0 },
+            });
+        }
+        self.len = 0;
+    }
+}
