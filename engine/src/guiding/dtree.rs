@@ -51,6 +51,12 @@ pub struct Flat {
     /// halves along y in each half along x.
     low_x: Vec<f32>,
     low_y: Vec<f32>,
+    /// The inverses of those shares and of their complements, which stretch a number that
+    /// chose a half back to [0, 1) (a multiply rather than a division at each level): two a
+    /// node along x (lower, upper half), four along y (lower and upper in the lower half
+    /// along x, then in the upper).
+    stretch_x: Vec<f32>,
+    stretch_y: Vec<f32>,
 }
 
 impl Flat {
@@ -66,6 +72,11 @@ impl Flat {
             child: nodes.iter().flat_map(|n| n.child).collect(),
             low_x: nodes.iter().map(|n| n.low_x).collect(),
             low_y: nodes.iter().flat_map(|n| n.low_y).collect(),
+            stretch_x: nodes.iter().flat_map(|n| [1.0 / n.low_x, 1.0 / (1.0 - n.low_x)]).collect(),
+            stretch_y: (nodes.iter())
+                .flat_map(|n| n.low_y.map(|y| [1.0 / y, 1.0 / (1.0 - y)]))
+                .flatten()
+                .collect(),
         }
     }
 }
@@ -253,6 +264,7 @@ pub fn sample_square_lanes<const N: usize>(
     // As in `pdf_square_lanes`: masked indices into power-of-two arrays.
     let (factor, child) = (&nodes.factor[..], &nodes.child[..nodes.factor.len()]);
     let (low_xs, low_ys) = (&nodes.low_x[..factor.len() / 4], &nodes.low_y[..factor.len() / 2]);
+    let (stretch_x, stretch_y) = (&nodes.stretch_x[..factor.len() / 2], &nodes.stretch_y[..factor.len()]);
     assert!(factor.len().is_power_of_two(), "a power-of-two array of nodes");
     let mask = factor.len() - 1;
     for _ in 0..MAX_LEVELS {
@@ -262,10 +274,13 @@ pub fn sample_square_lanes<const N: usize>(
             // The half along x in proportion to its energy, then the half along y within it.
             let low_x = low_xs[m & (mask >> 2)];
             let hx = ux[l] >= low_x;
-            let vx = if hx { (ux[l] - low_x) / (1.0 - low_x) } else { ux[l] / low_x }.clamp(0.0, BELOW_ONE);
-            let low_y = low_ys[(2 * m + hx as usize) & (mask >> 1)];
+            let sx = stretch_x[(2 * m + hx as usize) & (mask >> 1)];
+            let vx = ((ux[l] - if hx { low_x } else { 0.0 }) * sx).clamp(0.0, BELOW_ONE);
+            let iy = 2 * m + hx as usize;
+            let low_y = low_ys[iy & (mask >> 1)];
             let hy = uy[l] >= low_y;
-            let vy = if hy { (uy[l] - low_y) / (1.0 - low_y) } else { uy[l] / low_y }.clamp(0.0, BELOW_ONE);
+            let sy = stretch_y[(2 * iy + hy as usize) & mask];
+            let vy = ((uy[l] - if hy { low_y } else { 0.0 }) * sy).clamp(0.0, BELOW_ONE);
             let k = (4 * m + (hx as usize | (hy as usize) << 1)) & mask;
             let (f, c) = (factor[k], child[k]);
             let half = side[l] * 0.5;
