@@ -6,10 +6,9 @@
 
 use crate::lambert_vertex::{
     BSDF_SHARE, LANES, LambertIn, LambertInLanes, LambertOut, LambertOutLanes, cosine_about, light_part_with,
-    mixture,
+    mixture, scatter_out,
 };
-use crate::path;
-use crate::plain::{dot, offset, sel3};
+use crate::plain::{dot, sel3};
 use glam::Vec3;
 use pathwave_engine::guiding::Guide;
 use std::f32::consts::FRAC_1_PI;
@@ -76,8 +75,8 @@ pub fn lambert_guided(guide: &Guide, i: &LambertIn) -> Option<LambertOut> {
 /// next direction and `g_d` the guide's density of it.
 #[inline(always)]
 fn guided(i: &LambertIn, g_light: f32, d: Vec3, g_d: f32) -> LambertOut {
-    let (p, n, ng) = (i.p, i.n, i.ng);
-    let (shadow, so, contribution) = light_part_with(i, |c, _| mixture(c, g_light));
+    let (n, ng) = (i.n, i.ng);
+    let light = light_part_with(i, |c, _| mixture(c, g_light));
     let co = dot(i.wo, n);
     let nf = sel3(co < 0.0, -n, n);
     let cos = dot(d, nf);
@@ -85,22 +84,7 @@ fn guided(i: &LambertIn, g_light: f32, d: Vec3, g_d: f32) -> LambertOut {
     let pdf = mixture(c, g_d);
     let (dg, ds) = (dot(d, ng), dot(d, n));
     let leaves = cos > 0.0 && ((ds > 0.0 && co > 0.0) || dg * ds > 0.0);
-    let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
-    let beta = i.beta * i.albedo * (c / pdf);
-    let (rr_drawn, q) = path::roulette_rule(i.rr_on, beta, i.eta_scale);
-    let survive = !(rr_drawn && i.u_rr < q);
-    let beta = if rr_drawn { beta / (1.0 - q) } else { beta };
-    LambertOut {
-        shadow,
-        so,
-        sd: i.target - so,
-        contribution,
-        alive: pdf > 0.0 && survive && leaves,
-        o,
-        d,
-        beta,
-        pdf,
-    }
+    scatter_out(i, light, (d, ds, pdf, leaves), i.beta * i.albedo * (c / pdf))
 }
 
 /// The Lambertian vertices a training path recorded (at most [`Trail::MAX`], the first

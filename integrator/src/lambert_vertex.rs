@@ -138,7 +138,7 @@ pub fn environment_shadow(
 /// The kernel.
 #[inline(always)]
 pub fn lambert(i: &LambertIn) -> LambertOut {
-    let (p, n, ng) = (i.p, i.n, i.ng);
+    let (n, ng) = (i.n, i.ng);
     // Light sample.
     let (shadow, so, contribution) = light_part(i);
     let co = dot(i.wo, n);
@@ -150,9 +150,21 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     // rounding).
     let (dg, ds) = (dot(d, ng), dot(d, n));
     let leaves = (ds > 0.0 && co > 0.0) || dg * ds > 0.0;
-    let o = offset(p, i.err, sel3(ds > 0.0, ng, -ng));
-    // Russian roulette.
-    let beta = i.beta * i.albedo;
+    scatter_out(i, (shadow, so, contribution), (d, ds, pdf, leaves), i.beta * i.albedo)
+}
+
+/// The kernel's last steps, shared with the guided kernel ([`crate::guided`]): the next ray's
+/// origin on the side of `d` (`ds`: its cosine with the shading normal), drawn with density
+/// `pdf` and leaving (`leaves`) or not, Russian roulette on the throughput `beta` after the
+/// BSDF's weight, and the outputs with the light sample's `(shadow, origin, contribution)`.
+#[inline(always)]
+pub(crate) fn scatter_out(
+    i: &LambertIn,
+    (shadow, so, contribution): (bool, Vec3, Vec3),
+    (d, ds, pdf, leaves): (Vec3, f32, f32, bool),
+    beta: Vec3,
+) -> LambertOut {
+    let o = offset(i.p, i.err, sel3(ds > 0.0, i.ng, -i.ng));
     let (rr_drawn, q) = path::roulette_rule(i.rr_on, beta, i.eta_scale);
     let survive = !(rr_drawn && i.u_rr < q);
     let beta = if rr_drawn { beta / (1.0 - q) } else { beta };
