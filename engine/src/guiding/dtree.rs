@@ -37,7 +37,6 @@ impl Node {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DTree {
     nodes: Vec<Node>,
-    flat: Flat,
 }
 
 /// The density factors and children of an array of nodes, four a node (quadrant `q` of node
@@ -129,7 +128,7 @@ impl DTree {
         if !(total > 0.0 && total.is_finite()) {
             return DTree::default();
         }
-        let mut tree = DTree { nodes: vec![Node::default()], flat: Flat::default() };
+        let mut tree = DTree { nodes: vec![Node::default()] };
         // (node, its points, its corner, its side, its depth)
         let mut stack = vec![(0usize, points.to_vec(), Vec2::ZERO, 1.0f32, 1u32)];
         while let Some((n, pts, corner, side, depth)) = stack.pop() {
@@ -155,9 +154,6 @@ impl DTree {
             // A node holds energy (its parent split it for its share of the total).
             tree.nodes[n] = Node::of(sum, child);
         }
-        // Padded to a power of two, which the walks' index masks need.
-        tree.nodes.resize(tree.nodes.len().next_power_of_two(), Node::default());
-        tree.flat = Flat::of(&tree.nodes);
         tree
     }
 
@@ -167,7 +163,7 @@ impl DTree {
         self.nodes.is_empty()
     }
 
-    /// Nodes in the tree (padded to a power of two).
+    /// Nodes in the tree.
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
@@ -178,37 +174,6 @@ impl DTree {
         self.nodes
             .iter()
             .map(move |n| Node { child: n.child.map(|c| if c == 0 { 0 } else { c + first }), ..*n })
-    }
-
-    /// The density over the square at `s` (0 for an empty tree).
-    #[inline]
-    pub fn pdf_square(&self, s: Vec2) -> f32 {
-        if self.nodes.is_empty() {
-            return 0.0;
-        }
-        pdf_square_lanes::<1>(&self.flat, &[0], &[[s.x], [s.y]])[0]
-    }
-
-    /// The density in solid angle of the direction `d` (unit).
-    #[inline]
-    pub fn pdf(&self, d: Vec3A) -> f32 {
-        self.pdf_square(to_square(d)) * SQUARE_TO_SPHERE
-    }
-
-    /// A point of the square drawn from the tree's density with the numbers `u` (in [0, 1)),
-    /// and its density over the square. The tree must not be empty.
-    #[inline]
-    pub fn sample_square(&self, u: Vec2) -> (Vec2, f32) {
-        let (s, pdf) = sample_square_lanes::<1>(&self.flat, &[0], &[[u.x], [u.y]]);
-        (Vec2::new(s[0][0], s[1][0]), pdf[0])
-    }
-
-    /// A unit direction drawn from the tree's density with the numbers `u`, and its density in
-    /// solid angle. The tree must not be empty.
-    #[inline]
-    pub fn sample(&self, u: Vec2) -> (Vec3A, f32) {
-        let (s, pdf) = self.sample_square(u);
-        (from_square(s), pdf * SQUARE_TO_SPHERE)
     }
 }
 
@@ -317,6 +282,30 @@ mod tests {
     use super::*;
     use crate::testing::uniform;
 
+    /// A tree's walks one point at a time, on its own padded arrays.
+    struct Walks(Flat);
+
+    impl Walks {
+        fn of(t: &DTree) -> Walks {
+            let mut nodes = t.nodes.clone();
+            nodes.resize(nodes.len().next_power_of_two(), Node::default());
+            Walks(Flat::of(&nodes))
+        }
+
+        fn pdf_square(&self, s: Vec2) -> f32 {
+            pdf_square_lanes::<1>(&self.0, &[0], &[[s.x], [s.y]])[0]
+        }
+
+        fn pdf(&self, d: Vec3A) -> f32 {
+            self.pdf_square(to_square(d)) * SQUARE_TO_SPHERE
+        }
+
+        fn sample_square(&self, u: Vec2) -> (Vec2, f32) {
+            let (s, pdf) = sample_square_lanes::<1>(&self.0, &[0], &[[u.x], [u.y]]);
+            (Vec2::new(s[0][0], s[1][0]), pdf[0])
+        }
+    }
+
     /// Points clustered about `(0.7, 0.2)` and spread over the square, energies uneven.
     fn points(n: usize) -> Vec<(Vec2, f32)> {
         let mut u = uniform(7);
@@ -345,8 +334,9 @@ mod tests {
 
     #[test]
     fn density_integrates_to_one_and_follows_energy() {
-        let t = DTree::build(&points(20_000), Refine::DEFAULT);
-        assert!(t.len() > 10, "the cluster refines: {} nodes", t.len());
+        let tree = DTree::build(&points(20_000), Refine::DEFAULT);
+        assert!(tree.len() > 10, "the cluster refines: {} nodes", tree.len());
+        let t = Walks::of(&tree);
         // Midpoint rule on a 512^2 grid, finer than the deepest leaves the cluster reaches.
         let n = 512;
         let mut total = 0.0f64;
@@ -364,7 +354,7 @@ mod tests {
 
     #[test]
     fn samples_have_the_density_evaluated() {
-        let t = DTree::build(&points(20_000), Refine::DEFAULT);
+        let t = Walks::of(&DTree::build(&points(20_000), Refine::DEFAULT));
         let mut u = uniform(11);
         // A histogram of samples against the density's integral over its cells.
         let n = 16;
