@@ -42,9 +42,9 @@ pub fn train(scene: &RenderScene, opts: Options, passes: u32) -> Option<Arc<Guid
         let (_, _, records) = wavefront::render_training(&s, opts, 0..spp, &|_, _| {});
         guide = learn(&records, spp).map(Arc::new);
         if let Some(g) = &guide {
-            let (cells, nodes) = g.size();
+            let (cells, learned) = g.size();
             tracing::info!(
-                "guide pass {k}: {spp} spp, {} records, {cells} cells, {nodes} directional nodes",
+                "guide pass {k}: {spp} spp, {} records, {cells} cells, {learned} with directions",
                 records.len()
             );
         }

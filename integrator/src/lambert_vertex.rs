@@ -9,7 +9,6 @@ use crate::path::{self, PathState, ShadowRay, power_heuristic};
 use crate::plain::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler, SamplerLanes};
 use glam::{Vec2, Vec3, Vec3A};
-use pathwave_engine::guiding::Guide;
 use pathwave_engine::math::Ray;
 use pathwave_engine::math::disk_branch_free;
 use pathwave_engine::render_scene::RenderScene;
@@ -76,25 +75,24 @@ pub struct LambertOut {
     pub beta: Vec3,
     /// Density of the sampled direction.
     pub pdf: f32,
+    /// The density that MIS weighs the direction with where it meets a light: the BSDF's own
+    /// (cosine-weighted), which is `pdf` but at a guided vertex ([`crate::guided`]). Any
+    /// densities give weights that sum to one over the two strategies; the guide learns no
+    /// light that light sampling finds, so its share there is small.
+    pub mis_pdf: f32,
 }
 
 /// The light sample's part of the kernel: whether it makes a shadow ray, the ray's origin
-/// and its contribution if unoccluded.
+/// and its contribution if unoccluded. Its MIS weight reads the BSDF's cosine-weighted
+/// density, at a guided vertex too ([`LambertOut::mis_pdf`]).
 #[inline(always)]
-fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
-    light_part_with(i, |c, _| c)
-}
-
-/// [`light_part`] where directions are drawn with the density `pdf(c, wi)` of the direction
-/// `wi` (`c`: the BSDF's cosine-weighted density there, which the kernel draws with).
-#[inline(always)]
-pub(crate) fn light_part_with(i: &LambertIn, pdf: impl FnOnce(f32, Vec3) -> f32) -> (bool, Vec3, Vec3) {
+pub(crate) fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
     let (p, n, ng) = (i.p, i.n, i.ng);
     let wi = i.wi;
     let (co, ci) = (dot(i.wo, n), dot(wi, n));
     let c = ci.abs() * FRAC_1_PI;
     let f = i.albedo * c;
-    let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { pdf(c, wi) });
+    let w = power_heuristic(i.pdf_light, if i.delta_light { 0.0 } else { c });
     let contribution = i.beta * (f * i.le * (w / i.pdf_light));
     // The light must lie on wo's side of the shading normal, and leaves from that side: on
     // the outer side (ci > 0: ng is on the shading normal's side) whatever the facet says, on
@@ -109,13 +107,7 @@ pub(crate) fn light_part_with(i: &LambertIn, pdf: impl FnOnce(f32, Vec3) -> f32)
 /// (`LightTable::environment_apart`) at the vertex of inputs `i` (its light sample replaced),
 /// with the numbers `u`: the kernel's light part, one path at a time, in both integrators.
 #[inline]
-pub fn environment_shadow(
-    scene: &RenderScene,
-    i: &LambertIn,
-    time: f32,
-    u: Vec2,
-    guide: Option<(&Guide, u32)>,
-) -> Option<ShadowRay> {
+pub fn environment_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2) -> Option<ShadowRay> {
     let lp = path::environment_light(scene, i.p.into(), u)?;
     let i = LambertIn {
         wi: lp.wi.into(),
@@ -125,10 +117,7 @@ pub fn environment_shadow(
         target: lp.target.into(),
         ..*i
     };
-    let (shadow, so, contribution) = match guide {
-        Some((g, cell)) => light_part_with(&i, |c, wi| mixture(c, g.pdf(cell, wi.into()))),
-        None => light_part(&i),
-    };
+    let (shadow, so, contribution) = light_part(&i);
     shadow.then(|| ShadowRay {
         ray: Ray { origin: so.into(), dir: (i.target - so).into(), time },
         contribution,
@@ -150,18 +139,19 @@ pub fn lambert(i: &LambertIn) -> LambertOut {
     // rounding).
     let (dg, ds) = (dot(d, ng), dot(d, n));
     let leaves = (ds > 0.0 && co > 0.0) || dg * ds > 0.0;
-    scatter_out(i, (shadow, so, contribution), (d, ds, pdf, leaves), i.beta * i.albedo)
+    scatter_out(i, (shadow, so, contribution), (d, ds, pdf, pdf, leaves), i.beta * i.albedo)
 }
 
 /// The kernel's last steps, shared with the guided kernel ([`crate::guided`]): the next ray's
 /// origin on the side of `d` (`ds`: its cosine with the shading normal), drawn with density
-/// `pdf` and leaving (`leaves`) or not, Russian roulette on the throughput `beta` after the
-/// BSDF's weight, and the outputs with the light sample's `(shadow, origin, contribution)`.
+/// `pdf`, weighed in MIS with `mis_pdf` and leaving (`leaves`) or not, Russian roulette on the
+/// throughput `beta` after the BSDF's weight, and the outputs with the light sample's
+/// `(shadow, origin, contribution)`.
 #[inline(always)]
 pub(crate) fn scatter_out(
     i: &LambertIn,
     (shadow, so, contribution): (bool, Vec3, Vec3),
-    (d, ds, pdf, leaves): (Vec3, f32, f32, bool),
+    (d, ds, pdf, mis_pdf, leaves): (Vec3, f32, f32, f32, bool),
     beta: Vec3,
 ) -> LambertOut {
     let o = offset(i.p, i.err, sel3(ds > 0.0, i.ng, -i.ng));
@@ -178,18 +168,8 @@ pub(crate) fn scatter_out(
         d,
         beta,
         pdf,
+        mis_pdf,
     }
-}
-
-/// Where a guide was learned ([`crate::guided`]), the share of directions drawn from the BSDF
-/// (Müller et al.'s 0.5); the rest come from the guide.
-pub const BSDF_SHARE: f32 = 0.5;
-
-/// The density of a guided vertex's mixture for a direction where the BSDF's (cosine-weighted)
-/// density is `c` and the guide's `g`.
-#[inline(always)]
-pub fn mixture(c: f32, g: f32) -> f32 {
-    BSDF_SHARE * c + (1.0 - BSDF_SHARE) * g
 }
 
 /// A cosine-weighted direction about the unit normal `nf` for the numbers `u`, and its cosine.
@@ -453,7 +433,7 @@ pub struct Bounce<'a> {
     pub beta: &'a mut Vec3,
     /// The last scattering was a delta lobe.
     pub delta: &'a mut bool,
-    /// BSDF pdf of the last scattering.
+    /// The density MIS weighs the last scattering with ([`LambertOut::mis_pdf`]).
     pub prev_pdf: &'a mut f32,
     /// Last scattering point.
     pub prev_p: &'a mut Vec3A,
@@ -474,7 +454,7 @@ pub fn scattered(p: Vec3, n: Vec3, depth_after: u32, o: &LambertOut, st: Bounce)
     }
     *st.beta = o.beta;
     *st.delta = false;
-    *st.prev_pdf = o.pdf;
+    *st.prev_pdf = o.mis_pdf;
     *st.prev_p = p.into();
     *st.prev_n = n.into();
     *st.depth = depth_after;
@@ -548,6 +528,7 @@ lanes!(pub LambertInLanes for LambertIn {
 
 lanes!(pub LambertOutLanes for LambertOut {
     shadow: bool, so: v3, sd: v3, contribution: v3, alive: bool, o: v3, d: v3, beta: v3, pdf: f32,
+    mis_pdf: f32,
 });
 
 /// Runs the kernel on all lanes.

@@ -226,17 +226,12 @@ pub fn radiance_witnessed(
                         ray.time,
                         &u,
                     );
-                    let guided = scene.guide.as_deref().and_then(|g| {
-                        crate::guided::lambert_guided(g, &input).map(|o| (o, (g, g.cell(hit.surface.p))))
-                    });
-                    let out = guided.map_or_else(|| lambert_vertex::lambert(&input), |(o, _)| o);
-                    let environment = lambert_vertex::environment_shadow(
-                        scene,
-                        &input,
-                        ray.time,
-                        u.environment,
-                        guided.map(|(_, cell)| cell),
-                    );
+                    let out = match scene.guide.as_deref() {
+                        Some(g) => crate::guided::lambert_guided(g, &input),
+                        None => lambert_vertex::lambert(&input),
+                    };
+                    let environment =
+                        lambert_vertex::environment_shadow(scene, &input, ray.time, u.environment);
                     let (light, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time);
                     (path::Shadows { light, environment }, next)
                 }

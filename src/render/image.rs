@@ -220,7 +220,7 @@ pub fn render_image(
             if !how.quiet {
                 let size = guide.as_ref().map_or((0, 0), |g| g.size());
                 eprintln!(
-                    "guide learned in {:.2} s: {} cells, {} directional nodes",
+                    "guide learned in {:.2} s: {} cells, {} with directions",
                     started.elapsed().as_secs_f64(),
                     size.0,
                     size.1

@@ -5,14 +5,13 @@
 
 use glam::{Vec2, Vec3A};
 
-/// A node: its quadrants' shares of its energy as density factors (4 times the share: a
-/// quadrant covers a quarter of the node), the shares of its lower half along x and of the
-/// lower halves along y in each half along x (for sampling), and its children (0: the quadrant
-/// is a leaf). Quadrant `q` covers `x` in its lower (`q & 1 == 0`) or upper half and `y` in its
-/// lower (`q & 2 == 0`) or upper half.
+/// A node: the share of its energy in its lower half along x, the shares of the lower halves
+/// along y in each half along x, and its children (0: the quadrant is a leaf). Quadrant `q`
+/// covers `x` in its lower (`q & 1 == 0`) or upper half and `y` in its lower (`q & 2 == 0`) or
+/// upper half; its density factor (its share of the energy over its quarter of the area) is 4
+/// times the product of its shares along x and y.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Node {
-    factor: [f32; 4],
     low_x: f32,
     low_y: [f32; 2],
     child: [u32; 4],
@@ -23,12 +22,7 @@ impl Node {
     fn of(s: [f32; 4], child: [u32; 4]) -> Node {
         let total = s[0] + s[1] + s[2] + s[3];
         let share = |a: f32, b: f32| if a + b > 0.0 { a / (a + b) } else { 0.5 };
-        Node {
-            factor: s.map(|x| 4.0 * x / total),
-            low_x: (s[0] + s[2]) / total,
-            low_y: [share(s[0], s[2]), share(s[1], s[3])],
-            child,
-        }
+        Node { low_x: (s[0] + s[2]) / total, low_y: [share(s[0], s[2]), share(s[1], s[3])], child }
     }
 }
 
@@ -37,47 +31,6 @@ impl Node {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DTree {
     nodes: Vec<Node>,
-}
-
-/// The density factors and children of an array of nodes, four a node (quadrant `q` of node
-/// `n` at `4 n + q`), as [`pdf_square_lanes`] reads them: plain arrays, so that its loop over
-/// lanes gathers from them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Flat {
-    factor: Vec<f32>,
-    child: Vec<u32>,
-    /// Per node, the share of its lower half along x; two a node, the shares of the lower
-    /// halves along y in each half along x.
-    low_x: Vec<f32>,
-    low_y: Vec<f32>,
-    /// The inverses of those shares and of their complements, which stretch a number that
-    /// chose a half back to [0, 1) (a multiply rather than a division at each level): two a
-    /// node along x (lower, upper half), four along y (lower and upper in the lower half
-    /// along x, then in the upper).
-    stretch_x: Vec<f32>,
-    stretch_y: Vec<f32>,
-}
-
-impl Flat {
-    /// Nodes held (a power of two).
-    pub fn len(&self) -> usize {
-        self.low_x.len()
-    }
-
-    /// The factors and children of `nodes` (a power of two of them).
-    pub fn of(nodes: &[Node]) -> Flat {
-        Flat {
-            factor: nodes.iter().flat_map(|n| n.factor).collect(),
-            child: nodes.iter().flat_map(|n| n.child).collect(),
-            low_x: nodes.iter().map(|n| n.low_x).collect(),
-            low_y: nodes.iter().flat_map(|n| n.low_y).collect(),
-            stretch_x: nodes.iter().flat_map(|n| [1.0 / n.low_x, 1.0 / (1.0 - n.low_x)]).collect(),
-            stretch_y: (nodes.iter())
-                .flat_map(|n| n.low_y.map(|y| [1.0 / y, 1.0 / (1.0 - y)]))
-                .flatten()
-                .collect(),
-        }
-    }
 }
 
 /// How a tree refines: a quadrant holding more than `fraction` of the energy, reached by at
@@ -168,143 +121,55 @@ impl DTree {
         self.nodes.len()
     }
 
-    /// The tree's nodes, their children renumbered from `first` (to lie in one array with
-    /// other trees' from there).
-    pub(super) fn nodes_from(&self, first: u32) -> impl Iterator<Item = Node> + '_ {
-        self.nodes
-            .iter()
-            .map(move |n| Node { child: n.child.map(|c| if c == 0 { 0 } else { c + first }), ..*n })
+    /// The tree's density integrated over the bins of a `side` x `side` grid on the square
+    /// (`side` a power of two), bin `(i, j)` (x in `[i, i + 1) / side`, y in `[j, j + 1) / side`)
+    /// at `i * side + j`: the shares of the energy, which sum to 1 (empty: all 0).
+    pub fn masses(&self, side: usize) -> Vec<f64> {
+        assert!(side.is_power_of_two(), "a power-of-two grid");
+        let mut m = vec![0.0f64; side * side];
+        if self.is_empty() {
+            return m;
+        }
+        // (node, its corner and side in bins, its mass)
+        let mut stack = vec![(0usize, (0.0f64, 0.0f64), side as f64, 1.0f64)];
+        while let Some((n, (x, y), size, mass)) = stack.pop() {
+            let node = &self.nodes[n];
+            let half = size * 0.5;
+            for q in 0..4 {
+                let (hx, hy) = (q & 1 == 1, q & 2 == 2);
+                let sx = if hx { 1.0 - node.low_x as f64 } else { node.low_x as f64 };
+                let sy = node.low_y[hx as usize] as f64;
+                let sy = if hy { 1.0 - sy } else { sy };
+                let (qx, qy) = (x + if hx { half } else { 0.0 }, y + if hy { half } else { 0.0 });
+                let mq = mass * sx * sy;
+                if node.child[q] != 0 && half > 1.0 {
+                    stack.push((node.child[q] as usize, (qx, qy), half, mq));
+                } else if half >= 1.0 {
+                    // A leaf (or a node as large as a bin) spreads evenly over its bins.
+                    let k = half as usize;
+                    let (i0, j0) = (qx as usize, qy as usize);
+                    for i in i0..i0 + k {
+                        for j in j0..j0 + k {
+                            m[i * side + j] += mq / (k * k) as f64;
+                        }
+                    }
+                } else {
+                    // Within one bin.
+                    m[qx as usize * side + qy as usize] += mq;
+                }
+            }
+        }
+        m
     }
 }
 
-/// The deepest a walk down a tree goes ([`Refine::max_depth`] is at most this).
+/// The deepest a tree refines ([`Refine::max_depth`] is at most this: its corners stay exact in `f32`).
 pub const MAX_LEVELS: u32 = 20;
-
-/// The densities over the square at the points `s` (per lane: `s[0]` the x, `s[1]` the y) of
-/// the trees whose roots in `nodes` are `root`. The lanes walk down together, each on its own
-/// tree, so that their loads overlap; each lane's numbers are those of a walk on its own.
-#[inline(always)]
-pub fn pdf_square_lanes<const N: usize>(nodes: &Flat, root: &[u32; N], s: &[[f32; N]; 2]) -> [f32; N] {
-    let (mut n, mut x, mut y) = (*root, s[0], s[1]);
-    let (mut pdf, mut live) = ([1.0f32; N], [true; N]);
-    // Indices within the (power-of-two) arrays by construction: the mask spares the bounds
-    // checks, so that the loop over lanes may gather.
-    let (factor, child) = (&nodes.factor[..], &nodes.child[..nodes.factor.len()]);
-    assert!(factor.len().is_power_of_two(), "a power-of-two array of nodes");
-    let mask = factor.len() - 1;
-    for _ in 0..MAX_LEVELS {
-        let mut any = false;
-        for l in 0..N {
-            let (hx, hy) = (x[l] >= 0.5, y[l] >= 0.5);
-            let k = (n[l] as usize * 4 + (hx as usize | (hy as usize) << 1)) & mask;
-            let (f, c) = (factor[k], child[k]);
-            pdf[l] = if live[l] { pdf[l] * f } else { pdf[l] };
-            let go = live[l] && c != 0;
-            x[l] = if go { 2.0 * x[l] - hx as u32 as f32 } else { x[l] };
-            y[l] = if go { 2.0 * y[l] - hy as u32 as f32 } else { y[l] };
-            n[l] = if go { c } else { n[l] };
-            live[l] = go;
-            any |= go;
-        }
-        if !any {
-            break;
-        }
-    }
-    pdf
-}
-
-/// Points of the square drawn with the numbers `u` (in [0, 1)) from the trees whose roots in
-/// `nodes` are `root`, and their densities over the square; the lanes walk down together as in
-/// [`pdf_square_lanes`].
-#[inline(always)]
-pub fn sample_square_lanes<const N: usize>(
-    nodes: &Flat,
-    root: &[u32; N],
-    u: &[[f32; N]; 2],
-) -> ([[f32; N]; 2], [f32; N]) {
-    const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
-    let (mut n, mut ux, mut uy) = (*root, u[0], u[1]);
-    let (mut pdf, mut live) = ([1.0f32; N], [true; N]);
-    let (mut cx, mut cy, mut side) = ([0.0f32; N], [0.0f32; N], [1.0f32; N]);
-    // As in `pdf_square_lanes`: masked indices into power-of-two arrays.
-    let (factor, child) = (&nodes.factor[..], &nodes.child[..nodes.factor.len()]);
-    let (low_xs, low_ys) = (&nodes.low_x[..factor.len() / 4], &nodes.low_y[..factor.len() / 2]);
-    let (stretch_x, stretch_y) = (&nodes.stretch_x[..factor.len() / 2], &nodes.stretch_y[..factor.len()]);
-    assert!(factor.len().is_power_of_two(), "a power-of-two array of nodes");
-    let mask = factor.len() - 1;
-    for _ in 0..MAX_LEVELS {
-        let mut any = false;
-        for l in 0..N {
-            let m = n[l] as usize;
-            // The half along x in proportion to its energy, then the half along y within it.
-            let low_x = low_xs[m & (mask >> 2)];
-            let hx = ux[l] >= low_x;
-            let sx = stretch_x[(2 * m + hx as usize) & (mask >> 1)];
-            let vx = ((ux[l] - if hx { low_x } else { 0.0 }) * sx).clamp(0.0, BELOW_ONE);
-            let iy = 2 * m + hx as usize;
-            let low_y = low_ys[iy & (mask >> 1)];
-            let hy = uy[l] >= low_y;
-            let sy = stretch_y[(2 * iy + hy as usize) & mask];
-            let vy = ((uy[l] - if hy { low_y } else { 0.0 }) * sy).clamp(0.0, BELOW_ONE);
-            let k = (4 * m + (hx as usize | (hy as usize) << 1)) & mask;
-            let (f, c) = (factor[k], child[k]);
-            let half = side[l] * 0.5;
-            let on = live[l];
-            ux[l] = if on { vx } else { ux[l] };
-            uy[l] = if on { vy } else { uy[l] };
-            pdf[l] = if on { pdf[l] * f } else { pdf[l] };
-            cx[l] = if on && hx { cx[l] + half } else { cx[l] };
-            cy[l] = if on && hy { cy[l] + half } else { cy[l] };
-            side[l] = if on { half } else { side[l] };
-            let go = on && c != 0;
-            n[l] = if go { c } else { n[l] };
-            live[l] = go;
-            any |= go;
-        }
-        if !any {
-            break;
-        }
-    }
-    // Rounding must not carry a point over its cell's far edges.
-    let mut s = [[0.0f32; N]; 2];
-    for l in 0..N {
-        let inside = |c: f32, u: f32| {
-            let (end, p) = (c + side[l], c + u * side[l]);
-            if p >= end { end.next_down() } else { p }
-        };
-        (s[0][l], s[1][l]) = (inside(cx[l], ux[l]), inside(cy[l], uy[l]));
-    }
-    (s, pdf)
-}
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::testing::uniform;
-
-    /// A tree's walks one point at a time, on its own padded arrays.
-    struct Walks(Flat);
-
-    impl Walks {
-        fn of(t: &DTree) -> Walks {
-            let mut nodes = t.nodes.clone();
-            nodes.resize(nodes.len().next_power_of_two(), Node::default());
-            Walks(Flat::of(&nodes))
-        }
-
-        fn pdf_square(&self, s: Vec2) -> f32 {
-            pdf_square_lanes::<1>(&self.0, &[0], &[[s.x], [s.y]])[0]
-        }
-
-        fn pdf(&self, d: Vec3A) -> f32 {
-            self.pdf_square(to_square(d)) * SQUARE_TO_SPHERE
-        }
-
-        fn sample_square(&self, u: Vec2) -> (Vec2, f32) {
-            let (s, pdf) = sample_square_lanes::<1>(&self.0, &[0], &[[u.x], [u.y]]);
-            (Vec2::new(s[0][0], s[1][0]), pdf[0])
-        }
-    }
 
     /// Points clustered about `(0.7, 0.2)` and spread over the square, energies uneven.
     fn points(n: usize) -> Vec<(Vec2, f32)> {
@@ -333,60 +198,33 @@ mod tests {
     }
 
     #[test]
-    fn density_integrates_to_one_and_follows_energy() {
-        let tree = DTree::build(&points(20_000), Refine::DEFAULT);
+    fn masses_sum_to_one_and_follow_the_energy() {
+        let pts = points(20_000);
+        let tree = DTree::build(&pts, Refine::DEFAULT);
         assert!(tree.len() > 10, "the cluster refines: {} nodes", tree.len());
-        let t = Walks::of(&tree);
-        // Midpoint rule on a 512^2 grid, finer than the deepest leaves the cluster reaches.
-        let n = 512;
-        let mut total = 0.0f64;
-        for i in 0..n {
-            for j in 0..n {
-                let s = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-                total += t.pdf_square(s) as f64;
-            }
+        for side in [1, 4, 32, 256] {
+            let m = tree.masses(side);
+            assert!((m.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{side}");
         }
-        assert!((total / (n * n) as f64 - 1.0).abs() < 1e-3, "{}", total / (n * n) as f64);
-        assert!(t.pdf_square(Vec2::new(0.705, 0.21)) > 100.0 * t.pdf_square(Vec2::new(0.2, 0.7)));
+        // At 32 a side, each bin holds about the energy of the points in it (the tree's leaves
+        // are finer than the bins where the points crowd, coarser where they are few).
+        let m = tree.masses(32);
+        let total: f64 = pts.iter().map(|p| p.1 as f64).sum();
+        let mut in_bins = vec![0.0f64; 32 * 32];
+        for (s, w) in &pts {
+            in_bins[(s.x * 32.0) as usize * 32 + (s.y * 32.0) as usize] += *w as f64 / total;
+        }
+        let cluster = (0.705 * 32.0) as usize * 32 + (0.21 * 32.0) as usize;
+        assert!((m[cluster] / in_bins[cluster] - 1.0).abs() < 0.05, "{} {}", m[cluster], in_bins[cluster]);
+        assert!(m[cluster] > 100.0 * m[(0.2 * 32.0) as usize * 32 + (0.7 * 32.0) as usize]);
+        // A finer grid splits a bin's mass among its bins.
+        let fine = tree.masses(64);
+        let (i, j) = (cluster / 32, cluster % 32);
+        let four: f64 =
+            [(0, 0), (0, 1), (1, 0), (1, 1)].iter().map(|(a, b)| fine[(2 * i + a) * 64 + 2 * j + b]).sum();
+        assert!((four - m[cluster]).abs() < 1e-12);
         assert!(DTree::build(&[], Refine::DEFAULT).is_empty());
         assert!(DTree::build(&[(Vec2::splat(0.3), 0.0)], Refine::DEFAULT).is_empty());
-    }
-
-    #[test]
-    fn samples_have_the_density_evaluated() {
-        let t = Walks::of(&DTree::build(&points(20_000), Refine::DEFAULT));
-        let mut u = uniform(11);
-        // A histogram of samples against the density's integral over its cells.
-        let n = 16;
-        let mut hist = vec![0u32; n * n];
-        let draws = 400_000;
-        for _ in 0..draws {
-            let (s, pdf) = t.sample_square(Vec2::new(u(), u()));
-            assert!((pdf / t.pdf_square(s) - 1.0).abs() < 1e-4, "{pdf} {}", t.pdf_square(s));
-            let d = from_square(s);
-            assert!((t.pdf(d) / (pdf * SQUARE_TO_SPHERE) - 1.0).abs() < 1e-2 || pdf < 1.0);
-            hist[(s.x * n as f32) as usize * n + (s.y * n as f32) as usize] += 1;
-        }
-        let m = 64;
-        for ci in 0..n {
-            for cj in 0..n {
-                let mut mass = 0.0f64;
-                for i in 0..m {
-                    for j in 0..m {
-                        let s = Vec2::new(
-                            (ci as f32 + (i as f32 + 0.5) / m as f32) / n as f32,
-                            (cj as f32 + (j as f32 + 0.5) / m as f32) / n as f32,
-                        );
-                        mass += t.pdf_square(s) as f64 / (m * m * n * n) as f64;
-                    }
-                }
-                let expected = mass * draws as f64;
-                let got = hist[ci * n + cj] as f64;
-                assert!(
-                    (got - expected).abs() <= 5.0 * expected.sqrt() + 0.01 * expected + 2.0,
-                    "{ci},{cj}: {got} {expected}"
-                );
-            }
-        }
+        assert!(DTree::default().masses(8).iter().all(|&x| x == 0.0));
     }
 }

@@ -5,13 +5,14 @@
 //!
 //! The spatial part is a binary tree over the scene's box, each node split at its middle along
 //! x, y and z in turn, refined where the training paths recorded many vertices; each leaf holds
-//! a [`DTree`] of the energy that arrived there by direction. Unlike Müller et al.'s, the tree
-//! is built at once from one pass's records (kept in memory), in their order: the guide is a
-//! function of the records, whatever thread recorded them.
+//! a [`DTree`] of the energy that arrived there by direction, which the render reads integrated
+//! over a grid of bins (`grid`). Unlike Müller et al.'s, the tree is built at once from one
+//! pass's records (kept in memory), in their order: the guide is a function of the records,
+//! whatever thread recorded them.
 
 mod dtree;
+mod grid;
 
-use dtree::Node as DNode;
 pub use dtree::{DTree, MAX_LEVELS, Refine, SQUARE_TO_SPHERE, from_square, to_square};
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
@@ -52,14 +53,6 @@ pub struct Record {
     pub energy: f32,
 }
 
-/// A node of the spatial tree: split along `axis` (0-2) with its two children at `child` and
-/// `child + 1`, or a leaf (`axis` 3) whose directional tree is `child`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Node {
-    axis: u8,
-    child: u32,
-}
-
 /// The learned distribution of incident light over the scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Guide {
@@ -67,12 +60,16 @@ pub struct Guide {
     lo: Vec3A,
     /// Its inverse extent per axis.
     inv_size: Vec3A,
-    nodes: Vec<Node>,
-    /// Each cell's directional tree: its root in `directions` ([`Guide::EMPTY`]: nothing was
-    /// learned there).
-    roots: Vec<u32>,
-    /// The nodes of every cell's directional tree, in one set of arrays.
-    directions: dtree::Flat,
+    /// The spatial tree's nodes, the root first. A node at depth `k` splits along the axis
+    /// `k % 3`: an inner one holds the first of its two children (the lower half, the upper
+    /// next to it), a leaf [`Self::LEAF`] and its cell's grid in `directions` ([`Guide::EMPTY`]:
+    /// nothing was learned there). Padded to a power of two.
+    nodes: Vec<u32>,
+    /// Leaves of the spatial tree (cells).
+    cells: usize,
+    /// Every cell's directions, as a grid (the first one uniform, which empty cells' lanes
+    /// read and ignore).
+    directions: grid::Grids,
 }
 
 /// How the spatial tree refines: a cell with more than `max_records` records splits, down to
@@ -96,61 +93,68 @@ impl Guide {
         directional: Refine,
     ) -> Guide {
         let size = (hi - lo).max(Vec3A::splat(1e-6));
-        let mut guide = Guide {
-            lo,
-            inv_size: size.recip(),
-            nodes: vec![],
-            roots: vec![],
-            directions: Default::default(),
-        };
-        // Leaves in the order they are made, with their records; built in parallel after.
-        let mut leaves: Vec<Vec<(Vec2, f32)>> = Vec::new();
-        // (node, its records' unit coordinates and indices, depth)
-        let unit: Vec<(Vec3A, u32)> =
+        let mut guide =
+            Guide { lo, inv_size: size.recip(), nodes: vec![0], cells: 0, directions: Default::default() };
+        // The records' unit coordinates and indices, partitioned in place node by node: a
+        // leaf's records are a range of them. Leaves are listed in the order they are made
+        // (their nodes, their ranges); their directional trees are built in parallel after.
+        let mut pts: Vec<(Vec3A, u32)> =
             records.iter().enumerate().map(|(k, r)| (guide.unit(Vec3A::from(r.p)), k as u32)).collect();
-        guide.nodes.push(Node { axis: 3, child: 0 });
-        let mut stack = vec![(0usize, unit, 0u32)];
-        while let Some((n, pts, depth)) = stack.pop() {
-            if pts.len() <= spatial.max_records || depth >= spatial.max_depth {
-                guide.nodes[n] = Node { axis: 3, child: leaves.len() as u32 };
-                let energy = |&(_, k): &(Vec3A, u32)| {
-                    let r = &records[k as usize];
-                    (r.square, if r.energy.is_finite() { r.energy.max(0.0) } else { 0.0 })
-                };
-                leaves.push(pts.iter().map(energy).collect());
+        let mut leaves: Vec<(usize, std::ops::Range<usize>)> = Vec::new();
+        // (node, its records, depth)
+        let mut stack = vec![(0usize, 0..pts.len(), 0u32)];
+        while let Some((n, range, depth)) = stack.pop() {
+            if range.len() <= spatial.max_records || depth >= spatial.max_depth {
+                leaves.push((n, range));
                 continue;
             }
             let axis = (depth % 3) as usize;
-            let (mut low, mut high) = (Vec::new(), Vec::new());
-            for (mut u, k) in pts {
-                let hi_side = u[axis] >= 0.5;
-                u[axis] = 2.0 * u[axis] - hi_side as u32 as f32;
-                if hi_side { high.push((u, k)) } else { low.push((u, k)) }
+            let part = &mut pts[range.clone()];
+            let mut low = 0;
+            for j in 0..part.len() {
+                let hi_side = part[j].0[axis] >= 0.5;
+                part[j].0[axis] = 2.0 * part[j].0[axis] - hi_side as u32 as f32;
+                if !hi_side {
+                    part.swap(low, j);
+                    low += 1;
+                }
             }
             let c = guide.nodes.len();
-            guide.nodes[n] = Node { axis: axis as u8, child: c as u32 };
-            guide.nodes.push(Node { axis: 3, child: 0 });
-            guide.nodes.push(Node { axis: 3, child: 0 });
-            stack.push((c + 1, high, depth + 1));
-            stack.push((c, low, depth + 1));
+            guide.nodes[n] = c as u32;
+            guide.nodes.extend([0, 0]);
+            let mid = range.start + low;
+            stack.push((c + 1, mid..range.end, depth + 1));
+            stack.push((c, range.start..mid, depth + 1));
         }
-        let trees: Vec<DTree> = leaves.par_iter().map(|pts| DTree::build(pts, directional)).collect();
-        let mut directions = Vec::new();
-        for t in &trees {
-            let first = directions.len() as u32;
-            guide.roots.push(if t.is_empty() { Self::EMPTY } else { first });
-            directions.extend(t.nodes_from(first));
+        let energy = |&(_, k): &(Vec3A, u32)| {
+            let r = &records[k as usize];
+            (r.square, if r.energy.is_finite() { r.energy.max(0.0) } else { 0.0 })
+        };
+        let trees: Vec<DTree> = leaves
+            .par_iter()
+            .map(|(_, range)| {
+                let points: Vec<(Vec2, f32)> = pts[range.clone()].iter().map(energy).collect();
+                DTree::build(&points, directional)
+            })
+            .collect();
+        let masses: Vec<Vec<f64>> = trees.par_iter().map(|t| t.masses(grid::SIDE)).collect();
+        guide.directions.push(&[1.0 / grid::BINS as f64; grid::BINS]);
+        for ((t, m), &(n, _)) in trees.iter().zip(&masses).zip(&leaves) {
+            guide.nodes[n] = if t.is_empty() { Self::EMPTY } else { Self::LEAF | guide.directions.push(m) };
         }
-        // Padded to powers of two, which the walks' index masks rely on.
-        directions.resize(directions.len().max(1).next_power_of_two(), DNode::default());
-        guide.directions = dtree::Flat::of(&directions);
+        assert!(guide.directions.len() < Self::LEAF as usize, "grids fit below the leaf mark");
+        guide.cells = trees.len();
+        // Padded to a power of two, which the walk's index mask relies on.
         let len = guide.nodes.len().next_power_of_two();
-        guide.nodes.resize(len, Node { axis: 3, child: 0 });
+        guide.nodes.resize(len, Self::EMPTY);
         guide
     }
 
     /// A cell where nothing was learned ([`Guide::cells`]).
     pub const EMPTY: u32 = u32::MAX;
+
+    /// The mark of a leaf among the spatial tree's nodes.
+    const LEAF: u32 = 1 << 31;
 
     /// `p`'s coordinates in the box, in [0, 1] on each axis.
     #[inline]
@@ -169,83 +173,68 @@ impl Guide {
             (u[0][l], u[1][l], u[2][l]) = (q.x, q.y, q.z);
         }
         let mut n = [0u32; N];
-        // Masked indices into the power-of-two array (no bounds checks in the lanes' loop).
+        // Masked indices into the power-of-two array (no bounds checks in the lanes' loop: it
+        // gathers).
         let nodes = &self.nodes[..];
         assert!(nodes.len().is_power_of_two(), "a power-of-two array of nodes");
         let mask = nodes.len() - 1;
-        for _ in 0..64 {
+        for depth in 0..64 {
+            // Every lane still walking is at this depth, so splits along the same axis.
+            let u = &mut u[depth % 3];
             let mut any = false;
             for l in 0..N {
-                let node = nodes[n[l] as usize & mask];
-                let inner = node.axis != 3;
-                let v = match node.axis {
-                    0 => u[0][l],
-                    1 => u[1][l],
-                    _ => u[2][l],
-                };
-                let hi_side = v >= 0.5;
-                let w = if inner { 2.0 * v - hi_side as u32 as f32 } else { v };
-                u[0][l] = if node.axis == 0 { w } else { u[0][l] };
-                u[1][l] = if node.axis == 1 { w } else { u[1][l] };
-                u[2][l] = if node.axis == 2 { w } else { u[2][l] };
-                n[l] = if inner { node.child + hi_side as u32 } else { n[l] };
+                let c = nodes[n[l] as usize & mask];
+                let inner = c & Self::LEAF == 0;
+                let hi_side = u[l] >= 0.5;
+                u[l] = if inner { 2.0 * u[l] - hi_side as u32 as f32 } else { u[l] };
+                n[l] = if inner { c + hi_side as u32 } else { n[l] };
                 any |= inner;
             }
             if !any {
                 break;
             }
         }
-        n.map(|n| self.roots[self.nodes[n as usize].child as usize])
+        n.map(|n| match nodes[n as usize & mask] {
+            Self::EMPTY => Self::EMPTY,
+            leaf => leaf & !Self::LEAF,
+        })
     }
 
-    /// The densities in solid angle of the unit directions `d` (per lane: `d[axis]`) in the
-    /// cells `root` ([`Self::cells`]); 0 in an empty cell.
+    /// Looks up the directions' grids of the cells `root` ([`Self::cells`]), lane by lane: a
+    /// lane that `draw`s draws a unit direction with the numbers `u` (in [0, 1)), the
+    /// others find the unit direction `d`. Returns the directions (drawn, or `d`) and the
+    /// densities in solid angle there (0 in an empty cell, where nothing is drawn).
     #[inline(always)]
-    pub fn pdf_lanes<const N: usize>(&self, root: &[u32; N], d: &[[f32; N]; 3]) -> [f32; N] {
-        let mut s = [[0.0f32; N]; 2];
-        let mut r = [0u32; N];
-        for l in 0..N {
-            let q = to_square(Vec3A::new(d[0][l], d[1][l], d[2][l]));
-            (s[0][l], s[1][l]) = (q.x, q.y);
-            r[l] = if root[l] == Self::EMPTY { 0 } else { root[l] };
-        }
-        let pdf = dtree::pdf_square_lanes(&self.directions, &r, &s);
-        std::array::from_fn(|l| if root[l] == Self::EMPTY { 0.0 } else { pdf[l] * SQUARE_TO_SPHERE })
-    }
-
-    /// Unit directions drawn with the numbers `u` (in [0, 1)) in the cells `root`, and their
-    /// densities in solid angle (meaningless in an empty cell).
-    #[inline(always)]
-    pub fn sample_lanes<const N: usize>(
+    pub fn lookup_lanes<const N: usize>(
         &self,
         root: &[u32; N],
+        draw: &[bool; N],
         u: &[[f32; N]; 2],
+        d: &[[f32; N]; 3],
     ) -> ([[f32; N]; 3], [f32; N]) {
-        let r = root.map(|r| if r == Self::EMPTY { 0 } else { r });
-        let (s, pdf) = dtree::sample_square_lanes(&self.directions, &r, u);
-        let mut d = [[0.0f32; N]; 3];
+        let mut at = [[0.0f32; N]; 2];
+        let (mut r, mut draws) = ([0u32; N], [false; N]);
+        for l in 0..N {
+            let q = to_square(Vec3A::new(d[0][l], d[1][l], d[2][l]));
+            let empty = root[l] == Self::EMPTY;
+            draws[l] = draw[l] && !empty;
+            (at[0][l], at[1][l]) = if draws[l] { (u[0][l], u[1][l]) } else { (q.x, q.y) };
+            r[l] = if empty { 0 } else { root[l] };
+        }
+        let (s, pdf) = self.directions.lookup_lanes(&r, &draws, &at);
+        let mut out = *d;
         for l in 0..N {
             let v = from_square(Vec2::new(s[0][l], s[1][l]));
-            (d[0][l], d[1][l], d[2][l]) = (v.x, v.y, v.z);
+            if draws[l] {
+                (out[0][l], out[1][l], out[2][l]) = (v.x, v.y, v.z);
+            }
         }
-        (d, pdf.map(|p| p * SQUARE_TO_SPHERE))
+        (out, std::array::from_fn(|l| if root[l] == Self::EMPTY { 0.0 } else { pdf[l] * SQUARE_TO_SPHERE }))
     }
 
-    /// The directional tree of the cell holding `p`, as its root ([`Guide::EMPTY`]: none).
-    #[inline]
-    pub fn cell(&self, p: Vec3A) -> u32 {
-        self.cells::<1>(&[[p.x], [p.y], [p.z]])[0]
-    }
-
-    /// The density in solid angle of the unit direction `d` in the cell `root`.
-    #[inline]
-    pub fn pdf(&self, root: u32, d: Vec3A) -> f32 {
-        self.pdf_lanes::<1>(&[root], &[[d.x], [d.y], [d.z]])[0]
-    }
-
-    /// Cells of the spatial tree, and nodes of all its directional trees (for reports).
+    /// Cells of the spatial tree, and those of them that learned directions (for reports).
     pub fn size(&self) -> (usize, usize) {
-        (self.roots.len(), self.directions.len())
+        (self.cells, self.directions.len() - 1)
     }
 }
 
@@ -253,6 +242,17 @@ impl Guide {
 mod tests {
     use super::*;
     use crate::testing::uniform;
+
+    /// One-lane walks.
+    impl Guide {
+        fn cell(&self, p: Vec3A) -> u32 {
+            self.cells::<1>(&[[p.x], [p.y], [p.z]])[0]
+        }
+
+        fn pdf(&self, root: u32, d: Vec3A) -> f32 {
+            self.lookup_lanes::<1>(&[root], &[false], &[[0.0], [0.0]], &[[d.x], [d.y], [d.z]]).1[0]
+        }
+    }
 
     #[test]
     fn cells_split_where_records_crowd_and_keep_their_directions() {
@@ -272,23 +272,35 @@ mod tests {
         let (leaves, _) = g.size();
         assert!(leaves >= 20, "{leaves} leaves");
         let (left, right) = (g.cell(Vec3A::new(0.1, 0.5, 0.5)), g.cell(Vec3A::new(0.9, 0.5, 0.5)));
-        assert!(g.pdf(left, Vec3A::Z) > 10.0 && g.pdf(left, -Vec3A::Z) == 0.0);
-        assert!(g.pdf(right, -Vec3A::Z) > 10.0 && g.pdf(right, Vec3A::Z) == 0.0);
+        assert!(g.pdf(left, Vec3A::Z) > 2.0 && g.pdf(left, -Vec3A::Z) == 0.0);
+        assert!(g.pdf(right, -Vec3A::Z) > 2.0 && g.pdf(right, Vec3A::Z) == 0.0);
         // Outside the box: the nearest cell.
         assert_eq!(g.cell(Vec3A::new(-5.0, 0.5, 0.5)), left);
         // Lanes walk as one lane does.
         let p = [[0.1, 0.9, 0.3], [0.5, 0.2, 0.8], [0.5, 0.7, 0.1]];
         let cells = g.cells(&p);
         let d = [[0.0, 0.6, 0.0], [0.0, 0.0, 0.6], [1.0, -0.8, -0.8]];
-        let pdf = g.pdf_lanes(&cells, &d);
-        let (s, spdf) = g.sample_lanes(&cells, &[[0.3, 0.7, 0.9], [0.1, 0.5, 0.99]]);
+        let u = [[0.3, 0.7, 0.9], [0.1, 0.5, 0.99]];
+        // The first and last lanes find `d`, the middle one draws.
+        let (out, pdf) = g.lookup_lanes(&cells, &[false, true, false], &u, &d);
         for l in 0..3 {
             let at = Vec3A::new(p[0][l], p[1][l], p[2][l]);
             assert_eq!(cells[l], g.cell(at));
-            assert_eq!(pdf[l], g.pdf(cells[l], Vec3A::new(d[0][l], d[1][l], d[2][l])));
-            let (s1, p1) = g.sample_lanes::<1>(&[cells[l]], &[[[0.3, 0.7, 0.9][l]], [[0.1, 0.5, 0.99][l]]]);
-            assert_eq!((s1[0][0], s1[1][0], s1[2][0], p1[0]), (s[0][l], s[1][l], s[2][l], spdf[l]));
+            let one = g.lookup_lanes::<1>(
+                &[cells[l]],
+                &[l == 1],
+                &[[u[0][l]], [u[1][l]]],
+                &[[d[0][l]], [d[1][l]], [d[2][l]]],
+            );
+            assert_eq!(
+                (one.0[0][0], one.0[1][0], one.0[2][0], one.1[0]),
+                (out[0][l], out[1][l], out[2][l], pdf[l])
+            );
+            let at = Vec3A::new(out[0][l], out[1][l], out[2][l]);
+            let found = g.pdf(cells[l], at);
+            assert!(pdf[l] == found || (pdf[l] / found - 1.0).abs() < 1e-2, "{l}: {} {found}", pdf[l]);
         }
+        assert_eq!((out[0][0], out[2][2]), (d[0][0], d[2][2]));
         // The same records give the same guide.
         assert_eq!(g, Guide::build(&records, Vec3A::ZERO, Vec3A::ONE, spatial, Refine::DEFAULT));
         // Nothing learned: no tree.

@@ -390,7 +390,7 @@ pub fn render_training(
     let per_sample = 1.0 / samples.len().max(1) as f32;
     let mut stats = Stats::default();
     let mut charges = Vec::new();
-    let mut records = Vec::new();
+    let mut records = Vec::with_capacity(results.iter().map(|(_, r)| r.3.len()).sum());
     for (tile, (tile_guides, tile_charges, tile_stats, tile_records)) in results {
         records.extend(tile_records);
         if let (Some(g), Some(sums)) = (&mut guides, &tile_guides) {

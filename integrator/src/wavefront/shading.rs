@@ -306,13 +306,11 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
         ins.set_numbers(scene, &u);
         // A short last chunk leaves its last lanes as the chunk before: their samples go unread.
         lights.sample(&times, &u, &mut ins);
-        lambert_vertex::lambert_lanes(&ins, &mut outs);
-        // Where a guide was learned, the lanes it covers draw their directions from it.
-        let cells =
-            scene.guide.as_deref().map(|g| (g, crate::guided::lambert_guided_lanes(g, &ins, &mut outs)));
-        let guided = |l: usize| {
-            cells.and_then(|(g, c)| (c[l] != pathwave_engine::guiding::Guide::EMPTY).then_some((g, c[l])))
-        };
+        match scene.guide.as_deref() {
+            // Where a guide was learned, the lanes it covers draw their directions from it.
+            Some(g) => crate::guided::lambert_guided_lanes(g, &ins, &mut outs),
+            None => lambert_vertex::lambert_lanes(&ins, &mut outs),
+        }
         // The shadow rays, lanes that made one first.
         let (mut pick, mut n) = ([0; LANES], 0);
         for l in 0..chunk.len() {
@@ -324,9 +322,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             // The environment sampled apart: its light part of the kernel one path at a time.
             for (l, &i) in chunk.iter().enumerate() {
                 let env = u.get(l).environment;
-                if let Some(sh) =
-                    lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env, guided(l))
-                {
+                if let Some(sh) = lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env) {
                     q.shadow.push(i, &sh.ray, sh.contribution);
                 }
             }
