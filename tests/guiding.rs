@@ -55,6 +55,21 @@ fn a_guided_image_is_one_render_whatever_renders_it() {
         let (x, y) = (k as u32 % pw + 12, k as u32 / pw + 4);
         assert_eq!(*p, one[(y * w + x) as usize], "crop pixel {x},{y}");
     }
+    // A farm's shares (each training again over the whole image, and rendering its samples
+    // with their stages' guides) merge into the render that kept its training's images.
+    for (name, samples) in [("a.exr", "0..1"), ("b.exr", "1..3"), ("c.exr", "3..4")] {
+        run(name, &["-t", "2", "--samples", samples]);
+    }
+    let merged = dir.join("merged.exr");
+    let parts = ["a.exr.ckpt", "b.exr.ckpt", "c.exr.ckpt"].map(|p| dir.join(p));
+    let m = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("merge")
+        .args(&parts)
+        .arg("-o")
+        .arg(&merged)
+        .output();
+    assert!(m.unwrap().status.success());
+    assert_eq!(pixels(&merged).0, one, "shares merged");
     // The reference path tracer draws the same guided directions (ties on shared edges
     // aside, as `tests/wavefront.rs` allows).
     let (oracle, _) = run("oracle.exr", &["-t", "2", "--integrator", "oracle"]);
@@ -108,7 +123,7 @@ fn guiding_converges_to_the_image_and_lowers_the_noise_of_indirect_light() {
     // unguided ones' means spread by less than 1%).
     let (m_ref, m_on) = (mean(&reference), on.iter().map(|x| mean(x)).sum::<f64>() / 4.0);
     assert!((m_on / m_ref - 1.0).abs() < 0.01, "guided mean {m_on}, reference {m_ref}");
-    // Less noise at the same samples (the guide's training passes aside).
+    // Less noise at the same samples (the first seven, training, among them).
     let (v_off, v_on) = (rel_variance(&off, &reference), rel_variance(&on, &reference));
     eprintln!("means: reference {m_ref}, guided {m_on}; relative variance: guided {v_on}, unguided {v_off}");
     assert!(v_on < 0.95 * v_off, "relative variance guided {v_on}, unguided {v_off}");

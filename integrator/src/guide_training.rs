@@ -1,16 +1,20 @@
-//! Path guiding's training phase: passes over the whole image whose paths record what came back
-//! at their Lambertian vertices, each pass learning a [`Guide`] from its records and rendering
-//! with the guide of the pass before (Müller et al. 2017's iterations, their images set aside).
-//! Passes draw their numbers from seeds of their own, derived from the render's, so the guide is
-//! a function of the scene, the settings and the seed, and shares no numbers with the render.
+//! Path guiding's training: the render's first samples, in stages over the whole image, whose
+//! paths record what came back at their Lambertian vertices; each stage learns a [`Guide`] from
+//! its records and the next stage renders with it (Müller et al. 2017's iterations). Stage `k`
+//! (below [`PASSES`]) takes the render's samples `2^k - 1 .. 2^(k+1) - 1` (1, 2, 4, ... a
+//! pixel) with its seed, so its image is those samples of the render: a render over the whole
+//! image keeps it, and a sample is rendered with its stage's guide whoever renders it (a crop,
+//! a share of a farm, a resumed render). The guides are a function of the scene, the settings
+//! and the seed.
 
+use crate::film::Film;
 use crate::wavefront::{self, Options};
 use glam::Vec3A;
 use pathwave_engine::guiding::{Guide, Record, Refine, SpatialRefine};
 use pathwave_engine::render_scene::{PixelWindow, RenderScene};
 use std::sync::Arc;
 
-/// The training passes a render runs (of 1, 2, 4, ... samples per pixel).
+/// The training stages before the rest of the render (of 1, 2, 4, ... samples per pixel).
 pub const PASSES: u32 = 3;
 
 /// Records a spatial cell keeps at most, times the square root of the pass's samples per pixel
@@ -24,41 +28,53 @@ const RECORDS_PER_CELL: f64 = 12_000.0;
 const CELLS: usize = 256;
 const MIN_RECORDS: usize = 500;
 
-/// The guide learned by `passes` passes of 1, 2, 4, ... samples per pixel over the whole image
-/// of `scene` (`None` without a pass, or where no path brought light back to a Lambertian
-/// vertex). Each pass is logged (info) with what it learned.
-pub fn train(scene: &RenderScene, opts: Options, passes: u32) -> Option<Arc<Guide>> {
-    let _span = tracing::info_span!("guide_training", passes).entered();
+/// The first sample of stage `k` (`k <= PASSES`: stage [`PASSES`] is the rest of the render).
+pub fn stage_start(k: u32) -> u32 {
+    (1u32 << k.min(PASSES)) - 1
+}
+
+/// The stage of sample `s`.
+pub fn stage_of(s: u32) -> u32 {
+    s.saturating_add(1).ilog2().min(PASSES)
+}
+
+/// What training gives a render: the guide each stage renders with (`guides[k]`, stage 0
+/// without one) and the images over the whole window of the stages it rendered, in order.
+pub struct Training {
+    /// Per stage, up to the last one asked for.
+    pub guides: Vec<Option<Arc<Guide>>>,
+    /// The stages rendered (all before the last one asked for), each its samples' film.
+    pub films: Vec<Film>,
+}
+
+/// Renders the training stages over the whole image of `scene` up to (not including) stage
+/// `last` (at most [`PASSES`]), each with the guide of the stage before, and learns the guides
+/// of stages 1 to `last`; a guide is `None` where no path brought light back to a Lambertian
+/// vertex. Each stage is logged (info) with what it learned.
+pub fn train(scene: &RenderScene, opts: Options, last: u32) -> Training {
+    let last = last.min(PASSES);
+    let _span = tracing::info_span!("guide_training", stages = last).entered();
     let mut s = scene.clone();
     let (w, h) = (scene.settings.width, scene.settings.height);
     s.settings.window = PixelWindow { x0: 0, y0: 0, w, h };
     let opts = Options { train: true, guides: false, costs: false, ..opts };
-    let mut guide = None;
-    for k in 0..passes {
-        let spp = 1u32 << k.min(16);
-        s.settings.spp = spp;
-        s.settings.seed = pass_seed(scene.settings.seed, k);
-        s.guide = guide;
-        let (_, _, records) = wavefront::render_training(&s, opts, 0..spp, &|_, _| {});
-        guide = learn(&records, spp).map(Arc::new);
+    let mut t = Training { guides: vec![None], films: Vec::new() };
+    for k in 0..last {
+        let samples = stage_start(k)..stage_start(k + 1);
+        s.guide = t.guides[k as usize].clone();
+        let (film, _, records) = wavefront::render_training(&s, opts, samples.clone(), &|_, _| {});
+        let guide = learn(&records, samples.len() as u32).map(Arc::new);
         if let Some(g) = &guide {
             let (cells, learned) = g.size();
             tracing::info!(
-                "guide pass {k}: {spp} spp, {} records, {cells} cells, {learned} with directions",
+                "guide stage {k}: samples {samples:?}, {} records, {cells} cells, {learned} with directions",
                 records.len()
             );
         }
+        t.guides.push(guide);
+        t.films.push(film);
     }
-    guide
-}
-
-/// The seed of training pass `k` of a render seeded `seed` (SplitMix64's finaliser, so that
-/// neighbouring seeds and passes share nothing).
-fn pass_seed(seed: u64, k: u32) -> u64 {
-    let mut z = seed ^ 0x9E37_79B9_7F4A_7C15u64.wrapping_mul(k as u64 + 1);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    t
 }
 
 /// The guide of one pass's `records` (made at `spp` samples per pixel), over their box; `None`

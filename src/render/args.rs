@@ -37,9 +37,9 @@ pub struct SceneArgs {
     /// (overrides the scene).
     #[arg(long, value_name = "power|tree|auto")]
     pub light_sampler: Option<LightSamplerKind>,
-    /// Path guiding: on (training passes of 1, 2 and 4 samples per pixel over the whole image
-    /// learn where light comes from, and Lambertian surfaces draw half their directions from
-    /// what was learned) or off (default) (overrides the scene).
+    /// Path guiding: on (the render's first samples, in stages of 1, 2 and 4 per pixel over the
+    /// whole image, learn where light comes from, and Lambertian surfaces draw half their
+    /// directions from what was learned) or off (default) (overrides the scene).
     #[arg(long, value_name = "on|off")]
     pub guiding: Option<Guiding>,
     /// Scale samples down so that no component exceeds MAX (biased; off by default).

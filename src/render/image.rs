@@ -6,10 +6,10 @@ use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::guiding::Guiding;
-use crate::engine::render_scene::{RenderScene, SamplerKind};
+use crate::engine::render_scene::{PixelWindow, RenderScene, SamplerKind};
 use crate::engine::scene::LightSamplerKind;
 use crate::engine::scene::files::InputFile;
-use crate::integrator::{costs::PixelCosts, film::Film, oracle, wavefront};
+use crate::integrator::{costs::PixelCosts, film::Film, guide_training, oracle, wavefront};
 use crate::io::{self, LinearImage};
 use crate::view::{self, Viewers};
 use std::path::Path;
@@ -46,7 +46,10 @@ pub fn render_id(
     });
     let lights = (s.light_sampler != LightSamplerKind::Auto)
         .then(|| ("light_sampler", format!("{:?}", s.light_sampler)));
-    let guiding = (s.guiding != Guiding::Off).then(|| ("guiding", format!("{:?}", s.guiding)));
+    // Guiding says how many of its samples train (the checkpoints of versions whose training
+    // was apart from the samples hold other samples).
+    let guiding = (s.guiding != Guiding::Off)
+        .then(|| ("guiding", format!("{:?}, {} training stages", s.guiding, guide_training::PASSES)));
     let settings = checkpoint::settings_text(
         &[
             ("size", format!("{}x{}", s.width, s.height)),
@@ -204,21 +207,17 @@ pub fn render_image(
             eprintln!("{}: no checkpoint yet, starting at sample {lo}", ckpt_path.display());
         }
     }
-    // Path guiding learns its guide first (the same for every share and pass of the image).
-    let trained;
-    let scene = match s.guiding {
-        Guiding::On if lo + film.spp < hi => {
+    // Path guiding trains first: the stages over the whole image that learn the guides of the
+    // samples asked for (the same for every share and pass of the image).
+    let guided = s.guiding == Guiding::On && lo + film.spp < hi;
+    let stages: Vec<RenderScene> = match guided {
+        true => {
             let started = Instant::now();
             let opts = wavefront::Options { batch: how.batch, ..Default::default() };
-            let guide = pool.install(|| {
-                crate::integrator::guide_training::train(
-                    scene,
-                    opts,
-                    crate::integrator::guide_training::PASSES,
-                )
-            });
+            let last = guide_training::stage_of(hi - 1);
+            let training = pool.install(|| guide_training::train(scene, opts, last));
             if !how.quiet {
-                let size = guide.as_ref().map_or((0, 0), |g| g.size());
+                let size = training.guides.last().and_then(|g| g.as_ref()).map_or((0, 0), |g| g.size());
                 eprintln!(
                     "guide learned in {:.2} s: {} cells, {} with directions",
                     started.elapsed().as_secs_f64(),
@@ -226,10 +225,31 @@ pub fn render_image(
                     size.1
                 );
             }
-            trained = RenderScene { guide, ..scene.clone() };
-            &trained
+            // A plain render of the whole image keeps the stages' images: they are its
+            // samples (not the oracle's: it may differ from the wavefront in the last bit).
+            let whole = s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height });
+            let plain = !how.guides() && !how.costs() && checkpointing.is_none() && !viewers.progressive();
+            if whole && plain && how.integrator == Integrator::Wavefront {
+                for (k, part) in (0..).zip(training.films) {
+                    if lo + film.spp == guide_training::stage_start(k)
+                        && guide_training::stage_start(k + 1) <= hi
+                    {
+                        film.absorb(part);
+                    }
+                }
+            }
+            training.guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
         }
-        _ => scene,
+        false => Vec::new(),
+    };
+    // The scene a pass starting at sample `first` renders, and where its stage ends.
+    let stage = |first: u32| match guided {
+        true => {
+            let k = guide_training::stage_of(first);
+            let end = if k < guide_training::PASSES { guide_training::stage_start(k + 1) } else { u32::MAX };
+            (&stages[k as usize], end)
+        }
+        false => (scene, u32::MAX),
     };
     let first_spp = film.spp;
     let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&s.window);
@@ -244,7 +264,8 @@ pub fn render_image(
     let mut passes = 0;
     while lo + film.spp < hi {
         let next = lo + film.spp;
-        let range = next..(next + pass).min(hi);
+        let (scene, stage_end) = stage(next);
+        let range = next..(next + pass).min(hi).min(stage_end);
         let k = range.len();
         let before = (film.spp - first_spp) as usize * tiles;
         let progress = |done: usize, _| bar.update(before + done * k);

@@ -79,13 +79,16 @@ fn passes(
     engine: EngineArgs,
     pool: &rayon::ThreadPool,
 ) -> Ended {
-    // Path guiding learns its guide first, once for each version of the scene.
+    // Path guiding learns its guide first, once for each version of the scene; the preview's
+    // samples all render with the last stage's guide (training's images are set aside: the
+    // passes are the viewer's).
     let trained;
     let scene = match scene.settings.guiding {
         Guiding::On => {
             let opts = wavefront::Options { batch: engine.batch as usize, ..Default::default() };
-            let guide = pool.install(|| guide_training::train(scene, opts, guide_training::PASSES));
-            trained = RenderScene { guide, ..scene.clone() };
+            let last = guide_training::stage_of(scene.settings.spp.max(1) - 1);
+            let mut training = pool.install(|| guide_training::train(scene, opts, last));
+            trained = RenderScene { guide: training.guides.pop().flatten(), ..scene.clone() };
             &trained
         }
         Guiding::Off => scene,
