@@ -50,19 +50,24 @@ pub struct Training {
 /// Renders the training stages over the whole image of `scene` up to (not including) stage
 /// `last` (at most [`PASSES`]), each with the guide of the stage before, and learns the guides
 /// of stages 1 to `last`; a guide is `None` where no path brought light back to a Lambertian
-/// vertex. Each stage is logged (info) with what it learned.
-pub fn train(scene: &RenderScene, opts: Options, last: u32) -> Training {
+/// vertex. `progress` hears how many tiles' samples are done (of the image's tiles times
+/// `stage_start(last)`). Each stage is logged (info) with what it learned.
+pub fn train(scene: &RenderScene, opts: Options, last: u32, progress: &(dyn Fn(usize) + Sync)) -> Training {
     let last = last.min(PASSES);
     let _span = tracing::info_span!("guide_training", stages = last).entered();
     let mut s = scene.clone();
     let (w, h) = (scene.settings.width, scene.settings.height);
     s.settings.window = PixelWindow { x0: 0, y0: 0, w, h };
     let opts = Options { train: true, guides: false, costs: false, ..opts };
+    let (tiles_x, tiles_y) = crate::tile::Tile::grid_of(&s.settings.window);
+    let tiles = (tiles_x * tiles_y) as usize;
     let mut t = Training { guides: vec![None], films: Vec::new() };
     for k in 0..last {
         let samples = stage_start(k)..stage_start(k + 1);
         s.guide = t.guides[k as usize].clone();
-        let (film, _, records) = wavefront::render_training(&s, opts, samples.clone(), &|_, _| {});
+        let (before, n) = (samples.start as usize * tiles, samples.len());
+        let stage_progress = |done: usize, _| progress(before + done * n);
+        let (film, _, records) = wavefront::render_training(&s, opts, samples.clone(), &stage_progress);
         let guide = learn(&records, samples.len() as u32).map(Arc::new);
         if let Some(g) = &guide {
             let (cells, learned) = g.size();

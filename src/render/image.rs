@@ -215,7 +215,13 @@ pub fn render_image(
             let started = Instant::now();
             let opts = wavefront::Options { batch: how.batch, ..Default::default() };
             let last = guide_training::stage_of(hi - 1);
-            let training = pool.install(|| guide_training::train(scene, opts, last));
+            let full = PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
+            let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&full);
+            let total = guide_training::stage_start(last) as usize * (tiles_x * tiles_y) as usize;
+            let bar = Progress::new(how.quiet, total, "Training");
+            let training =
+                pool.install(|| guide_training::train(scene, opts, last, &|done| bar.update(done)));
+            bar.finish();
             if !how.quiet {
                 let size = training.guides.last().and_then(|g| g.as_ref()).map_or((0, 0), |g| g.size());
                 eprintln!(
@@ -227,7 +233,7 @@ pub fn render_image(
             }
             // A plain render of the whole image keeps the stages' images: they are its
             // samples (not the oracle's: it may differ from the wavefront in the last bit).
-            let whole = s.window == (PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height });
+            let whole = s.window == full;
             let plain = !how.guides() && !how.costs() && checkpointing.is_none() && !viewers.progressive();
             if whole && plain && how.integrator == Integrator::Wavefront {
                 for (k, part) in (0..).zip(training.films) {
@@ -254,7 +260,7 @@ pub fn render_image(
     let first_spp = film.spp;
     let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&s.window);
     let tiles = (tiles_x * tiles_y) as usize;
-    let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles);
+    let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles, "Rendering");
     let mut stats: Option<wavefront::Stats> = None;
     let mut last_save = Instant::now();
     // Without checkpoints or viewers, one pass; with checkpoints, passes sized to take about
@@ -372,16 +378,17 @@ struct Progress {
 }
 
 impl Progress {
-    fn new(quiet: bool, total: usize) -> Self {
+    /// A bar of `total` steps, saying `what` it counts (`Rendering`, `Training`).
+    fn new(quiet: bool, total: usize, what: &str) -> Self {
         use std::io::IsTerminal;
         let bar = match quiet {
             true => indicatif::ProgressBar::hidden(),
             false => indicatif::ProgressBar::new(total as u64),
         };
         bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "Rendering [{bar:40}] {percent:>3}% {elapsed} elapsed, ETA {eta}",
-            )
+            indicatif::ProgressStyle::with_template(&format!(
+                "{what} [{{bar:40}}] {{percent:>3}}% {{elapsed}} elapsed, ETA {{eta}}"
+            ))
             .expect("a valid template")
             .progress_chars("=> "),
         );

@@ -87,7 +87,7 @@ fn passes(
         Guiding::On => {
             let opts = wavefront::Options { batch: engine.batch as usize, ..Default::default() };
             let last = guide_training::stage_of(scene.settings.spp.max(1) - 1);
-            let mut training = pool.install(|| guide_training::train(scene, opts, last));
+            let mut training = pool.install(|| guide_training::train(scene, opts, last, &|_| {}));
             trained = RenderScene { guide: training.guides.pop().flatten(), ..scene.clone() };
             &trained
         }
