@@ -45,6 +45,8 @@ pub struct Training {
     pub guides: Vec<Option<Arc<Guide>>>,
     /// The stages rendered (all before the last one asked for), each its samples' film.
     pub films: Vec<Film>,
+    /// What their passes counted (stage times with [`Options::timing`]).
+    pub stats: wavefront::Stats,
 }
 
 /// Renders the training stages over the whole image of `scene` up to (not including) stage
@@ -61,13 +63,14 @@ pub fn train(scene: &RenderScene, opts: Options, last: u32, progress: &(dyn Fn(u
     let opts = Options { train: true, guides: false, costs: false, ..opts };
     let (tiles_x, tiles_y) = crate::tile::Tile::grid_of(&s.settings.window);
     let tiles = (tiles_x * tiles_y) as usize;
-    let mut t = Training { guides: vec![None], films: Vec::new() };
+    let mut t = Training { guides: vec![None], films: Vec::new(), stats: wavefront::Stats::default() };
     for k in 0..last {
         let samples = stage_start(k)..stage_start(k + 1);
         s.guide = t.guides[k as usize].clone();
         let (before, n) = (samples.start as usize * tiles, samples.len());
         let stage_progress = |done: usize, _| progress(before + done * n);
-        let (film, _, records) = wavefront::render_training(&s, opts, samples.clone(), &stage_progress);
+        let (film, stats, records) = wavefront::render_training(&s, opts, samples.clone(), &stage_progress);
+        t.stats = std::mem::take(&mut t.stats).merge(stats);
         let guide = learn(&records, samples.len() as u32).map(Arc::new);
         if let Some(g) = &guide {
             let (cells, learned) = g.size();

@@ -210,10 +210,12 @@ pub fn render_image(
     // Path guiding trains first: the stages over the whole image that learn the guides of the
     // samples asked for (the same for every share and pass of the image).
     let guided = s.guiding == Guiding::On && lo + film.spp < hi;
+    // Training's passes count in `--stats` with the render's.
+    let mut trained_stats = None;
     let stages: Vec<RenderScene> = match guided {
         true => {
             let started = Instant::now();
-            let opts = wavefront::Options { batch: how.batch, ..Default::default() };
+            let opts = wavefront::Options { batch: how.batch, timing: how.stats, ..Default::default() };
             let last = guide_training::stage_of(hi - 1);
             let full = PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
             let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&full);
@@ -244,6 +246,7 @@ pub fn render_image(
                     }
                 }
             }
+            trained_stats = (last > 0).then_some(training.stats);
             training.guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
         }
         false => Vec::new(),
@@ -261,7 +264,7 @@ pub fn render_image(
     let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&s.window);
     let tiles = (tiles_x * tiles_y) as usize;
     let bar = Progress::new(how.quiet, (hi - lo - film.spp) as usize * tiles, "Rendering");
-    let mut stats: Option<wavefront::Stats> = None;
+    let mut stats: Option<wavefront::Stats> = trained_stats;
     let mut last_save = Instant::now();
     // Without checkpoints or viewers, one pass; with checkpoints, passes sized to take about
     // half the interval (measured on the pass before), starting with one sample per pixel; with
