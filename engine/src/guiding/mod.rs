@@ -5,7 +5,7 @@
 //!
 //! The spatial part is a binary tree over the scene's box, each node split at its middle along
 //! x, y and z in turn, refined where the training paths recorded many vertices; each leaf holds
-//! a [`DTree`] of the energy that arrived there by direction, which the render reads integrated
+//! a `DTree` of the energy that arrived there by direction, which the render reads integrated
 //! over a grid of bins (`grid`). Unlike Müller et al.'s, the tree is built at once from one
 //! pass's records (kept in memory), in their order: the guide is a function of the records,
 //! whatever thread recorded them.
@@ -13,7 +13,8 @@
 mod dtree;
 mod grid;
 
-pub use dtree::{DTree, MAX_LEVELS, Refine, SQUARE_TO_SPHERE, from_square, to_square};
+use dtree::{DTree, SQUARE_TO_SPHERE, from_square};
+pub use dtree::{Refine, to_square};
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 
@@ -23,8 +24,8 @@ pub enum Guiding {
     /// Directions from the BSDF alone (default).
     #[default]
     Off,
-    /// Training passes learn a guide before the render, and Lambertian vertices draw half
-    /// their directions from it.
+    /// The render's first samples train in stages, each learning the guide of the next, and
+    /// Lambertian vertices draw half their directions from their stage's guide.
     On,
 }
 
@@ -162,9 +163,9 @@ impl Guide {
         ((p - self.lo) * self.inv_size).clamp(Vec3A::ZERO, Vec3A::ONE)
     }
 
-    /// The directional trees of the cells holding the points `p` (per lane: `p[axis]`), as
-    /// roots for [`Self::pdf_lanes`] and [`Self::sample_lanes`]; [`Guide::EMPTY`] where
-    /// nothing was learned. The lanes walk down together (their loads overlap).
+    /// The cells holding the points `p` (per lane: `p[axis]`), as their grids for
+    /// [`Self::lookup_lanes`]; [`Guide::EMPTY`] where nothing was learned. The lanes walk down
+    /// together (their loads gather).
     #[inline(always)]
     pub fn cells<const N: usize>(&self, p: &[[f32; N]; 3]) -> [u32; N] {
         let mut u = [[0.0f32; N]; 3];
