@@ -91,6 +91,8 @@ fn guided(i: &LambertIn, (d, from_guide, z): (Vec3, bool, f32), share: f32, g: f
 /// direction met): light sampling finds that, so the guide learns where the rest comes from.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Trail {
+    /// The path records ([`Trail::records`]).
+    pub keep: bool,
     len: u8,
     v: [TrailVertex; Trail::MAX],
 }
@@ -114,11 +116,20 @@ impl Trail {
     /// The most vertices recorded per path.
     pub const MAX: usize = 8;
 
+    /// Whether the path of pixel `(x, y)`'s sample `sample` is among the `share` of paths that
+    /// record (a hash of the three: the same paths whoever renders them).
+    #[inline]
+    pub fn records((x, y): (u32, u32), sample: u32, share: f32) -> bool {
+        let key = crate::sampler::mix64((y as u64) << 32 | x as u64) ^ sample as u64;
+        let u = (crate::sampler::mix64(key) >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
+        u < share
+    }
+
     /// Records the vertex at `p` that left along `d` drawn with density `pdf`, its throughput
     /// after being `beta` and the path's radiance `l` and depth `depth` after it.
     #[inline]
     pub fn push(&mut self, p: Vec3, d: Vec3, pdf: f32, beta: Vec3, l: Vec3, depth: u32) {
-        if (self.len as usize) < Self::MAX {
+        if self.keep && (self.len as usize) < Self::MAX {
             let v = TrailVertex { p: p.into(), d, pdf, beta, before: l, own: Vec3::ZERO, depth };
             self.v[self.len as usize] = v;
             self.len += 1;

@@ -288,7 +288,7 @@ pub fn render_image(
                     guides: how.guides(),
                     timing: how.stats,
                     costs: how.costs(),
-                    train: false,
+                    train: None,
                 };
                 let (film, stats) = wavefront::render_samples(scene, opts, range.clone(), &progress);
                 (film, Some(stats))

@@ -52,13 +52,13 @@ pub struct Options {
     /// ([`Stats::material_time`]), in the thread's CPU time; times the stages too.
     pub costs: bool,
     /// Record what paths bring back at their Lambertian vertices, for path guiding to learn
-    /// from ([`render_training`]).
-    pub train: bool,
+    /// from ([`render_training`]): this share of the paths (by a hash of pixel and sample).
+    pub train: Option<f32>,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Self { batch: 256, guides: false, timing: false, costs: false, train: false }
+        Self { batch: 256, guides: false, timing: false, costs: false, train: None }
     }
 }
 
@@ -328,7 +328,7 @@ pub fn render_samples(
     samples: Range<u32>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> (Film, Stats) {
-    let (film, stats, _) = render_training(scene, Options { train: false, ..opts }, samples, progress);
+    let (film, stats, _) = render_training(scene, Options { train: None, ..opts }, samples, progress);
     (film, stats)
 }
 

@@ -44,6 +44,8 @@ pub(super) struct TileWork<'a> {
     pub(super) stats: Stats,
     /// What training paths recorded, in the order they ended (with [`super::Options::train`]).
     pub(super) records: Option<Vec<Record>>,
+    /// The share of paths that record.
+    train: f32,
     /// Each stage's time in [`StageClock`] ticks while the tile runs (then added to
     /// [`Stats::time`]).
     ticks: [u64; Stage::SLOTS],
@@ -60,7 +62,7 @@ impl<'a> TileWork<'a> {
         splat: Option<(Splat, PixelWindow)>,
         guides: bool,
         costs: bool,
-        train: bool,
+        train: Option<f32>,
     ) -> Self {
         let pixels = (tile.w * tile.h) as usize;
         let pipeline = super::pipeline(scene, guides);
@@ -79,7 +81,8 @@ impl<'a> TileWork<'a> {
             charges: costs
                 .then(|| Charges::new(pixels, scene.materials.len(), scene.lights.len(), &pipeline)),
             stats: Stats::default(),
-            records: train.then(Vec::new),
+            records: train.map(|_| Vec::new()),
+            train: train.unwrap_or(0.0),
             ticks: [0; Stage::SLOTS],
             pipeline,
         }
@@ -248,6 +251,9 @@ impl<'a> TileWork<'a> {
                 // Only what the denoiser reads is written (52 bytes per path otherwise).
                 if guides {
                     p.guide[s] = Guide::NEW;
+                }
+                if self.records.is_some() {
+                    p.trail[s].keep = crate::guided::Trail::records(pixel[l], which[l].1, self.train);
                 }
                 q.active.push(slot);
             }
