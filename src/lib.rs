@@ -13,6 +13,7 @@ pub mod compare;
 pub mod convert;
 pub mod denoiser;
 pub mod farm;
+pub mod guide_file;
 pub mod io;
 pub mod limits;
 pub mod look;

@@ -85,6 +85,76 @@ fn a_guided_image_is_one_render_whatever_renders_it() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `pathwave render SCENE` into `out` with `args` (not quiet), which must succeed: what it said.
+fn render_said(scene: &str, out: &Path, args: &[&str]) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", scene, "-o"])
+        .arg(out)
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{said}");
+    said
+}
+
+#[test]
+fn a_guide_file_trains_once_for_every_run_of_the_image() {
+    let dir = temp_dir("file");
+    let file = dir.join("scene.guides");
+    let f = file.to_str().unwrap();
+    let base = ["--width", "48", "--height", "40", "--spp", "4", "--guiding", "on", "-t", "2"];
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        let said = render_said("scenes/cornell.ron", &out, &args);
+        (pixels(&out).0, said)
+    };
+    let (plain, _) = run("plain.exr", &[]);
+    let (first, said) = run("first.exr", &["--guide-file", f]);
+    assert!(file.exists() && !said.contains("guides read"), "{said}");
+    assert_eq!(first, plain, "training that writes its guides");
+    let (second, said) = run("second.exr", &["--guide-file", f]);
+    assert!(said.contains("the guides read (no training)"), "{said}");
+    assert_eq!(second, plain, "the guides read");
+    // Shares of a farm read them too, and merge into the image.
+    for (name, samples) in [("a.exr", "0..1"), ("b.exr", "1..3"), ("c.exr", "3..4")] {
+        let (_, said) = run(name, &["--samples", samples, "--guide-file", f]);
+        assert!(said.contains("guides read"), "{said}");
+    }
+    let merged = dir.join("merged.exr");
+    let m = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .arg("merge")
+        .args(["a.exr.ckpt", "b.exr.ckpt", "c.exr.ckpt"].map(|p| dir.join(p)))
+        .arg("-o")
+        .arg(&merged)
+        .output();
+    assert!(m.unwrap().status.success());
+    assert_eq!(pixels(&merged).0, plain, "shares merged");
+    // Another seed's render does not take them: it learns its own (and writes them).
+    let (seeded, _) = run("seeded.exr", &["--seed", "9"]);
+    let (other, said) = run("other.exr", &["--seed", "9", "--guide-file", f]);
+    assert!(said.contains("another scene or other settings"), "{said}");
+    assert_eq!(other, seeded, "another seed's guides");
+    // A damaged file is refused, saying so.
+    let mut bytes = std::fs::read(&file).unwrap();
+    let at = bytes.len() / 2;
+    bytes[at] ^= 0x10;
+    std::fs::write(&file, bytes).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_pathwave"))
+        .args(["render", "scenes/cornell.ron", "-o"])
+        .arg(dir.join("damaged.exr"))
+        .args(base)
+        .args(["--seed", "9", "--guide-file", f])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && said.contains("checksum"), "{said}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Relative variance of a pixel over `renders` (the variance of their values, weighted by
 /// `1 / (r^2 + 0.01)` with `r` the reference), averaged over pixels and channels.
 fn rel_variance(renders: &[Vec<[f32; 3]>], reference: &[[f32; 3]]) -> f64 {

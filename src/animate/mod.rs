@@ -138,6 +138,9 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
     let look = args.look.look();
     let seq = sequence::Sequence { output, frames, shard, fps, shutter, overwrite: c.overwrite, quiet, look };
     // Frames report one line each (from `animate::run`), not a bar or a line per pass.
+    if args.guide_file.is_some() {
+        return Err("--guide-file keeps one image's guides; animate's frames each learn their own".into());
+    }
     let how = How { quiet: true, ..args.how() };
     let mut total: Option<(wavefront::Stats, f64, u64)> = None;
     // With --stats, each frame's number, render seconds, update time, what the update built and
@@ -163,7 +166,7 @@ pub fn run(c: &AnimateCommand) -> Result<(), String> {
             None => {
                 {
                     // No checkpoint, so nothing identifies it.
-                    let id = RenderId { key: 0, settings: String::new() };
+                    let id = RenderId { key: 0, settings: String::new(), whole_key: 0 };
                     (
                         render_image(scene, &id, Path::new(output), &how, None, None, &pool, false, nv)?,
                         Vec::new(),

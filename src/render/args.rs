@@ -112,6 +112,12 @@ pub struct RenderArgs {
     /// checkpoint is kept at the end, to add samples later.
     #[arg(long, value_name = "SECS")]
     pub checkpoint_every: Option<f64>,
+    /// With path guiding, read the learned guides from FILE when it holds those of this scene
+    /// and these settings (the whole image's, whatever --crop or --samples), else learn them
+    /// and write them there: a farm's shares and a resumed render then train once. A render
+    /// with --checkpoint-every keeps them beside its checkpoint (OUT.ckpt.guides) unless told.
+    #[arg(long, value_name = "FILE")]
+    pub guide_file: Option<std::path::PathBuf>,
     /// How 8-bit outputs show the image.
     #[command(flatten)]
     pub look: LookArgs,
@@ -137,6 +143,7 @@ impl RenderArgs {
             denoise: self.denoise,
             aov: self.aov.clone().unwrap_or_default(),
             look: self.look.look(),
+            guide_file: self.guide_file.clone(),
         }
     }
 
@@ -379,6 +386,8 @@ pub struct How {
     pub quiet: bool,
     /// `--exposure` and `--view-transform`: how 8-bit outputs show the image.
     pub look: Look,
+    /// `--guide-file`.
+    pub guide_file: Option<std::path::PathBuf>,
 }
 
 /// The heat map of time per pixel that `--stats` writes beside the output NAME.EXT:

@@ -24,6 +24,10 @@ pub struct RenderId {
     pub key: u64,
     /// The settings as text (`checkpoint::settings_text`).
     pub settings: String,
+    /// The key of the whole image's render (the same but for the window, and with the samples
+    /// per pixel): what path guiding's training learns from, whichever part of the image a run
+    /// renders ([`crate::guide_file`]).
+    pub whole_key: u64,
 }
 
 /// The [`RenderId`] of a render of the scene made from `inputs` (the files its load read, then
@@ -50,26 +54,29 @@ pub fn render_id(
     // was apart from the samples hold other samples).
     let guiding = (s.guiding != Guiding::Off)
         .then(|| ("guiding", format!("{:?}, {} training stages", s.guiding, guide_training::PASSES)));
-    let settings = checkpoint::settings_text(
-        &[
-            ("size", format!("{}x{}", s.width, s.height)),
-            ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
-            ("seed", s.seed.to_string()),
-            ("max_depth", s.max_depth.to_string()),
-            ("rr_depth", s.rr_depth.to_string()),
-            ("clamp", format!("{:?}", s.clamp)),
-            ("time", time.to_string()),
-            ("shutter", format!("{} to {}", shutter.0, shutter.1)),
-            ("integrator", format!("{:?}", how.integrator)),
-            ("sampler", format!("{:?}", s.sampler)),
-            ("defines", format!("{:?}", how.defines)),
-        ]
-        .into_iter()
-        .chain(filter)
-        .chain(lights)
-        .chain(guiding)
-        .collect::<Vec<_>>(),
-    );
+    let settings_of = |w: &PixelWindow| {
+        checkpoint::settings_text(
+            &[
+                ("size", format!("{}x{}", s.width, s.height)),
+                ("window", format!("{}x{} at {},{}", w.w, w.h, w.x0, w.y0)),
+                ("seed", s.seed.to_string()),
+                ("max_depth", s.max_depth.to_string()),
+                ("rr_depth", s.rr_depth.to_string()),
+                ("clamp", format!("{:?}", s.clamp)),
+                ("time", time.to_string()),
+                ("shutter", format!("{} to {}", shutter.0, shutter.1)),
+                ("integrator", format!("{:?}", how.integrator)),
+                ("sampler", format!("{:?}", s.sampler)),
+                ("defines", format!("{:?}", how.defines)),
+            ]
+            .into_iter()
+            .chain(filter.clone())
+            .chain(lights.clone())
+            .chain(guiding.clone())
+            .collect::<Vec<_>>(),
+        )
+    };
+    let settings = settings_of(w);
     if settings.len() > checkpoint::MAX_SETTINGS_BYTES {
         return Err(format!(
             "the -D values take {} bytes; at most {} fit in a checkpoint",
@@ -79,7 +86,15 @@ pub fn render_id(
     }
     // The files in path order, by content only: a scene moved with its files keeps its key.
     let loaded: Vec<u8> = inputs.iter().flat_map(|f| f.hash.to_le_bytes()).collect();
-    Ok(RenderId { key: checkpoint::key(&loaded, &settings), settings })
+    // The whole image's, and its samples per pixel (which the sample pattern is stratified
+    // for: training's samples depend on it).
+    let whole =
+        settings_of(&PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height }) + &format!("spp: {}\n", s.spp);
+    Ok(RenderId {
+        key: checkpoint::key(&loaded, &settings),
+        settings,
+        whole_key: checkpoint::key(&loaded, &whole),
+    })
 }
 
 /// What a layered EXR's header records of a render: pathwave's version, the checkpoint key (a
@@ -92,6 +107,43 @@ pub fn metadata(key: u64, scene: &RenderScene, r: &Rendered) -> Vec<(&'static st
         ("pathwave:spp", r.spp.to_string()),
         ("pathwave:seed", scene.settings.seed.to_string()),
     ]
+}
+
+/// Where a checkpointed render keeps its guides when not told: beside the checkpoint.
+pub fn guides_beside(ckpt: &Path) -> std::path::PathBuf {
+    let mut name = ckpt.as_os_str().to_owned();
+    name.push(".guides");
+    name.into()
+}
+
+/// The guides of the training stages up to `last` in the guide file `path`, where it holds
+/// those of the render whose whole image's key is `key`; `None` (said unless `quiet`) where
+/// it holds another render's or fewer stages, which training then writes over.
+fn stored_guides(
+    path: &Path,
+    key: u64,
+    last: u32,
+    quiet: bool,
+) -> Result<Option<Vec<Option<std::sync::Arc<crate::engine::guiding::Guide>>>>, String> {
+    let (stored, mut guides) = crate::guide_file::load(path)?;
+    let note = |why: &str| {
+        if !quiet {
+            eprintln!("{}: {why}; learning them again", path.display());
+        }
+    };
+    if stored != key {
+        note("the guides of another scene or other settings");
+        return Ok(None);
+    }
+    if guides.len() <= last as usize {
+        note(&format!("guides of {} training stages, where {} are needed", guides.len(), last + 1));
+        return Ok(None);
+    }
+    guides.truncate(last as usize + 1);
+    if !quiet {
+        eprintln!("{}: the guides read (no training)", path.display());
+    }
+    Ok(Some(guides))
 }
 
 /// One rendered image, before it is written.
@@ -208,15 +260,24 @@ pub fn render_image(
         }
     }
     // Path guiding trains first: the stages over the whole image that learn the guides of the
-    // samples asked for (the same for every share and pass of the image).
+    // samples asked for (the same for every share and pass of the image), unless a guide file
+    // holds them.
     let guided = s.guiding == Guiding::On && lo + film.spp < hi;
     // Training's passes count in `--stats` with the render's.
     let mut trained_stats = None;
-    let stages: Vec<RenderScene> = match guided {
-        true => {
+    let last = guide_training::stage_of(hi.max(1) - 1);
+    let guide_file = how.guide_file.clone().or_else(|| checkpointing.map(|_| guides_beside(&ckpt_path)));
+    let stored = match &guide_file {
+        Some(f) if guided && f.exists() => stored_guides(f, id.whole_key, last, how.quiet)?,
+        _ => None,
+    };
+    let stages: Vec<RenderScene> = match (guided, stored) {
+        (true, Some(guides)) => {
+            guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
+        }
+        (true, None) => {
             let started = Instant::now();
             let opts = wavefront::Options { batch: how.batch, timing: how.stats, ..Default::default() };
-            let last = guide_training::stage_of(hi - 1);
             let full = PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
             let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&full);
             let total = guide_training::stage_start(last) as usize * (tiles_x * tiles_y) as usize;
@@ -247,9 +308,12 @@ pub fn render_image(
                 }
             }
             trained_stats = (last > 0).then_some(training.stats);
+            if let Some(f) = &guide_file {
+                crate::guide_file::save(f, id.whole_key, &training.guides)?;
+            }
             training.guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
         }
-        false => Vec::new(),
+        (false, _) => Vec::new(),
     };
     // The scene a pass starting at sample `first` renders, and where its stage ends.
     let stage = |first: u32| match guided {

@@ -67,6 +67,28 @@ impl Grids {
         g
     }
 
+    /// The densities and alias words ([`super::Guide::to_parts`]).
+    pub(super) fn to_parts(&self) -> (Vec<f32>, Vec<u32>) {
+        (self.pdf.clone(), self.alias.clone())
+    }
+
+    /// The grids of densities `pdf` and alias words `alias`, checked: whole grids, at least
+    /// one, the densities finite and not negative (an alias word names a bin of its grid
+    /// whatever its bits).
+    pub(super) fn from_parts((pdf, alias): (Vec<f32>, Vec<u32>)) -> Result<Grids, String> {
+        if pdf.is_empty() || pdf.len() % BINS != 0 || alias.len() != pdf.len() {
+            return Err(format!(
+                "a guide's grids hold {} densities and {} alias words: whole grids of {BINS} bins expected",
+                pdf.len(),
+                alias.len()
+            ));
+        }
+        if let Some(k) = pdf.iter().position(|p| !(p.is_finite() && *p >= 0.0)) {
+            return Err(format!("a guide's bin {k} has the density {}", pdf[k]));
+        }
+        Ok(Grids { pdf, alias })
+    }
+
     /// Looks up the grids `g` (an index below [`Self::len`]), lane by lane: a lane that
     /// `draw`s draws a point of the square with the numbers `at` (in [0, 1)), the others find
     /// the point `at` (in [0, 1]). Returns the points (drawn, or `at`) and the densities over the

@@ -73,6 +73,21 @@ pub struct Guide {
     directions: grid::Grids,
 }
 
+/// A [`Guide`]'s arrays as a file keeps them ([`Guide::to_parts`], [`Guide::from_parts`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GuideParts {
+    /// The box's lower corner.
+    pub lo: [f32; 3],
+    /// Its inverse extent per axis.
+    pub inv_size: [f32; 3],
+    /// Leaves of the spatial tree.
+    pub cells: u64,
+    /// The spatial tree's nodes.
+    pub nodes: Vec<u32>,
+    /// The cells' grids: per bin its density, then its alias word (16 x 16 bins a grid).
+    pub grids: (Vec<f32>, Vec<u32>),
+}
+
 /// How the spatial tree refines: a cell with more than `max_records` records splits, down to
 /// `max_depth` levels.
 #[derive(Clone, Copy, Debug)]
@@ -233,6 +248,59 @@ impl Guide {
         (out, std::array::from_fn(|l| if root[l] == Self::EMPTY { 0.0 } else { pdf[l] * SQUARE_TO_SPHERE }))
     }
 
+    /// The guide as plain arrays, for a file to keep ([`Guide::from_parts`]).
+    pub fn to_parts(&self) -> GuideParts {
+        GuideParts {
+            lo: self.lo.to_array(),
+            inv_size: self.inv_size.to_array(),
+            cells: self.cells as u64,
+            nodes: self.nodes.clone(),
+            grids: self.directions.to_parts(),
+        }
+    }
+
+    /// The guide of `parts` ([`Guide::to_parts`]), checked: every node within the tree and
+    /// after its parent, every leaf's grid among the grids, densities finite and not negative.
+    /// A guide read from a file (which its checksum does not make right) is refused with what
+    /// is wrong rather than walked out of bounds.
+    pub fn from_parts(p: GuideParts) -> Result<Guide, String> {
+        let finite = |v: [f32; 3]| v.iter().all(|x| x.is_finite());
+        if !finite(p.lo) || !finite(p.inv_size) || p.inv_size.iter().any(|&x| x <= 0.0) {
+            return Err(format!(
+                "a guide's box is not finite: from {:?}, inverse size {:?}",
+                p.lo, p.inv_size
+            ));
+        }
+        let n = p.nodes.len();
+        if !n.is_power_of_two() {
+            return Err(format!("a guide's {n} nodes are not a power of two"));
+        }
+        let directions = grid::Grids::from_parts(p.grids)?;
+        let grids = directions.len() as u32;
+        for (k, &c) in p.nodes.iter().enumerate() {
+            let ok = match c {
+                Self::EMPTY => true,
+                c if c & Self::LEAF != 0 => c & !Self::LEAF < grids && c & !Self::LEAF > 0,
+                c => (c as usize) > k && (c as usize) + 1 < n,
+            };
+            if !ok {
+                return Err(format!(
+                    "a guide's node {k} names {c:#x}, outside its {n} nodes and {grids} grids"
+                ));
+            }
+        }
+        if p.cells > n as u64 {
+            return Err(format!("a guide counts {} cells in {n} nodes", p.cells));
+        }
+        Ok(Guide {
+            lo: Vec3A::from_array(p.lo),
+            inv_size: Vec3A::from_array(p.inv_size),
+            nodes: p.nodes,
+            cells: p.cells as usize,
+            directions,
+        })
+    }
+
     /// Cells of the spatial tree, and those of them that learned directions (for reports).
     pub fn size(&self) -> (usize, usize) {
         (self.cells, self.directions.len() - 1)
@@ -304,6 +372,21 @@ mod tests {
         assert_eq!((out[0][0], out[2][2]), (d[0][0], d[2][2]));
         // The same records give the same guide.
         assert_eq!(g, Guide::build(&records, Vec3A::ZERO, Vec3A::ONE, spatial, Refine::DEFAULT));
+        // Its parts give it back; parts that would walk out of bounds or draw NaN are refused.
+        assert_eq!(Guide::from_parts(g.to_parts()), Ok(g.clone()));
+        let inner = g.nodes.iter().position(|&c| c & Guide::LEAF == 0).expect("an inner node");
+        let mut bad = g.to_parts();
+        bad.nodes[inner] = bad.nodes.len() as u32;
+        assert!(Guide::from_parts(bad).unwrap_err().contains("outside"));
+        let mut bad = g.to_parts();
+        bad.nodes[inner] = 0;
+        assert!(Guide::from_parts(bad).is_err(), "a node that points back up");
+        let mut bad = g.to_parts();
+        bad.grids.0[300] = f32::NAN;
+        assert!(Guide::from_parts(bad).unwrap_err().contains("density NaN"));
+        let mut bad = g.to_parts();
+        bad.grids.1.pop();
+        assert!(Guide::from_parts(bad).is_err(), "a grid cut short");
         // Nothing learned: no tree.
         let none = Guide::build(&[], Vec3A::ZERO, Vec3A::ONE, spatial, Refine::DEFAULT);
         assert_eq!(none.cell(Vec3A::splat(0.5)), Guide::EMPTY);
