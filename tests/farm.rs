@@ -169,6 +169,50 @@ fn the_merge_names_missing_and_unfinished_shares_and_writes_nothing() {
 }
 
 #[test]
+fn a_guided_image_learns_its_guides_once_for_every_share() {
+    let dir = temp("guided");
+    let scene = dir.join("cornell.ron");
+    std::fs::copy(root().join("scenes/cornell.ron"), &scene).unwrap();
+    let (out, single) = (dir.join("out.png"), dir.join("single.png"));
+    let flags = ["--width", "32", "--height", "24", "--spp", "8", "--guiding", "on"];
+    let mut c = pathwave();
+    c.args(["farm", "slurm"]).arg(&scene).arg("-o").arg(&out).args(["--split-samples", "--tasks", "2"]);
+    let printed = run(c.args(flags).arg("--dry-run"));
+    // A training job, then the array after it, then the merge.
+    let train = printed.find("TRAIN=$(sbatch").expect(&printed);
+    assert!(printed[train..].contains("RENDER=$(sbatch --parsable --dependency=afterok:$TRAIN"), "{printed}");
+    let execs: Vec<&str> = printed.lines().filter(|l| l.starts_with("exec ")).collect();
+    assert_eq!(execs.len(), 3, "{printed}");
+    assert!(execs[0].contains("--train-only --guide-file") && execs[1].contains("--guide-file"), "{printed}");
+    // What Slurm would run: the training job, the two tasks, the merge.
+    let job = dir.join("out.png.farm");
+    for sub in ["logs", "parts"] {
+        std::fs::create_dir_all(job.join(sub)).unwrap();
+    }
+    let shell = |line: &str, task: Option<u32>| {
+        let mut c = Command::new("sh");
+        c.args(["-c", line]).current_dir(root());
+        for v in TASK_VARS {
+            c.env_remove(v);
+        }
+        if let Some(t) = task {
+            c.env("SLURM_ARRAY_TASK_ID", t.to_string()).env("SLURM_ARRAY_TASK_COUNT", "2");
+        }
+        run(&mut c)
+    };
+    shell(execs[0], None);
+    assert!(job.join("guides.bin").exists());
+    for t in 0..2 {
+        let said = shell(execs[1], Some(t));
+        assert!(said.contains("the guides read (no training)"), "task {t}: {said}");
+    }
+    shell(execs[2], None);
+    run(pathwave().arg("render").arg(&scene).args(flags).arg("-q").arg("-o").arg(&single));
+    assert!(bytes(&out) == bytes(&single), "the merged image differs from one render");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_dry_run_prints_the_jobs_with_the_render_flags() {
     let dir = temp("dry");
     let scene = dir.join("p.ron");

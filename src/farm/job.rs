@@ -115,20 +115,27 @@ pub struct Job {
     pub name: String,
     /// `#SBATCH` lines besides the job's own (partition, time limit).
     pub directives: Vec<String>,
-    /// sbatch options for both submissions.
+    /// sbatch options for every submission.
     pub sbatch: Vec<String>,
+    /// One image's shares with path guiding: a job learns the guides first
+    /// ([`Job::train_script`]), which every task reads.
+    pub guided: bool,
 }
 
 impl Job {
     /// Checks the farm's options against the scene (`spp` samples per pixel, its animation's
-    /// frames `scene_frames`) and settles every path; `render_args` are the render flags to
-    /// pass on (see [`forwarded`]).
+    /// frames `scene_frames`, path guiding on or not: `guided`) and settles every path;
+    /// `render_args` are the render flags to pass on (see [`forwarded`]).
     pub fn plan(
         args: &SlurmArgs,
         spp: u32,
         scene_frames: (u32, u32),
+        guided: bool,
         mut render_args: Vec<String>,
     ) -> Result<Job, String> {
+        if render_args.iter().any(|a| a.starts_with("--guide-file")) {
+            return Err("--guide-file: a farm keeps the guides in its job folder (guides.bin)".into());
+        }
         let absolute = |p: &Path| std::path::absolute(p).map_err(|e| format!("{}: {e}", p.display()));
         let scene = absolute(&args.scene)?;
         let output = utf8(&absolute(Path::new(&args.output))?)?.to_owned();
@@ -235,105 +242,18 @@ impl Job {
             name: format!("pathwave-{name}"),
             directives,
             sbatch: args.sbatch.clone(),
+            guided: guided && args.split_samples,
         })
     }
 
-    /// The folder of the sample shares' checkpoints.
-    pub fn parts(&self) -> PathBuf {
-        self.dir.join("parts")
-    }
-
-    /// The job array's script: task `$SLURM_ARRAY_TASK_ID` renders its frames or its share.
-    pub fn render_script(&self) -> Result<String, String> {
-        let mut s = String::from("#!/bin/bash\n");
-        let (what, run) = match self.work {
-            Work::Samples { spp } => (
-                format!(
-                    "# pathwave farm: task I of this array renders share I of the {spp} samples per pixel of\n\
-                     # {}\n# into {}/task-I.exr.ckpt;\n\
-                     # a requeued or re-run task resumes it (a finished share is only written out again).\n",
-                    self.output,
-                    utf8(&self.parts())?
-                ),
-                // `render --samples auto` takes the same task from the environment.
-                format!(
-                    "exec {} render {} -o {}\"$SLURM_ARRAY_TASK_ID\".exr --samples auto --shard-count {} --resume",
-                    sh(utf8(&self.exe)?),
-                    sh(utf8(&self.scene)?),
-                    sh(&format!("{}/task-", utf8(&self.parts())?)),
-                    self.tasks
-                ),
-            ),
-            Work::Frames { first, end } => (
-                format!(
-                    "# pathwave farm: task I of this array renders frames {first}+I, {first}+I+{n}, ... \
-                     (of {first}..{end}) to\n# {}; a requeued or re-run task skips the frames that are there.\n",
-                    self.output,
-                    n = self.tasks
-                ),
-                format!(
-                    "exec {} animate {} -o {} --frames {first}..{end} --shard auto --shard-count {}",
-                    sh(utf8(&self.exe)?),
-                    sh(utf8(&self.scene)?),
-                    sh(&self.output),
-                    self.tasks
-                ),
-            ),
-        };
-        s += &what;
-        s += &format!("#SBATCH --job-name={}\n", self.name);
-        s += &format!("#SBATCH --array=0-{}\n", self.tasks - 1);
-        s += &format!("#SBATCH --output={}/logs/task-%a.log\n", utf8(&self.dir)?);
-        s += "#SBATCH --open-mode=append\n#SBATCH --requeue\n";
-        for d in &self.directives {
-            s += &format!("#SBATCH {d}\n");
-        }
-        s += &run;
-        for a in &self.render_args {
-            s += " ";
-            s += &sh(a);
-        }
-        s += "\n";
-        Ok(s)
-    }
-
-    /// The merge job's script.
-    pub fn merge_script(&self) -> Result<String, String> {
-        let mut s = String::from(
-            "#!/bin/bash\n# pathwave farm: runs once every task of the render array has succeeded; checks that every\n\
-             # share is there and whole, and names those that are not instead of writing a partial result.\n",
-        );
-        s += &format!("#SBATCH --job-name={}-merge\n", self.name);
-        s += &format!("#SBATCH --output={}/logs/merge.log\n", utf8(&self.dir)?);
-        s += "#SBATCH --open-mode=append\n";
-        for d in &self.directives {
-            s += &format!("#SBATCH {d}\n");
-        }
-        let exe = sh(utf8(&self.exe)?);
-        let (out, n) = (sh(&self.output), self.tasks);
-        s += &match self.work {
-            Work::Samples { spp } => {
-                let parts = sh(utf8(&self.parts())?);
-                // The merged image looks as the render flags say.
-                let look: String = (self.render_args.iter())
-                    .filter(|a| a.starts_with("--exposure=") || a.starts_with("--view-transform="))
-                    .map(|a| format!(" {}", sh(a)))
-                    .collect();
-                format!("exec {exe} farm merge -o {out} --tasks {n} --spp {spp} --parts {parts}{look}\n")
-            }
-            Work::Frames { first, end } => {
-                format!("exec {exe} farm merge -o {out} --tasks {n} --frames {first}..{end}\n")
-            }
-        };
-        Ok(s)
-    }
-
-    /// Writes the scripts into the job folder and submits the array, then the merge job
-    /// depending on it; prints how to follow them. With `dry_run`, prints the scripts and the
-    /// commands instead.
+    /// Writes the scripts into the job folder and submits the array (after the training job,
+    /// with path guiding), then the merge job depending on it; prints how to follow them. With
+    /// `dry_run`, prints the scripts and the commands instead.
     pub fn submit(&self, dry_run: bool) -> Result<(), String> {
         let (render, merge) = (self.render_script()?, self.merge_script()?);
         let (render_path, merge_path) = (self.dir.join("render.sbatch"), self.dir.join("merge.sbatch"));
+        let train = self.guided.then(|| self.train_script()).transpose()?;
+        let train_path = self.dir.join("train.sbatch");
         let extra: Vec<String> = self.sbatch.iter().map(|a| sh(a)).collect();
         let extra = extra.iter().map(|a| format!(" {a}")).collect::<String>();
         let mut folders = vec![self.dir.join("logs")];
@@ -345,10 +265,20 @@ impl Job {
             }
         }
         if dry_run {
+            if let Some(t) = &train {
+                println!("# {}\n{t}", train_path.display());
+            }
             println!("# {}\n{render}\n# {}\n{merge}", render_path.display(), merge_path.display());
             let folders: Vec<String> = folders.iter().map(|f| utf8(f).map(sh)).collect::<Result<_, _>>()?;
             println!("# to submit them:\nmkdir -p {}", folders.join(" "));
-            println!("RENDER=$(sbatch --parsable{extra} {})", sh(utf8(&render_path)?));
+            let after = match &train {
+                Some(_) => {
+                    println!("TRAIN=$(sbatch --parsable{extra} {})", sh(utf8(&train_path)?));
+                    " --dependency=afterok:$TRAIN --kill-on-invalid-dep=yes"
+                }
+                None => "",
+            };
+            println!("RENDER=$(sbatch --parsable{after}{extra} {})", sh(utf8(&render_path)?));
             println!(
                 "sbatch --dependency=afterok:$RENDER --kill-on-invalid-dep=yes{extra} {}",
                 sh(utf8(&merge_path)?)
@@ -360,7 +290,17 @@ impl Job {
         }
         io::atomically(&render_path, render.as_bytes())?;
         io::atomically(&merge_path, merge.as_bytes())?;
-        let render_id = sbatch(&[&self.sbatch[..], &[utf8(&render_path)?.to_owned()]].concat())?;
+        // With path guiding, the array waits for the job that learns its guides.
+        let after = match &train {
+            Some(t) => {
+                io::atomically(&train_path, t.as_bytes())?;
+                let id = sbatch(&[&self.sbatch[..], &[utf8(&train_path)?.to_owned()]].concat())?;
+                println!("submitted training job {id} (path guiding's guides, {})", self.guides().display());
+                vec![format!("--dependency=afterok:{id}"), "--kill-on-invalid-dep=yes".into()]
+            }
+            None => Vec::new(),
+        };
+        let render_id = sbatch(&[&after[..], &self.sbatch[..], &[utf8(&render_path)?.to_owned()]].concat())?;
         let dependency = format!("--dependency=afterok:{render_id}");
         let merge_args = [
             &[dependency, "--kill-on-invalid-dep=yes".into()],
@@ -565,7 +505,7 @@ pub fn forwarded(flags: &clap::Command, matches: &clap::ArgMatches) -> Result<Ve
 
 /// `path` as text for a script: UTF-8, without control characters (a line break would end a
 /// comment line of the script).
-fn utf8(path: &Path) -> Result<&str, String> {
+pub(super) fn utf8(path: &Path) -> Result<&str, String> {
     match path.to_str() {
         Some(s) if !s.chars().any(char::is_control) => Ok(s),
         _ => Err(format!("{}: a farm needs paths in UTF-8 without control characters", path.display())),

@@ -7,7 +7,9 @@
 //! - one image (`--split-samples`): task `i` renders the `i`-th of `n` contiguous shares of the
 //!   sample indices (`render --samples auto`) into a checkpoint in the job folder's `parts/`;
 //!   the merge job checks that every share is there and whole, and adds them into the image
-//!   (`pathwave merge`: the bits of one render).
+//!   (`pathwave merge`: the bits of one render). With path guiding, a job submitted before the
+//!   array learns the guides once (`render --train-only`) into the job folder's `guides.bin`,
+//!   and the array, which depends on it, reads them (`--guide-file`).
 //!
 //! Tasks are idempotent: a frame is written whole or not at all and an existing one is skipped,
 //! and a share's task resumes its checkpoint (a finished share is only written out again), so a
@@ -16,6 +18,7 @@
 //! writes nothing.
 
 pub mod job;
+mod scripts;
 
 use crate::animate::sequence::frame_path;
 use crate::merge::merge;
@@ -94,7 +97,9 @@ fn slurm(job: &SlurmArgs, args: &RenderArgs, matches: &clap::ArgMatches) -> Resu
             dir.to_str().ok_or_else(|| format!("{}: the scene's folder is not Unicode", dir.display()))?;
         forwarded.push(format!("--assets-under={dir}"));
     }
-    let plan = job::Job::plan(job, desc.render.spp.get(), (0, desc.animation.frames.get()), forwarded)?;
+    let guided = desc.render.guiding == crate::engine::guiding::Guiding::On;
+    let frames = (0, desc.animation.frames.get());
+    let plan = job::Job::plan(job, desc.render.spp.get(), frames, guided, forwarded)?;
     // Every frame's grid files (sequences': a file per frame) are there and start as grid
     // files do, inside the folder the tasks read from; a share of one image's samples reads
     // frame 0's (render without --time).

@@ -109,6 +109,46 @@ pub fn metadata(key: u64, scene: &RenderScene, r: &Rendered) -> Vec<(&'static st
     ]
 }
 
+/// Path guiding's training for `scene` (whose [`RenderId`] is `id`) up to stage `last`: read
+/// from the guide `file` where it holds them (no films then, and no statistics), else learned
+/// (with a progress bar unless quiet) and written there.
+pub fn learn_guides(
+    scene: &RenderScene,
+    id: &RenderId,
+    how: &How,
+    last: u32,
+    file: Option<&Path>,
+    pool: &rayon::ThreadPool,
+) -> Result<guide_training::Training, String> {
+    if let Some(f) = file.filter(|f| f.exists())
+        && let Some(guides) = stored_guides(f, id.whole_key, last, how.quiet)?
+    {
+        return Ok(guide_training::Training { guides, films: Vec::new(), stats: Default::default() });
+    }
+    let s = scene.settings;
+    let started = Instant::now();
+    let opts = wavefront::Options { batch: how.batch, timing: how.stats, ..Default::default() };
+    let full = PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
+    let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&full);
+    let total = guide_training::stage_start(last) as usize * (tiles_x * tiles_y) as usize;
+    let bar = Progress::new(how.quiet, total, "Training");
+    let training = pool.install(|| guide_training::train(scene, opts, last, &|done| bar.update(done)));
+    bar.finish();
+    if !how.quiet {
+        let size = training.guides.last().and_then(|g| g.as_ref()).map_or((0, 0), |g| g.size());
+        eprintln!(
+            "guide learned in {:.2} s: {} cells, {} with directions",
+            started.elapsed().as_secs_f64(),
+            size.0,
+            size.1
+        );
+    }
+    if let Some(f) = file {
+        crate::guide_file::save(f, id.whole_key, &training.guides)?;
+    }
+    Ok(training)
+}
+
 /// Where a checkpointed render keeps its guides when not told: beside the checkpoint.
 pub fn guides_beside(ckpt: &Path) -> std::path::PathBuf {
     let mut name = ckpt.as_os_str().to_owned();
@@ -265,38 +305,14 @@ pub fn render_image(
     let guided = s.guiding == Guiding::On && lo + film.spp < hi;
     // Training's passes count in `--stats` with the render's.
     let mut trained_stats = None;
-    let last = guide_training::stage_of(hi.max(1) - 1);
-    let guide_file = how.guide_file.clone().or_else(|| checkpointing.map(|_| guides_beside(&ckpt_path)));
-    let stored = match &guide_file {
-        Some(f) if guided && f.exists() => stored_guides(f, id.whole_key, last, how.quiet)?,
-        _ => None,
-    };
-    let stages: Vec<RenderScene> = match (guided, stored) {
-        (true, Some(guides)) => {
-            guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
-        }
-        (true, None) => {
-            let started = Instant::now();
-            let opts = wavefront::Options { batch: how.batch, timing: how.stats, ..Default::default() };
-            let full = PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
-            let (tiles_x, tiles_y) = crate::integrator::tile::Tile::grid_of(&full);
-            let total = guide_training::stage_start(last) as usize * (tiles_x * tiles_y) as usize;
-            let bar = Progress::new(how.quiet, total, "Training");
-            let training =
-                pool.install(|| guide_training::train(scene, opts, last, &|done| bar.update(done)));
-            bar.finish();
-            if !how.quiet {
-                let size = training.guides.last().and_then(|g| g.as_ref()).map_or((0, 0), |g| g.size());
-                eprintln!(
-                    "guide learned in {:.2} s: {} cells, {} with directions",
-                    started.elapsed().as_secs_f64(),
-                    size.0,
-                    size.1
-                );
-            }
+    let stages: Vec<RenderScene> = match guided {
+        true => {
+            let last = guide_training::stage_of(hi - 1);
+            let file = how.guide_file.clone().or_else(|| checkpointing.map(|_| guides_beside(&ckpt_path)));
+            let training = learn_guides(scene, id, how, last, file.as_deref(), pool)?;
             // A plain render of the whole image keeps the stages' images: they are its
             // samples (not the oracle's: it may differ from the wavefront in the last bit).
-            let whole = s.window == full;
+            let whole = s.window == PixelWindow { x0: 0, y0: 0, w: s.width, h: s.height };
             let plain = !how.guides() && !how.costs() && checkpointing.is_none() && !viewers.progressive();
             if whole && plain && how.integrator == Integrator::Wavefront {
                 for (k, part) in (0..).zip(training.films) {
@@ -308,12 +324,9 @@ pub fn render_image(
                 }
             }
             trained_stats = (last > 0).then_some(training.stats);
-            if let Some(f) = &guide_file {
-                crate::guide_file::save(f, id.whole_key, &training.guides)?;
-            }
             training.guides.into_iter().map(|guide| RenderScene { guide, ..scene.clone() }).collect()
         }
-        (false, _) => Vec::new(),
+        false => Vec::new(),
     };
     // The scene a pass starting at sample `first` renders, and where its stage ends.
     let stage = |first: u32| match guided {

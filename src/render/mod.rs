@@ -26,8 +26,13 @@ pub struct RenderCommand {
     /// The scene file.
     pub scene: PathBuf,
     /// Output image; the extension picks the format (.png or .exr).
-    #[arg(short, long, visible_alias = "outfile")]
-    pub output: PathBuf,
+    #[arg(short, long, visible_alias = "outfile", required_unless_present = "train_only")]
+    pub output: Option<PathBuf>,
+    /// Only learn path guiding's guides for the whole image (of --spp samples per pixel) and
+    /// write them to --guide-file, rendering nothing else: what a farm runs once before the
+    /// shares that read them.
+    #[arg(long, requires = "guide_file", conflicts_with_all = ["output", "samples", "resume"])]
+    pub train_only: bool,
     /// The flags `animate` takes too.
     #[command(flatten)]
     pub args: RenderArgs,
@@ -54,7 +59,10 @@ pub struct RenderCommand {
 
 /// Renders the scene into the output, as the flags say.
 pub fn run(c: &RenderCommand) -> Result<(), String> {
-    let (path, output, how) = (&c.scene, &c.output, c.args.how());
+    let Some(output) = &c.output else {
+        return train_only(c);
+    };
+    let (path, how) = (&c.scene, c.args.how());
     let every = c.args.checkpoint_every()?;
     let samples = c.samples.as_deref().map(|r| shard::Samples::parse(r, c.shard_count)).transpose()?;
     // A part is kept in its checkpoint for `merge`.
@@ -64,6 +72,9 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     how.check_aovs(output)?;
     let mut writes = how.files(output);
     writes.extend(checkpointing.as_ref().map(|_| checkpoint::path_for(output)));
+    // Path guiding's guides, when it is on (known once the scene is loaded; checked before).
+    writes.extend(how.guide_file.clone());
+    writes.extend(checkpointing.as_ref().map(|_| image::guides_beside(&checkpoint::path_for(output))));
     writes.extend(c.args.profile.trace.clone());
     io::check_writes(&writes, &io::Inputs::new([path.as_path()]))?;
     let time = c.time.checked()?;
@@ -78,12 +89,7 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
     let shutter = args::shutter_at(&desc, time);
-    let (mut world, scene) = pool.install(|| {
-        let mut world = load::world(&desc, path, &c.args.scene);
-        world.set_time(shutter.0, shutter.1);
-        world.set_frame(frame);
-        world.update_checked().map(|scene| (world, scene))
-    })?;
+    let (mut world, scene) = world_at(c, &desc, frame, shutter, &pool)?;
     log_scene(&scene);
     let s = scene.settings;
     let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
@@ -134,4 +140,50 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
         },
     );
     Ok(())
+}
+
+/// `render --train-only`: learns the guides of the scene's whole image and writes them to
+/// `--guide-file` (nothing is done where the file holds them already).
+fn train_only(c: &RenderCommand) -> Result<(), String> {
+    let (path, how) = (&c.scene, c.args.how());
+    let file = how.guide_file.clone().ok_or("--train-only writes the guides to --guide-file")?;
+    io::check_writes(std::slice::from_ref(&file), &io::Inputs::new([path.as_path()]))?;
+    let time = c.time.checked()?;
+    let pool = crate::pool(how.threads)?;
+    let desc = pool.install(|| load(path, &c.args.scene))?;
+    let frame = args::frame_at(&desc, time)?;
+    io::check_writes(std::slice::from_ref(&file), &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
+    let shutter = args::shutter_at(&desc, time);
+    let (mut world, scene) = world_at(c, &desc, frame, shutter, &pool)?;
+    if scene.settings.guiding != crate::engine::guiding::Guiding::On {
+        return Err("--train-only: the scene renders without path guiding (--guiding on)".into());
+    }
+    let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
+    let id = render_id(&inputs, &scene, &how, time, shutter)?;
+    let last = crate::integrator::guide_training::stage_of(scene.settings.spp - 1);
+    image::learn_guides(&scene, &id, &how, last, Some(&file), &pool)?;
+    if !how.quiet {
+        eprintln!("{}: the guides of {} training stages", file.display(), last + 1);
+    }
+    Ok(())
+}
+
+/// The world of the scene `desc` (`c`'s) at frame `frame`, its shutter open over `shutter`, and
+/// its render scene, built on `pool`'s threads.
+fn world_at(
+    c: &RenderCommand,
+    desc: &crate::engine::scene::SceneDesc,
+    frame: u32,
+    shutter: (f32, f32),
+    pool: &rayon::ThreadPool,
+) -> Result<
+    (crate::engine::world::SceneWorld, std::sync::Arc<crate::engine::render_scene::RenderScene>),
+    String,
+> {
+    pool.install(|| {
+        let mut world = load::world(desc, &c.scene, &c.args.scene);
+        world.set_time(shutter.0, shutter.1);
+        world.set_frame(frame);
+        world.update_checked().map(|scene| (world, scene))
+    })
 }
