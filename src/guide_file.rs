@@ -18,6 +18,10 @@ use std::sync::Arc;
 
 const MAGIC: &[u8; 8] = b"PWGUIDE1";
 
+/// The guides of a render's training stages: `guides[k]` renders stage `k` (the first
+/// `None`), as `integrator::guide_training::Training::guides` holds them.
+pub type Guides = Vec<Option<Arc<Guide>>>;
+
 /// The largest guide file read (a guide of a few thousand cells takes a few MB).
 pub const MAX_BYTES: u64 = 1 << 30;
 
@@ -53,7 +57,7 @@ pub fn save(path: &Path, key: u64, guides: &[Option<Arc<Guide>>]) -> Result<(), 
 }
 
 /// Reads the file at `path`: its key and guides ([`to_bytes`]).
-pub fn load(path: &Path) -> Result<(u64, Vec<Option<Arc<Guide>>>), String> {
+pub fn load(path: &Path) -> Result<(u64, Guides), String> {
     let size = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?.len();
     if size > MAX_BYTES {
         return Err(format!("{}: {size} bytes, more than a guide file's {MAX_BYTES}", path.display()));
@@ -63,7 +67,7 @@ pub fn load(path: &Path) -> Result<(u64, Vec<Option<Arc<Guide>>>), String> {
 }
 
 /// The key and guides of a file's `bytes`.
-pub fn from_bytes(bytes: &[u8]) -> Result<(u64, Vec<Option<Arc<Guide>>>), String> {
+pub fn from_bytes(bytes: &[u8]) -> Result<(u64, Guides), String> {
     if bytes.len() < MAGIC.len() + 8 + 4 + 8 || &bytes[..8] != MAGIC {
         return Err("no PWGUIDE1 header".into());
     }

@@ -164,7 +164,7 @@ fn stored_guides(
     key: u64,
     last: u32,
     quiet: bool,
-) -> Result<Option<Vec<Option<std::sync::Arc<crate::engine::guiding::Guide>>>>, String> {
+) -> Result<Option<crate::guide_file::Guides>, String> {
     let (stored, mut guides) = crate::guide_file::load(path)?;
     let note = |why: &str| {
         if !quiet {
