@@ -43,14 +43,14 @@ impl std::str::FromStr for Guiding {
 
 /// What a training path recorded at a vertex: where it was, the direction it left along (as a
 /// point of the square, [`to_square`]) and the energy that came back along it (the luminance
-/// of the radiance estimate divided by the direction's density).
+/// of the radiance estimate times the cosine, divided by the direction's density).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Record {
     /// The vertex.
     pub p: [f32; 3],
     /// The direction, on the square.
     pub square: Vec2,
-    /// Radiance (luminance) over density.
+    /// Radiance (luminance) times the cosine, over density.
     pub energy: f32,
 }
 

@@ -342,7 +342,7 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             if lambert_vertex::scattered(v3(&ins.p, l), v3(&ins.n, l), ins.depth_after[l], &o, st) && o.alive
             {
                 if !p.trail.is_empty() {
-                    p.trail[s].push(v3(&ins.p, l), o.d, o.pdf, o.beta, p.l[s], p.depth[s]);
+                    p.trail[s].push(v3(&ins.p, l), o.d, o.pdf, o.mis_pdf, o.beta, p.l[s], p.depth[s]);
                 }
                 p.set_ray(
                     s,
