@@ -193,9 +193,11 @@ fn guiding_converges_to_the_image_and_lowers_the_noise_of_indirect_light() {
     // unguided ones' means spread by less than 1%).
     let (m_ref, m_on) = (mean(&reference), on.iter().map(|x| mean(x)).sum::<f64>() / 4.0);
     assert!((m_on / m_ref - 1.0).abs() < 0.01, "guided mean {m_on}, reference {m_ref}");
-    // Less noise at the same samples (the first seven, training, among them).
+    // Less noise at the same samples (the first seven, training, among them): 0.73x with the
+    // guide learning the radiance times the cosine (0.87x learning the radiance alone), so a
+    // guide that loses that lowers it past the bound.
     let (v_off, v_on) = (rel_variance(&off, &reference), rel_variance(&on, &reference));
     eprintln!("means: reference {m_ref}, guided {m_on}; relative variance: guided {v_on}, unguided {v_off}");
-    assert!(v_on < 0.95 * v_off, "relative variance guided {v_on}, unguided {v_off}");
+    assert!(v_on < 0.82 * v_off, "relative variance guided {v_on}, unguided {v_off}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
