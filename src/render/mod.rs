@@ -76,24 +76,13 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
     writes.extend(how.guide_file.clone());
     writes.extend(checkpointing.as_ref().map(|_| image::guides_beside(&checkpoint::path_for(output))));
     writes.extend(c.args.profile.trace.clone());
-    io::check_writes(&writes, &io::Inputs::new([path.as_path()]))?;
-    let time = c.time.checked()?;
-    // The load's parallel work (files read ahead, BLAS, tables) runs on the render's threads.
-    let pool = crate::pool(how.threads)?;
-    let desc = pool.install(|| load(path, &c.args.scene))?;
-    // The frame's grid files are inputs too.
-    let frame = args::frame_at(&desc, time)?;
-    io::check_writes(&writes, &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
+    let Loaded { pool, desc, scene, id } = load_checked(c, &how, &writes)?;
     let samples = samples.map(|s| s.range(desc.render.spp.get())).transpose()?;
     if let Some(d) = how.denoise {
         denoiser::prepare(d, pool.current_num_threads())?;
     }
-    let shutter = args::shutter_at(&desc, time);
-    let (mut world, scene) = world_at(c, &desc, frame, shutter, &pool)?;
     log_scene(&scene);
     let s = scene.settings;
-    let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
-    let id = render_id(&inputs, &scene, &how, time, shutter)?;
     let mut viewers = Viewers::open(&c.view, &output.display().to_string(), &s, how.look);
     let r =
         render_image(&scene, &id, output, &how, checkpointing.as_ref(), samples, &pool, true, &mut viewers)?;
@@ -145,21 +134,12 @@ pub fn run(c: &RenderCommand) -> Result<(), String> {
 /// `render --train-only`: learns the guides of the scene's whole image and writes them to
 /// `--guide-file` (nothing is done where the file holds them already).
 fn train_only(c: &RenderCommand) -> Result<(), String> {
-    let (path, how) = (&c.scene, c.args.how());
+    let how = c.args.how();
     let file = how.guide_file.clone().ok_or("--train-only writes the guides to --guide-file")?;
-    io::check_writes(std::slice::from_ref(&file), &io::Inputs::new([path.as_path()]))?;
-    let time = c.time.checked()?;
-    let pool = crate::pool(how.threads)?;
-    let desc = pool.install(|| load(path, &c.args.scene))?;
-    let frame = args::frame_at(&desc, time)?;
-    io::check_writes(std::slice::from_ref(&file), &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
-    let shutter = args::shutter_at(&desc, time);
-    let (mut world, scene) = world_at(c, &desc, frame, shutter, &pool)?;
+    let Loaded { pool, scene, id, .. } = load_checked(c, &how, std::slice::from_ref(&file))?;
     if scene.settings.guiding != crate::engine::guiding::Guiding::On {
         return Err("--train-only: the scene renders without path guiding (--guiding on)".into());
     }
-    let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
-    let id = render_id(&inputs, &scene, &how, time, shutter)?;
     let last = crate::integrator::guide_training::stage_of(scene.settings.spp - 1);
     image::learn_guides(&scene, &id, &how, last, Some(&file), &pool)?;
     if !how.quiet {
@@ -168,22 +148,35 @@ fn train_only(c: &RenderCommand) -> Result<(), String> {
     Ok(())
 }
 
-/// The world of the scene `desc` (`c`'s) at frame `frame`, its shutter open over `shutter`, and
-/// its render scene, built on `pool`'s threads.
-fn world_at(
-    c: &RenderCommand,
-    desc: &crate::engine::scene::SceneDesc,
-    frame: u32,
-    shutter: (f32, f32),
-    pool: &rayon::ThreadPool,
-) -> Result<
-    (crate::engine::world::SceneWorld, std::sync::Arc<crate::engine::render_scene::RenderScene>),
-    String,
-> {
-    pool.install(|| {
-        let mut world = load::world(desc, &c.scene, &c.args.scene);
+/// A scene loaded for `render`: the threads it loaded on (the render's), its description, its
+/// render scene at the moment asked for and what identifies its samples.
+struct Loaded {
+    pool: rayon::ThreadPool,
+    desc: crate::engine::scene::SceneDesc,
+    scene: std::sync::Arc<crate::engine::render_scene::RenderScene>,
+    id: image::RenderId,
+}
+
+/// Loads `c`'s scene at its `--time`, none of the files it `writes` being one the scene reads
+/// (checked before loading, then with every file the load and the frame read).
+fn load_checked(c: &RenderCommand, how: &args::How, writes: &[PathBuf]) -> Result<Loaded, String> {
+    let path = &c.scene;
+    io::check_writes(writes, &io::Inputs::new([path.as_path()]))?;
+    let time = c.time.checked()?;
+    // The load's parallel work (files read ahead, BLAS, tables) runs on the render's threads.
+    let pool = crate::pool(how.threads)?;
+    let desc = pool.install(|| load(path, &c.args.scene))?;
+    // The frame's grid files are inputs too.
+    let frame = args::frame_at(&desc, time)?;
+    io::check_writes(writes, &io::Inputs::of(&desc).and(desc.frame_files(frame)))?;
+    let shutter = args::shutter_at(&desc, time);
+    let (mut world, scene) = pool.install(|| {
+        let mut world = load::world(&desc, path, &c.args.scene);
         world.set_time(shutter.0, shutter.1);
         world.set_frame(frame);
         world.update_checked().map(|scene| (world, scene))
-    })
+    })?;
+    let inputs: Vec<_> = desc.inputs.iter().cloned().chain(world.frame_inputs()).collect();
+    let id = render_id(&inputs, &scene, how, time, shutter)?;
+    Ok(Loaded { pool, desc, scene, id })
 }
