@@ -237,6 +237,19 @@ impl PixelAccumulator {
         self.weight_sq = self.weight_sq.saturating_add(o.weight_sq);
     }
 
+    /// Adds the 64-bit sums `part` and sets them to zero.
+    #[inline]
+    fn absorb(&mut self, part: &mut Partial) {
+        for c in 0..3 {
+            self.sum[c] = self.sum[c].saturating_add(part.0[c] as i128);
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(part.0[3 + c] as i128);
+        }
+        // The weights' parts are non-negative.
+        self.weight = self.weight.saturating_add(part.0[6] as u64);
+        self.weight_sq = self.weight_sq.saturating_add(part.0[7] as u64);
+        *part = Partial::default();
+    }
+
     /// Sum of the values (for tests; the film reads [`PixelSums`]).
     pub fn sum(&self) -> [f64; 3] {
         PixelSums::from(self).sum()
@@ -362,8 +375,75 @@ impl PixelSums {
     }
 }
 
-/// A tile's splatted samples (`PixelFilter::splats`): accumulators over `rect`, the pixels of
-/// the window that the tile's samples reach (the tile's own and a margin around them), row-major.
+/// A tile's sums: a [`PixelAccumulator`] a pixel, and beside it the pixel's latest samples'
+/// sums in 64 bits ([`Partial`]), added to the accumulator when a sum would leave them and by
+/// [`Self::into_pixels`].
+#[derive(Clone, Debug)]
+pub struct TileSums {
+    /// The wide sums, but for [`Self::partial`]'s.
+    pixels: Vec<PixelAccumulator>,
+    /// The 64-bit sums.
+    partial: Vec<Partial>,
+}
+
+/// A pixel's sums in 64-bit integers, the same fixed-point units as a [`PixelAccumulator`]'s:
+/// the values' three, their squares' three, the weights' and the squared weights'. A sample is
+/// added here while each of its parts is below [`PART`] and no sum overflows: plain 64-bit
+/// adds, where the wide sums take a saturating 128-bit add each (a tent-filtered render's
+/// splats took 97 ns a sample with those, 55 ns with these). The sums are exact integers
+/// either way, so a pixel's total is the same bits whichever sums took which samples.
+/// Aligned to its 64 bytes: one cache line.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(align(64))]
+struct Partial([i64; 8]);
+
+/// The largest part of a sample a [`Partial`] takes (exclusive): `f64 as i64` is exact below it
+/// (a value below 2^62 / 2^50 = 4096, a square below 2^22).
+const PART: f64 = (1u64 << 62) as f64;
+
+impl TileSums {
+    /// `n` pixels without samples.
+    pub fn new(n: usize) -> Self {
+        Self { pixels: vec![PixelAccumulator::default(); n], partial: vec![Partial::default(); n] }
+    }
+
+    /// Adds one sample value of weight 1 to pixel `k` ([`PixelAccumulator::add`]).
+    #[inline]
+    pub fn add(&mut self, k: usize, v: Vec3) {
+        if !usable(v) {
+            self.pixels[k].add(v);
+            return;
+        }
+        let v = v.as_dvec3();
+        self.add_scaled(k, &[(v * FIXED).to_array(), (v * v * FIXED_SQ).to_array()], false, 1.0);
+    }
+
+    /// Adds a usable sample (its value and squared value in fixed-point units, `scaled`;
+    /// `black` where both are zero) with the weight `w` (in [0, 1]) to pixel `k`.
+    #[inline(always)]
+    fn add_scaled(&mut self, k: usize, scaled: &[[f64; 3]; 2], black: bool, w: f32) {
+        if add_partial(&mut self.partial[k], scaled, w) {
+            return;
+        }
+        let p = &mut self.pixels[k];
+        p.absorb(&mut self.partial[k]);
+        match black {
+            true => p.add_weight(w),
+            false => p.add_weighted(scaled, w),
+        }
+    }
+
+    /// The pixels' sums.
+    pub fn into_pixels(mut self) -> Vec<PixelAccumulator> {
+        for (p, part) in self.pixels.iter_mut().zip(&mut self.partial) {
+            p.absorb(part);
+        }
+        self.pixels
+    }
+}
+
+/// A tile's splatted samples (`PixelFilter::splats`): the sums of `rect`, the pixels of the
+/// window that the tile's samples reach (the tile's own and a margin around them), row-major.
 #[derive(Clone, Debug)]
 pub struct SplatFilm {
     /// The filter.
@@ -371,13 +451,18 @@ pub struct SplatFilm {
     /// The pixels held, in image coordinates.
     pub rect: PixelWindow,
     /// Their sums.
-    pub pixels: Vec<PixelAccumulator>,
+    sums: TileSums,
 }
 
 impl SplatFilm {
     /// No samples of `filter` over `rect`.
     pub fn new(filter: Splat, rect: PixelWindow) -> Self {
-        Self { filter, rect, pixels: vec![PixelAccumulator::default(); rect.len()] }
+        Self { filter, rect, sums: TileSums::new(rect.len()) }
+    }
+
+    /// The pixels' sums (row-major over [`Self::rect`]).
+    pub fn into_pixels(self) -> Vec<PixelAccumulator> {
+        self.sums.into_pixels()
     }
 
     /// Adds a sample of value `v` of the pixel `pixel`, at `u` in [0, 1)^2 across it, to every
@@ -390,7 +475,7 @@ impl SplatFilm {
         let ok = usable(v);
         if !ok && r.contains(pixel.0, pixel.1) {
             let own = r.index(pixel.0, pixel.1);
-            self.pixels[own].non_finite += 1;
+            self.sums.pixels[own].non_finite += 1;
         }
         let v = if ok { v.as_dvec3() } else { glam::DVec3::ZERO };
         // The value and its square in fixed-point units, once (FIXED is a power of two: the
@@ -405,15 +490,43 @@ impl SplatFilm {
                 // Pixels off the image (negative coordinates wrap to huge ones) or outside the
                 // window are not held.
                 if r.contains(x, y) {
-                    let (p, w) = (&mut self.pixels[r.index(x, y)], wx.w[i] * wy.w[j]);
-                    match black {
-                        true => p.add_weight(w),
-                        false => p.add_weighted(&scaled, w),
-                    }
+                    self.sums.add_scaled(r.index(x, y), &scaled, black, wx.w[i] * wy.w[j]);
                 }
             }
         }
     }
+}
+
+/// Adds a sample (its value and squared value in fixed-point units, `scaled`) of weight `w` to
+/// the 64-bit sums `part`, with the parts [`PixelAccumulator::add_weighted`] would add: `false`
+/// (and `part` unchanged) where a part is too large or a sum would overflow.
+#[inline(always)]
+fn add_partial(part: &mut Partial, scaled: &[[f64; 3]; 2], w: f32) -> bool {
+    let w = w as f64;
+    let [v, sq] = scaled;
+    let x = [
+        w * v[0],
+        w * v[1],
+        w * v[2],
+        w * sq[0],
+        w * sq[1],
+        w * sq[2],
+        w * WEIGHT_FIXED,
+        w * w * WEIGHT_FIXED,
+    ];
+    if !x.iter().all(|x| x.abs() < PART) {
+        return false;
+    }
+    let mut sum = [0i64; 8];
+    let mut overflow = false;
+    for k in 0..8 {
+        let (s, o) = part.0[k].overflowing_add(x[k] as i64);
+        (sum[k], overflow) = (s, overflow | o);
+    }
+    if !overflow {
+        part.0 = sum;
+    }
+    !overflow
 }
 
 #[cfg(test)]
@@ -432,6 +545,37 @@ mod tests {
         assert_eq!(a, b);
         let exact: f64 = values.iter().map(|v| v.x as f64).sum();
         assert!((a.sum()[0] - exact).abs() < 1e-9 * exact);
+    }
+
+    #[test]
+    fn tile_sums_equal_the_wide_sums_at_every_magnitude() {
+        // Values from 1e-7 to 1e6 (past [`PART`] and through many overflows of the 64-bit
+        // sums), non-finite ones among them, at weights in [0, 1].
+        let mut h = 1u32;
+        let mut next = || {
+            h = h.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            h
+        };
+        let (mut tile, mut wide) = (TileSums::new(2), [PixelAccumulator::default(); 2]);
+        for i in 0..20_000 {
+            let m = 10f32.powf((next() % 1400) as f32 / 100.0 - 7.0);
+            let v = match i % 97 {
+                0 => Vec3::new(f32::NAN, 1.0, 1.0),
+                1 => Vec3::ZERO,
+                _ => Vec3::new(m, m * 0.5, m * 0.25),
+            };
+            let w = (next() % 1001) as f32 / 1000.0;
+            tile.add(0, v);
+            wide[0].add(v);
+            if usable(v) {
+                let d = v.as_dvec3();
+                let scaled = [(d * FIXED).to_array(), (d * d * FIXED_SQ).to_array()];
+                tile.add_scaled(1, &scaled, v == Vec3::ZERO, w);
+                wide[1].add_weighted(&scaled, w);
+            }
+        }
+        assert_eq!(tile.partial.iter().filter(|p| p.0 != [0; 8]).count(), 2, "the 64-bit sums took samples");
+        assert_eq!(tile.into_pixels(), wide);
     }
 
     #[test]

@@ -51,7 +51,7 @@ pub fn render_samples(
                         sums.splat((x, y), path::pixel_numbers(&sampler), l);
                     }
                 }
-                (sums.pixels, ())
+                (sums.into_pixels(), ())
             },
             PixelSums::add,
         );

@@ -7,7 +7,7 @@ use super::stage_clock::StageClock;
 use super::{Stage, Stats};
 use crate::aov::Guide;
 use crate::costs::PixelCosts;
-use crate::film::{PixelAccumulator, SplatFilm, clamp_sample};
+use crate::film::{PixelAccumulator, SplatFilm, TileSums, clamp_sample};
 use crate::guided::Trail;
 use crate::lambert_vertex::LANES;
 use crate::oracle;
@@ -68,7 +68,7 @@ impl<'a> TileWork<'a> {
         let pipeline = super::pipeline(scene, guides);
         let film = match splat {
             Some((filter, rect)) => TileFilm::Splat(Box::new(SplatFilm::new(filter, rect))),
-            None => TileFilm::Own(vec![PixelAccumulator::default(); pixels]),
+            None => TileFilm::Own(TileSums::new(pixels)),
         };
         Self {
             scene,
@@ -268,7 +268,7 @@ impl<'a> TileWork<'a> {
         match &mut self.film {
             TileFilm::Own(film) => {
                 for &i in &q.finished {
-                    film[p.pixel[i as usize] as usize].add(clamp_sample(p.l[i as usize], clamp));
+                    film.add(p.pixel[i as usize] as usize, clamp_sample(p.l[i as usize], clamp));
                 }
             }
             TileFilm::Splat(film) => {
@@ -563,7 +563,7 @@ impl Charges {
 #[derive(Clone)]
 pub(super) enum TileFilm {
     /// Each sample in its own pixel (row-major within the tile).
-    Own(Vec<PixelAccumulator>),
+    Own(TileSums),
     /// Each sample splatted over the pixels the filter reaches (boxed: the filter's tables
     /// are 2 KB).
     Splat(Box<SplatFilm>),
@@ -573,8 +573,8 @@ impl TileFilm {
     /// The sums: of the tile's pixels, or of the pixels its samples reach (row-major).
     pub(super) fn into_pixels(self) -> Vec<PixelAccumulator> {
         match self {
-            TileFilm::Own(pixels) => pixels,
-            TileFilm::Splat(film) => film.pixels,
+            TileFilm::Own(sums) => sums.into_pixels(),
+            TileFilm::Splat(film) => film.into_pixels(),
         }
     }
 }
