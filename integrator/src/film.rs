@@ -29,11 +29,16 @@ pub struct Film {
 }
 
 impl Film {
-    /// An empty film. Its pixels are allocated zeroed (`bytemuck::zeroed_vec`), so that the
-    /// memory is faulted in where the samples are first written, not here as well: a
-    /// 256x256 film is 6.3 MB, and `vec![PixelSums::default(); n]` wrote every byte.
+    /// An empty film. Its pixels are allocated zeroed (`bytemuck::zeroed_vec`: fresh pages
+    /// from the kernel) and then written with zeros across the threads, so that each page's
+    /// first touch is a write. Left to the render, a page's first touch was a tile's merge
+    /// reading the sums (which maps the kernel's shared zero page) and then writing them: a
+    /// copy-on-write fault that flushes every thread's TLB by an interprocessor interrupt, slow
+    /// on a VM (5-9% of a 1024x1024 16-spp render of Bitterli's cornell-box).
     pub fn new(width: u32, height: u32) -> Self {
-        let pixels = bytemuck::zeroed_vec(width as usize * height as usize);
+        use rayon::prelude::*;
+        let mut pixels: Vec<PixelSums> = bytemuck::zeroed_vec(width as usize * height as usize);
+        pixels.par_chunks_mut(4096).for_each(|c| c.fill(PixelSums::default()));
         Self { width, height, spp: 0, pixels, guides: None, costs: None }
     }
 
