@@ -209,15 +209,14 @@ impl PixelAccumulator {
         }
     }
 
-    /// Adds a usable sample (its value and squared value in fixed-point units, `scaled`) with
-    /// the weight `w` (in [0, 1]).
+    /// Adds a usable sample (its [`Parts`]) with the weight `w` (in [0, 1]).
     #[inline(always)]
-    fn add_weighted(&mut self, scaled: &[[f64; 3]; 2], w: f32) {
+    fn add_weighted(&mut self, parts: &Parts, w: f32) {
         let w = w as f64;
         self.add_weight(w as f32);
         for c in 0..3 {
-            self.sum[c] = self.sum[c].saturating_add(fixed(w * scaled[0][c]));
-            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(w * scaled[1][c]));
+            self.sum[c] = self.sum[c].saturating_add(fixed(w * parts.x[c]));
+            self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(w * parts.x[3 + c]));
         }
     }
 
@@ -380,36 +379,78 @@ impl PixelSums {
     }
 }
 
-/// A tile's sums: a [`PixelAccumulator`] a pixel, and beside it the pixel's latest samples'
-/// sums in 64 bits ([`Partial`]), added to the accumulator when a sum would leave them and by
-/// [`Self::into_pixels`].
+/// A tile's sums: a [`PixelAccumulator`] a pixel, and beside it 64-bit sums of the pixel's
+/// samples whose parts are small ([`Partial`]), added to the accumulator every
+/// [`PARTIAL_SAMPLES`] samples and by [`Self::into_pixels`].
 #[derive(Clone, Debug)]
 pub struct TileSums {
     /// The wide sums, but for [`Self::partial`]'s.
     pixels: Vec<PixelAccumulator>,
     /// The 64-bit sums.
     partial: Vec<Partial>,
+    /// Samples added since the 64-bit sums were last emptied.
+    samples: u32,
 }
 
-/// A pixel's sums in 64-bit integers, the same fixed-point units as a [`PixelAccumulator`]'s:
-/// the values' three, their squares' three, the weights' and the squared weights'. A sample is
-/// added here while each of its parts is below [`PART`] and no sum overflows: plain 64-bit
-/// adds, where the wide sums take a saturating 128-bit add each (a tent-filtered render's
-/// splats took 97 ns a sample with those, 55 ns with these). The sums are exact integers
-/// either way, so a pixel's total is the same bits whichever sums took which samples.
-/// Aligned to its 64 bytes: one cache line.
+/// A pixel's sums in 64-bit integers, the same fixed-point units as a [`PixelAccumulator`]'s
+/// (the values' three, their squares' three, the weights' and the squared weights'), of its
+/// samples whose parts are all below [`SMALL`]: plain 64-bit adds of integers converted
+/// without a branch ([`small_fixed`]), where the wide sums take a conversion with its range
+/// check and a saturating 128-bit add each (a tent-filtered render's splats took 97 ns a
+/// sample with those; see `benches/results/camera-and-film.md`). The sums are exact integers
+/// either way, and no wide sum comes near saturating (a sample's part is below 2^91), so a
+/// pixel's total is the same bits whichever sums took which samples. Aligned to its 64 bytes:
+/// one cache line.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(align(64))]
 struct Partial([i64; 8]);
 
-/// The largest part of a sample a [`Partial`] takes (exclusive): `f64 as i64` is exact below it
-/// (a value below 2^62 / 2^50 = 4096, a square below 2^22).
-const PART: f64 = (1u64 << 62) as f64;
+/// The bound (exclusive) on the magnitude of a sample's parts for the 64-bit sums: a value
+/// below 2 and a square below 2^11 (in their fixed-point units), where [`small_fixed`] is exact.
+const SMALL: f64 = (1u64 << 51) as f64;
+
+/// How many samples the 64-bit sums take before they are added to the wide ones: 2^12 parts
+/// below 2^51 sum below 2^63.
+const PARTIAL_SAMPLES: u32 = 1 << 12;
+
+/// `x as i64` (truncated) for |x| < 2^51, without the conversion's range checks, in operations
+/// that vectorise: the truncated value plus 1.5 * 2^52 is exact, and its bits less the
+/// constant's are the integer.
+#[inline(always)]
+fn small_fixed(x: f64) -> i64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    ((x.trunc() + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
+}
+
+/// A usable sample's parts in fixed-point units before its weight: its value's three, its
+/// square's three, and the weights' unit twice.
+#[derive(Clone, Copy, Debug)]
+struct Parts {
+    /// The parts.
+    x: [f64; 8],
+    /// Whether each is below [`SMALL`] (then so is each weighted part: weights are at most 1).
+    small: bool,
+}
+
+impl Parts {
+    /// The parts of the value `v` (zero for a discarded sample: its weights alone).
+    #[inline(always)]
+    fn new(v: glam::DVec3) -> Self {
+        // FIXED and FIXED_SQ are powers of two: the scaling rounds nothing.
+        let (a, b) = (v * FIXED, v * v * FIXED_SQ);
+        let x = [a.x, a.y, a.z, b.x, b.y, b.z, WEIGHT_FIXED, WEIGHT_FIXED];
+        Self { x, small: a.abs().max(b.abs()).max_element() < SMALL }
+    }
+}
 
 impl TileSums {
     /// `n` pixels without samples.
     pub fn new(n: usize) -> Self {
-        Self { pixels: vec![PixelAccumulator::default(); n], partial: vec![Partial::default(); n] }
+        Self {
+            pixels: vec![PixelAccumulator::default(); n],
+            partial: vec![Partial::default(); n],
+            samples: 0,
+        }
     }
 
     /// Adds one sample value of weight 1 to pixel `k` ([`PixelAccumulator::add`]).
@@ -419,30 +460,49 @@ impl TileSums {
             self.pixels[k].add(v);
             return;
         }
-        let v = v.as_dvec3();
-        self.add_scaled(k, &[(v * FIXED).to_array(), (v * v * FIXED_SQ).to_array()], false, 1.0);
+        self.count();
+        self.add_parts(k, &Parts::new(v.as_dvec3()), 1.0);
     }
 
-    /// Adds a usable sample (its value and squared value in fixed-point units, `scaled`;
-    /// `black` where both are zero) with the weight `w` (in [0, 1]) to pixel `k`.
+    /// Counts a sample about to be added (to one pixel or, splatted, to several), first
+    /// emptying the 64-bit sums into the wide ones where they have taken
+    /// [`PARTIAL_SAMPLES`].
     #[inline(always)]
-    fn add_scaled(&mut self, k: usize, scaled: &[[f64; 3]; 2], black: bool, w: f32) {
-        if add_partial(&mut self.partial[k], scaled, w) {
+    fn count(&mut self) {
+        if self.samples == PARTIAL_SAMPLES {
+            self.empty_partial();
+        }
+        self.samples += 1;
+    }
+
+    /// Adds the 64-bit sums to the wide ones.
+    fn empty_partial(&mut self) {
+        for (p, part) in self.pixels.iter_mut().zip(&mut self.partial) {
+            p.absorb(part);
+        }
+        self.samples = 0;
+    }
+
+    /// Adds a sample's `parts` with the weight `w` (in [0, 1]) to pixel `k`.
+    #[inline(always)]
+    fn add_parts(&mut self, k: usize, parts: &Parts, w: f32) {
+        if !parts.small {
+            self.pixels[k].add_weighted(parts, w);
             return;
         }
-        let p = &mut self.pixels[k];
-        p.absorb(&mut self.partial[k]);
-        match black {
-            true => p.add_weight(w),
-            false => p.add_weighted(scaled, w),
+        // The weighted parts as `add_weighted` computes them (the squared weight is exact in
+        // f64, and times a power of two).
+        let w = w as f64;
+        let part = &mut self.partial[k].0;
+        for (i, (sum, x)) in part.iter_mut().zip(parts.x).enumerate() {
+            let m = if i == 7 { w * w } else { w };
+            *sum = sum.wrapping_add(small_fixed(m * x));
         }
     }
 
     /// The pixels' sums.
     pub fn into_pixels(mut self) -> Vec<PixelAccumulator> {
-        for (p, part) in self.pixels.iter_mut().zip(&mut self.partial) {
-            p.absorb(part);
-        }
+        self.empty_partial();
         self.pixels
     }
 }
@@ -482,11 +542,8 @@ impl SplatFilm {
             let own = r.index(pixel.0, pixel.1);
             self.sums.pixels[own].non_finite += 1;
         }
-        let v = if ok { v.as_dvec3() } else { glam::DVec3::ZERO };
-        // The value and its square in fixed-point units, once (FIXED is a power of two: the
-        // scaling rounds nothing).
-        let scaled = [(v * FIXED).to_array(), (v * v * FIXED_SQ).to_array()];
-        let black = v == glam::DVec3::ZERO;
+        let parts = Parts::new(if ok { v.as_dvec3() } else { glam::DVec3::ZERO });
+        self.sums.count();
         let (wx, wy) = (self.filter.weights(u[0]), self.filter.weights(u[1]));
         for j in 0..wy.n {
             let y = (pixel.1 as i64 + (wy.first + j as i32) as i64) as u32;
@@ -495,43 +552,11 @@ impl SplatFilm {
                 // Pixels off the image (negative coordinates wrap to huge ones) or outside the
                 // window are not held.
                 if r.contains(x, y) {
-                    self.sums.add_scaled(r.index(x, y), &scaled, black, wx.w[i] * wy.w[j]);
+                    self.sums.add_parts(r.index(x, y), &parts, wx.w[i] * wy.w[j]);
                 }
             }
         }
     }
-}
-
-/// Adds a sample (its value and squared value in fixed-point units, `scaled`) of weight `w` to
-/// the 64-bit sums `part`, with the parts [`PixelAccumulator::add_weighted`] would add: `false`
-/// (and `part` unchanged) where a part is too large or a sum would overflow.
-#[inline(always)]
-fn add_partial(part: &mut Partial, scaled: &[[f64; 3]; 2], w: f32) -> bool {
-    let w = w as f64;
-    let [v, sq] = scaled;
-    let x = [
-        w * v[0],
-        w * v[1],
-        w * v[2],
-        w * sq[0],
-        w * sq[1],
-        w * sq[2],
-        w * WEIGHT_FIXED,
-        w * w * WEIGHT_FIXED,
-    ];
-    if !x.iter().all(|x| x.abs() < PART) {
-        return false;
-    }
-    let mut sum = [0i64; 8];
-    let mut overflow = false;
-    for k in 0..8 {
-        let (s, o) = part.0[k].overflowing_add(x[k] as i64);
-        (sum[k], overflow) = (s, overflow | o);
-    }
-    if !overflow {
-        part.0 = sum;
-    }
-    !overflow
 }
 
 #[cfg(test)]
@@ -554,8 +579,8 @@ mod tests {
 
     #[test]
     fn tile_sums_equal_the_wide_sums_at_every_magnitude() {
-        // Values from 1e-7 to 1e6 (past [`PART`] and through many overflows of the 64-bit
-        // sums), non-finite ones among them, at weights in [0, 1].
+        // Values from 1e-7 to 1e6 (past [`SMALL`], and the 64-bit sums emptied several times),
+        // non-finite ones among them, at weights in [0, 1].
         let mut h = 1u32;
         let mut next = || {
             h = h.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
@@ -573,14 +598,24 @@ mod tests {
             tile.add(0, v);
             wide[0].add(v);
             if usable(v) {
-                let d = v.as_dvec3();
-                let scaled = [(d * FIXED).to_array(), (d * d * FIXED_SQ).to_array()];
-                tile.add_scaled(1, &scaled, v == Vec3::ZERO, w);
-                wide[1].add_weighted(&scaled, w);
+                let parts = Parts::new(v.as_dvec3());
+                tile.count();
+                tile.add_parts(1, &parts, w);
+                wide[1].add_weighted(&parts, w);
             }
         }
         assert_eq!(tile.partial.iter().filter(|p| p.0 != [0; 8]).count(), 2, "the 64-bit sums took samples");
         assert_eq!(tile.into_pixels(), wide);
+        // The largest small parts, for longer than 64-bit sums of them would hold.
+        let (mut tile, mut wide) = (TileSums::new(1), PixelAccumulator::default());
+        let v = Vec3::splat(1.999);
+        (0..3 * PARTIAL_SAMPLES).for_each(|_| (tile.add(0, v), wide.add(v)).1);
+        assert_eq!(tile.into_pixels(), vec![wide]);
+        for x in [0.0, 0.75, 1.0, 2.5, 1e6, (1u64 << 51) as f64 - 1.0] {
+            for x in [x, -x] {
+                assert_eq!(small_fixed(x), x as i64, "{x}");
+            }
+        }
     }
 
     #[test]
