@@ -83,6 +83,19 @@ impl MeshBlas {
         Self { mesh, bvh, blocks }
     }
 
+    /// The BVH of triangles given by their corners, without a mesh: a hit's `id` is the
+    /// triangle's index in `triangles` (those without area are left out), and
+    /// [`Self::surface`] is not for it (the caller's meshes hold the surfaces).
+    pub fn over_triangles(triangles: &[[Vec3A; 3]]) -> Self {
+        let mesh = MeshData {
+            positions: triangles.iter().flatten().copied().collect(),
+            triangles: (0..triangles.len() as u32).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect(),
+            ..MeshData::default()
+        };
+        // The blocks hold the corners: the mesh is not kept.
+        Self { mesh: Arc::default(), ..Self::build(Arc::new(mesh)) }
+    }
+
     /// Bounds in object space.
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds
