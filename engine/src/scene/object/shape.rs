@@ -57,7 +57,9 @@ fn read_shape<'de, T: ShapeModel, A: VariantAccess<'de>>(variant: A) -> Result<T
 /// coordinates (`vt`) uv interpolates them (else uv is the barycentric weights of the second and
 /// third vertex). Objects naming the same file share one mesh and one BLAS: each is an instance
 /// (transform, material, motion) under the TLAS, so 10,000 objects of one mesh cost 10,000 instance
-/// records (`scenes/instances.ron`, written by `scenes/instances.py`). Meshes with an emitting
+/// records (`scenes/instances.ron`, written by `scenes/instances.py`); still objects whose mesh
+/// no other object uses are traced together, their triangles in world space under one BVH
+/// (`accel::instances`). Meshes with an emitting
 /// material are baked into world-space flat-shaded triangles instead, so that light sampling finds
 /// them.
 #[derive(Deserialize)]
