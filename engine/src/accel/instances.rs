@@ -177,6 +177,12 @@ impl Instances {
         me
     }
 
+    /// How many instances the merged BVH holds (still instances of meshes no other instance
+    /// uses, traced together in world space).
+    pub fn merged(&self) -> usize {
+        self.merged.as_ref().map_or(0, |m| m.holds.iter().filter(|&&h| h).count())
+    }
+
     /// Whether instance `i` is traced in the merged BVH, not under the TLAS.
     #[inline]
     fn is_merged(&self, i: usize) -> bool {
@@ -523,7 +529,7 @@ mod tests {
         let merged = Instances::build(blas.clone(), list.clone(), (0.0, 1.0));
         merged.validate().unwrap();
         assert_eq!(merged.merged.as_ref().map(|m| m.holds.clone()), Some(vec![true, true, false, false]));
-        assert_eq!(merged.order.len(), 2);
+        assert_eq!((merged.order.len(), merged.merged()), (2, 2));
         let tlas = Instances::build_merging(blas, list, (0.0, 1.0), false);
         assert!(tlas.merged.is_none());
         let mut rnd = crate::testing::signed(5);

@@ -205,7 +205,8 @@ pub fn update_instances(
             tracing::info!(
                 instances = out.instances.list.len(),
                 meshes = out.instances.blas.len(),
-                "instances' TLAS built in {:.2} ms (BLAS of new meshes included)",
+                merged = out.instances.merged(),
+                "instances' TLAS and merged BVH built in {:.2} ms (BLAS of new meshes included)",
                 start.elapsed().as_secs_f64() * 1e3
             );
         }
