@@ -213,20 +213,13 @@ impl PixelAccumulator {
     #[inline(always)]
     fn add_weighted(&mut self, parts: &Parts, w: f32) {
         let w = w as f64;
-        self.add_weight(w as f32);
+        // Through i64 (w is at most 1): one conversion instruction where `as u64` is several.
+        self.weight = self.weight.saturating_add((w * WEIGHT_FIXED) as i64 as u64);
+        self.weight_sq = self.weight_sq.saturating_add((w * w * WEIGHT_FIXED) as i64 as u64);
         for c in 0..3 {
             self.sum[c] = self.sum[c].saturating_add(fixed(w * parts.x[c]));
             self.sum_sq[c] = self.sum_sq[c].saturating_add(fixed(w * parts.x[3 + c]));
         }
-    }
-
-    /// [`Self::add_weighted`] of a sample of value zero: its weights only.
-    #[inline(always)]
-    fn add_weight(&mut self, w: f32) {
-        let w = w as f64;
-        // Through i64 (w is at most 1): one conversion instruction where `as u64` is several.
-        self.weight = self.weight.saturating_add((w * WEIGHT_FIXED) as i64 as u64);
-        self.weight_sq = self.weight_sq.saturating_add((w * w * WEIGHT_FIXED) as i64 as u64);
     }
 
     /// Adds another accumulator's samples.
