@@ -78,11 +78,9 @@ impl<'a> LightSampler<'a> {
     pub fn sample(&mut self, time: &[f32; LANES], u: &VertexSamplesLanes, out: &mut LambertInLanes) {
         let scene = self.scene;
         let from = out.p;
-        let scalar = |out: &mut LambertInLanes, l: usize| {
+        let scalar = |out: &mut LambertInLanes, picked: (usize, f32), l: usize| {
             let p = Vec3::new(from[0][l], from[1][l], from[2][l]);
-            let n = Vec3::new(out.n[0][l], out.n[1][l], out.n[2][l]);
-            let u = u.get(l);
-            let lp = path::pick_light(scene, p.into(), n.into(), time[l], u.light_pick, u.light);
+            let lp = path::sample_light(scene, picked, p.into(), time[l], u.get(l).light);
             let (wi, le, pdf, target, delta): (Vec3, Vec3, f32, Vec3, bool) =
                 lp.map_or(Default::default(), |lp| (lp.wi.into(), lp.le, lp.pdf, lp.target.into(), lp.delta));
             for a in 0..3 {
@@ -103,19 +101,20 @@ impl<'a> LightSampler<'a> {
             return;
         }
         let Some(plain) = self.plain else {
-            (0..LANES).for_each(|l| scalar(out, l));
+            let picks = scene.lights.pick_lanes(&u.light_pick, &from, &out.n);
+            (0..LANES).for_each(|l| scalar(out, picks[l], l));
             return;
         };
         // Which kernel each lane takes; lanes whose light is of none of their kinds go to
-        // `pick_light`. With one quad light its data stay in the quad kernel's inputs.
+        // `sample_light`. With one quad light its data stay in the quad kernel's inputs.
         let mut kind = [Kind::Other; LANES];
+        let mut picks = [(0, 0.0); LANES];
         if let [PlainLight::Quad(_)] = plain {
             kind = [Kind::Quad; LANES];
         } else {
+            picks = scene.lights.pick_lanes(&u.light_pick, &from, &out.n);
             for l in 0..LANES {
-                let p = glam::Vec3A::new(from[0][l], from[1][l], from[2][l]);
-                let n = glam::Vec3A::new(out.n[0][l], out.n[1][l], out.n[2][l]);
-                let (light, pmf) = scene.lights.pick(u.light_pick[l], p, n);
+                let (light, pmf) = picks[l];
                 let id = light as u32;
                 // The light's data stay while the lane picks it again; its probability, which
                 // the tree makes depend on the point, is set each time.
@@ -164,7 +163,16 @@ impl<'a> LightSampler<'a> {
         }
         out.delta_light = [false; LANES];
         for l in (0..LANES).filter(|&l| !done[l]) {
-            scalar(out, l);
+            // With one quad light the lanes did not pick.
+            let picked = match plain {
+                [PlainLight::Quad(_)] => {
+                    let p = glam::Vec3A::new(from[0][l], from[1][l], from[2][l]);
+                    let n = glam::Vec3A::new(out.n[0][l], out.n[1][l], out.n[2][l]);
+                    scene.lights.pick(u.light_pick[l], p, n)
+                }
+                _ => picks[l],
+            };
+            scalar(out, picked, l);
         }
     }
 }
@@ -464,7 +472,7 @@ mod tests {
     use pathwave_engine::world::SceneWorld;
 
     /// Three quad lights of different power (a rectangle, a two-sided rectangle and a
-    /// parallelogram) in a box.
+    /// parallelogram) in a box, chosen by the light tree (`Auto` with more than one light).
     const LIGHTS: &str = r#"Scene(
         camera: (look_from: (0, 0, -5), look_at: (0, 0, 0), vfov: 40),
         render: (width: 8, height: 8),
@@ -552,6 +560,7 @@ mod tests {
         let scene = SceneWorld::render_scene(&desc);
         let quads = scene.lights.plain.iter().filter(|l| matches!(l, PlainLight::Quad(_))).count();
         assert_eq!(quads, lights, "the quad lights");
+        assert_eq!(scene.lights.tree.is_some(), scene.lights.len() > 1, "the tree chooses among several");
         let mut rng = TestRng::new(11);
         let mut sampler = LightSampler::new(&scene);
         let (mut lit, mut spherical) = (0, 0);
@@ -572,15 +581,21 @@ mod tests {
                 u.light_pick[l] = rng.next_1d();
                 (u.light[0][l], u.light[1][l]) = (rng.next_1d(), rng.next_1d());
             }
+            // Surfaces facing every way, and points in a medium (no normal): the light tree
+            // weighs the lights by the normal.
+            let n: [Vec3; LANES] = std::array::from_fn(|l| match l % 4 {
+                0 => Vec3::ZERO,
+                _ => Vec3::new(rng.next_1d() - 0.5, rng.next_1d() - 0.5, rng.next_1d() - 0.5).normalize(),
+            });
             let mut got = LambertInLanes::default();
             for l in 0..LANES {
                 (got.p[0][l], got.p[1][l], got.p[2][l]) = (p[l].x, p[l].y, p[l].z);
+                (got.n[0][l], got.n[1][l], got.n[2][l]) = (n[l].x, n[l].y, n[l].z);
             }
             sampler.sample(&[0.0; LANES], &u, &mut got);
             for l in 0..LANES {
                 let u = u.get(l);
-                let want =
-                    path::pick_light(&scene, p[l].into(), Vec3::ZERO.into(), 0.0, u.light_pick, u.light);
+                let want = path::pick_light(&scene, p[l].into(), n[l].into(), 0.0, u.light_pick, u.light);
                 let bits = |v: [f32; 3]| v.map(f32::to_bits);
                 let lane = |a: &[[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
                 match want {
@@ -595,7 +610,7 @@ mod tests {
                 }
                 // Which lanes the spherical rectangle took, as the kernel decided.
                 if let PlainLight::Quad(q) =
-                    &scene.lights.plain[scene.lights.pick(u.light_pick, p[l].into(), Vec3::ZERO.into()).0]
+                    &scene.lights.plain[scene.lights.pick(u.light_pick, p[l].into(), n[l].into()).0]
                 {
                     let c = Vec3::from(q.center) - p[l];
                     spherical += (q.rect

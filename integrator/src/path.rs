@@ -11,7 +11,7 @@ mod light;
 mod medium;
 
 pub use camera::{camera_ray, camera_rays, camera_sampler, pixel_numbers};
-pub(crate) use light::{LightPick, environment_light, light_choice, pick_light, seen_from};
+pub(crate) use light::{LightPick, environment_light, light_choice, pick_light, sample_light, seen_from};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
 pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 

@@ -33,7 +33,7 @@ pub struct SceneArgs {
     #[arg(long)]
     pub max_depth: Option<u32>,
     /// How a light is chosen: power (a table fixed for the scene), tree (the light tree: by
-    /// each point's view of the lights) or auto (the tree above a number of lights; default)
+    /// each point's view of the lights) or auto (the tree with two lights or more; default)
     /// (overrides the scene).
     #[arg(long, value_name = "power|tree|auto")]
     pub light_sampler: Option<LightSamplerKind>,

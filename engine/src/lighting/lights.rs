@@ -11,7 +11,7 @@
 use crate::accel::geometry::Geometry;
 use crate::lighting::area::AreaEmission;
 use crate::lighting::tree::LightSamplerKind;
-use crate::lighting::tree::{LightBounds, LightTree};
+use crate::lighting::tree::{FEW_LIGHTS, LightBounds, LightTree, choose_lanes};
 use crate::math::luminance;
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 
@@ -23,11 +23,14 @@ pub use crate::lighting::punctual_light::{LightTexture, PunctualLight, SpotFallo
 pub const NO_LIGHT: u32 = u32::MAX;
 
 /// [`LightSamplerKind::Auto`] chooses by the light tree where a scene has more lights with
-/// bounds than this. Measured (benches/results/sampling.md, "A light tree"): spread small
-/// lights over a floor, 4 of them, the tree's relMSE is a third of the table's for 15% more
-/// time per sample, 8 a sixth for 20% more; a room under 6 ceiling panels, 0.6 of it for 80%
-/// more time (no gain). Every scene of `scenes/` has 4 lights or fewer and keeps the table.
-pub const TREE_MIN_LIGHTS: usize = 8;
+/// bounds than this; a scene with one keeps the table, whose choice is the same (bit for bit).
+/// Measured (benches/results/sampling.md, "A light tree" and "A few lights"): small lights
+/// spread over a floor, 4 of them, a third of the table's relMSE for 15% more time per sample,
+/// 8 a sixth for 20% more; with up to [`crate::lighting::tree::FEW_LIGHTS`] lights weighed
+/// across lanes, a room under 6 ceiling panels 0.63x the variance for 1.1x the time, the
+/// Cycles interior (2 lights) 0.70x for 1.08x, veach-bidir (2) 0.79x for 1.13x, veach-mis
+/// (4) 0.85x for 1.11x, `scenes/lights.ron` (a spot and a point) 0.84x for 1.03x.
+pub const TREE_MIN_LIGHTS: usize = 1;
 
 /// The bounds of an emitting primitive of power `phi` for the light tree (pbrt-v4's
 /// `DiffuseAreaLight::Bounds`): its box, and its normal where it is flat (a quad, a triangle, a
@@ -253,7 +256,7 @@ impl LightTable {
                             let (lo, hi) = sweep(i);
                             LightBounds { lo: b.lo + lo, hi: b.hi + hi, ..b }
                         }
-                        Some(OtherLight::Punctual(p)) => p.bounds(power[l])?,
+                        Some(OtherLight::Punctual(p)) => p.bounds()?,
                         Some(OtherLight::Environment) => return None,
                     };
                     Some((l as u32, b))
@@ -344,16 +347,57 @@ impl LightTable {
             let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
             return (i, self.pmf[i]);
         };
+        match self.infinite_or_tree(u) {
+            Err(picked) => picked,
+            Ok((u, finite)) => {
+                let (l, pmf) = tree.pick(u, from, n);
+                (l as usize, finite * pmf)
+            }
+        }
+    }
+
+    /// [`Self::pick`] for the points `from` of normals `n` in lanes, with `u` per lane: the
+    /// same bits, the importances of a tree of few lights computed across the lanes.
+    #[inline]
+    pub fn pick_lanes<const N: usize>(
+        &self,
+        u: &[f32; N],
+        from: &[[f32; N]; 3],
+        n: &[[f32; N]; 3],
+    ) -> [(usize, f32); N] {
+        let at = |a: &[[f32; N]; 3], l: usize| Vec3A::new(a[0][l], a[1][l], a[2][l]);
+        let Some((tree, few)) = self.tree.as_ref().and_then(|t| Some((t, t.few()?))) else {
+            return std::array::from_fn(|l| self.pick(u[l], at(from, l), at(n, l)));
+        };
+        let split: [_; N] = std::array::from_fn(|l| self.infinite_or_tree(u[l]));
+        let u_tree = split.map(|s| s.map_or(0.0, |(u, _)| u));
+        let (k, pmf) = crate::simd::lanes(
+            #[inline(always)]
+            || {
+                let mut importance = [[0.0; N]; FEW_LIGHTS];
+                tree.importances_lanes(from, n, &mut importance);
+                choose_lanes(&importance, few, &u_tree)
+            },
+        );
+        std::array::from_fn(|l| match split[l] {
+            Err(picked) => picked,
+            Ok((_, finite)) => (tree.leaf_light(k[l] as usize) as usize, finite * pmf[l]),
+        })
+    }
+
+    /// The first step of a choice by the tree: a light at infinity, each with its share
+    /// (pbrt-v4's `pInfinite`), as `Err((light, probability))`; else `Ok` of the number
+    /// rescaled for the tree's choice and the tree's share.
+    #[inline]
+    fn infinite_or_tree(&self, u: f32) -> Result<(f32, f32), (usize, f32)> {
         let count = self.infinite.len();
         let finite = self.finite_share();
         let p_infinite = 1.0 - finite;
         if u < p_infinite {
             let l = self.infinite[((u / p_infinite * count as f32) as usize).min(count - 1)] as usize;
-            return (l, self.pmf[l]);
+            return Err((l, self.pmf[l]));
         }
-        let u = ((u - p_infinite) / finite).min(1.0 - f32::EPSILON / 2.0);
-        let (l, pmf) = tree.pick(u, from, n);
-        (l as usize, finite * pmf)
+        Ok((((u - p_infinite) / finite).min(1.0 - f32::EPSILON / 2.0), finite))
     }
 
     /// The share of the choices the tree's lights take: one among the lights at infinity's.
@@ -436,12 +480,18 @@ mod tests {
         PunctualLight::Point { position: Vec3A::new(x, 1.0, 0.0), intensity: Vec3::splat(i) }
     }
 
-    /// Finite lights: half by power, half evenly; each light at infinity a share of its own.
+    /// The table's choice: finite lights half by power, half evenly; each light at infinity a
+    /// share of its own.
     #[test]
     fn choices_mix_power_and_even_shares() {
         let geo = Geometry::default();
         let table = |punctual: &[PunctualLight], environment| {
-            LightTable::build(&geo, Vec::new(), LightInputs { punctual, environment, ..Default::default() })
+            let sampler = LightSamplerKind::Power;
+            LightTable::build(
+                &geo,
+                Vec::new(),
+                LightInputs { punctual, environment, sampler, ..Default::default() },
+            )
         };
         use BackgroundSampling::{Alone, Always, Never};
         let one = table(&[point(0.0, 5.0)], Never);

@@ -139,8 +139,23 @@ impl PunctualLight {
     }
 
     /// Its bounds for the light tree (pbrt-v4's `PointLight::Bounds`, `SpotLight::Bounds`,
-    /// `ProjectionLight::Bounds`) with power `phi`; `None` at infinity.
-    pub(super) fn bounds(&self, phi: f32) -> Option<LightBounds> {
+    /// `ProjectionLight::Bounds`); `None` at infinity. Their power is that of a point light of
+    /// the same intensity along the axis (4 times it, over pi), not the light's own: the
+    /// importance's cone factor accounts for the directions it does not reach, as pbrt-v4
+    /// notes. (With a spot's own power, a spot of 25 degrees weighed 20 times too little
+    /// beside a point light: `scenes/lights.ron`, benches/results/sampling.md.)
+    pub(super) fn bounds(&self) -> Option<LightBounds> {
+        let phi = match *self {
+            PunctualLight::Point { intensity, .. } => luminance(intensity),
+            PunctualLight::Spot { intensity, texture, .. } => {
+                luminance(intensity * texture.map_or(Vec3::ONE, |t| t.texture.mean))
+            }
+            // The irradiance on the plane at distance 1 is the intensity along the axis.
+            PunctualLight::Projector { irradiance, texture, .. } => {
+                luminance(irradiance * texture.map_or(Vec3::ONE, |t| t.mean))
+            }
+            PunctualLight::Directional { .. } => return None,
+        } * 4.0;
         let at = |p: Vec3A, w: Vec3A, cos_theta_o: f32, cos_theta_e: f32| LightBounds {
             lo: p,
             hi: p,

@@ -138,6 +138,8 @@ struct Cone {
     w: Vec3A,
     half_diagonal: f32,
     r2: f32,
+    /// Its radius.
+    r: f32,
     phi: f32,
     cos_theta_o: f32,
     sin_theta_o: f32,
@@ -153,6 +155,7 @@ impl From<&LightBounds> for Cone {
             w: b.w,
             half_diagonal: (b.hi - b.lo).length() * 0.5,
             r2: (b.hi - center).length_squared(),
+            r: (b.hi - center).length_squared().sqrt(),
             phi: b.phi,
             cos_theta_o: b.cos_theta_o,
             sin_theta_o: sin_of(b.cos_theta_o),
@@ -171,30 +174,43 @@ impl Cone {
     /// normal's line; 0 where no light of the box can reach `p`.
     #[inline]
     fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
-        let d2_true = p.distance_squared(self.center);
+        self.importance_at(p.to_array(), n.to_array())
+    }
+
+    /// [`Self::importance`] on plain numbers, every branch a select and the operations in a
+    /// fixed order: a loop of it over lanes vectorises and gives each lane the scalar call's
+    /// bits ([`LightTree::importance_lanes`]).
+    #[inline(always)]
+    fn importance_at(&self, p: [f32; 3], n: [f32; 3]) -> f32 {
+        let c = self.center;
+        let d = [p[0] - c.x, p[1] - c.y, p[2] - c.z];
+        let d2_true = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let d2 = d2_true.max(self.half_diagonal);
+        // The unit direction from the box's centre to `p` (zero at the centre).
+        let inv = 1.0 / d2_true.sqrt();
+        let inv = if inv.is_finite() { inv } else { 0.0 };
+        let wi = [d[0] * inv, d[1] * inv, d[2] * inv];
         // The angle between the cone's axis and the direction from the box to `p`.
-        let wi = (p - self.center).normalize_or_zero();
-        let cos_w = if self.two_sided { self.w.dot(wi).abs() } else { self.w.dot(wi) };
+        let cos_w = self.w.x * wi[0] + self.w.y * wi[1] + self.w.z * wi[2];
+        let cos_w = if self.two_sided { cos_w.abs() } else { cos_w };
         let sin_w = sin_of(cos_w);
         // The half angle the box subtends from `p` (its bounding sphere's; all directions from
         // inside it).
-        let cos_b = if d2_true < self.r2 { -1.0 } else { (1.0 - self.r2 / d2_true).max(0.0).sqrt() };
-        let sin_b = sin_of(cos_b);
+        // (sin_b = r / d, cos_b = sqrt(1 - sin_b^2): one root fewer than both from cos_b.)
+        let inside = d2_true < self.r2;
+        let sin_b = if inside { 0.0 } else { (self.r * inv).min(1.0) };
+        let cos_b = if inside { -1.0 } else { sin_of(sin_b) };
         // theta' = max(0, theta_w - theta_o - theta_b).
         let (cos_o, sin_o) = (self.cos_theta_o, self.sin_theta_o);
         let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
         let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        if cos_p <= self.cos_theta_e {
-            return 0.0;
-        }
         let importance = self.phi * cos_p / d2;
-        if n == Vec3A::ZERO {
-            return importance.max(0.0);
-        }
-        let cos_i = wi.dot(n).abs();
-        (importance * cos_sub_clamped(sin_of(cos_i), cos_i, sin_b, cos_b)).max(0.0)
+        let cos_i = (wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2]).abs();
+        let facing = importance * cos_sub_clamped(sin_of(cos_i), cos_i, sin_b, cos_b);
+        let in_medium = n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0;
+        let importance = if in_medium { importance } else { facing };
+        if cos_p <= self.cos_theta_e { 0.0 } else { importance.max(0.0) }
     }
 }
 
@@ -207,14 +223,27 @@ struct Node {
     leaf: bool,
 }
 
-/// The tree over the bounded lights, stored flat.
+/// The tree over the bounded lights, stored flat; over at most [`FEW_LIGHTS`] lights, the
+/// leaves alone (`few`).
 #[derive(Clone, Debug, Default)]
 pub struct LightTree {
     nodes: Vec<Node>,
     /// Per light (the table's index), the way down to its leaf: bit `d` set where the walk
-    /// takes the second child at depth `d` (pbrt-v4's bit trail).
+    /// takes the second child at depth `d` (pbrt-v4's bit trail); with few lights, its leaf's
+    /// index.
     trail: Vec<u64>,
+    /// Whether the nodes are the leaves alone: a pick weighs every light by its own importance
+    /// at the point, one importance per light, across lanes where the points come in lanes
+    /// ([`Self::importances_lanes`]), where the walk takes two per level, one point at a time,
+    /// and weighs a light by its cluster's bounds.
+    few: bool,
 }
+
+/// The most lights a tree holds as its leaves alone. A Cornell box under six ceiling panels
+/// (benches/results/sampling.md, "A few lights"): the walk took 1.3-1.8x the table's time per
+/// sample, the leaves alone across lanes 1.1x, for 0.63x its variance. Above 8 the walk is
+/// kept (where the leaves alone stop paying was not measured).
+pub const FEW_LIGHTS: usize = 8;
 
 /// Buckets per axis in the build's split search (pbrt-v4's 12).
 const BUCKETS: usize = 12;
@@ -228,7 +257,16 @@ impl LightTree {
     /// one); `count` is the table's number of lights.
     pub fn build(lights: &[(u32, LightBounds)], count: usize) -> Self {
         assert!(!lights.is_empty(), "a light tree needs a light");
-        let mut tree = LightTree { nodes: Vec::with_capacity(2 * lights.len()), trail: vec![0; count] };
+        let mut tree =
+            LightTree { nodes: Vec::with_capacity(2 * lights.len()), trail: vec![0; count], few: false };
+        if lights.len() <= FEW_LIGHTS {
+            for (k, (light, bounds)) in lights.iter().enumerate() {
+                tree.nodes.push(Node { cone: Cone::from(bounds), index: *light, leaf: true });
+                tree.trail[*light as usize] = k as u64;
+            }
+            tree.few = true;
+            return tree;
+        }
         let mut lights = lights.to_vec();
         tree.build_node(&mut lights, 0, 0);
         tree
@@ -310,6 +348,14 @@ impl LightTree {
     /// can reach `p`.
     #[inline]
     pub fn pick(&self, mut u: f32, p: Vec3A, n: Vec3A) -> (u32, f32) {
+        if self.few {
+            let mut importance = [0.0; FEW_LIGHTS];
+            for (i, node) in importance.iter_mut().zip(&self.nodes) {
+                *i = node.cone.importance(p, n);
+            }
+            let (k, pmf) = choose(&importance[..self.nodes.len()], u);
+            return (self.nodes[k].index, pmf);
+        }
         let (mut at, mut pmf) = (0, 1.0f32);
         loop {
             let node = &self.nodes[at];
@@ -337,6 +383,14 @@ impl LightTree {
     /// (pbrt-v4's `PMF`): the same products along the light's trail, so the same bits.
     #[inline]
     pub fn pmf(&self, light: u32, p: Vec3A, n: Vec3A) -> f32 {
+        if self.few {
+            let mut sum = 0.0;
+            for node in &self.nodes {
+                sum += node.cone.importance(p, n);
+            }
+            let own = self.nodes[self.trail[light as usize] as usize].cone.importance(p, n);
+            return if sum > 0.0 { own / sum } else { 0.0 };
+        }
         let (mut at, mut pmf, mut trail) = (0, 1.0f32, self.trail[light as usize]);
         loop {
             let node = &self.nodes[at];
@@ -355,6 +409,37 @@ impl LightTree {
         }
     }
 
+    /// How many lights it holds as leaves alone ([`FEW_LIGHTS`]), if it does: then
+    /// [`Self::importances_lanes`] and [`choose`] pick for points in lanes.
+    #[inline]
+    pub fn few(&self) -> Option<usize> {
+        self.few.then_some(self.nodes.len())
+    }
+
+    /// With few lights, the importance of each leaf (`[k][lane]`, the first [`Self::few`]
+    /// rows) at the points `p` of normals `n` in lanes: the bits [`Self::pick`] computes for
+    /// each point.
+    #[inline]
+    pub fn importances_lanes<const N: usize>(
+        &self,
+        p: &[[f32; N]; 3],
+        n: &[[f32; N]; 3],
+        out: &mut [[f32; N]; FEW_LIGHTS],
+    ) {
+        for (row, node) in out.iter_mut().zip(&self.nodes) {
+            let cone = &node.cone;
+            for l in 0..N {
+                row[l] = cone.importance_at([p[0][l], p[1][l], p[2][l]], [n[0][l], n[1][l], n[2][l]]);
+            }
+        }
+    }
+
+    /// The light of leaf `k` (with few lights).
+    #[inline]
+    pub fn leaf_light(&self, k: usize) -> u32 {
+        self.nodes[k].index
+    }
+
     /// How many nodes it has.
     pub fn len(&self) -> usize {
         self.nodes.len()
@@ -364,6 +449,77 @@ impl LightTree {
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
+}
+
+/// Chooses one of the lights of importances `importance` (in order) with `u` in [0, 1): (its
+/// index, its importance over their sum); the probability 0 (the index meaningless) where all
+/// are 0. The sum is added in order, so a light's probability from [`LightTree::pmf`] has the
+/// same bits.
+///
+/// The light is the first whose running sum exceeds `u` times the sum (so one of some
+/// importance), counted without branches: [`choose_lanes`] does the same in lanes.
+#[inline]
+pub fn choose(importance: &[f32], u: f32) -> (usize, f32) {
+    let sum: f32 = importance.iter().fold(0.0, |a, &i| a + i);
+    if !(sum > 0.0) {
+        return (0, 0.0);
+    }
+    let t = u * sum;
+    let (mut acc, mut below, mut last) = (0.0, 0, 0);
+    for (k, &i) in importance.iter().enumerate() {
+        acc += i;
+        below += (acc <= t) as usize;
+        last = if i > 0.0 { k } else { last };
+    }
+    // `t` rounded up to the sum: the last light with some importance.
+    let k = if below < importance.len() { below } else { last };
+    (k, importance[k] / sum)
+}
+
+/// [`choose`] for each lane `l` among the first `few` rows of `importance[..][l]`, with
+/// `u[l]`: the index and probability per lane, the same bits (32-bit indices: 64-bit ones
+/// keep the selects from vectorising).
+#[inline]
+pub fn choose_lanes<const N: usize>(
+    importance: &[[f32; N]; FEW_LIGHTS],
+    few: usize,
+    u: &[f32; N],
+) -> ([u32; N], [f32; N]) {
+    let rows = &importance[..few];
+    let mut sum = [0.0f32; N];
+    for row in rows {
+        for l in 0..N {
+            sum[l] += row[l];
+        }
+    }
+    let (mut acc, mut below, mut last) = ([0.0f32; N], [0u32; N], [0u32; N]);
+    for (k, row) in rows.iter().enumerate() {
+        for l in 0..N {
+            acc[l] += row[l];
+            below[l] += (acc[l] <= u[l] * sum[l]) as u32;
+            last[l] = if row[l] > 0.0 { k as u32 } else { last[l] };
+        }
+    }
+    for l in 0..N {
+        below[l] = if below[l] < few as u32 { below[l] } else { last[l] };
+    }
+    // The chosen light's importance, then its probability.
+    let mut pmf = [0.0f32; N];
+    for (k, row) in rows.iter().enumerate() {
+        for l in 0..N {
+            // A sum of one term, each term masked by its bits: selects compile to branches.
+            let mask = 0u32.wrapping_sub((below[l] == k as u32) as u32);
+            pmf[l] += f32::from_bits(row[l].to_bits() & mask);
+        }
+    }
+    for l in 0..N {
+        pmf[l] /= sum[l];
+    }
+    for l in 0..N {
+        let none = !(sum[l] > 0.0);
+        (below[l], pmf[l]) = if none { (0, 0.0) } else { (below[l], pmf[l]) };
+    }
+    (below, pmf)
 }
 
 /// Moves the lights that `first` holds for ahead of the others; returns how many there are,
@@ -388,7 +544,7 @@ pub enum LightSamplerKind {
     /// what they can send it (lights at infinity keep their shares).
     Tree,
     /// The tree where the scene has more than [`crate::lighting::lights::TREE_MIN_LIGHTS`]
-    /// lights with bounds, else the table.
+    /// light with bounds (two or more), else the table.
     #[default]
     Auto,
 }
@@ -426,21 +582,36 @@ mod tests {
     /// and down (one-sided and two-sided), spheres, triangles, a disk, point, spot and
     /// projector lights, with a directional light and the environment at infinity.
     fn many_lights() -> (Geometry, LightTable) {
+        let (geo, table) = lights_of_every_kind(40, 20, 30);
+        assert_eq!(table.tree.as_ref().unwrap().few(), None);
+        (geo, table)
+    }
+
+    /// [`many_lights`] with two quads, a sphere and a triangle: eight lights with bounds,
+    /// which the tree holds as leaves alone.
+    fn few_lights() -> (Geometry, LightTable) {
+        let (geo, table) = lights_of_every_kind(2, 1, 1);
+        assert_eq!(table.tree.as_ref().unwrap().few(), Some(8));
+        (geo, table)
+    }
+
+    /// The scene of [`many_lights`] with `quads`, `spheres` and `triangles` emitters.
+    fn lights_of_every_kind(quads: usize, spheres: usize, triangles: usize) -> (Geometry, LightTable) {
         let mut r = crate::testing::uniform(5);
         let mut at = |s: f32| Vec3A::new(s * (r() - 0.5), s * r(), s * (r() - 0.5));
         let (mut prims, mut material) = (Vec::new(), Vec::new());
-        for k in 0..40 {
+        for k in 0..quads {
             let c = at(10.0);
             let flip = if k % 3 == 0 { -1.0 } else { 1.0 };
             let quad = Quad::new(c, Vec3A::X * 0.3, Vec3A::Z * 0.2 * flip).unwrap();
             prims.push(Primitive::Quad(quad));
-            material.push(k % 2);
+            material.push(k as u32 % 2);
         }
-        for k in 0..20 {
+        for k in 0..spheres {
             prims.push(Primitive::Sphere(Sphere::new(at(10.0), 0.1 + 0.01 * k as f32)));
             material.push(0);
         }
-        for _ in 0..30 {
+        for _ in 0..triangles {
             let c = at(10.0);
             prims.push(Primitive::Triangle(Triangle::new(c, c + at(0.5), c + at(0.5)).unwrap()));
             material.push(1);
@@ -496,6 +667,13 @@ mod tests {
     #[test]
     fn picks_follow_the_pmf() {
         let (geo, table) = many_lights();
+        check_picks(&geo, &table);
+        let (geo, table) = few_lights();
+        check_picks(&geo, &table);
+    }
+
+    /// [`picks_follow_the_pmf`] for one table.
+    fn check_picks(geo: &Geometry, table: &LightTable) {
         let n = table.len();
         let mut r = crate::testing::uniform(11);
         for k in 0..6 {
@@ -521,7 +699,7 @@ mod tests {
                     None => {
                         let prim = table.prims[l] as usize;
                         let two_sided = table.emission[geo.material[prim] as usize].unwrap().two_sided;
-                        let s = table.sample(&geo, l, p, glam::Vec2::new(r(), r()), 0.0);
+                        let s = table.sample(geo, l, p, glam::Vec2::new(r(), r()), 0.0);
                         two_sided || s.n.dot(p - s.p) > 0.0
                     }
                 };
@@ -566,15 +744,61 @@ mod tests {
     /// gives the light from the point the ray left.
     #[test]
     fn emitter_densities_hold_the_trees_pmf() {
-        let (geo, table) = many_lights();
+        for (geo, table) in [many_lights(), few_lights()] {
+            check_densities(&geo, &table);
+        }
+    }
+
+    /// [`emitter_densities_hold_the_trees_pmf`] for one table.
+    fn check_densities(geo: &Geometry, table: &LightTable) {
         let (from, normal) = (Vec3A::new(0.5, 1.0, -0.5), Vec3A::new(0.6, 0.8, 0.0));
         for (l, &prim) in table.prims.iter().enumerate() {
-            let s = table.sample(&geo, l, from, glam::Vec2::new(0.3, 0.6), 0.0);
+            let s = table.sample(geo, l, from, glam::Vec2::new(0.3, 0.6), 0.0);
             let want =
                 geo.prims[prim as usize].pdf_solid_angle(from, s.p, s.n) * table.pmf_from(l, from, normal);
-            let got = table.pdf(&geo, prim, from, normal, s.p, s.n, 0.0);
+            let got = table.pdf(geo, prim, from, normal, s.p, s.n, 0.0);
             assert_eq!(got.to_bits(), want.to_bits(), "light {l}");
         }
+    }
+
+    /// With few lights, picks for points in lanes have the bits of picks one point at a time,
+    /// on surfaces and in a medium, near the lights and far, and with numbers next to 1. (Fails
+    /// with the lanes' sum added in another order.)
+    #[test]
+    fn lanes_pick_as_one_point_does() {
+        const N: usize = 16;
+        let (_, table) = few_lights();
+        let mut r = crate::testing::uniform(12);
+        let mut lights = std::collections::HashSet::new();
+        for group in 0..400 {
+            let (mut p, mut n, mut u) = ([[0.0; N]; 3], [[0.0; N]; 3], [0.0; N]);
+            for l in 0..N {
+                let scale = if l % 3 == 0 { 0.5 } else { 14.0 };
+                let at = Vec3A::new(scale * (r() - 0.5), scale * r() - 2.0, scale * (r() - 0.5));
+                let normal = match (group + l) % 4 {
+                    0 => Vec3A::ZERO,
+                    _ => Vec3A::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize(),
+                };
+                for a in 0..3 {
+                    (p[a][l], n[a][l]) = (at[a], normal[a]);
+                }
+                u[l] = if l == 5 { 1.0 - f32::EPSILON / 2.0 } else { r() };
+            }
+            let got = table.pick_lanes(&u, &p, &n);
+            for l in 0..N {
+                let at = |a: &[[f32; N]; 3]| Vec3A::new(a[0][l], a[1][l], a[2][l]);
+                let want = table.pick(u[l], at(&p), at(&n));
+                assert_eq!(
+                    (got[l].0, got[l].1.to_bits()),
+                    (want.0, want.1.to_bits()),
+                    "lane {l} at {}",
+                    at(&p)
+                );
+                lights.insert(want.0);
+            }
+        }
+        // Every light was picked (the environment is sampled apart).
+        assert_eq!(lights.len(), table.len() - 1, "the lights picked");
     }
 
     /// Behind a one-sided quad, alone in the tree, nothing it sends arrives: probability 0.

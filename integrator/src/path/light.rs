@@ -34,9 +34,21 @@ pub(crate) fn pick_light(
     u_pick: f32,
     u: Vec2,
 ) -> Option<LightPick> {
+    sample_light(scene, scene.lights.pick(u_pick, p, n), p, time, u)
+}
+
+/// [`pick_light`]'s sample of the light it picked, `(light, pmf)` (the lanes pick for several
+/// points at once: `LightTable::pick_lanes`).
+#[inline]
+pub(crate) fn sample_light(
+    scene: &RenderScene,
+    (light, pmf): (usize, f32),
+    p: Vec3A,
+    time: f32,
+    u: Vec2,
+) -> Option<LightPick> {
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
-    let (light, pmf) = lights.pick(u_pick, p, n);
     if let Some(other) = lights.other(light) {
         return pick_other(scene, other, pmf, p, u);
     }
