@@ -452,17 +452,18 @@ fn materials_become_the_gltf_brdf_masked_and_emitting() {
         r#"{"name":"lamp","emissiveFactor":[1,0.5,0],"extensions":{"KHR_materials_emissive_strength":{"emissiveStrength":4}}}"#,
         r#"{"name":"varnish","pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":0.5},"extensions":{"KHR_materials_ior":{"ior":1.4},"KHR_materials_clearcoat":{"clearcoatFactor":1,"clearcoatRoughnessFactor":0.1}}}"#,
         r#"{"name":"glass","pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":0},"extensions":{"KHR_materials_transmission":{"transmissionFactor":1}}}"#,
+        r#"{"name":"frosted","pbrMetallicRoughness":{"metallicFactor":0,"roughnessFactor":0.2},"extensions":{"KHR_materials_transmission":{"transmissionFactor":1},"KHR_materials_ior":{"ior":1.33}}}"#,
     ];
     let mut members: Vec<(&str, &str)> = materials.iter().map(|m| ("materials", *m)).collect();
-    let meshes: Vec<String> = (0..6)
+    let meshes: Vec<String> = (0..7)
         .map(|m| {
             format!(r#"{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":3,"material":{m}}}]}}"#)
         })
         .collect();
     members.extend(meshes.iter().map(|m| ("meshes", m.as_str())));
-    let nodes: Vec<String> = (1..7).map(|m| format!(r#"{{"mesh":{m}}}"#)).collect();
+    let nodes: Vec<String> = (1..8).map(|m| format!(r#"{{"mesh":{m}}}"#)).collect();
     members.extend(nodes.iter().map(|n| ("nodes", n.as_str())));
-    members.push(("scenes", r#"{"nodes":[0,1,2,3,4,5]}"#));
+    members.push(("scenes", r#"{"nodes":[0,1,2,3,4,5,6]}"#));
     members.push((
         "extensionsUsed",
         r#"["KHR_materials_emissive_strength","KHR_materials_ior","KHR_materials_clearcoat","KHR_materials_transmission"]"#,
@@ -472,7 +473,9 @@ fn materials_become_the_gltf_brdf_masked_and_emitting() {
     for want in [
         r#""paint": MetallicRoughness(base_color: (0.8, 0.2, 0.1), metallic: 0.3, roughness: 0.6),"#,
         r#""varnish": MetallicRoughness(base_color: (1, 1, 1), metallic: 0, roughness: 0.5, ior: 1.4, clearcoat: 1, clearcoat_roughness: 0.1),"#,
-        r#""glass": Principled(base_color: (1, 1, 1), metallic: 0, roughness: 0, spec_trans: 1),"#,
+        // Smooth clear glass: the smooth dielectric.
+        r#""glass": Dielectric(ior: 1.5),"#,
+        r#""frosted": Principled(base_color: (1, 1, 1), metallic: 0, roughness: 0.2, eta: 1.33, spec_trans: 1),"#,
         r#""cut": Mask(opacity: 0, material: "cut (opaque)"),"#,
         r#""veil": Mask(opacity: 0.25, material: "veil (opaque)"),"#,
         r#"material: "lamp", emit: (radiance: (4, 2, 0), two_sided: false)"#,
@@ -480,7 +483,7 @@ fn materials_become_the_gltf_brdf_masked_and_emitting() {
         assert!(ron.contains(want), "{want} in\n{ron}");
     }
     let desc = crate::scene::load(&path).unwrap();
-    assert_eq!(desc.objects.len(), 6);
+    assert_eq!(desc.objects.len(), 7);
     let emit = desc.objects[3].emit.as_ref().unwrap();
     assert_eq!(
         emit.radiance,

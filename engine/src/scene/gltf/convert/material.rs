@@ -1,5 +1,6 @@
 //! glTF materials as RON: metallic-roughness materials as `MetallicRoughness` (the
-//! specification's BRDF; `Principled` where they transmit), with `Mask` for the alpha modes
+//! specification's BRDF; `Principled` where they transmit, `Dielectric` for smooth clear
+//! glass), with `Mask` for the alpha modes
 //! MASK and BLEND, `NormalMap` for normal textures and `emit` for emissive ones; textures as
 //! `Image` (an image file beside the glTF) or `GltfImage` (one inside it), with
 //! `KHR_texture_transform` as a `uv_transform`.
@@ -10,6 +11,7 @@
 
 use super::{Converter, file_name, num, rgb};
 use crate::format::gltf::{ImageAt, name, uri_path};
+use crate::material::microfacet::SMOOTH_ALPHA;
 use glam::Vec3;
 use gltf::material::AlphaMode;
 use std::fmt::Write;
@@ -64,7 +66,7 @@ impl Converter<'_> {
         let transmission = m.transmission().filter(|t| t.transmission_factor() > 0.0);
         let ior = m.ior().filter(|i| *i != 1.5);
         let coat = m.extension_value("KHR_materials_clearcoat");
-        let kind = if let Some(t) = transmission {
+        let kind = if let Some(t) = &transmission {
             if let Some(ior) = ior {
                 write!(fields, ", eta: {}", num(ior)).unwrap();
             }
@@ -118,7 +120,22 @@ impl Converter<'_> {
             }
             self.image_texture(n.texture(), n.tex_coord(), String::new(), true, "normalTexture", &at, path)
         });
-        let plain = format!("{kind}({fields})");
+        // Clear glass as smooth as a mirror (GGX width `roughness^2` below `SMOOTH_ALPHA`,
+        // where every rough material of pathwave is smooth): the smooth dielectric that the
+        // principled BSDF's transmission tends to. Cycles renders such glass by a delta lobe
+        // too; the principled BSDF's narrowest lobe (width `SMOOTH_ALPHA`) would reach a delta
+        // sun through it as glints and caustics that neither the specification's smooth
+        // surface nor Cycles shows.
+        let smooth_glass = transmission.as_ref().is_some_and(|t| t.transmission_factor() == 1.0)
+            && pbr.metallic_factor() == 0.0
+            && pbr.roughness_factor().powi(2) < SMOOTH_ALPHA
+            && pbr.metallic_roughness_texture().is_none()
+            && base_texture.is_none()
+            && [r, g, b] == [1.0; 3];
+        let plain = match smooth_glass {
+            true => format!("Dielectric(ior: {})", num(ior.unwrap_or(1.5))),
+            false => format!("{kind}({fields})"),
+        };
         let opacity = match m.alpha_mode() {
             AlphaMode::Opaque => 1.0,
             AlphaMode::Mask => {
