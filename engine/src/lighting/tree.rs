@@ -349,12 +349,12 @@ impl LightTree {
     #[inline]
     pub fn pick(&self, mut u: f32, p: Vec3A, n: Vec3A) -> (u32, f32) {
         if self.few {
-            let mut importance = [0.0; FEW_LIGHTS];
-            for (i, node) in importance.iter_mut().zip(&self.nodes) {
-                *i = node.cone.importance(p, n);
-            }
-            let (k, pmf) = choose(&importance[..self.nodes.len()], u);
-            return (self.nodes[k].index, pmf);
+            // One lane of the lanes' choice: the same operations, so the same bits.
+            let mut importance = [[0.0; 1]; FEW_LIGHTS];
+            let (p, n) = (p.to_array().map(|c| [c]), n.to_array().map(|c| [c]));
+            self.importances_lanes(&p, &n, &mut importance);
+            let (k, pmf) = choose_lanes(&importance, self.nodes.len(), &[u]);
+            return (self.nodes[k[0] as usize].index, pmf[0]);
         }
         let (mut at, mut pmf) = (0, 1.0f32);
         loop {
@@ -384,11 +384,13 @@ impl LightTree {
     #[inline]
     pub fn pmf(&self, light: u32, p: Vec3A, n: Vec3A) -> f32 {
         if self.few {
-            let mut sum = 0.0;
-            for node in &self.nodes {
-                sum += node.cone.importance(p, n);
+            // The sum in `choose_lanes`'s order.
+            let (mut sum, mut own) = (0.0, 0.0);
+            for (k, node) in self.nodes.iter().enumerate() {
+                let i = node.cone.importance(p, n);
+                sum += i;
+                own = if k as u64 == self.trail[light as usize] { i } else { own };
             }
-            let own = self.nodes[self.trail[light as usize] as usize].cone.importance(p, n);
             return if sum > 0.0 { own / sum } else { 0.0 };
         }
         let (mut at, mut pmf, mut trail) = (0, 1.0f32, self.trail[light as usize]);
@@ -410,7 +412,7 @@ impl LightTree {
     }
 
     /// How many lights it holds as leaves alone ([`FEW_LIGHTS`]), if it does: then
-    /// [`Self::importances_lanes`] and [`choose`] pick for points in lanes.
+    /// [`Self::importances_lanes`] and [`choose_lanes`] pick for points in lanes.
     #[inline]
     pub fn few(&self) -> Option<usize> {
         self.few.then_some(self.nodes.len())
@@ -451,34 +453,12 @@ impl LightTree {
     }
 }
 
-/// Chooses one of the lights of importances `importance` (in order) with `u` in [0, 1): (its
-/// index, its importance over their sum); the probability 0 (the index meaningless) where all
-/// are 0. The sum is added in order, so a light's probability from [`LightTree::pmf`] has the
-/// same bits.
-///
-/// The light is the first whose running sum exceeds `u` times the sum (so one of some
-/// importance), counted without branches: [`choose_lanes`] does the same in lanes.
-#[inline]
-pub fn choose(importance: &[f32], u: f32) -> (usize, f32) {
-    let sum: f32 = importance.iter().fold(0.0, |a, &i| a + i);
-    if !(sum > 0.0) {
-        return (0, 0.0);
-    }
-    let t = u * sum;
-    let (mut acc, mut below, mut last) = (0.0, 0, 0);
-    for (k, &i) in importance.iter().enumerate() {
-        acc += i;
-        below += (acc <= t) as usize;
-        last = if i > 0.0 { k } else { last };
-    }
-    // `t` rounded up to the sum: the last light with some importance.
-    let k = if below < importance.len() { below } else { last };
-    (k, importance[k] / sum)
-}
-
-/// [`choose`] for each lane `l` among the first `few` rows of `importance[..][l]`, with
-/// `u[l]`: the index and probability per lane, the same bits (32-bit indices: 64-bit ones
-/// keep the selects from vectorising).
+/// Chooses, for each lane `l`, one of the lights of importances `importance[..few][l]` with
+/// `u[l]` in [0, 1): its index and its importance over their sum; the probability 0 (the index
+/// meaningless) where all are 0. The light is the first whose running sum exceeds `u` times
+/// the sum (so one of some importance): the count of running sums at or below it, without
+/// branches (32-bit indices and masks: selects of 64-bit indices or of kept values compiled
+/// to branches). One lane ([`LightTree::pick`]) gives the bits of many.
 #[inline]
 pub fn choose_lanes<const N: usize>(
     importance: &[[f32; N]; FEW_LIGHTS],
@@ -763,7 +743,8 @@ mod tests {
 
     /// With few lights, picks for points in lanes have the bits of picks one point at a time,
     /// on surfaces and in a medium, near the lights and far, and with numbers next to 1. (Fails
-    /// with the lanes' sum added in another order.)
+    /// with the tree's share left out of the lanes' probability; the sum in another order than
+    /// `LightTree::pmf`'s fails `picks_follow_the_pmf`.)
     #[test]
     fn lanes_pick_as_one_point_does() {
         const N: usize = 16;
