@@ -263,6 +263,7 @@ impl GlossyLanes for PrincipledThin {
 
 lanes!(pub MetallicRoughnessLanes for MetallicRoughness {
     base_color: v3, metallic: f32, alpha: f32, f0: f32, clearcoat: f32, alpha_coat: f32,
+    e_avg: f32, fms_dielectric: f32, diffuse_scale: f32, fms_coat: f32,
 });
 
 /// What the glTF metallic-roughness kernel reads for one path.

@@ -1,12 +1,16 @@
 //! MetallicRoughness: the glTF 2.0 metallic-roughness material as the glTF specification's
 //! Appendix B ("BRDF Implementation") defines it, with the index of refraction of
-//! `KHR_materials_ior` and the clear coat of `KHR_materials_clearcoat`. What glTF files'
-//! materials become (`scene::gltf`).
+//! `KHR_materials_ior` and the clear coat of `KHR_materials_clearcoat`, and the energy of
+//! multiple scattering between microfacets that the specification suggests adding. What glTF
+//! files' materials become (`scene::gltf`).
 //!
 //! ```text
-//! specular(alpha)  = D(h) V(wo, wi)       GGX D, V = G1(wo) G1(wi) / (4 |n.wo| |n.wi|)
-//! dielectric       = (1 - F(f0)) base_color / pi + F(f0) specular(roughness^2)
+//! specular(alpha)  = D(h) V(wo, wi) (1 + Fms (1 - E(wo)) / E(wo))
+//!                    GGX D, V = G1(wo) G1(wi) / (4 |n.wo| |n.wi|); E, Fms: ggx_energy
+//! dielectric       = (1 - A(wo)) (1 - A(wi)) / (1 - A_avg) base_color / pi
+//!                    + F(f0) specular(roughness^2)
 //!                    F(f0) = f0 + (1 - f0) (1 - |wo.h|)^5, f0 = ((ior - 1) / (ior + 1))^2
+//!                    A: the directional albedo of F(f0) specular, A_avg its mean
 //! metal            = F(base_color) specular(roughness^2)
 //! material         = mix(dielectric, metal, metallic)
 //! coated           = mix(material, specular(clearcoat_roughness^2), clearcoat Fc)
@@ -14,16 +18,29 @@
 //! ```
 //!
 //! A Lambertian diffuse lobe under a Schlick-Fresnel-weighted GGX lobe with separable Smith
-//! masking (see [`super::microfacet`]), single scattering: not Disney's diffuse (no
-//! retro-reflection) and not Blender's energy-conserving Principled BSDF (its diffuse scaled
-//! by the specular layer's albedo, its GGX multiple-scattering). Both sides of the surface
-//! shade alike (the normal is turned towards `wo`), as glTF's `doubleSided` materials do.
+//! masking (see [`super::microfacet`]): not Disney's diffuse (no retro-reflection). Where the
+//! specification leaves the choice to the renderer, pathwave takes the accurate one it names
+//! ("Microfacet Surfaces", "Coupling Diffuse and Specular Reflection"; [`super::ggx_energy`]):
+//! - each GGX lobe is scaled by the factor of Turquin (2019) that gives back the light a
+//!   single-scattering lobe loses, its `Fms` the Fresnel factor of the light scattered more than
+//!   once (Kulla and Conty 2017), as Blender's multiple-scattering GGX: a white metal reflects
+//!   all the light at every roughness (31% head-on at roughness 1 without it);
+//! - the diffuse base is coupled to the specular layer by Kulla and Conty's weight, not by
+//!   `fresnel_mix`'s `1 - F(f0)`: a white dielectric reflects all the light (`1 - F` at the half
+//!   vector takes 4% from the diffuse lobe where a rough specular lobe returns 2%), and the
+//!   coupling is reciprocal. Blender's Principled BSDF weights its diffuse by `1 - A(wo)` alone.
+//!
+//! Both sides of the surface shade alike (the normal is turned towards `wo`), as glTF's
+//! `doubleSided` materials do.
 //!
 //! Sampling picks the diffuse cosine lobe, the specular lobe or the clear coat's (visible
 //! normals, Heitz 2018) in proportion to their weights seen from `wo` (Fresnel factors at the
 //! normal), and weighs the
 //! direction by the mixture's density: `eval`'s `pdf` is that mixture, so MIS sees one lobe.
 
+use super::ggx_energy::{
+    albedos, averages, compensation, layer_albedo, layer_average, multiple_fresnel, schlick_average,
+};
 use super::microfacet::{Ggx, Microfacet, PlainFrame, SMOOTH_ALPHA};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
 use crate::format::{Albedo, Color, Positive, UnitInterval};
@@ -32,16 +49,17 @@ use glam::{Vec2, Vec3, Vec3A};
 use std::f32::consts::FRAC_1_PI;
 
 /// The glTF 2.0 metallic-roughness material as the glTF specification's Appendix B defines it (what
-/// glTF files' opaque materials become): a Lambertian `base_color / pi` weighted by `1 - F` under a
-/// GGX lobe (width `roughness^2`, separable Smith masking) weighted by the Schlick Fresnel factor
-/// `F` of `f0 = ((ior - 1) / (ior + 1))^2` at the half vector, mixed by `metallic` with the same
-/// GGX lobe tinted by Schlick's factor of `f0 = base_color`; `KHR_materials_clearcoat`'s coat on
-/// top, a GGX lobe of width `clearcoat_roughness^2` mixed in by `clearcoat (0.04 + 0.96 (1 -
-/// n.wo)^5)`. Single scattering, not energy-conserving (a white metal of roughness 1 reflects 31%
-/// head-on), both sides alike. The parameters are glTF's `pbrMetallicRoughness` factors,
-/// `KHR_materials_ior`'s `ior` and `KHR_materials_clearcoat`'s, with glTF's defaults: `base_color`
-/// 1 (or a texture), `metallic` 1, `roughness` 1, `ior` 1.5, `clearcoat` and
-/// `clearcoat_roughness` 0.
+/// glTF files' opaque materials become), with the energy it suggests keeping: a Lambertian
+/// `base_color / pi` under a GGX lobe (width `roughness^2`, separable Smith masking) weighted by the
+/// Schlick Fresnel factor `F` of `f0 = ((ior - 1) / (ior + 1))^2` at the half vector, coupled to it
+/// by Kulla and Conty's energy-preserving weight (in place of `1 - F`), mixed by `metallic` with the
+/// same GGX lobe tinted by Schlick's factor of `f0 = base_color`; `KHR_materials_clearcoat`'s coat
+/// on top, a GGX lobe of width `clearcoat_roughness^2` mixed in by `clearcoat (0.04 + 0.96 (1 -
+/// n.wo)^5)`. Each GGX lobe gets back the light of multiple scattering (Turquin 2019, as Blender's
+/// multiple-scattering GGX): white, metal or dielectric, it reflects all the light. Both sides
+/// alike. The parameters are glTF's `pbrMetallicRoughness` factors, `KHR_materials_ior`'s `ior` and
+/// `KHR_materials_clearcoat`'s, with glTF's defaults: `base_color` 1 (or a texture), `metallic` 1,
+/// `roughness` 1, `ior` 1.5, `clearcoat` and `clearcoat_roughness` 0.
 #[derive(serde::Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
 pub struct MetallicRoughnessDesc {
@@ -92,7 +110,18 @@ pub struct MetallicRoughness {
     pub clearcoat: f32,
     /// GGX width of the clear coat.
     pub alpha_coat: f32,
+    /// Mean albedo `E_avg` of the base layer's GGX lobe with a Fresnel factor of 1.
+    pub e_avg: f32,
+    /// `Fms` of the dielectric's specular lobe ([`multiple_fresnel`]).
+    pub fms_dielectric: f32,
+    /// `1 / (1 - A_avg)` of the dielectric's specular layer ([`layer_average`]).
+    pub diffuse_scale: f32,
+    /// `Fms` of the clear coat's lobe.
+    pub fms_coat: f32,
 }
+
+/// The clear coat's normal-incidence reflectance (`KHR_materials_clearcoat`'s, of index 1.5).
+const COAT_F0: f32 = 0.04;
 
 /// `(1 - cos)^5`, `cos` limited to [0, 1].
 #[inline]
@@ -108,6 +137,35 @@ fn width(roughness: f32) -> f32 {
 }
 
 impl MetallicRoughness {
+    /// The material of glTF's parameters: perceptual roughnesses, the dielectric's index of
+    /// refraction.
+    pub fn new(
+        base_color: Vec3,
+        metallic: f32,
+        roughness: f32,
+        ior: f32,
+        clearcoat: f32,
+        clearcoat_roughness: f32,
+    ) -> Self {
+        let (alpha, alpha_coat) = (width(roughness), width(clearcoat_roughness));
+        let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+        let avg = averages(alpha);
+        let fms_dielectric = multiple_fresnel(schlick_average(Vec3::splat(f0)), avg.e).x;
+        let fms_coat = multiple_fresnel(schlick_average(Vec3::splat(COAT_F0)), averages(alpha_coat).e).x;
+        MetallicRoughness {
+            base_color,
+            metallic,
+            alpha,
+            f0,
+            clearcoat,
+            alpha_coat,
+            e_avg: avg.e,
+            fms_dielectric,
+            diffuse_scale: 1.0 / (1.0 - layer_average(f0, avg, fms_dielectric)).max(1e-6),
+            fms_coat,
+        }
+    }
+
     /// The probabilities of sampling the diffuse, the specular and the clear coat lobe seen
     /// at `cos_o` from the normal: the lobes' weights there, the Fresnel factors taken at the
     /// normal instead of the half vector (a dielectric's specular share at least 0.05).
@@ -135,16 +193,24 @@ impl MetallicRoughness {
         let base = Ggx { alpha: self.alpha };
         // D V with V = G1(wo) G1(wi) / (4 cos_o cos_i).
         let specular = base.d(h) * base.g1_over_cos(lo) * base.g1_over_cos(li) * 0.25;
+        let (albedos_o, albedos_i) = (albedos(self.alpha, lo.z), albedos(self.alpha, li.z));
         let f_dielectric = self.f0 + (1.0 - self.f0) * fw;
-        let dielectric =
-            Vec3::splat(f_dielectric * specular) + (1.0 - f_dielectric) * FRAC_1_PI * self.base_color;
-        let metal = (self.base_color + (Vec3::ONE - self.base_color) * fw) * specular;
+        let k_dielectric = 1.0 + self.fms_dielectric * (1.0 - albedos_o.0) / albedos_o.0;
+        let layer_o = layer_albedo(self.f0, albedos_o, self.fms_dielectric);
+        let layer_i = layer_albedo(self.f0, albedos_i, self.fms_dielectric);
+        let diffuse = (1.0 - layer_o) * (1.0 - layer_i) * self.diffuse_scale * FRAC_1_PI;
+        let dielectric = Vec3::splat(k_dielectric * f_dielectric * specular) + diffuse * self.base_color;
+        let fms_metal = multiple_fresnel(schlick_average(self.base_color), self.e_avg);
+        let k_metal = compensation(albedos_o.0, fms_metal);
+        let metal = k_metal * (self.base_color + (Vec3::ONE - self.base_color) * fw) * specular;
         let f = dielectric.lerp(metal, self.metallic);
         let [p_diffuse, p_specular, p_coat] = self.lobe_weights(lo.z);
         let pdf = p_diffuse * li.z * FRAC_1_PI + p_specular * base.pdf_visible(lo, h) / (4.0 * vh);
         let coat = Ggx { alpha: self.alpha_coat };
-        let fc = self.clearcoat * (0.04 + 0.96 * schlick(lo.z));
-        let coat_specular = coat.d(h) * coat.g1_over_cos(lo) * coat.g1_over_cos(li) * 0.25;
+        let fc = self.clearcoat * (COAT_F0 + (1.0 - COAT_F0) * schlick(lo.z));
+        let e_coat = albedos(self.alpha_coat, lo.z).0;
+        let k_coat = 1.0 + self.fms_coat * (1.0 - e_coat) / e_coat;
+        let coat_specular = k_coat * coat.d(h) * coat.g1_over_cos(lo) * coat.g1_over_cos(li) * 0.25;
         let coated = self.clearcoat > 0.0;
         let f = if coated { f * (1.0 - fc) + Vec3::splat(fc * coat_specular) } else { f };
         let pdf = if coated { pdf + p_coat * coat.pdf_visible(lo, h) / (4.0 * vh) } else { pdf };
@@ -182,16 +248,14 @@ impl MaterialModel for MetallicRoughness {
     const SHADING: Shading = Shading::Glossy;
 
     fn build(desc: &MetallicRoughnessDesc, colors: &mut Colors) -> Self {
-        let base_color = colors.get(&desc.base_color);
-        let eta = desc.ior.0;
-        MetallicRoughness {
-            base_color,
-            metallic: desc.metallic.0,
-            alpha: width(desc.roughness.0),
-            f0: ((eta - 1.0) / (eta + 1.0)).powi(2),
-            clearcoat: desc.clearcoat.map_or(0.0, |c| c.0),
-            alpha_coat: width(desc.clearcoat_roughness.map_or(0.0, |c| c.0)),
-        }
+        MetallicRoughness::new(
+            colors.get(&desc.base_color),
+            desc.metallic.0,
+            desc.roughness.0,
+            desc.ior.0,
+            desc.clearcoat.map_or(0.0, |c| c.0),
+            desc.clearcoat_roughness.map_or(0.0, |c| c.0),
+        )
     }
 
     #[inline]
@@ -230,14 +294,7 @@ mod tests {
     use crate::material::microfacet::testing::hemisphere;
 
     fn material(base: f32, metallic: f32, roughness: f32, clearcoat: f32) -> MetallicRoughness {
-        MetallicRoughness {
-            base_color: Vec3::new(base, 0.5 * base, 0.25),
-            metallic,
-            alpha: width(roughness),
-            f0: 0.04,
-            clearcoat,
-            alpha_coat: width(0.3),
-        }
+        MetallicRoughness::new(Vec3::new(base, 0.5 * base, 0.25), metallic, roughness, 1.5, clearcoat, 0.3)
     }
 
     fn cases() -> Vec<(&'static str, MetallicRoughness)> {
@@ -256,8 +313,16 @@ mod tests {
     }
 
     /// The glTF specification's Appendix B written out for one pair of directions, apart from
-    /// the material: the reference `eval` is checked against.
+    /// the material, each GGX lobe scaled by its multiple-scattering compensation: the
+    /// reference `eval` is checked against.
     fn spec_brdf(m: &MetallicRoughness, v: Vec3A, l: Vec3A) -> Vec3 {
+        // Turquin's factor and Kulla and Conty's coupling (ggx_energy).
+        let fms = |alpha: f32, f0: Vec3| multiple_fresnel(schlick_average(f0), averages(alpha).e);
+        let k = |alpha: f32, f0: Vec3| compensation(albedos(alpha, v.z).0, fms(alpha, f0));
+        let fms_d = fms(m.alpha, Vec3::splat(m.f0)).x;
+        let layer = |w: Vec3A| layer_albedo(m.f0, albedos(m.alpha, w.z), fms_d);
+        let coupling =
+            (1.0 - layer(v)) * (1.0 - layer(l)) / (1.0 - layer_average(m.f0, averages(m.alpha), fms_d));
         let h = (v + l).normalize();
         let (nl, nv, nh, vh) = (l.z, v.z, h.z, v.dot(h));
         let a2 = m.alpha * m.alpha;
@@ -265,21 +330,23 @@ mod tests {
         let vis =
             1.0 / ((nl + (a2 + (1.0 - a2) * nl * nl).sqrt()) * (nv + (a2 + (1.0 - a2) * nv * nv).sqrt()));
         let fr = |f0: Vec3| f0 + (Vec3::ONE - f0) * (1.0 - vh).powi(5);
-        let metal = fr(m.base_color) * vis * d;
+        let metal = k(m.alpha, m.base_color) * fr(m.base_color) * vis * d;
         let f = fr(Vec3::splat(m.f0));
-        let dielectric = (Vec3::ONE - f) * m.base_color / std::f32::consts::PI + f * vis * d;
+        let dielectric =
+            coupling * m.base_color / std::f32::consts::PI + k(m.alpha, Vec3::splat(m.f0)) * f * vis * d;
         let material = dielectric.lerp(metal, m.metallic);
         let ac2 = m.alpha_coat * m.alpha_coat;
         let dc = ac2 / (std::f32::consts::PI * (nh * nh * (ac2 - 1.0) + 1.0).powi(2));
         let visc =
             1.0 / ((nl + (ac2 + (1.0 - ac2) * nl * nl).sqrt()) * (nv + (ac2 + (1.0 - ac2) * nv * nv).sqrt()));
         let fc = m.clearcoat * (0.04 + 0.96 * (1.0 - nv).powi(5));
-        material * (1.0 - fc) + Vec3::splat(fc * visc * dc)
+        material * (1.0 - fc) + k(m.alpha_coat, Vec3::splat(0.04)) * fc * visc * dc
     }
 
-    /// `eval` is the specification's BRDF times the cosine, on either side of the surface.
-    /// (Checked to fail with Disney's diffuse, retro-reflection included, in place of the
-    /// Lambertian under `1 - F`: the rough dielectric is 4% off already at 0 and 30 degrees.)
+    /// `eval` is the specification's BRDF (with the energy it suggests keeping) times the
+    /// cosine, on either side of the surface. (Checked to fail with Disney's diffuse,
+    /// retro-reflection included, in place of the Lambertian: the rough dielectric is 4% off
+    /// already at 0 and 30 degrees.)
     #[test]
     fn eval_is_the_specifications_brdf() {
         for (what, m) in cases() {
@@ -324,11 +391,7 @@ mod tests {
     /// base under a clear coat of roughness 0.05, GGX width 0.0025, a lobe 36 times narrower
     /// than [`cases`]' coat.
     fn sharp_coat() -> MetallicRoughness {
-        MetallicRoughness {
-            base_color: Vec3::new(0.1, 0.45, 0.12),
-            alpha_coat: width(0.05),
-            ..material(0.1, 0.0, 0.6, 1.0)
-        }
+        MetallicRoughness::new(Vec3::new(0.1, 0.45, 0.12), 0.0, 0.6, 1.5, 1.0, 0.05)
     }
 
     #[test]
@@ -348,11 +411,12 @@ mod tests {
         }
     }
 
-    /// White: the sampler's estimate of the directional albedo is the quadrature's. (The
-    /// specification's BRDF does not conserve energy exactly: the diffuse lobe's `1 - F` takes
-    /// the Fresnel factor of each light direction's half vector, so a white dielectric of
-    /// roughness 0.2 seen at 60 degrees reflects 1.026; single scattering, a white metal of
-    /// roughness 1 seen head-on reflects 1 - ln 2 = 0.307, the quadrature's value.)
+    /// White: the sampler's estimate of the directional albedo is the quadrature's, and the
+    /// material reflects all the light, metal or dielectric, at every roughness and angle.
+    /// (Checked to fail without the multiple-scattering compensation: a white metal of
+    /// roughness 1 seen head-on reflects 1 - ln 2 = 0.307; and with `fresnel_mix`'s `1 - F`
+    /// in place of the coupling: a white dielectric of roughness 1 reflects 0.978 head-on,
+    /// 1.03 at roughness 0.2 seen at 60 degrees.)
     #[test]
     fn directional_albedo_by_sampling_is_the_quadratures() {
         let mut r = crate::testing::uniform(11);
@@ -370,7 +434,7 @@ mod tests {
                     let by_sampling = sum / n as f64;
                     let by_quadrature = hemisphere(400, 200, |wi| m.eval(wo, wi, Vec3A::Z).f_cos.x as f64);
                     assert!(
-                        by_quadrature < 1.05 && by_quadrature > 0.3,
+                        (by_quadrature - 1.0).abs() < 0.01,
                         "{roughness} {metallic} {deg}: {by_quadrature}"
                     );
                     assert!((by_sampling - by_quadrature).abs() < 0.01, "{by_sampling} vs {by_quadrature}");

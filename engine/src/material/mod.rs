@@ -15,6 +15,7 @@ pub mod chi2;
 pub mod dielectric;
 pub mod diffuse_light;
 mod disney;
+pub mod ggx_energy;
 pub mod lambertian;
 pub mod metal;
 pub mod metallic_roughness;
