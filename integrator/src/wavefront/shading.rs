@@ -201,18 +201,28 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
             #[inline(always)]
             || path::GlossySamples::draw_lanes(scene, &samplers, &depths, reads),
         );
-        // Per lane: the kernel (none: shaded path by path) and light sample; the kernels that
-        // some lane takes, as bits by `Kernel::index`.
+        // Per lane: the material as its kernel takes it (none: shaded path by path), and the
+        // point and normal the lights are picked for, all lanes at once (the bits of one
+        // point's pick); then the light sample. The kernels that some lane takes, as bits by
+        // `Kernel::index`.
+        let mut materials: [Option<(K, Kernel)>; LANES] = std::array::from_fn(|_| None);
+        let (mut from, mut normal, mut u_pick) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [0.0; LANES]);
+        for (l, &i) in chunk.iter().enumerate() {
+            let sp = &p.hit[i as usize].surface;
+            materials[l] = scene.with_material(p.hit[i as usize].material, sp, K::lane_material);
+            for a in 0..3 {
+                (from[a][l], normal[a][l]) = (sp.p[a], sp.ns[a]);
+            }
+            u_pick[l] = u[l].light_pick;
+        }
+        let picks = (!scene.lights.is_empty()).then(|| scene.lights.pick_lanes(&u_pick, &from, &normal));
         let (mut kernel, mut used) = ([None; LANES], 0u32);
         let mut lights: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
-            let hit = &p.hit[s];
-            let Some((m, k)) = scene.with_material(hit.material, &hit.surface, K::lane_material) else {
-                continue;
-            };
-            let (sp, time) = (&hit.surface, p.time[s]);
-            lights[l] = path::glossy_light(scene, sp, time, &u[l]);
+            let Some((m, k)) = materials[l].take() else { continue };
+            let (sp, time) = (&p.hit[s].surface, p.time[s]);
+            lights[l] = picks.and_then(|picks| path::sample_light(scene, picks[l], sp.p, time, u[l].light));
             let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
             K::set(&mut ins, l, &m, (-p.dir[s]).into(), sp.ns.into(), wi.into(), &u[l].bsdf);
             kernel[l] = Some(k);
