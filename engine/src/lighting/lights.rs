@@ -11,7 +11,7 @@
 use crate::accel::geometry::Geometry;
 use crate::lighting::area::AreaEmission;
 use crate::lighting::tree::LightSamplerKind;
-use crate::lighting::tree::{FEW_LIGHTS, LightBounds, LightTree, choose_lanes};
+use crate::lighting::tree::{FEW_LIGHTS, LightBounds, LightTree, choose_lanes, importance_sums};
 use crate::math::luminance;
 use crate::shape::{EllipsoidLight, LightSample, Primitive, QuadLight, SphereLight};
 
@@ -31,6 +31,21 @@ pub const NO_LIGHT: u32 = u32::MAX;
 /// Cycles interior (2 lights) 0.70x for 1.08x, veach-bidir (2) 0.79x for 1.13x, veach-mis
 /// (4) 0.85x for 1.11x, `scenes/lights.ron` (a spot and a point) 0.84x for 1.03x.
 pub const TREE_MIN_LIGHTS: usize = 1;
+
+/// The least share of the choices that the tree's lights and the lights at infinity each keep
+/// at a point where both send light ([`LightTable::infinite_share`]).
+pub const INFINITE_MIN_SHARE: f32 = 0.1;
+
+/// A directional light's importance at a point of normal `n` (zero in a medium), in the light
+/// tree's units (a point light's: 4 times the irradiance it gives a surface facing it): `power`
+/// (4 times its irradiance) times the cosine to the normal's line.
+#[inline]
+fn infinite_importance(to_light: Vec3A, power: f32, n: Vec3A) -> f32 {
+    match n == Vec3A::ZERO {
+        true => power,
+        false => power * to_light.dot(n).abs(),
+    }
+}
 
 /// The bounds of an emitting primitive of power `phi` for the light tree (pbrt-v4's
 /// `DiffuseAreaLight::Bounds`): its box, and its normal where it is flat (a quad, a triangle, a
@@ -82,9 +97,12 @@ pub struct LightTable {
     /// ([`LightSamplerKind`]); then [`Self::pick`] and the densities ask it, and `pmf` holds
     /// only the lights at infinity's probabilities.
     pub tree: Option<LightTree>,
-    /// The lights at infinity that the choice takes, in order (the tree's table chooses among
-    /// them evenly).
+    /// The lights at infinity that the choice takes, in order, with the tree (directional
+    /// lights: the environment beside other lights is sampled apart).
     infinite: Vec<u32>,
+    /// Each one's unit direction towards it and the importance it has on a surface facing it
+    /// ([`Self::infinite_share`]).
+    infinite_bounds: Vec<(Vec3A, f32)>,
     /// The environment is sampled apart ([`Self::environment_apart`]).
     apart: bool,
 }
@@ -230,10 +248,13 @@ impl LightTable {
             t.cdf[last..].fill(1.0);
         }
         let bounded = infinite.iter().filter(|&&i| !i).count();
+        let chosen_infinite = (0..infinite.len()).filter(|&k| infinite[k] && !apart(k)).count();
         let tree = match inputs.sampler {
             LightSamplerKind::Power => false,
             LightSamplerKind::Tree => bounded > 0,
-            LightSamplerKind::Auto => bounded > TREE_MIN_LIGHTS,
+            // A light at infinity beside one bounded light: the tree's importance at the point
+            // shares the choices between them (`infinite_share`).
+            LightSamplerKind::Auto => bounded > TREE_MIN_LIGHTS || (bounded > 0 && chosen_infinite > 0),
         };
         if tree {
             // A primitive at time t lies translated by velocity * t: over the shutter its box
@@ -264,6 +285,16 @@ impl LightTable {
                 .collect();
             t.infinite =
                 (0..t.pmf.len() as u32).filter(|&l| infinite[l as usize] && !apart(l as usize)).collect();
+            t.infinite_bounds = (t.infinite.iter())
+                .map(|&l| match t.other(l as usize) {
+                    Some(OtherLight::Punctual(PunctualLight::Directional { to_light, irradiance })) => {
+                        (*to_light, 4.0 * luminance(*irradiance))
+                    }
+                    // Not reached: the environment beside other lights is sampled apart. An
+                    // importance everywhere keeps it a share.
+                    _ => (Vec3A::ZERO, 1.0),
+                })
+                .collect();
             t.tree = Some(LightTree::build(&bounds, t.pmf.len()));
         }
         // The lights of the kinds the integrator samples across lanes, as plain numbers.
@@ -347,7 +378,8 @@ impl LightTable {
             let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
             return (i, self.pmf[i]);
         };
-        match self.infinite_or_tree(u) {
+        let total = if self.infinite.is_empty() { 0.0 } else { tree.importance_total(from, n) };
+        match self.infinite_or_tree(u, total, n) {
             Err(picked) => picked,
             Ok((u, finite)) => {
                 let (l, pmf) = tree.pick(u, from, n);
@@ -369,15 +401,17 @@ impl LightTable {
         let Some((tree, few)) = self.tree.as_ref().and_then(|t| Some((t, t.few()?))) else {
             return std::array::from_fn(|l| self.pick(u[l], at(from, l), at(n, l)));
         };
-        let split: [_; N] = std::array::from_fn(|l| self.infinite_or_tree(u[l]));
+        let mut importance = [[0.0; N]; FEW_LIGHTS];
+        crate::simd::lanes(
+            #[inline(always)]
+            || tree.importances_lanes(from, n, &mut importance),
+        );
+        let total = importance_sums(&importance, few);
+        let split: [_; N] = std::array::from_fn(|l| self.infinite_or_tree(u[l], total[l], at(n, l)));
         let u_tree = split.map(|s| s.map_or(0.0, |(u, _)| u));
         let (k, pmf) = crate::simd::lanes(
             #[inline(always)]
-            || {
-                let mut importance = [[0.0; N]; FEW_LIGHTS];
-                tree.importances_lanes(from, n, &mut importance);
-                choose_lanes(&importance, few, &u_tree)
-            },
+            || choose_lanes(&importance, few, &u_tree),
         );
         std::array::from_fn(|l| match split[l] {
             Err(picked) => picked,
@@ -385,34 +419,83 @@ impl LightTable {
         })
     }
 
-    /// The first step of a choice by the tree: a light at infinity, each with its share
-    /// (pbrt-v4's `pInfinite`), as `Err((light, probability))`; else `Ok` of the number
-    /// rescaled for the tree's choice and the tree's share.
+    /// The first step of a choice by the tree at a point of normal `n` where its lights'
+    /// importance is `total` ([`LightTree::importance_total`]): a light at infinity, with its
+    /// probability, as `Err((light, probability))`; else `Ok` of the number rescaled for the
+    /// tree's choice and the tree's share ([`Self::infinite_share`]).
     #[inline]
-    fn infinite_or_tree(&self, u: f32) -> Result<(f32, f32), (usize, f32)> {
-        let count = self.infinite.len();
-        let finite = self.finite_share();
-        let p_infinite = 1.0 - finite;
-        if u < p_infinite {
-            let l = self.infinite[((u / p_infinite * count as f32) as usize).min(count - 1)] as usize;
-            return Err((l, self.pmf[l]));
+    fn infinite_or_tree(&self, u: f32, total: f32, n: Vec3A) -> Result<(f32, f32), (usize, f32)> {
+        if self.infinite.is_empty() {
+            return Ok((u.min(1.0 - f32::EPSILON / 2.0), 1.0));
         }
+        let (p_infinite, importances) = self.infinite_share(total, n);
+        if u < p_infinite {
+            // Among the lights at infinity by their parts (the last where rounding leaves `v`
+            // beyond their sum).
+            let v = u / p_infinite;
+            let mut k = self.infinite.len() - 1;
+            let mut acc = 0.0;
+            for j in 0..self.infinite.len() {
+                acc += self.infinite_part(j, importances, n);
+                if v < acc {
+                    k = j;
+                    break;
+                }
+            }
+            return Err((self.infinite[k] as usize, p_infinite * self.infinite_part(k, importances, n)));
+        }
+        let finite = 1.0 - p_infinite;
         Ok((((u - p_infinite) / finite).min(1.0 - f32::EPSILON / 2.0), finite))
     }
 
-    /// The share of the choices the tree's lights take: one among the lights at infinity's.
+    /// The share of the choices that go to the lights at infinity at a point of normal `n`
+    /// where the tree's lights' importance is `total`, and the lights at infinity's importance
+    /// there. In proportion to the importances, as Cycles' light tree weighs its distant lights
+    /// against the others at each point: where the tree's lights cannot reach (outside a spot's
+    /// cone) all the choices go to the sun, where a fixed share (pbrt-v4's) leaves half of them
+    /// to a light that sends nothing. Where both send light, each keeps at least
+    /// [`INFINITE_MIN_SHARE`]: the importances know nothing of shadows (a sun outside a room lit
+    /// by lamps). Where neither has importance, the fixed shares (one each).
     #[inline]
-    fn finite_share(&self) -> f32 {
-        1.0 / (self.infinite.len() + 1) as f32
+    fn infinite_share(&self, total: f32, n: Vec3A) -> (f32, f32) {
+        let importances: f32 =
+            (self.infinite_bounds.iter()).map(|&(w, power)| infinite_importance(w, power, n)).sum();
+        let p = match (importances > 0.0, total > 0.0) {
+            (true, true) => {
+                (importances / (importances + total)).clamp(INFINITE_MIN_SHARE, 1.0 - INFINITE_MIN_SHARE)
+            }
+            (true, false) => 1.0,
+            (false, true) => 0.0,
+            (false, false) => 1.0 - 1.0 / (self.infinite.len() + 1) as f32,
+        };
+        (p, importances)
+    }
+
+    /// The part of the `k`-th light at infinity in their share: its importance over theirs,
+    /// `importances` (evenly where that is 0).
+    #[inline]
+    fn infinite_part(&self, k: usize, importances: f32, n: Vec3A) -> f32 {
+        let (to_light, power) = self.infinite_bounds[k];
+        match importances > 0.0 {
+            true => infinite_importance(to_light, power, n) / importances,
+            false => 1.0 / self.infinite.len() as f32,
+        }
     }
 
     /// The probability that [`Self::pick`] picks `light` for the point `from` of normal `n`:
     /// the same bits.
     #[inline]
     pub fn pmf_from(&self, light: usize, from: Vec3A, n: Vec3A) -> f32 {
-        match &self.tree {
-            Some(tree) if !self.at_infinity(light) => self.finite_share() * tree.pmf(light as u32, from, n),
-            _ => self.pmf[light],
+        let Some(tree) = &self.tree else { return self.pmf[light] };
+        let at_infinity = self.at_infinity(light);
+        if self.infinite.is_empty() {
+            return if at_infinity { self.pmf[light] } else { tree.pmf(light as u32, from, n) };
+        }
+        let (p_infinite, importances) = self.infinite_share(tree.importance_total(from, n), n);
+        match self.infinite.iter().position(|&l| l as usize == light) {
+            Some(k) => p_infinite * self.infinite_part(k, importances, n),
+            None if at_infinity => self.pmf[light],
+            None => (1.0 - p_infinite) * tree.pmf(light as u32, from, n),
         }
     }
 
@@ -478,6 +561,56 @@ mod tests {
 
     fn point(x: f32, i: f32) -> PunctualLight {
         PunctualLight::Point { position: Vec3A::new(x, 1.0, 0.0), intensity: Vec3::splat(i) }
+    }
+
+    /// A sun beside one spot (the glTF shot's lights): `Auto` takes the tree, and the sun's
+    /// share follows the importances at the point. Outside the spot's cone it takes every
+    /// choice; under the spot the two share them, each at least `INFINITE_MIN_SHARE`; in a
+    /// medium the sun is weighed without a cosine; `pick` and `pmf_from` agree. (Fails with
+    /// the fixed share, pbrt-v4's, of one half: outside the cone the sun has 0.5.)
+    #[test]
+    fn a_sun_beside_a_spot_takes_the_choices_the_spot_cannot_use() {
+        let spot = PunctualLight::Spot {
+            position: Vec3A::new(0.0, 4.0, 0.0),
+            axis: -Vec3A::Y,
+            intensity: Vec3::splat(30.0),
+            cos_falloff: 0.95,
+            cos_total: 0.9,
+            falloff: SpotFalloff::Smoothstep,
+            texture: None,
+        };
+        let sun =
+            PunctualLight::Directional { to_light: Vec3A::new(0.6, 0.8, 0.0), irradiance: Vec3::splat(3.0) };
+        let inputs = LightInputs {
+            punctual: &[spot, sun],
+            environment: BackgroundSampling::Never,
+            ..Default::default()
+        };
+        let table = LightTable::build(&Geometry::default(), Vec::new(), inputs);
+        assert!(table.tree.is_some(), "Auto takes the tree for a sun beside a spot");
+        let up = Vec3A::Y;
+        let share = |p: Vec3A, n: Vec3A| {
+            let sun = table.pmf_from(1, p, n);
+            assert!((sun + table.pmf_from(0, p, n) - 1.0).abs() < 1e-6, "at {p}");
+            sun
+        };
+        // Outside the cone (the spot's axis is straight down; 45 degrees off it).
+        assert_eq!(share(Vec3A::new(4.0, 0.0, 0.0), up), 1.0);
+        // Under the spot: the spot's importance 4 * 30 / 16 = 7.5, the sun's 4 * 3 * 0.8 = 9.6.
+        let under = share(Vec3A::ZERO, up);
+        assert!((under - 9.6 / (9.6 + 7.5)).abs() < 0.02, "{under}");
+        // Nearly edge-on to the sun, facing the spot: the floor of the share; edge-on, none.
+        assert_eq!(share(Vec3A::ZERO, Vec3A::new(0.8, -0.59, 0.0).normalize()), INFINITE_MIN_SHARE);
+        assert_eq!(share(Vec3A::ZERO, Vec3A::new(0.8, -0.6, 0.0)), 0.0);
+        // In a medium: the sun's 12 against the spot's 7.5.
+        let medium = share(Vec3A::ZERO, Vec3A::ZERO);
+        assert!((medium - 12.0 / 19.5).abs() < 0.02, "{medium}");
+        for (p, n) in [(Vec3A::ZERO, up), (Vec3A::new(4.0, 0.0, 0.0), up), (Vec3A::ZERO, Vec3A::ZERO)] {
+            for u in [0.0, 0.3, 0.55, 0.7, 0.999] {
+                let (l, pmf) = table.pick(u, p, n);
+                assert_eq!(pmf.to_bits(), table.pmf_from(l, p, n).to_bits(), "{u} at {p}");
+            }
+        }
     }
 
     /// The table's choice: finite lights half by power, half evenly; each light at infinity a

@@ -436,6 +436,20 @@ impl LightTree {
         }
     }
 
+    /// A bound on what all its lights send to the point `p` of normal `n`: with few lights,
+    /// the sum of their importances in [`choose_lanes`]'s order (the bits of one lane of
+    /// [`Self::importances_lanes`] summed as [`importance_sums`] sums them); else the root's.
+    #[inline]
+    pub fn importance_total(&self, p: Vec3A, n: Vec3A) -> f32 {
+        if self.few {
+            let mut importance = [[0.0; 1]; FEW_LIGHTS];
+            let (p, n) = (p.to_array().map(|c| [c]), n.to_array().map(|c| [c]));
+            self.importances_lanes(&p, &n, &mut importance);
+            return importance_sums(&importance, self.nodes.len())[0];
+        }
+        self.nodes[0].cone.importance(p, n)
+    }
+
     /// The light of leaf `k` (with few lights).
     #[inline]
     pub fn leaf_light(&self, k: usize) -> u32 {
@@ -453,6 +467,19 @@ impl LightTree {
     }
 }
 
+/// The sum of each lane's importances `importance[..few][l]`, in row order: the sum
+/// [`choose_lanes`] divides by.
+#[inline]
+pub fn importance_sums<const N: usize>(importance: &[[f32; N]; FEW_LIGHTS], few: usize) -> [f32; N] {
+    let mut sum = [0.0f32; N];
+    for row in &importance[..few] {
+        for l in 0..N {
+            sum[l] += row[l];
+        }
+    }
+    sum
+}
+
 /// Chooses, for each lane `l`, one of the lights of importances `importance[..few][l]` with
 /// `u[l]` in [0, 1): its index and its importance over their sum; the probability 0 (the index
 /// meaningless) where all are 0. The light is the first whose running sum exceeds `u` times
@@ -466,12 +493,7 @@ pub fn choose_lanes<const N: usize>(
     u: &[f32; N],
 ) -> ([u32; N], [f32; N]) {
     let rows = &importance[..few];
-    let mut sum = [0.0f32; N];
-    for row in rows {
-        for l in 0..N {
-            sum[l] += row[l];
-        }
-    }
+    let sum = importance_sums(importance, few);
     let (mut acc, mut below, mut last) = ([0.0f32; N], [0u32; N], [0u32; N]);
     for (k, row) in rows.iter().enumerate() {
         for l in 0..N {
