@@ -38,10 +38,11 @@ pub const INFINITE_MIN_SHARE: f32 = 0.1;
 
 /// A directional light's importance at a point of normal `n` (zero in a medium), in the light
 /// tree's units (a point light's: 4 times the irradiance it gives a surface facing it): `power`
-/// (4 times its irradiance) times the cosine to the normal's line.
+/// (4 times its irradiance) times the cosine to the normal's line; `power` itself for a light
+/// from every direction (`to_light` zero) or in a medium.
 #[inline]
 fn infinite_importance(to_light: Vec3A, power: f32, n: Vec3A) -> f32 {
-    match n == Vec3A::ZERO {
+    match n == Vec3A::ZERO || to_light == Vec3A::ZERO {
         true => power,
         false => power * to_light.dot(n).abs(),
     }
@@ -94,8 +95,9 @@ pub struct LightTable {
     /// What the surfaces of each material id emit ([`crate::lighting::area`]).
     pub emission: Vec<Option<AreaEmission>>,
     /// The light tree over the lights with bounds, where it chooses them
-    /// ([`LightSamplerKind`]); then [`Self::pick`] and the densities ask it, and `pmf` holds
-    /// only the lights at infinity's probabilities.
+    /// ([`LightSamplerKind`]); then [`Self::pick`] and the densities ask it and the importances
+    /// of the lights at infinity (`infinite_bounds`), and `pmf` holds only the probability of
+    /// the environment sampled apart (1).
     pub tree: Option<LightTree>,
     /// The lights at infinity that the choice takes, in order, with the tree (directional
     /// lights: the environment beside other lights is sampled apart).
@@ -290,8 +292,8 @@ impl LightTable {
                     Some(OtherLight::Punctual(PunctualLight::Directional { to_light, irradiance })) => {
                         (*to_light, 4.0 * luminance(*irradiance))
                     }
-                    // Not reached: the environment beside other lights is sampled apart. An
-                    // importance everywhere keeps it a share.
+                    // Not reached (the environment beside other lights is sampled apart): a
+                    // light from every direction, of importance 1 everywhere.
                     _ => (Vec3A::ZERO, 1.0),
                 })
                 .collect();
