@@ -94,7 +94,13 @@ pub fn multiple_fresnel(f_avg: Vec3, e_avg: f32) -> Vec3 {
 /// The factor `1 + Fms (1 - e) / e` that gives a single-scattering lobe of albedo `e` (from
 /// [`albedos`]) back the light scattered more than once, `fms` from [`multiple_fresnel`].
 #[inline(always)]
-pub fn compensation(e: f32, fms: Vec3) -> Vec3 {
+pub fn compensation(e: f32, fms: f32) -> f32 {
+    1.0 + fms * (1.0 - e) / e
+}
+
+/// [`compensation`] for a coloured `Fms` (a metal's).
+#[inline(always)]
+pub fn compensation_rgb(e: f32, fms: Vec3) -> Vec3 {
     Vec3::ONE + fms * ((1.0 - e) / e)
 }
 
@@ -102,7 +108,7 @@ pub fn compensation(e: f32, fms: Vec3) -> Vec3 {
 /// albedos `(e, s)` of [`albedos`] at `mu` and its scalar `Fms`.
 #[inline(always)]
 pub fn layer_albedo(f0: f32, (e, s): (f32, f32), fms: f32) -> f32 {
-    (f0 * e + (1.0 - f0) * s) * (1.0 + fms * (1.0 - e) / e)
+    (f0 * e + (1.0 - f0) * s) * compensation(e, fms)
 }
 
 /// `A_avg = 2 ∫ A mu dmu` of [`layer_albedo`]'s lobe, from its [`Averages`].

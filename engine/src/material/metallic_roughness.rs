@@ -39,7 +39,8 @@
 //! direction by the mixture's density: `eval`'s `pdf` is that mixture, so MIS sees one lobe.
 
 use super::ggx_energy::{
-    albedos, averages, compensation, layer_albedo, layer_average, multiple_fresnel, schlick_average,
+    albedos, averages, compensation, compensation_rgb, layer_albedo, layer_average, multiple_fresnel,
+    schlick_average,
 };
 use super::microfacet::{Ggx, Microfacet, PlainFrame, SMOOTH_ALPHA};
 use super::{BsdfEval, BsdfSample, Colors, MaterialModel, Shading};
@@ -195,13 +196,13 @@ impl MetallicRoughness {
         let specular = base.d(h) * base.g1_over_cos(lo) * base.g1_over_cos(li) * 0.25;
         let (albedos_o, albedos_i) = (albedos(self.alpha, lo.z), albedos(self.alpha, li.z));
         let f_dielectric = self.f0 + (1.0 - self.f0) * fw;
-        let k_dielectric = 1.0 + self.fms_dielectric * (1.0 - albedos_o.0) / albedos_o.0;
+        let k_dielectric = compensation(albedos_o.0, self.fms_dielectric);
         let layer_o = layer_albedo(self.f0, albedos_o, self.fms_dielectric);
         let layer_i = layer_albedo(self.f0, albedos_i, self.fms_dielectric);
         let diffuse = (1.0 - layer_o) * (1.0 - layer_i) * self.diffuse_scale * FRAC_1_PI;
         let dielectric = Vec3::splat(k_dielectric * f_dielectric * specular) + diffuse * self.base_color;
         let fms_metal = multiple_fresnel(schlick_average(self.base_color), self.e_avg);
-        let k_metal = compensation(albedos_o.0, fms_metal);
+        let k_metal = compensation_rgb(albedos_o.0, fms_metal);
         let metal = k_metal * (self.base_color + (Vec3::ONE - self.base_color) * fw) * specular;
         let f = dielectric.lerp(metal, self.metallic);
         let [p_diffuse, p_specular, p_coat] = self.lobe_weights(lo.z);
@@ -209,7 +210,7 @@ impl MetallicRoughness {
         let coat = Ggx { alpha: self.alpha_coat };
         let fc = self.clearcoat * (COAT_F0 + (1.0 - COAT_F0) * schlick(lo.z));
         let e_coat = albedos(self.alpha_coat, lo.z).0;
-        let k_coat = 1.0 + self.fms_coat * (1.0 - e_coat) / e_coat;
+        let k_coat = compensation(e_coat, self.fms_coat);
         let coat_specular = k_coat * coat.d(h) * coat.g1_over_cos(lo) * coat.g1_over_cos(li) * 0.25;
         let coated = self.clearcoat > 0.0;
         let f = if coated { f * (1.0 - fc) + Vec3::splat(fc * coat_specular) } else { f };
@@ -318,7 +319,7 @@ mod tests {
     fn spec_brdf(m: &MetallicRoughness, v: Vec3A, l: Vec3A) -> Vec3 {
         // Turquin's factor and Kulla and Conty's coupling (ggx_energy).
         let fms = |alpha: f32, f0: Vec3| multiple_fresnel(schlick_average(f0), averages(alpha).e);
-        let k = |alpha: f32, f0: Vec3| compensation(albedos(alpha, v.z).0, fms(alpha, f0));
+        let k = |alpha: f32, f0: Vec3| compensation_rgb(albedos(alpha, v.z).0, fms(alpha, f0));
         let fms_d = fms(m.alpha, Vec3::splat(m.f0)).x;
         let layer = |w: Vec3A| layer_albedo(m.f0, albedos(m.alpha, w.z), fms_d);
         let coupling =
