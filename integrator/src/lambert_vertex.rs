@@ -591,7 +591,7 @@ mod tests {
                 err: 1e-5,
                 wo: unit(),
                 albedo: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()),
-                beta: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) + 0.05,
+                beta: Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.4 + 0.02,
                 eta_scale: 1.0,
                 depth_after: 1 + (k % 8),
                 wi: unit(),
@@ -625,9 +625,10 @@ mod tests {
             // cos = sqrt(1 - r^2) amplifies the disk's rounding near the rim: compare its square.
             let cos = o.pdf * std::f32::consts::PI;
             assert!((cos * cos - z * z).abs() <= 1e-6, "{k}: pdf {} vs {}", o.pdf, z / std::f32::consts::PI);
-            // Throughput and roulette: survive with the largest channel of the new throughput.
+            // Throughput and roulette: survive with the largest channel of the new throughput
+            // over the survivors' weight.
             let beta = i.beta * i.albedo;
-            let q = if i.rr_on { (1.0 - beta.max_element()).max(0.0) } else { 0.0 };
+            let q = if i.rr_on { (1.0 - beta.max_element() / path::ROULETTE_WEIGHT).max(0.0) } else { 0.0 };
             let survives = !(i.u_rr < q);
             assert_eq!(o.alive, survives && o.pdf > 0.0, "{k}");
             if survives {
