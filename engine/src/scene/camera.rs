@@ -282,7 +282,8 @@ pub struct RenderDesc {
     pub spp: NonZeroU32,
     /// Maximum number of bounces (default 64).
     pub max_depth: u32,
-    /// Bounces before Russian roulette may end a path (default 5).
+    /// Bounces before Russian roulette may end a path (default 3; Mitsuba scenes: theirs, 5 by
+    /// default).
     pub rr_depth: u32,
     /// Seed of every random number of the image (default 0).
     pub seed: u64,
@@ -433,7 +434,7 @@ impl Default for RenderDesc {
             height: n(512),
             spp: n(64),
             max_depth: 64,
-            rr_depth: 5,
+            rr_depth: 3,
             seed: 0,
             clamp: None,
             sampler: SamplerKind::default(),
