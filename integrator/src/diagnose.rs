@@ -310,8 +310,8 @@ impl Witness for Recorder<'_> {
                 let (depth, at) = self.last.map_or((0, [Vec3A::ZERO; 2]), |(d, _, at)| (d, at));
                 (self.sampled(depth, at), Event::LightSampling)
             }
-            Source::EnvironmentSample => {
-                let env = self.scene.lights.environment_apart();
+            Source::ApartSample => {
+                let env = self.scene.lights.apart();
                 (env.map_or(Light::Background, |e| Light::of(self.scene, e)), Event::LightSampling)
             }
             Source::Emitter(m) => (Light::Emitter(m), met),

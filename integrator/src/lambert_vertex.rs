@@ -103,12 +103,12 @@ pub(crate) fn light_part(i: &LambertIn) -> (bool, Vec3, Vec3) {
     (shadow, so, contribution)
 }
 
-/// The shadow ray towards the environment sampled apart from the other lights
-/// (`LightTable::environment_apart`) at the vertex of inputs `i` (its light sample replaced),
+/// The shadow ray towards the light sampled apart from the choice among the others
+/// (`LightTable::apart`) at the vertex of inputs `i` (its light sample replaced),
 /// with the numbers `u`: the kernel's light part, one path at a time, in both integrators.
 #[inline]
-pub fn environment_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2) -> Option<ShadowRay> {
-    let lp = path::environment_light(scene, i.p.into(), u)?;
+pub fn apart_shadow(scene: &RenderScene, i: &LambertIn, time: f32, u: Vec2) -> Option<ShadowRay> {
+    let lp = path::apart_light(scene, i.p.into(), u)?;
     let i = LambertIn {
         wi: lp.wi.into(),
         le: lp.le,
@@ -192,8 +192,8 @@ pub struct VertexSamples {
     pub light_pick: f32,
     /// Where on it.
     pub light: Vec2,
-    /// The point on the environment sampled apart (zero where there is none).
-    pub environment: Vec2,
+    /// The point on the light sampled apart (zero where there is none).
+    pub apart: Vec2,
     /// The next direction.
     pub dir: Vec2,
     /// Russian roulette.
@@ -242,9 +242,9 @@ impl VertexSamples {
         } else {
             crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT))
         };
-        let environment = match scene.lights.environment_apart() {
-            Some(_) => crate::sampler::get_2d_lanes(samplers, &Dims::environment_lanes(depths)),
-            None => [Vec2::ZERO; N],
+        let apart = match scene.lights.apart_samples() {
+            true => crate::sampler::get_2d_lanes(samplers, &Dims::apart_lanes(depths)),
+            false => [Vec2::ZERO; N],
         };
         let dir = crate::sampler::get_2d_lanes(samplers, &dims(Dims::BSDF));
         // Roulette's number only where some lane plays it.
@@ -257,7 +257,7 @@ impl VertexSamples {
         let mut out = VertexSamplesLanes { light_pick: pick, ..Default::default() };
         for l in 0..N {
             (out.light[0][l], out.light[1][l]) = (light[l].x, light[l].y);
-            (out.environment[0][l], out.environment[1][l]) = (environment[l].x, environment[l].y);
+            (out.apart[0][l], out.apart[1][l]) = (apart[l].x, apart[l].y);
             (out.dir[0][l], out.dir[1][l]) = (dir[l].x, dir[l].y);
             out.roulette[l] = if plays[l] { rr[l] } else { 0.0 };
         }
@@ -273,8 +273,8 @@ pub struct VertexSamplesLanes<const N: usize = LANES> {
     pub light_pick: [f32; N],
     /// Where on it: the two coordinates, per lane.
     pub light: [[f32; N]; 2],
-    /// The point on the environment sampled apart, per lane.
-    pub environment: [[f32; N]; 2],
+    /// The point on the light sampled apart, per lane.
+    pub apart: [[f32; N]; 2],
     /// The next direction: the two coordinates, per lane.
     pub dir: [[f32; N]; 2],
     /// Russian roulette, per lane.
@@ -286,7 +286,7 @@ impl<const N: usize> Default for VertexSamplesLanes<N> {
         Self {
             light_pick: [0.0; N],
             light: [[0.0; N]; 2],
-            environment: [[0.0; N]; 2],
+            apart: [[0.0; N]; 2],
             dir: [[0.0; N]; 2],
             roulette: [0.0; N],
         }
@@ -300,7 +300,7 @@ impl<const N: usize> VertexSamplesLanes<N> {
         VertexSamples {
             light_pick: self.light_pick[l],
             light: Vec2::new(self.light[0][l], self.light[1][l]),
-            environment: Vec2::new(self.environment[0][l], self.environment[1][l]),
+            apart: Vec2::new(self.apart[0][l], self.apart[1][l]),
             dir: Vec2::new(self.dir[0][l], self.dir[1][l]),
             roulette: self.roulette[l],
         }

@@ -96,8 +96,8 @@ pub enum Source {
     Emitter(u32),
     /// The light sampled at the path's last vertex ([`sampled_light`] says which).
     LightSample,
-    /// The environment sampled apart from the other lights at the path's last vertex.
-    EnvironmentSample,
+    /// The light sampled apart from the choice among the others at the path's last vertex.
+    ApartSample,
     /// The background, met by the path's ray.
     Background,
     /// A glowing medium the path's ray scattered in.
@@ -230,10 +230,9 @@ pub fn radiance_witnessed(
                         Some(g) => crate::guided::lambert_guided(g, &input),
                         None => lambert_vertex::lambert(&input),
                     };
-                    let environment =
-                        lambert_vertex::environment_shadow(scene, &input, ray.time, u.environment);
+                    let apart = lambert_vertex::apart_shadow(scene, &input, ray.time, u.apart);
                     let (light, next) = lambert_vertex::apply(&input, &out, &mut st, ray.time);
-                    (path::Shadows { light, environment }, next)
+                    (path::Shadows { light, apart }, next)
                 }
                 Shading::Sampled => (
                     path::Shadows::default(),
@@ -247,9 +246,7 @@ pub fn radiance_witnessed(
             }
         };
         witness.scatters(vertex.0, vertex.1, vertex.2, st.delta);
-        for (s, source) in
-            [(shadows.light, Source::LightSample), (shadows.environment, Source::EnvironmentSample)]
-        {
+        for (s, source) in [(shadows.light, Source::LightSample), (shadows.apart, Source::ApartSample)] {
             if let Some(s) = s {
                 let before = st.l;
                 path::trace_shadow(scene, &mut st, &s);

@@ -11,7 +11,7 @@ mod light;
 mod medium;
 
 pub use camera::{camera_ray, camera_rays, camera_sampler, pixel_numbers};
-pub(crate) use light::{LightPick, environment_light, light_choice, pick_light, sample_light, seen_from};
+pub(crate) use light::{LightPick, apart_light, light_choice, pick_light, sample_light, seen_from};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
 pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
 
@@ -81,27 +81,27 @@ pub struct ShadowRay {
     pub contribution: Vec3,
 }
 
-/// The shadow rays of one vertex: the chosen light's, and the environment's where it is
-/// sampled apart from the other lights (`LightTable::environment_apart`).
+/// The shadow rays of one vertex: the chosen light's, and the light's sampled apart from the
+/// choice where there is one (`LightTable::apart`: the environment, or a directional light).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Shadows {
     /// Towards the light chosen.
     pub light: Option<ShadowRay>,
-    /// Towards the environment sampled apart.
-    pub environment: Option<ShadowRay>,
+    /// Towards the light sampled apart.
+    pub apart: Option<ShadowRay>,
 }
 
 impl Shadows {
     /// The chosen light's shadow ray alone.
     #[inline]
     pub fn one(light: Option<ShadowRay>) -> Self {
-        Self { light, environment: None }
+        Self { light, apart: None }
     }
 
     /// Those there are, the chosen light's first.
     #[inline]
     pub fn iter(&self) -> impl Iterator<Item = &ShadowRay> {
-        self.light.iter().chain(self.environment.iter())
+        self.light.iter().chain(self.apart.iter())
     }
 }
 
@@ -440,9 +440,8 @@ pub struct GlossySamples {
     pub light_pick: f32,
     /// Where on it.
     pub light: Vec2,
-    /// The point on the environment sampled apart ([`Dims::environment`]; zero where there is
-    /// none).
-    pub environment: Vec2,
+    /// The point on the light sampled apart ([`Dims::apart`]; zero where there is none).
+    pub apart: Vec2,
     /// BSDF sampling and roulette.
     pub bsdf: ScatterSamples,
 }
@@ -475,15 +474,15 @@ impl GlossySamples {
             false => crate::sampler::get_2d_lanes(samplers, &dims(Dims::LIGHT)),
             true => [Vec2::ZERO; N],
         };
-        let environment = match scene.lights.environment_apart() {
-            Some(_) => crate::sampler::get_2d_lanes(samplers, &Dims::environment_lanes(depths)),
-            None => [Vec2::ZERO; N],
+        let apart = match scene.lights.apart_samples() {
+            true => crate::sampler::get_2d_lanes(samplers, &Dims::apart_lanes(depths)),
+            false => [Vec2::ZERO; N],
         };
         let bsdf = ScatterSamples::draw_lanes(scene, samplers, depths, reads);
         std::array::from_fn(|l| Self {
             light_pick: light_pick[l],
             light: light[l],
-            environment: environment[l],
+            apart: apart[l],
             bsdf: bsdf[l],
         })
     }
@@ -512,7 +511,7 @@ pub fn shade_glossy(
     let shadow = |lp: LightPick| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time);
     let shadows = Shadows {
         light: glossy_light(scene, sp, time, u).and_then(shadow),
-        environment: environment_light(scene, sp.p, u.environment).and_then(shadow),
+        apart: apart_light(scene, sp.p, u.apart).and_then(shadow),
     };
     (shadows, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
 }
@@ -579,14 +578,14 @@ mod tests {
         let scene = SceneWorld::render_scene(&desc);
         // Beside its point light the map is sampled apart, at every vertex: probability 1.
         let (env, pmf) = (scene.lights.environment.unwrap() as usize, scene.lights.environment_pmf());
-        assert_eq!((scene.lights.environment_apart(), pmf), (Some(env), 1.0));
+        assert_eq!((scene.lights.apart(), pmf), (Some(env), 1.0));
         let mut rng = TestRng::new(3);
         let p = Vec3A::new(0.3, 0.01, 2.0);
         let (mut sampled, mut other_cell) = (0, 0);
         let agree = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * a.abs().max(b.abs());
         for _ in 0..10_000 {
             let u = Vec2::new(rng.next_1d(), rng.next_1d());
-            let Some(lp) = environment_light(&scene, p, u) else { continue };
+            let Some(lp) = apart_light(&scene, p, u) else { continue };
             let (le, pdf) = scene.background.radiance_pdf(lp.wi);
             assert!(!lp.delta);
             sampled += 1;

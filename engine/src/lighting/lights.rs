@@ -105,8 +105,8 @@ pub struct LightTable {
     /// Each one's unit direction towards it and the importance it has on a surface facing it
     /// ([`Self::infinite_share`]).
     infinite_bounds: Vec<(Vec3A, f32)>,
-    /// The environment is sampled apart ([`Self::environment_apart`]).
-    apart: bool,
+    /// The light sampled apart ([`Self::apart`]).
+    apart: Option<u32>,
 }
 
 /// A light as plain numbers for the integrator's lane kernels.
@@ -203,9 +203,6 @@ impl LightTable {
             BackgroundSampling::Always => true,
             BackgroundSampling::Alone => alone,
         };
-        // Beside other lights, the environment is sampled at every vertex besides the choice
-        // among them (see `environment_apart`).
-        t.apart = environment && !alone;
         if environment {
             t.environment = Some((t.prims.len() + t.others.len()) as u32);
             t.others.push(OtherLight::Environment);
@@ -213,11 +210,19 @@ impl LightTable {
             power.push(1.0);
             group.push(usize::MAX);
         }
+        // Beside other lights, the environment, else the brightest directional light, is
+        // sampled at every vertex besides the choice among them (see `apart`).
+        let sun = (0..t.others.len())
+            .filter(|&k| matches!(t.others[k], OtherLight::Punctual(PunctualLight::Directional { .. })))
+            .max_by(|&a, &b| power[t.prims.len() + a].total_cmp(&power[t.prims.len() + b]))
+            .map(|k| (t.prims.len() + k) as u32);
+        let beside_others = t.prims.len() + t.others.len() > 1;
+        t.apart = t.environment.or(sun).filter(|_| beside_others);
         // Finite lights share one share, half in proportion to power and half evenly among
         // objects (a mesh's triangles share its part by power, as Mitsuba picks an emitter
         // and then a point on it by area); each infinite one has a share.
         infinite.splice(0..0, std::iter::repeat_n(false, t.prims.len()));
-        let apart = |k: usize| t.apart && t.environment == Some(k as u32);
+        let apart = |k: usize| t.apart == Some(k as u32);
         let chosen = |k: &usize| !apart(*k);
         let shares = (0..infinite.len()).filter(chosen).filter(|&k| infinite[k]).count()
             + infinite.iter().any(|&i| !i) as usize;
@@ -349,17 +354,27 @@ impl LightTable {
         self.environment.map_or(0.0, |l| self.pmf[l as usize])
     }
 
-    /// The environment's light index where it is sampled apart from the other lights: beside
-    /// other lights, next-event estimation takes one sample of the environment at every vertex
-    /// besides its choice among the others ([`Self::pick`] never picks it; its probability is
-    /// 1), where a choice among all would give it a share of the samples and the lights the
-    /// rest. Each technique then takes every sample: on materials-env (a map with a sun and a
-    /// point light) the variance per sample of a choice between the two with even shares is
-    /// 1.8x that of the map sampled alone. `None` where the environment is not sampled or is
-    /// the only light (then the choice always picks it).
+    /// The light index of the light sampled apart from the others: beside other lights,
+    /// next-event estimation takes one sample of the environment (where it is sampled), else
+    /// of the brightest directional light, at every vertex besides its choice among the others
+    /// ([`Self::pick`] never picks it; its probability is 1), where a choice among all would
+    /// give it a share of the samples and the lights the rest. Each technique then takes every
+    /// sample: on materials-env (a map with a sun and a point light) the variance per sample of
+    /// a choice between the two with even shares is 1.8x that of the map sampled alone; on a
+    /// sun beside a spot (the glTF shot of `scenes/cycles`), the choice by importance at the
+    /// point left 1.4x the variance of the sun apart, whose shadow ray is the cheapest there is
+    /// (`benches/results/sampling.md`). `None` where there is no such light or it is the only
+    /// light (then the choice always picks it).
     #[inline]
-    pub fn environment_apart(&self) -> Option<usize> {
-        self.environment.filter(|_| self.apart).map(|l| l as usize)
+    pub fn apart(&self) -> Option<usize> {
+        self.apart.map(|l| l as usize)
+    }
+
+    /// Whether the light sampled apart draws a point of its own (the environment does; a
+    /// directional light has one direction).
+    #[inline]
+    pub fn apart_samples(&self) -> bool {
+        self.apart.is_some() && self.apart == self.environment
     }
 
     /// The end of a shadow ray from `from` towards a light at infinity in direction `wi`: a
@@ -565,11 +580,36 @@ mod tests {
         PunctualLight::Point { position: Vec3A::new(x, 1.0, 0.0), intensity: Vec3::splat(i) }
     }
 
-    /// A sun beside one spot (the glTF shot's lights): `Auto` takes the tree, and the sun's
-    /// share follows the importances at the point. Outside the spot's cone it takes every
-    /// choice; under the spot the two share them, each at least `INFINITE_MIN_SHARE`; in a
-    /// medium the sun is weighed without a cosine; `pick` and `pmf_from` agree. (Fails with
-    /// the fixed share, pbrt-v4's, of one half: outside the cone the sun has 0.5.)
+    /// A sun beside other lights is sampled apart (the brightest, where there are several),
+    /// the environment before it; alone, it is the choice. (Fails with the sun in the choice.)
+    #[test]
+    fn a_sun_beside_other_lights_is_sampled_apart() {
+        let sun = |e: f32| PunctualLight::Directional { to_light: Vec3A::Y, irradiance: Vec3::splat(e) };
+        let build = |punctual: &[PunctualLight], environment| {
+            LightTable::build(
+                &Geometry::default(),
+                Vec::new(),
+                LightInputs { punctual, environment, ..Default::default() },
+            )
+        };
+        let table = build(&[point(0.0, 1.0), sun(1.0), sun(2.0)], BackgroundSampling::Never);
+        assert_eq!((table.apart(), table.pmf[2]), (Some(2), 1.0));
+        for u in [0.0, 0.3, 0.6, 0.999] {
+            assert_ne!(table.pick(u, Vec3A::ZERO, Vec3A::Y).0, 2, "{u}");
+        }
+        let beside_a_spot = build(&[point(0.0, 1.0), sun(1.0)], BackgroundSampling::Never);
+        assert_eq!(beside_a_spot.apart(), Some(1));
+        assert_eq!(beside_a_spot.pick(0.7, Vec3A::ZERO, Vec3A::Y), (0, 1.0));
+        assert_eq!(build(&[sun(1.0)], BackgroundSampling::Never).apart(), None);
+        assert_eq!(build(&[sun(1.0), point(0.0, 1.0)], BackgroundSampling::Always).apart(), Some(2));
+    }
+
+    /// A second sun beside a spot, the first sampled apart: `Auto` takes the tree, and the
+    /// second sun's share follows the importances at the point. Outside the spot's cone it
+    /// takes every choice; under the spot the two share them, each at least
+    /// `INFINITE_MIN_SHARE`; in a medium the sun is weighed without a cosine; `pick` and
+    /// `pmf_from` agree. (Fails with the fixed share, pbrt-v4's, of one half: outside the cone
+    /// the sun has 0.5.)
     #[test]
     fn a_sun_beside_a_spot_takes_the_choices_the_spot_cannot_use() {
         let spot = PunctualLight::Spot {
@@ -583,16 +623,18 @@ mod tests {
         };
         let sun =
             PunctualLight::Directional { to_light: Vec3A::new(0.6, 0.8, 0.0), irradiance: Vec3::splat(3.0) };
+        let apart = PunctualLight::Directional { to_light: Vec3A::Y, irradiance: Vec3::splat(5.0) };
         let inputs = LightInputs {
-            punctual: &[spot, sun],
+            punctual: &[spot, apart, sun],
             environment: BackgroundSampling::Never,
             ..Default::default()
         };
         let table = LightTable::build(&Geometry::default(), Vec::new(), inputs);
         assert!(table.tree.is_some(), "Auto takes the tree for a sun beside a spot");
+        assert_eq!(table.apart(), Some(1));
         let up = Vec3A::Y;
         let share = |p: Vec3A, n: Vec3A| {
-            let sun = table.pmf_from(1, p, n);
+            let sun = table.pmf_from(2, p, n);
             assert!((sun + table.pmf_from(0, p, n) - 1.0).abs() < 1e-6, "at {p}");
             sun
         };
@@ -637,7 +679,7 @@ mod tests {
         // The environment beside other lights is sampled apart: probability 1, never picked.
         let three = table(&[point(0.0, 1.0), point(1.0, 3.0), sun], Always);
         assert_eq!(three.pmf, [0.375 / 2.0, 0.625 / 2.0, 1.0 / 2.0, 1.0]);
-        assert_eq!((three.environment, three.environment_apart()), (Some(3), Some(3)));
+        assert_eq!((three.environment, three.apart()), (Some(3), Some(3)));
         assert_eq!(three.pick(0.99, Vec3A::ZERO, Vec3A::ZERO), (2, 1.0 / 2.0));
         assert_eq!(three.pick(1.0 - f32::EPSILON / 2.0, Vec3A::ZERO, Vec3A::ZERO).0, 2);
         assert!(matches!(three.other(2), Some(OtherLight::Punctual(PunctualLight::Directional { .. }))));
@@ -648,7 +690,7 @@ mod tests {
         assert_eq!(table(&[point(0.0, 5.0)], Alone).environment, None);
         let sky = table(&[point(0.0, 0.0)], Alone);
         assert_eq!((sky.environment, sky.pmf.as_slice()), (Some(0), [1.0].as_slice()));
-        assert_eq!((sky.environment_apart(), sky.pick(0.5, Vec3A::ZERO, Vec3A::ZERO)), (None, (0, 1.0)));
+        assert_eq!((sky.apart(), sky.pick(0.5, Vec3A::ZERO, Vec3A::ZERO)), (None, (0, 1.0)));
     }
 
     /// The even half of the choices goes to objects alike, an object's primitives splitting

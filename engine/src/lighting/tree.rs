@@ -686,7 +686,7 @@ mod tests {
                 _ => Vec3A::new(r() - 0.5, r() - 0.5, r() - 0.5).normalize(),
             };
             // The environment beside the other lights is sampled apart, never picked.
-            let apart = table.environment_apart();
+            let apart = table.apart();
             let pmf: Vec<f32> =
                 (0..n).map(|l| if Some(l) == apart { 0.0 } else { table.pmf_from(l, p, normal) }).collect();
             let sum: f64 = pmf.iter().map(|&x| x as f64).sum();

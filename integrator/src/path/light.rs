@@ -130,13 +130,13 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
     }
 }
 
-/// The environment's light sample seen from `p` with the numbers `u`, where it is sampled
-/// apart from the other lights (`LightTable::environment_apart`: with probability 1, at every
+/// The light sample seen from `p` with the numbers `u` of the light sampled apart from the
+/// choice among the others (`LightTable::apart`: with probability 1, at every
 /// vertex that samples a light); `None` elsewhere, or when it sends nothing.
 #[inline]
-pub(crate) fn environment_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
-    scene.lights.environment_apart()?;
-    pick_other(scene, &OtherLight::Environment, 1.0, p, u)
+pub(crate) fn apart_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
+    let l = scene.lights.apart()?;
+    pick_other(scene, scene.lights.other(l)?, 1.0, p, u)
 }
 
 /// The number that chooses the light at the vertex after `depth` bounces (one light needs

@@ -3,11 +3,11 @@
 //! Henyey-Greenstein phase sampling and Russian roulette.
 
 use super::{
-    LightPick, PathState, ShadowRay, Shadows, environment_light, light_choice, pick_light, power_heuristic,
+    LightPick, PathState, ShadowRay, Shadows, apart_light, light_choice, pick_light, power_heuristic,
     roulette,
 };
 use crate::sampler::{Dims, Sampler};
-use glam::{Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::math::{Ray, uniform_sphere};
 use pathwave_engine::media::phase::{hg, sample_hg};
 use pathwave_engine::render_scene::RenderScene;
@@ -130,11 +130,12 @@ pub fn scatter_in_medium(
         let u = sampler.get_2d(Dims::vertex(depth, Dims::LIGHT));
         pick_light(scene, p, Vec3A::ZERO, time, u_pick, u).map(shadow)
     };
-    let environment = match scene.lights.environment_apart() {
-        Some(_) => environment_light(scene, p, sampler.get_2d(Dims::environment(depth))).map(shadow),
-        None => None,
+    let u_apart = match scene.lights.apart_samples() {
+        true => sampler.get_2d(Dims::apart(depth)),
+        false => Vec2::ZERO,
     };
-    let shadows = Shadows { light, environment };
+    let apart = apart_light(scene, p, u_apart).map(shadow);
+    let shadows = Shadows { light, apart };
     let u = sampler.get_2d(Dims::vertex(depth, Dims::BSDF));
     let (wi, pdf) = if g == 0.0 { (uniform_sphere(u), ISOTROPIC) } else { sample_hg(wo, g, u) };
     (st.delta, st.prev_pdf, st.prev_p, st.prev_n) = (false, pdf, p, Vec3A::ZERO);

@@ -99,24 +99,24 @@ impl Dims {
         d
     }
 
-    /// The first of the environment's numbers ([`Self::environment`]), between the vertices'
+    /// The first of the numbers of the light sampled apart ([`Self::apart`]), between the vertices'
     /// and the wrappers' (a path of 2^28 vertices would reach it).
-    const ENVIRONMENT: u32 = 1 << 30;
+    const APART: u32 = 1 << 30;
 
-    /// The point on the environment sampled apart from the other lights at the vertex after
-    /// `depth` bounces (2D; `LightTable::environment_apart`): numbers of their own, so that
+    /// The point on the light sampled apart from the others at the vertex after `depth`
+    /// bounces (2D; `LightTable::apart`): numbers of their own, so that
     /// scenes without one keep theirs.
     #[inline]
-    pub const fn environment(depth: u32) -> u32 {
-        Self::ENVIRONMENT.wrapping_add(depth)
+    pub const fn apart(depth: u32) -> u32 {
+        Self::APART.wrapping_add(depth)
     }
 
-    /// [`Self::environment`] for `N` paths at once.
+    /// [`Self::apart`] for `N` paths at once.
     #[inline(always)]
-    pub fn environment_lanes<const N: usize>(depths: &[u32; N]) -> [u32; N] {
+    pub fn apart_lanes<const N: usize>(depths: &[u32; N]) -> [u32; N] {
         let mut d = [0; N];
         for l in 0..N {
-            d[l] = Self::environment(depths[l]);
+            d[l] = Self::apart(depths[l]);
         }
         d
     }

@@ -184,7 +184,7 @@ fn shade_glossy(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32
 /// the numbers of [`LANES`](lambert_vertex::LANES) paths drawn at once, the light sample path
 /// by path, then the BSDF evaluated towards it and sampled across lanes for the hits the kernel
 /// shades (anisotropic conductors and height-correlated shadowing by kernels of their own),
-/// and the path's bookkeeping path by path; where the environment is sampled apart, the BSDF
+/// and the path's bookkeeping path by path; where a light is sampled apart, the BSDF
 /// is evaluated towards its samples across lanes too. Smooth ones (delta lobes) are shaded as
 /// the other glossy kinds.
 fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Queues, queue: &[u32]) {
@@ -233,14 +233,14 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                 K::run(&ins, k, &mut outs[k.index()]);
             }
         }
-        // The environment sampled apart: the BSDF towards its samples, across lanes again.
-        let mut environment: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
-        if scene.lights.environment_apart().is_some() {
+        // The light sampled apart: the BSDF towards its samples, across lanes again.
+        let mut apart: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
+        if scene.lights.apart().is_some() {
             for (l, &i) in chunk.iter().enumerate() {
                 if kernel[l].is_some() {
                     let sp = &p.hit[i as usize].surface;
-                    environment[l] = path::environment_light(scene, sp.p, u[l].environment);
-                    K::set_wi(&mut ins, l, environment[l].as_ref().map_or(sp.ns, |lp| lp.wi).into());
+                    apart[l] = path::apart_light(scene, sp.p, u[l].apart);
+                    K::set_wi(&mut ins, l, apart[l].as_ref().map_or(sp.ns, |lp| lp.wi).into());
                 }
             }
             for k in Kernel::ALL {
@@ -267,13 +267,13 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
                     let env_eval = &env_outs[k.index()];
-                    let environment = environment[l]
+                    let apart = apart[l]
                         .as_ref()
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || env_eval.eval(l), time));
                     let next = bs.and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)
                     });
-                    (path::Shadows { light, environment }, next)
+                    (path::Shadows { light, apart }, next)
                 }
             };
             route(p, q, i, shadows, next);
@@ -328,11 +328,11 @@ fn shade_lambertian_lanes(scene: &RenderScene, p: &mut Paths, q: &mut Queues, qu
             n += outs.shadow[l] as usize;
         }
         q.shadow.extend_lanes(&pick[..n], chunk, &times, &outs.so, &outs.sd, &outs.contribution);
-        if scene.lights.environment_apart().is_some() {
-            // The environment sampled apart: its light part of the kernel one path at a time.
+        if scene.lights.apart().is_some() {
+            // The light sampled apart: its light part of the kernel one path at a time.
             for (l, &i) in chunk.iter().enumerate() {
-                let env = u.get(l).environment;
-                if let Some(sh) = lambert_vertex::environment_shadow(scene, &ins.get(l), times[l], env) {
+                let env = u.get(l).apart;
+                if let Some(sh) = lambert_vertex::apart_shadow(scene, &ins.get(l), times[l], env) {
                     q.shadow.push(i, &sh.ray, sh.contribution);
                 }
             }

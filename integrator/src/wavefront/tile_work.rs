@@ -467,15 +467,15 @@ impl Charges {
                 }
             }
             Stage::TraceShadowRays if many_lights => {
-                // A vertex that samples the environment apart queues its ray after the chosen
-                // light's: a slot's second ray is the environment's (its first, where the
+                // A vertex that samples a light apart queues its ray after the chosen light's:
+                // a slot's second ray is the light apart's (its first, where the
                 // chosen light made none, is counted as the chosen light's).
                 const SECOND: u64 = 1 << 63;
-                let apart = scene.lights.environment_apart();
+                let apart = scene.lights.apart();
                 for &s in slots {
                     let (shaded, light) = self.path_light[s as usize];
                     let light = match apart {
-                        Some(env) if shaded == iteration | SECOND => env as u32,
+                        Some(a) if shaded == iteration | SECOND => a as u32,
                         _ if shaded == iteration => light,
                         _ => continue,
                     };
