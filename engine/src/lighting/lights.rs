@@ -97,10 +97,11 @@ pub struct LightTable {
     /// The light tree over the lights with bounds, where it chooses them
     /// ([`LightSamplerKind`]); then [`Self::pick`] and the densities ask it and the importances
     /// of the lights at infinity (`infinite_bounds`), and `pmf` holds only the probability of
-    /// the environment sampled apart (1).
+    /// the light sampled apart (1).
     pub tree: Option<LightTree>,
     /// The lights at infinity that the choice takes, in order, with the tree (directional
-    /// lights: the environment beside other lights is sampled apart).
+    /// lights other than the one sampled apart; the environment beside other lights is always
+    /// apart).
     infinite: Vec<u32>,
     /// Each one's unit direction towards it and the importance it has on a surface facing it
     /// ([`Self::infinite_share`]).
@@ -246,7 +247,7 @@ impl LightTable {
                 (true, _, _) => 1.0 / shares as f32,
             };
             t.pmf.push(pmf);
-            // The environment apart takes no part of the choice: its CDF step is empty.
+            // The light apart takes no part of the choice: its CDF step is empty.
             acc += if apart(k) { 0.0 } else { pmf };
             t.cdf.push(acc);
         }
