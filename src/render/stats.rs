@@ -147,7 +147,7 @@ fn material_name(names: &[String], id: u32) -> String {
 fn light_name(names: &[String], light: Light) -> String {
     match light {
         Light::Emitter(id) => material_name(names, id),
-        Light::Punctual(k) => format!("point light #{k}"),
+        Light::Punctual(k) => format!("point, spot or directional light #{k}"),
         Light::Background => "the background".into(),
         Light::BackgroundPeak => {
             format!("the background's sun (its directions {}x its mean or more)", diagnose::PEAK)
