@@ -311,8 +311,8 @@ impl Witness for Recorder<'_> {
                 (self.sampled(depth, at), Event::LightSampling)
             }
             Source::ApartSample => {
-                let env = self.scene.lights.apart();
-                (env.map_or(Light::Background, |e| Light::of(self.scene, e)), Event::LightSampling)
+                let apart = self.scene.lights.apart();
+                (apart.map_or(Light::Background, |l| Light::of(self.scene, l)), Event::LightSampling)
             }
             Source::Emitter(m) => (Light::Emitter(m), met),
             Source::Background => (Light::Background, met),
