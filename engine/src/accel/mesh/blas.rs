@@ -40,6 +40,10 @@ pub struct MeshBlas {
     pub mesh: Arc<MeshData>,
     bvh: Bvh8,
     pub(super) blocks: Vec<TriBlock>,
+    /// The mesh's vertex normals shade it ([`smooth_normals`]): false without them, and where
+    /// every triangle's three equal its own normal (a flat-shaded mesh, as exporters write
+    /// boxes and walls), so that its hits skip the interpolation and the terminator's lift.
+    smooth: bool,
 }
 
 impl MeshBlas {
@@ -80,7 +84,8 @@ impl MeshBlas {
             }
             (first, blocks.len() as u32 - first)
         });
-        Self { mesh, bvh, blocks }
+        let smooth = smooth_normals(&mesh);
+        Self { mesh, bvh, blocks, smooth }
     }
 
     /// The BVH of triangles given by their corners, without a mesh: a hit's `id` is the
@@ -236,14 +241,15 @@ impl MeshBlas {
         let mut sp = Triangle { p: [a, b, c], uv: None }.surface(p);
         // The triangle's uv are its barycentric weights.
         sp.on = MeshPoint { mesh: u32::MAX, triangle: hit.id, b: sp.uv, instance: u32::MAX };
-        if self.mesh.normals.is_none() && self.mesh.uvs.is_none() {
+        if !self.smooth && self.mesh.uvs.is_none() {
             return (sp, 0.0);
         }
         let (b1, b2) = (sp.uv.x, sp.uv.y);
         let b0 = 1.0 - b1 - b2;
         let [i, j, k] = self.mesh.triangles[hit.id as usize].map(|v| v as usize);
         let mut lift = 0.0;
-        if let Some(n) = &self.mesh.normals
+        if self.smooth
+            && let Some(n) = &self.mesh.normals
             && let Some(ns) = unit(b0 * n[i] + b1 * n[j] + b2 * n[k])
         {
             (sp.ns, sp.ns_base) = (ns, ns);
@@ -257,6 +263,21 @@ impl MeshBlas {
         }
         (sp, lift)
     }
+}
+
+/// Whether `mesh`'s vertex normals shade it differently from its triangles' own normals: some
+/// triangle (with area) has a vertex normal more than about 0.1 degree from its geometric
+/// normal, or on its other side. Where none has, the shading normal they give is the geometric
+/// one to within 1e-6, and the terminator's lift is 0 to within rounding: the mesh is shaded
+/// flat, as one without normals.
+fn smooth_normals(mesh: &MeshData) -> bool {
+    let Some(normals) = &mesh.normals else { return false };
+    const FLAT: f32 = 1.0 - 1e-6;
+    mesh.triangles.iter().enumerate().any(|(i, t)| {
+        let [a, b, c] = mesh.triangle(i as u32);
+        let Some(ng) = unit((b - a).cross(c - a)) else { return false };
+        t.iter().any(|&v| !(normals[v as usize].normalize_or_zero().dot(ng) >= FLAT))
+    })
 }
 
 /// The shadow-terminator offset of Hanika ("Hacking the Shadow Terminator", Ray Tracing Gems
@@ -287,4 +308,43 @@ pub fn terminator_lift(x: Vec3A, n: Vec3A, p: [Vec3A; 3], vn: [Vec3A; 3], b: [f3
     }
     let h = d.dot(n);
     if h > 0.0 && h.is_finite() { h } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit square in z = 0 (two triangles, counter-clockwise seen from +z) with the given
+    /// vertex normals and uvs.
+    fn square(normals: Option<Vec<Vec3A>>) -> MeshData {
+        MeshData {
+            positions: vec![Vec3A::ZERO, Vec3A::X, Vec3A::new(1.0, 1.0, 0.0), Vec3A::Y],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            normals,
+            uvs: Some(vec![glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::ONE, glam::Vec2::Y]),
+            ..MeshData::default()
+        }
+    }
+
+    /// Vertex normals that equal the faces' own shade nothing: the mesh is shaded flat, with the
+    /// bits of the same mesh without normals; a normal tilted by a degree, or one on the other
+    /// side, still shades it (and turns the geometric normal to its side).
+    #[test]
+    fn flat_vertex_normals_shade_as_none() {
+        let up = vec![Vec3A::Z; 4];
+        let tilted = vec![Vec3A::Z, Vec3A::new(0.0175, 0.0, 1.0), Vec3A::Z, Vec3A::Z];
+        let down = vec![Vec3A::NEG_Z; 4];
+        let [bare, flat, tilted, down] =
+            [None, Some(up), Some(tilted), Some(down)].map(|n| MeshBlas::build(Arc::new(square(n))));
+        assert!(!bare.smooth && !flat.smooth && tilted.smooth && down.smooth);
+        let (o, d) = (Vec3A::new(0.7, 0.2, 1.0), Vec3A::NEG_Z);
+        let hit = bare.intersect(o, d, f32::INFINITY).expect("the ray meets the square");
+        let p = o + hit.t * d;
+        let (a, b) = (bare.surface(&hit, p), flat.surface(&hit, p));
+        assert_eq!(format!("{a:?}"), format!("{b:?}"));
+        assert_eq!(a.0.ns, Vec3A::Z);
+        let (t, lift) = tilted.surface(&hit, p);
+        assert!(t.ns != t.n && t.ns.x > 0.0 && lift >= 0.0, "{t:?}");
+        assert_eq!(down.surface(&hit, p).0.n, Vec3A::NEG_Z);
+    }
 }
