@@ -419,10 +419,15 @@ impl LightTable {
         let Some((tree, few)) = self.tree.as_ref().and_then(|t| Some((t, t.few()?))) else {
             return std::array::from_fn(|l| self.pick(u[l], at(from, l), at(n, l)));
         };
-        let mut importance = [[0.0; N]; FEW_LIGHTS];
-        crate::simd::lanes(
+        // Into a local of the closure: written through a captured reference, the loop could
+        // alias the inputs for all the compiler knew, and it kept it scalar in some builds.
+        let importance = crate::simd::lanes(
             #[inline(always)]
-            || tree.importances_lanes(from, n, &mut importance),
+            || {
+                let mut importance = [[0.0; N]; FEW_LIGHTS];
+                tree.importances_lanes(from, n, &mut importance);
+                importance
+            },
         );
         let total = importance_sums(&importance, few);
         let split: [_; N] = std::array::from_fn(|l| self.infinite_or_tree(u[l], total[l], at(n, l)));
