@@ -7,6 +7,7 @@ use crate::plain::{dot, offset, sel3};
 use crate::sampler::{Dims, Sampler};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::lighting::lights::OtherLight;
+use pathwave_engine::lighting::punctual_light::PunctualLight;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
 
@@ -136,7 +137,20 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
 #[inline]
 pub(crate) fn apart_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
     let l = scene.lights.apart()?;
-    pick_other(scene, scene.lights.other(l)?, 1.0, p, u)
+    match scene.lights.other(l)? {
+        // A sun, in line: its direction and irradiance are the same at every point (what
+        // `pick_other` computes for it, without the call and the match on every kind).
+        &OtherLight::Punctual(PunctualLight::Directional { to_light, irradiance }) => {
+            (irradiance != Vec3::ZERO).then(|| LightPick {
+                wi: to_light,
+                le: irradiance,
+                pdf: 1.0,
+                target: scene.lights.beyond(p, to_light),
+                delta: true,
+            })
+        }
+        other => pick_other(scene, other, 1.0, p, u),
+    }
 }
 
 /// The number that chooses the light at the vertex after `depth` bounces (one light needs

@@ -9,6 +9,7 @@ use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
+use glam::Vec3A;
 use pathwave_engine::material::dielectric::Dielectric;
 use pathwave_engine::material::metal::Metal;
 use pathwave_engine::material::metallic_roughness::MetallicRoughness;
@@ -217,12 +218,21 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
         }
         let picks = (!scene.lights.is_empty()).then(|| scene.lights.pick_lanes(&u_pick, &from, &normal));
         let (mut kernel, mut used) = ([None; LANES], 0u32);
-        let mut lights: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
+        let lights = match &picks {
+            Some(picks) => {
+                let lane = |l: usize| chunk.get(l).map(|&i| i as usize).filter(|_| materials[l].is_some());
+                let active = std::array::from_fn(|l| lane(l).is_some());
+                let points = std::array::from_fn(|l| lane(l).map_or(Vec3A::ZERO, |s| p.hit[s].surface.p));
+                let times = std::array::from_fn(|l| lane(l).map_or(0.0, |s| p.time[s]));
+                let numbers = std::array::from_fn(|l| u[l].light);
+                light_lanes::sample_lights_lanes(scene, picks, &active, &points, &times, &numbers)
+            }
+            None => std::array::from_fn(|_| None),
+        };
         for (l, &i) in chunk.iter().enumerate() {
             let s = i as usize;
             let Some((m, k)) = materials[l].take() else { continue };
-            let (sp, time) = (&p.hit[s].surface, p.time[s]);
-            lights[l] = picks.and_then(|picks| path::sample_light(scene, picks[l], sp.p, time, u[l].light));
+            let sp = &p.hit[s].surface;
             let wi = lights[l].as_ref().map_or(sp.ns, |lp| lp.wi);
             K::set(&mut ins, l, &m, (-p.dir[s]).into(), sp.ns.into(), wi.into(), &u[l].bsdf);
             kernel[l] = Some(k);
