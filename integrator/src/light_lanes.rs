@@ -12,7 +12,7 @@ use crate::path;
 use crate::plain::{dot, sel3};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::lighting::lights::{OtherLight, PlainLight};
-use pathwave_engine::lighting::punctual_light::{PunctualLight, SpotFalloff};
+use pathwave_engine::lighting::punctual_light::{PunctualLight, SpotFalloff, smoothstep, toward};
 use pathwave_engine::render_scene::{Background, RenderScene};
 use pathwave_engine::shape::{
     EllipsoidLight, QuadLight, SPHERICAL_MIN_ESTIMATE, SphereLight, cone_sample, ellipsoid_sample,
@@ -475,12 +475,13 @@ pub(crate) fn sample_lights_lanes(
     scene: &RenderScene,
     picks: &[(usize, f32); LANES],
     active: &[bool; LANES],
-    from: &[Vec3A; LANES],
+    from: &[[f32; LANES]; 3],
     time: &[f32; LANES],
     u: &[Vec2; LANES],
 ) -> [Option<path::LightPick>; LANES] {
     let mut out: [Option<path::LightPick>; LANES] = std::array::from_fn(|_| None);
-    let mut i = PunctualLanes::default();
+    let point = |l: usize| Vec3A::new(from[0][l], from[1][l], from[2][l]);
+    let mut i = PunctualLanes { from: *from, ..Default::default() };
     let mut taken = [false; LANES];
     for l in (0..LANES).filter(|&l| active[l]) {
         let (position, axis, intensity, cone) = match scene.lights.other(picks[l].0) {
@@ -497,14 +498,13 @@ pub(crate) fn sample_lights_lanes(
                 texture: None,
             })) => (position, axis, intensity, Some((cos_total, cos_falloff))),
             _ => {
-                out[l] = path::sample_light(scene, picks[l], from[l], time[l], u[l]);
+                out[l] = path::sample_light(scene, picks[l], point(l), time[l], u[l]);
                 continue;
             }
         };
         taken[l] = true;
         for c in 0..3 {
-            (i.position[c][l], i.axis[c][l], i.intensity[c][l], i.from[c][l]) =
-                (position[c], axis[c], intensity[c], from[l][c]);
+            (i.position[c][l], i.axis[c][l], i.intensity[c][l]) = (position[c], axis[c], intensity[c]);
         }
         (i.spot[l], (i.cos_total[l], i.cos_falloff[l])) = (cone.is_some(), cone.unwrap_or((0.0, 0.0)));
     }
@@ -525,7 +525,7 @@ pub(crate) fn sample_lights_lanes(
         if le == Vec3::ZERO || !(d > 0.0) || !(pmf > 0.0) {
             continue;
         }
-        out[l] = Some(path::LightPick { wi, le, pdf: pmf, target: from[l] + wi * d, delta: true });
+        out[l] = Some(path::LightPick { wi, le, pdf: pmf, target: point(l) + wi * d, delta: true });
     }
     out
 }
@@ -553,20 +553,14 @@ struct PunctualOut {
 }
 
 /// [`PunctualLight::illuminate`] of a point light or a smooth spot without texture, across
-/// lanes: glam's operations one by one (a dot product sums x and y first, then z).
+/// lanes: its own definitions (`punctual_light::toward`, `smoothstep`) lane by lane.
 #[inline(always)]
 fn punctual_lanes(i: &PunctualLanes) -> PunctualOut {
     let mut o = PunctualOut::default();
     for l in 0..LANES {
-        let to = [0, 1, 2].map(|c| i.position[c][l] - i.from[c][l]);
-        let d2 = (to[0] * to[0] + to[1] * to[1]) + to[2] * to[2];
-        let d = d2.sqrt();
-        let wi = to.map(|t| t / d);
-        let cos = -((wi[0] * i.axis[0][l] + wi[1] * i.axis[1][l]) + wi[2] * i.axis[2][l]);
-        let (a, b) = (i.cos_total[l], i.cos_falloff[l]);
-        let t = ((cos - a) / (b - a)).clamp(0.0, 1.0);
-        let smooth = if a == b { if cos < a { 0.0 } else { 1.0 } } else { t * t * (3.0 - 2.0 * t) };
-        let spot = smooth / d2;
+        let at = |a: &[[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
+        let (wi, d, d2, cos) = toward(at(&i.position), at(&i.from), at(&i.axis));
+        let spot = smoothstep(i.cos_total[l], i.cos_falloff[l], cos) / d2;
         for c in 0..3 {
             o.wi[c][l] = wi[c];
             o.le[c][l] = if i.spot[l] { i.intensity[c][l] * spot } else { i.intensity[c][l] / d2 };
@@ -768,7 +762,7 @@ mod tests {
         let mut rng = TestRng::new(5);
         let (mut taken, mut lit) = (0, 0);
         for round in 0..3000 {
-            let from: [Vec3A; LANES] = std::array::from_fn(|l| match (round + l) % 7 {
+            let points: [Vec3A; LANES] = std::array::from_fn(|l| match (round + l) % 7 {
                 // On a light's position: no direction, no sample.
                 0 => Vec3A::new(1.0, 1.0, 0.0),
                 _ => Vec3A::new(
@@ -779,14 +773,15 @@ mod tests {
             });
             let picks: [(usize, f32); LANES] = std::array::from_fn(|l| {
                 let n = Vec3A::new(rng.next_1d() - 0.5, rng.next_1d() - 0.5, rng.next_1d() - 0.5).normalize();
-                scene.lights.pick(rng.next_1d(), from[l], n)
+                scene.lights.pick(rng.next_1d(), points[l], n)
             });
             let active = std::array::from_fn(|l| (round + l) % 5 != 0);
             let u: [Vec2; LANES] = std::array::from_fn(|_| Vec2::new(rng.next_1d(), rng.next_1d()));
+            let from = [0, 1, 2].map(|c| points.map(|p| p[c]));
             let got = sample_lights_lanes(&scene, &picks, &active, &from, &[0.0; LANES], &u);
             for l in 0..LANES {
                 let want =
-                    active[l].then(|| path::sample_light(&scene, picks[l], from[l], 0.0, u[l])).flatten();
+                    active[l].then(|| path::sample_light(&scene, picks[l], points[l], 0.0, u[l])).flatten();
                 let bits = |p: &path::LightPick| {
                     let v = |a: [f32; 3]| a.map(f32::to_bits);
                     (v(p.wi.into()), v(p.le.into()), p.pdf.to_bits(), v(p.target.into()), p.delta)
@@ -795,7 +790,7 @@ mod tests {
                     got[l].as_ref().map(bits),
                     want.as_ref().map(bits),
                     "lane {l} at {} (light {})",
-                    from[l],
+                    points[l],
                     picks[l].0
                 );
                 taken += (active[l]

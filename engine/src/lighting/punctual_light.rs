@@ -194,17 +194,12 @@ impl PunctualLight {
     pub fn illuminate(&self, from: Vec3A, textures: &Textures) -> (Vec3A, f32, Vec3) {
         match *self {
             PunctualLight::Point { position, intensity } => {
-                let to = position - from;
-                let d2 = to.length_squared();
-                let d = d2.sqrt();
-                (to / d, d, intensity / d2)
+                let (wi, d, d2, _) = toward(position.into(), from.into(), [0.0; 3]);
+                (wi.into(), d, intensity / d2)
             }
             PunctualLight::Spot { position, axis, intensity, cos_falloff, cos_total, falloff, texture } => {
-                let to = position - from;
-                let d2 = to.length_squared();
-                let d = d2.sqrt();
-                let wi = to / d;
-                let cos = -wi.dot(axis);
+                let (wi, d, d2, cos) = toward(position.into(), from.into(), axis.into());
+                let wi = Vec3A::from(wi);
                 let f = match falloff {
                     SpotFalloff::Smoothstep => smoothstep(cos_total, cos_falloff, cos),
                     SpotFalloff::Linear { total, inv_width } => {
@@ -259,12 +254,26 @@ fn cos_sin_of(x: f32) -> f32 {
     crate::math::cos_sin_turn((x / std::f32::consts::TAU).clamp(0.0, 0.5)).0
 }
 
-/// Hermite smoothstep of `x` between `a` and `b` (0 below `a`, 1 above `b`).
-#[inline]
-fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
-    if a == b {
-        return if x < a { 0.0 } else { 1.0 };
-    }
+/// Hermite smoothstep of `x` between `a` and `b` (0 below `a`, 1 above `b`), its branch a
+/// select (a loop of it over lanes vectorises).
+#[inline(always)]
+pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
+    let step = if x < a { 0.0 } else { 1.0 };
+    if a == b { step } else { t * t * (3.0 - 2.0 * t) }
+}
+
+/// From `from` towards a point light at `position`: the unit direction, the distance, its
+/// square and the cosine between the direction back from the light and `axis` (a spot's). On
+/// plain numbers, glam's operations in glam's order (a dot product adds x and y, then z), so
+/// that a loop of it over lanes vectorises and gives each lane [`PunctualLight::illuminate`]'s
+/// bits.
+#[inline(always)]
+pub fn toward(position: [f32; 3], from: [f32; 3], axis: [f32; 3]) -> ([f32; 3], f32, f32, f32) {
+    let to = [0, 1, 2].map(|c| position[c] - from[c]);
+    let d2 = (to[0] * to[0] + to[1] * to[1]) + to[2] * to[2];
+    let d = d2.sqrt();
+    let wi = to.map(|t| t / d);
+    let cos = -((wi[0] * axis[0] + wi[1] * axis[1]) + wi[2] * axis[2]);
+    (wi, d, d2, cos)
 }

@@ -103,14 +103,7 @@ pub(crate) fn seen_from(
 #[inline(never)]
 fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
     match light {
-        OtherLight::Punctual(l) => {
-            let (wi, dist, le) = l.illuminate(p, &scene.textures);
-            if le == Vec3::ZERO || !(dist > 0.0) || !(pmf > 0.0) {
-                return None;
-            }
-            let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
-            Some(LightPick { wi, le, pdf: pmf, target, delta: true })
-        }
+        OtherLight::Punctual(l) => punctual_pick(scene, l, pmf, p),
         OtherLight::Environment => {
             // The MIS-compensated density of a map (`Background::sample`): every caller, at
             // surfaces of every shading kind and in media, weighs this sample by MIS against
@@ -131,6 +124,18 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
     }
 }
 
+/// The point, spot, directional or projector light `l`, chosen with probability `pmf`, seen
+/// from `p`.
+#[inline]
+fn punctual_pick(scene: &RenderScene, l: &PunctualLight, pmf: f32, p: Vec3A) -> Option<LightPick> {
+    let (wi, dist, le) = l.illuminate(p, &scene.textures);
+    if le == Vec3::ZERO || !(dist > 0.0) || !(pmf > 0.0) {
+        return None;
+    }
+    let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
+    Some(LightPick { wi, le, pdf: pmf, target, delta: true })
+}
+
 /// The light sample seen from `p` with the numbers `u` of the light sampled apart from the
 /// choice among the others (`LightTable::apart`: with probability 1, at every
 /// vertex that samples a light); `None` elsewhere, or when it sends nothing.
@@ -138,17 +143,8 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
 pub(crate) fn apart_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
     let l = scene.lights.apart()?;
     match scene.lights.other(l)? {
-        // A sun, in line: its direction and irradiance are the same at every point (what
-        // `pick_other` computes for it, without the call and the match on every kind).
-        &OtherLight::Punctual(PunctualLight::Directional { to_light, irradiance }) => {
-            (irradiance != Vec3::ZERO).then(|| LightPick {
-                wi: to_light,
-                le: irradiance,
-                pdf: 1.0,
-                target: scene.lights.beyond(p, to_light),
-                delta: true,
-            })
-        }
+        // A sun, in line (`pick_other` is a call and a match on every kind of light).
+        OtherLight::Punctual(l) => punctual_pick(scene, l, 1.0, p),
         other => pick_other(scene, other, 1.0, p, u),
     }
 }

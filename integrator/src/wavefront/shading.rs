@@ -9,7 +9,6 @@ use crate::glossy_lanes::{EvalLanes, GlossyLanes, Kernel};
 use crate::lambert_vertex;
 use crate::light_lanes;
 use crate::path;
-use glam::Vec3A;
 use pathwave_engine::material::dielectric::Dielectric;
 use pathwave_engine::material::metal::Metal;
 use pathwave_engine::material::metallic_roughness::MetallicRoughness;
@@ -220,12 +219,11 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
         let (mut kernel, mut used) = ([None; LANES], 0u32);
         let lights = match &picks {
             Some(picks) => {
-                let lane = |l: usize| chunk.get(l).map(|&i| i as usize).filter(|_| materials[l].is_some());
-                let active = std::array::from_fn(|l| lane(l).is_some());
-                let points = std::array::from_fn(|l| lane(l).map_or(Vec3A::ZERO, |s| p.hit[s].surface.p));
-                let times = std::array::from_fn(|l| lane(l).map_or(0.0, |s| p.time[s]));
+                // The lanes the kernels shade (a material only for `chunk`'s hits).
+                let active = std::array::from_fn(|l| materials[l].is_some());
+                let times = std::array::from_fn(|l| chunk.get(l).map_or(0.0, |&i| p.time[i as usize]));
                 let numbers = std::array::from_fn(|l| u[l].light);
-                light_lanes::sample_lights_lanes(scene, picks, &active, &points, &times, &numbers)
+                light_lanes::sample_lights_lanes(scene, picks, &active, &from, &times, &numbers)
             }
             None => std::array::from_fn(|_| None),
         };
