@@ -6,7 +6,7 @@ scenes/cycles/make.py): both render the same .glb file, Cycles through Blender's
       (run with the bpy venv, /opt/vdbvenv/bin/python): one Cycles render; prints a JSON line
       with render_s, the time of bpy.ops.render.render alone
   beside_cycles.py bench [--scenes sampler,interior,shot] [--spp 16,64] [--ref-spp 1024] [--reps 16]
-      [--json OUT] [--png DIR]
+      [--json OUT] [--png DIR] [--pathwave-args '--light-tracing on']
       (run with a python that has numpy and mitsuba, /opt/mitsuba-anchor/bin/python): for each
       scene a converged render by each renderer (cached in $CYCLES_REFS, /tmp/cycles-refs by
       default), then pathwave and Cycles alternately at each spp; prints the per-channel
@@ -36,6 +36,7 @@ import os
 import re
 import subprocess
 import sys
+import shlex
 import tempfile
 import time
 
@@ -166,7 +167,12 @@ def bench(argv):
     ap.add_argument('--reps', type=int, default=16)
     ap.add_argument('--json', default=None)
     ap.add_argument('--png', default=None, help='write cycles-SCENE.png (Cycles | pathwave) here')
+    ap.add_argument('--pathwave-args', default='',
+                    help="more options for pathwave, such as '--light-tracing on' (its converged render "
+                         'is then made and cached with them too)')
     a = ap.parse_args(argv)
+    extra = shlex.split(a.pathwave_args)
+    tag = ''.join('-' + re.sub('[^A-Za-z0-9.]+', '', x) for x in extra)
     sys.path.insert(0, '/work/shared/anchors/mitsuba')
     import numpy as np
     import metrics
@@ -178,9 +184,9 @@ def bench(argv):
         if not os.path.exists(ref_path):
             s = run_cycles(scene, ref_path, a.ref_spp, 1)
             print('%s: Cycles reference, %d spp in %.1f s' % (scene, a.ref_spp, s), file=sys.stderr, flush=True)
-        pw_ref_path = os.path.join(REFS, '%s-pathwave-%d.exr' % (scene, a.ref_spp))
+        pw_ref_path = os.path.join(REFS, '%s-pathwave%s-%d.exr' % (scene, tag, a.ref_spp))
         if not os.path.exists(pw_ref_path):
-            s = run_pathwave(scene, pw_ref_path, a.ref_spp, 1)
+            s = run_pathwave(scene, pw_ref_path, a.ref_spp, 1, extra)
             print('%s: pathwave reference, %d spp in %.1f s' % (scene, a.ref_spp, s), file=sys.stderr, flush=True)
         ref, pw_ref = metrics.load(ref_path), metrics.load(pw_ref_path)
         between = metrics.metrics(pw_ref, ref)
@@ -188,7 +194,7 @@ def bench(argv):
             pw, cy = [], []
             for r in range(a.reps):
                 out = os.path.join(tmp, 'pw.exr')
-                t = run_pathwave(scene, out, spp, 100 + r)
+                t = run_pathwave(scene, out, spp, 100 + r, extra)
                 pw.append((t, metrics.metrics(metrics.load(out), pw_ref)))
                 out = os.path.join(tmp, 'cy.exr')
                 t = run_cycles(scene, out, spp, 100 + r)

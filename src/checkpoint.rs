@@ -16,12 +16,18 @@
 //! resumed from one may differ in its last bits from a fresh render's; the image does not).
 //! Those of format 2 (format 3 without the settings' text) are read and merge with one
 //! another; their key was made from another description of the settings, so `--resume` refuses
-//! them, saying that their settings are not recorded.
+//! them, saying that their settings are not recorded. A render with light tracing writes format
+//! 5 (`PWCKPT05`): format 4 and, after the pixels, the light tracer's three sums per pixel
+//! (`i64`, the film's `LIGHT_UNIT`).
 
 use crate::integrator::film::{Film, PixelSums};
 use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 8] = b"PWCKPT04";
+/// Format 5's magic: format 4 with the light tracer's sums after the pixels.
+const MAGIC_V5: &[u8; 8] = b"PWCKPT05";
+/// Bytes per pixel of the light tracer's sums (format 5).
+const LIGHT_BYTES: usize = 3 * 8;
 /// Format 3's magic: no weights (every sample weighed 1).
 const MAGIC_V3: &[u8; 8] = b"PWCKPT03";
 /// Format 2's magic: format 3 without the settings' text (read with empty
@@ -43,8 +49,8 @@ const HEADER_BYTES: usize = 8 + 8 + FIELDS_BYTES;
 /// The longest settings' text: its `-D` values are the only long part.
 pub const MAX_SETTINGS_BYTES: usize = 1 << 20;
 /// The largest checkpoint read: that of the largest image `render` makes (65536 x 65536).
-pub const MAX_BYTES: u64 =
-    (HEADER_BYTES + 4 + MAX_SETTINGS_BYTES + CHECKSUM_BYTES) as u64 + ((PIXEL_BYTES as u64) << 32);
+pub const MAX_BYTES: u64 = (HEADER_BYTES + 4 + MAX_SETTINGS_BYTES + CHECKSUM_BYTES) as u64
+    + (((PIXEL_BYTES + LIGHT_BYTES) as u64) << 32);
 
 /// A render in progress.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,7 +139,7 @@ impl Checkpoint {
         let f = &self.film;
         let mut out =
             Vec::with_capacity(HEADER_BYTES + 4 + self.settings.len() + f.pixels.len() * PIXEL_BYTES);
-        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(if f.light.is_some() { MAGIC_V5 } else { MAGIC });
         out.extend_from_slice(&self.key.to_le_bytes());
         out.extend_from_slice(&(self.settings.len() as u32).to_le_bytes());
         out.extend_from_slice(self.settings.as_bytes());
@@ -148,6 +154,9 @@ impl Checkpoint {
             for v in [non_finite, weights[0], weights[1]] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
+        }
+        for s in f.light.iter().flatten() {
+            s.iter().for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
         }
         let checksum = xxhash_rust::xxh3::xxh3_64(&out);
         out.extend_from_slice(&checksum.to_le_bytes());
@@ -167,10 +176,12 @@ impl Checkpoint {
         if bytes.starts_with(MAGIC_V1) {
             return Err(bad("written by an older pathwave, without a checksum; render without --resume"));
         }
-        let (v2, v3) = (bytes.starts_with(MAGIC_V2), bytes.starts_with(MAGIC_V3));
-        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || !(v2 || v3 || bytes.starts_with(MAGIC)) {
-            return Err(bad("no PWCKPT04, PWCKPT03 or PWCKPT02 header"));
+        let (v2, v3, v5) =
+            (bytes.starts_with(MAGIC_V2), bytes.starts_with(MAGIC_V3), bytes.starts_with(MAGIC_V5));
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES || !(v2 || v3 || v5 || bytes.starts_with(MAGIC)) {
+            return Err(bad("no PWCKPT05, PWCKPT04, PWCKPT03 or PWCKPT02 header"));
         }
+        let light_bytes = if v5 { LIGHT_BYTES } else { 0 };
         let pixel_bytes = if v2 || v3 { PIXEL_BYTES_V3 } else { PIXEL_BYTES };
         let (body, tail) = bytes.split_at(bytes.len() - CHECKSUM_BYTES);
         if xxhash_rust::xxh3::xxh3_64(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
@@ -195,7 +206,7 @@ impl Checkpoint {
         let (first_sample, spp) = (u32_at(12), u32_at(16));
         let pixels_at = at + FIELDS_BYTES;
         let expected = (width as u64 * height as u64)
-            .checked_mul(pixel_bytes as u64)
+            .checked_mul((pixel_bytes + light_bytes) as u64)
             .and_then(|n| n.checked_add((pixels_at + CHECKSUM_BYTES) as u64));
         if width == 0 || height == 0 || expected != Some(bytes.len() as u64) {
             return Err(bad(&format!("{} bytes do not hold a {width}x{height} image", bytes.len())));
@@ -207,7 +218,13 @@ impl Checkpoint {
         }
         let mut film = Film::new(width, height);
         film.spp = spp;
-        for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..].chunks_exact(pixel_bytes)) {
+        let light_at = pixels_at + film.pixels.len() * pixel_bytes;
+        if v5 {
+            let sums = body[light_at..].chunks_exact(LIGHT_BYTES);
+            let i64_at = |c: &[u8], k: usize| i64::from_le_bytes(c[8 * k..8 * k + 8].try_into().unwrap());
+            film.light = Some(sums.map(|c| [0, 1, 2].map(|k| i64_at(c, k))).collect());
+        }
+        for (p, chunk) in film.pixels.iter_mut().zip(body[pixels_at..light_at].chunks_exact(pixel_bytes)) {
             // Format 4: 96-bit sums (sign-extended); formats 2 and 3: `i128`, squares in 2^50
             // units (2^10 times format 4's).
             let v4 = pixel_bytes == PIXEL_BYTES;
@@ -311,6 +328,29 @@ mod tests {
     use super::*;
     use crate::integrator::film::PixelAccumulator;
     use glam::Vec3;
+
+    #[test]
+    fn the_light_tracers_sums_read_back_as_written() {
+        let mut film = Film::new(2, 2);
+        film.spp = 3;
+        film.light = Some(vec![[1, -2, 3], [i64::MAX, 0, 5], [7, 8, 9], [i64::MIN, 1, 2]]);
+        let settings = settings_text(&[("light_tracing", "On".into())]);
+        let c = Checkpoint { key: key(b"scene", &settings), settings, target_spp: 8, first_sample: 0, film };
+        let bytes = c.to_bytes();
+        assert!(bytes.starts_with(MAGIC_V5));
+        let path = Path::new("light.ckpt");
+        assert_eq!(Checkpoint::from_bytes(&bytes, path).unwrap(), c);
+        // The same film without them is format 4, a byte count the other cannot pass for.
+        let plain = Checkpoint { film: Film { light: None, ..c.film.clone() }, ..c.clone() };
+        let mut b = plain.to_bytes();
+        assert!(b.starts_with(MAGIC));
+        b[..8].copy_from_slice(MAGIC_V5);
+        let n = b.len() - CHECKSUM_BYTES;
+        let sum = xxhash_rust::xxh3::xxh3_64(&b[..n]);
+        b[n..].copy_from_slice(&sum.to_le_bytes());
+        let err = Checkpoint::from_bytes(&b, path).unwrap_err();
+        assert!(err.contains("do not hold a 2x2 image"), "{err}");
+    }
 
     #[test]
     fn a_checkpoint_reads_back_as_written_and_a_damaged_one_is_refused() {

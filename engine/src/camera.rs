@@ -355,6 +355,67 @@ impl Camera {
     pub fn forward(&self) -> Vec3A {
         -self.pose.w
     }
+
+    /// True for a pinhole that light tracing can connect to ([`Self::pinhole_view`]): a
+    /// perspective camera without aperture, at rest.
+    pub fn is_pinhole(&self) -> bool {
+        !self.orthographic && !self.has_aperture() && !self.moves()
+    }
+
+    /// Where a pinhole camera ([`Self::is_pinhole`]) sees the world point `p`: the image
+    /// position in pixels (as [`Self::generate_ray`] takes it), the unit direction from `p` to
+    /// the pinhole, the distance, and the camera's importance along that ray per unit of image
+    /// area in pixels: `1 / (d omega / dA)`, the solid angle a pixel spans there being
+    /// `|du x dv| cos^3 theta / F^2` (pixel steps `du`, `dv` on the image plane at distance
+    /// `F`, `theta` the ray's angle from the plane's normal; pbrt-v4's
+    /// `PerspectiveCamera::We` per pixel). `None` where `p` is behind the camera, outside the
+    /// image, or outside the clip planes' depths.
+    pub fn pinhole_view(&self, p: Vec3A) -> Option<PinholeView> {
+        let pose = &self.pose;
+        let n = pose.du.cross(pose.dv);
+        let area = n.length();
+        let to_plane = pose.corner - pose.origin;
+        let n = if n.dot(to_plane) < 0.0 { -n / area } else { n / area };
+        let f = to_plane.dot(n);
+        let q = p - pose.origin;
+        let depth = q.dot(n);
+        if !(depth > 0.0) || !(f > 0.0) {
+            return None;
+        }
+        // Camera-space depth: the image plane lies at `focus` (see `ray_from`).
+        if let Some(c) = self.clip
+            && !(c.near..=c.far).contains(&(depth / f * pose.focus))
+        {
+            return None;
+        }
+        let r = q * (f / depth) - to_plane;
+        let (uu, uv, vv) = (pose.du.dot(pose.du), pose.du.dot(pose.dv), pose.dv.dot(pose.dv));
+        let (ru, rv) = (r.dot(pose.du), r.dot(pose.dv));
+        let det = uu * vv - uv * uv;
+        let pixel = Vec2::new((ru * vv - rv * uv) / det, (rv * uu - ru * uv) / det);
+        let dist = q.length();
+        let cos = depth / dist;
+        let importance = f * f / (area * cos * cos * cos);
+        (importance.is_finite() && pixel.is_finite()).then_some(PinholeView {
+            pixel,
+            to_camera: -q / dist,
+            dist,
+            importance,
+        })
+    }
+}
+
+/// A world point as a pinhole camera sees it ([`Camera::pinhole_view`]).
+#[derive(Clone, Copy, Debug)]
+pub struct PinholeView {
+    /// Image position in pixels.
+    pub pixel: Vec2,
+    /// Unit direction from the point to the pinhole.
+    pub to_camera: Vec3A,
+    /// Distance from the point to the pinhole.
+    pub dist: f32,
+    /// Importance per unit of image area (pixels): `1 / (d omega / dA)`.
+    pub importance: f32,
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use crate::accel::queue::Aggregate;
 use crate::camera::Camera;
 use crate::lighting::area::AreaEmission;
 use crate::lighting::environment::{EnvPdf, EnvSample, EnvironmentMap};
+use crate::lighting::light_paths::LightPaths;
 use crate::lighting::lights::{BackgroundSampling, LightTable};
 use crate::material::Material;
 use crate::material::wrap::{self, Amount, Resolved, Tilt, Wrapper, Wrappers, mix_lambertian};
@@ -108,6 +109,8 @@ pub struct RenderSettings {
     pub light_sampler: crate::scene::LightSamplerKind,
     /// Whether the render learns a guide first ([`RenderScene::guide`]).
     pub guiding: crate::guiding::Guiding,
+    /// Whether light tracing takes punctual lights' caustics ([`RenderScene::light_paths`]).
+    pub light_tracing: crate::lighting::light_paths::LightTracing,
 }
 
 impl std::str::FromStr for SamplerKind {
@@ -368,6 +371,9 @@ pub struct RenderScene {
     /// The distribution of incident light that Lambertian vertices draw part of their
     /// directions from (path guiding), once trained; `None` renders without.
     pub guide: Option<Arc<crate::guiding::Guide>>,
+    /// Light tracing's lights, where it takes caustics' paths (planned where the world makes
+    /// the scene); `None` renders every path by path tracing.
+    pub light_paths: Option<Arc<LightPaths>>,
 }
 
 impl RenderScene {

@@ -26,7 +26,15 @@ pub struct Film {
     /// What the pixels cost, when the integrator measured it: over the samples it rendered
     /// (a film resumed from a checkpoint has costs of the samples rendered since).
     pub costs: Option<PixelCosts>,
+    /// Per pixel, the light tracer's exact sums over the same samples (in units of
+    /// [`LIGHT_UNIT`]), in scenes where it takes part of the paths
+    /// (`crate::light_tracer`); a pixel's estimate adds them over the sample count.
+    pub light: Option<Vec<[i64; 3]>>,
 }
+
+/// Fixed-point scale of the light tracer's sums: 2^24 (a pixel's sum saturates at 2^39,
+/// about 5.5e11; values below 6e-8 round to zero).
+pub const LIGHT_UNIT: f64 = (1u64 << 24) as f64;
 
 impl Film {
     /// An empty film. Its pixels are allocated zeroed (`bytemuck::zeroed_vec`: fresh pages
@@ -39,20 +47,29 @@ impl Film {
         use rayon::prelude::*;
         let mut pixels: Vec<PixelSums> = bytemuck::zeroed_vec(width as usize * height as usize);
         pixels.par_chunks_mut(4096).for_each(|c| c.fill(PixelSums::default()));
-        Self { width, height, spp: 0, pixels, guides: None, costs: None }
+        Self { width, height, spp: 0, pixels, guides: None, costs: None, light: None }
     }
 
     /// Per-pixel estimate: the weighted mean (the plain mean where samples weigh 1, as the
     /// box's do: then the weight is the sample count and the bits are those of sum / spp).
+    /// With the light tracer's sums, each pixel adds them over the sample count.
     pub fn mean(&self) -> Vec<Vec3> {
-        self.pixels
+        let mut mean: Vec<Vec3> = self
+            .pixels
             .iter()
             .map(|p| {
                 let (s, w) = (p.sum(), p.weight());
                 let k = if w > 0.0 { 1.0 / w } else { 0.0 };
                 Vec3::new((s[0] * k) as f32, (s[1] * k) as f32, (s[2] * k) as f32)
             })
-            .collect()
+            .collect();
+        if let Some(light) = &self.light {
+            let k = if self.spp > 0 { 1.0 / (LIGHT_UNIT * self.spp as f64) } else { 0.0 };
+            for (m, l) in mean.iter_mut().zip(light) {
+                *m += Vec3::new((l[0] as f64 * k) as f32, (l[1] as f64 * k) as f32, (l[2] as f64 * k) as f32);
+            }
+        }
+        mean
     }
 
     /// Adds the samples of another film of the same size (other sample indices of the same
@@ -84,6 +101,15 @@ impl Film {
         }
         self.spp += o.spp;
         self.pixels.iter_mut().zip(&o.pixels).for_each(|(a, b)| a.merge(b));
+        match (&mut self.light, &o.light) {
+            (Some(a), Some(b)) => a.iter_mut().zip(b).for_each(|(a, b)| {
+                for c in 0..3 {
+                    a[c] = a[c].saturating_add(b[c]);
+                }
+            }),
+            (a @ None, Some(b)) => *a = Some(b.clone()),
+            _ => {}
+        }
     }
 
     /// [`Self::merge`] of a film this one may keep: an empty film (no samples, guides or costs)
@@ -91,7 +117,7 @@ impl Film {
     /// (zeroed pages faulted in, then a pass adding every pixel: 3-5 ms of a 256x256 render).
     pub fn absorb(&mut self, o: Film) {
         assert_eq!((self.width, self.height), (o.width, o.height), "films of different sizes");
-        match self.spp == 0 && self.guides.is_none() && self.costs.is_none() {
+        match self.spp == 0 && self.guides.is_none() && self.costs.is_none() && self.light.is_none() {
             true => *self = o,
             false => self.merge(&o),
         }

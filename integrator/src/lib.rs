@@ -14,6 +14,7 @@ pub mod guide_training;
 pub mod guided;
 pub mod lambert_vertex;
 pub mod light_lanes;
+pub mod light_tracer;
 pub mod metal_lanes;
 pub mod oracle;
 pub mod path;

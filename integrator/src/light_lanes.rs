@@ -525,7 +525,8 @@ pub(crate) fn sample_lights_lanes(
         if le == Vec3::ZERO || !(d > 0.0) || !(pmf > 0.0) {
             continue;
         }
-        out[l] = Some(path::LightPick { wi, le, pdf: pmf, target: point(l) + wi * d, delta: true });
+        let (target, light) = (point(l) + wi * d, picks[l].0 as u32);
+        out[l] = Some(path::LightPick { wi, le, pdf: pmf, target, delta: true, light });
     }
     out
 }

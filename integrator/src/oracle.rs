@@ -33,6 +33,9 @@ pub fn render_samples(
         tracing::info_span!("oracle_render", width = s.width, height = s.height, spp = s.spp).entered();
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
+    if let Some(plan) = &scene.light_paths {
+        film.light = Some(crate::light_tracer::trace(scene, plan, samples.clone()));
+    }
     if let Some(filter) = s.filter.splat() {
         tile::splat_tiles(
             &s.window,
@@ -204,6 +207,9 @@ pub fn radiance_witnessed(
             // A surface with a null lobe is sampled at the limit too (only a null sample goes on).
             if path::at_max_depth(scene, st.bounces()) && !mat.has_null_lobe() {
                 break 'path;
+            }
+            if let Some(lp) = &scene.light_paths {
+                path::divide_for_light_paths(&mut st, lp.class(mat), &hit.surface);
             }
             vertex = (st.depth, [hit.surface.p, hit.surface.ns], Some(named));
             match mat.shading() {

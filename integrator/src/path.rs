@@ -7,10 +7,13 @@
 //! rays that start paths in `camera`.
 
 mod camera;
+mod division;
 mod light;
 mod medium;
 
 pub use camera::{camera_ray, camera_rays, camera_sampler, pixel_numbers};
+pub use division::divide_for_light_paths;
+pub(crate) use division::{emitter_traced, light_traced};
 pub(crate) use light::{LightPick, apart_light, light_choice, pick_light, sample_light, seen_from};
 pub use light::{media_transmittance, shadow_transmittance, trace_shadow};
 pub use medium::{Flight, chromatic_flight, medium_dim, sample_medium, scatter_in_medium};
@@ -46,6 +49,13 @@ pub struct PathState {
     /// Null crossings so far ([`BsdfSample::null`](pathwave_engine::material::BsdfSample::null)):
     /// `depth - crossings` bounces count towards `max_depth`.
     pub crossings: u32,
+    /// In a scene where light tracing takes punctual lights' caustics
+    /// ([`RenderScene::light_paths`]; [`divide_for_light_paths`]): the path's first vertex was
+    /// rough and none of its others is one light tracing leaves to the path tracer.
+    pub caustic: bool,
+    /// ... and the vertex being shaded is sharp: a punctual light sampled here ends a path the
+    /// light tracer counts.
+    pub traced_here: bool,
 }
 
 impl PathState {
@@ -62,6 +72,8 @@ impl PathState {
             prev_pdf: 0.0,
             depth: 0,
             crossings: 0,
+            caustic: false,
+            traced_here: false,
         }
     }
 
@@ -139,6 +151,10 @@ pub fn escape(scene: &RenderScene, st: &mut PathState, dir: Vec3A) {
 /// unless the path came by a delta lobe (or is a camera ray).
 #[inline]
 pub fn emit(scene: &RenderScene, st: &mut PathState, hit: &Hit, wo: Vec3A, time: f32) {
+    // After a sharp vertex of a caustic's path, a light that light tracing emits from is its.
+    if st.traced_here && emitter_traced(scene, hit.prim) {
+        return;
+    }
     let sp = &hit.surface;
     let le = scene.emitted(hit.material, sp, sp.n.dot(wo));
     if le == Vec3::ZERO {
@@ -509,9 +525,10 @@ pub fn shade_glossy(
         return (Shadows::default(), scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true));
     }
     let shadow = |lp: LightPick| light_shadow(scene, st, sp, wo, &lp, || mat.eval(wo, lp.wi, sp.ns), time);
+    let ours = |lp: &LightPick| !light_traced(scene, st, lp);
     let shadows = Shadows {
-        light: glossy_light(scene, sp, time, u).and_then(shadow),
-        apart: apart_light(scene, sp.p, u.apart).and_then(shadow),
+        light: glossy_light(scene, sp, time, u).filter(ours).and_then(shadow),
+        apart: apart_light(scene, sp.p, u.apart).filter(ours).and_then(shadow),
     };
     (shadows, scatter_with(scene, st, sp, wo, mat, time, &u.bsdf, true))
 }

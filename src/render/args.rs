@@ -7,6 +7,7 @@
 use crate::MAX_THREADS;
 use crate::denoiser::Denoiser;
 use crate::engine::guiding::Guiding;
+use crate::engine::lighting::light_paths::LightTracing;
 use crate::engine::render_scene::SamplerKind;
 use crate::engine::scene::{FilterDesc, LightSamplerKind, SceneDesc};
 use crate::look::{Look, LookArgs};
@@ -42,6 +43,11 @@ pub struct SceneArgs {
     /// directions from what was learned) or off (default) (overrides the scene).
     #[arg(long, value_name = "on|off")]
     pub guiding: Option<Guiding>,
+    /// Light tracing: on (the caustics that point, spot, directional and projector lights
+    /// throw onto rough surfaces through mirrors, glass and sharp lobes are traced from the
+    /// lights and connected to the camera) or off (default) (overrides the scene).
+    #[arg(long, value_name = "on|off")]
+    pub light_tracing: Option<LightTracing>,
     /// Scale samples down so that no component exceeds MAX (biased; off by default).
     #[arg(long, value_name = "MAX")]
     pub clamp: Option<f32>,

@@ -6,6 +6,7 @@ use super::post_process::post_process;
 use crate::checkpoint::{self, Checkpoint};
 use crate::engine::filter::PixelFilter;
 use crate::engine::guiding::Guiding;
+use crate::engine::lighting::light_paths::{self, LightTracing};
 use crate::engine::render_scene::{PixelWindow, RenderScene, SamplerKind};
 use crate::engine::scene::LightSamplerKind;
 use crate::engine::scene::files::InputFile;
@@ -54,6 +55,10 @@ pub fn render_id(
     // was apart from the samples hold other samples).
     let guiding = (s.guiding != Guiding::Off)
         .then(|| ("guiding", format!("{:?}, {} training stages", s.guiding, guide_training::PASSES)));
+    // Light tracing says where sharp lobes start (the paths it takes).
+    let light_tracing = (s.light_tracing != LightTracing::Off).then(|| {
+        ("light_tracing", format!("{:?}, sharp below alpha {}", s.light_tracing, light_paths::SHARP_ALPHA))
+    });
     let settings_of = |w: &PixelWindow| {
         checkpoint::settings_text(
             &[
@@ -73,6 +78,7 @@ pub fn render_id(
             .chain(filter.clone())
             .chain(lights.clone())
             .chain(guiding.clone())
+            .chain(light_tracing.clone())
             .collect::<Vec<_>>(),
         )
     };

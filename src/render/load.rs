@@ -73,6 +73,7 @@ pub fn load(path: &Path, o: &SceneArgs) -> Result<scene::SceneDesc, String> {
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     r.light_sampler = o.light_sampler.unwrap_or(r.light_sampler);
     r.guiding = o.guiding.unwrap_or(r.guiding);
+    r.light_tracing = o.light_tracing.unwrap_or(r.light_tracing);
     r.clamp = o.clamp()?.or(r.clamp);
     r.crop = o.crop()?.or(r.crop);
     limits::check_render(r)?;

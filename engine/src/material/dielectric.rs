@@ -55,6 +55,11 @@ impl MaterialModel for Dielectric {
     }
 
     /// Glass shows as white in the albedo guide.
+    /// Delta lobes.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(0.0)
+    }
+
     fn albedo(&self) -> Vec3 {
         Vec3::ONE
     }

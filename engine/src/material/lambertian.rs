@@ -73,6 +73,11 @@ impl MaterialModel for Lambertian {
         !self.two_sided
     }
 
+    /// A diffuse kind: light tracing connects it to the camera.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(f32::INFINITY)
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo

@@ -65,6 +65,11 @@ impl MaterialModel for Metal {
         eval_plain(self.albedo, self.fuzz, wo.into(), wi.into(), n.into())
     }
 
+    /// A perfect mirror is a delta lobe; a fuzzed one has no density to weigh.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        (self.fuzz == 0.0).then_some(0.0)
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo

@@ -282,6 +282,11 @@ impl MaterialModel for MetallicRoughness {
         self.eval_plain(frame.local(wo.into()), frame.local(wi.into()))
     }
 
+    /// The base layer, or the clear coat where there is one.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(if self.clearcoat > 0.0 { self.alpha.min(self.alpha_coat) } else { self.alpha })
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.base_color

@@ -238,6 +238,11 @@ pub trait MaterialModel: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'sta
     fn one_sided(&self) -> bool {
         false
     }
+
+    /// Its sharpest lobe's width for light tracing (0 delta, infinity diffuse, `None` ignored).
+    fn sharpest_alpha(&self) -> Option<f32> {
+        None
+    }
 }
 
 /// The colours and numbers of one material being built: plain values, or textures whose mean
@@ -508,6 +513,14 @@ macro_rules! registry {
             pub fn one_sided(&self) -> bool {
                 match self {
                     $($(#[$attr])* Material::$variant(m) => m.one_sided(),)+
+                }
+            }
+
+            /// See [`MaterialModel::sharpest_alpha`].
+            #[inline]
+            pub fn sharpest_alpha(&self) -> Option<f32> {
+                match self {
+                    $($(#[$attr])* Material::$variant(m) => m.sharpest_alpha(),)+
                 }
             }
         }

@@ -262,6 +262,11 @@ impl MaterialModel for Plastic {
     }
 
     /// The base's albedo.
+    /// The smooth coating is a delta lobe.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(0.0)
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo

@@ -484,6 +484,13 @@ impl MaterialModel for Principled {
         self.lobes().eval_plain(frame.local(wo.into()), frame.local(wi.into()))
     }
 
+    /// The main lobe, or the clearcoat where there is one.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        let l = self.lobes();
+        let main = l.ax.min(l.ay);
+        Some(if l.clearcoat > 0.0 { main.min(l.cc_alpha) } else { main })
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.base_color

@@ -410,6 +410,11 @@ impl MaterialModel for RoughConductor {
         }
     }
 
+    /// The narrower of its two widths.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(self.alpha.min(self.alpha_v))
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.tint

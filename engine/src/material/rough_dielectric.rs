@@ -275,6 +275,11 @@ impl MaterialModel for RoughDielectric {
     }
 
     /// Clear glass shows as white in the albedo guide.
+    /// Its width.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(self.alpha)
+    }
+
     fn albedo(&self) -> Vec3 {
         Vec3::ONE
     }

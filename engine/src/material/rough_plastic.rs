@@ -499,6 +499,11 @@ impl MaterialModel for RoughPlastic {
     }
 
     /// The base's albedo.
+    /// The coating's width.
+    fn sharpest_alpha(&self) -> Option<f32> {
+        Some(self.alpha)
+    }
+
     #[inline]
     fn albedo(&self) -> Vec3 {
         self.albedo

@@ -300,6 +300,9 @@ pub struct RenderDesc {
     pub light_sampler: LightSamplerKind,
     /// Path guiding: `Off` (default) or `On` (see [`crate::guiding`]).
     pub guiding: crate::guiding::Guiding,
+    /// Light tracing of punctual lights' caustics: `Off` (default) or `On` (see
+    /// [`crate::lighting::light_paths`]).
+    pub light_tracing: crate::lighting::light_paths::LightTracing,
 }
 
 /// A pixel filter as Mitsuba 3 defines it (mitsuba3 `src/rfilters/`), in pixels: `Box`
@@ -442,6 +445,7 @@ impl Default for RenderDesc {
             filter: FilterDesc::Box,
             light_sampler: LightSamplerKind::Auto,
             guiding: crate::guiding::Guiding::Off,
+            light_tracing: crate::lighting::light_paths::LightTracing::Off,
         }
     }
 }

@@ -23,6 +23,13 @@ pub trait PrimitiveShape: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'st
     /// The solid-angle density with which [`Self::sample_solid_angle`] from `from` gives the
     /// point `p` (unit normal `n`).
     fn pdf_solid_angle(&self, from: Vec3A, p: Vec3A, n: Vec3A) -> f32;
+    /// A point uniform over the surface (area density `1 / area`, in `pdf`), where light
+    /// tracing emits from it; `None` for kinds that give none (their light is left to the path
+    /// tracer).
+    fn sample_area(&self, u: Vec2) -> Option<LightSample> {
+        let _ = u;
+        None
+    }
     /// The derivatives `(dp/du, dp/dv)` of the point along the texture coordinates at `sp`:
     /// the tangent of an anisotropic material and the frame of bump and normal maps; `None`
     /// where the kind does not give them (an anisotropic material then takes an arbitrary
@@ -81,6 +88,13 @@ macro_rules! primitives {
             pub fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {
                 match self {
                     $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::sample_solid_angle(s, from, u),)+
+                }
+            }
+
+            /// See [`PrimitiveShape::sample_area`].
+            pub fn sample_area(&self, u: Vec2) -> Option<LightSample> {
+                match self {
+                    $($(#[$attr])* Primitive::$variant(s) => PrimitiveShape::sample_area(s, u),)+
                 }
             }
 

@@ -389,6 +389,11 @@ impl PrimitiveShape for Quad {
         self.area
     }
 
+    fn sample_area(&self, u: Vec2) -> Option<LightSample> {
+        let p = self.q + u.x * self.u + u.y * self.v;
+        Some(LightSample { p, n: self.n, pdf: 1.0 / self.area, err: self.point_error() })
+    }
+
     /// Samples a point of the quad as seen from `from`: uniformly in the solid angle of a
     /// rectangle (unless it subtends very little or almost everything), else uniformly by area;
     /// the density is returned in solid angle.

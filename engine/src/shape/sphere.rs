@@ -290,6 +290,16 @@ impl PrimitiveShape for Sphere {
         4.0 * PI * self.radius * self.radius
     }
 
+    fn sample_area(&self, u: Vec2) -> Option<LightSample> {
+        let n = uniform_sphere(u);
+        Some(LightSample {
+            p: self.center + self.radius * n,
+            n,
+            pdf: 1.0 / self.area(),
+            err: self.point_error(),
+        })
+    }
+
     /// Samples a point of the sphere visible from `from`: uniformly in the cone it subtends when
     /// `from` is outside, uniformly by area when inside.
     fn sample_solid_angle(&self, from: Vec3A, u: Vec2) -> LightSample {

@@ -342,6 +342,12 @@ impl PrimitiveShape for Triangle {
         0.5 * crate::math::length(self.cross())
     }
 
+    fn sample_area(&self, u: Vec2) -> Option<LightSample> {
+        let su = u.x.sqrt();
+        let sp = self.surface_at(su * (1.0 - u.y), su * u.y);
+        Some(LightSample { p: sp.p, n: sp.n, pdf: 1.0 / self.area(), err: sp.err })
+    }
+
     /// Samples a point of the triangle as seen from `from`: uniformly in its solid angle where
     /// it is estimated to subtend at least 0.3 sr, else uniformly by area (the square-root
     /// parameterisation); the density is returned in solid angle.

@@ -3,6 +3,8 @@
 
 use super::components::*;
 use crate::camera::Camera;
+use crate::lighting::light_paths::{LightPaths, LightTracing, SHARP_ALPHA};
+use crate::material::Material;
 use crate::render_scene::{Features, RenderScene};
 use crate::scene::{CameraDesc, CameraView, Projection};
 use bevy_ecs::prelude::*;
@@ -59,7 +61,7 @@ pub fn extract_render_scene(
         Some(close) => make(&camera.0).moving_to(&make(close)),
         None => make(&camera.0),
     };
-    out.0 = Some(Arc::new(RenderScene {
+    let mut scene = RenderScene {
         features: Features::detect(&geometry.geometry, &instances.instances, &media.media, &camera)
             .with_materials(
                 &geometry.geometry,
@@ -83,5 +85,39 @@ pub fn extract_render_scene(
         varies: RenderScene::varying_materials(&textures.per_material, &wrappers.0),
         wrappers: wrappers.0.clone(),
         guide: None,
-    }));
+        light_paths: None,
+    };
+    scene.light_paths = match plan_light_paths(&scene) {
+        Ok(plan) => plan.map(Arc::new),
+        Err(why) => {
+            tracing::warn!("{why}");
+            None
+        }
+    };
+    out.0 = Some(Arc::new(scene));
+}
+
+/// Light tracing for `scene` ([`LightPaths`]): `None` where it is off or has nothing to take
+/// (no light it emits from, no sharp material); an error saying why where it is on but the
+/// scene has what it does not follow: participating media, a camera other than a pinhole at
+/// rest, or a pixel filter wider than the film splats.
+fn plan_light_paths(scene: &RenderScene) -> Result<Option<LightPaths>, String> {
+    if scene.settings.light_tracing == LightTracing::Off {
+        return Ok(None);
+    }
+    let sharp = |m: &Material| m.sharpest_alpha().is_some_and(|a| a < SHARP_ALPHA);
+    if !scene.materials.iter().any(sharp) {
+        return Ok(None);
+    }
+    let refuse = |what: &str| Err(format!("light tracing is off: {what}"));
+    if scene.features.media {
+        return refuse("the scene has participating media");
+    }
+    if !scene.camera.is_pinhole() {
+        return refuse("the camera is not a pinhole at rest (it has a lens or moves, or is orthographic)");
+    }
+    if scene.settings.filter.samples_offsets() {
+        return refuse("the pixel filter reaches further than the film splats (4 pixels)");
+    }
+    Ok(LightPaths::new(&scene.lights, &scene.geometry))
 }

@@ -140,6 +140,7 @@ pub(super) fn spawn(world: &mut World, desc: &SceneDesc) {
         filter: r.filter.into(),
         light_sampler: r.light_sampler,
         guiding: r.guiding,
+        light_tracing: r.light_tracing,
     }));
     world.insert_resource(CameraParams(desc.camera, None));
     world.insert_resource(FrameTime { open: desc.camera.shutter.0, close: desc.camera.shutter.1 });

@@ -21,6 +21,8 @@ pub(crate) struct LightPick {
     pub pdf: f32,
     pub target: Vec3A,
     pub delta: bool,
+    /// The light's index in the light table.
+    pub light: u32,
 }
 
 /// Picks a light with `u_pick` and a point on it with `u` as seen from `p` (of shading normal
@@ -51,7 +53,7 @@ pub(crate) fn sample_light(
     let geo = &*scene.geometry;
     let lights = &*scene.lights;
     if let Some(other) = lights.other(light) {
-        return pick_other(scene, other, pmf, p, u);
+        return pick_other(scene, other, (light as u32, pmf), p, u);
     }
     let ls = lights.sample(geo, light, p, u, time);
     let prim = lights.prims[light];
@@ -59,7 +61,8 @@ pub(crate) fn sample_light(
     let emission = lights.emission[geo.material[prim as usize] as usize].as_ref()?;
     let emit = |cos| emission.emitted(&scene.textures, cos, || geo.surface(prim, ls.p, time));
     let s = seen_from(ls.p.into(), ls.n.into(), ls.pdf, ls.err, pmf, p.into(), emit);
-    s.ok.then(|| LightPick { wi: s.wi.into(), le: s.le, pdf: s.pdf, target: s.target.into(), delta: false })
+    let (wi, target, light) = (s.wi.into(), s.target.into(), light as u32);
+    s.ok.then_some(LightPick { wi, le: s.le, pdf: s.pdf, target, delta: false, light })
 }
 
 /// What a light sample gives a shading point, before the choice of `ok`: the direction to it,
@@ -101,9 +104,15 @@ pub(crate) fn seen_from(
 
 /// [`pick_light`] for a light that is not a primitive, chosen with probability `pmf`.
 #[inline(never)]
-fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Vec2) -> Option<LightPick> {
-    match light {
-        OtherLight::Punctual(l) => punctual_pick(scene, l, pmf, p),
+fn pick_other(
+    scene: &RenderScene,
+    other: &OtherLight,
+    (light, pmf): (u32, f32),
+    p: Vec3A,
+    u: Vec2,
+) -> Option<LightPick> {
+    match other {
+        OtherLight::Punctual(l) => punctual_pick(scene, l, (light, pmf), p),
         OtherLight::Environment => {
             // The MIS-compensated density of a map (`Background::sample`): every caller, at
             // surfaces of every shading kind and in media, weighs this sample by MIS against
@@ -119,6 +128,7 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
                 pdf,
                 target: scene.lights.beyond(p, s.dir),
                 delta: false,
+                light,
             })
         }
     }
@@ -127,13 +137,18 @@ fn pick_other(scene: &RenderScene, light: &OtherLight, pmf: f32, p: Vec3A, u: Ve
 /// The point, spot, directional or projector light `l`, chosen with probability `pmf`, seen
 /// from `p`.
 #[inline]
-fn punctual_pick(scene: &RenderScene, l: &PunctualLight, pmf: f32, p: Vec3A) -> Option<LightPick> {
+fn punctual_pick(
+    scene: &RenderScene,
+    l: &PunctualLight,
+    (light, pmf): (u32, f32),
+    p: Vec3A,
+) -> Option<LightPick> {
     let (wi, dist, le) = l.illuminate(p, &scene.textures);
     if le == Vec3::ZERO || !(dist > 0.0) || !(pmf > 0.0) {
         return None;
     }
     let target = if dist.is_finite() { p + wi * dist } else { scene.lights.beyond(p, wi) };
-    Some(LightPick { wi, le, pdf: pmf, target, delta: true })
+    Some(LightPick { wi, le, pdf: pmf, target, delta: true, light })
 }
 
 /// The light sample seen from `p` with the numbers `u` of the light sampled apart from the
@@ -141,11 +156,12 @@ fn punctual_pick(scene: &RenderScene, l: &PunctualLight, pmf: f32, p: Vec3A) -> 
 /// vertex that samples a light); `None` elsewhere, or when it sends nothing.
 #[inline]
 pub(crate) fn apart_light(scene: &RenderScene, p: Vec3A, u: Vec2) -> Option<LightPick> {
-    let l = scene.lights.apart()?;
-    match scene.lights.other(l)? {
+    let index = scene.lights.apart()?;
+    let light = index as u32;
+    match scene.lights.other(index)? {
         // A sun, in line (`pick_other` is a call and a match on every kind of light).
-        OtherLight::Punctual(l) => punctual_pick(scene, l, 1.0, p),
-        other => pick_other(scene, other, 1.0, p, u),
+        OtherLight::Punctual(l) => punctual_pick(scene, l, (light, 1.0), p),
+        other => pick_other(scene, other, (light, 1.0), p, u),
     }
 }
 

@@ -347,6 +347,9 @@ pub fn render_training(
     let batch = opts.batch.max(1);
     let mut film = Film::new(s.window.w, s.window.h);
     film.spp = samples.len() as u32;
+    if let Some(plan) = &scene.light_paths {
+        film.light = Some(crate::light_tracer::trace(scene, plan, samples.clone()));
+    }
     let run = |(paths, queues): &mut (Paths, Queues), tile: &Tile, splat: Option<(Splat, PixelWindow)>| {
         let _span =
             tracing::trace_span!("tile", x0 = tile.x0, y0 = tile.y0, samples = samples.len()).entered();

@@ -46,6 +46,10 @@ pub struct Paths {
     pub depth: Vec<u32>,
     /// Null crossings so far.
     pub crossings: Vec<u32>,
+    /// The path is a caustic's so far, for light tracing ([`PathState::caustic`]).
+    pub caustic: Vec<bool>,
+    /// Its punctual light samples here are the light tracer's ([`PathState::traced_here`]).
+    pub traced_here: Vec<bool>,
     /// Spectral MIS ratios in coloured media (see [`crate::path::chromatic_flight`]).
     pub ratio: Vec<Vec3>,
     /// Random stream.
@@ -101,6 +105,8 @@ impl Paths {
             prev_pdf: vec![0.0; n],
             depth: vec![0; n],
             crossings: vec![0; n],
+            caustic: vec![false; n],
+            traced_here: vec![false; n],
             ratio: vec![Vec3::ONE; n],
             sampler: vec![Sampler::new(SamplerKind::Sobol, 0, 0, 0, 1); n],
             pixel: vec![0; n],
@@ -152,6 +158,8 @@ impl Paths {
             prev_pdf: self.prev_pdf[i],
             depth: self.depth[i],
             crossings: self.crossings[i],
+            caustic: self.caustic[i],
+            traced_here: self.traced_here[i],
         }
     }
 
@@ -168,6 +176,8 @@ impl Paths {
         self.prev_pdf[i] = s.prev_pdf;
         self.depth[i] = s.depth;
         self.crossings[i] = s.crossings;
+        self.caustic[i] = s.caustic;
+        self.traced_here[i] = s.traced_here;
     }
 }
 

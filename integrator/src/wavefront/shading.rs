@@ -271,12 +271,11 @@ fn shade_in_lanes<K: GlossyLanes>(scene: &RenderScene, p: &mut Paths, q: &mut Qu
                 ),
                 Some(k) => {
                     let (e, bs) = K::result(&outs[k.index()], l);
-                    let light = lights[l]
-                        .as_ref()
+                    let ours = |lp: &&path::LightPick| !path::light_traced(scene, &st, lp);
+                    let light = (lights[l].as_ref().filter(ours))
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || e, time));
                     let env_eval = &env_outs[k.index()];
-                    let apart = apart[l]
-                        .as_ref()
+                    let apart = (apart[l].as_ref().filter(ours))
                         .and_then(|lp| path::light_shadow(scene, &st, sp, wo, lp, || env_eval.eval(l), time));
                     let next = bs.and_then(|bs| {
                         path::scatter_sampled(scene, &mut st, sp, wo, bs, time, &u[l].bsdf, true)

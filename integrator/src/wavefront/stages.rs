@@ -7,6 +7,7 @@ use crate::lambert_vertex;
 use crate::path;
 use glam::{Vec3, Vec3A};
 use pathwave_engine::accel::geometry::Hit;
+use pathwave_engine::lighting::light_paths::LightPaths;
 use pathwave_engine::material::Shading;
 use pathwave_engine::math::Ray;
 use pathwave_engine::render_scene::RenderScene;
@@ -118,9 +119,12 @@ fn bin<const WRAPPERS: bool>(scene: &RenderScene, p: &mut Paths, q: &mut Queues,
     match kind.shading() {
         Shading::Emitter => q.emissive.push(i),
         Shading::Diffuse | Shading::Sampled | Shading::Glossy => {
-            // A surface that emits and reflects: `handle_emissive` adds its emission first.
+            // A surface that emits and reflects: `handle_emissive` adds its emission first
+            // (with the last vertex's division for light tracing, then this one's).
             if scene.features.emitting_surfaces && scene.lights.emits(hit.material) {
                 q.emissive.push(i);
+            } else if let Some(lp) = &scene.light_paths {
+                divide_for_light_paths(scene, lp, p, i as usize, &hit);
             }
             q.shade[kind as usize].push(i)
         }
@@ -138,6 +142,16 @@ fn store_hit(dst: &mut Hit, h: &Hit) {
     (dst.t, dst.prim, dst.material) = (*t, *prim, *material);
     let d = &mut dst.surface;
     (d.p, d.n, d.ns, d.ns_base, d.uv, d.err, d.on) = (*p, *n, *ns, *ns_base, *uv, *err, *on);
+}
+
+/// [`path::divide_for_light_paths`] at the hit `hit` of path `i`, in scenes where light tracing
+/// is on. Out of line: other scenes never call it.
+#[inline(never)]
+fn divide_for_light_paths(scene: &RenderScene, lp: &LightPaths, p: &mut Paths, i: usize, hit: &Hit) {
+    let mut st = p.state(i);
+    let class = scene.with_material(hit.material, &hit.surface, |mat| lp.class(mat));
+    path::divide_for_light_paths(&mut st, class, &hit.surface);
+    (p.caustic[i], p.traced_here[i]) = (st.caustic, st.traced_here);
 }
 
 /// Resolves the wrapper path `i` met ([`path::resolve`]): the hit with the plain material that
@@ -292,6 +306,8 @@ pub fn handle_emissive(scene: &RenderScene, p: &mut Paths, q: &mut Queues) {
         p.l[s] = st.l;
         if scene.materials[hit.material as usize].is_emissive() {
             q.finished.push(i);
+        } else if let Some(lp) = &scene.light_paths {
+            divide_for_light_paths(scene, lp, p, s, &hit);
         }
     }
 }
