@@ -551,7 +551,7 @@ mod tests {
 
     #[test]
     fn offset_equals_the_engine_offset() {
-        let mut s = crate::sampler::TestRng::new(4);
+        let mut s = crate::sampler::Stream::new(4);
         for _ in 0..10_000 {
             let p = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5)
                 * 10f32.powi((s.next_1d() * 12.0) as i32 - 6);
@@ -573,14 +573,14 @@ mod tests {
     #[test]
     fn the_kernel_is_the_textbook_lambertian_vertex() {
         use pathwave_engine::math::{Frame, concentric_disk, offset_ray_origin};
-        let mut s = crate::sampler::TestRng::new(21);
+        let mut s = crate::sampler::Stream::new(21);
         let mut unit = || {
             let v = Vec3::new(s.next_1d() - 0.5, s.next_1d() - 0.5, s.next_1d() - 0.5);
             if v.length() > 1e-3 { v.normalize() } else { Vec3::Y }
         };
         let close =
             |a: Vec3, b: Vec3, tol: f32| (a - b).abs().max_element() <= tol * (1.0 + b.abs().max_element());
-        let mut s = crate::sampler::TestRng::new(22);
+        let mut s = crate::sampler::Stream::new(22);
         let (mut shadows, mut alive) = (0, 0);
         for k in 0..20_000 {
             let n = unit();

@@ -574,7 +574,7 @@ fn punctual_lanes(i: &PunctualLanes) -> PunctualOut {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::TestRng;
+    use crate::sampler::Stream;
     use pathwave_engine::scene::parse;
     use pathwave_engine::world::SceneWorld;
 
@@ -668,7 +668,7 @@ mod tests {
         let quads = scene.lights.plain.iter().filter(|l| matches!(l, PlainLight::Quad(_))).count();
         assert_eq!(quads, lights, "the quad lights");
         assert_eq!(scene.lights.tree.is_some(), scene.lights.len() > 1, "the tree chooses among several");
-        let mut rng = TestRng::new(11);
+        let mut rng = Stream::new(11);
         let mut sampler = LightSampler::new(&scene);
         let (mut lit, mut spherical) = (0, 0);
         for _ in 0..4000 {
@@ -760,7 +760,7 @@ mod tests {
         )"#;
         let desc = parse(text, std::path::Path::new("<test>")).unwrap();
         let scene = SceneWorld::render_scene(&desc);
-        let mut rng = TestRng::new(5);
+        let mut rng = Stream::new(5);
         let (mut taken, mut lit) = (0, 0);
         for round in 0..3000 {
             let points: [Vec3A; LANES] = std::array::from_fn(|l| match (round + l) % 7 {

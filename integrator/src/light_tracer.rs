@@ -23,6 +23,7 @@
 
 use crate::film::LIGHT_UNIT;
 use crate::path::{leaving_side, shadow_transmittance};
+use crate::sampler::{Stream, mix64};
 use glam::{Vec2, Vec3, Vec3A};
 use pathwave_engine::camera::PinholeView;
 use pathwave_engine::filter::PixelFilter;
@@ -92,7 +93,7 @@ pub fn trace(scene: &RenderScene, plan: &LightPaths, samples: Range<u32>) -> Vec
     let total = samples.len() as u64 * per_sample;
     (0..total.div_ceil(CHUNK)).into_par_iter().for_each(|c| {
         for n in first + c * CHUNK..first + ((c + 1) * CHUNK).min(total) {
-            let mut rng = Stream::new(s.seed, n);
+            let mut rng = Stream::new(mix64(s.seed ^ 0x6c69_6768_7450_6174) ^ n);
             trace_path(scene, plan, &mut rng, &splat);
         }
     });
@@ -101,10 +102,10 @@ pub fn trace(scene: &RenderScene, plan: &LightPaths, samples: Range<u32>) -> Vec
 
 /// One light path from the stream `rng`, splatting what the camera sees of it.
 fn trace_path(scene: &RenderScene, plan: &LightPaths, rng: &mut Stream, splat: &impl Fn(Vec2, Vec3)) {
-    let (light, pmf) = plan.pick(rng.next());
+    let (light, pmf) = plan.pick(rng.next_1d());
     let (t0, t1) = scene.camera.shutter;
-    let time = if scene.features.motion { t0 + (t1 - t0) * rng.next() } else { t0 };
-    let u = [rng.next(), rng.next(), rng.next(), rng.next()];
+    let time = if scene.features.motion { t0 + (t1 - t0) * rng.next_1d() } else { t0 };
+    let u = [rng.next_1d(), rng.next_1d(), rng.next_1d(), rng.next_1d()];
     let Some(e) = plan.emit(light, pmf, u, time, &scene.geometry, &scene.textures) else { return };
     let (mut ray, mut beta) = (e.ray, e.beta);
     let (beta0, max_depth) = (beta.max_element(), scene.settings.max_depth);
@@ -115,7 +116,7 @@ fn trace_path(scene: &RenderScene, plan: &LightPaths, rng: &mut Stream, splat: &
         let view = scene.camera.pinhole_view(hit.surface.p);
         if scene.features.wrappers {
             let wo = view.map_or(-ray.dir, |v| v.to_camera);
-            let resolved = scene.resolve(hit.material, &mut hit.surface, wo, |_| rng.next());
+            let resolved = scene.resolve(hit.material, &mut hit.surface, wo, |_| rng.next_1d());
             match resolved {
                 Resolved::Material(id) => hit.material = id,
                 Resolved::Pass => {
@@ -147,8 +148,8 @@ fn trace_path(scene: &RenderScene, plan: &LightPaths, rng: &mut Stream, splat: &
         if m + 2 > max_depth || tilted {
             return;
         }
-        let u = Vec2::new(rng.next(), rng.next());
-        let Some(bs) = mat.sample(wi, sp.ns, u, rng.next()) else { return };
+        let u = Vec2::new(rng.next_1d(), rng.next_1d());
+        let Some(bs) = mat.sample(wi, sp.ns, u, rng.next_1d()) else { return };
         // (Kinds with a null lobe are neither rough nor sharp.)
         if bs.null {
             return;
@@ -168,7 +169,7 @@ fn trace_path(scene: &RenderScene, plan: &LightPaths, rng: &mut Stream, splat: &
         // Russian roulette from the third vertex on, by the throughput against the light's.
         if m >= 3 {
             let q = (beta.max_element() / beta0).min(1.0);
-            if !(rng.next() < q) {
+            if !(rng.next_1d() < q) {
                 return;
             }
             beta /= q;
@@ -230,30 +231,4 @@ fn integral(f: &PixelFilter) -> f64 {
 fn straight_on(sp: &SurfacePoint, ray: Ray) -> Ray {
     let side = if ray.dir.dot(sp.n) > 0.0 { sp.n } else { -sp.n };
     Ray { origin: offset_ray_origin(sp.p, sp.err, side), ..ray }
-}
-
-/// A light path's random numbers: SplitMix64 (Steele, Lea and Flood 2014) over a state
-/// seeded by a hash of the render's seed and the path's number.
-struct Stream(u64);
-
-impl Stream {
-    fn new(seed: u64, path: u64) -> Self {
-        let mut s = Stream(seed ^ 0x6c69_6768_7450_6174);
-        s.0 = s.mix() ^ path.wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        s.mix();
-        s
-    }
-
-    fn mix(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A number in [0, 1).
-    fn next(&mut self) -> f32 {
-        (self.mix() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
 }

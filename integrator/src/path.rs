@@ -576,7 +576,7 @@ pub(crate) fn light_shadow(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampler::TestRng;
+    use crate::sampler::Stream;
     use pathwave_engine::math::uniform_sphere;
     use pathwave_engine::world::SceneWorld;
 
@@ -596,7 +596,7 @@ mod tests {
         // Beside its point light the map is sampled apart, at every vertex: probability 1.
         let (env, pmf) = (scene.lights.environment.unwrap() as usize, scene.lights.environment_pmf());
         assert_eq!((scene.lights.apart(), pmf), (Some(env), 1.0));
-        let mut rng = TestRng::new(3);
+        let mut rng = Stream::new(3);
         let p = Vec3A::new(0.3, 0.01, 2.0);
         let (mut sampled, mut other_cell) = (0, 0);
         let agree = |a: f32, b: f32, tol: f32| (a - b).abs() <= tol * a.abs().max(b.abs());

@@ -231,7 +231,8 @@ impl LightPaths {
                     PunctualLight::Point { position, .. } | PunctualLight::Projector { position, .. } => {
                         (position, (uniform_sphere(Vec2::new(u[0], u[1])), 4.0 * PI))
                     }
-                    PunctualLight::Directional { .. } => unreachable!("matched above"),
+                    // (Matched above.)
+                    PunctualLight::Directional { .. } => return None,
                 };
                 // The intensity towards `dir`: what the light gives a point at distance 1.
                 let (_, dist, le) = l.illuminate(position + dir, textures);

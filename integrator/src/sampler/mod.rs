@@ -444,16 +444,18 @@ fn to_unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
-/// A stream of independent uniform numbers for tests that need many of them.
-#[cfg(test)]
-pub(crate) struct TestRng(u64);
+/// A stream of independent uniform numbers: a Weyl sequence through [`mix64`] (splitmix64's
+/// construction; Steele, Lea and Flood 2014), for the light tracer's paths and for tests that
+/// need many numbers.
+pub(crate) struct Stream(u64);
 
-#[cfg(test)]
-impl TestRng {
+impl Stream {
+    /// The stream of `seed`.
     pub(crate) fn new(seed: u64) -> Self {
         Self(mix64(seed ^ 0x2545_f491_4f6c_dd1d))
     }
 
+    /// The next number, in [0, 1).
     pub(crate) fn next_1d(&mut self) -> f32 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         to_unit((mix64(self.0) >> 32) as u32)
