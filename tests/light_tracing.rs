@@ -245,3 +245,36 @@ fn scenes_without_its_paths_render_as_before() {
     let lens = room(true, "On").replace("vfov: 50)", "vfov: 50, aperture_radius: 0.05, focus_dist: 5)");
     assert!(scene(&lens).light_paths.is_none(), "a camera with a lens");
 }
+
+#[test]
+fn shares_of_a_light_traced_render_merge_into_it_and_resume() {
+    // Through the command line: machines' sample ranges (checkpoints of format 5, the light
+    // tracer's sums beside the pixels') merge into the bits of one render, and --resume
+    // completes a partial one.
+    let dir = common::temp("light", "shares");
+    std::fs::write(dir.join("room.ron"), room(true, "On").replace("spp: 1024", "spp: 8")).unwrap();
+    let out = |name: &str| dir.join(name);
+    let render = |name: &str, extra: &[&str]| {
+        common::run(
+            common::pathwave().arg("render").arg(dir.join("room.ron")).arg("-o").arg(out(name)).args(extra),
+        )
+    };
+    render("whole.exr", &["-q"]);
+    render("a.exr", &["-q", "--samples", "0..3"]);
+    render("b.exr", &["-q", "--samples", "3..8"]);
+    common::run(
+        common::pathwave()
+            .arg("merge")
+            .arg(out("b.exr.ckpt"))
+            .arg(out("a.exr.ckpt"))
+            .arg("-o")
+            .arg(out("ab.exr")),
+    );
+    let whole = std::fs::read(out("whole.exr")).unwrap();
+    assert!(std::fs::read(out("ab.exr")).unwrap() == whole, "two shares merged");
+    render("c.exr", &["-q", "--samples", "0..3"]);
+    std::fs::rename(out("c.exr.ckpt"), out("d.exr.ckpt")).unwrap();
+    render("d.exr", &["-q", "--resume"]);
+    assert!(std::fs::read(out("d.exr")).unwrap() == whole, "a share resumed to the whole");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
