@@ -90,7 +90,9 @@ pub fn extract_render_scene(
     scene.light_paths = match plan_light_paths(&scene) {
         Ok(plan) => plan.map(Arc::new),
         Err(why) => {
-            tracing::warn!("{why}");
+            // Once a process: an animation makes its scene again each frame.
+            static WARNED: std::sync::Once = std::sync::Once::new();
+            WARNED.call_once(|| tracing::warn!("{why}"));
             None
         }
     };
