@@ -58,6 +58,15 @@ impl PixelFilter {
         }
     }
 
+    /// The 1D filter's integral over its support, in closed form (the Gaussian's from its CDF).
+    pub fn integral(&self) -> f64 {
+        match self {
+            PixelFilter::Box => 1.0,
+            PixelFilter::Tent { radius } => *radius as f64,
+            PixelFilter::Gaussian(g) => g.total,
+        }
+    }
+
     /// The image position of a sample of pixel (x, y) drawn with the numbers `u` in [0, 1)^2:
     /// for the box, (x + u.x, y + u.y), as before filters existed (the same bits); for the
     /// others, the pixel centre plus an offset with density f(dx) f(dy) / (integral)^2.

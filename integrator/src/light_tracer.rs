@@ -58,16 +58,18 @@ pub fn trace(scene: &RenderScene, plan: &LightPaths, samples: Range<u32>) -> Vec
         if x < 0 || y < 0 || x >= win.w as i64 || y >= win.h as i64 {
             return;
         }
+        // Saturating, as the film's sums: a pixel's light could otherwise wrap around.
         let at = &sums[(y * win.w as i64 + x) as usize];
         for ch in 0..3 {
-            at[ch].fetch_add(v[ch].round() as i64, Ordering::Relaxed);
+            let add = |s: i64| Some(s.saturating_add(v[ch].round() as i64));
+            let _ = at[ch].fetch_update(Ordering::Relaxed, Ordering::Relaxed, add);
         }
     };
     // A filter other than the box: each pixel whose centre it reaches from the image point
     // takes the splat weighed by the filter there over its integral (pbrt-v4's
     // `RGBFilm::AddSplat`), the expectation the weighted mean of the camera's samples has.
     let filter = s.filter;
-    let (radius, norm) = (filter.radius(), integral(&filter).powi(2) as f32);
+    let (radius, norm) = (filter.radius(), filter.integral().powi(2) as f32);
     let splat = |pixel: Vec2, c: Vec3| {
         let v = c * scale;
         if !(v.is_finite() && v.max_element() < (1u64 << 40) as f32) {
@@ -215,15 +217,6 @@ fn connect(
     let shadow = Ray { origin, dir: target - origin, time };
     let Some(tr) = shadow_transmittance(scene, &shadow) else { return };
     splat(v.pixel, beta * f_cos * tr * (corr * v.importance / (v.dist * v.dist)));
-}
-
-/// The integral of the 1D filter over its support (midpoint rule in `f64`: the same bits on
-/// every machine).
-fn integral(f: &PixelFilter) -> f64 {
-    const STEPS: u32 = 1 << 16;
-    let r = f.radius() as f64;
-    let h = 2.0 * r / STEPS as f64;
-    (0..STEPS).map(|i| f.eval((-r + (i as f64 + 0.5) * h) as f32) as f64).sum::<f64>() * h
 }
 
 /// The ray going on unbent past the surface at `sp`.

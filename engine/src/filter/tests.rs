@@ -109,3 +109,21 @@ fn box_position_is_pixel_plus_u() {
         assert_eq!(got.map(f32::to_bits), [p.0 as f32 + u[0], p.1 as f32 + u[1]].map(f32::to_bits));
     }
 }
+
+#[test]
+fn integrals_in_closed_form_are_the_filters_sums() {
+    let filters =
+        [PixelFilter::Box, PixelFilter::Tent { radius: 1.5 }, PixelFilter::Gaussian(Gaussian::new(0.5))];
+    for f in filters {
+        let (r, n) = (f.radius() as f64, 100_000);
+        let sum: f64 =
+            (0..n).map(|k| f.eval((-r + 2.0 * r * (k as f64 + 0.5) / n as f64) as f32) as f64).sum();
+        let numeric = sum * 2.0 * r / n as f64;
+        assert!(
+            (f.integral() / numeric - 1.0).abs() < 1e-4,
+            "{}: {} against {numeric}",
+            f.describe(),
+            f.integral()
+        );
+    }
+}
